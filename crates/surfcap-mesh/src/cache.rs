@@ -1,0 +1,228 @@
+//! The subject cache written by `surfcap import` and read by every later command: a folder of
+//! `.npy` arrays (so a researcher can open them in numpy) and a `subject.json` describing them.
+//!
+//! ```text
+//! subject.json            name, fps, up axis, units, sequences (name, frames, tags, joints)
+//! faces.npy               uint32 [triangles, 3]
+//! uv.npy, uv_faces.npy    float32 [uvs, 2], uint32 [triangles, 3]      (when the mesh has UVs)
+//! positions_<k>.npy       float32 [frames, vertices, 3]                 (sequence k)
+//! labels_<k>.npy          uint8 [frames]: 0 original, 1 synthetic
+//! joints_<k>.npy          float32 [frames, joints, 4, 4]                 (when known)
+//! ```
+//! Reading allocates each array once at its final size; sequences load in parallel.
+
+use std::path::Path;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::atomic::{write_dir, write_file};
+use crate::error::{Error, Result, err};
+use crate::io::npy::{expect_shape, read_npy, write_npy};
+use crate::progress::Progress;
+use crate::subject::{FrameLabel, JointTrack, Sequence, Subject, Units, UpAxis};
+use crate::topology::{Topology, UvAtlas};
+
+const FORMAT: &str = "surfcap-subject";
+const VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    format: String,
+    version: u32,
+    name: String,
+    fps: f64,
+    up_axis: UpAxis,
+    units: Units,
+    vertices: usize,
+    triangles: usize,
+    sequences: Vec<SeqHeader>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct SeqHeader {
+    name: String,
+    frames: usize,
+    tags: Vec<String>,
+    joints: Option<JointsHeader>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct JointsHeader {
+    names: Vec<String>,
+    parents: Vec<Option<usize>>,
+}
+
+/// Whether `path` is a subject cache folder.
+pub fn is_cache(path: &Path) -> bool {
+    path.join("subject.json").is_file()
+}
+
+/// Writes the subject as a cache folder (atomically: all or nothing).
+pub fn write_cache(path: &Path, subject: &Subject, progress: &dyn Progress) -> Result<()> {
+    let topo = subject.topology();
+    let header = Header {
+        format: FORMAT.into(),
+        version: VERSION,
+        name: subject.name.clone(),
+        fps: subject.fps,
+        up_axis: subject.up_axis,
+        units: subject.units.clone(),
+        vertices: topo.n_vertices(),
+        triangles: topo.n_triangles(),
+        sequences: subject
+            .sequences()
+            .iter()
+            .map(|s| SeqHeader {
+                name: s.name.clone(),
+                frames: s.n_frames(),
+                tags: s.tags.clone(),
+                joints: s.joints.as_ref().map(|j| JointsHeader {
+                    names: j.names.clone(),
+                    parents: j.parents.clone(),
+                }),
+            })
+            .collect(),
+    };
+    progress.start("writing subject cache", subject.sequences().len() as u64);
+    write_dir(path, |dir| {
+        let flat: Vec<u32> = topo.triangles().iter().flatten().copied().collect();
+        write_file(&dir.join("faces.npy"), |w| {
+            write_npy(w, &[topo.n_triangles(), 3], &flat)
+        })?;
+        if let Some(uv) = topo.uv() {
+            let c: Vec<f32> = uv.coords.iter().flatten().copied().collect();
+            write_file(&dir.join("uv.npy"), |w| {
+                write_npy(w, &[uv.coords.len(), 2], &c)
+            })?;
+            let f: Vec<u32> = uv.corners.iter().flatten().copied().collect();
+            write_file(&dir.join("uv_faces.npy"), |w| {
+                write_npy(w, &[uv.corners.len(), 3], &f)
+            })?;
+        }
+        for (k, s) in subject.sequences().iter().enumerate() {
+            let nv = topo.n_vertices();
+            write_file(&dir.join(format!("positions_{k}.npy")), |w| {
+                write_npy(w, &[s.n_frames(), nv, 3], s.positions())
+            })?;
+            let labels: Vec<u8> = s
+                .labels
+                .iter()
+                .map(|l| (*l == FrameLabel::Synthetic) as u8)
+                .collect();
+            write_file(&dir.join(format!("labels_{k}.npy")), |w| {
+                write_npy(w, &[s.n_frames()], &labels)
+            })?;
+            if let Some(j) = &s.joints {
+                write_file(&dir.join(format!("joints_{k}.npy")), |w| {
+                    write_npy(w, &[s.n_frames(), j.n_joints(), 4, 4], &j.matrices)
+                })?;
+            }
+            progress.advance(1);
+        }
+        let json = serde_json::to_vec_pretty(&header)
+            .map_err(|e| err!(Io, "cannot encode subject.json: {e}"))?;
+        write_file(&dir.join("subject.json"), |w| w.write_all(&json))
+    })?;
+    progress.finish();
+    Ok(())
+}
+
+/// Reads a cache folder, checking every array against `subject.json`.
+pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
+    let hp = path.join("subject.json");
+    let text = std::fs::read(&hp).map_err(|e| Error::io(&hp, "read", e))?;
+    let h: Header = serde_json::from_slice(&text).map_err(|e| {
+        err!(Syntax, "not a surfcap subject description: {e}")
+            .in_file(&hp)
+            .at_line(e.line())
+    })?;
+    if h.format != FORMAT || h.version != VERSION {
+        return Err(err!(
+            Unsupported,
+            "format {:?} version {}: expected {FORMAT:?} version {VERSION} (re-import the data with this surfcap)",
+            h.format,
+            h.version
+        )
+        .in_file(&hp));
+    }
+    let fp = path.join("faces.npy");
+    let faces = read_npy::<u32>(&fp)?;
+    expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
+    let triangles: Vec<[u32; 3]> = faces
+        .data
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let uv = if path.join("uv.npy").is_file() {
+        let (up, ufp) = (path.join("uv.npy"), path.join("uv_faces.npy"));
+        let c = read_npy::<f32>(&up)?;
+        expect_shape(&c, &[None, Some(2)], "texture coordinates").map_err(|e| e.in_file(&up))?;
+        let f = read_npy::<u32>(&ufp)?;
+        expect_shape(&f, &[Some(h.triangles), Some(3)], "texture corners")
+            .map_err(|e| e.in_file(&ufp))?;
+        Some(UvAtlas {
+            coords: c.data.chunks_exact(2).map(|x| [x[0], x[1]]).collect(),
+            corners: f.data.chunks_exact(3).map(|x| [x[0], x[1], x[2]]).collect(),
+        })
+    } else {
+        None
+    };
+    let topology = Topology::new(h.vertices, triangles, uv).map_err(|e| e.in_file(&fp))?;
+    let nv = h.vertices;
+    progress.start("reading subject", h.sequences.len() as u64);
+    let sequences: Vec<Result<Sequence>> = h
+        .sequences
+        .par_iter()
+        .enumerate()
+        .map(|(k, sh)| {
+            let pp = path.join(format!("positions_{k}.npy"));
+            let p = read_npy::<f32>(&pp)?;
+            expect_shape(&p, &[Some(sh.frames), Some(nv), Some(3)], "positions")
+                .map_err(|e| e.in_file(&pp))?;
+            let mut s = Sequence::new(sh.name.clone(), nv, p.data)
+                .map_err(|e| e.in_file(&pp))?
+                .with_tags(sh.tags.clone());
+            let lp = path.join(format!("labels_{k}.npy"));
+            let l = read_npy::<u8>(&lp)?;
+            expect_shape(&l, &[Some(sh.frames)], "frame labels").map_err(|e| e.in_file(&lp))?;
+            let labels = l
+                .data
+                .iter()
+                .enumerate()
+                .map(|(f, &b)| match b {
+                    0 => Ok(FrameLabel::Original),
+                    1 => Ok(FrameLabel::Synthetic),
+                    _ => Err(
+                        err!(Shape, "label {b}: expected 0 (original) or 1 (synthetic)")
+                            .in_file(&lp)
+                            .at_frame(f),
+                    ),
+                })
+                .collect::<Result<Vec<_>>>()?;
+            s = s.with_labels(labels)?;
+            if let Some(jh) = &sh.joints {
+                let jp = path.join(format!("joints_{k}.npy"));
+                let j = read_npy::<f32>(&jp)?;
+                expect_shape(
+                    &j,
+                    &[Some(sh.frames), Some(jh.names.len()), Some(4), Some(4)],
+                    "joint matrices",
+                )
+                .map_err(|e| e.in_file(&jp))?;
+                s = s
+                    .with_joints(JointTrack {
+                        names: jh.names.clone(),
+                        parents: jh.parents.clone(),
+                        matrices: j.data,
+                    })
+                    .map_err(|e| e.in_file(&jp))?;
+            }
+            progress.advance(1);
+            Ok(s)
+        })
+        .collect();
+    let sequences = sequences.into_iter().collect::<Result<Vec<_>>>()?;
+    progress.finish();
+    Subject::new(h.name, topology, sequences, h.fps, h.up_axis, h.units).map_err(|e| e.in_file(&hp))
+}

@@ -1,0 +1,9 @@
+//! Readers and writers, one format per file.
+
+pub mod frame_folder;
+pub mod glb;
+pub mod npy;
+pub mod obj;
+pub mod pc2;
+pub mod ply;
+pub mod shared_layout;

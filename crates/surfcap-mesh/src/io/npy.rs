@@ -1,0 +1,303 @@
+//! NumPy `.npy` arrays: the header is parsed by `npyz`; the data is decoded here in chunks
+//! straight into a vector of exactly the right size, so a 240 MB position array costs 240 MB.
+//!
+//! Readers accept C-order arrays of the numeric types that hold the values losslessly enough
+//! for their use (float32/float64 for positions, unsigned/signed integers for indices), in either
+//! byte order; anything else is an error naming the file and what was expected.
+
+use std::io::{Read, Write};
+use std::path::Path;
+
+use npyz::{DType, Endianness, TypeChar, WriterBuilder};
+
+use crate::error::{Error, Location, Result, err};
+
+/// An n-dimensional array in C order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NpyArray<T> {
+    pub shape: Vec<usize>,
+    pub data: Vec<T>,
+}
+
+/// Element types the readers can produce.
+pub trait NpyElement: Sized + Copy + Default {
+    /// Human description of the accepted dtypes, for errors.
+    const EXPECTED: &'static str;
+    /// Whether a stored dtype can be read as `Self`.
+    fn accepts(kind: TypeChar, size: u64) -> bool;
+    /// Decodes one little-endian item of the stored dtype; `None` if its value does not fit.
+    fn decode(kind: TypeChar, bytes: &[u8]) -> Option<Self>;
+}
+
+fn le_u64(b: &[u8]) -> u64 {
+    let mut a = [0u8; 8];
+    a[..b.len()].copy_from_slice(b);
+    u64::from_le_bytes(a)
+}
+
+fn le_i64(b: &[u8]) -> i64 {
+    let shift = 64 - 8 * b.len() as u32;
+    ((le_u64(b) << shift) as i64) >> shift
+}
+
+impl NpyElement for f32 {
+    const EXPECTED: &'static str = "float32 ('<f4') or float64 ('<f8')";
+    fn accepts(kind: TypeChar, size: u64) -> bool {
+        kind == TypeChar::Float && (size == 4 || size == 8)
+    }
+    fn decode(_: TypeChar, b: &[u8]) -> Option<f32> {
+        Some(match b.len() {
+            4 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            _ => f64::from_le_bytes(b.try_into().ok()?) as f32,
+        })
+    }
+}
+
+impl NpyElement for u32 {
+    const EXPECTED: &'static str = "an integer type ('<u4', '<i4', '<i8', ...)";
+    fn accepts(kind: TypeChar, size: u64) -> bool {
+        matches!(kind, TypeChar::Int | TypeChar::Uint) && matches!(size, 1 | 2 | 4 | 8)
+    }
+    fn decode(kind: TypeChar, b: &[u8]) -> Option<u32> {
+        match kind {
+            TypeChar::Uint => u32::try_from(le_u64(b)).ok(),
+            _ => u32::try_from(le_i64(b)).ok(),
+        }
+    }
+}
+
+impl NpyElement for u8 {
+    const EXPECTED: &'static str = "uint8 ('|u1')";
+    fn accepts(kind: TypeChar, size: u64) -> bool {
+        kind == TypeChar::Uint && size == 1
+    }
+    fn decode(_: TypeChar, b: &[u8]) -> Option<u8> {
+        Some(b[0])
+    }
+}
+
+/// Counts bytes consumed, to know where the header ends.
+struct Counting<R> {
+    inner: R,
+    count: u64,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.count += n as u64;
+        Ok(n)
+    }
+}
+
+/// Reads an array from `reader`, whose total length is `total_len` bytes.
+pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<NpyArray<T>> {
+    if total_len == 0 {
+        return Err(err!(Empty, "empty file: expected a .npy array"));
+    }
+    let mut r = Counting {
+        inner: reader,
+        count: 0,
+    };
+    let header = npyz::NpyHeader::from_reader(&mut r).map_err(|e| match e.kind() {
+        std::io::ErrorKind::UnexpectedEof => err!(Truncated, "file ends inside the .npy header"),
+        _ => err!(Syntax, "not a valid .npy header: {e}"),
+    })?;
+    let data_start = r.count;
+    let DType::Plain(ts) = header.dtype() else {
+        return Err(err!(
+            DType,
+            "structured dtype {}: expected {}",
+            header.dtype().descr(),
+            T::EXPECTED
+        ));
+    };
+    if !T::accepts(ts.type_char(), ts.size_field()) {
+        return Err(err!(DType, "dtype '{ts}': expected {}", T::EXPECTED));
+    }
+    if header.order() == npyz::Order::Fortran && header.shape().len() > 1 {
+        return Err(err!(
+            Shape,
+            "array is in Fortran order: expected C order (save np.ascontiguousarray(a))"
+        ));
+    }
+    let item = ts.size_field() as usize;
+    let shape: Vec<usize> = header.shape().iter().map(|&d| d as usize).collect();
+    let n = header
+        .shape()
+        .iter()
+        .try_fold(1u64, |a, &d| a.checked_mul(d));
+    let bytes_needed = n.and_then(|n| n.checked_mul(item as u64));
+    let available = total_len.saturating_sub(data_start);
+    let shape_text = format!("{:?}", header.shape());
+    let Some(bytes_needed) = bytes_needed else {
+        return Err(err!(Shape, "shape {shape_text} is too large"));
+    };
+    if bytes_needed > available {
+        return Err(err!(
+            Truncated,
+            "header declares shape {shape_text} of '{ts}' ({bytes_needed} bytes of data) but the file holds only {available}"
+        )
+        .at(Location::Byte(total_len)));
+    }
+    if bytes_needed < available {
+        return Err(err!(
+            Shape,
+            "{} bytes after the data of shape {shape_text}: expected the file to end there",
+            available - bytes_needed
+        )
+        .at(Location::Byte(data_start + bytes_needed)));
+    }
+    let n = (bytes_needed / item as u64) as usize;
+    let mut data = Vec::with_capacity(n);
+    let mut chunk = vec![0u8; item * 65536];
+    let kind = ts.type_char();
+    let swap = ts.endianness() == Endianness::Big && item > 1;
+    let mut done = 0usize;
+    while done < n {
+        let m = (n - done).min(65536);
+        let buf = &mut chunk[..m * item];
+        r.read_exact(buf).map_err(|e| {
+            err!(Truncated, "cannot read array data: {e}").at(Location::Byte(r.count))
+        })?;
+        for (k, b) in buf.chunks_exact_mut(item).enumerate() {
+            if swap {
+                b.reverse();
+            }
+            let v = T::decode(kind, b).ok_or_else(|| {
+                err!(
+                    DType,
+                    "element {} does not fit: expected {}",
+                    done + k,
+                    T::EXPECTED
+                )
+            })?;
+            data.push(v);
+        }
+        done += m;
+    }
+    Ok(NpyArray { shape, data })
+}
+
+/// Reads a `.npy` file; errors name the file.
+pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, "open .npy file", e))?;
+    let len = f
+        .metadata()
+        .map_err(|e| Error::io(path, "read .npy file size", e))?
+        .len();
+    parse_npy(std::io::BufReader::with_capacity(1 << 16, f), len).map_err(|e| e.in_file(path))
+}
+
+/// Checks an array's shape against a pattern where `None` means any length.
+pub fn expect_shape<T>(a: &NpyArray<T>, pattern: &[Option<usize>], what: &str) -> Result<()> {
+    let ok = a.shape.len() == pattern.len()
+        && a.shape
+            .iter()
+            .zip(pattern)
+            .all(|(&d, p)| p.is_none_or(|p| p == d));
+    if ok {
+        return Ok(());
+    }
+    let want: Vec<String> = pattern
+        .iter()
+        .map(|p| p.map_or("*".into(), |d| d.to_string()))
+        .collect();
+    Err(err!(
+        Shape,
+        "shape {:?}: expected {what} of shape [{}]",
+        a.shape,
+        want.join(", ")
+    ))
+}
+
+/// Writes a C-order array (`f32` as `<f4`, `u32` as `<u4`, `u8` as `|u1`).
+pub fn write_npy<T: npyz::AutoSerialize + Copy>(
+    w: impl Write,
+    shape: &[usize],
+    data: &[T],
+) -> std::io::Result<()> {
+    debug_assert_eq!(shape.iter().product::<usize>(), data.len());
+    let shape: Vec<u64> = shape.iter().map(|&d| d as u64).collect();
+    let mut writer = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(&shape)
+        .writer(w)
+        .begin_nd()?;
+    writer.extend(data.iter().copied())?;
+    writer.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::ErrorKind;
+
+    fn bytes<T: npyz::AutoSerialize + Copy>(shape: &[usize], data: &[T]) -> Vec<u8> {
+        let mut v = Vec::new();
+        write_npy(&mut v, shape, data).unwrap();
+        v
+    }
+
+    fn parse<T: NpyElement>(b: &[u8]) -> Result<NpyArray<T>> {
+        parse_npy(b, b.len() as u64)
+    }
+
+    #[test]
+    fn round_trips_and_converts() {
+        let a = bytes(&[2, 3], &[1.5f32, 2., 3., 4., 5., 6.]);
+        let back = parse::<f32>(&a).unwrap();
+        assert_eq!(back.shape, vec![2, 3]);
+        assert_eq!(back.data[5], 6.0);
+        let d = bytes(&[2], &[0.25f64, -1.0]);
+        assert_eq!(parse::<f32>(&d).unwrap().data, vec![0.25, -1.0]);
+        let i = bytes(&[3], &[0i64, 7, 9]);
+        assert_eq!(parse::<u32>(&i).unwrap().data, vec![0, 7, 9]);
+        let neg = bytes(&[1], &[-1i32]);
+        assert_eq!(parse::<u32>(&neg).unwrap_err().kind, ErrorKind::DType);
+    }
+
+    #[test]
+    fn reads_big_endian() {
+        let mut a = bytes(&[2], &[1.5f32, -2.0]);
+        let at = a.windows(3).position(|w| w == b"<f4").unwrap();
+        a[at] = b'>';
+        let n = a.len();
+        a[n - 8..n - 4].copy_from_slice(&1.5f32.to_be_bytes());
+        a[n - 4..].copy_from_slice(&(-2.0f32).to_be_bytes());
+        assert_eq!(parse::<f32>(&a).unwrap().data, vec![1.5, -2.0]);
+    }
+
+    #[test]
+    fn bad_files_are_errors() {
+        let a = bytes(&[4, 3], &[0f32; 12]);
+        assert_eq!(
+            parse::<f32>(&a[..a.len() - 1]).unwrap_err().kind,
+            ErrorKind::Truncated
+        );
+        assert_eq!(
+            parse::<f32>(&a[..20]).unwrap_err().kind,
+            ErrorKind::Truncated
+        );
+        assert_eq!(parse::<f32>(&[]).unwrap_err().kind, ErrorKind::Empty);
+        assert_eq!(
+            parse::<f32>(b"not numpy at all, sorry").unwrap_err().kind,
+            ErrorKind::Syntax
+        );
+        let mut long = a.clone();
+        long.push(0);
+        assert_eq!(parse::<f32>(&long).unwrap_err().kind, ErrorKind::Shape);
+        let ints = bytes(&[2], &[1i32, 2]);
+        let e = parse::<f32>(&ints).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::DType);
+        assert!(e.to_string().contains("expected float32"), "{e}");
+        let arr = parse::<f32>(&a).unwrap();
+        assert!(expect_shape(&arr, &[None, Some(3)], "positions").is_ok());
+        assert_eq!(
+            expect_shape(&arr, &[None, None, Some(3)], "positions")
+                .unwrap_err()
+                .kind,
+            ErrorKind::Shape
+        );
+    }
+}

@@ -1,0 +1,217 @@
+//! `surfcap.toml`: a subject described by a list of sequences from any supported source.
+//!
+//! ```toml
+//! name = "horse"          # optional; default: the folder's name
+//! fps = 24                # optional when every source knows its frame rate
+//! up_axis = "+y"          # optional
+//! units = "m"             # optional
+//!
+//! [[sequence]]
+//! source = "gallop"       # relative to this file: any source `surfcap import` reads
+//! name = "gallop"         # optional rename (only for a source with one sequence)
+//! tags = ["gallop", "locomotion"]
+//!
+//! [[sequence]]
+//! source = "cache.pc2"    # a PC2 point cache or a bare positions .npy needs a template mesh
+//! template = "rest.obj"
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result, err};
+use crate::import::{ImportOptions, SourceSequence, read_source};
+use crate::progress::Progress;
+use crate::subject::{Units, UpAxis};
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Manifest {
+    name: Option<String>,
+    fps: Option<f64>,
+    up_axis: Option<String>,
+    units: Option<String>,
+    #[serde(default)]
+    sequence: Vec<Entry>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Entry {
+    source: PathBuf,
+    name: Option<String>,
+    #[serde(default)]
+    tags: Vec<String>,
+    template: Option<PathBuf>,
+    joints: Option<PathBuf>,
+}
+
+/// The manifest file a path designates: `surfcap.toml` itself, any `.toml`, or a folder holding one.
+pub fn find_manifest(path: &Path) -> Option<PathBuf> {
+    if path.is_file() && path.extension().is_some_and(|e| e == "toml") {
+        return Some(path.to_path_buf());
+    }
+    let inside = path.join("surfcap.toml");
+    inside.is_file().then_some(inside)
+}
+
+fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usize> {
+    span.map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
+}
+
+/// Reads the manifest and every sequence it lists.
+pub fn read_manifest(
+    path: &Path,
+    progress: &dyn Progress,
+) -> Result<(ImportOptions, Vec<SourceSequence>)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read manifest", e))?;
+    let m: Manifest = toml::from_str(&text).map_err(|e| {
+        let mut er = err!(Syntax, "{}", e.message()).in_file(path);
+        if let Some(l) = line_of(&text, e.span()) {
+            er = er.at_line(l);
+        }
+        er
+    })?;
+    let line_with = |needle: &str| text.lines().position(|l| l.contains(needle)).map(|i| i + 1);
+    let at = |e: Error, needle: &str| {
+        let e = e.in_file(path);
+        match line_with(needle) {
+            Some(l) => e.at_line(l),
+            None => e,
+        }
+    };
+    if m.sequence.is_empty() {
+        return Err(err!(Empty, "no [[sequence]] entries: expected at least one").in_file(path));
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let up_axis = match &m.up_axis {
+        Some(u) => Some(UpAxis::parse(u).map_err(|e| at(e, "up_axis"))?),
+        None => None,
+    };
+    if let Some(f) = m.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+        return Err(at(
+            err!(Metadata, "fps = {f}: expected a positive number"),
+            "fps",
+        ));
+    }
+    let opts = ImportOptions {
+        name: m.name.clone(),
+        fps: m.fps,
+        up_axis,
+        units: m.units.as_deref().map(Units::parse),
+    };
+    let mut out = Vec::new();
+    for e in &m.sequence {
+        let src = base.join(&e.source);
+        let needle = e.source.to_string_lossy().into_owned();
+        let mut seqs = match &e.template {
+            Some(t) => vec![read_with_template(&src, &base.join(t)).map_err(|er| at(er, &needle))?],
+            None => read_source(&src, progress)?,
+        };
+        if let Some(j) = &e.joints {
+            let jp = base.join(j);
+            if seqs.len() != 1 {
+                return Err(at(
+                    err!(
+                        Metadata,
+                        "'joints' needs a source with exactly one sequence"
+                    ),
+                    &needle,
+                ));
+            }
+            let arr = crate::io::npy::read_npy::<f32>(&jp)?;
+            let frames = seqs[0].positions.len() / (3 * seqs[0].topology.n_vertices());
+            crate::io::npy::expect_shape(
+                &arr,
+                &[Some(frames), None, Some(4), Some(4)],
+                "joint world matrices [frames, joints, 4, 4]",
+            )
+            .map_err(|er| er.in_file(&jp))?;
+            let nj = arr.shape[1];
+            seqs[0].joints = Some(crate::subject::JointTrack {
+                names: (0..nj).map(|i| format!("joint_{i}")).collect(),
+                parents: vec![None; nj],
+                matrices: arr.data,
+            });
+        }
+        if let Some(n) = &e.name {
+            if seqs.len() != 1 {
+                return Err(at(
+                    err!(
+                        Metadata,
+                        "'name' renames one sequence, but {needle:?} holds {}",
+                        seqs.len()
+                    ),
+                    &needle,
+                ));
+            }
+            seqs[0].name = n.clone();
+        }
+        for s in &mut seqs {
+            s.tags.extend(e.tags.iter().cloned());
+        }
+        out.extend(seqs);
+    }
+    Ok((opts, out))
+}
+
+/// A PC2 point cache or a bare `[frames, vertices, 3]` positions `.npy`, with a template mesh.
+fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
+    let t = crate::io::obj::read_obj(template)?;
+    let topology = t.topology().map_err(|e| e.in_file(template))?;
+    let nv = topology.n_vertices();
+    let ext = src
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let positions = match ext.as_str() {
+        "pc2" => {
+            let b = std::fs::read(src).map_err(|e| Error::io(src, "read", e))?;
+            let c = crate::io::pc2::parse_pc2(&b).map_err(|e| e.in_file(src))?;
+            if c.n_points != nv {
+                return Err(err!(
+                    TopologyMismatch,
+                    "{} points, expected {nv} as in {}",
+                    c.n_points,
+                    template.display()
+                )
+                .in_file(src));
+            }
+            c.positions
+        }
+        "npy" => {
+            let a = crate::io::npy::read_npy::<f32>(src)?;
+            crate::io::npy::expect_shape(
+                &a,
+                &[None, Some(nv), Some(3)],
+                &format!("positions of the template's {nv} vertices"),
+            )
+            .map_err(|e| e.in_file(src))?;
+            a.data
+        }
+        _ => {
+            return Err(err!(
+                Unsupported,
+                "a template goes with a .pc2 or .npy source, not {ext:?}"
+            )
+            .in_file(src));
+        }
+    };
+    let name = src
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    Ok(SourceSequence {
+        name,
+        topology,
+        positions,
+        joints: None,
+        tags: Vec::new(),
+        labels: None,
+        fps: None,
+        up_axis: None,
+        units: None,
+        origin: src.to_path_buf(),
+    })
+}
