@@ -1,1 +1,97 @@
-fn main() {}
+//! `surfcap`: the command-line front of the surfcap toolkit.
+//!
+//! Exit codes: 0 success, 1 user error (bad input, bad arguments; the message says what and
+//! where), 2 internal error (a bug: please report it).
+
+mod commands;
+mod progress;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Make new animations from 4D surface capture.
+#[derive(Parser, Debug)]
+#[command(name = "surfcap", version, about, long_about = None)]
+struct Cli {
+    /// No progress bars and no notes; only results and errors.
+    #[arg(long, global = true)]
+    quiet: bool,
+    /// Print results (and errors) as JSON for scripts.
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Read sequences from files into a subject cache that later commands read fast.
+    Import(commands::import::Args),
+    /// Describe a subject: sequences, frames, vertices, triangles, components, bounding box.
+    Info(commands::info::Args),
+    /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches or npy arrays.
+    Export(commands::export::Args),
+    /// Run the main job on built-in data: build a subject, import it, export it.
+    Demo(commands::demo::Args),
+    /// Measure speed and memory (loading a subject).
+    Bench(commands::bench::Args),
+}
+
+/// What every command gets: how to report.
+pub struct Ctx {
+    pub quiet: bool,
+    pub json: bool,
+}
+
+impl Ctx {
+    /// A note for humans (assumptions, hints); silent with --quiet or --json.
+    pub fn note(&self, text: &str) {
+        if !self.quiet && !self.json {
+            eprintln!("note: {text}");
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return match e.kind() {
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => ExitCode::SUCCESS,
+                _ => ExitCode::from(1),
+            };
+        }
+    };
+    let ctx = Ctx { quiet: cli.quiet, json: cli.json };
+    let json = cli.json;
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        default_hook(info);
+        eprintln!("surfcap: internal error (this is a bug; please report it with the command you ran)");
+    }));
+    let result = std::panic::catch_unwind(|| match cli.command {
+        Command::Import(a) => commands::import::run(&ctx, a),
+        Command::Info(a) => commands::info::run(&ctx, a),
+        Command::Export(a) => commands::export::run(&ctx, a),
+        Command::Demo(a) => commands::demo::run(&ctx, a),
+        Command::Bench(a) => commands::bench::run(&ctx, a),
+    });
+    match result {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
+            if json {
+                let chain: Vec<String> = e.chain().skip(1).map(|c| c.to_string()).collect();
+                eprintln!("{}", serde_json::json!({ "error": e.to_string(), "causes": chain }));
+            } else {
+                eprintln!("surfcap: error: {e}");
+                for c in e.chain().skip(1) {
+                    eprintln!("  caused by: {c}");
+                }
+            }
+            ExitCode::from(1)
+        }
+        Err(_) => ExitCode::from(2),
+    }
+}

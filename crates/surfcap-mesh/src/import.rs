@@ -94,12 +94,12 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
                 .in_file(&origin));
             }
             return Ok(vec![SourceSequence {
-                name: s.name,
+                name: s.meta.name.unwrap_or(s.name),
                 topology: s.topology,
                 positions: s.positions,
                 joints: s.joints,
-                tags: Vec::new(),
-                labels: None,
+                tags: s.meta.tags,
+                labels: s.meta.labels,
                 fps: s.meta.fps,
                 up_axis: s.meta.up_axis,
                 units: s.meta.units,

@@ -10,7 +10,7 @@ use serde_json::Value;
 use crate::error::{Error, Result, err};
 use crate::io::npy::{expect_shape, read_npy};
 use crate::io::obj::read_obj;
-use crate::subject::{JointTrack, Units, UpAxis};
+use crate::subject::{FrameLabel, JointTrack, Units, UpAxis};
 use crate::topology::Topology;
 
 /// What a dataset's `meta.json` says about one sequence.
@@ -24,6 +24,10 @@ pub struct SequenceMeta {
     pub vertices: Option<usize>,
     pub joint_names: Option<Vec<String>>,
     pub joint_parents: Option<Vec<Option<usize>>>,
+    /// Sequence name, tags and frame labels, as written by `surfcap export --format npy`.
+    pub name: Option<String>,
+    pub tags: Vec<String>,
+    pub labels: Option<Vec<FrameLabel>>,
     pub meta_path: Option<PathBuf>,
 }
 
@@ -108,6 +112,9 @@ pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
         vertices: seq["vertices"].as_u64().map(|x| x as usize),
         joint_names,
         joint_parents,
+        name: seq["name"].as_str().map(str::to_string),
+        tags: serde_json::from_value(seq["tags"].clone()).unwrap_or_default(),
+        labels: serde_json::from_value(seq["frame_labels"].clone()).ok(),
         meta_path: Some(meta_path),
     })
 }
