@@ -51,7 +51,7 @@ mod tests {
                 "f.obj", "f01.obj", "f1.obj", "f2.obj", "f10.obj", "f100.obj", "g0.obj"
             ]
         );
-        let mut w = vec![
+        let mut w = [
             "mesh_0010.ply",
             "mesh_0009.ply",
             "mesh_99999999999999999999999.ply",

@@ -166,7 +166,7 @@ impl Sequence {
     pub fn new(name: impl Into<String>, n_vertices: usize, positions: Vec<f32>) -> Result<Self> {
         let name = name.into();
         let per_frame = 3 * n_vertices;
-        if per_frame == 0 || positions.len() % per_frame != 0 {
+        if per_frame == 0 || !positions.len().is_multiple_of(per_frame) {
             return Err(err!(
                 Shape,
                 "sequence {name:?}: {} coordinates is not a whole number of frames of {n_vertices} vertices",

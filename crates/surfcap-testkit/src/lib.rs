@@ -8,7 +8,10 @@ use std::path::{Path, PathBuf};
 
 /// The workspace root (two levels above a crate's manifest).
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("workspace root exists")
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .expect("workspace root exists")
 }
 
 /// The shared real-data folder, or `None` (after printing why) when it is missing outside CI.
@@ -23,9 +26,15 @@ pub fn shared_data() -> Option<PathBuf> {
         return Some(dir);
     }
     if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("real data missing at {} (CI=true: real-data tests must not be skipped)", dir.display());
+        panic!(
+            "real data missing at {} (CI=true: real-data tests must not be skipped)",
+            dir.display()
+        );
     }
-    eprintln!("skipping: real data missing at {} (set SURFCAP_DATA)", dir.display());
+    eprintln!(
+        "skipping: real data missing at {} (set SURFCAP_DATA)",
+        dir.display()
+    );
     None
 }
 

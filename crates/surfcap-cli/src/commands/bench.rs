@@ -51,9 +51,14 @@ fn peak_rss() -> Option<u64> {
 /// A subject of `frames` frames (split in sequences of 500) with about `vertices` vertices.
 fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
     let segments = 25usize;
-    let rings = (vertices.saturating_sub(2) / segments).max(2);
+    let rings = vertices.saturating_sub(2).div_ceil(segments).max(2);
     let per_seq = 500usize.min(frames.max(1));
-    let base = worm_subject(&WormParams { rings, segments, frames: per_seq, ..Default::default() })?;
+    let base = worm_subject(&WormParams {
+        rings,
+        segments,
+        frames: per_seq,
+        ..Default::default()
+    })?;
     let nv = base.topology().n_vertices();
     let mut seqs = Vec::new();
     let mut left = frames;
@@ -66,18 +71,39 @@ fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
         left -= n;
         k += 1;
     }
-    Ok(Subject::new("bench", base.topology().clone(), seqs, 30.0, base.up_axis, base.units.clone())?)
+    Ok(Subject::new(
+        "bench",
+        base.topology().clone(),
+        seqs,
+        30.0,
+        base.up_axis,
+        base.units.clone(),
+    )?)
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let What::Load { subject, frames, vertices, repeat, in_process, fps } = a.what;
+    let What::Load {
+        subject,
+        frames,
+        vertices,
+        repeat,
+        in_process,
+        fps,
+    } = a.what;
     if in_process {
         let path = subject.context("--in-process needs --subject")?;
-        let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+        let opts = surfcap_mesh::import::ImportOptions {
+            fps,
+            ..Default::default()
+        };
         let t0 = Instant::now();
         let s = surfcap_mesh::import::open_subject(&path, &opts, &NoProgress)?.subject;
         let secs = t0.elapsed().as_secs_f64();
-        let bytes = s.sequences().iter().map(|q| std::mem::size_of_val(q.positions())).sum::<usize>();
+        let bytes = s
+            .sequences()
+            .iter()
+            .map(|q| std::mem::size_of_val(q.positions()))
+            .sum::<usize>();
         print_json(&json!({
             "seconds": secs,
             "peak_rss_bytes": peak_rss(),
@@ -102,18 +128,32 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut runs = Vec::new();
     for _ in 0..repeat.max(1) {
         let mut cmd = std::process::Command::new(&exe);
-        cmd.args(["bench", "load", "--in-process", "--subject"]).arg(&path);
+        cmd.args(["bench", "load", "--in-process", "--subject"])
+            .arg(&path);
         if let Some(f) = fps {
             cmd.arg("--fps").arg(f.to_string());
         }
-        let out = cmd.output().context("running the measuring child process")?;
-        anyhow::ensure!(out.status.success(), "loading failed: {}", String::from_utf8_lossy(&out.stderr).trim());
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).context("reading the child's report")?;
+        let out = cmd
+            .output()
+            .context("running the measuring child process")?;
+        anyhow::ensure!(
+            out.status.success(),
+            "loading failed: {}",
+            String::from_utf8_lossy(&out.stderr).trim()
+        );
+        let v: serde_json::Value =
+            serde_json::from_slice(&out.stdout).context("reading the child's report")?;
         runs.push(v);
     }
-    let mut secs: Vec<f64> = runs.iter().map(|r| r["seconds"].as_f64().unwrap_or(f64::NAN)).collect();
+    let mut secs: Vec<f64> = runs
+        .iter()
+        .map(|r| r["seconds"].as_f64().unwrap_or(f64::NAN))
+        .collect();
     secs.sort_by(f64::total_cmp);
-    let peak = runs.iter().filter_map(|r| r["peak_rss_bytes"].as_u64()).max();
+    let peak = runs
+        .iter()
+        .filter_map(|r| r["peak_rss_bytes"].as_u64())
+        .max();
     let r0 = &runs[0];
     let report = json!({
         "subject": path,
@@ -128,7 +168,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     if ctx.json {
         print_json(&report);
     } else {
-        let mb = |b: Option<u64>| b.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1e6));
+        let mb =
+            |b: Option<u64>| b.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1e6));
         println!(
             "loaded {} frames x {} vertices ({} of positions): best {:.3} s, median {:.3} s over {} runs; peak resident memory {}",
             r0["frames"],

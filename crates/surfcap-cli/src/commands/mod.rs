@@ -6,10 +6,10 @@ pub mod export;
 pub mod import;
 pub mod info;
 
-use std::path::PathBuf;
+use std::path::Path;
 
 use surfcap_mesh::import::ImportOptions;
-use surfcap_mesh::{UpAxis, Units};
+use surfcap_mesh::{Units, UpAxis};
 
 /// Options that say what the sources do not (shared by import, info and export).
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -34,12 +34,21 @@ impl SourceOpts {
         if let Some(f) = self.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
             anyhow::bail!("--fps {f}: expected a positive number of frames per second");
         }
-        Ok(ImportOptions { name, fps: self.fps, up_axis: self.up_axis, units: self.units.as_deref().map(Units::parse) })
+        Ok(ImportOptions {
+            name,
+            fps: self.fps,
+            up_axis: self.up_axis,
+            units: self.units.as_deref().map(Units::parse),
+        })
     }
 }
 
 /// Opens a subject (cache or any importable source) with a progress bar and shows the notes.
-pub fn open(ctx: &crate::Ctx, path: &PathBuf, opts: &SourceOpts) -> anyhow::Result<surfcap_mesh::Subject> {
+pub fn open(
+    ctx: &crate::Ctx,
+    path: &Path,
+    opts: &SourceOpts,
+) -> anyhow::Result<surfcap_mesh::Subject> {
     let bar = crate::progress::Bar::new(ctx);
     let imported = surfcap_mesh::import::open_subject(path, &opts.to_import(None)?, &bar)?;
     for n in &imported.notes {
@@ -50,5 +59,8 @@ pub fn open(ctx: &crate::Ctx, path: &PathBuf, opts: &SourceOpts) -> anyhow::Resu
 
 /// Prints a JSON value on stdout.
 pub fn print_json(v: &serde_json::Value) {
-    println!("{}", serde_json::to_string_pretty(v).expect("JSON values always serialise"));
+    println!(
+        "{}",
+        serde_json::to_string_pretty(v).expect("JSON values always serialise")
+    );
 }

@@ -129,27 +129,27 @@ pub fn read_frame_folder(
                 .in_file(path)
                 .at(Location::Frame(frame_no)));
             }
-            if !f.triangles.is_empty() {
-                if let Some(diff) = first_triangle_difference(topology.triangles(), &f.triangles) {
-                    let i = topology
-                        .triangles()
-                        .iter()
-                        .zip(&f.triangles)
-                        .position(|(a, b)| a != b);
-                    let loc = match i.and_then(|i| f.lines.get(i)) {
-                        Some(&line) => Location::FrameLine {
-                            frame: frame_no,
-                            line,
-                        },
-                        None => Location::Frame(frame_no),
-                    };
-                    return Err(err!(
-                        TopologyMismatch,
-                        "faces differ from the first frame's: {diff}"
-                    )
-                    .in_file(path)
-                    .at(loc));
-                }
+            if !f.triangles.is_empty()
+                && let Some(diff) = first_triangle_difference(topology.triangles(), &f.triangles)
+            {
+                let i = topology
+                    .triangles()
+                    .iter()
+                    .zip(&f.triangles)
+                    .position(|(a, b)| a != b);
+                let loc = match i.and_then(|i| f.lines.get(i)) {
+                    Some(&line) => Location::FrameLine {
+                        frame: frame_no,
+                        line,
+                    },
+                    None => Location::Frame(frame_no),
+                };
+                return Err(err!(
+                    TopologyMismatch,
+                    "faces differ from the first frame's: {diff}"
+                )
+                .in_file(path)
+                .at(loc));
             }
             Ok(f.positions)
         })

@@ -61,7 +61,7 @@ impl Bin {
         bytes: &[u8],
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::buffer::View> {
-        while self.data.len() % 4 != 0 {
+        while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
         let offset = self.data.len();
@@ -297,7 +297,7 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
         "units": subject.units,
         "sequences": seq_meta.iter().map(|m| json!({"name": m["sequence"], "frames": m["frames"], "tags": m["tags"]})).collect::<Vec<_>>(),
     }}));
-    while bin.data.len() % 4 != 0 {
+    while !bin.data.len().is_multiple_of(4) {
         bin.data.push(0);
     }
     root.push(json::Buffer {
@@ -385,7 +385,7 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
         Some(ix) => ix.into_u32().collect(),
         None => (0..nv as u32).collect(),
     };
-    if flat.len() % 3 != 0 {
+    if !flat.len().is_multiple_of(3) {
         return Err(err!(
             Shape,
             "{} triangle indices: expected a multiple of 3",

@@ -1,0 +1,308 @@
+//! The `surfcap` program end to end: exit codes, error messages, JSON output, and `.glb` files
+//! checked by the Khronos glTF validator.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn surfcap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .args(args)
+        .output()
+        .expect("surfcap runs")
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn demo_runs_and_its_glb_is_valid() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("demo");
+    let o = surfcap(&["demo", "-o", p(&out), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "worm.subject/subject.json",
+        "export/worm.glb",
+        "export/worm.json",
+        "export/npy/meta.json",
+        "export/pc2/slither.pc2",
+    ] {
+        assert!(out.join(f).is_file(), "demo did not write {f}");
+    }
+    assert!(out.join("export/obj/slither/frame_00059.obj").is_file());
+    surfcap_testkit::validate_glb(&[out.join("export/worm.glb")]);
+    let side: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("export/worm.json")).unwrap()).unwrap();
+    assert_eq!(side["sequences"][0]["frame_labels"][0], "original");
+}
+
+#[test]
+fn import_info_export_on_real_data_with_valid_glb() {
+    let Some(data) = surfcap_testkit::shared_data() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let subject = tmp.path().join("knight.subject");
+    let k = data.join("kaykit_adventurers");
+    let o = surfcap(&[
+        "import",
+        p(&k.join("knight_Idle")),
+        p(&k.join("knight_Running_A")),
+        "-o",
+        p(&subject),
+        "--name",
+        "knight",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["sequences"], 2);
+
+    let o = surfcap(&["info", p(&subject), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(info["vertices"], 2145);
+    assert_eq!(info["fps"], 30.0);
+    assert!(info["connected_components"].as_u64().unwrap() > 1);
+    assert_eq!(info["sequences"][1]["name"], "knight_Running_A");
+    assert_eq!(info["sequences"][0]["joints"], 41);
+
+    let o = surfcap(&["info", p(&subject)]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("components") && text.contains("knight_Running_A"),
+        "{text}"
+    );
+
+    let glb = tmp.path().join("knight.glb");
+    let o = surfcap(&[
+        "export",
+        p(&subject),
+        "--format",
+        "glb",
+        "-o",
+        p(&glb),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let crane = tmp.path().join("crane.glb");
+    let o = surfcap(&[
+        "export",
+        p(&data.join("vlasic2008/crane")),
+        "--format",
+        "glb",
+        "-o",
+        p(&crane),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A z-up subject is stored as is and turned upright by the node's rotation.
+    let zup = tmp.path().join("cat_zup.glb");
+    let o = surfcap(&[
+        "export",
+        p(&data.join("walking_cat_depraz/walk")),
+        "--format",
+        "glb",
+        "-o",
+        p(&zup),
+        "--fps",
+        "25",
+        "--up-axis",
+        "+z",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    surfcap_testkit::validate_glb(&[glb, crane, zup]);
+
+    for format in ["obj", "ply", "pc2", "npy"] {
+        let out = tmp.path().join(format);
+        let o = surfcap(&[
+            "export",
+            p(&subject),
+            "--format",
+            format,
+            "-o",
+            p(&out),
+            "--sequence",
+            "knight_Idle",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{format}: {}", stderr(&o));
+        assert!(
+            out.join("frames.json").is_file() || out.join("meta.json").is_file(),
+            "{format}: no sidecar"
+        );
+    }
+}
+
+#[test]
+fn user_errors_exit_1_and_name_the_file_and_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("frames");
+    std::fs::create_dir(&dir).unwrap();
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(dir.join("f_1.obj"), tri).unwrap();
+    std::fs::write(dir.join("f_2.obj"), tri).unwrap();
+    std::fs::write(dir.join("f_10.obj"), tri.replace("f 1 3 4", "f 1 3 9")).unwrap();
+    let o = surfcap(&[
+        "import",
+        p(&dir),
+        "-o",
+        p(&tmp.path().join("s")),
+        "--fps",
+        "30",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("f_10.obj") && e.contains("line 6") && e.contains("frame 2"),
+        "{e}"
+    );
+    assert!(!tmp.path().join("s").exists(), "nothing written on error");
+
+    // Natural order: f_10 is the last frame, so a vertex-count mismatch there names frame 2.
+    std::fs::write(dir.join("f_10.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
+    let o = surfcap(&[
+        "import",
+        p(&dir),
+        "-o",
+        p(&tmp.path().join("s")),
+        "--fps",
+        "30",
+    ]);
+    let e = stderr(&o);
+    assert!(
+        e.contains("f_10.obj") && e.contains("3 vertices, expected 4") && e.contains("frame 2"),
+        "{e}"
+    );
+
+    // No frame rate: a clear request for one.
+    std::fs::write(dir.join("f_10.obj"), tri).unwrap();
+    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--fps"), "{}", stderr(&o));
+    let o = surfcap(&[
+        "import",
+        p(&dir),
+        "-o",
+        p(&tmp.path().join("s")),
+        "--fps",
+        "30",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let o = surfcap(&["info", p(&tmp.path().join("missing"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing"), "{}", stderr(&o));
+
+    let o = surfcap(&[
+        "export",
+        p(&tmp.path().join("s")),
+        "--format",
+        "fbx",
+        "-o",
+        "x",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "bad arguments are user errors");
+
+    let o = surfcap(&["info", p(&tmp.path().join("missing")), "--json"]);
+    let v: serde_json::Value =
+        serde_json::from_str(stderr(&o).trim()).expect("--json errors are JSON");
+    assert!(v["error"].as_str().unwrap().contains("missing"));
+}
+
+#[test]
+fn bad_npy_and_ply_are_reported_with_what_was_expected() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = tmp.path().join("seq");
+    std::fs::create_dir(&seq).unwrap();
+    std::fs::write(
+        seq.join("template.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let npy = |descr: &str, shape: &str, data: usize| {
+        let header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+        let h = format!("{header}{}\n", " ".repeat(128 - 10 - header.len() - 1));
+        let mut b = b"\x93NUMPY\x01\x00".to_vec();
+        b.extend_from_slice(&(h.len() as u16).to_le_bytes());
+        b.extend_from_slice(h.as_bytes());
+        b.extend_from_slice(&vec![0u8; data]);
+        std::fs::write(seq.join("positions.npy"), b).unwrap();
+        let o = surfcap(&["info", p(&seq), "--fps", "30"]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(stderr(&o).contains("positions.npy"), "{}", stderr(&o));
+        stderr(&o)
+    };
+    assert!(npy("<i4", "(1, 3, 3)", 36).contains("expected float32"));
+    assert!(
+        npy("<f4", "(1, 4, 3)", 48)
+            .contains("expected positions of the template's 3 vertices of shape [*, 3, 3]")
+    );
+    assert!(npy("<f4", "(2, 3, 3)", 40).contains("file holds only 40"));
+    let ply = tmp.path().join("x.ply");
+    std::fs::write(&ply, "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0").unwrap();
+    let o = surfcap(&["info", p(&ply), "--fps", "30"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("x.ply") && stderr(&o).contains("file ends"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn manifest_with_tags_and_a_point_cache() {
+    let tmp = tempfile::tempdir().unwrap();
+    let demo = tmp.path().join("demo");
+    assert!(
+        surfcap(&["demo", "-o", p(&demo), "--quiet"])
+            .status
+            .success()
+    );
+    let manifest = tmp.path().join("surfcap.toml");
+    std::fs::write(
+        &manifest,
+        format!(
+            "name = \"tube\"\nfps = 30\nup_axis = \"+y\"\nunits = \"m\"\n\n[[sequence]]\nsource = \"{}\"\ntags = [\"crawl\"]\n\n\
+             [[sequence]]\nsource = \"{}\"\ntemplate = \"{}\"\nname = \"curl_from_pc2\"\n",
+            p(&demo.join("export/obj/slither")),
+            p(&demo.join("export/pc2/curl.pc2")),
+            p(&demo.join("export/pc2/template.obj"))
+        ),
+    )
+    .unwrap();
+    let o = surfcap(&["info", p(&manifest), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["subject"], "tube");
+    assert_eq!(v["sequences"][0]["tags"], serde_json::json!(["crawl"]));
+    assert_eq!(v["sequences"][1]["name"], "curl_from_pc2");
+    assert_eq!(v["frames"], 120);
+
+    std::fs::write(
+        &manifest,
+        "name = \"tube\"\nfps = -3\n\n[[sequence]]\nsource = \"nowhere\"\n",
+    )
+    .unwrap();
+    let o = surfcap(&["info", p(&manifest)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("surfcap.toml") && stderr(&o).contains("line 2"),
+        "{}",
+        stderr(&o)
+    );
+    std::fs::write(&manifest, "name = \"tube\"\nfrobnicate = 1\n").unwrap();
+    let o = surfcap(&["info", p(&manifest)]);
+    assert!(
+        stderr(&o).contains("line 2") && stderr(&o).contains("frobnicate"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -1,0 +1,10 @@
+//! Any bytes: the OBJ reader returns a mesh or an error, never panics; a mesh it returns
+//! has a valid topology or a clear error for it.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    if let Ok(m) = surfcap_mesh::io::obj::parse_obj(data) {
+        let _ = m.topology();
+    }
+});
