@@ -493,3 +493,58 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
         units,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
+
+    fn subject() -> Subject {
+        let t = Topology::new(4, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], None).unwrap();
+        let base = [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1.];
+        let mut p = base.to_vec();
+        p.extend(base.iter().map(|x| x * 2.0 + 0.5));
+        let a = Sequence::new("a", 4, p)
+            .unwrap()
+            .with_tags(vec!["walk".into()]);
+        let b = Sequence::new("b", 4, base.iter().map(|x| x - 1.0).collect())
+            .unwrap()
+            .with_labels(vec![FrameLabel::Synthetic])
+            .unwrap();
+        Subject::new("tet", t, vec![a, b], 25.0, UpAxis::PosZ, Units::metres()).unwrap()
+    }
+
+    #[test]
+    fn round_trips_sequences_labels_and_metadata() {
+        let s = subject();
+        let mut buf = Vec::new();
+        write_glb(&mut buf, &s).unwrap();
+        let g = parse_glb(&buf).unwrap();
+        assert_eq!(g.fps, Some(25.0));
+        assert_eq!(g.up_axis, Some(UpAxis::PosZ));
+        assert_eq!(g.topology, *s.topology());
+        assert_eq!(g.sequences.len(), 2);
+        for (x, y) in g.sequences.iter().zip(s.sequences()) {
+            assert_eq!((&x.name, &x.tags, &x.labels), (&y.name, &y.tags, &y.labels));
+            assert_eq!(x.positions(), y.positions());
+        }
+    }
+
+    #[test]
+    fn damaged_files_are_errors_not_crashes() {
+        let mut buf = Vec::new();
+        write_glb(&mut buf, &subject()).unwrap();
+        assert_eq!(parse_glb(&[]).unwrap_err().kind, crate::ErrorKind::Empty);
+        for cut in [12, 40, buf.len() / 2, buf.len() - 8] {
+            assert!(parse_glb(&buf[..cut]).is_err(), "cut at {cut}");
+        }
+        // Shrink the declared binary chunk: accessors no longer fit.
+        let json_len = u32::from_le_bytes(buf[12..16].try_into().unwrap()) as usize;
+        let bin_at = 20 + json_len;
+        let mut short = buf[..bin_at + 8 + 16].to_vec();
+        short[bin_at..bin_at + 4].copy_from_slice(&16u32.to_le_bytes());
+        let n = short.len() as u32;
+        short[8..12].copy_from_slice(&n.to_le_bytes());
+        assert!(parse_glb(&short).is_err());
+    }
+}

@@ -90,13 +90,59 @@ impl<R: Read> Read for Counting<R> {
     }
 }
 
+/// Fills `buf` as far as the reader allows; returns how many bytes were read.
+fn read_up_to(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..])? {
+            0 => break,
+            k => n += k,
+        }
+    }
+    Ok(n)
+}
+
 /// Reads an array from `reader`, whose total length is `total_len` bytes.
 pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<NpyArray<T>> {
     if total_len == 0 {
         return Err(err!(Empty, "empty file: expected a .npy array"));
     }
+    // Check the declared header length against the file size before npyz allocates a buffer
+    // of that length (a damaged length field would otherwise ask for gigabytes; found by the
+    // fuzzer, see fuzz/FINDINGS.md).
+    let mut reader = reader;
+    let mut prefix = [0u8; 12];
+    let got = read_up_to(&mut reader, &mut prefix).map_err(|e| err!(Io, "cannot read: {e}"))?;
+    const MAGIC: &[u8; 6] = b"\x93NUMPY";
+    if got < 10 || &prefix[..6] != MAGIC {
+        return Err(if got < 10 && prefix[..got.min(6)] == MAGIC[..got.min(6)] {
+            err!(Truncated, "file ends inside the .npy header")
+        } else {
+            err!(Syntax, "no .npy magic string: expected a NumPy array file")
+        });
+    }
+    let (len_bytes, header_len) = match prefix[6] {
+        1 => (2u64, u16::from_le_bytes([prefix[8], prefix[9]]) as u64),
+        2 | 3 if got >= 12 => (
+            4,
+            u32::from_le_bytes([prefix[8], prefix[9], prefix[10], prefix[11]]) as u64,
+        ),
+        2 | 3 => return Err(err!(Truncated, "file ends inside the .npy header")),
+        v => {
+            return Err(err!(
+                Unsupported,
+                ".npy format version {v}: expected 1, 2 or 3"
+            ));
+        }
+    };
+    if 8 + len_bytes + header_len > total_len {
+        return Err(err!(
+            Truncated,
+            "header declares {header_len} bytes of header but the file has only {total_len} bytes"
+        ));
+    }
     let mut r = Counting {
-        inner: reader,
+        inner: std::io::Cursor::new(&prefix[..got]).chain(reader),
         count: 0,
     };
     let header = npyz::NpyHeader::from_reader(&mut r).map_err(|e| match e.kind() {

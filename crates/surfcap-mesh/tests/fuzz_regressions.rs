@@ -1,0 +1,20 @@
+//! Inputs the fuzzers found (see fuzz/FINDINGS.md): each must give an error, quickly and
+//! without a crash or a huge allocation.
+
+use std::path::Path;
+
+use surfcap_mesh::ErrorKind;
+use surfcap_mesh::io::npy::read_npy;
+
+fn case(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fuzz_regressions")
+        .join(name)
+}
+
+#[test]
+fn npy_header_length_of_3_gb_is_an_error_not_an_allocation() {
+    let e = read_npy::<f32>(&case("npy_header_length_3gb.npy")).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Truncated, "{e}");
+    assert!(e.to_string().contains("npy_header_length_3gb.npy"), "{e}");
+}
