@@ -18,3 +18,10 @@ fn npy_header_length_of_3_gb_is_an_error_not_an_allocation() {
     assert_eq!(e.kind, ErrorKind::Truncated, "{e}");
     assert!(e.to_string().contains("npy_header_length_3gb.npy"), "{e}");
 }
+
+#[test]
+fn glb_with_a_header_length_below_12_is_an_error_not_a_panic() {
+    let bytes = std::fs::read(case("glb_length_underflow.bin")).unwrap();
+    assert!(surfcap_mesh::io::glb::parse_glb(&bytes).is_err());
+    assert!(surfcap_mesh::io::pc2::parse_pc2(&bytes).is_err());
+}

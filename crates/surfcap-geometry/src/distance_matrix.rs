@@ -1,0 +1,189 @@
+//! All-pairs pose distance matrix of a subject (thesis 2.3.2), computed in parallel.
+//!
+//! The motion-plane alignment of every pair (eq. 2.3) needs only weighted inner products of the
+//! frames' centred horizontal coordinates, so they come from three dense matrix products (faer)
+//! instead of F^2 passes over the vertices. The deformation distances then cost one pass over
+//! the triangles per pair, with per-frame triangle frames precomputed once.
+//!
+//! The matrix is symmetric by construction: d(i, j) is computed for i < j (deforming i into j)
+//! and mirrored, as the thesis treats the distance as symmetric ("to deform pose i into j or
+//! vice versa"); the two directions differ only in the stretch term's ||S - I|| vs ||S^-1 - I||.
+//! Every entry is computed independently in a fixed order: the result does not depend on the
+//! number of threads.
+
+use faer::Mat;
+use rayon::prelude::*;
+use surfcap_mesh::{Progress, Subject};
+
+use crate::motion_plane_alignment::{plane_axes, rotation_about_up};
+use crate::pose_distance::{PoseMetric, deformation_distance, triangle_frames};
+
+/// Parameters of a distance matrix.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DistanceParams {
+    pub metric: PoseMetric,
+    /// Weight of the stretch term (eq. 2.13: w_m = 0.01 for all triangles).
+    pub w: f64,
+    /// Per-vertex alignment weights of eq. 2.2-2.5 (`None`: all ones).
+    pub vertex_weights: Option<Vec<f64>>,
+}
+
+impl Default for DistanceParams {
+    fn default() -> Self {
+        DistanceParams {
+            metric: PoseMetric::Deformation,
+            w: 0.01,
+            vertex_weights: None,
+        }
+    }
+}
+
+/// An F x F matrix over the subject's global frame index, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DistanceMatrix {
+    pub n: usize,
+    pub values: Vec<f64>,
+    /// Largest number of zero-area triangles skipped in one pair (deformation metrics).
+    pub max_skipped_triangles: usize,
+}
+
+impl DistanceMatrix {
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.values[i * self.n + j]
+    }
+}
+
+/// Pairwise alignment data: for frames i (target) and j (moved onto i),
+/// `cross[i][j]` = sum w (u_i u_j + v_i v_j) and `wedge[i][j]` = sum w (u_i v_j - v_i u_j) over
+/// centred horizontal coordinates, and `vert[i][j]` = sum w y_i y_j over vertical coordinates.
+pub struct AlignmentGram {
+    pub n: usize,
+    pub cross: Mat<f64>,
+    pub wedge: Mat<f64>,
+    pub vert: Mat<f64>,
+}
+
+impl AlignmentGram {
+    /// The up-axis angle that aligns frame j onto frame i (eq. 2.3, with atan2).
+    pub fn theta(&self, i: usize, j: usize) -> f64 {
+        self.wedge[(i, j)].atan2(self.cross[(i, j)])
+    }
+
+    /// The residual of eq. 2.2 after the optimal motion-plane alignment.
+    pub fn euclidean(&self, i: usize, j: usize) -> f64 {
+        let (a, b) = (self.cross[(i, j)], self.wedge[(i, j)]);
+        let horizontal = self.cross[(i, i)] + self.cross[(j, j)] - 2.0 * (a * a + b * b).sqrt();
+        let vertical = self.vert[(i, i)] + self.vert[(j, j)] - 2.0 * self.vert[(i, j)];
+        horizontal.max(0.0) + vertical.max(0.0)
+    }
+}
+
+/// Builds the alignment Gram matrices of all frames.
+pub fn alignment_gram(subject: &Subject, weights: Option<&[f64]>) -> AlignmentGram {
+    let (iu, iv, iw) = plane_axes(subject.up_axis);
+    let f = subject.n_frames();
+    let nv = subject.topology().n_vertices();
+    let w = |k: usize| weights.map_or(1.0, |w| w[k]);
+    let sw: f64 = (0..nv).map(w).sum::<f64>().max(f64::MIN_POSITIVE);
+    let mut u = Mat::<f64>::zeros(f, nv);
+    let mut v = Mat::<f64>::zeros(f, nv);
+    let mut y = Mat::<f64>::zeros(f, nv);
+    for g in 0..f {
+        let p = subject.frame(g).expect("global index in range");
+        let (mut cu, mut cv) = (0.0, 0.0);
+        for k in 0..nv {
+            cu += w(k) * p[3 * k + iu] as f64;
+            cv += w(k) * p[3 * k + iv] as f64;
+        }
+        let (cu, cv) = (cu / sw, cv / sw);
+        for k in 0..nv {
+            let sq = w(k).sqrt();
+            u[(g, k)] = sq * (p[3 * k + iu] as f64 - cu);
+            v[(g, k)] = sq * (p[3 * k + iv] as f64 - cv);
+            y[(g, k)] = sq * p[3 * k + iw] as f64;
+        }
+    }
+    let cross = &u * u.transpose() + &v * v.transpose();
+    let wedge = &u * v.transpose() - &v * u.transpose();
+    let vert = &y * y.transpose();
+    AlignmentGram {
+        n: f,
+        cross,
+        wedge,
+        vert,
+    }
+}
+
+/// The all-pairs distance matrix of the subject's frames (global frame index order).
+pub fn distance_matrix(
+    subject: &Subject,
+    params: &DistanceParams,
+    progress: &dyn Progress,
+) -> DistanceMatrix {
+    let n = subject.n_frames();
+    let gram = alignment_gram(subject, params.vertex_weights.as_deref());
+    let mut values = vec![0.0f64; n * n];
+    let mut max_skipped = 0usize;
+    match params.metric {
+        PoseMetric::Euclidean => {
+            for i in 0..n {
+                for j in 0..n {
+                    values[i * n + j] = if i == j {
+                        0.0
+                    } else {
+                        gram.euclidean(i.min(j), i.max(j))
+                    };
+                }
+            }
+        }
+        PoseMetric::Deformation | PoseMetric::DeformationLog => {
+            let log_s = params.metric == PoseMetric::DeformationLog;
+            progress.start("triangle frames", n as u64);
+            let frames: Vec<Vec<f64>> = (0..n)
+                .into_par_iter()
+                .map(|g| {
+                    let mut out = Vec::new();
+                    triangle_frames(
+                        subject.topology(),
+                        subject.frame(g).expect("in range"),
+                        &mut out,
+                    );
+                    progress.advance(1);
+                    out
+                })
+                .collect();
+            progress.finish();
+            progress.start("pose distances", (n * n.saturating_sub(1) / 2) as u64);
+            let rows: Vec<(Vec<f64>, usize)> = (0..n)
+                .into_par_iter()
+                .map(|i| {
+                    let mut row = vec![0.0; n - i - 1];
+                    let mut skipped = 0;
+                    for (k, j) in (i + 1..n).enumerate() {
+                        let g = rotation_about_up(subject.up_axis, gram.theta(i, j));
+                        let (d, s) =
+                            deformation_distance(&frames[i], &frames[j], &g, params.w, log_s);
+                        row[k] = d;
+                        skipped = skipped.max(s);
+                    }
+                    progress.advance(row.len() as u64);
+                    (row, skipped)
+                })
+                .collect();
+            progress.finish();
+            for (i, (row, skipped)) in rows.into_iter().enumerate() {
+                max_skipped = max_skipped.max(skipped);
+                for (k, d) in row.into_iter().enumerate() {
+                    let j = i + 1 + k;
+                    values[i * n + j] = d;
+                    values[j * n + i] = d;
+                }
+            }
+        }
+    }
+    DistanceMatrix {
+        n,
+        values,
+        max_skipped_triangles: max_skipped,
+    }
+}

@@ -1,0 +1,16 @@
+//! surfcap pose geometry (thesis sections 2.3 and 2.4): rigid alignment, deformation gradients,
+//! polar decomposition, rotation log/exp, pose distances and their all-pairs matrix,
+//! differential operators, Poisson reconstruction and pose interpolation.
+//!
+//! One algorithm per module, named after what it computes; each cites the thesis equations it
+//! implements. Expensive precomputation (per-frame triangle frames, Cholesky factorisations) is
+//! separate from per-query work.
+
+pub mod deformation_gradient;
+pub mod distance_matrix;
+pub mod gradient_operator;
+pub mod motion_plane_alignment;
+pub mod poisson_reconstruction;
+pub mod polar_decomposition;
+pub mod pose_distance;
+pub mod rotation_log_exp;

@@ -1,0 +1,224 @@
+//! Poisson reconstruction from target per-triangle gradients (thesis eq. 2.48):
+//! G^T D G X = G^T D G~, with G and D of a fixed pose.
+//!
+//! The system is singular: X + a constant per connected component solves it too. We remove that
+//! null space by pinning the first vertex of every component to 0, factor the reduced matrix
+//! once (sparse Cholesky, faer, sequential: the solve of a 2-core rayon run was 40 times slower,
+//! see DEPENDENCIES.md), and after each solve translate every component so its vertex mean is
+//! where the caller wants it (eq. 2.49 needs each one-sided solution pinned to the linearly
+//! interpolated centroid, PAPER-NOTES). A tiny diagonal shift (1e-10 of the mean diagonal)
+//! keeps the factorisation defined when some vertex touches only zero-area triangles.
+//!
+//! Precompute/solve split (libigl's `*_precomputation` / `*_solve`): `PoissonSolver::new` does
+//! the symbolic and numeric factorisation; `solve` is two triangular solves and a divergence.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Conj, Mat, Par, Side};
+use nalgebra::{Matrix3, Vector3};
+use surfcap_mesh::{Components, Topology, connected_components};
+
+use crate::gradient_operator::GradientOperator;
+
+/// A factorised Poisson system for one pose of a mesh.
+pub struct PoissonSolver {
+    op: GradientOperator,
+    components: Components,
+    /// Reduced unknown index of each vertex; `None` for the pinned ones.
+    reduced: Vec<Option<usize>>,
+    symbolic: SymbolicCholesky<usize>,
+    numeric: Vec<f64>,
+}
+
+/// Why a factorisation failed (it should not on a mesh with positive areas).
+#[derive(Debug)]
+pub struct PoissonError(pub String);
+
+impl std::fmt::Display for PoissonError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Poisson system: {}", self.0)
+    }
+}
+
+impl std::error::Error for PoissonError {}
+
+impl PoissonSolver {
+    /// Builds and factorises the system for `topology` in the pose `positions`.
+    pub fn new(topology: &Topology, positions: &[f32]) -> Result<Self, PoissonError> {
+        let op = GradientOperator::new(topology, positions);
+        let components = connected_components(topology);
+        let n = topology.n_vertices();
+        let mut pinned = vec![false; components.count];
+        let mut reduced = vec![None; n];
+        let mut next = 0usize;
+        for v in 0..n {
+            let c = components.labels[v] as usize;
+            if pinned[c] {
+                reduced[v] = Some(next);
+                next += 1;
+            } else {
+                pinned[c] = true;
+            }
+        }
+        let trip: Vec<Triplet<usize, usize, f64>> = op
+            .laplacian_triplets()
+            .into_iter()
+            .filter_map(|t| Some(Triplet::new(reduced[t.row]?, reduced[t.col]?, t.val)))
+            .filter(|t| t.row >= t.col)
+            .collect();
+        let mean_diag = {
+            let d: f64 = trip.iter().filter(|t| t.row == t.col).map(|t| t.val).sum();
+            if next > 0 {
+                (d / next as f64).max(f64::MIN_POSITIVE)
+            } else {
+                1.0
+            }
+        };
+        let mut trip = trip;
+        trip.extend((0..next).map(|k| Triplet::new(k, k, 1e-10 * mean_diag)));
+        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(next, next, &trip)
+            .map_err(|e| PoissonError(format!("cannot assemble: {e:?}")))?;
+        let symbolic = factorize_symbolic_cholesky(
+            mat.symbolic(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| PoissonError(format!("symbolic factorisation: {e:?}")))?;
+        let mut numeric = vec![0.0f64; symbolic.len_val()];
+        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+        symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut numeric,
+                mat.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut MemBuffer::new(scratch)),
+                Default::default(),
+            )
+            .map_err(|e| PoissonError(format!("numeric factorisation: {e:?}")))?;
+        Ok(PoissonSolver {
+            op,
+            components,
+            reduced,
+            symbolic,
+            numeric,
+        })
+    }
+
+    pub fn operator(&self) -> &GradientOperator {
+        &self.op
+    }
+
+    pub fn components(&self) -> &Components {
+        &self.components
+    }
+
+    /// Vertex mean of every component of `positions`.
+    pub fn component_centroids(&self, positions: &[f32]) -> Vec<Vector3<f64>> {
+        let mut sum = vec![Vector3::zeros(); self.components.count];
+        let mut cnt = vec![0usize; self.components.count];
+        for (v, &c) in self.components.labels.iter().enumerate() {
+            sum[c as usize] += crate::deformation_gradient::vertex(positions, v as u32);
+            cnt[c as usize] += 1;
+        }
+        sum.iter()
+            .zip(&cnt)
+            .map(|(s, &n)| s / n.max(1) as f64)
+            .collect()
+    }
+
+    /// Vertices whose gradients best match `targets` (one 3x3 G~_m per triangle, in the
+    /// convention of [`GradientOperator::gradients`]), each component translated so that its
+    /// vertex mean is `centroids[c]`.
+    pub fn solve(&self, targets: &[Matrix3<f64>], centroids: &[Vector3<f64>]) -> Vec<f32> {
+        let div = self.op.divergence(targets);
+        let m = self.numeric_dim();
+        let mut rhs = Mat::<f64>::zeros(m, 3);
+        for (v, r) in self.reduced.iter().enumerate() {
+            if let Some(k) = r {
+                for c in 0..3 {
+                    rhs[(*k, c)] = div[v][c];
+                }
+            }
+        }
+        let scratch = self.symbolic.solve_in_place_scratch::<f64>(3, Par::Seq);
+        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(
+            &self.symbolic,
+            &self.numeric,
+        )
+        .solve_in_place_with_conj(
+            Conj::No,
+            rhs.as_mut(),
+            Par::Seq,
+            MemStack::new(&mut MemBuffer::new(scratch)),
+        );
+        let n = self.reduced.len();
+        let mut x = vec![Vector3::zeros(); n];
+        for (v, r) in self.reduced.iter().enumerate() {
+            if let Some(k) = r {
+                x[v] = Vector3::new(rhs[(*k, 0)], rhs[(*k, 1)], rhs[(*k, 2)]);
+            }
+        }
+        // Translate every component onto its requested centroid.
+        let mut sum = vec![Vector3::zeros(); self.components.count];
+        let mut cnt = vec![0usize; self.components.count];
+        for (v, &c) in self.components.labels.iter().enumerate() {
+            sum[c as usize] += x[v];
+            cnt[c as usize] += 1;
+        }
+        let shift: Vec<Vector3<f64>> = (0..self.components.count)
+            .map(|c| centroids[c] - sum[c] / cnt[c].max(1) as f64)
+            .collect();
+        x.iter()
+            .zip(&self.components.labels)
+            .flat_map(|(p, &c)| {
+                let q = p + shift[c as usize];
+                [q.x as f32, q.y as f32, q.z as f32]
+            })
+            .collect()
+    }
+
+    fn numeric_dim(&self) -> usize {
+        self.reduced.iter().filter(|r| r.is_some()).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reproduces_a_mesh_from_its_own_gradients_with_several_components() {
+        // Two separate tetrahedra.
+        let t = Topology::new(
+            8,
+            vec![
+                [0, 2, 1],
+                [0, 1, 3],
+                [1, 2, 3],
+                [0, 3, 2],
+                [4, 6, 5],
+                [4, 5, 7],
+                [5, 6, 7],
+                [4, 7, 6],
+            ],
+            None,
+        )
+        .unwrap();
+        let p: Vec<f32> = vec![
+            0.1, 0.0, 0.0, 1.0, 0.2, 0.0, 0.0, 1.3, 0.1, 0.2, 0.1, 1.5, 5.0, 0.0, 0.0, 6.0, 0.1,
+            0.3, 5.2, 1.0, 0.0, 5.1, 0.2, 1.0,
+        ];
+        let s = PoissonSolver::new(&t, &p).unwrap();
+        assert_eq!(s.components().count, 2);
+        let g = s.operator().gradients(&p);
+        let back = s.solve(&g, &s.component_centroids(&p));
+        for (a, b) in back.iter().zip(&p) {
+            assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+        }
+    }
+}
