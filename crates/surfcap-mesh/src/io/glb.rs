@@ -342,7 +342,57 @@ pub fn parse_glb(bytes: &[u8]) -> Result<GlbAnimation> {
     }
 }
 
+/// Checks the GLB container (header and chunk lengths) before the gltf crate splits it: its
+/// splitter subtracts lengths without checking them (found by the fuzzer, see fuzz/FINDINGS.md).
+fn check_container(bytes: &[u8]) -> Result<&[u8]> {
+    let u32_at = |k: usize| {
+        bytes
+            .get(k..k + 4)
+            .map(|b| u32::from_le_bytes(b.try_into().unwrap()) as usize)
+    };
+    if bytes.len() < 20 || &bytes[..4] != b"glTF" {
+        return Err(err!(
+            Syntax,
+            "no glTF binary header: expected a .glb file starting with 'glTF'"
+        ));
+    }
+    if u32_at(4) != Some(2) {
+        return Err(err!(
+            Unsupported,
+            "glTF binary version {}: expected 2",
+            u32_at(4).unwrap_or(0)
+        ));
+    }
+    let length = u32_at(8).unwrap_or(0);
+    if length < 20 || length > bytes.len() {
+        return Err(err!(
+            Truncated,
+            "header declares {length} bytes, the file has {}",
+            bytes.len()
+        ));
+    }
+    let json_len = u32_at(12).unwrap_or(0);
+    if &bytes[16..20] != b"JSON" || 20 + json_len > length {
+        return Err(err!(
+            Syntax,
+            "the first chunk is not a JSON chunk that fits in the file"
+        ));
+    }
+    let bin_at = 20 + json_len.div_ceil(4) * 4;
+    if bin_at + 8 <= length {
+        let bin_len = u32_at(bin_at).unwrap_or(usize::MAX);
+        if bin_len > length - bin_at - 8 {
+            return Err(err!(
+                Truncated,
+                "binary chunk of {bin_len} bytes does not fit in the file"
+            ));
+        }
+    }
+    Ok(&bytes[..length])
+}
+
 fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
+    let bytes = check_container(bytes)?;
     let g =
         gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
     let blob = g.blob.as_deref();
