@@ -391,11 +391,53 @@ fn check_container(bytes: &[u8]) -> Result<&[u8]> {
     Ok(&bytes[..length])
 }
 
+/// Checks that an accessor's data lies inside the binary chunk, before any reader touches it.
+fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
+    let what = || format!("accessor {}", a.index());
+    let Some(view) = a.view() else {
+        return Err(err!(
+            Unsupported,
+            "{} has no buffer view (sparse-only data is not supported)",
+            what()
+        ));
+    };
+    if !matches!(view.buffer().source(), gltf::buffer::Source::Bin) {
+        return Err(err!(
+            Unsupported,
+            "{} refers to an external buffer: expected data inside the .glb",
+            what()
+        ));
+    }
+    let elem = a.size();
+    let stride = view.stride().unwrap_or(elem);
+    let count = a.count();
+    if count == 0 {
+        return Err(err!(Shape, "{} has no elements", what()));
+    }
+    let need = (count - 1)
+        .checked_mul(stride)
+        .and_then(|n| n.checked_add(elem))
+        .and_then(|n| n.checked_add(a.offset()));
+    let view_end = view.offset().checked_add(view.length());
+    match (need, view_end) {
+        (Some(n), Some(e)) if n <= view.length() && e <= blob_len => Ok(()),
+        _ => Err(err!(
+            Truncated,
+            "{} does not fit in its buffer view or the binary chunk",
+            what()
+        )),
+    }
+}
+
 fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
     let bytes = check_container(bytes)?;
     let g =
         gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
     let blob = g.blob.as_deref();
+    let blob_len = blob.map_or(0, <[u8]>::len);
+    for a in g.accessors() {
+        check_accessor(&a, blob_len)?;
+    }
     let buffers = |b: gltf::Buffer| match b.source() {
         gltf::buffer::Source::Bin => blob,
         _ => None,
@@ -586,7 +628,11 @@ mod tests {
         write_glb(&mut buf, &subject()).unwrap();
         assert_eq!(parse_glb(&[]).unwrap_err().kind, crate::ErrorKind::Empty);
         for cut in [12, 40, buf.len() / 2, buf.len() - 8] {
-            assert!(parse_glb(&buf[..cut]).is_err(), "cut at {cut}");
+            let e = parse_glb(&buf[..cut]).unwrap_err();
+            assert!(
+                !e.message.contains("malformed"),
+                "cut at {cut}: a panic was caught: {e}"
+            );
         }
         // Shrink the declared binary chunk: accessors no longer fit.
         let json_len = u32::from_le_bytes(buf[12..16].try_into().unwrap()) as usize;
@@ -595,6 +641,7 @@ mod tests {
         short[bin_at..bin_at + 4].copy_from_slice(&16u32.to_le_bytes());
         let n = short.len() as u32;
         short[8..12].copy_from_slice(&n.to_le_bytes());
-        assert!(parse_glb(&short).is_err());
+        let e = parse_glb(&short).unwrap_err();
+        assert!(!e.message.contains("malformed"), "a panic was caught: {e}");
     }
 }
