@@ -32,6 +32,12 @@ enum Command {
     Info(commands::info::Args),
     /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches or npy arrays.
     Export(commands::export::Args),
+    /// All-pairs pose distance matrix (thesis eq. 2.2, 2.13, 2.14) as .npy, cached.
+    Distance(commands::distance::Args),
+    /// Interpolate two poses, non-linearly (thesis eq. 2.45-2.49) or linearly.
+    Interpolate(commands::interpolate::Args),
+    /// Evaluations that produce the numbers of the thesis's tables.
+    Eval(commands::eval::Args),
     /// Run the main job on built-in data: build a subject, import it, export it.
     Demo(commands::demo::Args),
     /// Measure speed and memory (loading a subject).
@@ -82,6 +88,9 @@ fn main() -> ExitCode {
         Command::Import(a) => commands::import::run(&ctx, a),
         Command::Info(a) => commands::info::run(&ctx, a),
         Command::Export(a) => commands::export::run(&ctx, a),
+        Command::Distance(a) => commands::distance::run(&ctx, a),
+        Command::Interpolate(a) => commands::interpolate::run(&ctx, a),
+        Command::Eval(a) => commands::eval::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
     });

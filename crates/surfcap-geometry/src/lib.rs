@@ -13,4 +13,6 @@ pub mod motion_plane_alignment;
 pub mod poisson_reconstruction;
 pub mod polar_decomposition;
 pub mod pose_distance;
+pub mod pose_interpolation;
 pub mod rotation_log_exp;
+pub mod shape_distortion;

@@ -10,6 +10,7 @@
 pub mod atomic;
 pub mod cache;
 pub mod connected_components;
+pub mod derived_cache;
 pub mod error;
 pub mod export;
 pub mod frame_index;

@@ -357,6 +357,31 @@ impl Subject {
         Some(self.sequences[s].frame(f))
     }
 
+    /// Global index of a frame written `sequence:frame` (0-based frame), or a bare global index.
+    pub fn resolve_frame(&self, spec: &str) -> Result<usize> {
+        let bad = |why: String| err!(Metadata, "frame {spec:?}: {why}");
+        match spec.rsplit_once(':') {
+            Some((name, f)) => {
+                let (k, seq) = self.sequence(name).ok_or_else(|| {
+                    let known: Vec<&str> = self.sequences.iter().map(|s| s.name.as_str()).collect();
+                    bad(format!("no sequence {name:?}; the subject has {}", known.join(", ")))
+                })?;
+                let f: usize = f.parse().map_err(|_| bad(format!("{f:?} is not a frame number")))?;
+                if f >= seq.n_frames() {
+                    return Err(bad(format!("sequence {name:?} has frames 0..{}", seq.n_frames() - 1)));
+                }
+                Ok(self.index.global(k, f).expect("checked above"))
+            }
+            None => {
+                let g: usize = spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
+                if g >= self.n_frames() {
+                    return Err(bad(format!("the subject has global frames 0..{}", self.n_frames() - 1)));
+                }
+                Ok(g)
+            }
+        }
+    }
+
     /// Keeps only the named sequences, in the given order.
     pub fn select(self, names: &[String]) -> Result<Self> {
         if names.is_empty() {
@@ -422,6 +447,20 @@ mod tests {
         let e = Sequence::new("s", 3, p).unwrap_err();
         assert_eq!(e.kind, ErrorKind::NonFinite);
         assert_eq!(e.location, Some(crate::Location::Frame(1)));
+    }
+
+    #[test]
+    fn resolves_frame_specs() {
+        let topo = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
+        let a = Sequence::new("a:b", 3, vec![0.0; 18]).unwrap();
+        let c = Sequence::new("c", 3, vec![0.0; 27]).unwrap();
+        let s = Subject::new("s", topo, vec![a, c], 30.0, UpAxis::PosY, Units::metres()).unwrap();
+        assert_eq!(s.resolve_frame("c:2").unwrap(), 4);
+        assert_eq!(s.resolve_frame("a:b:1").unwrap(), 1);
+        assert_eq!(s.resolve_frame("3").unwrap(), 3);
+        assert!(s.resolve_frame("c:3").is_err());
+        assert!(s.resolve_frame("d:0").unwrap_err().to_string().contains("a:b, c"));
+        assert!(s.resolve_frame("5").is_err());
     }
 
     #[test]

@@ -2,9 +2,12 @@
 
 pub mod bench;
 pub mod demo;
+pub mod distance;
+pub mod eval;
 pub mod export;
 pub mod import;
 pub mod info;
+pub mod interpolate;
 
 use std::path::Path;
 

@@ -53,6 +53,19 @@ impl NpyElement for f32 {
     }
 }
 
+impl NpyElement for f64 {
+    const EXPECTED: &'static str = "float64 ('<f8') or float32 ('<f4')";
+    fn accepts(kind: TypeChar, size: u64) -> bool {
+        kind == TypeChar::Float && (size == 4 || size == 8)
+    }
+    fn decode(_: TypeChar, b: &[u8]) -> Option<f64> {
+        Some(match b.len() {
+            4 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            _ => f64::from_le_bytes(b.try_into().ok()?),
+        })
+    }
+}
+
 impl NpyElement for u32 {
     const EXPECTED: &'static str = "an integer type ('<u4', '<i4', '<i8', ...)";
     fn accepts(kind: TypeChar, size: u64) -> bool {

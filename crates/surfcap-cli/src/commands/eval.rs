@@ -1,0 +1,82 @@
+//! `surfcap eval ...`: the numbers the issues ask for, reproducible by anyone.
+
+use std::path::PathBuf;
+
+use serde_json::json;
+use surfcap_geometry::pose_interpolation::NonlinearInterpolator;
+use surfcap_geometry::shape_distortion::{edge_length_distortion, volume_change};
+
+use super::{SourceOpts, print_json};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(subcommand)]
+    pub what: What,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum What {
+    /// Linear vs non-linear interpolation at lambda = 0.5 (thesis 2.4, Fig. 2.8): edge-length
+    /// distortion and volume change, relative to the linear blend of the inputs' own measures.
+    Interpolation {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// Pose pairs as FROM,TO (each sequence:frame or a global frame), repeatable.
+        #[arg(long = "pair", required = true)]
+        pairs: Vec<String>,
+        /// Interpolation parameter.
+        #[arg(long, default_value_t = 0.5)]
+        lambda: f64,
+        /// Stretch interpolation: linear (eq. 2.45) or log (eq. 2.46).
+        #[arg(long, default_value = "linear")]
+        stretch: String,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let What::Interpolation { subject, pairs, lambda, stretch, source } = a.what;
+    let stretch = super::interpolate::stretch_of(&stretch)?;
+    let s = super::open(ctx, &subject, &source)?;
+    let topo = s.topology();
+    let mut rows = Vec::new();
+    for pair in &pairs {
+        let (from, to) = pair.split_once(',').ok_or_else(|| anyhow::anyhow!("--pair {pair:?}: expected FROM,TO"))?;
+        let (gi, gj) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
+        let pi = s.frame(gi).expect("resolved");
+        let t0 = std::time::Instant::now();
+        let interp = NonlinearInterpolator::new(topo, pi, s.frame(gj).expect("resolved"), s.up_axis)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let nonlinear = interp.at(lambda, stretch);
+        let secs = t0.elapsed().as_secs_f64();
+        let linear = interp.linear(lambda);
+        let pj = interp.aligned_target();
+        let row = json!({
+            "pair": pair,
+            "lambda": lambda,
+            "linear": { "edge_distortion": edge_length_distortion(topo, pi, pj, &linear, lambda), "volume_change": volume_change(topo, pi, pj, &linear, lambda) },
+            "nonlinear": { "edge_distortion": edge_length_distortion(topo, pi, pj, &nonlinear, lambda), "volume_change": volume_change(topo, pi, pj, &nonlinear, lambda) },
+            "nonlinear_seconds": secs,
+        });
+        rows.push(row);
+    }
+    if ctx.json {
+        print_json(&json!({ "subject": s.name, "rows": rows }));
+        return Ok(());
+    }
+    println!("subject {} ({} vertices, {} triangles), lambda = {lambda}", s.name, topo.n_vertices(), topo.n_triangles());
+    println!("{:<28} {:>14} {:>14} {:>14} {:>14} {:>9}", "pair", "edge lin.", "edge nonlin.", "volume lin.", "volume nonlin.", "time");
+    for r in &rows {
+        println!(
+            "{:<28} {:>14.5} {:>14.5} {:>14.5} {:>14.5} {:>8.3}s",
+            r["pair"].as_str().unwrap_or(""),
+            r["linear"]["edge_distortion"].as_f64().unwrap_or(f64::NAN),
+            r["nonlinear"]["edge_distortion"].as_f64().unwrap_or(f64::NAN),
+            r["linear"]["volume_change"].as_f64().unwrap_or(f64::NAN),
+            r["nonlinear"]["volume_change"].as_f64().unwrap_or(f64::NAN),
+            r["nonlinear_seconds"].as_f64().unwrap_or(f64::NAN),
+        );
+    }
+    Ok(())
+}
