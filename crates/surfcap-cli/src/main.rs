@@ -65,24 +65,17 @@ fn main() -> ExitCode {
         Err(e) => {
             let _ = e.print();
             return match e.kind() {
-                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
-                    ExitCode::SUCCESS
-                }
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => ExitCode::SUCCESS,
                 _ => ExitCode::from(1),
             };
         }
     };
-    let ctx = Ctx {
-        quiet: cli.quiet,
-        json: cli.json,
-    };
+    let ctx = Ctx { quiet: cli.quiet, json: cli.json };
     let json = cli.json;
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         default_hook(info);
-        eprintln!(
-            "surfcap: internal error (this is a bug; please report it with the command you ran)"
-        );
+        eprintln!("surfcap: internal error (this is a bug; please report it with the command you ran)");
     }));
     let result = std::panic::catch_unwind(|| match cli.command {
         Command::Import(a) => commands::import::run(&ctx, a),
@@ -99,10 +92,7 @@ fn main() -> ExitCode {
         Ok(Err(e)) => {
             if json {
                 let chain: Vec<String> = e.chain().skip(1).map(|c| c.to_string()).collect();
-                eprintln!(
-                    "{}",
-                    serde_json::json!({ "error": e.to_string(), "causes": chain })
-                );
+                eprintln!("{}", serde_json::json!({ "error": e.to_string(), "causes": chain }));
             } else {
                 eprintln!("surfcap: error: {e}");
                 for c in e.chain().skip(1) {

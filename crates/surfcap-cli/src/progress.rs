@@ -10,17 +10,11 @@ pub struct Bar {
 
 impl Bar {
     pub fn new(ctx: &crate::Ctx) -> Self {
-        let target = if ctx.quiet || ctx.json {
-            ProgressDrawTarget::hidden()
-        } else {
-            ProgressDrawTarget::stderr()
-        };
+        let target = if ctx.quiet || ctx.json { ProgressDrawTarget::hidden() } else { ProgressDrawTarget::stderr() };
         let bar = ProgressBar::with_draw_target(Some(0), target);
         bar.set_style(
-            ProgressStyle::with_template(
-                "{msg:28} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})",
-            )
-            .expect("static template is valid"),
+            ProgressStyle::with_template("{msg:28} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})")
+                .expect("static template is valid"),
         );
         Bar { bar }
     }

@@ -5,10 +5,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn surfcap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surfcap"))
-        .args(args)
-        .output()
-        .expect("surfcap runs")
+    Command::new(env!("CARGO_BIN_EXE_surfcap")).args(args).output().expect("surfcap runs")
 }
 
 fn p(path: &Path) -> &str {
@@ -74,32 +71,13 @@ fn import_info_export_on_real_data_with_valid_glb() {
 
     let o = surfcap(&["info", p(&subject)]);
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        text.contains("components") && text.contains("knight_Running_A"),
-        "{text}"
-    );
+    assert!(text.contains("components") && text.contains("knight_Running_A"), "{text}");
 
     let glb = tmp.path().join("knight.glb");
-    let o = surfcap(&[
-        "export",
-        p(&subject),
-        "--format",
-        "glb",
-        "-o",
-        p(&glb),
-        "--quiet",
-    ]);
+    let o = surfcap(&["export", p(&subject), "--format", "glb", "-o", p(&glb), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let crane = tmp.path().join("crane.glb");
-    let o = surfcap(&[
-        "export",
-        p(&data.join("vlasic2008/crane")),
-        "--format",
-        "glb",
-        "-o",
-        p(&crane),
-        "--quiet",
-    ]);
+    let o = surfcap(&["export", p(&data.join("vlasic2008/crane")), "--format", "glb", "-o", p(&crane), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     // A z-up subject is stored as is and turned upright by the node's rotation.
     let zup = tmp.path().join("cat_zup.glb");
@@ -133,10 +111,7 @@ fn import_info_export_on_real_data_with_valid_glb() {
             "--quiet",
         ]);
         assert!(o.status.success(), "{format}: {}", stderr(&o));
-        assert!(
-            out.join("frames.json").is_file() || out.join("meta.json").is_file(),
-            "{format}: no sidecar"
-        );
+        assert!(out.join("frames.json").is_file() || out.join("meta.json").is_file(), "{format}: no sidecar");
     }
 }
 
@@ -149,71 +124,35 @@ fn user_errors_exit_1_and_name_the_file_and_line() {
     std::fs::write(dir.join("f_1.obj"), tri).unwrap();
     std::fs::write(dir.join("f_2.obj"), tri).unwrap();
     std::fs::write(dir.join("f_10.obj"), tri.replace("f 1 3 4", "f 1 3 9")).unwrap();
-    let o = surfcap(&[
-        "import",
-        p(&dir),
-        "-o",
-        p(&tmp.path().join("s")),
-        "--fps",
-        "30",
-    ]);
+    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30"]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(
-        e.contains("f_10.obj") && e.contains("line 6") && e.contains("frame 2"),
-        "{e}"
-    );
+    assert!(e.contains("f_10.obj") && e.contains("line 6") && e.contains("frame 2"), "{e}");
     assert!(!tmp.path().join("s").exists(), "nothing written on error");
 
     // Natural order: f_10 is the last frame, so a vertex-count mismatch there names frame 2.
     std::fs::write(dir.join("f_10.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
-    let o = surfcap(&[
-        "import",
-        p(&dir),
-        "-o",
-        p(&tmp.path().join("s")),
-        "--fps",
-        "30",
-    ]);
+    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30"]);
     let e = stderr(&o);
-    assert!(
-        e.contains("f_10.obj") && e.contains("3 vertices, expected 4") && e.contains("frame 2"),
-        "{e}"
-    );
+    assert!(e.contains("f_10.obj") && e.contains("3 vertices, expected 4") && e.contains("frame 2"), "{e}");
 
     // No frame rate: a clear request for one.
     std::fs::write(dir.join("f_10.obj"), tri).unwrap();
     let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s"))]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--fps"), "{}", stderr(&o));
-    let o = surfcap(&[
-        "import",
-        p(&dir),
-        "-o",
-        p(&tmp.path().join("s")),
-        "--fps",
-        "30",
-        "--quiet",
-    ]);
+    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30", "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
 
     let o = surfcap(&["info", p(&tmp.path().join("missing"))]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("missing"), "{}", stderr(&o));
 
-    let o = surfcap(&[
-        "export",
-        p(&tmp.path().join("s")),
-        "--format",
-        "fbx",
-        "-o",
-        "x",
-    ]);
+    let o = surfcap(&["export", p(&tmp.path().join("s")), "--format", "fbx", "-o", "x"]);
     assert_eq!(o.status.code(), Some(1), "bad arguments are user errors");
 
     let o = surfcap(&["info", p(&tmp.path().join("missing")), "--json"]);
-    let v: serde_json::Value =
-        serde_json::from_str(stderr(&o).trim()).expect("--json errors are JSON");
+    let v: serde_json::Value = serde_json::from_str(stderr(&o).trim()).expect("--json errors are JSON");
     assert!(v["error"].as_str().unwrap().contains("missing"));
 }
 
@@ -222,11 +161,7 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
     let tmp = tempfile::tempdir().unwrap();
     let seq = tmp.path().join("seq");
     std::fs::create_dir(&seq).unwrap();
-    std::fs::write(
-        seq.join("template.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-    )
-    .unwrap();
+    std::fs::write(seq.join("template.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let npy = |descr: &str, shape: &str, data: usize| {
         let header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
         let h = format!("{header}{}\n", " ".repeat(128 - 10 - header.len() - 1));
@@ -241,31 +176,20 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
         stderr(&o)
     };
     assert!(npy("<i4", "(1, 3, 3)", 36).contains("expected float32"));
-    assert!(
-        npy("<f4", "(1, 4, 3)", 48)
-            .contains("expected positions of the template's 3 vertices of shape [*, 3, 3]")
-    );
+    assert!(npy("<f4", "(1, 4, 3)", 48).contains("expected positions of the template's 3 vertices of shape [*, 3, 3]"));
     assert!(npy("<f4", "(2, 3, 3)", 40).contains("file holds only 40"));
     let ply = tmp.path().join("x.ply");
     std::fs::write(&ply, "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0").unwrap();
     let o = surfcap(&["info", p(&ply), "--fps", "30"]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(
-        stderr(&o).contains("x.ply") && stderr(&o).contains("file ends"),
-        "{}",
-        stderr(&o)
-    );
+    assert!(stderr(&o).contains("x.ply") && stderr(&o).contains("file ends"), "{}", stderr(&o));
 }
 
 #[test]
 fn manifest_with_tags_and_a_point_cache() {
     let tmp = tempfile::tempdir().unwrap();
     let demo = tmp.path().join("demo");
-    assert!(
-        surfcap(&["demo", "-o", p(&demo), "--quiet"])
-            .status
-            .success()
-    );
+    assert!(surfcap(&["demo", "-o", p(&demo), "--quiet"]).status.success());
     let manifest = tmp.path().join("surfcap.toml");
     std::fs::write(
         &manifest,
@@ -286,23 +210,11 @@ fn manifest_with_tags_and_a_point_cache() {
     assert_eq!(v["sequences"][1]["name"], "curl_from_pc2");
     assert_eq!(v["frames"], 120);
 
-    std::fs::write(
-        &manifest,
-        "name = \"tube\"\nfps = -3\n\n[[sequence]]\nsource = \"nowhere\"\n",
-    )
-    .unwrap();
+    std::fs::write(&manifest, "name = \"tube\"\nfps = -3\n\n[[sequence]]\nsource = \"nowhere\"\n").unwrap();
     let o = surfcap(&["info", p(&manifest)]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(
-        stderr(&o).contains("surfcap.toml") && stderr(&o).contains("line 2"),
-        "{}",
-        stderr(&o)
-    );
+    assert!(stderr(&o).contains("surfcap.toml") && stderr(&o).contains("line 2"), "{}", stderr(&o));
     std::fs::write(&manifest, "name = \"tube\"\nfrobnicate = 1\n").unwrap();
     let o = surfcap(&["info", p(&manifest)]);
-    assert!(
-        stderr(&o).contains("line 2") && stderr(&o).contains("frobnicate"),
-        "{}",
-        stderr(&o)
-    );
+    assert!(stderr(&o).contains("line 2") && stderr(&o).contains("frobnicate"), "{}", stderr(&o));
 }

@@ -25,18 +25,14 @@ pub fn triangle_frame(p: &[f32], t: &[u32; 3]) -> Option<Matrix3<f64>> {
     let c = e1.cross(&e2);
     let len = c.norm();
     let scale = e1.norm_squared().max(e2.norm_squared());
-    if !(len > 1e-12 * scale) || scale == 0.0 {
+    if len <= 1e-12 * scale || scale == 0.0 {
         return None;
     }
     Some(Matrix3::from_columns(&[e1, e2, c / len]))
 }
 
 /// J = B A^-1 for every triangle; zero-area triangles (in either pose) get `None`.
-pub fn deformation_gradients(
-    topology: &Topology,
-    pi: &[f32],
-    pj: &[f32],
-) -> Vec<Option<Matrix3<f64>>> {
+pub fn deformation_gradients(topology: &Topology, pi: &[f32], pj: &[f32]) -> Vec<Option<Matrix3<f64>>> {
     topology
         .triangles()
         .iter()
@@ -58,10 +54,7 @@ mod tests {
         let pi = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
         let pj = [0.0f32, 0.0, 1.0, 0.0, 2.0, 1.0, -1.0, 0.0, 1.0];
         let j = deformation_gradients(&topo, &pi, &pj)[0].unwrap();
-        let (a, b) = (
-            triangle_frame(&pi, &[0, 1, 2]).unwrap(),
-            triangle_frame(&pj, &[0, 1, 2]).unwrap(),
-        );
+        let (a, b) = (triangle_frame(&pi, &[0, 1, 2]).unwrap(), triangle_frame(&pj, &[0, 1, 2]).unwrap());
         assert!((j * a - b).norm() < 1e-12);
         let same = deformation_gradients(&topo, &pi, &pi)[0].unwrap();
         assert!((same - Matrix3::identity()).norm() < 1e-12);

@@ -12,7 +12,7 @@
 //! number of threads.
 
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::{Accum, Mat};
 use rayon::prelude::*;
 use surfcap_mesh::{Progress, Subject};
 
@@ -31,11 +31,7 @@ pub struct DistanceParams {
 
 impl Default for DistanceParams {
     fn default() -> Self {
-        DistanceParams {
-            metric: PoseMetric::Deformation,
-            w: 0.01,
-            vertex_weights: None,
-        }
+        DistanceParams { metric: PoseMetric::Deformation, w: 0.01, vertex_weights: None }
     }
 }
 
@@ -101,18 +97,17 @@ fn row_block(
     let i1 = (i0 + ROW_BLOCK).min(n);
     let mut acc: Vec<Vec<f64>> = (i0..i1).map(|i| vec![0.0; n - i - 1]).collect();
     let mut skipped: Vec<Vec<usize>> = (i0..i1).map(|i| vec![0; n - i - 1]).collect();
-    let rot: Vec<Vec<nalgebra::Matrix3<f64>>> = (i0..i1)
-        .map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect())
-        .collect();
+    let rot: Vec<Vec<nalgebra::Matrix3<f64>>> =
+        (i0..i1).map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect()).collect();
     let len = frames.first().map_or(0, Vec::len);
     let step = TRIANGLE_CHUNK * FRAME_FLOATS;
     for start in (0..len).step_by(step) {
         let end = (start + step).min(len);
         for j in i0 + 1..n {
             let fj = &frames[j][start..end];
-            for i in i0..i1.min(j) {
-                let (r, k) = (i - i0, j - i - 1);
-                let (d, s) = deformation_distance(&frames[i][start..end], fj, &rot[r][k], w, log_s);
+            for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
+                let k = j - (i0 + r) - 1;
+                let (d, s) = deformation_distance(&fi[start..end], fj, &rot[r][k], w, log_s);
                 acc[r][k] += d;
                 skipped[r][k] += s;
             }
@@ -147,12 +142,10 @@ pub fn alignment_gram(subject: &Subject, weights: Option<&[f64]>) -> AlignmentGr
             y[(g, k)] = sq * p[3 * k + iw] as f64;
         }
     }
-    // Sequential GEMM on purpose: after faer's parallel kernels ran on the rayon workers, the
-    // scalar code later run on those workers (the deformation distances) was measured 6 times
-    // slower on this machine (2-core Xeon; consistent with AVX-512 upper state left dirty on the
-    // workers). These products are a small part of the work.
+    // faer's GEMM kernels are AVX-512; the distance loop clears the upper vector state before it
+    // runs (see `pose_distance::clear_upper_vector_state`), so the parallel product is safe.
     let product = |a: &Mat<f64>, b: &Mat<f64>, sign: f64, dst: &mut Mat<f64>, accum: Accum| {
-        matmul(dst.as_mut(), accum, a.as_ref(), b.transpose(), sign, Par::Seq)
+        matmul(dst.as_mut(), accum, a.as_ref(), b.transpose(), sign, faer::get_global_parallelism())
     };
     let mut cross = Mat::<f64>::zeros(f, f);
     product(&u, &u, 1.0, &mut cross, Accum::Replace);
@@ -162,20 +155,11 @@ pub fn alignment_gram(subject: &Subject, weights: Option<&[f64]>) -> AlignmentGr
     product(&v, &u, -1.0, &mut wedge, Accum::Add);
     let mut vert = Mat::<f64>::zeros(f, f);
     product(&y, &y, 1.0, &mut vert, Accum::Replace);
-    AlignmentGram {
-        n: f,
-        cross,
-        wedge,
-        vert,
-    }
+    AlignmentGram { n: f, cross, wedge, vert }
 }
 
 /// The all-pairs distance matrix of the subject's frames (global frame index order).
-pub fn distance_matrix(
-    subject: &Subject,
-    params: &DistanceParams,
-    progress: &dyn Progress,
-) -> DistanceMatrix {
+pub fn distance_matrix(subject: &Subject, params: &DistanceParams, progress: &dyn Progress) -> DistanceMatrix {
     let n = subject.n_frames();
     let gram = alignment_gram(subject, params.vertex_weights.as_deref());
     let mut values = vec![0.0f64; n * n];
@@ -184,11 +168,7 @@ pub fn distance_matrix(
         PoseMetric::Euclidean => {
             for i in 0..n {
                 for j in 0..n {
-                    values[i * n + j] = if i == j {
-                        0.0
-                    } else {
-                        gram.euclidean(i.min(j), i.max(j))
-                    };
+                    values[i * n + j] = if i == j { 0.0 } else { gram.euclidean(i.min(j), i.max(j)) };
                 }
             }
         }
@@ -199,11 +179,7 @@ pub fn distance_matrix(
                 .into_par_iter()
                 .map(|g| {
                     let mut out = Vec::new();
-                    triangle_frames(
-                        subject.topology(),
-                        subject.frame(g).expect("in range"),
-                        &mut out,
-                    );
+                    triangle_frames(subject.topology(), subject.frame(g).expect("in range"), &mut out);
                     progress.advance(1);
                     out
                 })
@@ -233,9 +209,5 @@ pub fn distance_matrix(
             }
         }
     }
-    DistanceMatrix {
-        n,
-        values,
-        max_skipped_triangles: max_skipped,
-    }
+    DistanceMatrix { n, values, max_skipped_triangles: max_skipped }
 }

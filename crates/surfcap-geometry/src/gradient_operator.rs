@@ -34,18 +34,13 @@ impl GradientOperator {
         let mut basis = Vec::with_capacity(topology.n_triangles());
         let mut areas = Vec::with_capacity(topology.n_triangles());
         for t in topology.triangles() {
-            let (v1, v2, v3) = (
-                vertex(positions, t[0]),
-                vertex(positions, t[1]),
-                vertex(positions, t[2]),
-            );
+            let (v1, v2, v3) = (vertex(positions, t[0]), vertex(positions, t[1]), vertex(positions, t[2]));
             let (e1, e2) = (v1 - v3, v2 - v3);
             let c = e1.cross(&e2);
             let len = c.norm();
             let scale = e1.norm_squared().max(e2.norm_squared());
             let inv = if len > 1e-12 * scale {
-                Matrix3::from_rows(&[e1.transpose(), e2.transpose(), (c / len).transpose()])
-                    .try_inverse()
+                Matrix3::from_rows(&[e1.transpose(), e2.transpose(), (c / len).transpose()]).try_inverse()
             } else {
                 None
             };
@@ -62,12 +57,7 @@ impl GradientOperator {
                 }
             }
         }
-        GradientOperator {
-            n_vertices: topology.n_vertices(),
-            triangles: topology.triangles().to_vec(),
-            basis,
-            areas,
-        }
+        GradientOperator { n_vertices: topology.n_vertices(), triangles: topology.triangles().to_vec(), basis, areas }
     }
 
     pub fn n_vertices(&self) -> usize {
@@ -83,11 +73,7 @@ impl GradientOperator {
         self.triangles
             .iter()
             .zip(&self.basis)
-            .map(|(t, g)| {
-                (0..3)
-                    .map(|k| g[k] * vertex(values, t[k]).transpose())
-                    .sum()
-            })
+            .map(|(t, g)| (0..3).map(|k| g[k] * vertex(values, t[k]).transpose()).sum())
             .collect()
     }
 
@@ -96,8 +82,8 @@ impl GradientOperator {
         let mut trip = Vec::with_capacity(9 * self.triangles.len());
         for (m, (t, g)) in self.triangles.iter().zip(&self.basis).enumerate() {
             for (k, &v) in t.iter().enumerate() {
-                for d in 0..3 {
-                    trip.push(Triplet::new(3 * m + d, v as usize, g[k][d]));
+                for (d, &gd) in g[k].iter().enumerate() {
+                    trip.push(Triplet::new(3 * m + d, v as usize, gd));
                 }
             }
         }
@@ -116,11 +102,7 @@ impl GradientOperator {
         for ((t, g), &area) in self.triangles.iter().zip(&self.basis).zip(&self.areas) {
             for a in 0..3 {
                 for b in 0..3 {
-                    trip.push(Triplet::new(
-                        t[a] as usize,
-                        t[b] as usize,
-                        area * g[a].dot(&g[b]),
-                    ));
+                    trip.push(Triplet::new(t[a] as usize, t[b] as usize, area * g[a].dot(&g[b])));
                 }
             }
         }
@@ -129,23 +111,14 @@ impl GradientOperator {
 
     /// L = G^T D G as a sparse N x N matrix (duplicates summed).
     pub fn laplacian(&self) -> SparseColMat<usize, f64> {
-        SparseColMat::try_new_from_triplets(
-            self.n_vertices,
-            self.n_vertices,
-            &self.laplacian_triplets(),
-        )
-        .expect("indices are in range by construction")
+        SparseColMat::try_new_from_triplets(self.n_vertices, self.n_vertices, &self.laplacian_triplets())
+            .expect("indices are in range by construction")
     }
 
     /// Divergence G^T D of per-triangle 3x3 gradients (eq. 2.38, 2.48): one row per vertex.
     pub fn divergence(&self, grads: &[Matrix3<f64>]) -> Vec<Vector3<f64>> {
         let mut out = vec![Vector3::zeros(); self.n_vertices];
-        for ((t, g), (&area, gm)) in self
-            .triangles
-            .iter()
-            .zip(&self.basis)
-            .zip(self.areas.iter().zip(grads))
-        {
+        for ((t, g), (&area, gm)) in self.triangles.iter().zip(&self.basis).zip(self.areas.iter().zip(grads)) {
             for k in 0..3 {
                 out[t[k] as usize] += area * gm.transpose() * g[k];
             }
@@ -156,19 +129,12 @@ impl GradientOperator {
 
 /// The cotangent Laplacian of eq. 2.40 as triplets (positive semi-definite sign convention):
 /// off-diagonal -1/2 (cot alpha + cot beta) per edge, diagonal the sum of the weights.
-pub fn cotangent_laplacian_triplets(
-    topology: &Topology,
-    positions: &[f32],
-) -> Vec<Triplet<usize, usize, f64>> {
+pub fn cotangent_laplacian_triplets(topology: &Topology, positions: &[f32]) -> Vec<Triplet<usize, usize, f64>> {
     let mut trip = Vec::new();
     for t in topology.triangles() {
         for k in 0..3 {
             let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            let (pa, pb, po) = (
-                vertex(positions, a),
-                vertex(positions, b),
-                vertex(positions, o),
-            );
+            let (pa, pb, po) = (vertex(positions, a), vertex(positions, b), vertex(positions, o));
             let (u, v) = (pa - po, pb - po);
             let cr = u.cross(&v).norm();
             if cr <= 0.0 {
@@ -176,12 +142,7 @@ pub fn cotangent_laplacian_triplets(
             }
             let w = 0.5 * u.dot(&v) / cr;
             let (a, b) = (a as usize, b as usize);
-            trip.extend([
-                Triplet::new(a, b, -w),
-                Triplet::new(b, a, -w),
-                Triplet::new(a, a, w),
-                Triplet::new(b, b, w),
-            ]);
+            trip.extend([Triplet::new(a, b, -w), Triplet::new(b, a, -w), Triplet::new(a, a, w), Triplet::new(b, b, w)]);
         }
     }
     trip
@@ -193,10 +154,7 @@ mod tests {
 
     fn tetra() -> (Topology, Vec<f32>) {
         let t = Topology::new(4, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], None).unwrap();
-        (
-            t,
-            vec![0.1, 0.0, 0.0, 1.0, 0.2, 0.0, 0.0, 1.3, 0.1, 0.2, 0.1, 1.5],
-        )
+        (t, vec![0.1, 0.0, 0.0, 1.0, 0.2, 0.0, 0.0, 1.3, 0.1, 0.2, 0.1, 1.5])
     }
 
     #[test]
@@ -208,8 +166,7 @@ mod tests {
         let f: Vec<f32> = p
             .chunks(3)
             .flat_map(|v| {
-                let y = m * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)
-                    + Vector3::new(1.0, -2.0, 0.5);
+                let y = m * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64) + Vector3::new(1.0, -2.0, 0.5);
                 [y.x as f32, y.y as f32, y.z as f32]
             })
             .collect();
@@ -218,11 +175,7 @@ mod tests {
             // edge directions e (as G^T e) to M e.
             let (v1, v2, v3) = (vertex(&p, tri[0]), vertex(&p, tri[1]), vertex(&p, tri[2]));
             for e in [v1 - v3, v2 - v3] {
-                assert!(
-                    (g.transpose() * e - m * e).norm() < 1e-5,
-                    "{}",
-                    (g.transpose() * e - m * e).norm()
-                );
+                assert!((g.transpose() * e - m * e).norm() < 1e-5, "{}", (g.transpose() * e - m * e).norm());
             }
         }
     }
@@ -232,13 +185,9 @@ mod tests {
         let (t, p) = tetra();
         let op = GradientOperator::new(&t, &p);
         let l = op.laplacian().to_dense();
-        let c = SparseColMat::<usize, f64>::try_new_from_triplets(
-            4,
-            4,
-            &cotangent_laplacian_triplets(&t, &p),
-        )
-        .unwrap()
-        .to_dense();
+        let c = SparseColMat::<usize, f64>::try_new_from_triplets(4, 4, &cotangent_laplacian_triplets(&t, &p))
+            .unwrap()
+            .to_dense();
         assert!((&l - &c).norm_max() < 1e-12 * c.norm_max());
         // G^T D G from the explicit matrices agrees too.
         let g = op.matrix().to_dense();

@@ -35,11 +35,7 @@ pub struct PlaneMotion {
 
 impl PlaneMotion {
     pub fn identity(up: UpAxis) -> Self {
-        PlaneMotion {
-            theta: 0.0,
-            t: [0.0; 2],
-            up,
-        }
+        PlaneMotion { theta: 0.0, t: [0.0; 2], up }
     }
 
     /// The rotation as a 3x3 matrix acting on column vectors.
@@ -74,12 +70,7 @@ pub fn rotation_about_up(up: UpAxis, theta: f64) -> Matrix3<f64> {
 
 /// The motion minimising sum_k w_k |p_i(k) - T p_j(k)|^2 (eq. 2.3-2.5) and that minimum
 /// (eq. 2.2). `weights` of `None` means all ones. Positions are `[n][3]`.
-pub fn motion_plane_alignment(
-    pi: &[f32],
-    pj: &[f32],
-    weights: Option<&[f64]>,
-    up: UpAxis,
-) -> (PlaneMotion, f64) {
+pub fn motion_plane_alignment(pi: &[f32], pj: &[f32], weights: Option<&[f64]>, up: UpAxis) -> (PlaneMotion, f64) {
     let (iu, iv, iw) = plane_axes(up);
     let n = pi.len() / 3;
     let w = |k: usize| weights.map_or(1.0, |w| w[k]);
@@ -115,10 +106,7 @@ pub fn motion_plane_alignment(
     }
     let theta = num.atan2(den);
     let (s, c) = theta.sin_cos();
-    let t = [
-        mi[0] - (mj[0] * c + mj[1] * s),
-        mi[1] - (-mj[0] * s + mj[1] * c),
-    ];
+    let t = [mi[0] - (mj[0] * c + mj[1] * s), mi[1] - (-mj[0] * s + mj[1] * c)];
     let residual = (hi + hj - 2.0 * (num * num + den * den).sqrt()).max(0.0) + vert;
     (PlaneMotion { theta, t, up }, residual)
 }
@@ -133,9 +121,7 @@ pub fn procrustes(
 ) -> (Matrix3<f64>, Vector3<f64>, f64) {
     let n = pi.len() / 3;
     let w = |k: usize| weights.map_or(1.0, |w| w[k]);
-    let p = |a: &[f32], k: usize| {
-        Vector3::new(a[3 * k] as f64, a[3 * k + 1] as f64, a[3 * k + 2] as f64)
-    };
+    let p = |a: &[f32], k: usize| Vector3::new(a[3 * k] as f64, a[3 * k + 1] as f64, a[3 * k + 2] as f64);
     let sw: f64 = (0..n).map(w).sum();
     if sw <= 0.0 {
         return (Matrix3::identity(), Vector3::zeros(), 1.0);
@@ -151,11 +137,7 @@ pub fn procrustes(
     }
     // R maximises tr(R^T H): the rotation factor of H's polar decomposition.
     let (r, s_sym) = crate::polar_decomposition::polar_decomposition(&h);
-    let scale = if with_scale && var_j > 0.0 {
-        s_sym.trace() / var_j
-    } else {
-        1.0
-    };
+    let scale = if with_scale && var_j > 0.0 { s_sym.trace() / var_j } else { 1.0 };
     let t = ci - scale * r * cj;
     (r, t, scale)
 }
@@ -165,9 +147,7 @@ mod tests {
     use super::*;
 
     fn pose() -> Vec<f32> {
-        vec![
-            0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.0, 1.0, 2.0, -1.0, 0.3, 0.7, 0.2, 1.5, -1.0,
-        ]
+        vec![0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.0, 1.0, 2.0, -1.0, 0.3, 0.7, 0.2, 1.5, -1.0]
     }
 
     #[test]
@@ -177,11 +157,7 @@ mod tests {
                 let pi = pose();
                 let mut pj = pi.clone();
                 // pj = M^-1 pi, so that aligning pj onto pi must find M.
-                let m = PlaneMotion {
-                    theta,
-                    t: [0.3, -1.2],
-                    up,
-                };
+                let m = PlaneMotion { theta, t: [0.3, -1.2], up };
                 let r = m.rotation();
                 let (iu, iv, _) = plane_axes(up);
                 for q in pj.chunks_exact_mut(3) {
@@ -191,8 +167,7 @@ mod tests {
                     q.copy_from_slice(&[v.x as f32, v.y as f32, v.z as f32]);
                 }
                 let (found, residual) = motion_plane_alignment(&pi, &pj, None, up);
-                let dtheta = (found.theta - theta + std::f64::consts::PI)
-                    .rem_euclid(std::f64::consts::TAU)
+                let dtheta = (found.theta - theta + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
                     - std::f64::consts::PI;
                 assert!(dtheta.abs() < 1e-5, "{up:?} {theta}: {}", found.theta);
                 assert!(residual < 1e-9, "{residual}");
@@ -213,17 +188,12 @@ mod tests {
             .chunks_exact(3)
             .flat_map(|q| {
                 let v = (r.transpose()
-                    * (Vector3::new(q[0] as f64, q[1] as f64, q[2] as f64)
-                        - Vector3::new(1.0, 2.0, 3.0)))
+                    * (Vector3::new(q[0] as f64, q[1] as f64, q[2] as f64) - Vector3::new(1.0, 2.0, 3.0)))
                     / 2.0;
                 [v.x as f32, v.y as f32, v.z as f32]
             })
             .collect();
         let (rr, t, s) = procrustes(&pi, &pj, None, true);
-        assert!(
-            (rr - r).norm() < 1e-5
-                && (s - 2.0).abs() < 1e-5
-                && (t - Vector3::new(1.0, 2.0, 3.0)).norm() < 1e-5
-        );
+        assert!((rr - r).norm() < 1e-5 && (s - 2.0).abs() < 1e-5 && (t - Vector3::new(1.0, 2.0, 3.0)).norm() < 1e-5);
     }
 }

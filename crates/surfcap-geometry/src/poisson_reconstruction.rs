@@ -53,10 +53,10 @@ impl PoissonSolver {
         let mut pinned = vec![false; components.count];
         let mut reduced = vec![None; n];
         let mut next = 0usize;
-        for v in 0..n {
-            let c = components.labels[v] as usize;
+        for (r, &c) in reduced.iter_mut().zip(&components.labels) {
+            let c = c as usize;
             if pinned[c] {
-                reduced[v] = Some(next);
+                *r = Some(next);
                 next += 1;
             } else {
                 pinned[c] = true;
@@ -70,23 +70,14 @@ impl PoissonSolver {
             .collect();
         let mean_diag = {
             let d: f64 = trip.iter().filter(|t| t.row == t.col).map(|t| t.val).sum();
-            if next > 0 {
-                (d / next as f64).max(f64::MIN_POSITIVE)
-            } else {
-                1.0
-            }
+            if next > 0 { (d / next as f64).max(f64::MIN_POSITIVE) } else { 1.0 }
         };
         let mut trip = trip;
         trip.extend((0..next).map(|k| Triplet::new(k, k, 1e-10 * mean_diag)));
         let mat = SparseColMat::<usize, f64>::try_new_from_triplets(next, next, &trip)
             .map_err(|e| PoissonError(format!("cannot assemble: {e:?}")))?;
-        let symbolic = factorize_symbolic_cholesky(
-            mat.symbolic(),
-            Side::Lower,
-            Default::default(),
-            Default::default(),
-        )
-        .map_err(|e| PoissonError(format!("symbolic factorisation: {e:?}")))?;
+        let symbolic = factorize_symbolic_cholesky(mat.symbolic(), Side::Lower, Default::default(), Default::default())
+            .map_err(|e| PoissonError(format!("symbolic factorisation: {e:?}")))?;
         let mut numeric = vec![0.0f64; symbolic.len_val()];
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
         symbolic
@@ -100,13 +91,7 @@ impl PoissonSolver {
                 Default::default(),
             )
             .map_err(|e| PoissonError(format!("numeric factorisation: {e:?}")))?;
-        Ok(PoissonSolver {
-            op,
-            components,
-            reduced,
-            symbolic,
-            numeric,
-        })
+        Ok(PoissonSolver { op, components, reduced, symbolic, numeric })
     }
 
     pub fn operator(&self) -> &GradientOperator {
@@ -125,10 +110,7 @@ impl PoissonSolver {
             sum[c as usize] += crate::deformation_gradient::vertex(positions, v as u32);
             cnt[c as usize] += 1;
         }
-        sum.iter()
-            .zip(&cnt)
-            .map(|(s, &n)| s / n.max(1) as f64)
-            .collect()
+        sum.iter().zip(&cnt).map(|(s, &n)| s / n.max(1) as f64).collect()
     }
 
     /// Vertices whose gradients best match `targets` (one 3x3 G~_m per triangle, in the
@@ -146,16 +128,8 @@ impl PoissonSolver {
             }
         }
         let scratch = self.symbolic.solve_in_place_scratch::<f64>(3, Par::Seq);
-        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(
-            &self.symbolic,
-            &self.numeric,
-        )
-        .solve_in_place_with_conj(
-            Conj::No,
-            rhs.as_mut(),
-            Par::Seq,
-            MemStack::new(&mut MemBuffer::new(scratch)),
-        );
+        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric)
+            .solve_in_place_with_conj(Conj::No, rhs.as_mut(), Par::Seq, MemStack::new(&mut MemBuffer::new(scratch)));
         let n = self.reduced.len();
         let mut x = vec![Vector3::zeros(); n];
         for (v, r) in self.reduced.iter().enumerate() {
@@ -170,9 +144,8 @@ impl PoissonSolver {
             sum[c as usize] += x[v];
             cnt[c as usize] += 1;
         }
-        let shift: Vec<Vector3<f64>> = (0..self.components.count)
-            .map(|c| centroids[c] - sum[c] / cnt[c].max(1) as f64)
-            .collect();
+        let shift: Vec<Vector3<f64>> =
+            (0..self.components.count).map(|c| centroids[c] - sum[c] / cnt[c].max(1) as f64).collect();
         x.iter()
             .zip(&self.components.labels)
             .flat_map(|(p, &c)| {
@@ -196,22 +169,13 @@ mod tests {
         // Two separate tetrahedra.
         let t = Topology::new(
             8,
-            vec![
-                [0, 2, 1],
-                [0, 1, 3],
-                [1, 2, 3],
-                [0, 3, 2],
-                [4, 6, 5],
-                [4, 5, 7],
-                [5, 6, 7],
-                [4, 7, 6],
-            ],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2], [4, 6, 5], [4, 5, 7], [5, 6, 7], [4, 7, 6]],
             None,
         )
         .unwrap();
         let p: Vec<f32> = vec![
-            0.1, 0.0, 0.0, 1.0, 0.2, 0.0, 0.0, 1.3, 0.1, 0.2, 0.1, 1.5, 5.0, 0.0, 0.0, 6.0, 0.1,
-            0.3, 5.2, 1.0, 0.0, 5.1, 0.2, 1.0,
+            0.1, 0.0, 0.0, 1.0, 0.2, 0.0, 0.0, 1.3, 0.1, 0.2, 0.1, 1.5, 5.0, 0.0, 0.0, 6.0, 0.1, 0.3, 5.2, 1.0, 0.0,
+            5.1, 0.2, 1.0,
         ];
         let s = PoissonSolver::new(&t, &p).unwrap();
         assert_eq!(s.components().count, 2);

@@ -36,11 +36,7 @@ mod tests {
 
     fn check(t: Matrix3<f64>) {
         let (r, s) = polar_decomposition(&t);
-        assert!(
-            (r.determinant() - 1.0).abs() < 1e-12,
-            "det R = {}",
-            r.determinant()
-        );
+        assert!((r.determinant() - 1.0).abs() < 1e-12, "det R = {}", r.determinant());
         assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
         assert!((s - s.transpose()).norm() < 1e-12 * (1.0 + t.norm()));
         assert!((r * s - t).norm() < 1e-12 * (1.0 + t.norm()), "RS != T");

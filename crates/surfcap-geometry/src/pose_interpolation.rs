@@ -54,8 +54,6 @@ struct Side {
     solver: PoissonSolver,
     log_r: Vec<Vector3<f64>>,
     s: Vec<Matrix3<f64>>,
-    /// log S (symmetric), for eq. 2.46.
-    log_s: Vec<Matrix3<f64>>,
     grads: Vec<Matrix3<f64>>,
     centroids: Vec<Vector3<f64>>,
 }
@@ -65,24 +63,23 @@ fn side(topology: &Topology, from: &[f32], to: &[f32]) -> Result<Side, PoissonEr
     let grads = solver.operator().gradients(from);
     let mut log_r = Vec::with_capacity(topology.n_triangles());
     let mut s = Vec::with_capacity(topology.n_triangles());
-    let mut log_s = Vec::with_capacity(topology.n_triangles());
     for j in deformation_gradients(topology, from, to) {
         // A zero-area triangle (in either pose) has no deformation gradient: it keeps its
         // gradient (identity deformation); it has zero area, so it does not weigh in L anyway.
         let (r, st) = j.map(|j| polar_decomposition(&j)).unwrap_or((Matrix3::identity(), Matrix3::identity()));
-        let e = st.symmetric_eigen();
-        let ls = e.eigenvectors * Matrix3::from_diagonal(&e.eigenvalues.map(|x| x.max(1e-12).ln())) * e.eigenvectors.transpose();
         log_r.push(log_rotation(&r));
         s.push(st);
-        log_s.push(ls);
     }
     let centroids = solver.component_centroids(from);
-    Ok(Side { solver, log_r, s, log_s, grads, centroids })
+    Ok(Side { solver, log_r, s, grads, centroids })
 }
 
-fn exp_sym(m: &Matrix3<f64>) -> Matrix3<f64> {
-    let e = m.symmetric_eigen();
-    e.eigenvectors * Matrix3::from_diagonal(&e.eigenvalues.map(f64::exp)) * e.eigenvectors.transpose()
+/// S^t for a symmetric positive (semi-)definite S: exp(t log S) through its eigen-decomposition
+/// (eigenvalues floored at 1e-12 so that a degenerate stretch stays finite).
+fn sym_power(s: &Matrix3<f64>, t: f64) -> Matrix3<f64> {
+    let e = s.symmetric_eigen();
+    let d = e.eigenvalues.map(|x| (t * x.max(1e-12).ln()).exp());
+    e.eigenvectors * Matrix3::from_diagonal(&d) * e.eigenvectors.transpose()
 }
 
 impl Side {
@@ -94,7 +91,7 @@ impl Side {
                 let r = exp_rotation(&(self.log_r[m] * t));
                 let s = match stretch {
                     StretchInterpolation::Linear => Matrix3::identity() * (1.0 - t) + self.s[m] * t,
-                    StretchInterpolation::Log => exp_sym(&(self.log_s[m] * t)),
+                    StretchInterpolation::Log => sym_power(&self.s[m], t),
                 };
                 self.grads[m] * (r * s).transpose()
             })
@@ -115,8 +112,9 @@ impl NonlinearInterpolator {
     /// `pj` is aligned onto `pi` (motion plane) first.
     pub fn new(topology: &Topology, pi: &[f32], pj: &[f32], up: UpAxis) -> Result<Self, PoissonError> {
         let pj = align_onto(pi, pj, up);
-        let from_i = side(topology, pi, &pj)?;
-        let from_j = side(topology, &pj, pi)?;
+        // The two sides are independent: factorise them on two threads.
+        let (from_i, from_j) = rayon::join(|| side(topology, pi, &pj), || side(topology, &pj, pi));
+        let (from_i, from_j) = (from_i?, from_j?);
         Ok(NonlinearInterpolator { pi: pi.to_vec(), pj, from_i, from_j })
     }
 

@@ -7,8 +7,12 @@ use surfcap_mesh::Topology;
 use crate::deformation_gradient::vertex;
 
 fn edges(topology: &Topology) -> Vec<(u32, u32)> {
-    let mut e: Vec<(u32, u32)> =
-        topology.triangles().iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).map(|(a, b)| (a.min(b), a.max(b))).collect();
+    let mut e: Vec<(u32, u32)> = topology
+        .triangles()
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
     e.sort_unstable();
     e.dedup();
     e

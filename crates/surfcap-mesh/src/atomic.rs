@@ -8,27 +8,19 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 fn sibling(path: &Path, tag: &str) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
     path.with_file_name(format!(".{name}.{tag}-{}", std::process::id()))
 }
 
 fn ensure_parent(path: &Path) -> Result<()> {
     match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => {
-            fs::create_dir_all(p).map_err(|e| Error::io(p, "create directory", e))
-        }
+        Some(p) if !p.as_os_str().is_empty() => fs::create_dir_all(p).map_err(|e| Error::io(p, "create directory", e)),
         _ => Ok(()),
     }
 }
 
 /// Writes a file through `write`, then renames it onto `path`.
-pub fn write_file(
-    path: &Path,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<()> {
+pub fn write_file(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
     ensure_parent(path)?;
     let tmp = sibling(path, "tmp");
     let result = (|| {
@@ -98,15 +90,9 @@ mod tests {
         assert_eq!(fs::read(&f).unwrap(), b"first");
         let dir = d.path().join("out");
         write_dir(&dir, |t| write_file(&t.join("x"), |w| w.write_all(b"1"))).unwrap();
-        let r = write_dir(&dir, |_| {
-            Err(crate::error::Error::new(crate::ErrorKind::Io, "boom"))
-        });
+        let r = write_dir(&dir, |_| Err(crate::error::Error::new(crate::ErrorKind::Io, "boom")));
         assert!(r.is_err());
         assert_eq!(fs::read(dir.join("x")).unwrap(), b"1");
-        assert_eq!(
-            fs::read_dir(d.path()).unwrap().count(),
-            2,
-            "no temporaries left behind"
-        );
+        assert_eq!(fs::read_dir(d.path()).unwrap().count(), 2, "no temporaries left behind");
     }
 }

@@ -77,42 +77,27 @@ pub fn write_cache(path: &Path, subject: &Subject, progress: &dyn Progress) -> R
                 name: s.name.clone(),
                 frames: s.n_frames(),
                 tags: s.tags.clone(),
-                joints: s.joints.as_ref().map(|j| JointsHeader {
-                    names: j.names.clone(),
-                    parents: j.parents.clone(),
-                }),
+                joints: s.joints.as_ref().map(|j| JointsHeader { names: j.names.clone(), parents: j.parents.clone() }),
             })
             .collect(),
     };
     progress.start("writing subject cache", subject.sequences().len() as u64);
     write_dir(path, |dir| {
         let flat: Vec<u32> = topo.triangles().iter().flatten().copied().collect();
-        write_file(&dir.join("faces.npy"), |w| {
-            write_npy(w, &[topo.n_triangles(), 3], &flat)
-        })?;
+        write_file(&dir.join("faces.npy"), |w| write_npy(w, &[topo.n_triangles(), 3], &flat))?;
         if let Some(uv) = topo.uv() {
             let c: Vec<f32> = uv.coords.iter().flatten().copied().collect();
-            write_file(&dir.join("uv.npy"), |w| {
-                write_npy(w, &[uv.coords.len(), 2], &c)
-            })?;
+            write_file(&dir.join("uv.npy"), |w| write_npy(w, &[uv.coords.len(), 2], &c))?;
             let f: Vec<u32> = uv.corners.iter().flatten().copied().collect();
-            write_file(&dir.join("uv_faces.npy"), |w| {
-                write_npy(w, &[uv.corners.len(), 3], &f)
-            })?;
+            write_file(&dir.join("uv_faces.npy"), |w| write_npy(w, &[uv.corners.len(), 3], &f))?;
         }
         for (k, s) in subject.sequences().iter().enumerate() {
             let nv = topo.n_vertices();
             write_file(&dir.join(format!("positions_{k}.npy")), |w| {
                 write_npy(w, &[s.n_frames(), nv, 3], s.positions())
             })?;
-            let labels: Vec<u8> = s
-                .labels
-                .iter()
-                .map(|l| (*l == FrameLabel::Synthetic) as u8)
-                .collect();
-            write_file(&dir.join(format!("labels_{k}.npy")), |w| {
-                write_npy(w, &[s.n_frames()], &labels)
-            })?;
+            let labels: Vec<u8> = s.labels.iter().map(|l| (*l == FrameLabel::Synthetic) as u8).collect();
+            write_file(&dir.join(format!("labels_{k}.npy")), |w| write_npy(w, &[s.n_frames()], &labels))?;
             if let Some(j) = &s.joints {
                 write_file(&dir.join(format!("joints_{k}.npy")), |w| {
                     write_npy(w, &[s.n_frames(), j.n_joints(), 4, 4], &j.matrices)
@@ -120,8 +105,7 @@ pub fn write_cache(path: &Path, subject: &Subject, progress: &dyn Progress) -> R
             }
             progress.advance(1);
         }
-        let json = serde_json::to_vec_pretty(&header)
-            .map_err(|e| err!(Io, "cannot encode subject.json: {e}"))?;
+        let json = serde_json::to_vec_pretty(&header).map_err(|e| err!(Io, "cannot encode subject.json: {e}"))?;
         write_file(&dir.join("subject.json"), |w| w.write_all(&json))
     })?;
     progress.finish();
@@ -132,11 +116,8 @@ pub fn write_cache(path: &Path, subject: &Subject, progress: &dyn Progress) -> R
 pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
     let hp = path.join("subject.json");
     let text = std::fs::read(&hp).map_err(|e| Error::io(&hp, "read", e))?;
-    let h: Header = serde_json::from_slice(&text).map_err(|e| {
-        err!(Syntax, "not a surfcap subject description: {e}")
-            .in_file(&hp)
-            .at_line(e.line())
-    })?;
+    let h: Header = serde_json::from_slice(&text)
+        .map_err(|e| err!(Syntax, "not a surfcap subject description: {e}").in_file(&hp).at_line(e.line()))?;
     if h.format != FORMAT || h.version != VERSION {
         return Err(err!(
             Unsupported,
@@ -149,18 +130,13 @@ pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
     let fp = path.join("faces.npy");
     let faces = read_npy::<u32>(&fp)?;
     expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
-    let triangles: Vec<[u32; 3]> = faces
-        .data
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
+    let triangles: Vec<[u32; 3]> = faces.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let uv = if path.join("uv.npy").is_file() {
         let (up, ufp) = (path.join("uv.npy"), path.join("uv_faces.npy"));
         let c = read_npy::<f32>(&up)?;
         expect_shape(&c, &[None, Some(2)], "texture coordinates").map_err(|e| e.in_file(&up))?;
         let f = read_npy::<u32>(&ufp)?;
-        expect_shape(&f, &[Some(h.triangles), Some(3)], "texture corners")
-            .map_err(|e| e.in_file(&ufp))?;
+        expect_shape(&f, &[Some(h.triangles), Some(3)], "texture corners").map_err(|e| e.in_file(&ufp))?;
         Some(UvAtlas {
             coords: c.data.chunks_exact(2).map(|x| [x[0], x[1]]).collect(),
             corners: f.data.chunks_exact(3).map(|x| [x[0], x[1], x[2]]).collect(),
@@ -178,11 +154,9 @@ pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
         .map(|(k, sh)| {
             let pp = path.join(format!("positions_{k}.npy"));
             let p = read_npy::<f32>(&pp)?;
-            expect_shape(&p, &[Some(sh.frames), Some(nv), Some(3)], "positions")
-                .map_err(|e| e.in_file(&pp))?;
-            let mut s = Sequence::new(sh.name.clone(), nv, p.data)
-                .map_err(|e| e.in_file(&pp))?
-                .with_tags(sh.tags.clone());
+            expect_shape(&p, &[Some(sh.frames), Some(nv), Some(3)], "positions").map_err(|e| e.in_file(&pp))?;
+            let mut s =
+                Sequence::new(sh.name.clone(), nv, p.data).map_err(|e| e.in_file(&pp))?.with_tags(sh.tags.clone());
             let lp = path.join(format!("labels_{k}.npy"));
             let l = read_npy::<u8>(&lp)?;
             expect_shape(&l, &[Some(sh.frames)], "frame labels").map_err(|e| e.in_file(&lp))?;
@@ -193,29 +167,17 @@ pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
                 .map(|(f, &b)| match b {
                     0 => Ok(FrameLabel::Original),
                     1 => Ok(FrameLabel::Synthetic),
-                    _ => Err(
-                        err!(Shape, "label {b}: expected 0 (original) or 1 (synthetic)")
-                            .in_file(&lp)
-                            .at_frame(f),
-                    ),
+                    _ => Err(err!(Shape, "label {b}: expected 0 (original) or 1 (synthetic)").in_file(&lp).at_frame(f)),
                 })
                 .collect::<Result<Vec<_>>>()?;
             s = s.with_labels(labels)?;
             if let Some(jh) = &sh.joints {
                 let jp = path.join(format!("joints_{k}.npy"));
                 let j = read_npy::<f32>(&jp)?;
-                expect_shape(
-                    &j,
-                    &[Some(sh.frames), Some(jh.names.len()), Some(4), Some(4)],
-                    "joint matrices",
-                )
-                .map_err(|e| e.in_file(&jp))?;
+                expect_shape(&j, &[Some(sh.frames), Some(jh.names.len()), Some(4), Some(4)], "joint matrices")
+                    .map_err(|e| e.in_file(&jp))?;
                 s = s
-                    .with_joints(JointTrack {
-                        names: jh.names.clone(),
-                        parents: jh.parents.clone(),
-                        matrices: j.data,
-                    })
+                    .with_joints(JointTrack { names: jh.names.clone(), parents: jh.parents.clone(), matrices: j.data })
                     .map_err(|e| e.in_file(&jp))?;
             }
             progress.advance(1);

@@ -41,11 +41,7 @@ pub fn connected_components(topology: &Topology) -> Components {
         for (a, b) in [(t[0], t[1]), (t[1], t[2])] {
             let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
             if ra != rb {
-                let (big, small) = if size[ra as usize] >= size[rb as usize] {
-                    (ra, rb)
-                } else {
-                    (rb, ra)
-                };
+                let (big, small) = if size[ra as usize] >= size[rb as usize] { (ra, rb) } else { (rb, ra) };
                 parent[small as usize] = big;
                 size[big as usize] += size[small as usize];
             }
@@ -62,10 +58,7 @@ pub fn connected_components(topology: &Topology) -> Components {
         }
         labels[v as usize] = label_of_root[r];
     }
-    Components {
-        labels,
-        count: count as usize,
-    }
+    Components { labels, count: count as usize }
 }
 
 #[cfg(test)]

@@ -64,11 +64,11 @@ impl DerivedCache {
         path: &Path,
         compute: impl FnOnce() -> Result<NpyArray<f64>>,
     ) -> Result<(NpyArray<f64>, bool)> {
-        if path.is_file() {
-            if let Ok(a) = read_npy::<f64>(path) {
-                return Ok((a, true));
-            }
-            // An unreadable entry (older format, damaged disk) is recomputed and replaced.
+        // An unreadable entry (older format, damaged disk) is recomputed and replaced.
+        if path.is_file()
+            && let Ok(a) = read_npy::<f64>(path)
+        {
+            return Ok((a, true));
         }
         let a = compute()?;
         write_file(path, |w| write_npy(w, &a.shape, &a.data))?;

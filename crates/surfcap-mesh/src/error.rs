@@ -76,13 +76,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
     pub fn new(kind: ErrorKind, message: impl Into<String>) -> Self {
-        Error {
-            kind,
-            path: None,
-            location: None,
-            message: message.into(),
-            source: None,
-        }
+        Error { kind, path: None, location: None, message: message.into(), source: None }
     }
 
     /// An I/O failure on `path`, keeping the OS error as the source.
@@ -118,10 +112,7 @@ impl Error {
 
     pub fn at_frame(self, frame: usize) -> Self {
         match self.location {
-            Some(Location::Line(line)) => Error {
-                location: Some(Location::FrameLine { frame, line }),
-                ..self
-            },
+            Some(Location::Line(line)) => Error { location: Some(Location::FrameLine { frame, line }), ..self },
             _ => self.at(Location::Frame(frame)),
         }
     }

@@ -48,21 +48,8 @@ pub struct ExportOptions {
 
 /// A file-system-safe version of a sequence name.
 pub fn safe_name(name: &str) -> String {
-    let s: String = name
-        .chars()
-        .map(|c| {
-            if c.is_alphanumeric() || "-_.".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if s.is_empty() || s.starts_with('.') {
-        format!("_{s}")
-    } else {
-        s
-    }
+    let s: String = name.chars().map(|c| if c.is_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
+    if s.is_empty() || s.starts_with('.') { format!("_{s}") } else { s }
 }
 
 /// The sidecar description: subject metadata and every frame's label.
@@ -118,11 +105,7 @@ pub fn export(
             Ok(vec![out.to_path_buf(), side])
         }
         ExportFormat::Obj | ExportFormat::Ply => {
-            let ext = if format == ExportFormat::Obj {
-                "obj"
-            } else {
-                "ply"
-            };
+            let ext = if format == ExportFormat::Obj { "obj" } else { "ply" };
             progress.start(&format!("writing {ext} frames"), subject.n_frames() as u64);
             write_dir(out, |dir| {
                 for s in subject.sequences() {
@@ -132,9 +115,7 @@ pub fn export(
                         if format == ExportFormat::Obj {
                             write_file(&p, |w| obj::write_obj(w, topo, s.frame(f)))?;
                         } else {
-                            write_file(&p, |w| {
-                                ply::write_ply(w, topo, s.frame(f), opts.ply_ascii)
-                            })?;
+                            write_file(&p, |w| ply::write_ply(w, topo, s.frame(f), opts.ply_ascii))?;
                         }
                         progress.advance(1);
                     }
@@ -146,9 +127,7 @@ pub fn export(
         }
         ExportFormat::Pc2 => {
             write_dir(out, |dir| {
-                write_file(&dir.join("template.obj"), |w| {
-                    obj::write_obj(w, topo, subject.sequences()[0].frame(0))
-                })?;
+                write_file(&dir.join("template.obj"), |w| obj::write_obj(w, topo, subject.sequences()[0].frame(0)))?;
                 for s in subject.sequences() {
                     let p = dir.join(format!("{}.pc2", safe_name(&s.name)));
                     write_file(&p, |w| pc2::write_pc2(w, topo.n_vertices(), s.positions()))?;
@@ -161,18 +140,9 @@ pub fn export(
             progress.start("writing npy sequences", subject.sequences().len() as u64);
             write_dir(out, |dir| {
                 let mut seqs = serde_json::Map::new();
-                for (s, m) in subject
-                    .sequences()
-                    .iter()
-                    .zip(meta["sequences"].as_array().unwrap())
-                {
+                for (s, m) in subject.sequences().iter().zip(meta["sequences"].as_array().unwrap()) {
                     let sd = dir.join(safe_name(&s.name));
-                    shared_layout::write_layout_sequence(
-                        &sd,
-                        topo,
-                        s.positions(),
-                        s.joints.as_ref(),
-                    )?;
+                    shared_layout::write_layout_sequence(&sd, topo, s.positions(), s.joints.as_ref())?;
                     seqs.insert(
                         safe_name(&s.name),
                         json!({
@@ -196,12 +166,8 @@ pub fn export(
                 });
                 if let Some(j) = subject.sequences().iter().find_map(|s| s.joints.as_ref()) {
                     root["joint_names"] = json!(j.names);
-                    root["joint_parents"] = json!(
-                        j.parents
-                            .iter()
-                            .map(|p| p.map_or(-1, |p| p as i64))
-                            .collect::<Vec<_>>()
-                    );
+                    root["joint_parents"] =
+                        json!(j.parents.iter().map(|p| p.map_or(-1, |p| p as i64)).collect::<Vec<_>>());
                 }
                 write_json(&dir.join("meta.json"), &root)
             })?;

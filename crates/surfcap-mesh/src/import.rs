@@ -45,14 +45,9 @@ pub struct Imported {
 }
 
 fn file_stem(p: &Path) -> String {
-    let p = if p.file_name().is_none() {
-        p.canonicalize().unwrap_or_else(|_| p.to_path_buf())
-    } else {
-        p.to_path_buf()
-    };
-    p.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "subject".into())
+    let p =
+        if p.file_name().is_none() { p.canonicalize().unwrap_or_else(|_| p.to_path_buf()) } else { p.to_path_buf() };
+    p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "subject".into())
 }
 
 fn simple(name: String, topology: Topology, positions: Vec<f32>, origin: &Path) -> SourceSequence {
@@ -81,11 +76,7 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
         if is_layout_sequence(path) {
             let s = read_layout_sequence(path)?;
             let origin = path.join("positions.npy");
-            if let Some(f) = s
-                .meta
-                .frames
-                .filter(|&f| f * s.topology.n_vertices() * 3 != s.positions.len())
-            {
+            if let Some(f) = s.meta.frames.filter(|&f| f * s.topology.n_vertices() * 3 != s.positions.len()) {
                 return Err(err!(
                     Shape,
                     "{} frames, but meta.json says {f}",
@@ -108,10 +99,7 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
         }
         let seqs = dataset_sequences(path)?;
         if !seqs.is_empty() {
-            progress.start(
-                &format!("reading {} sequences", seqs.len()),
-                seqs.len() as u64,
-            );
+            progress.start(&format!("reading {} sequences", seqs.len()), seqs.len() as u64);
             let mut out = Vec::new();
             for s in seqs {
                 out.extend(read_source(&s, &crate::progress::NoProgress)?);
@@ -133,10 +121,7 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
         )
         .in_file(path));
     }
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => {
             let m = crate::io::obj::read_obj(path)?;
@@ -207,11 +192,7 @@ fn agree<T: Clone + PartialEq + std::fmt::Debug>(
 }
 
 /// Merges sequences into one subject. All must share the first one's topology.
-pub fn assemble(
-    default_name: &str,
-    seqs: Vec<SourceSequence>,
-    opts: &ImportOptions,
-) -> Result<Imported> {
+pub fn assemble(default_name: &str, seqs: Vec<SourceSequence>, opts: &ImportOptions) -> Result<Imported> {
     let Some(first) = seqs.first() else {
         return Err(err!(Empty, "nothing to import: no sequences were found"));
     };
@@ -228,26 +209,20 @@ pub fn assemble(
     }
     let mut notes = Vec::new();
     let fps = agree("frame rate", opts.fps, &seqs, |s| s.fps)?.ok_or_else(|| {
-        err!(
-            Metadata,
-            "no frame rate is known for these sequences: pass --fps (or set fps in surfcap.toml)"
-        )
-        .in_file(&first.origin)
+        err!(Metadata, "no frame rate is known for these sequences: pass --fps (or set fps in surfcap.toml)")
+            .in_file(&first.origin)
     })?;
     let up_axis = match agree("up axis", opts.up_axis, &seqs, |s| s.up_axis)? {
         Some(u) => u,
         None => {
-            notes
-                .push("no up axis in the sources: assumed +y (pass --up-axis to change it)".into());
+            notes.push("no up axis in the sources: assumed +y (pass --up-axis to change it)".into());
             UpAxis::PosY
         }
     };
     let units = match agree("units", opts.units.clone(), &seqs, |s| s.units.clone())? {
         Some(u) => u,
         None => {
-            notes.push(
-                "no units in the sources: recorded as arbitrary (pass --units to set them)".into(),
-            );
+            notes.push("no units in the sources: recorded as arbitrary (pass --units to set them)".into());
             Units::arbitrary()
         }
     };
@@ -255,9 +230,7 @@ pub fn assemble(
     let mut sequences = Vec::with_capacity(seqs.len());
     for s in seqs {
         let origin = s.origin.clone();
-        let mut seq = Sequence::new(s.name, nv, s.positions)
-            .map_err(|e| e.in_file(&origin))?
-            .with_tags(s.tags);
+        let mut seq = Sequence::new(s.name, nv, s.positions).map_err(|e| e.in_file(&origin))?.with_tags(s.tags);
         if let Some(l) = s.labels {
             seq = seq.with_labels(l).map_err(|e| e.in_file(&origin))?;
         }
@@ -266,26 +239,16 @@ pub fn assemble(
         }
         sequences.push(seq);
     }
-    let name = opts
-        .name
-        .clone()
-        .unwrap_or_else(|| default_name.to_string());
+    let name = opts.name.clone().unwrap_or_else(|| default_name.to_string());
     let subject = Subject::new(name, topology, sequences, fps, up_axis, units)?;
     Ok(Imported { subject, notes })
 }
 
 /// Imports any mix of sources (manifests included) into one subject.
-pub fn import(
-    paths: &[PathBuf],
-    opts: &ImportOptions,
-    progress: &dyn Progress,
-) -> Result<Imported> {
+pub fn import(paths: &[PathBuf], opts: &ImportOptions, progress: &dyn Progress) -> Result<Imported> {
     let mut seqs = Vec::new();
     let mut opts = opts.clone();
-    let mut default_name = paths
-        .first()
-        .map(|p| file_stem(p))
-        .unwrap_or_else(|| "subject".into());
+    let mut default_name = paths.first().map(|p| file_stem(p)).unwrap_or_else(|| "subject".into());
     for p in paths {
         if let Some(m) = manifest::find_manifest(p) {
             let (m_opts, m_seqs) = manifest::read_manifest(&m, progress)?;
@@ -328,20 +291,13 @@ fn sequences_of(s: &Subject, origin: &Path) -> Vec<SourceSequence> {
 }
 
 /// Opens a subject: a cache written by `surfcap import` (fast), or any importable source.
-pub fn open_subject(
-    path: &Path,
-    opts: &ImportOptions,
-    progress: &dyn Progress,
-) -> Result<Imported> {
+pub fn open_subject(path: &Path, opts: &ImportOptions, progress: &dyn Progress) -> Result<Imported> {
     if cache::is_cache(path) {
         let mut subject = cache::read_cache(path, progress)?;
         if let Some(f) = opts.fps {
             subject.fps = f;
         }
-        return Ok(Imported {
-            subject,
-            notes: Vec::new(),
-        });
+        return Ok(Imported { subject, notes: Vec::new() });
     }
     import(&[path.to_path_buf()], opts, progress)
 }

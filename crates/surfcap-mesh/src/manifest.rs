@@ -61,10 +61,7 @@ fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usize> {
 }
 
 /// Reads the manifest and every sequence it lists.
-pub fn read_manifest(
-    path: &Path,
-    progress: &dyn Progress,
-) -> Result<(ImportOptions, Vec<SourceSequence>)> {
+pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOptions, Vec<SourceSequence>)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read manifest", e))?;
     let m: Manifest = toml::from_str(&text).map_err(|e| {
         let mut er = err!(Syntax, "{}", e.message()).in_file(path);
@@ -90,17 +87,9 @@ pub fn read_manifest(
         None => None,
     };
     if let Some(f) = m.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
-        return Err(at(
-            err!(Metadata, "fps = {f}: expected a positive number"),
-            "fps",
-        ));
+        return Err(at(err!(Metadata, "fps = {f}: expected a positive number"), "fps"));
     }
-    let opts = ImportOptions {
-        name: m.name.clone(),
-        fps: m.fps,
-        up_axis,
-        units: m.units.as_deref().map(Units::parse),
-    };
+    let opts = ImportOptions { name: m.name.clone(), fps: m.fps, up_axis, units: m.units.as_deref().map(Units::parse) };
     let mut out = Vec::new();
     for e in &m.sequence {
         let src = base.join(&e.source);
@@ -112,13 +101,7 @@ pub fn read_manifest(
         if let Some(j) = &e.joints {
             let jp = base.join(j);
             if seqs.len() != 1 {
-                return Err(at(
-                    err!(
-                        Metadata,
-                        "'joints' needs a source with exactly one sequence"
-                    ),
-                    &needle,
-                ));
+                return Err(at(err!(Metadata, "'joints' needs a source with exactly one sequence"), &needle));
             }
             let arr = crate::io::npy::read_npy::<f32>(&jp)?;
             let frames = seqs[0].positions.len() / (3 * seqs[0].topology.n_vertices());
@@ -138,11 +121,7 @@ pub fn read_manifest(
         if let Some(n) = &e.name {
             if seqs.len() != 1 {
                 return Err(at(
-                    err!(
-                        Metadata,
-                        "'name' renames one sequence, but {needle:?} holds {}",
-                        seqs.len()
-                    ),
+                    err!(Metadata, "'name' renames one sequence, but {needle:?} holds {}", seqs.len()),
                     &needle,
                 ));
             }
@@ -161,10 +140,7 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
     let t = crate::io::obj::read_obj(template)?;
     let topology = t.topology().map_err(|e| e.in_file(template))?;
     let nv = topology.n_vertices();
-    let ext = src
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
+    let ext = src.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     let positions = match ext.as_str() {
         "pc2" => {
             let b = std::fs::read(src).map_err(|e| Error::io(src, "read", e))?;
@@ -191,17 +167,10 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
             a.data
         }
         _ => {
-            return Err(err!(
-                Unsupported,
-                "a template goes with a .pc2 or .npy source, not {ext:?}"
-            )
-            .in_file(src));
+            return Err(err!(Unsupported, "a template goes with a .pc2 or .npy source, not {ext:?}").in_file(src));
         }
     };
-    let name = src
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = src.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     Ok(SourceSequence {
         name,
         topology,

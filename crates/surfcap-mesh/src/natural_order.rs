@@ -41,21 +41,10 @@ mod tests {
 
     #[test]
     fn orders_numbers_by_value() {
-        let mut v = vec![
-            "f10.obj", "f2.obj", "f1.obj", "f01.obj", "g0.obj", "f100.obj", "f.obj",
-        ];
+        let mut v = vec!["f10.obj", "f2.obj", "f1.obj", "f01.obj", "g0.obj", "f100.obj", "f.obj"];
         v.sort_by(|a, b| natural_cmp(a, b));
-        assert_eq!(
-            v,
-            vec![
-                "f.obj", "f01.obj", "f1.obj", "f2.obj", "f10.obj", "f100.obj", "g0.obj"
-            ]
-        );
-        let mut w = [
-            "mesh_0010.ply",
-            "mesh_0009.ply",
-            "mesh_99999999999999999999999.ply",
-        ];
+        assert_eq!(v, vec!["f.obj", "f01.obj", "f1.obj", "f2.obj", "f10.obj", "f100.obj", "g0.obj"]);
+        let mut w = ["mesh_0010.ply", "mesh_0009.ply", "mesh_99999999999999999999999.ply"];
         w.sort_by(|a, b| natural_cmp(a, b));
         assert_eq!(w[0], "mesh_0009.ply");
     }

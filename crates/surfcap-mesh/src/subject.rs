@@ -42,10 +42,7 @@ impl UpAxis {
             (Some('x'), true, true) => Ok(UpAxis::NegX),
             (Some('y'), true, true) => Ok(UpAxis::NegY),
             (Some('z'), true, true) => Ok(UpAxis::NegZ),
-            _ => Err(err!(
-                Metadata,
-                "up axis {text:?}: expected one of +x, +y, +z, -x, -y, -z"
-            )),
+            _ => Err(err!(Metadata, "up axis {text:?}: expected one of +x, +y, +z, -x, -y, -z")),
         }
     }
 
@@ -83,27 +80,18 @@ pub struct Units {
 
 impl Units {
     pub fn metres() -> Self {
-        Units {
-            name: "m".into(),
-            metres_per_unit: Some(1.0),
-        }
+        Units { name: "m".into(), metres_per_unit: Some(1.0) }
     }
 
     pub fn arbitrary() -> Self {
-        Units {
-            name: "arbitrary".into(),
-            metres_per_unit: None,
-        }
+        Units { name: "arbitrary".into(), metres_per_unit: None }
     }
 
     /// Reads the leading word of a description: `m`, `metres (approx.)`, `cm`, `mm`, `inches`;
     /// anything else (`arbitrary (rescaled)`, `model units`) is kept as arbitrary units.
     pub fn parse(text: &str) -> Self {
         let lower = text.trim().to_ascii_lowercase();
-        let word: String = lower
-            .chars()
-            .take_while(|c| c.is_ascii_alphabetic())
-            .collect();
+        let word: String = lower.chars().take_while(|c| c.is_ascii_alphabetic()).collect();
         let scale = match word.as_str() {
             "m" | "metre" | "metres" | "meter" | "meters" => Some(1.0),
             "cm" | "centimetre" | "centimetres" | "centimeter" | "centimeters" => Some(0.01),
@@ -112,14 +100,8 @@ impl Units {
             _ => None,
         };
         match scale {
-            Some(s) => Units {
-                name: word,
-                metres_per_unit: Some(s),
-            },
-            None => Units {
-                name: text.trim().to_string(),
-                metres_per_unit: None,
-            },
+            Some(s) => Units { name: word, metres_per_unit: Some(s) },
+            None => Units { name: text.trim().to_string(), metres_per_unit: None },
         }
     }
 }
@@ -229,17 +211,9 @@ impl Sequence {
                 joints.n_joints()
             ));
         }
-        if let Some((j, _)) = joints
-            .parents
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.is_some_and(|p| p >= joints.n_joints()))
+        if let Some((j, _)) = joints.parents.iter().enumerate().find(|(_, p)| p.is_some_and(|p| p >= joints.n_joints()))
         {
-            return Err(err!(
-                Shape,
-                "joint {j}'s parent is out of range ({} joints)",
-                joints.n_joints()
-            ));
+            return Err(err!(Shape, "joint {j}'s parent is out of range ({} joints)", joints.n_joints()));
         }
         self.joints = Some(joints);
         Ok(self)
@@ -289,10 +263,7 @@ impl Subject {
     ) -> Result<Self> {
         let name = name.into();
         if !(fps.is_finite() && fps > 0.0) {
-            return Err(err!(
-                Metadata,
-                "frame rate {fps}: expected a positive number of frames per second"
-            ));
+            return Err(err!(Metadata, "frame rate {fps}: expected a positive number of frames per second"));
         }
         if sequences.is_empty() {
             return Err(err!(Empty, "subject {name:?} has no sequences"));
@@ -308,23 +279,11 @@ impl Subject {
                 ));
             }
             if sequences[..i].iter().any(|t| t.name == s.name) {
-                return Err(err!(
-                    Metadata,
-                    "two sequences are named {:?}: names must be unique",
-                    s.name
-                ));
+                return Err(err!(Metadata, "two sequences are named {:?}: names must be unique", s.name));
             }
         }
         let index = FrameIndex::new(sequences.iter().map(|s| s.n_frames()));
-        Ok(Subject {
-            name,
-            topology,
-            sequences,
-            fps,
-            up_axis,
-            units,
-            index,
-        })
+        Ok(Subject { name, topology, sequences, fps, up_axis, units, index })
     }
 
     pub fn topology(&self) -> &Topology {
@@ -336,10 +295,7 @@ impl Subject {
     }
 
     pub fn sequence(&self, name: &str) -> Option<(usize, &Sequence)> {
-        self.sequences
-            .iter()
-            .enumerate()
-            .find(|(_, s)| s.name == name)
+        self.sequences.iter().enumerate().find(|(_, s)| s.name == name)
     }
 
     /// The global frame index <-> (sequence, frame) mapping.
@@ -373,7 +329,8 @@ impl Subject {
                 Ok(self.index.global(k, f).expect("checked above"))
             }
             None => {
-                let g: usize = spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
+                let g: usize =
+                    spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
                 if g >= self.n_frames() {
                     return Err(bad(format!("the subject has global frames 0..{}", self.n_frames() - 1)));
                 }
@@ -387,24 +344,12 @@ impl Subject {
         if names.is_empty() {
             return Ok(self);
         }
-        let Subject {
-            name,
-            topology,
-            mut sequences,
-            fps,
-            up_axis,
-            units,
-            ..
-        } = self;
+        let Subject { name, topology, mut sequences, fps, up_axis, units, .. } = self;
         let mut chosen = Vec::with_capacity(names.len());
         for n in names {
             let Some(i) = sequences.iter().position(|s| &s.name == n) else {
                 let known: Vec<&str> = sequences.iter().map(|s| s.name.as_str()).collect();
-                return Err(err!(
-                    Metadata,
-                    "no sequence named {n:?}: the subject has {}",
-                    known.join(", ")
-                ));
+                return Err(err!(Metadata, "no sequence named {n:?}: the subject has {}", known.join(", ")));
             };
             chosen.push(sequences.swap_remove(i));
         }
@@ -420,10 +365,7 @@ mod tests {
     #[test]
     fn parses_up_axes() {
         assert_eq!(UpAxis::parse("y").unwrap(), UpAxis::PosY);
-        assert_eq!(
-            UpAxis::parse("+Y (Maya default; verify)").unwrap(),
-            UpAxis::PosY
-        );
+        assert_eq!(UpAxis::parse("+Y (Maya default; verify)").unwrap(), UpAxis::PosY);
         assert_eq!(UpAxis::parse("-z").unwrap(), UpAxis::NegZ);
         assert!(UpAxis::parse("yz").is_err());
         assert!(UpAxis::parse("up").is_err());
@@ -434,10 +376,7 @@ mod tests {
         assert_eq!(Units::parse("metres (approx.)").metres_per_unit, Some(1.0));
         assert_eq!(Units::parse("cm").metres_per_unit, Some(0.01));
         assert_eq!(Units::parse("arbitrary (rescaled)").metres_per_unit, None);
-        assert_eq!(
-            Units::parse("model units (NOT meters)").metres_per_unit,
-            None
-        );
+        assert_eq!(Units::parse("model units (NOT meters)").metres_per_unit, None);
     }
 
     #[test]
@@ -468,23 +407,9 @@ mod tests {
         let topo = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
         let a = Sequence::new("a", 3, vec![0.0; 9]).unwrap();
         let b = Sequence::new("b", 4, vec![0.0; 12]).unwrap();
-        let e = Subject::new(
-            "s",
-            topo.clone(),
-            vec![a.clone(), b],
-            30.0,
-            UpAxis::PosY,
-            Units::metres(),
-        );
+        let e = Subject::new("s", topo.clone(), vec![a.clone(), b], 30.0, UpAxis::PosY, Units::metres());
         assert_eq!(e.unwrap_err().kind, ErrorKind::TopologyMismatch);
-        let e = Subject::new(
-            "s",
-            topo.clone(),
-            vec![a.clone(), a.clone()],
-            30.0,
-            UpAxis::PosY,
-            Units::metres(),
-        );
+        let e = Subject::new("s", topo.clone(), vec![a.clone(), a.clone()], 30.0, UpAxis::PosY, Units::metres());
         assert_eq!(e.unwrap_err().kind, ErrorKind::Metadata);
         let s = Subject::new("s", topo, vec![a], 30.0, UpAxis::PosY, Units::metres()).unwrap();
         assert_eq!(s.n_frames(), 1);

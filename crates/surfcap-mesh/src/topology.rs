@@ -28,10 +28,7 @@ impl Topology {
             return Err(err!(Empty, "a topology needs at least one vertex"));
         }
         if n_vertices > u32::MAX as usize {
-            return Err(err!(
-                Unsupported,
-                "{n_vertices} vertices exceed the 32-bit index limit"
-            ));
+            return Err(err!(Unsupported, "{n_vertices} vertices exceed the 32-bit index limit"));
         }
         if triangles.is_empty() {
             return Err(err!(Empty, "no triangles: expected at least one face"));
@@ -59,11 +56,7 @@ impl Topology {
                 }
             }
         }
-        Ok(Topology {
-            n_vertices,
-            triangles,
-            uv,
-        })
+        Ok(Topology { n_vertices, triangles, uv })
     }
 
     pub fn n_vertices(&self) -> usize {
@@ -86,10 +79,7 @@ impl Topology {
     /// `None` when both topologies have the same vertex count and the same triangles in order.
     pub fn first_difference(&self, other: &Topology) -> Option<String> {
         if self.n_vertices != other.n_vertices {
-            return Some(format!(
-                "{} vertices, expected {} as in the template",
-                other.n_vertices, self.n_vertices
-            ));
+            return Some(format!("{} vertices, expected {} as in the template", other.n_vertices, self.n_vertices));
         }
         first_triangle_difference(&self.triangles, &other.triangles)
     }
@@ -100,11 +90,7 @@ impl Topology {
     pub fn count_degenerate_triangles(&self, positions: &[f32], rel_eps: f64) -> usize {
         let p = |i: u32| {
             let k = 3 * i as usize;
-            [
-                positions[k] as f64,
-                positions[k + 1] as f64,
-                positions[k + 2] as f64,
-            ]
+            [positions[k] as f64, positions[k + 1] as f64, positions[k + 2] as f64]
         };
         let (lo, hi) = crate::bounding_box(positions);
         let diag2: f64 = (0..3).map(|k| ((hi[k] - lo[k]) as f64).powi(2)).sum();
@@ -115,11 +101,7 @@ impl Topology {
                 let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
                 let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
                 let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-                let n = [
-                    u[1] * v[2] - u[2] * v[1],
-                    u[2] * v[0] - u[0] * v[2],
-                    u[0] * v[1] - u[1] * v[0],
-                ];
+                let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
                 (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() * 0.5 <= eps
             })
             .count()
@@ -164,11 +146,7 @@ pub(crate) fn first_triangle_difference(expected: &[[u32; 3]], got: &[[u32; 3]])
         ));
     }
     if expected.len() != got.len() {
-        return Some(format!(
-            "{} triangles, expected {} as in the template",
-            got.len(),
-            expected.len()
-        ));
+        return Some(format!("{} triangles, expected {} as in the template", got.len(), expected.len()));
     }
     None
 }
@@ -185,10 +163,7 @@ mod tests {
         let e = Topology::new(3, vec![[0, 1, 2], [0, 0, 2]], None).unwrap_err();
         assert_eq!(e.kind, ErrorKind::DegenerateFace);
         assert_eq!(e.location, Some(Location::Face(1)));
-        assert_eq!(
-            Topology::new(3, vec![], None).unwrap_err().kind,
-            ErrorKind::Empty
-        );
+        assert_eq!(Topology::new(3, vec![], None).unwrap_err().kind, ErrorKind::Empty);
     }
 
     #[test]

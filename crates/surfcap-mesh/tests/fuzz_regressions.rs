@@ -7,9 +7,7 @@ use surfcap_mesh::ErrorKind;
 use surfcap_mesh::io::npy::read_npy;
 
 fn case(name: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fuzz_regressions")
-        .join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions").join(name)
 }
 
 #[test]
@@ -24,10 +22,7 @@ fn glb_with_a_header_length_below_12_is_an_error_not_a_panic() {
     for name in ["glb_length_underflow.bin", "glb_version_0.bin"] {
         let bytes = std::fs::read(case(name)).unwrap();
         let e = surfcap_mesh::io::glb::parse_glb(&bytes).unwrap_err();
-        assert!(
-            !e.message.contains("malformed"),
-            "{name}: caught a panic instead of checking: {e}"
-        );
+        assert!(!e.message.contains("malformed"), "{name}: caught a panic instead of checking: {e}");
         assert!(surfcap_mesh::io::pc2::parse_pc2(&bytes).is_err());
     }
 }

@@ -28,15 +28,7 @@ pub struct WormParams {
 
 impl Default for WormParams {
     fn default() -> Self {
-        WormParams {
-            rings: 40,
-            segments: 16,
-            frames: 60,
-            fps: 30.0,
-            length: 1.2,
-            radius: 0.08,
-            seed: 0,
-        }
+        WormParams { rings: 40, segments: 16, frames: 60, fps: 30.0, length: 1.2, radius: 0.08, seed: 0 }
     }
 }
 
@@ -68,10 +60,8 @@ fn topology(p: &WormParams) -> Result<Topology, Error> {
 fn frame(p: &WormParams, m: &Motion, time: f64, phase: f64, out: &mut Vec<f32>) {
     let (r, s) = (p.rings, p.segments);
     let ds = p.length / (r - 1) as f64;
-    let heading = |sa: f64| {
-        m.amplitude
-            * (std::f64::consts::TAU * (sa / m.wavelength - m.frequency * time) + phase).sin()
-    };
+    let heading =
+        |sa: f64| m.amplitude * (std::f64::consts::TAU * (sa / m.wavelength - m.frequency * time) + phase).sin();
     // Integrate the centre line (midpoint rule), then centre it and add the travel.
     let mut centre = Vec::with_capacity(r);
     let mut c = [0.0f64, 0.0];
@@ -94,21 +84,13 @@ fn frame(p: &WormParams, m: &Motion, time: f64, phase: f64, out: &mut Vec<f32>) 
         for j in 0..s {
             let th = std::f64::consts::TAU * j as f64 / s as f64;
             let (a, b) = (th.cos() * rad, th.sin() * rad);
-            out.extend_from_slice(&[
-                (c[0] + travel + a * n[0]) as f32,
-                (height + b) as f32,
-                (c[1] + a * n[1]) as f32,
-            ]);
+            out.extend_from_slice(&[(c[0] + travel + a * n[0]) as f32, (height + b) as f32, (c[1] + a * n[1]) as f32]);
         }
     }
     for (i, sign) in [(0usize, -1.0f64), (r - 1, 1.0)] {
         let (c, phi) = centre[i];
         let d = sign * radius(i) * 0.8;
-        out.extend_from_slice(&[
-            (c[0] + travel + d * phi.cos()) as f32,
-            height as f32,
-            (c[1] + d * phi.sin()) as f32,
-        ]);
+        out.extend_from_slice(&[(c[0] + travel + d * phi.cos()) as f32, height as f32, (c[1] + d * phi.sin()) as f32]);
     }
     debug_assert_eq!(out.len() - start, 3 * (r * s + 2));
 }
@@ -126,24 +108,8 @@ pub fn worm_subject(params: &WormParams) -> Result<Subject, Error> {
     // A seed only shifts the phase: small, reproducible, platform-independent.
     let phase = (params.seed % 1000) as f64 * 0.001 * std::f64::consts::TAU;
     let motions = [
-        (
-            "slither",
-            Motion {
-                amplitude: 0.5,
-                wavelength: params.length * 0.8,
-                frequency: 1.0,
-                speed: 0.25,
-            },
-        ),
-        (
-            "curl",
-            Motion {
-                amplitude: 1.2,
-                wavelength: params.length * 2.0,
-                frequency: 0.4,
-                speed: 0.0,
-            },
-        ),
+        ("slither", Motion { amplitude: 0.5, wavelength: params.length * 0.8, frequency: 1.0, speed: 0.25 }),
+        ("curl", Motion { amplitude: 1.2, wavelength: params.length * 2.0, frequency: 0.4, speed: 0.0 }),
     ];
     let mut seqs = Vec::new();
     for (name, m) in &motions {
@@ -153,14 +119,7 @@ pub fn worm_subject(params: &WormParams) -> Result<Subject, Error> {
         }
         seqs.push(Sequence::new(*name, topo.n_vertices(), pos)?.with_tags(vec![name.to_string()]));
     }
-    Subject::new(
-        "worm",
-        topo,
-        seqs,
-        params.fps,
-        UpAxis::PosY,
-        Units::metres(),
-    )
+    Subject::new("worm", topo, seqs, params.fps, UpAxis::PosY, Units::metres())
 }
 
 #[cfg(test)]
@@ -170,22 +129,14 @@ mod tests {
 
     #[test]
     fn closed_two_manifold_and_deterministic() {
-        let p = WormParams {
-            rings: 6,
-            segments: 5,
-            frames: 4,
-            ..Default::default()
-        };
+        let p = WormParams { rings: 6, segments: 5, frames: 4, ..Default::default() };
         let s = worm_subject(&p).unwrap();
         let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
         for t in s.topology().triangles() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
                 *edges.entry((a, b)).or_default() += 1;
-                assert!(
-                    !edges.contains_key(&(a, b)) || edges[&(a, b)] == 1,
-                    "edge used twice in one direction"
-                );
+                assert!(!edges.contains_key(&(a, b)) || edges[&(a, b)] == 1, "edge used twice in one direction");
             }
         }
         for &(a, b) in edges.keys() {

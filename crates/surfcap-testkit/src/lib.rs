@@ -8,10 +8,7 @@ use std::path::{Path, PathBuf};
 
 /// The workspace root (two levels above a crate's manifest).
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .expect("workspace root exists")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("workspace root exists")
 }
 
 /// The shared real-data folder, or `None` (after printing why) when it is missing outside CI.
@@ -19,22 +16,15 @@ pub fn workspace_root() -> PathBuf {
 /// # Panics
 /// When `CI=true` and the folder is missing: CI must not silently skip real-data tests.
 pub fn shared_data() -> Option<PathBuf> {
-    let dir = std::env::var_os("SURFCAP_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace_root().join("../shared/data"));
+    let dir =
+        std::env::var_os("SURFCAP_DATA").map(PathBuf::from).unwrap_or_else(|| workspace_root().join("../shared/data"));
     if dir.join("README.md").is_file() {
         return Some(dir);
     }
     if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!(
-            "real data missing at {} (CI=true: real-data tests must not be skipped)",
-            dir.display()
-        );
+        panic!("real data missing at {} (CI=true: real-data tests must not be skipped)", dir.display());
     }
-    eprintln!(
-        "skipping: real data missing at {} (set SURFCAP_DATA)",
-        dir.display()
-    );
+    eprintln!("skipping: real data missing at {} (set SURFCAP_DATA)", dir.display());
     None
 }
 

@@ -38,6 +38,166 @@ pub enum What {
         #[arg(long)]
         fps: Option<f64>,
     },
+    /// All-pairs deformation distance matrix: triangle pairs per second, against the machine's
+    /// dense f64 matrix-multiply rate (thesis eq. 2.13).
+    Distance {
+        /// A subject; default: the built-in tube with --frames frames of about --triangles triangles.
+        #[arg(long)]
+        subject: Option<PathBuf>,
+        #[arg(long, default_value_t = 175)]
+        frames: usize,
+        #[arg(long, default_value_t = 20000)]
+        triangles: usize,
+        /// Frame rate for sources that do not give one.
+        #[arg(long)]
+        fps: Option<f64>,
+    },
+    /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
+    Interpolate {
+        /// A subject cache or source.
+        subject: PathBuf,
+        #[arg(long)]
+        from: String,
+        #[arg(long)]
+        to: String,
+        #[arg(long, default_value_t = 5)]
+        repeat: usize,
+        /// Frame rate for sources that do not give one.
+        #[arg(long)]
+        fps: Option<f64>,
+    },
+}
+
+/// Rate of a 1000 x 1000 f64 matrix product on all cores (faer), in FLOP/s: the reference
+/// "peak" that the distance benchmark's arithmetic rate is compared with.
+fn gemm_rate() -> f64 {
+    let n = 1000;
+    let a = faer::Mat::<f64>::from_fn(n, n, |i, j| ((i * 31 + j * 17) % 101) as f64 / 101.0);
+    let b = a.clone();
+    let _ = &a * &b;
+    let t0 = Instant::now();
+    let reps = 5;
+    for _ in 0..reps {
+        std::hint::black_box(&a * &b);
+    }
+    2.0 * (n * n * n) as f64 * reps as f64 / t0.elapsed().as_secs_f64()
+}
+
+/// Floating-point operations per triangle pair in `deformation_distance`, counted from the
+/// code: 27 mul + 18 add (rotations), 15 mul + 13 add (dot products), 4 mul + 1 add (m),
+/// 5 for h, 2 div, 5 for the trace, 8 for the stretch term and sum; sqrt and acos counted as one
+/// each. An estimate for the "fraction of peak" figure, not a measurement.
+const FLOPS_PER_TRIANGLE_PAIR: f64 = 100.0;
+
+fn distance_bench(
+    ctx: &crate::Ctx,
+    subject: Option<PathBuf>,
+    frames: usize,
+    triangles: usize,
+    fps: Option<f64>,
+) -> anyhow::Result<()> {
+    use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+    let s = match subject {
+        Some(p) => {
+            let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+            surfcap_mesh::import::open_subject(&p, &opts, &NoProgress)?.subject
+        }
+        None => {
+            let segments = 25usize;
+            let rings = (triangles / (2 * segments)).max(2);
+            let w = worm_subject(&WormParams { rings, segments, frames: frames.div_ceil(2), ..Default::default() })?;
+            let nv = w.topology().n_vertices();
+            let mut all = Vec::new();
+            for q in w.sequences() {
+                all.extend_from_slice(q.positions());
+            }
+            all.truncate(frames * 3 * nv);
+            let seq = Sequence::new("all", nv, all)?;
+            Subject::new("bench", w.topology().clone(), vec![seq], 30.0, w.up_axis, w.units.clone())?
+        }
+    };
+    let n = s.n_frames();
+    let m = s.topology().n_triangles();
+    let bar = crate::progress::Bar::new(ctx);
+    let t0 = Instant::now();
+    let d = distance_matrix(&s, &DistanceParams::default(), &bar);
+    let secs = t0.elapsed().as_secs_f64();
+    let pairs = (n * (n - 1) / 2) as f64 * m as f64;
+    let rate = pairs / secs;
+    let peak = gemm_rate();
+    let report = json!({
+        "frames": n, "triangles": m, "seconds": secs, "triangle_pairs_per_second": rate,
+        "threads": rayon::current_num_threads(),
+        "estimated_flops_per_triangle_pair": FLOPS_PER_TRIANGLE_PAIR,
+        "gemm_flops_per_second": peak,
+        "fraction_of_gemm_rate": rate * FLOPS_PER_TRIANGLE_PAIR / peak,
+        "max_skipped_triangles": d.max_skipped_triangles,
+        "peak_rss_bytes": peak_rss(),
+    });
+    if ctx.json {
+        print_json(&report);
+    } else {
+        println!(
+            "{n} x {n} deformation distances, {m} triangles: {secs:.2} s, {:.1} M triangle pairs/s on {} threads; \
+             ~{:.1} GFLOP/s = {:.1}% of the machine's dense f64 GEMM rate ({:.1} GFLOP/s); peak memory {:.0} MB",
+            rate / 1e6,
+            rayon::current_num_threads(),
+            rate * FLOPS_PER_TRIANGLE_PAIR / 1e9,
+            100.0 * rate * FLOPS_PER_TRIANGLE_PAIR / peak,
+            peak / 1e9,
+            peak_rss().unwrap_or(0) as f64 / 1e6
+        );
+    }
+    Ok(())
+}
+
+fn interpolate_bench(
+    ctx: &crate::Ctx,
+    subject: PathBuf,
+    from: &str,
+    to: &str,
+    repeat: usize,
+    fps: Option<f64>,
+) -> anyhow::Result<()> {
+    use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
+    let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+    let s = surfcap_mesh::import::open_subject(&subject, &opts, &NoProgress)?.subject;
+    let (gi, gj) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
+    let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
+    let mut setup = Vec::new();
+    let mut solve = Vec::new();
+    for _ in 0..repeat.max(1) {
+        let t0 = Instant::now();
+        let it = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis).map_err(|e| anyhow::anyhow!("{e}"))?;
+        setup.push(t0.elapsed().as_secs_f64());
+        let t1 = Instant::now();
+        std::hint::black_box(it.at(0.5, StretchInterpolation::Linear));
+        solve.push(t1.elapsed().as_secs_f64());
+    }
+    let med = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (su, so) = (med(&mut setup), med(&mut solve));
+    let report = json!({
+        "vertices": s.topology().n_vertices(), "triangles": s.topology().n_triangles(),
+        "setup_seconds_median": su, "lambda_seconds_median": so, "total_seconds_median": su + so,
+        "runs": repeat.max(1),
+    });
+    if ctx.json {
+        print_json(&report);
+    } else {
+        println!(
+            "non-linear interpolation, {} vertices: set-up (alignment, 2 x polar decompositions, 2 x Cholesky) \
+             {:.1} ms, one lambda (2 x Poisson solves) {:.1} ms, total {:.1} ms (medians of {})",
+            s.topology().n_vertices(),
+            su * 1e3,
+            so * 1e3,
+            (su + so) * 1e3,
+            repeat.max(1)
+        );
+    }
+    Ok(())
 }
 
 /// Peak resident set size of this process (Linux `VmHWM`), in bytes.
@@ -53,12 +213,7 @@ fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
     let segments = 25usize;
     let rings = vertices.saturating_sub(2).div_ceil(segments).max(2);
     let per_seq = 500usize.min(frames.max(1));
-    let base = worm_subject(&WormParams {
-        rings,
-        segments,
-        frames: per_seq,
-        ..Default::default()
-    })?;
+    let base = worm_subject(&WormParams { rings, segments, frames: per_seq, ..Default::default() })?;
     let nv = base.topology().n_vertices();
     let mut seqs = Vec::new();
     let mut left = frames;
@@ -71,39 +226,28 @@ fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
         left -= n;
         k += 1;
     }
-    Ok(Subject::new(
-        "bench",
-        base.topology().clone(),
-        seqs,
-        30.0,
-        base.up_axis,
-        base.units.clone(),
-    )?)
+    Ok(Subject::new("bench", base.topology().clone(), seqs, 30.0, base.up_axis, base.units.clone())?)
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let What::Load {
-        subject,
-        frames,
-        vertices,
-        repeat,
-        in_process,
-        fps,
-    } = a.what;
+    let (subject, frames, vertices, repeat, in_process, fps) = match a.what {
+        What::Load { subject, frames, vertices, repeat, in_process, fps } => {
+            (subject, frames, vertices, repeat, in_process, fps)
+        }
+        What::Distance { subject, frames, triangles, fps } => {
+            return distance_bench(ctx, subject, frames, triangles, fps);
+        }
+        What::Interpolate { subject, from, to, repeat, fps } => {
+            return interpolate_bench(ctx, subject, &from, &to, repeat, fps);
+        }
+    };
     if in_process {
         let path = subject.context("--in-process needs --subject")?;
-        let opts = surfcap_mesh::import::ImportOptions {
-            fps,
-            ..Default::default()
-        };
+        let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
         let t0 = Instant::now();
         let s = surfcap_mesh::import::open_subject(&path, &opts, &NoProgress)?.subject;
         let secs = t0.elapsed().as_secs_f64();
-        let bytes = s
-            .sequences()
-            .iter()
-            .map(|q| std::mem::size_of_val(q.positions()))
-            .sum::<usize>();
+        let bytes = s.sequences().iter().map(|q| std::mem::size_of_val(q.positions())).sum::<usize>();
         print_json(&json!({
             "seconds": secs,
             "peak_rss_bytes": peak_rss(),
@@ -128,32 +272,18 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut runs = Vec::new();
     for _ in 0..repeat.max(1) {
         let mut cmd = std::process::Command::new(&exe);
-        cmd.args(["bench", "load", "--in-process", "--subject"])
-            .arg(&path);
+        cmd.args(["bench", "load", "--in-process", "--subject"]).arg(&path);
         if let Some(f) = fps {
             cmd.arg("--fps").arg(f.to_string());
         }
-        let out = cmd
-            .output()
-            .context("running the measuring child process")?;
-        anyhow::ensure!(
-            out.status.success(),
-            "loading failed: {}",
-            String::from_utf8_lossy(&out.stderr).trim()
-        );
-        let v: serde_json::Value =
-            serde_json::from_slice(&out.stdout).context("reading the child's report")?;
+        let out = cmd.output().context("running the measuring child process")?;
+        anyhow::ensure!(out.status.success(), "loading failed: {}", String::from_utf8_lossy(&out.stderr).trim());
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).context("reading the child's report")?;
         runs.push(v);
     }
-    let mut secs: Vec<f64> = runs
-        .iter()
-        .map(|r| r["seconds"].as_f64().unwrap_or(f64::NAN))
-        .collect();
+    let mut secs: Vec<f64> = runs.iter().map(|r| r["seconds"].as_f64().unwrap_or(f64::NAN)).collect();
     secs.sort_by(f64::total_cmp);
-    let peak = runs
-        .iter()
-        .filter_map(|r| r["peak_rss_bytes"].as_u64())
-        .max();
+    let peak = runs.iter().filter_map(|r| r["peak_rss_bytes"].as_u64()).max();
     let r0 = &runs[0];
     let report = json!({
         "subject": path,
@@ -168,8 +298,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     if ctx.json {
         print_json(&report);
     } else {
-        let mb =
-            |b: Option<u64>| b.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1e6));
+        let mb = |b: Option<u64>| b.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1e6));
         println!(
             "loaded {} frames x {} vertices ({} of positions): best {:.3} s, median {:.3} s over {} runs; peak resident memory {}",
             r0["frames"],

@@ -26,10 +26,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             println!("{s}");
         }
     };
-    let built = worm_subject(&WormParams {
-        seed: a.seed,
-        ..Default::default()
-    })?;
+    let built = worm_subject(&WormParams { seed: a.seed, ..Default::default() })?;
     say(&format!(
         "1. built the built-in subject {:?}: {} sequences, {} frames, {} vertices",
         built.name,
@@ -38,36 +35,18 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         built.topology().n_vertices()
     ));
     let source = a.output.join("source");
-    export(
-        &built,
-        ExportFormat::Npy,
-        &source,
-        ExportOptions::default(),
-        &bar,
-    )?;
-    say(&format!(
-        "2. wrote it as source files (template.obj + positions.npy) in {}",
-        source.display()
-    ));
-    let opts = surfcap_mesh::import::ImportOptions {
-        name: Some(built.name.clone()),
-        ..Default::default()
-    };
+    export(&built, ExportFormat::Npy, &source, ExportOptions::default(), &bar)?;
+    say(&format!("2. wrote it as source files (template.obj + positions.npy) in {}", source.display()));
+    let opts = surfcap_mesh::import::ImportOptions { name: Some(built.name.clone()), ..Default::default() };
     let imported = surfcap_mesh::import::import(std::slice::from_ref(&source), &opts, &bar)?;
     let subject = imported.subject;
     anyhow::ensure!(
-        built
-            .sequences()
-            .iter()
-            .all(|b| subject.sequence(&b.name).is_some_and(|(_, a)| a == b)),
+        built.sequences().iter().all(|b| subject.sequence(&b.name).is_some_and(|(_, a)| a == b)),
         "the imported sequences differ from the built ones"
     );
     let cache = a.output.join("worm.subject");
     surfcap_mesh::cache::write_cache(&cache, &subject, &bar)?;
-    say(&format!(
-        "3. imported them into the subject cache {}",
-        cache.display()
-    ));
+    say(&format!("3. imported them into the subject cache {}", cache.display()));
     let mut written = Vec::new();
     for (fmt, name) in [
         (ExportFormat::Glb, "worm.glb"),
@@ -76,31 +55,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         (ExportFormat::Pc2, "pc2"),
         (ExportFormat::Npy, "npy"),
     ] {
-        written.extend(export(
-            &subject,
-            fmt,
-            &a.output.join("export").join(name),
-            ExportOptions::default(),
-            &bar,
-        )?);
+        written.extend(export(&subject, fmt, &a.output.join("export").join(name), ExportOptions::default(), &bar)?);
     }
-    say(&format!(
-        "4. exported it as glb, OBJ, PLY, PC2 and npy in {}",
-        a.output.join("export").display()
-    ));
+    say(&format!("4. exported it as glb, OBJ, PLY, PC2 and npy in {}", a.output.join("export").display()));
     if ctx.json {
-        print_json(
-            &json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written }),
-        );
+        print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written }));
     } else if !ctx.quiet {
         println!("\nsurfcap info {}:", cache.display());
-        super::info::run(
-            ctx,
-            super::info::Args {
-                subject: cache.clone(),
-                source: Default::default(),
-            },
-        )?;
+        super::info::run(ctx, super::info::Args { subject: cache.clone(), source: Default::default() })?;
         println!(
             "\nplay {} in Blender (File > Import > glTF) or any three.js viewer",
             a.output.join("export/worm.glb").display()

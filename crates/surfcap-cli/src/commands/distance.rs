@@ -36,7 +36,9 @@ pub struct Args {
 pub struct MetricArg(pub PoseMetric);
 
 fn parse_metric(s: &str) -> Result<MetricArg, String> {
-    PoseMetric::parse(s).map(MetricArg).ok_or_else(|| format!("{s:?}: expected deformation, deformation-log or euclidean"))
+    PoseMetric::parse(s)
+        .map(MetricArg)
+        .ok_or_else(|| format!("{s:?}: expected deformation, deformation-log or euclidean"))
 }
 
 /// Where derived matrices are cached.
@@ -94,7 +96,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::atomic::write_file(&a.output, |w| write_npy(w, &m.shape, &m.data))
         .with_context(|| format!("writing {}", a.output.display()))?;
     let n = m.shape[0];
-    let off: Vec<f64> = (0..n).flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j))).map(|(i, j)| m.data[i * n + j]).collect();
+    let off: Vec<f64> = (0..n)
+        .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
+        .map(|(i, j)| m.data[i * n + j])
+        .collect();
     let mean = off.iter().sum::<f64>() / off.len().max(1) as f64;
     let max = off.iter().cloned().fold(0.0, f64::max);
     if ctx.json {

@@ -65,8 +65,16 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         print_json(&json!({ "subject": s.name, "rows": rows }));
         return Ok(());
     }
-    println!("subject {} ({} vertices, {} triangles), lambda = {lambda}", s.name, topo.n_vertices(), topo.n_triangles());
-    println!("{:<28} {:>14} {:>14} {:>14} {:>14} {:>9}", "pair", "edge lin.", "edge nonlin.", "volume lin.", "volume nonlin.", "time");
+    println!(
+        "subject {} ({} vertices, {} triangles), lambda = {lambda}",
+        s.name,
+        topo.n_vertices(),
+        topo.n_triangles()
+    );
+    println!(
+        "{:<28} {:>14} {:>14} {:>14} {:>14} {:>9}",
+        "pair", "edge lin.", "edge nonlin.", "volume lin.", "volume nonlin.", "time"
+    );
     for r in &rows {
         println!(
             "{:<28} {:>14.5} {:>14.5} {:>14.5} {:>14.5} {:>8.3}s",

@@ -33,26 +33,16 @@ pub struct Args {
 pub struct ExportFormatArg(pub ExportFormat);
 
 fn parse_format(s: &str) -> Result<ExportFormatArg, String> {
-    ExportFormat::parse(s)
-        .map(ExportFormatArg)
-        .ok_or_else(|| format!("{s:?}: expected glb, obj, ply, pc2 or npy"))
+    ExportFormat::parse(s).map(ExportFormatArg).ok_or_else(|| format!("{s:?}: expected glb, obj, ply, pc2 or npy"))
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = super::open(ctx, &a.subject, &a.source)?.select(&a.sequences)?;
     let bar = crate::progress::Bar::new(ctx);
-    let written = export(
-        &s,
-        a.format.0,
-        &a.output,
-        ExportOptions { ply_ascii: a.ascii },
-        &bar,
-    )
-    .with_context(|| format!("exporting {:?}", s.name))?;
+    let written = export(&s, a.format.0, &a.output, ExportOptions { ply_ascii: a.ascii }, &bar)
+        .with_context(|| format!("exporting {:?}", s.name))?;
     if ctx.json {
-        print_json(
-            &json!({ "written": written, "frames": s.n_frames(), "sequences": s.sequences().len() }),
-        );
+        print_json(&json!({ "written": written, "frames": s.n_frames(), "sequences": s.sequences().len() }));
     } else {
         for w in &written {
             println!("wrote {}", w.display());

@@ -26,8 +26,7 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
-    let imported =
-        surfcap_mesh::import::import(&a.sources, &a.source.to_import(a.name.clone())?, &bar)?;
+    let imported = surfcap_mesh::import::import(&a.sources, &a.source.to_import(a.name.clone())?, &bar)?;
     for n in &imported.notes {
         ctx.note(n);
     }

@@ -39,11 +39,7 @@ pub fn describe(s: &Subject) -> serde_json::Value {
                 zero_area = zero_area.max(n);
             }
         }
-        let synthetic = q
-            .labels
-            .iter()
-            .filter(|l| **l == surfcap_mesh::FrameLabel::Synthetic)
-            .count();
+        let synthetic = q.labels.iter().filter(|l| **l == surfcap_mesh::FrameLabel::Synthetic).count();
         seqs.push(json!({
             "name": q.name,
             "frames": q.n_frames(),
@@ -80,31 +76,13 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     let units = &s.units;
     println!("subject     {}", s.name);
-    println!(
-        "frames      {} in {} sequences at {} fps",
-        s.n_frames(),
-        s.sequences().len(),
-        s.fps
-    );
+    println!("frames      {} in {} sequences at {} fps", s.n_frames(), s.sequences().len(), s.fps);
     println!("vertices    {}", d["vertices"]);
     println!("triangles   {}", d["triangles"]);
-    let sizes: Vec<String> = d["component_sizes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .take(8)
-        .map(|x| x.to_string())
-        .collect();
-    let more = if s.topology().n_vertices() > 0 && d["connected_components"].as_u64().unwrap() > 8 {
-        ", ..."
-    } else {
-        ""
-    };
-    println!(
-        "components  {} (vertices: {}{more})",
-        d["connected_components"],
-        sizes.join(", ")
-    );
+    let sizes: Vec<String> = d["component_sizes"].as_array().unwrap().iter().take(8).map(|x| x.to_string()).collect();
+    let more =
+        if s.topology().n_vertices() > 0 && d["connected_components"].as_u64().unwrap() > 8 { ", ..." } else { "" };
+    println!("components  {} (vertices: {}{more})", d["connected_components"], sizes.join(", "));
     let bb = |k: &str| -> String {
         let v: Vec<String> = d["bounding_box"][k]
             .as_array()
@@ -127,24 +105,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     }
     println!("sequences");
-    let w = s
-        .sequences()
-        .iter()
-        .map(|q| q.name.len())
-        .max()
-        .unwrap_or(4)
-        .max(4);
+    let w = s.sequences().iter().map(|q| q.name.len()).max().unwrap_or(4).max(4);
     for q in d["sequences"].as_array().unwrap() {
-        let tags: Vec<&str> = q["tags"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter_map(|t| t.as_str())
-            .collect();
-        let joints = q["joints"]
-            .as_u64()
-            .map(|j| format!("  {j} joints"))
-            .unwrap_or_default();
+        let tags: Vec<&str> = q["tags"].as_array().unwrap().iter().filter_map(|t| t.as_str()).collect();
+        let joints = q["joints"].as_u64().map(|j| format!("  {j} joints")).unwrap_or_default();
         let synth = match q["synthetic_frames"].as_u64() {
             Some(0) | None => String::new(),
             Some(n) => format!("  {n} synthetic"),
@@ -154,11 +118,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             q["name"].as_str().unwrap_or(""),
             q["frames"],
             q["seconds"].as_f64().unwrap_or(0.0),
-            if tags.is_empty() {
-                String::new()
-            } else {
-                format!("  [{}]", tags.join(", "))
-            },
+            if tags.is_empty() { String::new() } else { format!("  [{}]", tags.join(", ")) },
             joints,
             synth,
         );

@@ -49,7 +49,8 @@ pub fn stretch_of(s: &str) -> anyhow::Result<StretchInterpolation> {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.steps >= 2, "--steps {}: expected at least 2 (both ends are included)", a.steps);
-    let format = ExportFormat::parse(&a.format).with_context(|| format!("--format {:?}: expected glb, obj, ply, pc2 or npy", a.format))?;
+    let format = ExportFormat::parse(&a.format)
+        .with_context(|| format!("--format {:?}: expected glb, obj, ply, pc2 or npy", a.format))?;
     let stretch = stretch_of(&a.stretch)?;
     let nonlinear = match a.method.as_str() {
         "nonlinear" => true,
@@ -78,11 +79,20 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
     let seq = Sequence::new(name, nv, positions)?.with_labels(labels)?.with_tags(vec!["interpolation".into()]);
-    let out = Subject::new(format!("{}-interpolation", s.name), s.topology().clone(), vec![seq], s.fps, s.up_axis, s.units.clone())?;
+    let out = Subject::new(
+        format!("{}-interpolation", s.name),
+        s.topology().clone(),
+        vec![seq],
+        s.fps,
+        s.up_axis,
+        s.units.clone(),
+    )?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&out, format, &a.output, ExportOptions::default(), &bar)?;
     if ctx.json {
-        print_json(&json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() }));
+        print_json(
+            &json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() }),
+        );
     } else {
         println!(
             "{} interpolation of global frames {gi} -> {gj} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",

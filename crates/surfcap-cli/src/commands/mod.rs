@@ -37,21 +37,12 @@ impl SourceOpts {
         if let Some(f) = self.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
             anyhow::bail!("--fps {f}: expected a positive number of frames per second");
         }
-        Ok(ImportOptions {
-            name,
-            fps: self.fps,
-            up_axis: self.up_axis,
-            units: self.units.as_deref().map(Units::parse),
-        })
+        Ok(ImportOptions { name, fps: self.fps, up_axis: self.up_axis, units: self.units.as_deref().map(Units::parse) })
     }
 }
 
 /// Opens a subject (cache or any importable source) with a progress bar and shows the notes.
-pub fn open(
-    ctx: &crate::Ctx,
-    path: &Path,
-    opts: &SourceOpts,
-) -> anyhow::Result<surfcap_mesh::Subject> {
+pub fn open(ctx: &crate::Ctx, path: &Path, opts: &SourceOpts) -> anyhow::Result<surfcap_mesh::Subject> {
     let bar = crate::progress::Bar::new(ctx);
     let imported = surfcap_mesh::import::open_subject(path, &opts.to_import(None)?, &bar)?;
     for n in &imported.notes {
@@ -62,8 +53,5 @@ pub fn open(
 
 /// Prints a JSON value on stdout.
 pub fn print_json(v: &serde_json::Value) {
-    println!(
-        "{}",
-        serde_json::to_string_pretty(v).expect("JSON values always serialise")
-    );
+    println!("{}", serde_json::to_string_pretty(v).expect("JSON values always serialise"));
 }

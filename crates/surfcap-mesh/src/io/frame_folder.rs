@@ -38,18 +38,13 @@ pub fn list_frames(dir: &Path, format: FrameFormat) -> Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = Vec::new();
     for e in entries {
         let p = e.map_err(|e| Error::io(dir, "list directory", e))?.path();
-        let ext_ok = p
-            .extension()
-            .is_some_and(|x| x.eq_ignore_ascii_case(format.extension()));
+        let ext_ok = p.extension().is_some_and(|x| x.eq_ignore_ascii_case(format.extension()));
         if ext_ok && p.is_file() {
             files.push(p);
         }
     }
     files.sort_by(|a, b| {
-        natural_cmp(
-            &a.file_name().unwrap().to_string_lossy(),
-            &b.file_name().unwrap().to_string_lossy(),
-        )
+        natural_cmp(&a.file_name().unwrap().to_string_lossy(), &b.file_name().unwrap().to_string_lossy())
     });
     Ok(files)
 }
@@ -65,50 +60,25 @@ fn read_frame(path: &Path, format: FrameFormat, want_topology: bool) -> Result<F
     let (positions, triangles, lines, topology) = match format {
         FrameFormat::Obj => {
             let m = read_obj(path)?;
-            let t = if want_topology {
-                Some(m.topology().map_err(|e| e.in_file(path))?)
-            } else {
-                None
-            };
+            let t = if want_topology { Some(m.topology().map_err(|e| e.in_file(path))?) } else { None };
             (m.positions, m.triangles, m.triangle_lines, t)
         }
         FrameFormat::Ply => {
             let m = read_ply(path)?;
-            let t = if want_topology {
-                Some(m.topology().map_err(|e| e.in_file(path))?)
-            } else {
-                None
-            };
+            let t = if want_topology { Some(m.topology().map_err(|e| e.in_file(path))?) } else { None };
             (m.positions, m.triangles, Vec::new(), t)
         }
     };
-    Ok(Frame {
-        positions,
-        triangles,
-        lines,
-        topology,
-    })
+    Ok(Frame { positions, triangles, lines, topology })
 }
 
 /// Reads a folder of frames into one topology and contiguous positions.
-pub fn read_frame_folder(
-    dir: &Path,
-    format: FrameFormat,
-    progress: &dyn Progress,
-) -> Result<(Topology, Vec<f32>)> {
+pub fn read_frame_folder(dir: &Path, format: FrameFormat, progress: &dyn Progress) -> Result<(Topology, Vec<f32>)> {
     let files = list_frames(dir, format)?;
     if files.is_empty() {
-        return Err(err!(
-            Empty,
-            "no .{} files: expected one mesh file per frame",
-            format.extension()
-        )
-        .in_file(dir));
+        return Err(err!(Empty, "no .{} files: expected one mesh file per frame", format.extension()).in_file(dir));
     }
-    progress.start(
-        &format!("reading {} frames", files.len()),
-        files.len() as u64,
-    );
+    progress.start(&format!("reading {} frames", files.len()), files.len() as u64);
     let first = read_frame(&files[0], format, true)?;
     let topology = first.topology.clone().expect("requested");
     let nv = topology.n_vertices();
@@ -132,24 +102,14 @@ pub fn read_frame_folder(
             if !f.triangles.is_empty()
                 && let Some(diff) = first_triangle_difference(topology.triangles(), &f.triangles)
             {
-                let i = topology
-                    .triangles()
-                    .iter()
-                    .zip(&f.triangles)
-                    .position(|(a, b)| a != b);
+                let i = topology.triangles().iter().zip(&f.triangles).position(|(a, b)| a != b);
                 let loc = match i.and_then(|i| f.lines.get(i)) {
-                    Some(&line) => Location::FrameLine {
-                        frame: frame_no,
-                        line,
-                    },
+                    Some(&line) => Location::FrameLine { frame: frame_no, line },
                     None => Location::Frame(frame_no),
                 };
-                return Err(err!(
-                    TopologyMismatch,
-                    "faces differ from the first frame's: {diff}"
-                )
-                .in_file(path)
-                .at(loc));
+                return Err(err!(TopologyMismatch, "faces differ from the first frame's: {diff}")
+                    .in_file(path)
+                    .at(loc));
             }
             Ok(f.positions)
         })

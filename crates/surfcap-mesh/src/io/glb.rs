@@ -137,38 +137,13 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
     };
     let mut bin = Bin { data: Vec::new() };
 
-    let indices: Vec<u8> = topo
-        .triangles()
-        .iter()
-        .flatten()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let iv = bin.view(
-        &mut root,
-        &indices,
-        Some(json::buffer::Target::ElementArrayBuffer),
-    );
-    let indices = root.push(accessor(
-        iv,
-        topo.n_triangles() * 3,
-        ComponentType::U32,
-        Type::Scalar,
-        None,
-    ));
+    let indices: Vec<u8> = topo.triangles().iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+    let iv = bin.view(&mut root, &indices, Some(json::buffer::Target::ElementArrayBuffer));
+    let indices = root.push(accessor(iv, topo.n_triangles() * 3, ComponentType::U32, Type::Scalar, None));
 
     let base = subject.sequences()[0].frame(0);
-    let bv = bin.view(
-        &mut root,
-        &f32_bytes(base),
-        Some(json::buffer::Target::ArrayBuffer),
-    );
-    let base_acc = root.push(accessor(
-        bv,
-        nv,
-        ComponentType::F32,
-        Type::Vec3,
-        Some(vec3_bounds(base)),
-    ));
+    let bv = bin.view(&mut root, &f32_bytes(base), Some(json::buffer::Target::ArrayBuffer));
+    let base_acc = root.push(accessor(bv, nv, ComponentType::F32, Type::Vec3, Some(vec3_bounds(base))));
 
     let n_targets = subject.n_frames();
     let mut targets = Vec::with_capacity(n_targets);
@@ -179,23 +154,9 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
             for ((d, p), b) in delta.iter_mut().zip(s.frame(f)).zip(base) {
                 *d = p - b;
             }
-            let v = bin.view(
-                &mut root,
-                &f32_bytes(&delta),
-                Some(json::buffer::Target::ArrayBuffer),
-            );
-            let a = root.push(accessor(
-                v,
-                nv,
-                ComponentType::F32,
-                Type::Vec3,
-                Some(vec3_bounds(&delta)),
-            ));
-            targets.push(json::mesh::MorphTarget {
-                positions: Some(a),
-                normals: None,
-                tangents: None,
-            });
+            let v = bin.view(&mut root, &f32_bytes(&delta), Some(json::buffer::Target::ArrayBuffer));
+            let a = root.push(accessor(v, nv, ComponentType::F32, Type::Vec3, Some(vec3_bounds(&delta))));
+            targets.push(json::mesh::MorphTarget { positions: Some(a), normals: None, tangents: None });
             names.push(format!("{}:{f}", s.name));
         }
     }
@@ -222,12 +183,7 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
         rotation: up_to_y(subject.up_axis),
         ..Default::default()
     });
-    root.push(json::Scene {
-        extensions: None,
-        extras: None,
-        name: None,
-        nodes: vec![node],
-    });
+    root.push(json::Scene { extensions: None, extras: None, name: None, nodes: vec![node] });
     root.scene = Some(json::Index::new(0));
 
     let mut first = 0usize;
@@ -248,13 +204,7 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
             weights[f * n_targets + first + f] = 1.0;
         }
         let wv = bin.view(&mut root, &f32_bytes(&weights), None);
-        let w_acc = root.push(accessor(
-            wv,
-            n * n_targets,
-            ComponentType::F32,
-            Type::Scalar,
-            None,
-        ));
+        let w_acc = root.push(accessor(wv, n * n_targets, ComponentType::F32, Type::Scalar, None));
         let labels: Vec<&FrameLabel> = s.labels.iter().collect();
         let meta = json!({
             "sequence": s.name,
@@ -309,11 +259,7 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
     });
     let json_bytes = root.to_vec().map_err(std::io::Error::other)?;
     let glb = gltf::binary::Glb {
-        header: gltf::binary::Header {
-            magic: *b"glTF",
-            version: 2,
-            length: 0,
-        },
+        header: gltf::binary::Header { magic: *b"glTF", version: 2, length: 0 },
         json: std::borrow::Cow::Owned(json_bytes),
         bin: Some(std::borrow::Cow::Owned(bin.data)),
     };
@@ -335,57 +281,33 @@ pub fn parse_glb(bytes: &[u8]) -> Result<GlbAnimation> {
     // be an error, never a crash.
     match std::panic::catch_unwind(|| decode(bytes)) {
         Ok(r) => r,
-        Err(_) => Err(err!(
-            Syntax,
-            "malformed glTF: an accessor does not fit its buffer"
-        )),
+        Err(_) => Err(err!(Syntax, "malformed glTF: an accessor does not fit its buffer")),
     }
 }
 
 /// Checks the GLB container (header and chunk lengths) before the gltf crate splits it: its
 /// splitter subtracts lengths without checking them (found by the fuzzer, see fuzz/FINDINGS.md).
 fn check_container(bytes: &[u8]) -> Result<&[u8]> {
-    let u32_at = |k: usize| {
-        bytes
-            .get(k..k + 4)
-            .map(|b| u32::from_le_bytes(b.try_into().unwrap()) as usize)
-    };
+    let u32_at = |k: usize| bytes.get(k..k + 4).map(|b| u32::from_le_bytes(b.try_into().unwrap()) as usize);
     if bytes.len() < 20 || &bytes[..4] != b"glTF" {
-        return Err(err!(
-            Syntax,
-            "no glTF binary header: expected a .glb file starting with 'glTF'"
-        ));
+        return Err(err!(Syntax, "no glTF binary header: expected a .glb file starting with 'glTF'"));
     }
     if u32_at(4) != Some(2) {
-        return Err(err!(
-            Unsupported,
-            "glTF binary version {}: expected 2",
-            u32_at(4).unwrap_or(0)
-        ));
+        return Err(err!(Unsupported, "glTF binary version {}: expected 2", u32_at(4).unwrap_or(0)));
     }
     let length = u32_at(8).unwrap_or(0);
     if length < 20 || length > bytes.len() {
-        return Err(err!(
-            Truncated,
-            "header declares {length} bytes, the file has {}",
-            bytes.len()
-        ));
+        return Err(err!(Truncated, "header declares {length} bytes, the file has {}", bytes.len()));
     }
     let json_len = u32_at(12).unwrap_or(0);
     if &bytes[16..20] != b"JSON" || 20 + json_len > length {
-        return Err(err!(
-            Syntax,
-            "the first chunk is not a JSON chunk that fits in the file"
-        ));
+        return Err(err!(Syntax, "the first chunk is not a JSON chunk that fits in the file"));
     }
     let bin_at = 20 + json_len.div_ceil(4) * 4;
     if bin_at + 8 <= length {
         let bin_len = u32_at(bin_at).unwrap_or(usize::MAX);
         if bin_len > length - bin_at - 8 {
-            return Err(err!(
-                Truncated,
-                "binary chunk of {bin_len} bytes does not fit in the file"
-            ));
+            return Err(err!(Truncated, "binary chunk of {bin_len} bytes does not fit in the file"));
         }
     }
     Ok(&bytes[..length])
@@ -395,18 +317,10 @@ fn check_container(bytes: &[u8]) -> Result<&[u8]> {
 fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
     let what = || format!("accessor {}", a.index());
     let Some(view) = a.view() else {
-        return Err(err!(
-            Unsupported,
-            "{} has no buffer view (sparse-only data is not supported)",
-            what()
-        ));
+        return Err(err!(Unsupported, "{} has no buffer view (sparse-only data is not supported)", what()));
     };
     if !matches!(view.buffer().source(), gltf::buffer::Source::Bin) {
-        return Err(err!(
-            Unsupported,
-            "{} refers to an external buffer: expected data inside the .glb",
-            what()
-        ));
+        return Err(err!(Unsupported, "{} refers to an external buffer: expected data inside the .glb", what()));
     }
     let elem = a.size();
     let stride = view.stride().unwrap_or(elem);
@@ -414,25 +328,18 @@ fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
     if count == 0 {
         return Err(err!(Shape, "{} has no elements", what()));
     }
-    let need = (count - 1)
-        .checked_mul(stride)
-        .and_then(|n| n.checked_add(elem))
-        .and_then(|n| n.checked_add(a.offset()));
+    let need =
+        (count - 1).checked_mul(stride).and_then(|n| n.checked_add(elem)).and_then(|n| n.checked_add(a.offset()));
     let view_end = view.offset().checked_add(view.length());
     match (need, view_end) {
         (Some(n), Some(e)) if n <= view.length() && e <= blob_len => Ok(()),
-        _ => Err(err!(
-            Truncated,
-            "{} does not fit in its buffer view or the binary chunk",
-            what()
-        )),
+        _ => Err(err!(Truncated, "{} does not fit in its buffer view or the binary chunk", what())),
     }
 }
 
 fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
     let bytes = check_container(bytes)?;
-    let g =
-        gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
+    let g = gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
     let blob = g.blob.as_deref();
     let blob_len = blob.map_or(0, <[u8]>::len);
     for a in g.accessors() {
@@ -445,31 +352,15 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
     let (node, mesh) = g
         .nodes()
         .find_map(|n| n.mesh().map(|m| (n, m)))
-        .ok_or_else(|| {
-            err!(
-                Empty,
-                "no node with a mesh: expected an animated triangle mesh"
-            )
-        })?;
+        .ok_or_else(|| err!(Empty, "no node with a mesh: expected an animated triangle mesh"))?;
     let prim = mesh
         .primitives()
         .find(|p| p.mode() == gltf::mesh::Mode::Triangles)
-        .ok_or_else(|| {
-            err!(
-                Unsupported,
-                "mesh {:?} has no triangle primitive",
-                mesh.name().unwrap_or("")
-            )
-        })?;
+        .ok_or_else(|| err!(Unsupported, "mesh {:?} has no triangle primitive", mesh.name().unwrap_or("")))?;
     let r = prim.reader(buffers);
     let base: Vec<f32> = r
         .read_positions()
-        .ok_or_else(|| {
-            err!(
-                Syntax,
-                "triangle primitive has no readable POSITION accessor"
-            )
-        })?
+        .ok_or_else(|| err!(Syntax, "triangle primitive has no readable POSITION accessor"))?
         .flatten()
         .collect();
     let nv = base.len() / 3;
@@ -478,38 +369,22 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
         None => (0..nv as u32).collect(),
     };
     if !flat.len().is_multiple_of(3) {
-        return Err(err!(
-            Shape,
-            "{} triangle indices: expected a multiple of 3",
-            flat.len()
-        ));
+        return Err(err!(Shape, "{} triangle indices: expected a multiple of 3", flat.len()));
     }
     let triangles: Vec<[u32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let topology = Topology::new(nv, triangles, None)?;
     let mut targets: Vec<Vec<f32>> = Vec::new();
     for (p, _, _) in r.read_morph_targets() {
-        let t: Vec<f32> = p
-            .map(|it| it.flatten().collect())
-            .unwrap_or_else(|| vec![0.0; 3 * nv]);
+        let t: Vec<f32> = p.map(|it| it.flatten().collect()).unwrap_or_else(|| vec![0.0; 3 * nv]);
         if t.len() != 3 * nv {
-            return Err(err!(
-                Shape,
-                "morph target {} has {} positions, expected {nv}",
-                targets.len(),
-                t.len() / 3
-            ));
+            return Err(err!(Shape, "morph target {} has {} positions, expected {nv}", targets.len(), t.len() / 3));
         }
         targets.push(t);
     }
     let root_meta = extras_surfcap(&g.document.as_json().extras);
     let mut fps = root_meta.as_ref().and_then(|m| m["fps"].as_f64());
-    let up_axis = root_meta
-        .as_ref()
-        .and_then(|m| m["up_axis"].as_str())
-        .and_then(|s| UpAxis::parse(s).ok());
-    let units = root_meta
-        .as_ref()
-        .and_then(|m| serde_json::from_value::<Units>(m["units"].clone()).ok());
+    let up_axis = root_meta.as_ref().and_then(|m| m["up_axis"].as_str()).and_then(|s| UpAxis::parse(s).ok());
+    let units = root_meta.as_ref().and_then(|m| serde_json::from_value::<Units>(m["units"].clone()).ok());
 
     let mut sequences = Vec::new();
     for (ai, anim) in g.animations().enumerate() {
@@ -520,14 +395,10 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
             continue;
         };
         let cr = ch.reader(buffers);
-        let times: Vec<f32> = cr
-            .read_inputs()
-            .ok_or_else(|| err!(Syntax, "animation {ai} has no input times"))?
-            .collect();
+        let times: Vec<f32> =
+            cr.read_inputs().ok_or_else(|| err!(Syntax, "animation {ai} has no input times"))?.collect();
         let weights: Vec<f32> = match cr.read_outputs() {
-            Some(gltf::animation::util::ReadOutputs::MorphTargetWeights(w)) => {
-                w.into_f32().collect()
-            }
+            Some(gltf::animation::util::ReadOutputs::MorphTargetWeights(w)) => w.into_f32().collect(),
             _ => return Err(err!(Syntax, "animation {ai} has no morph weights")),
         };
         let nt = targets.len();
@@ -554,14 +425,10 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
             }
             positions.extend_from_slice(&p);
         }
-        let name = anim
-            .name()
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("animation_{ai}"));
+        let name = anim.name().map(str::to_string).unwrap_or_else(|| format!("animation_{ai}"));
         let mut seq = Sequence::new(name, nv, positions)?;
         if let Some(m) = extras_surfcap(anim.extras()) {
-            if let Ok(labels) = serde_json::from_value::<Vec<FrameLabel>>(m["frame_labels"].clone())
-            {
+            if let Ok(labels) = serde_json::from_value::<Vec<FrameLabel>>(m["frame_labels"].clone()) {
                 seq = seq.with_labels(labels)?;
             }
             if let Ok(tags) = serde_json::from_value::<Vec<String>>(m["tags"].clone()) {
@@ -571,19 +438,9 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
         sequences.push(seq);
     }
     if sequences.is_empty() {
-        sequences.push(Sequence::new(
-            mesh.name().unwrap_or("mesh").to_string(),
-            nv,
-            base,
-        )?);
+        sequences.push(Sequence::new(mesh.name().unwrap_or("mesh").to_string(), nv, base)?);
     }
-    Ok(GlbAnimation {
-        topology,
-        sequences,
-        fps,
-        up_axis,
-        units,
-    })
+    Ok(GlbAnimation { topology, sequences, fps, up_axis, units })
 }
 
 #[cfg(test)]
@@ -596,9 +453,7 @@ mod tests {
         let base = [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1.];
         let mut p = base.to_vec();
         p.extend(base.iter().map(|x| x * 2.0 + 0.5));
-        let a = Sequence::new("a", 4, p)
-            .unwrap()
-            .with_tags(vec!["walk".into()]);
+        let a = Sequence::new("a", 4, p).unwrap().with_tags(vec!["walk".into()]);
         let b = Sequence::new("b", 4, base.iter().map(|x| x - 1.0).collect())
             .unwrap()
             .with_labels(vec![FrameLabel::Synthetic])
@@ -629,10 +484,7 @@ mod tests {
         assert_eq!(parse_glb(&[]).unwrap_err().kind, crate::ErrorKind::Empty);
         for cut in [12, 40, buf.len() / 2, buf.len() - 8] {
             let e = parse_glb(&buf[..cut]).unwrap_err();
-            assert!(
-                !e.message.contains("malformed"),
-                "cut at {cut}: a panic was caught: {e}"
-            );
+            assert!(!e.message.contains("malformed"), "cut at {cut}: a panic was caught: {e}");
         }
         // Shrink the declared binary chunk: accessors no longer fit.
         let json_len = u32::from_le_bytes(buf[12..16].try_into().unwrap()) as usize;

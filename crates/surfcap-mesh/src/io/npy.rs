@@ -136,16 +136,10 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
     }
     let (len_bytes, header_len) = match prefix[6] {
         1 => (2u64, u16::from_le_bytes([prefix[8], prefix[9]]) as u64),
-        2 | 3 if got >= 12 => (
-            4,
-            u32::from_le_bytes([prefix[8], prefix[9], prefix[10], prefix[11]]) as u64,
-        ),
+        2 | 3 if got >= 12 => (4, u32::from_le_bytes([prefix[8], prefix[9], prefix[10], prefix[11]]) as u64),
         2 | 3 => return Err(err!(Truncated, "file ends inside the .npy header")),
         v => {
-            return Err(err!(
-                Unsupported,
-                ".npy format version {v}: expected 1, 2 or 3"
-            ));
+            return Err(err!(Unsupported, ".npy format version {v}: expected 1, 2 or 3"));
         }
     };
     if 8 + len_bytes + header_len > total_len {
@@ -154,38 +148,24 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
             "header declares {header_len} bytes of header but the file has only {total_len} bytes"
         ));
     }
-    let mut r = Counting {
-        inner: std::io::Cursor::new(&prefix[..got]).chain(reader),
-        count: 0,
-    };
+    let mut r = Counting { inner: std::io::Cursor::new(&prefix[..got]).chain(reader), count: 0 };
     let header = npyz::NpyHeader::from_reader(&mut r).map_err(|e| match e.kind() {
         std::io::ErrorKind::UnexpectedEof => err!(Truncated, "file ends inside the .npy header"),
         _ => err!(Syntax, "not a valid .npy header: {e}"),
     })?;
     let data_start = r.count;
     let DType::Plain(ts) = header.dtype() else {
-        return Err(err!(
-            DType,
-            "structured dtype {}: expected {}",
-            header.dtype().descr(),
-            T::EXPECTED
-        ));
+        return Err(err!(DType, "structured dtype {}: expected {}", header.dtype().descr(), T::EXPECTED));
     };
     if !T::accepts(ts.type_char(), ts.size_field()) {
         return Err(err!(DType, "dtype '{ts}': expected {}", T::EXPECTED));
     }
     if header.order() == npyz::Order::Fortran && header.shape().len() > 1 {
-        return Err(err!(
-            Shape,
-            "array is in Fortran order: expected C order (save np.ascontiguousarray(a))"
-        ));
+        return Err(err!(Shape, "array is in Fortran order: expected C order (save np.ascontiguousarray(a))"));
     }
     let item = ts.size_field() as usize;
     let shape: Vec<usize> = header.shape().iter().map(|&d| d as usize).collect();
-    let n = header
-        .shape()
-        .iter()
-        .try_fold(1u64, |a, &d| a.checked_mul(d));
+    let n = header.shape().iter().try_fold(1u64, |a, &d| a.checked_mul(d));
     let bytes_needed = n.and_then(|n| n.checked_mul(item as u64));
     let available = total_len.saturating_sub(data_start);
     let shape_text = format!("{:?}", header.shape());
@@ -216,21 +196,13 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
     while done < n {
         let m = (n - done).min(65536);
         let buf = &mut chunk[..m * item];
-        r.read_exact(buf).map_err(|e| {
-            err!(Truncated, "cannot read array data: {e}").at(Location::Byte(r.count))
-        })?;
+        r.read_exact(buf).map_err(|e| err!(Truncated, "cannot read array data: {e}").at(Location::Byte(r.count)))?;
         for (k, b) in buf.chunks_exact_mut(item).enumerate() {
             if swap {
                 b.reverse();
             }
-            let v = T::decode(kind, b).ok_or_else(|| {
-                err!(
-                    DType,
-                    "element {} does not fit: expected {}",
-                    done + k,
-                    T::EXPECTED
-                )
-            })?;
+            let v = T::decode(kind, b)
+                .ok_or_else(|| err!(DType, "element {} does not fit: expected {}", done + k, T::EXPECTED))?;
             data.push(v);
         }
         done += m;
@@ -241,48 +213,25 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
 /// Reads a `.npy` file; errors name the file.
 pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, "open .npy file", e))?;
-    let len = f
-        .metadata()
-        .map_err(|e| Error::io(path, "read .npy file size", e))?
-        .len();
+    let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
     parse_npy(std::io::BufReader::with_capacity(1 << 16, f), len).map_err(|e| e.in_file(path))
 }
 
 /// Checks an array's shape against a pattern where `None` means any length.
 pub fn expect_shape<T>(a: &NpyArray<T>, pattern: &[Option<usize>], what: &str) -> Result<()> {
-    let ok = a.shape.len() == pattern.len()
-        && a.shape
-            .iter()
-            .zip(pattern)
-            .all(|(&d, p)| p.is_none_or(|p| p == d));
+    let ok = a.shape.len() == pattern.len() && a.shape.iter().zip(pattern).all(|(&d, p)| p.is_none_or(|p| p == d));
     if ok {
         return Ok(());
     }
-    let want: Vec<String> = pattern
-        .iter()
-        .map(|p| p.map_or("*".into(), |d| d.to_string()))
-        .collect();
-    Err(err!(
-        Shape,
-        "shape {:?}: expected {what} of shape [{}]",
-        a.shape,
-        want.join(", ")
-    ))
+    let want: Vec<String> = pattern.iter().map(|p| p.map_or("*".into(), |d| d.to_string())).collect();
+    Err(err!(Shape, "shape {:?}: expected {what} of shape [{}]", a.shape, want.join(", ")))
 }
 
 /// Writes a C-order array (`f32` as `<f4`, `u32` as `<u4`, `u8` as `|u1`).
-pub fn write_npy<T: npyz::AutoSerialize + Copy>(
-    w: impl Write,
-    shape: &[usize],
-    data: &[T],
-) -> std::io::Result<()> {
+pub fn write_npy<T: npyz::AutoSerialize + Copy>(w: impl Write, shape: &[usize], data: &[T]) -> std::io::Result<()> {
     debug_assert_eq!(shape.iter().product::<usize>(), data.len());
     let shape: Vec<u64> = shape.iter().map(|&d| d as u64).collect();
-    let mut writer = npyz::WriteOptions::new()
-        .default_dtype()
-        .shape(&shape)
-        .writer(w)
-        .begin_nd()?;
+    let mut writer = npyz::WriteOptions::new().default_dtype().shape(&shape).writer(w).begin_nd()?;
     writer.extend(data.iter().copied())?;
     writer.finish()
 }
@@ -330,19 +279,10 @@ mod tests {
     #[test]
     fn bad_files_are_errors() {
         let a = bytes(&[4, 3], &[0f32; 12]);
-        assert_eq!(
-            parse::<f32>(&a[..a.len() - 1]).unwrap_err().kind,
-            ErrorKind::Truncated
-        );
-        assert_eq!(
-            parse::<f32>(&a[..20]).unwrap_err().kind,
-            ErrorKind::Truncated
-        );
+        assert_eq!(parse::<f32>(&a[..a.len() - 1]).unwrap_err().kind, ErrorKind::Truncated);
+        assert_eq!(parse::<f32>(&a[..20]).unwrap_err().kind, ErrorKind::Truncated);
         assert_eq!(parse::<f32>(&[]).unwrap_err().kind, ErrorKind::Empty);
-        assert_eq!(
-            parse::<f32>(b"not numpy at all, sorry").unwrap_err().kind,
-            ErrorKind::Syntax
-        );
+        assert_eq!(parse::<f32>(b"not numpy at all, sorry").unwrap_err().kind, ErrorKind::Syntax);
         let mut long = a.clone();
         long.push(0);
         assert_eq!(parse::<f32>(&long).unwrap_err().kind, ErrorKind::Shape);
@@ -352,11 +292,6 @@ mod tests {
         assert!(e.to_string().contains("expected float32"), "{e}");
         let arr = parse::<f32>(&a).unwrap();
         assert!(expect_shape(&arr, &[None, Some(3)], "positions").is_ok());
-        assert_eq!(
-            expect_shape(&arr, &[None, None, Some(3)], "positions")
-                .unwrap_err()
-                .kind,
-            ErrorKind::Shape
-        );
+        assert_eq!(expect_shape(&arr, &[None, None, Some(3)], "positions").unwrap_err().kind, ErrorKind::Shape);
     }
 }

@@ -36,21 +36,12 @@ impl ObjMesh {
     /// The topology of this mesh (faces and UVs), checked.
     pub fn topology(&self) -> Result<Topology> {
         if self.n_vertices() == 0 {
-            return Err(err!(
-                Empty,
-                "no vertices ('v' lines): expected a triangle mesh"
-            ));
+            return Err(err!(Empty, "no vertices ('v' lines): expected a triangle mesh"));
         }
         if self.triangles.is_empty() {
-            return Err(err!(
-                Empty,
-                "no faces ('f' lines): expected a triangle mesh"
-            ));
+            return Err(err!(Empty, "no faces ('f' lines): expected a triangle mesh"));
         }
-        let uv = self.uv_corners.as_ref().map(|c| UvAtlas {
-            coords: self.texcoords.clone(),
-            corners: c.clone(),
-        });
+        let uv = self.uv_corners.as_ref().map(|c| UvAtlas { coords: self.texcoords.clone(), corners: c.clone() });
         Topology::new(self.n_vertices(), self.triangles.clone(), uv)
     }
 }
@@ -74,9 +65,8 @@ pub fn parse_obj(bytes: &[u8]) -> Result<ObjMesh> {
             Some(k) => &raw[..k],
             None => raw,
         };
-        let line = std::str::from_utf8(raw).map_err(|_| {
-            err!(Syntax, "not valid UTF-8 text: expected an OBJ statement").at_line(line_no)
-        })?;
+        let line = std::str::from_utf8(raw)
+            .map_err(|_| err!(Syntax, "not valid UTF-8 text: expected an OBJ statement").at_line(line_no))?;
         let mut tokens = line.split_ascii_whitespace();
         let Some(keyword) = tokens.next() else {
             continue;
@@ -85,17 +75,15 @@ pub fn parse_obj(bytes: &[u8]) -> Result<ObjMesh> {
             "v" => {
                 let mut xyz = [0f32; 3];
                 for (k, c) in xyz.iter_mut().enumerate() {
-                    let tok = tokens.next().ok_or_else(|| {
-                        err!(Syntax, "'v' has {k} coordinates: expected 3 (x y z)").at_line(line_no)
-                    })?;
+                    let tok = tokens
+                        .next()
+                        .ok_or_else(|| err!(Syntax, "'v' has {k} coordinates: expected 3 (x y z)").at_line(line_no))?;
                     *c = parse_coordinate(tok).map_err(|e| e.at_line(line_no))?;
                 }
                 mesh.positions.extend_from_slice(&xyz);
             }
             "vt" => {
-                let u = tokens
-                    .next()
-                    .ok_or_else(|| err!(Syntax, "'vt' without coordinates").at_line(line_no))?;
+                let u = tokens.next().ok_or_else(|| err!(Syntax, "'vt' without coordinates").at_line(line_no))?;
                 let u = parse_coordinate(u).map_err(|e| e.at_line(line_no))?;
                 let v = match tokens.next() {
                     Some(t) => parse_coordinate(t).map_err(|e| e.at_line(line_no))?,
@@ -105,9 +93,9 @@ pub fn parse_obj(bytes: &[u8]) -> Result<ObjMesh> {
             }
             "vn" => {
                 for k in 0..3 {
-                    let tok = tokens.next().ok_or_else(|| {
-                        err!(Syntax, "'vn' has {k} components: expected 3").at_line(line_no)
-                    })?;
+                    let tok = tokens
+                        .next()
+                        .ok_or_else(|| err!(Syntax, "'vn' has {k} components: expected 3").at_line(line_no))?;
                     parse_coordinate(tok).map_err(|e| e.at_line(line_no))?;
                 }
                 n_normals += 1;
@@ -117,30 +105,19 @@ pub fn parse_obj(bytes: &[u8]) -> Result<ObjMesh> {
                 corners.clear();
                 let nv = mesh.positions.len() / 3;
                 for tok in tokens.by_ref() {
-                    corners.push(
-                        parse_corner(tok, nv, mesh.texcoords.len(), n_normals)
-                            .map_err(|e| e.at_line(line_no))?,
-                    );
+                    corners
+                        .push(parse_corner(tok, nv, mesh.texcoords.len(), n_normals).map_err(|e| e.at_line(line_no))?);
                 }
                 if corners.len() < 3 {
-                    return Err(err!(
-                        DegenerateFace,
-                        "face has {} corners: expected at least 3",
-                        corners.len()
-                    )
-                    .at_line(line_no));
+                    return Err(err!(DegenerateFace, "face has {} corners: expected at least 3", corners.len())
+                        .at_line(line_no));
                 }
                 for k in 1..corners.len() - 1 {
                     let t = [corners[0].0, corners[k].0, corners[k + 1].0];
                     check_triangle(&t, nv).map_err(|e| e.at_line(line_no))?;
                     mesh.triangles.push(t);
                     mesh.triangle_lines.push(line_no);
-                    match (
-                        &mut mesh.uv_corners,
-                        corners[0].1,
-                        corners[k].1,
-                        corners[k + 1].1,
-                    ) {
+                    match (&mut mesh.uv_corners, corners[0].1, corners[k].1, corners[k + 1].1) {
                         (Some(uv), Some(a), Some(b), Some(c)) => uv.push([a, b, c]),
                         (uv, ..) => *uv = None,
                     }
@@ -156,32 +133,22 @@ pub fn parse_obj(bytes: &[u8]) -> Result<ObjMesh> {
 }
 
 fn parse_coordinate(tok: &str) -> Result<f32> {
-    let x: f32 = tok
-        .parse()
-        .map_err(|_| err!(Syntax, "{tok:?} is not a number: expected a coordinate"))?;
+    let x: f32 = tok.parse().map_err(|_| err!(Syntax, "{tok:?} is not a number: expected a coordinate"))?;
     if !x.is_finite() {
-        return Err(err!(
-            NonFinite,
-            "coordinate {tok:?} is not finite: expected a finite number"
-        ));
+        return Err(err!(NonFinite, "coordinate {tok:?} is not finite: expected a finite number"));
     }
     Ok(x)
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index to 0-based.
 fn resolve_index(tok: &str, count: usize, what: &str) -> Result<u32> {
-    let i: i64 = tok
-        .parse()
-        .map_err(|_| err!(Syntax, "{tok:?} is not an integer: expected a {what} index"))?;
+    let i: i64 = tok.parse().map_err(|_| err!(Syntax, "{tok:?} is not an integer: expected a {what} index"))?;
     let resolved = if i > 0 {
         i - 1
     } else if i < 0 {
         count as i64 + i
     } else {
-        return Err(err!(
-            IndexOutOfRange,
-            "{what} index 0: OBJ indices start at 1 (or are negative)"
-        ));
+        return Err(err!(IndexOutOfRange, "{what} index 0: OBJ indices start at 1 (or are negative)"));
     };
     if resolved < 0 || resolved >= count as i64 {
         return Err(err!(
@@ -194,10 +161,7 @@ fn resolve_index(tok: &str, count: usize, what: &str) -> Result<u32> {
 
 fn parse_corner(tok: &str, nv: usize, nvt: usize, nvn: usize) -> Result<(u32, Option<u32>)> {
     if tok.matches('/').count() > 2 {
-        return Err(err!(
-            Syntax,
-            "face corner {tok:?}: expected v, v/vt, v//vn or v/vt/vn"
-        ));
+        return Err(err!(Syntax, "face corner {tok:?}: expected v, v/vt, v//vn or v/vt/vn"));
     }
     let mut parts = tok.split('/');
     let v = resolve_index(parts.next().unwrap_or(""), nv, "vertex")?;
@@ -221,11 +185,7 @@ pub fn read_obj(path: &Path) -> Result<ObjMesh> {
 }
 
 /// Writes one frame as OBJ text (with `vt` and `f v/vt` when the topology has UVs).
-pub fn write_obj(
-    w: &mut (impl Write + ?Sized),
-    topology: &Topology,
-    positions: &[f32],
-) -> std::io::Result<()> {
+pub fn write_obj(w: &mut (impl Write + ?Sized), topology: &Topology, positions: &[f32]) -> std::io::Result<()> {
     let mut buf = String::with_capacity(positions.len() * 12 + topology.n_triangles() * 24);
     use std::fmt::Write as _;
     buf.push_str("# written by surfcap\n");
@@ -239,16 +199,8 @@ pub fn write_obj(
                 let _ = writeln!(buf, "vt {} {}", t[0], t[1]);
             }
             for (t, c) in topology.triangles().iter().zip(&uv.corners) {
-                let _ = writeln!(
-                    buf,
-                    "f {}/{} {}/{} {}/{}",
-                    t[0] + 1,
-                    c[0] + 1,
-                    t[1] + 1,
-                    c[1] + 1,
-                    t[2] + 1,
-                    c[2] + 1
-                );
+                let _ =
+                    writeln!(buf, "f {}/{} {}/{} {}/{}", t[0] + 1, c[0] + 1, t[1] + 1, c[1] + 1, t[2] + 1, c[2] + 1);
             }
         }
         None => {
@@ -296,75 +248,30 @@ mod tests {
             ("v 0 0 0\nv 1 0\n", ErrorKind::Syntax, 2),
             ("v 0 0 0\nv 1 0 nan\n", ErrorKind::NonFinite, 2),
             ("v 0 0 0\nv 1 0 inf\n", ErrorKind::NonFinite, 2),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
-                ErrorKind::IndexOutOfRange,
-                4,
-            ),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
-                ErrorKind::IndexOutOfRange,
-                4,
-            ),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n",
-                ErrorKind::IndexOutOfRange,
-                4,
-            ),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2\n",
-                ErrorKind::DegenerateFace,
-                4,
-            ),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n",
-                ErrorKind::DegenerateFace,
-                4,
-            ),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", ErrorKind::IndexOutOfRange, 4),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", ErrorKind::IndexOutOfRange, 4),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", ErrorKind::IndexOutOfRange, 4),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2\n", ErrorKind::DegenerateFace, 4),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", ErrorKind::DegenerateFace, 4),
             ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", ErrorKind::Syntax, 4),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1/1 2 3\n",
-                ErrorKind::Syntax,
-                4,
-            ),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/5 2/1 3/1\n",
-                ErrorKind::IndexOutOfRange,
-                4,
-            ),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1/1 2 3\n", ErrorKind::Syntax, 4),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/5 2/1 3/1\n", ErrorKind::IndexOutOfRange, 4),
         ];
         for (text, kind, line) in cases {
             let e = parse_obj(text.as_bytes()).unwrap_err();
-            assert_eq!(
-                (e.kind, e.location.clone()),
-                (*kind, Some(Location::Line(*line))),
-                "{text:?}: {e}"
-            );
+            assert_eq!((e.kind, e.location.clone()), (*kind, Some(Location::Line(*line))), "{text:?}: {e}");
         }
     }
 
     #[test]
     fn meshes_without_faces_have_no_topology() {
-        assert_eq!(
-            parse_obj(b"v 0 0 0\n")
-                .unwrap()
-                .topology()
-                .unwrap_err()
-                .kind,
-            ErrorKind::Empty
-        );
-        assert_eq!(
-            parse_obj(b"\n").unwrap().topology().unwrap_err().kind,
-            ErrorKind::Empty
-        );
+        assert_eq!(parse_obj(b"v 0 0 0\n").unwrap().topology().unwrap_err().kind, ErrorKind::Empty);
+        assert_eq!(parse_obj(b"\n").unwrap().topology().unwrap_err().kind, ErrorKind::Empty);
     }
 
     #[test]
     fn write_then_read_is_exact() {
-        let m = parse_obj(
-            b"v 0.1 0.2 0.3\nv 1e-7 -3.5 2\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
-        )
-        .unwrap();
+        let m = parse_obj(b"v 0.1 0.2 0.3\nv 1e-7 -3.5 2\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
         let topo = m.topology().unwrap();
         let mut out = Vec::new();
         write_obj(&mut out, &topo, &m.positions).unwrap();

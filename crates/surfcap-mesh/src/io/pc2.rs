@@ -21,18 +21,11 @@ pub struct PointCache {
 
 impl PointCache {
     pub fn n_samples(&self) -> usize {
-        self.positions
-            .len()
-            .checked_div(3 * self.n_points)
-            .unwrap_or(0)
+        self.positions.len().checked_div(3 * self.n_points).unwrap_or(0)
     }
 }
 
-pub fn write_pc2(
-    w: &mut (impl Write + ?Sized),
-    n_points: usize,
-    positions: &[f32],
-) -> std::io::Result<()> {
+pub fn write_pc2(w: &mut (impl Write + ?Sized), n_points: usize, positions: &[f32]) -> std::io::Result<()> {
     let samples = positions.len().checked_div(3 * n_points).unwrap_or(0);
     let mut out = Vec::with_capacity(32 + positions.len() * 4);
     out.extend_from_slice(SIGNATURE);
@@ -52,31 +45,23 @@ pub fn parse_pc2(b: &[u8]) -> Result<PointCache> {
         return Err(err!(Empty, "empty file: expected a PC2 point cache"));
     }
     if b.len() < 32 {
-        return Err(err!(
-            Truncated,
-            "file is {} bytes: a PC2 header needs 32",
-            b.len()
-        )
-        .at(Location::Byte(b.len() as u64)));
+        return Err(
+            err!(Truncated, "file is {} bytes: a PC2 header needs 32", b.len()).at(Location::Byte(b.len() as u64))
+        );
     }
     if &b[..12] != SIGNATURE {
-        return Err(
-            err!(Syntax, "no 'POINTCACHE2' signature: expected a PC2 file").at(Location::Byte(0)),
-        );
+        return Err(err!(Syntax, "no 'POINTCACHE2' signature: expected a PC2 file").at(Location::Byte(0)));
     }
     let i32_at = |k: usize| i32::from_le_bytes(b[k..k + 4].try_into().unwrap());
     let f32_at = |k: usize| f32::from_le_bytes(b[k..k + 4].try_into().unwrap());
-    let (version, n_points, start, rate, samples) =
-        (i32_at(12), i32_at(16), f32_at(20), f32_at(24), i32_at(28));
+    let (version, n_points, start, rate, samples) = (i32_at(12), i32_at(16), f32_at(20), f32_at(24), i32_at(28));
     if version != 1 {
         return Err(err!(Unsupported, "PC2 version {version}: expected 1").at(Location::Byte(12)));
     }
     if n_points <= 0 || samples < 0 {
-        return Err(err!(
-            Shape,
-            "{n_points} points, {samples} samples: expected positive counts"
-        )
-        .at(Location::Byte(16)));
+        return Err(
+            err!(Shape, "{n_points} points, {samples} samples: expected positive counts").at(Location::Byte(16))
+        );
     }
     let need = (n_points as u64) * (samples as u64) * 12;
     let have = (b.len() - 32) as u64;
@@ -88,32 +73,15 @@ pub fn parse_pc2(b: &[u8]) -> Result<PointCache> {
         .at(Location::Byte(b.len() as u64)));
     }
     if need < have {
-        return Err(err!(
-            Shape,
-            "{} bytes after the last sample: expected the file to end",
-            have - need
-        )
-        .at(Location::Byte(32 + need)));
+        return Err(err!(Shape, "{} bytes after the last sample: expected the file to end", have - need)
+            .at(Location::Byte(32 + need)));
     }
-    let positions: Vec<f32> = b[32..]
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
-        .collect();
+    let positions: Vec<f32> = b[32..].chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
     if let Some(k) = positions.iter().position(|x| !x.is_finite()) {
         let per = 3 * n_points as usize;
-        return Err(err!(
-            NonFinite,
-            "point {} has a non-finite coordinate",
-            (k % per) / 3
-        )
-        .at(Location::Frame(k / per)));
+        return Err(err!(NonFinite, "point {} has a non-finite coordinate", (k % per) / 3).at(Location::Frame(k / per)));
     }
-    Ok(PointCache {
-        n_points: n_points as usize,
-        start_frame: start,
-        sample_rate: rate,
-        positions,
-    })
+    Ok(PointCache { n_points: n_points as usize, start_frame: start, sample_rate: rate, positions })
 }
 
 #[cfg(test)]
@@ -129,10 +97,7 @@ mod tests {
         let c = parse_pc2(&b).unwrap();
         assert_eq!((c.n_points, c.n_samples()), (3, 2));
         assert_eq!(c.positions, p);
-        assert_eq!(
-            parse_pc2(&b[..b.len() - 2]).unwrap_err().kind,
-            ErrorKind::Truncated
-        );
+        assert_eq!(parse_pc2(&b[..b.len() - 2]).unwrap_err().kind, ErrorKind::Truncated);
         assert_eq!(parse_pc2(&b[..10]).unwrap_err().kind, ErrorKind::Truncated);
         assert_eq!(parse_pc2(b"").unwrap_err().kind, ErrorKind::Empty);
         let mut bad = b.clone();
@@ -141,9 +106,6 @@ mod tests {
         let mut nan = b.clone();
         nan[32 + 4 * 10..32 + 4 * 11].copy_from_slice(&f32::NAN.to_le_bytes());
         let e = parse_pc2(&nan).unwrap_err();
-        assert_eq!(
-            (e.kind, e.location),
-            (ErrorKind::NonFinite, Some(Location::Frame(1)))
-        );
+        assert_eq!((e.kind, e.location), (ErrorKind::NonFinite, Some(Location::Frame(1))));
     }
 }

@@ -96,10 +96,7 @@ impl PlyMesh {
 
     pub fn topology(&self) -> Result<Topology> {
         if self.triangles.is_empty() {
-            return Err(err!(
-                Empty,
-                "no faces: expected a 'face' element with triangles"
-            ));
+            return Err(err!(Empty, "no faces: expected a 'face' element with triangles"));
         }
         Topology::new(self.n_vertices(), self.triangles.clone(), None)
     }
@@ -115,10 +112,7 @@ struct Header {
 
 fn parse_header(bytes: &[u8]) -> Result<Header> {
     if bytes.is_empty() {
-        return Err(err!(
-            Empty,
-            "empty file: expected a PLY header starting with 'ply'"
-        ));
+        return Err(err!(Empty, "empty file: expected a PLY header starting with 'ply'"));
     }
     let mut pos = 0usize;
     let mut line_no = 0usize;
@@ -132,8 +126,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
         let raw = &bytes[pos..pos + len];
         pos += len + 1;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let line = std::str::from_utf8(raw)
-            .map_err(|_| err!(Syntax, "header line is not text").at_line(line_no))?;
+        let line = std::str::from_utf8(raw).map_err(|_| err!(Syntax, "header line is not text").at_line(line_no))?;
         let mut t = line.split_ascii_whitespace();
         let keyword = t.next().unwrap_or("");
         if line_no == 1 {
@@ -160,18 +153,12 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
             "comment" | "obj_info" | "" => {}
             "element" => {
                 let (Some(name), Some(count), None) = (t.next(), t.next(), t.next()) else {
-                    return Err(err!(Syntax, "{line:?}: expected 'element <name> <count>'")
-                        .at_line(line_no));
+                    return Err(err!(Syntax, "{line:?}: expected 'element <name> <count>'").at_line(line_no));
                 };
-                let count = count.parse().map_err(|_| {
-                    err!(Syntax, "element count {count:?}: expected a whole number")
-                        .at_line(line_no)
-                })?;
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    props: Vec::new(),
-                });
+                let count = count
+                    .parse()
+                    .map_err(|_| err!(Syntax, "element count {count:?}: expected a whole number").at_line(line_no))?;
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
             }
             "property" => {
                 let Some(el) = elements.last_mut() else {
@@ -179,7 +166,11 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
                 };
                 let parts: Vec<&str> = t.collect();
                 let bad = || {
-                    err!(Syntax, "{line:?}: expected 'property <type> <name>' or 'property list <count type> <item type> <name>'").at_line(line_no)
+                    err!(
+                        Syntax,
+                        "{line:?}: expected 'property <type> <name>' or 'property list <count type> <item type> <name>'"
+                    )
+                    .at_line(line_no)
                 };
                 let prop = match parts.as_slice() {
                     ["list", c, i, name] => {
@@ -187,25 +178,17 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
                             return Err(bad());
                         };
                         if !count.is_integer() {
-                            return Err(err!(
-                                Syntax,
-                                "list count type {c:?}: expected an integer type"
-                            )
-                            .at_line(line_no));
+                            return Err(
+                                err!(Syntax, "list count type {c:?}: expected an integer type").at_line(line_no)
+                            );
                         }
-                        Property {
-                            name: name.to_string(),
-                            kind: PropKind::List { count, item },
-                        }
+                        Property { name: name.to_string(), kind: PropKind::List { count, item } }
                     }
                     [ty, name] => {
                         let Some(s) = Scalar::parse(ty) else {
                             return Err(bad());
                         };
-                        Property {
-                            name: name.to_string(),
-                            kind: PropKind::Scalar(s),
-                        }
+                        Property { name: name.to_string(), kind: PropKind::Scalar(s) }
                     }
                     _ => return Err(bad()),
                 };
@@ -215,14 +198,8 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
             other => return Err(err!(Syntax, "unknown header keyword {other:?}").at_line(line_no)),
         }
     }
-    let format =
-        format.ok_or_else(|| err!(Syntax, "header has no 'format' line").at_line(line_no))?;
-    Ok(Header {
-        format,
-        elements,
-        data_start: pos,
-        lines: line_no,
-    })
+    let format = format.ok_or_else(|| err!(Syntax, "header has no 'format' line").at_line(line_no))?;
+    Ok(Header { format, elements, data_start: pos, lines: line_no })
 }
 
 /// Where the reader is, for error messages.
@@ -282,57 +259,31 @@ pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh> {
         ve.props
             .iter()
             .position(|p| p.name == c && matches!(p.kind, PropKind::Scalar(_)))
-            .ok_or_else(|| {
-                err!(Syntax, "vertex element has no scalar property {c:?}").at_line(header.lines)
-            })
+            .ok_or_else(|| err!(Syntax, "vertex element has no scalar property {c:?}").at_line(header.lines))
     };
     let xyz = [coord("x")?, coord("y")?, coord("z")?];
     let n_vertices = usize::try_from(ve.count)
         .ok()
         .filter(|&n| n <= u32::MAX as usize)
-        .ok_or_else(|| {
-            err!(
-                Unsupported,
-                "{} vertices exceed the 32-bit index limit",
-                ve.count
-            )
-        })?;
+        .ok_or_else(|| err!(Unsupported, "{} vertices exceed the 32-bit index limit", ve.count))?;
     let face_list = |e: &Element| {
         e.props.iter().position(|p| {
-            matches!(p.kind, PropKind::List { .. })
-                && (p.name == "vertex_indices" || p.name == "vertex_index")
+            matches!(p.kind, PropKind::List { .. }) && (p.name == "vertex_indices" || p.name == "vertex_index")
         })
     };
 
-    let mut mesh = PlyMesh {
-        positions: Vec::new(),
-        triangles: Vec::new(),
-    };
-    let mut inst = Instance {
-        scalars: Vec::new(),
-        list: Vec::new(),
-    };
+    let mut mesh = PlyMesh { positions: Vec::new(), triangles: Vec::new() };
+    let mut inst = Instance { scalars: Vec::new(), list: Vec::new() };
     // ascii state
     let text_lines = &bytes[header.data_start..];
     let mut ascii_lines = text_lines.split(|&b| b == b'\n').enumerate();
-    let mut cursor = Cursor {
-        bytes,
-        pos: header.data_start,
-        big_endian: header.format == Format::BinaryBe,
-    };
+    let mut cursor = Cursor { bytes, pos: header.data_start, big_endian: header.format == Format::BinaryBe };
 
     for el in &header.elements {
         let is_vertex = el.name == "vertex";
-        let face_prop = if el.name == "face" {
-            face_list(el)
-        } else {
-            None
-        };
+        let face_prop = if el.name == "face" { face_list(el) } else { None };
         if el.name == "face" && face_prop.is_none() {
-            return Err(
-                err!(Syntax, "face element has no 'vertex_indices' list property")
-                    .at_line(header.lines),
-            );
+            return Err(err!(Syntax, "face element has no 'vertex_indices' list property").at_line(header.lines));
         }
         if el.props.is_empty() {
             // Nothing to read (and nothing stored in the file) for such an element.
@@ -362,23 +313,15 @@ pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh> {
                                 }
                             }
                             None => {
-                                return Err(err!(
-                                    Truncated,
-                                    "file ends before {} {k} of {}",
-                                    el.name,
-                                    el.count
-                                )
-                                .at_line(
-                                    header.lines + text_lines.split(|&b| b == b'\n').count(),
-                                ));
+                                return Err(err!(Truncated, "file ends before {} {k} of {}", el.name, el.count)
+                                    .at_line(header.lines + text_lines.split(|&b| b == b'\n').count()));
                             }
                         }
                     };
                     line_of_instance = header.lines + idx + 1;
-                    let text = std::str::from_utf8(line)
-                        .map_err(|_| err!(Syntax, "not text").at_line(line_of_instance))?;
-                    read_ascii_instance(el, text, &mut inst)
-                        .map_err(|e| e.at_line(line_of_instance))?;
+                    let text =
+                        std::str::from_utf8(line).map_err(|_| err!(Syntax, "not text").at_line(line_of_instance))?;
+                    read_ascii_instance(el, text, &mut inst).map_err(|e| e.at_line(line_of_instance))?;
                 }
                 Format::BinaryLe | Format::BinaryBe => {
                     let start = cursor.pos;
@@ -387,20 +330,13 @@ pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh> {
                 }
             }
             let at = |e: Error| {
-                if line_of_instance > 0 {
-                    e.at_line(line_of_instance)
-                } else {
-                    e.at(Location::Byte(cursor.pos as u64))
-                }
+                if line_of_instance > 0 { e.at_line(line_of_instance) } else { e.at(Location::Byte(cursor.pos as u64)) }
             };
             if is_vertex {
                 for &c in &xyz {
                     let x = inst.scalars[c] as f32;
                     if !x.is_finite() {
-                        return Err(at(err!(
-                            NonFinite,
-                            "vertex {k} has coordinate {x}: expected a finite number"
-                        )));
+                        return Err(at(err!(NonFinite, "vertex {k} has coordinate {x}: expected a finite number")));
                     }
                     mesh.positions.push(x);
                 }
@@ -425,24 +361,15 @@ pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh> {
                 };
                 let first = get(corners[0]).map_err(at)?;
                 for j in 1..corners.len() - 1 {
-                    let t = [
-                        first,
-                        get(corners[j]).map_err(at)?,
-                        get(corners[j + 1]).map_err(at)?,
-                    ];
-                    check_triangle(&t, n_vertices)
-                        .map_err(|e| at(err!(DegenerateFace, "face {k}: {}", e.message)))?;
+                    let t = [first, get(corners[j]).map_err(at)?, get(corners[j + 1]).map_err(at)?];
+                    check_triangle(&t, n_vertices).map_err(|e| at(err!(DegenerateFace, "face {k}: {}", e.message)))?;
                     mesh.triangles.push(t);
                 }
             }
         }
     }
     if mesh.positions.len() != 3 * n_vertices {
-        return Err(err!(
-            Shape,
-            "read {} vertices, header declares {n_vertices}",
-            mesh.positions.len() / 3
-        ));
+        return Err(err!(Shape, "read {} vertices, header declares {n_vertices}", mesh.positions.len() / 3));
     }
     Ok(mesh)
 }
@@ -452,11 +379,8 @@ fn read_ascii_instance(el: &Element, line: &str, inst: &mut Instance) -> Result<
     inst.list.clear();
     let mut tokens = line.split_ascii_whitespace();
     let mut next = |what: &str| -> Result<f64> {
-        let t = tokens
-            .next()
-            .ok_or_else(|| err!(Syntax, "{} line ends before {what}", el.name))?;
-        t.parse::<f64>()
-            .map_err(|_| err!(Syntax, "{t:?} is not a number: expected {what}"))
+        let t = tokens.next().ok_or_else(|| err!(Syntax, "{} line ends before {what}", el.name))?;
+        t.parse::<f64>().map_err(|_| err!(Syntax, "{t:?} is not a number: expected {what}"))
     };
     for p in &el.props {
         match p.kind {
@@ -467,10 +391,7 @@ fn read_ascii_instance(el: &Element, line: &str, inst: &mut Instance) -> Result<
             PropKind::List { .. } => {
                 let n = next(&format!("the length of list {:?}", p.name))?;
                 if n < 0.0 || n.fract() != 0.0 || n > 1e6 {
-                    return Err(err!(
-                        Syntax,
-                        "list length {n}: expected a small whole number"
-                    ));
+                    return Err(err!(Syntax, "list length {n}: expected a small whole number"));
                 }
                 inst.scalars.push(f64::NAN);
                 for _ in 0..n as usize {
@@ -481,12 +402,7 @@ fn read_ascii_instance(el: &Element, line: &str, inst: &mut Instance) -> Result<
         }
     }
     if let Some(extra) = tokens.next() {
-        return Err(err!(
-            Syntax,
-            "unexpected {extra:?} after the {} properties of {}",
-            el.props.len(),
-            el.name
-        ));
+        return Err(err!(Syntax, "unexpected {extra:?} after the {} properties of {}", el.props.len(), el.name));
     }
     Ok(())
 }
@@ -532,11 +448,7 @@ pub fn write_ply(
 ) -> std::io::Result<()> {
     let nv = positions.len() / 3;
     let nf = topology.n_triangles();
-    let format = if ascii {
-        "ascii"
-    } else {
-        "binary_little_endian"
-    };
+    let format = if ascii { "ascii" } else { "binary_little_endian" };
     let mut out = Vec::with_capacity(200 + nv * 12 + nf * 13);
     write!(
         out,
@@ -592,10 +504,7 @@ mod tests {
 property double z\r\nproperty uchar red\r\nelement face 1\r\nproperty uchar flags\r\nproperty list uchar uint vertex_index\r\n\
 element edge 1\r\nproperty int a\r\nend_header\r\n"
             .to_vec();
-        for (i, v) in [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]]
-            .iter()
-            .enumerate()
-        {
+        for (i, v) in [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]].iter().enumerate() {
             for x in v {
                 b.extend_from_slice(&f64::to_be_bytes(*x));
             }
@@ -633,32 +542,17 @@ element edge 1\r\nproperty int a\r\nend_header\r\n"
         let cases: &[(&str, ErrorKind, usize)] = &[
             ("0 0 0\n1 0 0\n0 1\n3 0 1 2\n", ErrorKind::Syntax, 12),
             ("0 0 0\n1 0 0\n0 1 nan\n3 0 1 2\n", ErrorKind::NonFinite, 12),
-            (
-                "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
-                ErrorKind::IndexOutOfRange,
-                13,
-            ),
-            (
-                "0 0 0\n1 0 0\n0 1 0\n3 0 1 1\n",
-                ErrorKind::DegenerateFace,
-                13,
-            ),
+            ("0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", ErrorKind::IndexOutOfRange, 13),
+            ("0 0 0\n1 0 0\n0 1 0\n3 0 1 1\n", ErrorKind::DegenerateFace, 13),
             ("0 0 0\n1 0 0\n0 1 0\n", ErrorKind::Truncated, 13),
         ];
         for (data, kind, line) in cases {
             let e = parse_ply(format!("{head}{data}").as_bytes()).unwrap_err();
-            assert_eq!(
-                (e.kind, e.location.clone()),
-                (*kind, Some(Location::Line(*line))),
-                "{data:?}: {e}"
-            );
+            assert_eq!((e.kind, e.location.clone()), (*kind, Some(Location::Line(*line))), "{data:?}: {e}");
         }
         assert_eq!(parse_ply(b"").unwrap_err().kind, ErrorKind::Empty);
         assert_eq!(parse_ply(b"plx\n").unwrap_err().kind, ErrorKind::Syntax);
-        let e = parse_ply(
-            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
-        )
-        .unwrap_err();
+        let e = parse_ply(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n").unwrap_err();
         assert_eq!(e.kind, ErrorKind::Syntax);
     }
 }

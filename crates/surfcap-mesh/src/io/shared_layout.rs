@@ -65,45 +65,27 @@ fn number(v: &Value) -> Option<f64> {
 
 /// Reads `meta.json` next to the sequence folder (in its parent), if there is one.
 pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
-    let name = seq_dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let Some(meta_path) = seq_dir
-        .parent()
-        .map(|p| p.join("meta.json"))
-        .filter(|p| p.is_file())
-    else {
+    let name = seq_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let Some(meta_path) = seq_dir.parent().map(|p| p.join("meta.json")).filter(|p| p.is_file()) else {
         return Ok(SequenceMeta::default());
     };
     let text = std::fs::read_to_string(&meta_path).map_err(|e| Error::io(&meta_path, "read", e))?;
-    let root: Value = serde_json::from_str(&text).map_err(|e| {
-        err!(Syntax, "invalid JSON: {e}")
-            .in_file(&meta_path)
-            .at_line(e.line())
-    })?;
+    let root: Value = serde_json::from_str(&text)
+        .map_err(|e| err!(Syntax, "invalid JSON: {e}").in_file(&meta_path).at_line(e.line()))?;
     let seq = &root["sequences"][&name];
     let pick = |key: &str| {
-        if seq[key].is_null() {
-            &root[key]
-        } else {
-            &seq[key]
-        }
+        if seq[key].is_null() { &root[key] } else { &seq[key] }
     };
     let up_axis = match pick("up_axis").as_str() {
         Some(s) => Some(UpAxis::parse(s).map_err(|e| e.in_file(&meta_path))?),
         None => None,
     };
-    let joint_names = root["joint_names"].as_array().map(|a| {
-        a.iter()
-            .map(|n| n.as_str().unwrap_or("").to_string())
-            .collect::<Vec<_>>()
-    });
-    let joint_parents = root["joint_parents"].as_array().map(|a| {
-        a.iter()
-            .map(|p| p.as_i64().and_then(|p| usize::try_from(p).ok()))
-            .collect::<Vec<_>>()
-    });
+    let joint_names = root["joint_names"]
+        .as_array()
+        .map(|a| a.iter().map(|n| n.as_str().unwrap_or("").to_string()).collect::<Vec<_>>());
+    let joint_parents = root["joint_parents"]
+        .as_array()
+        .map(|a| a.iter().map(|p| p.as_i64().and_then(|p| usize::try_from(p).ok())).collect::<Vec<_>>());
     Ok(SequenceMeta {
         fps: number(&seq["fps"]).or_else(|| number(&root["fps"])),
         up_axis,
@@ -131,18 +113,11 @@ pub fn read_layout_sequence(dir: &Path) -> Result<LayoutSequence> {
     let nv = topology.n_vertices();
     let positions_path = dir.join("positions.npy");
     let positions = read_npy::<f32>(&positions_path)?;
-    expect_shape(
-        &positions,
-        &[None, Some(nv), Some(3)],
-        &format!("positions of the template's {nv} vertices"),
-    )
-    .map_err(|e| e.in_file(&positions_path))?;
+    expect_shape(&positions, &[None, Some(nv), Some(3)], &format!("positions of the template's {nv} vertices"))
+        .map_err(|e| e.in_file(&positions_path))?;
     let frames = positions.shape[0];
     if frames == 0 {
-        return Err(
-            err!(Empty, "no frames: expected shape [frames >= 1, {nv}, 3]")
-                .in_file(&positions_path),
-        );
+        return Err(err!(Empty, "no frames: expected shape [frames >= 1, {nv}, 3]").in_file(&positions_path));
     }
     let per_frame = 3 * nv;
     if let Some(k) = positions.data.iter().position(|x| !x.is_finite()) {
@@ -158,18 +133,13 @@ pub fn read_layout_sequence(dir: &Path) -> Result<LayoutSequence> {
     let joints_path = dir.join("joints.npy");
     let joints = if joints_path.is_file() {
         let j = read_npy::<f32>(&joints_path)?;
-        expect_shape(
-            &j,
-            &[Some(frames), None, Some(4), Some(4)],
-            "joint world matrices [frames, joints, 4, 4]",
-        )
-        .map_err(|e| e.in_file(&joints_path))?;
+        expect_shape(&j, &[Some(frames), None, Some(4), Some(4)], "joint world matrices [frames, joints, 4, 4]")
+            .map_err(|e| e.in_file(&joints_path))?;
         let nj = j.shape[1];
         let names = match &meta.joint_names {
             Some(n) if n.len() == nj => n.clone(),
             Some(n) => {
-                return Err(err!(Shape, "{nj} joints, but meta.json names {}", n.len())
-                    .in_file(&joints_path));
+                return Err(err!(Shape, "{nj} joints, but meta.json names {}", n.len()).in_file(&joints_path));
             }
             None => (0..nj).map(|i| format!("joint_{i}")).collect(),
         };
@@ -177,21 +147,11 @@ pub fn read_layout_sequence(dir: &Path) -> Result<LayoutSequence> {
             Some(p) if p.len() == nj => p.clone(),
             _ => vec![None; nj],
         };
-        Some(JointTrack {
-            names,
-            parents,
-            matrices: j.data,
-        })
+        Some(JointTrack { names, parents, matrices: j.data })
     } else {
         None
     };
-    Ok(LayoutSequence {
-        name,
-        topology,
-        positions: positions.data,
-        joints,
-        meta,
-    })
+    Ok(LayoutSequence { name, topology, positions: positions.data, joints, meta })
 }
 
 /// Writes a sequence in the layout (`template.obj`, `positions.npy`, optional `joints.npy`)
