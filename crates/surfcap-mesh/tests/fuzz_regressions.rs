@@ -26,3 +26,10 @@ fn glb_with_a_header_length_below_12_is_an_error_not_a_panic() {
         assert!(surfcap_mesh::io::pc2::parse_pc2(&bytes).is_err());
     }
 }
+
+#[test]
+fn pc2_whose_point_and_sample_counts_overflow_is_an_error() {
+    let bytes = std::fs::read(case("pc2_count_overflow.bin")).unwrap();
+    let e = surfcap_mesh::io::pc2::parse_pc2(&bytes).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Truncated, "{e}");
+}

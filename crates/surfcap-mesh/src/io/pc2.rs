@@ -63,7 +63,8 @@ pub fn parse_pc2(b: &[u8]) -> Result<PointCache> {
             err!(Shape, "{n_points} points, {samples} samples: expected positive counts").at(Location::Byte(16))
         );
     }
-    let need = (n_points as u64) * (samples as u64) * 12;
+    // Checked: both counts come from the file (the fuzzer found a header whose product overflows).
+    let need = (n_points as u64).checked_mul(samples as u64).and_then(|n| n.checked_mul(12)).unwrap_or(u64::MAX);
     let have = (b.len() - 32) as u64;
     if need > have {
         return Err(err!(
