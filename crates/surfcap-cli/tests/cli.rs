@@ -218,3 +218,73 @@ fn manifest_with_tags_and_a_point_cache() {
     let o = surfcap(&["info", p(&manifest)]);
     assert!(stderr(&o).contains("line 2") && stderr(&o).contains("frobnicate"), "{}", stderr(&o));
 }
+
+#[test]
+fn pose_metric_evaluation_on_kaykit_prefers_our_distance() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let k = data.join("kaykit_adventurers");
+    let subject = tmp.path().join("knight.subject");
+    let clips = ["knight_Idle", "knight_Running_A", "knight_Jump_Full_Short", "knight_Cheer"];
+    let mut args: Vec<String> = vec!["import".into()];
+    args.extend(clips.iter().map(|c| p(&k.join(c)).to_string()));
+    args.extend(["-o".into(), p(&subject).into(), "--quiet".into()]);
+    let o = surfcap(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = tmp.path().join("pm");
+    let cache = tmp.path().join("cache");
+    let o = surfcap(&[
+        "eval",
+        "pose-metric",
+        p(&subject),
+        "--max-frames",
+        "60",
+        "--permutations",
+        "500",
+        "--classes",
+        "5",
+        "-o",
+        p(&out),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (ours, eucl) = (v["ours"]["pearson"].as_f64().unwrap(), v["euclidean"]["pearson"].as_f64().unwrap());
+    assert!(ours > eucl, "Pearson ours {ours} vs Euclidean {eucl}");
+    assert!(v["ours"]["mantel_p_value"].as_f64().unwrap() < 0.01);
+    for f in ["pose-metric.json", "correlogram.svg", "correlogram.png"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // Same seed, same numbers; the distance matrices now come from the cache.
+    let again = surfcap(&[
+        "eval",
+        "pose-metric",
+        p(&subject),
+        "--max-frames",
+        "60",
+        "--permutations",
+        "500",
+        "--classes",
+        "5",
+        "-o",
+        p(&out),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    let w: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+    assert_eq!(v["ours"], w["ours"]);
+    assert_eq!(v["correlogram"], w["correlogram"]);
+    // And the same whatever the number of threads (recomputed, not read from the cache).
+    let one = Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .env("RAYON_NUM_THREADS", "1")
+        .args(["eval", "pose-metric", p(&subject), "--max-frames", "60", "--permutations", "500", "--classes", "5"])
+        .args(["-o", p(&out), "--cache-dir", p(&tmp.path().join("cache1")), "--json"])
+        .output()
+        .unwrap();
+    let u: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+    assert_eq!(v["ours"], u["ours"]);
+    assert_eq!(v["euclidean"], u["euclidean"]);
+}

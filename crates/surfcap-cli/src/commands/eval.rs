@@ -8,6 +8,16 @@ use surfcap_geometry::shape_distortion::{edge_length_distortion, volume_change};
 
 use super::{SourceOpts, print_json};
 
+/// Options of `eval pose-metric`.
+pub struct PoseMetricOpts {
+    pub max_frames: usize,
+    pub permutations: usize,
+    pub classes: usize,
+    pub seed: u64,
+    pub output: PathBuf,
+    pub cache: super::distance::CacheOpts,
+}
+
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(subcommand)]
@@ -33,10 +43,41 @@ pub enum What {
         #[command(flatten)]
         source: SourceOpts,
     },
+    /// Our pose distance and the Euclidean one against the skeleton ground truth (thesis 2.3.2,
+    /// Fig. 2.5-2.7): Pearson and distance correlation, Mantel test, Mantel correlogram plot.
+    PoseMetric {
+        /// A subject whose sequences carry ground-truth joint matrices.
+        subject: PathBuf,
+        /// Frames used (evenly spaced over the global index when the subject has more).
+        #[arg(long, default_value_t = 200)]
+        max_frames: usize,
+        /// Permutations of the Mantel test.
+        #[arg(long, default_value_t = 10000)]
+        permutations: usize,
+        /// Distance classes of the correlogram.
+        #[arg(long, default_value_t = 10)]
+        classes: usize,
+        /// Seed of the permutations.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Folder for the report (JSON) and the correlogram plot (SVG, PNG).
+        #[arg(short, long, default_value = "pose-metric")]
+        output: PathBuf,
+        #[command(flatten)]
+        cache: super::distance::CacheOpts,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let What::Interpolation { subject, pairs, lambda, stretch, source } = a.what;
+    let (subject, pairs, lambda, stretch, source) = match a.what {
+        What::Interpolation { subject, pairs, lambda, stretch, source } => (subject, pairs, lambda, stretch, source),
+        What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
+            let opts = PoseMetricOpts { max_frames, permutations, classes, seed, output, cache };
+            return super::eval_pose_metric::run(ctx, &subject, &source, &opts);
+        }
+    };
     let stretch = super::interpolate::stretch_of(&stretch)?;
     let s = super::open(ctx, &subject, &source)?;
     let topo = s.topology();

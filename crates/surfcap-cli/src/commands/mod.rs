@@ -4,6 +4,7 @@ pub mod bench;
 pub mod demo;
 pub mod distance;
 pub mod eval;
+pub mod eval_pose_metric;
 pub mod export;
 pub mod import;
 pub mod info;

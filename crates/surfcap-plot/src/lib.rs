@@ -1,0 +1,171 @@
+//! Line charts written as SVG and PNG (plotters), with an embedded font (DejaVu Sans) so that
+//! text renders on machines without system fonts. Files are written under a temporary name and
+//! renamed into place.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::style::{FontStyle, register_font};
+
+static FONT: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+fn ensure_font() {
+    REGISTER.call_once(|| {
+        // The font is a valid TTF compiled into the binary; registration cannot fail on it.
+        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// One line of a chart.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend text; an empty name draws the line without a legend entry.
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+    pub color: (u8, u8, u8),
+    pub dashed: bool,
+    /// Draw a marker at every point.
+    pub markers: bool,
+}
+
+/// A line chart.
+#[derive(Debug, Clone)]
+pub struct LineChart {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+}
+
+/// Why a chart could not be written.
+#[derive(Debug)]
+pub struct PlotError(pub String);
+
+impl std::fmt::Display for PlotError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for PlotError {}
+
+fn bounds(series: &[Series]) -> ((f64, f64), (f64, f64)) {
+    let pts = series.iter().flat_map(|s| s.points.iter()).filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, y) in pts {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if !x0.is_finite() {
+        return ((0.0, 1.0), (0.0, 1.0));
+    }
+    let pad = |a: f64, b: f64| {
+        let d = if b > a { (b - a) * 0.05 } else { 0.5 };
+        (a - d, b + d)
+    };
+    (pad(x0, x1), pad(y0, y1))
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, chart: &LineChart) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let ((x0, x1), (y0, y1)) = bounds(&chart.series);
+    let mut c = ChartBuilder::on(&root)
+        .caption(&chart.title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .x_desc(chart.x_label.as_str())
+        .y_desc(chart.y_label.as_str())
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for s in &chart.series {
+        let color = RGBColor(s.color.0, s.color.1, s.color.2);
+        let style = color.stroke_width(2);
+        let anno = if s.dashed {
+            c.draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style)).map_err(|e| e.to_string())?
+        } else {
+            c.draw_series(LineSeries::new(s.points.iter().copied(), style)).map_err(|e| e.to_string())?
+        };
+        if !s.name.is_empty() {
+            anno.label(s.name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        }
+        if s.markers {
+            c.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+        }
+    }
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())
+}
+
+fn temp_sibling(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    // Keep the extension last: plotters picks the image format from it.
+    path.with_file_name(format!(".tmp-{}-{name}", std::process::id()))
+}
+
+/// Writes `<stem>.svg` and `<stem>.png` (800 x 500) and returns their paths.
+pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>, PlotError> {
+    ensure_font();
+    if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| PlotError(format!("{}: cannot create: {e}", dir.display())))?;
+    }
+    let svg = stem.with_extension("svg");
+    let png = stem.with_extension("png");
+    let mut text = String::new();
+    draw(SVGBackend::with_string(&mut text, (800, 500)).into_drawing_area(), chart)
+        .map_err(|e| PlotError(format!("{}: {e}", svg.display())))?;
+    let tmp = temp_sibling(&svg);
+    std::fs::write(&tmp, text)
+        .and_then(|_| std::fs::rename(&tmp, &svg))
+        .map_err(|e| PlotError(format!("{}: cannot write: {e}", svg.display())))?;
+    let tmp = temp_sibling(&png);
+    draw(BitMapBackend::new(&tmp, (800, 500)).into_drawing_area(), chart)
+        .map_err(|e| PlotError(format!("{}: {e}", png.display())))?;
+    std::fs::rename(&tmp, &png).map_err(|e| PlotError(format!("{}: cannot write: {e}", png.display())))?;
+    Ok(vec![svg, png])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_svg_with_text_and_a_png() {
+        let d = tempfile::tempdir().unwrap();
+        let chart = LineChart {
+            title: "Correlogram".into(),
+            x_label: "distance class".into(),
+            y_label: "r".into(),
+            series: vec![Series {
+                name: "ours".into(),
+                points: vec![(0.0, 0.9), (1.0, 0.5), (2.0, -0.1)],
+                color: (220, 30, 30),
+                dashed: false,
+                markers: true,
+            }],
+        };
+        let files = write_line_chart(&d.path().join("c"), &chart).unwrap();
+        let svg = std::fs::read_to_string(&files[0]).unwrap();
+        assert!(svg.contains("Correlogram") && svg.contains("ours"));
+        let png = std::fs::read(&files[1]).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+        assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 2, "no temporaries left");
+    }
+}
