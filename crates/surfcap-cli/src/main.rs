@@ -59,7 +59,19 @@ impl Ctx {
     }
 }
 
+/// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
+/// programs do, rather than panic in `println!`: restore the default SIGPIPE action, which Rust
+/// programs ignore by default.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to SIG_DFL at start-up, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
