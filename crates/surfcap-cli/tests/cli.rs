@@ -233,22 +233,13 @@ fn pose_metric_evaluation_on_kaykit_prefers_our_distance() {
     assert!(o.status.success(), "{}", stderr(&o));
     let out = tmp.path().join("pm");
     let cache = tmp.path().join("cache");
-    let o = surfcap(&[
-        "eval",
-        "pose-metric",
-        p(&subject),
-        "--max-frames",
-        "60",
-        "--permutations",
-        "500",
-        "--classes",
-        "5",
-        "-o",
-        p(&out),
-        "--cache-dir",
-        p(&cache),
-        "--json",
-    ]);
+    let evaluate = |cache: &Path| {
+        let args = ["--max-frames", "60", "--permutations", "500", "--classes", "5", "--json"];
+        surfcap(
+            &[&["eval", "pose-metric", p(&subject), "-o", p(&out), "--cache-dir", p(cache)][..], &args[..]].concat(),
+        )
+    };
+    let o = evaluate(&cache);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let (ours, eucl) = (v["ours"]["pearson"].as_f64().unwrap(), v["euclidean"]["pearson"].as_f64().unwrap());
@@ -258,22 +249,7 @@ fn pose_metric_evaluation_on_kaykit_prefers_our_distance() {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     // Same seed, same numbers; the distance matrices now come from the cache.
-    let again = surfcap(&[
-        "eval",
-        "pose-metric",
-        p(&subject),
-        "--max-frames",
-        "60",
-        "--permutations",
-        "500",
-        "--classes",
-        "5",
-        "-o",
-        p(&out),
-        "--cache-dir",
-        p(&cache),
-        "--json",
-    ]);
+    let again = evaluate(&cache);
     let w: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
     assert_eq!(v["ours"], w["ours"]);
     assert_eq!(v["correlogram"], w["correlogram"]);

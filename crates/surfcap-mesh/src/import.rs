@@ -50,7 +50,8 @@ fn file_stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "subject".into())
 }
 
-fn simple(name: String, topology: Topology, positions: Vec<f32>, origin: &Path) -> SourceSequence {
+/// A sequence with nothing known but its geometry (no joints, tags, labels or metadata).
+pub(crate) fn simple(name: String, topology: Topology, positions: Vec<f32>, origin: &Path) -> SourceSequence {
     SourceSequence {
         name,
         topology,
@@ -296,6 +297,12 @@ pub fn open_subject(path: &Path, opts: &ImportOptions, progress: &dyn Progress) 
         let mut subject = cache::read_cache(path, progress)?;
         if let Some(f) = opts.fps {
             subject.fps = f;
+        }
+        if let Some(u) = opts.up_axis {
+            subject.up_axis = u;
+        }
+        if let Some(u) = &opts.units {
+            subject.units = u.clone();
         }
         return Ok(Imported { subject, notes: Vec::new() });
     }

@@ -171,16 +171,5 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
         }
     };
     let name = src.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(SourceSequence {
-        name,
-        topology,
-        positions,
-        joints: None,
-        tags: Vec::new(),
-        labels: None,
-        fps: None,
-        up_axis: None,
-        units: None,
-        origin: src.to_path_buf(),
-    })
+    Ok(crate::import::simple(name, topology, positions, src))
 }

@@ -108,14 +108,7 @@ fn accessor(
 }
 
 fn vec3_bounds(p: &[f32]) -> (Value, Value) {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for v in p.chunks_exact(3) {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
-        }
-    }
+    let (lo, hi) = crate::bounding_box(p);
     (json!(lo), json!(hi))
 }
 
