@@ -189,7 +189,7 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
     }
     let n = (bytes_needed / item as u64) as usize;
     let mut data = Vec::with_capacity(n);
-    let mut chunk = vec![0u8; item * 65536];
+    let mut chunk = vec![0u8; item * n.min(65536)];
     let kind = ts.type_char();
     let swap = ts.endianness() == Endianness::Big && item > 1;
     let mut done = 0usize;
