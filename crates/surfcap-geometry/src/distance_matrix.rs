@@ -17,7 +17,9 @@ use rayon::prelude::*;
 use surfcap_mesh::{Progress, Subject};
 
 use crate::motion_plane_alignment::{plane_axes, rotation_about_up};
-use crate::pose_distance::{FRAME_FLOATS, PoseMetric, deformation_distance, triangle_frames};
+use crate::pose_distance::{
+    BLOCK, FRAME_FLOATS, PoseMetric, deformation_distance, degenerate_triangles, triangle_frames, union_count,
+};
 
 /// Parameters of a distance matrix.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,11 +82,10 @@ impl AlignmentGram {
 /// this blocking the all-pairs loop is bound by memory bandwidth, not arithmetic).
 const ROW_BLOCK: usize = 8;
 /// Triangles per chunk: a block of frames' chunks stays in the L2 cache.
-const TRIANGLE_CHUNK: usize = 256;
+const TRIANGLE_CHUNK: usize = 4 * BLOCK;
 
 /// Distances d(i, j) for i in `i0..i0 + ROW_BLOCK`, j > i, accumulated chunk by chunk (a fixed
-/// order, so the sums do not depend on the thread count); also the most triangles skipped in
-/// one pair.
+/// order, so the sums do not depend on the thread count).
 fn row_block(
     subject: &Subject,
     gram: &AlignmentGram,
@@ -92,14 +93,14 @@ fn row_block(
     i0: usize,
     w: f64,
     log_s: bool,
-) -> (Vec<Vec<f64>>, usize) {
+) -> Vec<Vec<f64>> {
     let n = frames.len();
     let i1 = (i0 + ROW_BLOCK).min(n);
     let mut acc: Vec<Vec<f64>> = (i0..i1).map(|i| vec![0.0; n - i - 1]).collect();
-    let mut skipped: Vec<Vec<usize>> = (i0..i1).map(|i| vec![0; n - i - 1]).collect();
     let rot: Vec<Vec<nalgebra::Matrix3<f64>>> =
         (i0..i1).map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect()).collect();
     let len = frames.first().map_or(0, Vec::len);
+    // Whole storage blocks per chunk (TRIANGLE_CHUNK is a multiple of BLOCK).
     let step = TRIANGLE_CHUNK * FRAME_FLOATS;
     for start in (0..len).step_by(step) {
         let end = (start + step).min(len);
@@ -107,14 +108,11 @@ fn row_block(
             let fj = &frames[j][start..end];
             for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
                 let k = j - (i0 + r) - 1;
-                let (d, s) = deformation_distance(&fi[start..end], fj, &rot[r][k], w, log_s);
-                acc[r][k] += d;
-                skipped[r][k] += s;
+                acc[r][k] += deformation_distance(&fi[start..end], fj, &rot[r][k], w, log_s);
             }
         }
     }
-    let most = skipped.iter().flatten().copied().max().unwrap_or(0);
-    (acc, most)
+    acc
 }
 
 /// Builds the alignment Gram matrices of all frames.
@@ -185,19 +183,27 @@ pub fn distance_matrix(subject: &Subject, params: &DistanceParams, progress: &dy
                 })
                 .collect();
             progress.finish();
+            let m = subject.topology().n_triangles();
+            let degenerate: Vec<Vec<u32>> = frames.iter().map(|f| degenerate_triangles(f, m)).collect();
+            if degenerate.iter().any(|d| !d.is_empty()) {
+                for i in 0..n {
+                    for j in i + 1..n {
+                        max_skipped = max_skipped.max(union_count(&degenerate[i], &degenerate[j]));
+                    }
+                }
+            }
             progress.start("pose distances", (n * n.saturating_sub(1) / 2) as u64);
             let blocks: Vec<usize> = (0..n).step_by(ROW_BLOCK).collect();
-            let results: Vec<(usize, Vec<Vec<f64>>, usize)> = blocks
+            let results: Vec<(usize, Vec<Vec<f64>>)> = blocks
                 .into_par_iter()
                 .map(|i0| {
-                    let (acc, skipped) = row_block(subject, &gram, &frames, i0, params.w, log_s);
+                    let acc = row_block(subject, &gram, &frames, i0, params.w, log_s);
                     progress.advance(acc.iter().map(Vec::len).sum::<usize>() as u64);
-                    (i0, acc, skipped)
+                    (i0, acc)
                 })
                 .collect();
             progress.finish();
-            for (i0, acc, skipped) in results {
-                max_skipped = max_skipped.max(skipped);
+            for (i0, acc) in results {
                 for (r, row) in acc.into_iter().enumerate() {
                     let i = i0 + r;
                     for (k, d) in row.into_iter().enumerate() {

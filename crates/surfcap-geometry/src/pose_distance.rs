@@ -58,39 +58,78 @@ impl PoseMetric {
 /// the inverse's 1/a11, -a12/(a11 a22), 1/a22 (3). Zero-area triangles store zeros.
 pub const FRAME_FLOATS: usize = 15;
 
+/// Triangles per storage block. A frame's data is stored block by block, and inside a block
+/// field by field (structure of arrays): the loop over a block's triangles reads each field
+/// contiguously, so the compiler can run it on vector registers. The last block is padded with
+/// zero-area triangles.
+pub const BLOCK: usize = 64;
+
+/// Floats of one storage block.
+pub const BLOCK_FLOATS: usize = BLOCK * FRAME_FLOATS;
+
 /// Per-frame precomputation for the deformation distances (the expensive part is per pair).
 /// Stored in f64: the rotation angle comes from acos of a trace near 3 for similar poses, and
-/// f32 frames would put a noise floor of ~5e-4 rad on every triangle.
+/// f32 frames would put a noise floor of ~5e-4 rad on every triangle. Layout: blocks of
+/// [`BLOCK`] triangles, each block `FRAME_FLOATS` arrays of `BLOCK` values.
 pub fn triangle_frames(topology: &Topology, p: &[f32], out: &mut Vec<f64>) {
+    let m = topology.n_triangles();
     out.clear();
-    out.reserve(topology.n_triangles() * FRAME_FLOATS);
-    for t in topology.triangles() {
+    out.resize(m.div_ceil(BLOCK) * BLOCK_FLOATS, 0.0);
+    for (k, t) in topology.triangles().iter().enumerate() {
         let (v1, v2, v3) = (vertex(p, t[0]), vertex(p, t[1]), vertex(p, t[2]));
         let (e1, e2) = (v1 - v3, v2 - v3);
         let c = e1.cross(&e2);
         let (len1, area2) = (e1.norm(), c.norm());
         let scale = e1.norm_squared().max(e2.norm_squared());
         if area2 <= 1e-12 * scale || len1 == 0.0 {
-            out.extend_from_slice(&[0.0; FRAME_FLOATS]);
-            continue;
+            continue; // stays zero: skipped by the distance
         }
         let tt = e1 / len1;
         let n = c / area2;
         let b = n.cross(&tt);
         let (a11, a12, a22) = (len1, e2.dot(&tt), e2.dot(&b));
         let inv = [1.0 / a11, -a12 / (a11 * a22), 1.0 / a22];
-        for v in [tt.x, tt.y, tt.z, b.x, b.y, b.z, n.x, n.y, n.z, a11, a12, a22, inv[0], inv[1], inv[2]] {
-            out.push(v);
+        let base = (k / BLOCK) * BLOCK_FLOATS + k % BLOCK;
+        let fields = [tt.x, tt.y, tt.z, b.x, b.y, b.z, n.x, n.y, n.z, a11, a12, a22, inv[0], inv[1], inv[2]];
+        for (f, v) in fields.into_iter().enumerate() {
+            out[base + f * BLOCK] = v;
         }
     }
 }
 
+/// Triangles of a frame that have no deformation gradient (zero area), from its
+/// [`triangle_frames`]; the distance skips a triangle when either frame lists it.
+pub fn degenerate_triangles(frames: &[f64], n_triangles: usize) -> Vec<u32> {
+    (0..n_triangles)
+        .filter(|&k| frames[(k / BLOCK) * BLOCK_FLOATS + 11 * BLOCK + k % BLOCK] == 0.0)
+        .map(|k| k as u32)
+        .collect()
+}
+
+/// Number of triangles in the union of two sorted lists.
+pub fn union_count(a: &[u32], b: &[u32]) -> usize {
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < a.len() || j < b.len() {
+        match (a.get(i), b.get(j)) {
+            (Some(x), Some(y)) if x == y => {
+                i += 1;
+                j += 1;
+            }
+            (Some(x), Some(y)) if x < y => i += 1,
+            (Some(_), None) => i += 1,
+            _ => j += 1,
+        }
+        n += 1;
+    }
+    n
+}
+
 /// Clears the upper halves of the vector registers (`vzeroupper`) when the CPU has AVX.
 ///
-/// The loop below is SSE code that calls libm's `acos` (VEX-encoded on FMA machines). Measured
-/// on this project's 2-core Xeon: after wide AVX-512 kernels (faer's GEMM) had run on a thread,
-/// the loop ran 5-6 times slower on that thread (the penalty showed at the `acos` call and
-/// return), and clearing the state first restored the speed.
+/// The portable loop is SSE code that calls libm (`acos`, `ln`), which is VEX-encoded on FMA
+/// machines. Measured on this project's 2-core Xeon: after wide AVX-512 kernels (faer's GEMM)
+/// had run on a thread, that loop ran 5-6 times slower on that thread (the penalty showed at the
+/// libm call and return), and clearing the state first restored the speed.
 #[inline]
 fn clear_upper_vector_state() {
     #[cfg(target_arch = "x86_64")]
@@ -108,10 +147,66 @@ unsafe fn zeroupper() {
     std::arch::x86_64::_mm256_zeroupper();
 }
 
+/// Terms of the arcsine series used by [`acos_branchless`].
+const ASIN_TERMS: usize = 22;
+
+/// asin(x) = x sum_k c_k x^(2k), c_k = (2k)! / (4^k (k!)^2 (2k + 1)).
+const ASIN_COEFFS: [f64; ASIN_TERMS] = {
+    let mut c = [0.0; ASIN_TERMS];
+    let mut ratio = 1.0;
+    let mut k = 0;
+    while k < ASIN_TERMS {
+        if k > 0 {
+            ratio *= (2 * k - 1) as f64 / (2 * k) as f64;
+        }
+        c[k] = ratio / (2 * k + 1) as f64;
+        k += 1;
+    }
+    c
+};
+
+/// acos on [-1, 1] without branches or calls, so that the block loop vectorises: the argument is
+/// reduced to an arcsine on [0, 0.5] (acos c = 2 asin sqrt((1 - c)/2) for c >= 0.5, where 1 - c is
+/// exact and small angles keep full precision; pi - 2 asin sqrt((1 + c)/2) for c <= -0.5;
+/// pi/2 -+ asin |c| between), and the arcsine summed from its series (truncation below 3e-16 on
+/// [0, 0.5]). Agrees with libm's `acos` to 1e-14 (tested).
+#[inline(always)]
+pub fn acos_branchless(c: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let hi = c >= 0.5;
+    let lo = c <= -0.5;
+    let y = if hi {
+        0.5 - 0.5 * c
+    } else if lo {
+        0.5 + 0.5 * c
+    } else {
+        c * c
+    };
+    let y = y.max(0.0);
+    let x = if hi || lo { y.sqrt() } else { c.abs() };
+    let mut p = ASIN_COEFFS[ASIN_TERMS - 1];
+    let mut k = ASIN_TERMS - 1;
+    while k > 0 {
+        k -= 1;
+        p = p * y + ASIN_COEFFS[k];
+    }
+    let a = x * p;
+    if hi {
+        2.0 * a
+    } else if lo {
+        PI - 2.0 * a
+    } else if c >= 0.0 {
+        FRAC_PI_2 - a
+    } else {
+        FRAC_PI_2 + a
+    }
+}
+
 /// Sum over triangles of the per-triangle deformation cost from frame i to frame j, where `g`
-/// is the rotation about the up axis that aligns pose j onto pose i. Returns the distance and
-/// the number of triangles skipped because they have zero area in either frame.
-pub fn deformation_distance(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, log_s: bool) -> (f64, usize) {
+/// is the rotation about the up axis that aligns pose j onto pose i. `fi`, `fj` are whole
+/// storage blocks of [`triangle_frames`] (the same blocks of both frames); zero-area triangles
+/// (and the padding) contribute nothing (see [`degenerate_triangles`] to count them).
+pub fn deformation_distance(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, log_s: bool) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
@@ -123,55 +218,67 @@ pub fn deformation_distance(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, lo
     deformation_distance_body(fi, fj, g, w, log_s)
 }
 
-/// The same loop compiled for AVX2 + FMA (VEX encodings throughout: no SSE/AVX transitions
-/// around libm's FMA `acos`, and fused multiply-adds in the dot products).
+/// The same loops compiled for AVX2 + FMA: 4 triangles per vector instruction in the block loop.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn deformation_distance_avx2(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, log_s: bool) -> (f64, usize) {
+unsafe fn deformation_distance_avx2(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, log_s: bool) -> f64 {
     deformation_distance_body(fi, fj, g, w, log_s)
 }
 
 #[inline(always)]
-fn deformation_distance_body(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, log_s: bool) -> (f64, usize) {
+fn deformation_distance_body(fi: &[f64], fj: &[f64], g: &Matrix3<f64>, w: f64, log_s: bool) -> f64 {
     let gm = [g[(0, 0)], g[(0, 1)], g[(0, 2)], g[(1, 0)], g[(1, 1)], g[(1, 2)], g[(2, 0)], g[(2, 1)], g[(2, 2)]];
-    let rot = |x: f64, y: f64, z: f64| {
-        [gm[0] * x + gm[1] * y + gm[2] * z, gm[3] * x + gm[4] * y + gm[5] * z, gm[6] * x + gm[7] * y + gm[8] * z]
-    };
     let mut total = 0.0f64;
-    let mut skipped = 0usize;
-    for (a, b) in fi.chunks_exact(FRAME_FLOATS).zip(fj.chunks_exact(FRAME_FLOATS)) {
-        let a = |k: usize| a[k];
-        let b = |k: usize| b[k];
-        if a(11) == 0.0 || b(11) == 0.0 {
-            skipped += 1;
-            continue;
-        }
+    for (a, b) in fi.chunks_exact(BLOCK_FLOATS).zip(fj.chunks_exact(BLOCK_FLOATS)) {
+        total += if log_s { block_cost::<true>(a, b, &gm, w) } else { block_cost::<false>(a, b, &gm, w) };
+    }
+    total
+}
+
+/// Field `k` of a storage block.
+#[inline(always)]
+fn field(s: &[f64], k: usize) -> &[f64; BLOCK] {
+    s[k * BLOCK..(k + 1) * BLOCK].try_into().expect("whole block")
+}
+
+/// Cost of one block of triangles. With `LOG` false the loop has no calls and vectorises.
+#[inline(always)]
+fn block_cost<const LOG: bool>(a: &[f64], b: &[f64], gm: &[f64; 9], w: f64) -> f64 {
+    let at: [&[f64; BLOCK]; FRAME_FLOATS] = std::array::from_fn(|k| field(a, k));
+    let bt: [&[f64; BLOCK]; FRAME_FLOATS] = std::array::from_fn(|k| field(b, k));
+    let mut acc = [0.0f64; BLOCK];
+    for k in 0..BLOCK {
+        let valid = at[11][k] != 0.0 && bt[11][k] != 0.0;
         // m = a_j a_i^-1, upper triangular [[p, q], [0, t]].
-        let p = b(9) * a(12);
-        let q = b(9) * a(13) + b(10) * a(14);
-        let t = b(11) * a(14);
-        let h = ((p + t) * (p + t) + q * q).sqrt();
+        let p = bt[9][k] * at[12][k];
+        let q = bt[9][k] * at[13][k] + bt[10][k] * at[14][k];
+        let t = bt[11][k] * at[14][k];
+        let h2 = (p + t) * (p + t) + q * q;
+        let h = if valid { h2.sqrt() } else { 1.0 };
         let (cphi, sphi) = ((p + t) / h, -q / h);
-        let gt = rot(b(0), b(1), b(2));
-        let gb = rot(b(3), b(4), b(5));
-        let gn = rot(b(6), b(7), b(8));
-        let dot = |u: usize, v: &[f64; 3]| a(u) * v[0] + a(u + 1) * v[1] + a(u + 2) * v[2];
+        let rot = |x: f64, y: f64, z: f64| {
+            [gm[0] * x + gm[1] * y + gm[2] * z, gm[3] * x + gm[4] * y + gm[5] * z, gm[6] * x + gm[7] * y + gm[8] * z]
+        };
+        let gt = rot(bt[0][k], bt[1][k], bt[2][k]);
+        let gb = rot(bt[3][k], bt[4][k], bt[5][k]);
+        let gn = rot(bt[6][k], bt[7][k], bt[8][k]);
+        let dot = |u: usize, v: &[f64; 3]| at[u][k] * v[0] + at[u + 1][k] * v[1] + at[u + 2][k] * v[2];
         let p00_p11 = dot(0, &gt) + dot(3, &gb);
         let p01_p10 = dot(0, &gb) - dot(3, &gt);
         let p22 = dot(6, &gn);
         let trace = cphi * p00_p11 + sphi * p01_p10 + p22;
-        let angle = (0.5 * (trace - 1.0)).clamp(-1.0, 1.0).acos();
-        let stretch = if log_s {
+        let c = (0.5 * (trace - 1.0)).clamp(-1.0, 1.0);
+        let (angle, stretch) = if LOG {
             // Singular values of m: roots of x^2 - h x + p t.
             let disc = (h * h - 4.0 * p * t).max(0.0).sqrt();
-            let (s1, s2) = (0.5 * (h + disc), (0.5 * (h - disc)).max(f64::MIN_POSITIVE));
-            (s1.ln().powi(2) + s2.ln().powi(2)).sqrt()
+            let (s1, s2) = ((0.5 * (h + disc)).max(f64::MIN_POSITIVE), (0.5 * (h - disc)).max(f64::MIN_POSITIVE));
+            (c.acos(), (s1.ln().powi(2) + s2.ln().powi(2)).sqrt())
         } else {
-            (p * p + q * q + t * t - 2.0 * h + 2.0).max(0.0).sqrt()
+            (acos_branchless(c), (p * p + q * q + t * t - 2.0 * h + 2.0).max(0.0).sqrt())
         };
-        total += angle + w * stretch;
+        acc[k] = if valid { angle + w * stretch } else { 0.0 };
     }
-    (total, skipped)
+    acc.iter().sum()
 }
 
 #[cfg(test)]
@@ -206,6 +313,29 @@ mod tests {
     }
 
     #[test]
+    fn branchless_acos_matches_libm_and_degenerate_triangles_are_listed() {
+        let mut worst = 0.0f64;
+        for k in 0..=200_000 {
+            let c = -1.0 + 2.0 * k as f64 / 200_000.0;
+            worst = worst.max((acos_branchless(c) - c.acos()).abs());
+        }
+        for e in [1e-16, 1e-12, 1e-8, 1e-4] {
+            for c in [1.0 - e, -1.0 + e] {
+                worst = worst.max((acos_branchless(c) - c.acos()).abs());
+            }
+        }
+        assert!(worst < 1e-14, "{worst}");
+        assert_eq!(acos_branchless(1.0), 0.0);
+        let topo = Topology::new(4, vec![[0, 1, 2], [0, 1, 3]], None).unwrap();
+        let p = [0., 0., 0., 1., 0., 0., 0., 1., 0., 2., 0., 0.];
+        let mut f = Vec::new();
+        triangle_frames(&topo, &p, &mut f);
+        assert_eq!(f.len(), BLOCK_FLOATS);
+        assert_eq!(degenerate_triangles(&f, 2), vec![1]);
+        assert_eq!(union_count(&[1, 4, 9], &[2, 4]), 4);
+    }
+
+    #[test]
     fn closed_form_matches_the_svd_route() {
         let mut seed = 7u64;
         let n = 30usize;
@@ -225,15 +355,16 @@ mod tests {
         triangle_frames(&topo, &pi, &mut fi);
         triangle_frames(&topo, &pj, &mut fj);
         for log_s in [false, true] {
-            let (fast, skipped) = deformation_distance(&fi, &fj, &g, 0.01, log_s);
+            let fast = deformation_distance(&fi, &fj, &g, 0.01, log_s);
+            let skipped = degenerate_triangles(&fi, topo.n_triangles()).len();
             // The portable loop and the AVX2 one (when this machine has it) agree.
-            let (portable, _) = deformation_distance_body(&fi, &fj, &g, 0.01, log_s);
+            let portable = deformation_distance_body(&fi, &fj, &g, 0.01, log_s);
             assert!((fast - portable).abs() < 1e-12 * fast.max(1.0), "{fast} vs {portable}");
             let slow = reference(&topo, &pi, &pj, &g, 0.01, log_s);
             assert_eq!(skipped, 0);
             assert!((fast - slow).abs() < 1e-4 * slow.max(1.0), "log_s={log_s}: {fast} vs {slow}");
         }
-        let (zero, _) = deformation_distance(&fi, &fi, &Matrix3::identity(), 0.01, false);
+        let zero = deformation_distance(&fi, &fi, &Matrix3::identity(), 0.01, false);
         assert!(zero < 1e-6, "{zero}");
         let _ = log_rotation(&r);
     }
