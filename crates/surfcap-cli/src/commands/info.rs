@@ -79,9 +79,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     println!("frames      {} in {} sequences at {} fps", s.n_frames(), s.sequences().len(), s.fps);
     println!("vertices    {}", d["vertices"]);
     println!("triangles   {}", d["triangles"]);
+    let comps_count = d["connected_components"].as_u64().unwrap_or(0);
     let sizes: Vec<String> = d["component_sizes"].as_array().unwrap().iter().take(8).map(|x| x.to_string()).collect();
-    let more =
-        if s.topology().n_vertices() > 0 && d["connected_components"].as_u64().unwrap() > 8 { ", ..." } else { "" };
+    let more = if comps_count > 8 { ", ..." } else { "" };
     println!("components  {} (vertices: {}{more})", d["connected_components"], sizes.join(", "));
     let bb = |k: &str| -> String {
         let v: Vec<String> = d["bounding_box"][k]
