@@ -32,7 +32,8 @@ fn demo_runs_and_its_glb_is_valid() {
         assert!(out.join(f).is_file(), "demo did not write {f}");
     }
     assert!(out.join("export/obj/slither/frame_00059.obj").is_file());
-    surfcap_testkit::validate_glb(&[out.join("export/worm.glb")]);
+    surfcap_testkit::validate_glb(&[out.join("export/worm.glb"), out.join("export/interpolation.glb")]);
+    assert!(out.join("distances.npy").is_file());
     let side: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("export/worm.json")).unwrap()).unwrap();
     assert_eq!(side["sequences"][0]["frame_labels"][0], "original");

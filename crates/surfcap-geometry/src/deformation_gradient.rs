@@ -44,6 +44,57 @@ pub fn deformation_gradients(topology: &Topology, pi: &[f32], pj: &[f32]) -> Vec
         .collect()
 }
 
+/// Orthonormal basis (t, b, n) of a triangle (t along v1 - v3) and its edges v1 - v3, v2 - v3 in
+/// that basis as the upper-triangular [[a11, a12], [0, a22]]; `None` for a zero-area triangle.
+fn triangle_basis(p: &[f32], t: &[u32; 3]) -> Option<(Matrix3<f64>, [f64; 3])> {
+    let (v1, v2, v3) = (vertex(p, t[0]), vertex(p, t[1]), vertex(p, t[2]));
+    let (e1, e2) = (v1 - v3, v2 - v3);
+    let c = e1.cross(&e2);
+    let (len1, area2) = (e1.norm(), c.norm());
+    if area2 <= 1e-12 * e1.norm_squared().max(e2.norm_squared()) || len1 == 0.0 {
+        return None;
+    }
+    let tt = e1 / len1;
+    let n = c / area2;
+    let b = n.cross(&tt);
+    Some((Matrix3::from_columns(&[tt, b, n]), [len1, e2.dot(&tt), e2.dot(&b)]))
+}
+
+/// Polar factors (R, S) of every triangle's deformation gradient J = B A^-1, in closed form:
+/// with each frame written as an orthonormal basis Q times an upper-triangular 2x2 edge matrix
+/// (plus 1 for the normal), J = Q_j (m (+) 1) Q_i^T with m = a_j a_i^-1, so R = Q_j (r (+) 1) Q_i^T
+/// and S = Q_i (s (+) 1) Q_i^T where m = r s is the 2x2 polar decomposition (rotation angle
+/// atan2(m21 - m12, m11 + m22)). The same factors as [`polar_decomposition`] of J (tested), without
+/// a 3x3 SVD per triangle. `None` for zero-area triangles.
+///
+/// [`polar_decomposition`]: crate::polar_decomposition::polar_decomposition
+pub fn deformation_polar_factors(
+    topology: &Topology,
+    pi: &[f32],
+    pj: &[f32],
+) -> Vec<Option<(Matrix3<f64>, Matrix3<f64>)>> {
+    topology
+        .triangles()
+        .iter()
+        .map(|t| {
+            let (qi, a) = triangle_basis(pi, t)?;
+            let (qj, b) = triangle_basis(pj, t)?;
+            // m = b a^-1 for upper-triangular a = [[a0, a1], [0, a2]], b likewise.
+            let (p, q, u) = (b[0] / a[0], (b[1] - b[0] * a[1] / a[0]) / a[2], b[2] / a[2]);
+            let h = ((p + u) * (p + u) + q * q).sqrt();
+            let (c, s) = ((p + u) / h, -q / h);
+            let r2 = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+            // s2 = r2^T m (symmetric positive 2x2), in the i basis.
+            let m = Matrix3::new(p, q, 0.0, 0.0, u, 0.0, 0.0, 0.0, 1.0);
+            let mut s2 = r2.transpose() * m;
+            let off = 0.5 * (s2[(0, 1)] + s2[(1, 0)]);
+            s2[(0, 1)] = off;
+            s2[(1, 0)] = off;
+            Some((qj * r2 * qi.transpose(), qi * s2 * qi.transpose()))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -60,5 +111,10 @@ mod tests {
         assert!((same - Matrix3::identity()).norm() < 1e-12);
         let flat = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0];
         assert!(deformation_gradients(&topo, &pi, &flat)[0].is_none());
+        // The closed-form polar factors equal the SVD route's.
+        let (r, s) = deformation_polar_factors(&topo, &pi, &pj)[0].unwrap();
+        let (r0, s0) = crate::polar_decomposition::polar_decomposition(&j);
+        assert!((r - r0).norm() < 1e-12 && (s - s0).norm() < 1e-12, "{r} {r0} {s} {s0}");
+        assert!((r * s - j).norm() < 1e-12);
     }
 }

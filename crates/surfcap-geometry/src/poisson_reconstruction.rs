@@ -12,6 +12,8 @@
 //! Precompute/solve split (libigl's `*_precomputation` / `*_solve`): `PoissonSolver::new` does
 //! the symbolic and numeric factorisation; `solve` is two triangular solves and a divergence.
 
+use std::sync::Arc;
+
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
@@ -22,13 +24,21 @@ use surfcap_mesh::{Components, Topology, connected_components};
 
 use crate::gradient_operator::GradientOperator;
 
-/// A factorised Poisson system for one pose of a mesh.
-pub struct PoissonSolver {
-    op: GradientOperator,
+/// What a Poisson system owes to its topology alone: the connected components, the pinned
+/// vertices, and the symbolic Cholesky factorisation (fill-reducing ordering and elimination
+/// tree) of the reduced Laplacian's sparsity pattern. Shared by every pose of the same mesh.
+pub struct PoissonPattern {
     components: Components,
     /// Reduced unknown index of each vertex; `None` for the pinned ones.
     reduced: Vec<Option<usize>>,
+    n_reduced: usize,
     symbolic: SymbolicCholesky<usize>,
+}
+
+/// A factorised Poisson system for one pose of a mesh.
+pub struct PoissonSolver {
+    op: GradientOperator,
+    pattern: Arc<PoissonPattern>,
     numeric: Vec<f64>,
 }
 
@@ -44,14 +54,41 @@ impl std::fmt::Display for PoissonError {
 
 impl std::error::Error for PoissonError {}
 
-impl PoissonSolver {
-    /// Builds and factorises the system for `topology` in the pose `positions`.
-    pub fn new(topology: &Topology, positions: &[f32]) -> Result<Self, PoissonError> {
-        let op = GradientOperator::new(topology, positions);
+/// Lower-triangle triplets of the reduced Laplacian (values from `op`, or 1 for the pattern)
+/// plus the diagonal shift; the same entries in the same order for every pose of a topology.
+fn reduced_triplets(
+    topology: &Topology,
+    op: Option<&GradientOperator>,
+    reduced: &[Option<usize>],
+    n_reduced: usize,
+) -> Vec<Triplet<usize, usize, f64>> {
+    let full = match op {
+        Some(op) => op.laplacian_triplets(),
+        None => topology
+            .triangles()
+            .iter()
+            .flat_map(|t| (0..9).map(move |k| Triplet::new(t[k / 3] as usize, t[k % 3] as usize, 1.0)))
+            .collect(),
+    };
+    let mut trip: Vec<Triplet<usize, usize, f64>> = full
+        .into_iter()
+        .filter_map(|t| Some(Triplet::new(reduced[t.row]?, reduced[t.col]?, t.val)))
+        .filter(|t| t.row >= t.col)
+        .collect();
+    let mean_diag = {
+        let d: f64 = trip.iter().filter(|t| t.row == t.col).map(|t| t.val).sum();
+        if n_reduced > 0 { (d / n_reduced as f64).max(f64::MIN_POSITIVE) } else { 1.0 }
+    };
+    trip.extend((0..n_reduced).map(|k| Triplet::new(k, k, 1e-10 * mean_diag)));
+    trip
+}
+
+impl PoissonPattern {
+    /// Components, pinned vertices and the symbolic factorisation for `topology`.
+    pub fn new(topology: &Topology) -> Result<Self, PoissonError> {
         let components = connected_components(topology);
-        let n = topology.n_vertices();
         let mut pinned = vec![false; components.count];
-        let mut reduced = vec![None; n];
+        let mut reduced = vec![None; topology.n_vertices()];
         let mut next = 0usize;
         for (r, &c) in reduced.iter_mut().zip(&components.labels) {
             let c = c as usize;
@@ -62,22 +99,34 @@ impl PoissonSolver {
                 pinned[c] = true;
             }
         }
-        let trip: Vec<Triplet<usize, usize, f64>> = op
-            .laplacian_triplets()
-            .into_iter()
-            .filter_map(|t| Some(Triplet::new(reduced[t.row]?, reduced[t.col]?, t.val)))
-            .filter(|t| t.row >= t.col)
-            .collect();
-        let mean_diag = {
-            let d: f64 = trip.iter().filter(|t| t.row == t.col).map(|t| t.val).sum();
-            if next > 0 { (d / next as f64).max(f64::MIN_POSITIVE) } else { 1.0 }
-        };
-        let mut trip = trip;
-        trip.extend((0..next).map(|k| Triplet::new(k, k, 1e-10 * mean_diag)));
+        let trip = reduced_triplets(topology, None, &reduced, next);
         let mat = SparseColMat::<usize, f64>::try_new_from_triplets(next, next, &trip)
             .map_err(|e| PoissonError(format!("cannot assemble: {e:?}")))?;
         let symbolic = factorize_symbolic_cholesky(mat.symbolic(), Side::Lower, Default::default(), Default::default())
             .map_err(|e| PoissonError(format!("symbolic factorisation: {e:?}")))?;
+        Ok(PoissonPattern { components, reduced, n_reduced: next, symbolic })
+    }
+}
+
+impl PoissonSolver {
+    /// Builds and factorises the system for `topology` in the pose `positions`.
+    pub fn new(topology: &Topology, positions: &[f32]) -> Result<Self, PoissonError> {
+        Self::with_pattern(Arc::new(PoissonPattern::new(topology)?), topology, positions)
+    }
+
+    /// Factorises the system of another pose of a topology whose pattern is already known (the
+    /// symbolic factorisation is reused: only the numeric one is done).
+    pub fn with_pattern(
+        pattern: Arc<PoissonPattern>,
+        topology: &Topology,
+        positions: &[f32],
+    ) -> Result<Self, PoissonError> {
+        let op = GradientOperator::new(topology, positions);
+        let trip = reduced_triplets(topology, Some(&op), &pattern.reduced, pattern.n_reduced);
+        let n = pattern.n_reduced;
+        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+            .map_err(|e| PoissonError(format!("cannot assemble: {e:?}")))?;
+        let symbolic = &pattern.symbolic;
         let mut numeric = vec![0.0f64; symbolic.len_val()];
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
         symbolic
@@ -91,7 +140,7 @@ impl PoissonSolver {
                 Default::default(),
             )
             .map_err(|e| PoissonError(format!("numeric factorisation: {e:?}")))?;
-        Ok(PoissonSolver { op, components, reduced, symbolic, numeric })
+        Ok(PoissonSolver { op, pattern, numeric })
     }
 
     pub fn operator(&self) -> &GradientOperator {
@@ -99,14 +148,14 @@ impl PoissonSolver {
     }
 
     pub fn components(&self) -> &Components {
-        &self.components
+        &self.pattern.components
     }
 
     /// Vertex mean of every component of `positions`.
     pub fn component_centroids(&self, positions: &[f32]) -> Vec<Vector3<f64>> {
-        let mut sum = vec![Vector3::zeros(); self.components.count];
-        let mut cnt = vec![0usize; self.components.count];
-        for (v, &c) in self.components.labels.iter().enumerate() {
+        let mut sum = vec![Vector3::zeros(); self.pattern.components.count];
+        let mut cnt = vec![0usize; self.pattern.components.count];
+        for (v, &c) in self.pattern.components.labels.iter().enumerate() {
             sum[c as usize] += crate::deformation_gradient::vertex(positions, v as u32);
             cnt[c as usize] += 1;
         }
@@ -118,45 +167,41 @@ impl PoissonSolver {
     /// vertex mean is `centroids[c]`.
     pub fn solve(&self, targets: &[Matrix3<f64>], centroids: &[Vector3<f64>]) -> Vec<f32> {
         let div = self.op.divergence(targets);
-        let m = self.numeric_dim();
+        let m = self.pattern.n_reduced;
         let mut rhs = Mat::<f64>::zeros(m, 3);
-        for (v, r) in self.reduced.iter().enumerate() {
+        for (v, r) in self.pattern.reduced.iter().enumerate() {
             if let Some(k) = r {
                 for c in 0..3 {
                     rhs[(*k, c)] = div[v][c];
                 }
             }
         }
-        let scratch = self.symbolic.solve_in_place_scratch::<f64>(3, Par::Seq);
-        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric)
+        let scratch = self.pattern.symbolic.solve_in_place_scratch::<f64>(3, Par::Seq);
+        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.pattern.symbolic, &self.numeric)
             .solve_in_place_with_conj(Conj::No, rhs.as_mut(), Par::Seq, MemStack::new(&mut MemBuffer::new(scratch)));
-        let n = self.reduced.len();
+        let n = self.pattern.reduced.len();
         let mut x = vec![Vector3::zeros(); n];
-        for (v, r) in self.reduced.iter().enumerate() {
+        for (v, r) in self.pattern.reduced.iter().enumerate() {
             if let Some(k) = r {
                 x[v] = Vector3::new(rhs[(*k, 0)], rhs[(*k, 1)], rhs[(*k, 2)]);
             }
         }
         // Translate every component onto its requested centroid.
-        let mut sum = vec![Vector3::zeros(); self.components.count];
-        let mut cnt = vec![0usize; self.components.count];
-        for (v, &c) in self.components.labels.iter().enumerate() {
+        let mut sum = vec![Vector3::zeros(); self.pattern.components.count];
+        let mut cnt = vec![0usize; self.pattern.components.count];
+        for (v, &c) in self.pattern.components.labels.iter().enumerate() {
             sum[c as usize] += x[v];
             cnt[c as usize] += 1;
         }
         let shift: Vec<Vector3<f64>> =
-            (0..self.components.count).map(|c| centroids[c] - sum[c] / cnt[c].max(1) as f64).collect();
+            (0..self.pattern.components.count).map(|c| centroids[c] - sum[c] / cnt[c].max(1) as f64).collect();
         x.iter()
-            .zip(&self.components.labels)
+            .zip(&self.pattern.components.labels)
             .flat_map(|(p, &c)| {
                 let q = p + shift[c as usize];
                 [q.x as f32, q.y as f32, q.z as f32]
             })
             .collect()
-    }
-
-    fn numeric_dim(&self) -> usize {
-        self.reduced.iter().filter(|r| r.is_some()).count()
     }
 }
 

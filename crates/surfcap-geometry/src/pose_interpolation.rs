@@ -18,13 +18,14 @@
 //! Precompute/solve split: [`NonlinearInterpolator::new`] factorises both Poisson systems and
 //! decomposes every triangle's gradient once; [`NonlinearInterpolator::at`] is per-lambda work.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, Vector3};
 use surfcap_mesh::{Topology, UpAxis};
 
-use crate::deformation_gradient::deformation_gradients;
+use crate::deformation_gradient::deformation_polar_factors;
 use crate::motion_plane_alignment::motion_plane_alignment;
-use crate::poisson_reconstruction::{PoissonError, PoissonSolver};
-use crate::polar_decomposition::polar_decomposition;
+use crate::poisson_reconstruction::{PoissonError, PoissonPattern, PoissonSolver};
 use crate::rotation_log_exp::{exp_rotation, log_rotation};
 
 /// How the stretch factor S is interpolated.
@@ -58,15 +59,15 @@ struct Side {
     centroids: Vec<Vector3<f64>>,
 }
 
-fn side(topology: &Topology, from: &[f32], to: &[f32]) -> Result<Side, PoissonError> {
-    let solver = PoissonSolver::new(topology, from)?;
+fn side(pattern: &Arc<PoissonPattern>, topology: &Topology, from: &[f32], to: &[f32]) -> Result<Side, PoissonError> {
+    let solver = PoissonSolver::with_pattern(pattern.clone(), topology, from)?;
     let grads = solver.operator().gradients(from);
     let mut log_r = Vec::with_capacity(topology.n_triangles());
     let mut s = Vec::with_capacity(topology.n_triangles());
-    for j in deformation_gradients(topology, from, to) {
+    for rs in deformation_polar_factors(topology, from, to) {
         // A zero-area triangle (in either pose) has no deformation gradient: it keeps its
         // gradient (identity deformation); it has zero area, so it does not weigh in L anyway.
-        let (r, st) = j.map(|j| polar_decomposition(&j)).unwrap_or((Matrix3::identity(), Matrix3::identity()));
+        let (r, st) = rs.unwrap_or((Matrix3::identity(), Matrix3::identity()));
         log_r.push(log_rotation(&r));
         s.push(st);
     }
@@ -113,7 +114,9 @@ impl NonlinearInterpolator {
     pub fn new(topology: &Topology, pi: &[f32], pj: &[f32], up: UpAxis) -> Result<Self, PoissonError> {
         let pj = align_onto(pi, pj, up);
         // The two sides are independent: factorise them on two threads.
-        let (from_i, from_j) = rayon::join(|| side(topology, pi, &pj), || side(topology, &pj, pi));
+        // One symbolic factorisation serves both poses (same topology).
+        let pattern = Arc::new(PoissonPattern::new(topology)?);
+        let (from_i, from_j) = rayon::join(|| side(&pattern, topology, pi, &pj), || side(&pattern, topology, &pj, pi));
         let (from_i, from_j) = (from_i?, from_j?);
         Ok(NonlinearInterpolator { pi: pi.to_vec(), pj, from_i, from_j })
     }

@@ -188,7 +188,7 @@ fn interpolate_bench(
         print_json(&report);
     } else {
         println!(
-            "non-linear interpolation, {} vertices: set-up (alignment, 2 x polar decompositions, 2 x Cholesky) \
+            "non-linear interpolation, {} vertices: set-up (alignment, polar factors, 1 symbolic + 2 numeric Cholesky) \
              {:.1} ms, one lambda (2 x Poisson solves) {:.1} ms, total {:.1} ms (medians of {})",
             s.topology().n_vertices(),
             su * 1e3,

@@ -1,10 +1,15 @@
 //! `surfcap demo`: the main job on built-in data. For now: build the built-in subject, write it
-//! as source files, import them into a subject cache, describe it, and export it in every format.
+//! as source files, import them into a subject cache, describe it, export it in every format,
+//! compute its pose distance matrix and a non-linear interpolation between two of its poses.
 
 use std::path::PathBuf;
 
 use serde_json::json;
+use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::io::npy::write_npy;
+use surfcap_mesh::{FrameLabel, Sequence, Subject};
 use surfcap_synth::{WormParams, worm_subject};
 
 use super::print_json;
@@ -58,6 +63,41 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         written.extend(export(&subject, fmt, &a.output.join("export").join(name), ExportOptions::default(), &bar)?);
     }
     say(&format!("4. exported it as glb, OBJ, PLY, PC2 and npy in {}", a.output.join("export").display()));
+
+    // Pose geometry (thesis 2.3-2.4): all-pairs distances and a non-linear interpolation.
+    let d = distance_matrix(&subject, &DistanceParams::default(), &bar);
+    let dist_path = a.output.join("distances.npy");
+    surfcap_mesh::atomic::write_file(&dist_path, |w| write_npy(w, &[d.n, d.n], &d.values))?;
+    say(&format!("5. computed the {0} x {0} deformation-gradient pose distances -> {1}", d.n, dist_path.display()));
+    let (from, to) = (subject.resolve_frame("slither:0")?, subject.resolve_frame("curl:40")?);
+    let interp = NonlinearInterpolator::new(
+        subject.topology(),
+        subject.frame(from).expect("resolved"),
+        subject.frame(to).expect("resolved"),
+        subject.up_axis,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let steps = 12usize;
+    let nv = subject.topology().n_vertices();
+    let mut pos = Vec::with_capacity(steps * 3 * nv);
+    let mut labels = Vec::with_capacity(steps);
+    for k in 0..steps {
+        let lambda = k as f64 / (steps - 1) as f64;
+        pos.extend_from_slice(&interp.at(lambda, StretchInterpolation::Linear));
+        labels.push(if k == 0 || k == steps - 1 { FrameLabel::Original } else { FrameLabel::Synthetic });
+    }
+    let seq = Sequence::new("slither_0_to_curl_40", nv, pos)?.with_labels(labels)?;
+    let blend = Subject::new(
+        "worm-interpolation",
+        subject.topology().clone(),
+        vec![seq],
+        subject.fps,
+        subject.up_axis,
+        subject.units.clone(),
+    )?;
+    let interp_path = a.output.join("export/interpolation.glb");
+    written.extend(export(&blend, ExportFormat::Glb, &interp_path, ExportOptions::default(), &bar)?);
+    say(&format!("6. interpolated slither:0 -> curl:40 non-linearly in {steps} poses -> {}", interp_path.display()));
     if ctx.json {
         print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written }));
     } else if !ctx.quiet {
