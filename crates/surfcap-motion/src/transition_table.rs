@@ -1,0 +1,240 @@
+//! The all-pairs transition table with variable segment lengths (thesis 2.5.3-2.5.4,
+//! eq. 2.55-2.57): for every ordered pair of frames (i, j), the source and destination segment
+//! lengths l^i, l^j in [l_min, l_max] and the warp that minimise the normalised DTW cost, that
+//! cost D(i, j) and the transition duration L(i, j).
+//!
+//! Shared dynamic programming: for a source start i and a destination start j', one DTW table
+//! over the l_max x l_max grid of frames (i + k, j' + l) holds the best path to every cell; cell
+//! (l^i - 1, l^j - 1) is the transition from i to j = j' + l^j - 1 with lengths (l^i, l^j). So one
+//! DP per (i, j') serves every length pair and every end frame: O(N^2 l_max^2 p) in all, instead of
+//! one DTW per length pair, O(N^2 l_max^4 p) (the naive loop, kept here as a reference for tests
+//! and the speed-up benchmark).
+//!
+//! Windows must lie inside their own sequences (source [i, i + l^i - 1], destination
+//! [j - l^j + 1, j]); pairs whose windows cannot fit get D = infinity, L = 0.
+//! Ties are broken by the first minimum in a fixed scan order, so the table does not depend on
+//! the number of threads.
+
+use rayon::prelude::*;
+use surfcap_mesh::{FrameIndex, Progress};
+
+use crate::dtw::{DtwTables, Slope, dtw_fill};
+
+/// Parameters of a transition table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableParams {
+    pub l_min: usize,
+    pub l_max: usize,
+    pub slope: Slope,
+}
+
+/// D, L, l^i, l^j for all ordered frame pairs (row-major N x N over global frames).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TransitionTable {
+    pub n: usize,
+    /// Normalised cost (eq. 2.50/2.55); infinity where no windows fit.
+    pub cost: Vec<f64>,
+    /// Duration: the warp path length L (eq. 2.56).
+    pub len: Vec<u32>,
+    pub li: Vec<u32>,
+    pub lj: Vec<u32>,
+}
+
+/// Frames available from each global frame to the end of its sequence (itself included), and
+/// from the start of its sequence to it.
+fn room(index: &FrameIndex) -> (Vec<usize>, Vec<usize>) {
+    let n = index.len();
+    let mut after = vec![0; n];
+    let mut before = vec![0; n];
+    for s in 0..index.n_sequences() {
+        let r = index.range(s);
+        for g in r.clone() {
+            after[g] = r.end - g;
+            before[g] = g - r.start + 1;
+        }
+    }
+    (after, before)
+}
+
+/// Best (normalised cost, length, l^i, l^j) for source i over a DTW table started at (i, j'),
+/// updating the row's entries for every end frame j = j' + l^j - 1.
+struct RowBest<'a> {
+    cost: &'a mut [f64],
+    len: &'a mut [u32],
+    li: &'a mut [u32],
+    lj: &'a mut [u32],
+}
+
+/// The table with shared dynamic programming.
+pub fn transition_table(d: &[f64], index: &FrameIndex, p: &TableParams, progress: &dyn Progress) -> TransitionTable {
+    let n = index.len();
+    let (after, _) = room(index);
+    let mut cost = vec![f64::INFINITY; n * n];
+    let mut len = vec![0u32; n * n];
+    let mut li = vec![0u32; n * n];
+    let mut lj = vec![0u32; n * n];
+    progress.start("transition table", n as u64);
+    cost.par_chunks_mut(n)
+        .zip(len.par_chunks_mut(n))
+        .zip(li.par_chunks_mut(n).zip(lj.par_chunks_mut(n)))
+        .enumerate()
+        .for_each_init(DtwTables::default, |t, (i, ((c, l), (a, b)))| {
+            let mut row = RowBest { cost: c, len: l, li: a, lj: b };
+            source_row(d, n, i, &after, p, t, &mut row);
+            progress.advance(1);
+        });
+    progress.finish();
+    TransitionTable { n, cost, len, li, lj }
+}
+
+fn source_row(d: &[f64], n: usize, i: usize, after: &[usize], p: &TableParams, t: &mut DtwTables, row: &mut RowBest) {
+    let rows = after[i].min(p.l_max);
+    if rows < p.l_min {
+        return;
+    }
+    for js in 0..n {
+        let cols = after[js].min(p.l_max);
+        if cols < p.l_min {
+            continue;
+        }
+        dtw_fill(rows, cols, |k, l| d[(i + k) * n + js + l], p.slope, t);
+        for l in p.l_min - 1..cols {
+            let j = js + l;
+            for k in p.l_min - 1..rows {
+                let (c, len) = t.at(k, l);
+                if !c.is_finite() {
+                    continue;
+                }
+                let norm = c / len as f64;
+                if norm < row.cost[j] {
+                    row.cost[j] = norm;
+                    row.len[j] = len;
+                    row.li[j] = k as u32 + 1;
+                    row.lj[j] = l as u32 + 1;
+                }
+            }
+        }
+    }
+}
+
+/// The naive reference: one DTW per (l^i, l^j) for the pair (i, j); (cost, L, l^i, l^j).
+pub fn naive_transition(
+    d: &[f64],
+    index: &FrameIndex,
+    i: usize,
+    j: usize,
+    p: &TableParams,
+) -> Option<(f64, u32, u32, u32)> {
+    let n = index.len();
+    let (after, before) = room(index);
+    let mut best: Option<(f64, u32, u32, u32)> = None;
+    let mut t = DtwTables::default();
+    // Same scan order as the shared version: destination start ascending (l^j descending), then
+    // l^i ascending.
+    for lj in (p.l_min..=p.l_max.min(before[j])).rev() {
+        let js = j + 1 - lj;
+        for li in p.l_min..=p.l_max.min(after[i]) {
+            dtw_fill(li, lj, |k, l| d[(i + k) * n + js + l], p.slope, &mut t);
+            let (c, len) = t.at(li - 1, lj - 1);
+            if c.is_finite() && best.is_none_or(|b| c / (len as f64) < b.0) {
+                best = Some((c / len as f64, len, li as u32, lj as u32));
+            }
+        }
+    }
+    best
+}
+
+/// The standard transition (no time warping, l^i = l^j = l fixed): mean of
+/// d(i + t, j - l + 1 + t), t = 0..l; `None` when the windows do not fit.
+pub fn standard_transition(d: &[f64], index: &FrameIndex, i: usize, j: usize, l: usize) -> Option<f64> {
+    let n = index.len();
+    let (after, before) = room(index);
+    if after[i] < l || before[j] < l {
+        return None;
+    }
+    let js = j + 1 - l;
+    Some((0..l).map(|t| d[(i + t) * n + js + t]).sum::<f64>() / l as f64)
+}
+
+/// DTW with fixed equal lengths l^i = l^j = l: (normalised cost, L).
+pub fn fixed_length_dtw(
+    d: &[f64],
+    index: &FrameIndex,
+    i: usize,
+    j: usize,
+    l: usize,
+    slope: Slope,
+) -> Option<(f64, u32)> {
+    let n = index.len();
+    let (after, before) = room(index);
+    if after[i] < l || before[j] < l {
+        return None;
+    }
+    let js = j + 1 - l;
+    let mut t = DtwTables::default();
+    dtw_fill(l, l, |k, m| d[(i + k) * n + js + m], slope, &mut t);
+    let (c, len) = t.at(l - 1, l - 1);
+    c.is_finite().then(|| (c / len as f64, len))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use surfcap_mesh::NoProgress;
+
+    fn toy(n: usize) -> Vec<f64> {
+        // A distance between frames on two sequences of a 1D "pose" that moves at varying speed.
+        let pose = |g: usize| (g as f64 * 0.37).sin() * 3.0 + (g as f64 * 0.11).cos();
+        (0..n * n).map(|k| (pose(k / n) - pose(k % n)).abs() + 0.01).collect()
+    }
+
+    #[test]
+    fn shared_dp_equals_the_naive_loop() {
+        let index = FrameIndex::new([14, 11, 9]);
+        let n = index.len();
+        let d = toy(n);
+        for slope in [Some(1), Some(2), Some(3), None] {
+            let p = TableParams { l_min: 3, l_max: 6, slope };
+            let t = transition_table(&d, &index, &p, &NoProgress);
+            for i in 0..n {
+                for j in 0..n {
+                    let naive = naive_transition(&d, &index, i, j, &p);
+                    let k = i * n + j;
+                    match naive {
+                        None => assert!(t.cost[k].is_infinite(), "({i},{j}) {slope:?}"),
+                        Some((c, len, li, lj)) => {
+                            assert!((t.cost[k] - c).abs() < 1e-12, "({i},{j}) {slope:?}: {} vs {c}", t.cost[k]);
+                            assert_eq!((t.len[k], t.li[k], t.lj[k]), (len, li, lj), "({i},{j}) {slope:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn windows_stay_inside_sequences_and_lengths_in_bounds() {
+        let index = FrameIndex::new([10, 10]);
+        let d = toy(20);
+        let p = TableParams { l_min: 4, l_max: 7, slope: Some(3) };
+        let t = transition_table(&d, &index, &p, &NoProgress);
+        // Source frame 8 of sequence 0 has only 2 frames left: no transition starts there.
+        assert!((0..20).all(|j| t.cost[8 * 20 + j].is_infinite()));
+        // Destination frame 12 (third of sequence 1) has only 3 frames before it.
+        assert!((0..20).all(|i| t.cost[i * 20 + 12].is_infinite()));
+        for k in 0..400 {
+            if t.cost[k].is_finite() {
+                assert!((4..=7).contains(&t.li[k]) && (4..=7).contains(&t.lj[k]));
+                assert!(t.len[k] >= t.li[k].max(t.lj[k]));
+            }
+        }
+        // DTW with variable lengths is never worse than the standard transition of any length.
+        for (i, j) in [(0, 15), (2, 19), (5, 9)] {
+            for l in 4..=7 {
+                if let Some(s) = standard_transition(&d, &index, i, j, l) {
+                    assert!(t.cost[i * 20 + j] <= s + 1e-12);
+                }
+            }
+        }
+    }
+}
