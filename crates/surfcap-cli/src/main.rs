@@ -36,6 +36,8 @@ enum Command {
     Distance(commands::distance::Args),
     /// Interpolate two poses, non-linearly (thesis eq. 2.45-2.49) or linearly.
     Interpolate(commands::interpolate::Args),
+    /// All-pairs optimal transitions (DTW + variable segment lengths, thesis 2.5) as .npy, cached.
+    Transitions(commands::transitions::Args),
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
     /// Run the main job on built-in data: build a subject, import it, export it.
@@ -96,6 +98,7 @@ fn main() -> ExitCode {
         Command::Distance(a) => commands::distance::run(&ctx, a),
         Command::Interpolate(a) => commands::interpolate::run(&ctx, a),
         Command::Eval(a) => commands::eval::run(&ctx, a),
+        Command::Transitions(a) => commands::transitions::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
     });

@@ -265,3 +265,42 @@ fn pose_metric_evaluation_on_kaykit_prefers_our_distance() {
     assert_eq!(v["ours"], u["ours"]);
     assert_eq!(v["euclidean"], u["euclidean"]);
 }
+
+#[test]
+fn transitions_table_and_evaluation_on_the_horse() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let horse = data.join("sumner2004-horse/gallop");
+    let cache = tmp.path().join("cache");
+    let out = tmp.path().join("tr");
+    let o = surfcap(&["transitions", p(&horse), "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!((v["l_min"].as_u64(), v["l_max"].as_u64()), (Some(8), Some(48)), "24 fps bounds");
+    for f in ["D.npy", "L.npy", "li.npy", "lj.npy"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let ev = tmp.path().join("ev");
+    let o = surfcap(&[
+        "eval",
+        "transitions",
+        p(&horse),
+        "--slopes",
+        "2,3",
+        "-o",
+        p(&ev),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for r in v["rows"].as_array().unwrap() {
+        let m = |k: &str| r[k]["mean"].as_f64().unwrap();
+        assert!(m("dtw_vls") <= m("dtw") && m("dtw") <= m("standard"), "{r}");
+        assert!(r["pairs"].as_u64().unwrap() > 0);
+    }
+    for f in ["transitions.json", "costs.svg", "costs.png", "durations.svg", "durations.png"] {
+        assert!(ev.join(f).is_file(), "{f}");
+    }
+}

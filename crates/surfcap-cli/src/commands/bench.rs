@@ -52,6 +52,23 @@ pub enum What {
         #[arg(long)]
         fps: Option<f64>,
     },
+    /// All-pairs transition table (thesis 2.5.3-2.5.4) and its speed-up over one DTW per segment
+    /// length pair, measured on a sample of frame pairs.
+    Transitions {
+        /// A subject; default: the built-in tube, two sequences, --frames frames in all.
+        #[arg(long)]
+        subject: Option<PathBuf>,
+        #[arg(long, default_value_t = 350)]
+        frames: usize,
+        /// Frame pairs timed with the naive loop.
+        #[arg(long, default_value_t = 12)]
+        sample: usize,
+        #[command(flatten)]
+        table: super::transitions::TableOpts,
+        /// Frame rate for sources that do not give one.
+        #[arg(long)]
+        fps: Option<f64>,
+    },
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate {
         /// A subject cache or source.
@@ -151,6 +168,74 @@ fn distance_bench(
     Ok(())
 }
 
+fn transitions_bench(
+    ctx: &crate::Ctx,
+    subject: Option<PathBuf>,
+    frames: usize,
+    sample: usize,
+    table: &super::transitions::TableOpts,
+    fps: Option<f64>,
+) -> anyhow::Result<()> {
+    use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+    use surfcap_motion::transition_table::{naive_transition, transition_table};
+    let s = match subject {
+        Some(p) => {
+            let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+            surfcap_mesh::import::open_subject(&p, &opts, &NoProgress)?.subject
+        }
+        None => worm_subject(&WormParams { frames: frames.div_ceil(2), ..Default::default() })?,
+    };
+    let p = table.params(s.fps)?;
+    let bar = crate::progress::Bar::new(ctx);
+    let t0 = Instant::now();
+    let d = distance_matrix(&s, &DistanceParams::default(), &bar);
+    let dist_secs = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let t = transition_table(&d.values, s.frame_index(), &p, &bar);
+    let table_secs = t1.elapsed().as_secs_f64();
+    let n = t.n;
+    let candidates: Vec<usize> = (0..n * n).filter(|&k| t.cost[k].is_finite()).collect();
+    anyhow::ensure!(!candidates.is_empty(), "no frame pair has room for a transition");
+    let picks: Vec<usize> = (0..sample.max(1)).map(|k| candidates[k * candidates.len() / sample.max(1)]).collect();
+    let t2 = Instant::now();
+    let mut mismatches = 0;
+    for &k in &picks {
+        let naive = naive_transition(&d.values, s.frame_index(), k / n, k % n, &p);
+        if naive.is_none_or(|(c, ..)| (c - t.cost[k]).abs() > 1e-9 * c.abs().max(1.0)) {
+            mismatches += 1;
+        }
+    }
+    let per_pair = t2.elapsed().as_secs_f64() / picks.len() as f64;
+    let naive_total = per_pair * candidates.len() as f64;
+    let report = json!({
+        "frames": n, "fps": s.fps, "l_min": p.l_min, "l_max": p.l_max, "slope": p.slope,
+        "distance_seconds": dist_secs, "table_seconds": table_secs,
+        "pairs_with_transitions": candidates.len(), "naive_seconds_per_pair": per_pair,
+        "naive_seconds_estimated": naive_total, "speed_up": naive_total / table_secs,
+        "naive_pairs_checked": picks.len(), "naive_mismatches": mismatches, "threads": rayon::current_num_threads(),
+    });
+    if ctx.json {
+        print_json(&report);
+    } else {
+        println!(
+            "{n} frames at {} fps, segments {}..{}, slope {}: table {table_secs:.2} s on {} threads (distances {dist_secs:.2} s); \
+             naive one-DTW-per-length: {:.3} s per pair on {} sampled pairs (all agree: {}), ~{:.0} s for all {} pairs: speed-up {:.0}x",
+            s.fps,
+            p.l_min,
+            p.l_max,
+            p.slope.map_or("inf".into(), |p| p.to_string()),
+            rayon::current_num_threads(),
+            per_pair,
+            picks.len(),
+            mismatches == 0,
+            naive_total,
+            candidates.len(),
+            naive_total / table_secs
+        );
+    }
+    Ok(())
+}
+
 fn interpolate_bench(
     ctx: &crate::Ctx,
     subject: PathBuf,
@@ -236,6 +321,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         What::Distance { subject, frames, triangles, fps } => {
             return distance_bench(ctx, subject, frames, triangles, fps);
+        }
+        What::Transitions { subject, frames, sample, table, fps } => {
+            return transitions_bench(ctx, subject, frames, sample, &table, fps);
         }
         What::Interpolate { subject, from, to, repeat, fps } => {
             return interpolate_bench(ctx, subject, &from, &to, repeat, fps);

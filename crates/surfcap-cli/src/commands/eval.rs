@@ -43,6 +43,29 @@ pub enum What {
         #[command(flatten)]
         source: SourceOpts,
     },
+    /// Standard transitions vs DTW vs DTW + variable segment lengths for several slopes (thesis
+    /// 2.5.5, Fig. 2.15): mean and standard deviation of normalised costs, and plots of costs and
+    /// durations over a sample of frame pairs.
+    Transitions {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// Slope constraints to compare.
+        #[arg(long, value_delimiter = ',', default_value = "2,3,4,5")]
+        slopes: Vec<usize>,
+        /// Fixed segment length of the standard and DTW-only transitions (default: one second).
+        #[arg(long)]
+        fixed: Option<usize>,
+        /// Frame pairs in the plots.
+        #[arg(long, default_value_t = 100)]
+        plot_pairs: usize,
+        /// Folder for the report and the plots.
+        #[arg(short, long, default_value = "transitions-eval")]
+        output: PathBuf,
+        #[command(flatten)]
+        cache: super::distance::CacheOpts,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
     /// Our pose distance and the Euclidean one against the skeleton ground truth (thesis 2.3.2,
     /// Fig. 2.5-2.7): Pearson and distance correlation, Mantel test, Mantel correlogram plot.
     PoseMetric {
@@ -73,6 +96,10 @@ pub enum What {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (subject, pairs, lambda, stretch, source) = match a.what {
         What::Interpolation { subject, pairs, lambda, stretch, source } => (subject, pairs, lambda, stretch, source),
+        What::Transitions { subject, slopes, fixed, plot_pairs, output, cache, source } => {
+            let opts = super::eval_transitions::Opts { slopes, fixed, plot_pairs, output, cache };
+            return super::eval_transitions::run(ctx, &subject, &source, &opts);
+        }
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
             let opts = PoseMetricOpts { max_frames, permutations, classes, seed, output, cache };
             return super::eval_pose_metric::run(ctx, &subject, &source, &opts);

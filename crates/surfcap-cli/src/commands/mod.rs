@@ -5,10 +5,12 @@ pub mod demo;
 pub mod distance;
 pub mod eval;
 pub mod eval_pose_metric;
+pub mod eval_transitions;
 pub mod export;
 pub mod import;
 pub mod info;
 pub mod interpolate;
+pub mod transitions;
 
 use std::path::Path;
 
