@@ -38,6 +38,8 @@ enum Command {
     Interpolate(commands::interpolate::Args),
     /// All-pairs optimal transitions (DTW + variable segment lengths, thesis 2.5) as .npy, cached.
     Transitions(commands::transitions::Args),
+    /// One optimal transition between two frames, blended (thesis 2.5.4, Algorithm 2), as .glb.
+    Transition(commands::transition::Args),
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
     /// Run the main job on built-in data: build a subject, import it, export it.
@@ -99,6 +101,7 @@ fn main() -> ExitCode {
         Command::Interpolate(a) => commands::interpolate::run(&ctx, a),
         Command::Eval(a) => commands::eval::run(&ctx, a),
         Command::Transitions(a) => commands::transitions::run(&ctx, a),
+        Command::Transition(a) => commands::transition::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
     });

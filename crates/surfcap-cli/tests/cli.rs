@@ -304,3 +304,42 @@ fn transitions_table_and_evaluation_on_the_horse() {
         assert!(ev.join(f).is_file(), "{f}");
     }
 }
+
+#[test]
+fn one_transition_is_blended_and_valid() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let horse = data.join("sumner2004-horse/gallop");
+    let out = tmp.path().join("t.glb");
+    let o = surfcap(&[
+        "transition",
+        p(&horse),
+        "--from",
+        "gallop:2",
+        "--to",
+        "gallop:40",
+        "-o",
+        p(&out),
+        "--cache-dir",
+        p(&tmp.path().join("cache")),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let t = &v["transition"];
+    let (cost, table) = (t["normalised_cost"].as_f64().unwrap(), t["table_cost"].as_f64().unwrap());
+    assert!((cost - table).abs() <= 1e-9 * table.max(1.0), "warp recovered with the table's cost: {cost} vs {table}");
+    let warp = t["warp"].as_array().unwrap();
+    assert_eq!(warp.len() as u64, t["duration"].as_u64().unwrap());
+    assert_eq!(warp[0], serde_json::json!([2, 40 + 1 - t["destination_length"].as_u64().unwrap()]));
+    surfcap_testkit::validate_glb(std::slice::from_ref(&out));
+    let side: serde_json::Value = serde_json::from_slice(&std::fs::read(tmp.path().join("t.json")).unwrap()).unwrap();
+    let labels = side["sequences"][0]["frame_labels"].as_array().unwrap();
+    assert_eq!(labels.len(), warp.len());
+    assert_eq!(labels[0], "original");
+    assert_eq!(labels[1], "synthetic");
+    // A destination too close to its sequence start has no room for a segment.
+    let o = surfcap(&["transition", p(&horse), "--from", "gallop:2", "--to", "gallop:3", "-o", p(&out)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no transition"), "{}", stderr(&o));
+}

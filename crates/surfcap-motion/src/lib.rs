@@ -3,6 +3,7 @@
 //! Frames are global frame indices of a subject; pose distances come as an N x N row-major
 //! matrix (surfcap-geometry's distance matrix).
 
+pub mod blend;
 pub mod dtw;
 pub mod transition_table;
 

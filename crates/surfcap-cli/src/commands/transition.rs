@@ -1,0 +1,102 @@
+//! `surfcap transition <subject> --from seq:frame --to seq:frame -o out.glb`: one optimal
+//! transition (thesis 2.5.4 for its lengths and warp, Algorithm 2 for its frames).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use serde_json::json;
+use surfcap_geometry::distance_matrix::DistanceParams;
+use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_motion::blend::{Lambda, Mixing, blend};
+use surfcap_motion::dtw::dtw_window;
+
+use super::distance::{CacheOpts, cached_distance_matrix};
+use super::transitions::{TableOpts, cached_table};
+use super::{SourceOpts, print_json};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A subject cache, or any source `surfcap import` reads.
+    pub subject: PathBuf,
+    /// Source frame i (sequence:frame or a global frame): the source segment starts there.
+    #[arg(long)]
+    pub from: String,
+    /// Destination frame j: the destination segment ends there.
+    #[arg(long)]
+    pub to: String,
+    /// Output .glb (plus a .json sidecar and <output>.transition.json with lengths, warp, cost).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let s = super::open(ctx, &a.subject, &a.source)?;
+    let p = a.table.params(s.fps)?;
+    let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
+    let (table, _) = cached_table(ctx, &s, &p, &a.cache)?;
+    let n = table.n;
+    let k = i * n + j;
+    anyhow::ensure!(
+        table.cost[k].is_finite(),
+        "no transition from {} to {}: the source needs {} frames after it and the destination {} before it, in their own sequences",
+        a.from,
+        a.to,
+        p.l_min,
+        p.l_min
+    );
+    let (li, lj) = (table.li[k] as usize, table.lj[k] as usize);
+    let (d, _, _) = cached_distance_matrix(ctx, &s, &DistanceParams::default(), &a.cache)?;
+    let warp = dtw_window(&d.data, n, i, li, j, lj, p.slope).context("the table's warp could not be recovered")?;
+    let src: Vec<&[f32]> = (i..i + li).map(|g| s.frame(g).expect("in range")).collect();
+    let dst: Vec<&[f32]> = (j + 1 - lj..=j).map(|g| s.frame(g).expect("in range")).collect();
+    let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(x, y)| (x - i, y - (j + 1 - lj))).collect();
+    let t0 = std::time::Instant::now();
+    let frames = blend(s.topology(), s.up_axis, &src, &dst, &offsets, Lambda::Ramp, Mixing::Nonlinear)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let secs = t0.elapsed().as_secs_f64();
+    let nv = s.topology().n_vertices();
+    let l = frames.len();
+    let labels: Vec<FrameLabel> =
+        (0..l).map(|t| if t == 0 || t == l - 1 { FrameLabel::Original } else { FrameLabel::Synthetic }).collect();
+    let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
+    let seq = Sequence::new(name, nv, frames.concat())?.with_labels(labels)?.with_tags(vec!["transition".into()]);
+    let out = Subject::new(
+        format!("{}-transition", s.name),
+        s.topology().clone(),
+        vec![seq],
+        s.fps,
+        s.up_axis,
+        s.units.clone(),
+    )?;
+    let bar = crate::progress::Bar::new(ctx);
+    let mut written = export(&out, ExportFormat::Glb, &a.output, ExportOptions::default(), &bar)?;
+    let report = json!({
+        "from": i, "to": j, "source_length": li, "destination_length": lj, "duration": warp.len,
+        "normalised_cost": warp.cost, "table_cost": table.cost[k], "slope": p.slope,
+        "warp": warp.path, "blend_seconds": secs,
+    });
+    let rp = a.output.with_extension("transition.json");
+    surfcap_mesh::atomic::write_file(&rp, |w| {
+        serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)
+    })?;
+    written.push(rp);
+    if ctx.json {
+        print_json(&json!({ "transition": report, "written": written }));
+    } else {
+        println!(
+            "transition {i} -> {j}: source segment {li} frames, destination {lj}, duration {} frames, normalised cost {:.3}; blended in {secs:.2} s",
+            warp.len, warp.cost
+        );
+        for w in &written {
+            println!("wrote {}", w.display());
+        }
+    }
+    Ok(())
+}

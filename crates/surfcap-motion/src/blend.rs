@@ -1,0 +1,208 @@
+//! Blend (thesis Algorithm 2, 3.4.1): the synthetic transition segment between a source segment
+//! and a destination segment, following the DTW warp, with recurring motion-plane alignment of
+//! the remaining segments, non-linear interpolation with lambda = (t - 1)/(L - 1), and
+//! integration of the centre of mass.
+//!
+//! Readings (PAPER-NOTES and ours):
+//! - Align(M_n, M_m) is the up-axis angle theta that rotates M_m onto M_n (eq. 2.3); it is split
+//!   as -lambda theta for the source and (1 - lambda) theta for the destination, each rotating the
+//!   remaining segment about its current frame's centre of mass.
+//! - "Planar translations towards P": T_n and T_m move the remaining segments in the ground plane
+//!   only; the vertical coordinate stays as captured. P advances by the lambda-weighted average of
+//!   the two segments' own (moved) ground-plane centre-of-mass steps; at a segment's last frame
+//!   its step is taken as zero.
+//! - The centre of mass of a frame is its vertex mean.
+
+use surfcap_geometry::motion_plane_alignment::{PlaneMotion, motion_plane_alignment, plane_axes};
+use surfcap_geometry::poisson_reconstruction::PoissonError;
+use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation, linear_interpolation};
+use surfcap_mesh::{Topology, UpAxis};
+
+/// How each output frame mixes its source and destination frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Lambda {
+    /// lambda = (t - 1)/(L - 1): the transition of Algorithm 2.
+    Ramp,
+    /// A fixed lambda for every frame (Fig. 3.14 blends two sequences with 0.5).
+    Constant(f64),
+}
+
+/// Pose interpolation used for each output frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mixing {
+    /// Gradient-domain interpolation (thesis 2.4.3).
+    Nonlinear,
+    /// Vertex blending (eq. 2.23), for comparison.
+    Linear,
+}
+
+fn centre(p: &[f32]) -> [f64; 3] {
+    let n = (p.len() / 3).max(1) as f64;
+    let mut c = [0.0; 3];
+    for v in p.chunks_exact(3) {
+        for k in 0..3 {
+            c[k] += v[k] as f64;
+        }
+    }
+    c.map(|x| x / n)
+}
+
+/// Move(S, theta, C, T): rotate frames about the vertical axis through C by theta, then
+/// translate them by T in the ground plane.
+fn move_frames(frames: &mut [Vec<f32>], theta: f64, c: [f64; 3], t: [f64; 2], up: UpAxis) {
+    let (iu, iv, _) = plane_axes(up);
+    let (s, co) = theta.sin_cos();
+    // As a PlaneMotion: x -> R x + (C - R C + T) in the plane.
+    let (cu, cv) = (c[iu], c[iv]);
+    let tu = cu - (cu * co + cv * s) + t[0];
+    let tv = cv - (-cu * s + cv * co) + t[1];
+    let m = PlaneMotion { theta, t: [tu, tv], up };
+    for f in frames {
+        m.apply(f);
+    }
+}
+
+/// Blends `source` (frames i .. i + l^i - 1) into `destination` (frames j - l^j + 1 .. j) along
+/// the warp `path` (pairs of offsets into the two segments, from (0, 0) to their ends).
+pub fn blend(
+    topology: &Topology,
+    up: UpAxis,
+    source: &[&[f32]],
+    destination: &[&[f32]],
+    path: &[(usize, usize)],
+    lambda: Lambda,
+    mixing: Mixing,
+) -> Result<Vec<Vec<f32>>, PoissonError> {
+    let (iu, iv, _) = plane_axes(up);
+    let mut src: Vec<Vec<f32>> = source.iter().map(|f| f.to_vec()).collect();
+    let mut dst: Vec<Vec<f32>> = destination.iter().map(|f| f.to_vec()).collect();
+    let l = path.len();
+    let mut out = Vec::with_capacity(l);
+    let mut p = centre(&src[0]);
+    for (t, &(n, m)) in path.iter().enumerate() {
+        let lam = match lambda {
+            Lambda::Ramp if l > 1 => t as f64 / (l - 1) as f64,
+            Lambda::Ramp => 1.0,
+            Lambda::Constant(x) => x,
+        };
+        let (theta, _) = {
+            let (mo, r) = motion_plane_alignment(&src[n], &dst[m], None, up);
+            (mo.theta, r)
+        };
+        let (cn, cm) = (centre(&src[n]), centre(&dst[m]));
+        let tn = [p[iu] - cn[iu], p[iv] - cn[iv]];
+        let tm = [p[iu] - cm[iu], p[iv] - cm[iv]];
+        move_frames(&mut src[n..], -lam * theta, cn, tn, up);
+        move_frames(&mut dst[m..], (1.0 - lam) * theta, cm, tm, up);
+        let frame = match mixing {
+            Mixing::Nonlinear => {
+                NonlinearInterpolator::new(topology, &src[n], &dst[m], up)?.at(lam, StretchInterpolation::Linear)
+            }
+            Mixing::Linear => linear_interpolation(&src[n], &dst[m], lam),
+        };
+        out.push(frame);
+        let step = |seg: &[Vec<f32>], k: usize| -> [f64; 2] {
+            if k + 1 < seg.len() {
+                let (a, b) = (centre(&seg[k]), centre(&seg[k + 1]));
+                [b[iu] - a[iu], b[iv] - a[iv]]
+            } else {
+                [0.0, 0.0]
+            }
+        };
+        let (sn, sm) = (step(&src, n), step(&dst, m));
+        p[iu] += (1.0 - lam) * sn[0] + lam * sm[0];
+        p[iv] += (1.0 - lam) * sn[1] + lam * sm[1];
+    }
+    Ok(out)
+}
+
+/// Length of the ground-plane path of the frames' centres of mass.
+pub fn centre_path_length(frames: &[Vec<f32>], up: UpAxis) -> f64 {
+    let (iu, iv, _) = plane_axes(up);
+    frames
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (centre(&w[0]), centre(&w[1]));
+            ((b[iu] - a[iu]).powi(2) + (b[iv] - a[iv]).powi(2)).sqrt()
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use surfcap_synth::{WormParams, worm_subject};
+
+    /// The built-in tube's straight crawl bent onto a circle of radius 1 (left for `sign` = 1,
+    /// right for -1): each frame's body is turned to the circle's tangent and placed at the arc
+    /// length it has crawled.
+    fn turning(sign: f64) -> (Topology, Vec<Vec<f32>>) {
+        let w = worm_subject(&WormParams { rings: 12, segments: 8, frames: 40, ..Default::default() }).unwrap();
+        let seq = &w.sequences()[0];
+        let c0 = centre(seq.frame(0));
+        let frames = (0..seq.n_frames())
+            .map(|f| {
+                let mut p = seq.frame(f).to_vec();
+                let c = centre(&p);
+                let s = c[0] - c0[0];
+                let theta = sign * s;
+                let (x, z) = (s.sin(), -sign * (1.0 - s.cos()));
+                for v in p.chunks_exact_mut(3) {
+                    v[0] -= c[0] as f32;
+                    v[2] -= c[2] as f32;
+                }
+                PlaneMotion { theta, t: [c0[0] + x, c0[2] + z], up: UpAxis::PosY }.apply(&mut p);
+                p
+            })
+            .collect();
+        (w.topology().clone(), frames)
+    }
+
+    #[test]
+    fn blending_a_left_and_a_right_turn_keeps_the_path_where_linear_blending_shortens_it() {
+        let (topo, left) = turning(1.0);
+        let (_, right) = turning(-1.0);
+        // Start the right turn facing the other way, as two captures rarely share a heading.
+        let right: Vec<Vec<f32>> = right
+            .into_iter()
+            .map(|mut p| {
+                PlaneMotion { theta: 2.5, t: [0.3, -0.2], up: UpAxis::PosY }.apply(&mut p);
+                p
+            })
+            .collect();
+        let path: Vec<(usize, usize)> = (0..left.len()).map(|k| (k, k)).collect();
+        let (l, r): (Vec<&[f32]>, Vec<&[f32]>) =
+            (left.iter().map(|f| &f[..]).collect(), right.iter().map(|f| &f[..]).collect());
+        let ours = blend(&topo, UpAxis::PosY, &l, &r, &path, Lambda::Constant(0.5), Mixing::Nonlinear).unwrap();
+        let plain: Vec<Vec<f32>> = left.iter().zip(&right).map(|(a, b)| linear_interpolation(a, b, 0.5)).collect();
+        let (len_l, len_r) = (centre_path_length(&left, UpAxis::PosY), centre_path_length(&right, UpAxis::PosY));
+        let (len_ours, len_plain) = (centre_path_length(&ours, UpAxis::PosY), centre_path_length(&plain, UpAxis::PosY));
+        let mean = 0.5 * (len_l + len_r);
+        assert!((len_ours - mean).abs() < 0.1 * mean, "Blend path {len_ours} vs inputs' mean {mean}");
+        assert!(len_plain < 0.6 * mean, "linear blending should collapse: {len_plain} vs {mean}");
+        eprintln!("centre-of-mass path: inputs {len_l:.3} / {len_r:.3}, Blend {len_ours:.3}, linear {len_plain:.3}");
+    }
+
+    #[test]
+    fn ramp_starts_at_the_source_frame() {
+        let (topo, left) = turning(1.0);
+        let (_, right) = turning(-1.0);
+        let path: Vec<(usize, usize)> = (0..10).map(|k| (k, k + 5)).collect();
+        let (l, r): (Vec<&[f32]>, Vec<&[f32]>) =
+            (left[..10].iter().map(|f| &f[..]).collect(), right[5..15].iter().map(|f| &f[..]).collect());
+        let out = blend(
+            &topo,
+            UpAxis::PosY,
+            &l,
+            &r,
+            &path.iter().map(|&(a, b)| (a, b - 5)).collect::<Vec<_>>(),
+            Lambda::Ramp,
+            Mixing::Nonlinear,
+        )
+        .unwrap();
+        assert_eq!(out.len(), 10);
+        // First frame: the source's first frame, unmoved (P starts at its centre).
+        let d0 = out[0].iter().zip(&left[0]).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+        assert!(d0 < 1e-4, "{d0}");
+    }
+}
