@@ -196,7 +196,11 @@ fn transitions_bench(
     let n = t.n;
     let candidates: Vec<usize> = (0..n * n).filter(|&k| t.cost[k].is_finite()).collect();
     anyhow::ensure!(!candidates.is_empty(), "no frame pair has room for a transition");
-    let picks: Vec<usize> = (0..sample.max(1)).map(|k| candidates[k * candidates.len() / sample.max(1)]).collect();
+    // Pairs spread over the whole table (a fixed multiplicative hash of the sample index): evenly
+    // spaced row-major picks would all sit at the start of their rows, where windows are short.
+    let picks: Vec<usize> = (0..sample.max(1) as u64)
+        .map(|k| candidates[(k.wrapping_mul(2_654_435_761) % candidates.len() as u64) as usize])
+        .collect();
     let t2 = Instant::now();
     let mut mismatches = 0;
     for &k in &picks {
