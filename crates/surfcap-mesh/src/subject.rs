@@ -114,6 +114,14 @@ pub enum FrameLabel {
     Synthetic,
 }
 
+impl FrameLabel {
+    /// Labels of a synthetic segment between two captured frames: original at both ends,
+    /// synthetic in between.
+    pub fn original_ends(n: usize) -> Vec<FrameLabel> {
+        (0..n).map(|t| if t == 0 || t + 1 == n { FrameLabel::Original } else { FrameLabel::Synthetic }).collect()
+    }
+}
+
 /// Ground-truth skeleton of a sequence: per-frame world matrices of each joint.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointTrack {
@@ -313,6 +321,12 @@ impl Subject {
         Some(self.sequences[s].frame(f))
     }
 
+    /// A new subject with this one's topology, frame rate, up axis and units, holding `sequence`
+    /// (a result made from this subject's frames: an interpolation, a transition, a synthesis).
+    pub fn derived(&self, name: impl Into<String>, sequence: Sequence) -> Result<Subject> {
+        Subject::new(name, self.topology.clone(), vec![sequence], self.fps, self.up_axis, self.units.clone())
+    }
+
     /// Global index of a frame written `sequence:frame` (0-based frame), or a bare global index.
     pub fn resolve_frame(&self, spec: &str) -> Result<usize> {
         let bad = |why: String| err!(Metadata, "frame {spec:?}: {why}");
@@ -400,6 +414,13 @@ mod tests {
         assert!(s.resolve_frame("c:3").is_err());
         assert!(s.resolve_frame("d:0").unwrap_err().to_string().contains("a:b, c"));
         assert!(s.resolve_frame("5").is_err());
+        let d = s.derived(
+            "d",
+            Sequence::new("x", 3, vec![0.0; 9]).unwrap().with_labels(FrameLabel::original_ends(1)).unwrap(),
+        );
+        assert_eq!(d.unwrap().fps, 30.0);
+        use FrameLabel::{Original as O, Synthetic as S};
+        assert_eq!(FrameLabel::original_ends(4), vec![O, S, S, O]);
     }
 
     #[test]

@@ -85,6 +85,12 @@ pub enum What {
     },
 }
 
+/// Opens a benchmark's subject without progress output (the timings are printed instead).
+fn open_quietly(path: &std::path::Path, fps: Option<f64>) -> anyhow::Result<Subject> {
+    let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+    Ok(surfcap_mesh::import::open_subject(path, &opts, &NoProgress)?.subject)
+}
+
 /// Rate of a 1000 x 1000 f64 matrix product on all cores (faer), in FLOP/s: the reference
 /// "peak" that the distance benchmark's arithmetic rate is compared with.
 fn gemm_rate() -> f64 {
@@ -115,10 +121,7 @@ fn distance_bench(
 ) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
     let s = match subject {
-        Some(p) => {
-            let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
-            surfcap_mesh::import::open_subject(&p, &opts, &NoProgress)?.subject
-        }
+        Some(p) => open_quietly(&p, fps)?,
         None => {
             let segments = 25usize;
             let rings = (triangles / (2 * segments)).max(2);
@@ -179,10 +182,7 @@ fn transitions_bench(
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
     use surfcap_motion::transition_table::{naive_transition, transition_table};
     let s = match subject {
-        Some(p) => {
-            let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
-            surfcap_mesh::import::open_subject(&p, &opts, &NoProgress)?.subject
-        }
+        Some(p) => open_quietly(&p, fps)?,
         None => worm_subject(&WormParams { frames: frames.div_ceil(2), ..Default::default() })?,
     };
     let p = table.params(s.fps)?;
@@ -249,8 +249,7 @@ fn interpolate_bench(
     fps: Option<f64>,
 ) -> anyhow::Result<()> {
     use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-    let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
-    let s = surfcap_mesh::import::open_subject(&subject, &opts, &NoProgress)?.subject;
+    let s = open_quietly(&subject, fps)?;
     let (gi, gj) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let mut setup = Vec::new();

@@ -9,7 +9,7 @@ use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::io::npy::write_npy;
-use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_synth::{WormParams, worm_subject};
 
 use super::print_json;
@@ -80,21 +80,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let steps = 12usize;
     let nv = subject.topology().n_vertices();
     let mut pos = Vec::with_capacity(steps * 3 * nv);
-    let mut labels = Vec::with_capacity(steps);
     for k in 0..steps {
         let lambda = k as f64 / (steps - 1) as f64;
         pos.extend_from_slice(&interp.at(lambda, StretchInterpolation::Linear));
-        labels.push(if k == 0 || k == steps - 1 { FrameLabel::Original } else { FrameLabel::Synthetic });
     }
-    let seq = Sequence::new("slither_0_to_curl_40", nv, pos)?.with_labels(labels)?;
-    let blend = Subject::new(
-        "worm-interpolation",
-        subject.topology().clone(),
-        vec![seq],
-        subject.fps,
-        subject.up_axis,
-        subject.units.clone(),
-    )?;
+    let seq = Sequence::new("slither_0_to_curl_40", nv, pos)?.with_labels(FrameLabel::original_ends(steps))?;
+    let blend = subject.derived("worm-interpolation", seq)?;
     let interp_path = a.output.join("export/interpolation.glb");
     written.extend(export(&blend, ExportFormat::Glb, &interp_path, ExportOptions::default(), &bar)?);
     say(&format!("6. interpolated slither:0 -> curl:40 non-linearly in {steps} poses -> {}", interp_path.display()));

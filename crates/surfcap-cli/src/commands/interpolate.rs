@@ -6,7 +6,7 @@ use anyhow::Context;
 use serde_json::json;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
-use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_mesh::{FrameLabel, Sequence};
 
 use super::{SourceOpts, print_json};
 
@@ -65,7 +65,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let setup = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
     let mut positions = Vec::with_capacity(a.steps * 3 * nv);
-    let mut labels = Vec::with_capacity(a.steps);
     for k in 0..a.steps {
         let lambda = k as f64 / (a.steps - 1) as f64;
         let p = match (k, nonlinear) {
@@ -75,18 +74,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             (_, false) => interp.linear(lambda),
         };
         positions.extend_from_slice(&p);
-        labels.push(if k == 0 || k == a.steps - 1 { FrameLabel::Original } else { FrameLabel::Synthetic });
     }
     let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
-    let seq = Sequence::new(name, nv, positions)?.with_labels(labels)?.with_tags(vec!["interpolation".into()]);
-    let out = Subject::new(
-        format!("{}-interpolation", s.name),
-        s.topology().clone(),
-        vec![seq],
-        s.fps,
-        s.up_axis,
-        s.units.clone(),
-    )?;
+    let seq = Sequence::new(name, nv, positions)?
+        .with_labels(FrameLabel::original_ends(a.steps))?
+        .with_tags(vec!["interpolation".into()]);
+    let out = s.derived(format!("{}-interpolation", s.name), seq)?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&out, format, &a.output, ExportOptions::default(), &bar)?;
     if ctx.json {

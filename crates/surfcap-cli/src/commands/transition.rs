@@ -7,7 +7,7 @@ use anyhow::Context;
 use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
-use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::blend::{Lambda, Mixing, blend};
 use surfcap_motion::dtw::dtw_window;
 
@@ -62,19 +62,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let secs = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
-    let l = frames.len();
-    let labels: Vec<FrameLabel> =
-        (0..l).map(|t| if t == 0 || t == l - 1 { FrameLabel::Original } else { FrameLabel::Synthetic }).collect();
     let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
-    let seq = Sequence::new(name, nv, frames.concat())?.with_labels(labels)?.with_tags(vec!["transition".into()]);
-    let out = Subject::new(
-        format!("{}-transition", s.name),
-        s.topology().clone(),
-        vec![seq],
-        s.fps,
-        s.up_axis,
-        s.units.clone(),
-    )?;
+    let seq = Sequence::new(name, nv, frames.concat())?
+        .with_labels(FrameLabel::original_ends(frames.len()))?
+        .with_tags(vec!["transition".into()]);
+    let out = s.derived(format!("{}-transition", s.name), seq)?;
     let bar = crate::progress::Bar::new(ctx);
     let mut written = export(&out, ExportFormat::Glb, &a.output, ExportOptions::default(), &bar)?;
     let report = json!({
