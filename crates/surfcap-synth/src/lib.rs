@@ -5,6 +5,7 @@
 //! mannequin of the built-in-subjects issue will join it here.
 
 pub mod bvh;
+pub mod mannequin;
 mod worm;
 
 pub use worm::{WormParams, worm_subject};
