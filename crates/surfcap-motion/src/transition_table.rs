@@ -40,20 +40,37 @@ pub struct TransitionTable {
     pub lj: Vec<u32>,
 }
 
-/// Frames available from each global frame to the end of its sequence (itself included), and
-/// from the start of its sequence to it.
-fn room(index: &FrameIndex) -> (Vec<usize>, Vec<usize>) {
-    let n = index.len();
-    let mut after = vec![0; n];
-    let mut before = vec![0; n];
-    for s in 0..index.n_sequences() {
-        let r = index.range(s);
-        for g in r.clone() {
-            after[g] = r.end - g;
-            before[g] = g - r.start + 1;
+/// Frames available around each global frame inside its own sequence: `after[g]` from g to the
+/// sequence's end (g included), `before[g]` from the sequence's start to g (g included).
+/// Computed once per subject and passed to the per-pair functions.
+#[derive(Debug, Clone)]
+pub struct SegmentRoom {
+    pub after: Vec<usize>,
+    pub before: Vec<usize>,
+}
+
+impl SegmentRoom {
+    pub fn new(index: &FrameIndex) -> Self {
+        let n = index.len();
+        let mut after = vec![0; n];
+        let mut before = vec![0; n];
+        for s in 0..index.n_sequences() {
+            let r = index.range(s);
+            for g in r.clone() {
+                after[g] = r.end - g;
+                before[g] = g - r.start + 1;
+            }
         }
+        SegmentRoom { after, before }
     }
-    (after, before)
+
+    pub fn len(&self) -> usize {
+        self.after.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.after.is_empty()
+    }
 }
 
 /// Best (normalised cost, length, l^i, l^j) for source i over a DTW table started at (i, j'),
@@ -68,7 +85,7 @@ struct RowBest<'a> {
 /// The table with shared dynamic programming.
 pub fn transition_table(d: &[f64], index: &FrameIndex, p: &TableParams, progress: &dyn Progress) -> TransitionTable {
     let n = index.len();
-    let (after, _) = room(index);
+    let after = SegmentRoom::new(index).after;
     let mut cost = vec![f64::INFINITY; n * n];
     let mut len = vec![0u32; n * n];
     let mut li = vec![0u32; n * n];
@@ -120,13 +137,13 @@ fn source_row(d: &[f64], n: usize, i: usize, after: &[usize], p: &TableParams, t
 /// The naive reference: one DTW per (l^i, l^j) for the pair (i, j); (cost, L, l^i, l^j).
 pub fn naive_transition(
     d: &[f64],
-    index: &FrameIndex,
+    room: &SegmentRoom,
     i: usize,
     j: usize,
     p: &TableParams,
 ) -> Option<(f64, u32, u32, u32)> {
-    let n = index.len();
-    let (after, before) = room(index);
+    let n = room.len();
+    let (after, before) = (&room.after, &room.before);
     let mut best: Option<(f64, u32, u32, u32)> = None;
     let mut t = DtwTables::default();
     // Same scan order as the shared version: destination start ascending (l^j descending), then
@@ -146,9 +163,9 @@ pub fn naive_transition(
 
 /// The standard transition (no time warping, l^i = l^j = l fixed): mean of
 /// d(i + t, j - l + 1 + t), t = 0..l; `None` when the windows do not fit.
-pub fn standard_transition(d: &[f64], index: &FrameIndex, i: usize, j: usize, l: usize) -> Option<f64> {
-    let n = index.len();
-    let (after, before) = room(index);
+pub fn standard_transition(d: &[f64], room: &SegmentRoom, i: usize, j: usize, l: usize) -> Option<f64> {
+    let n = room.len();
+    let (after, before) = (&room.after, &room.before);
     if after[i] < l || before[j] < l {
         return None;
     }
@@ -159,14 +176,14 @@ pub fn standard_transition(d: &[f64], index: &FrameIndex, i: usize, j: usize, l:
 /// DTW with fixed equal lengths l^i = l^j = l: (normalised cost, L).
 pub fn fixed_length_dtw(
     d: &[f64],
-    index: &FrameIndex,
+    room: &SegmentRoom,
     i: usize,
     j: usize,
     l: usize,
     slope: Slope,
 ) -> Option<(f64, u32)> {
-    let n = index.len();
-    let (after, before) = room(index);
+    let n = room.len();
+    let (after, before) = (&room.after, &room.before);
     if after[i] < l || before[j] < l {
         return None;
     }
@@ -198,7 +215,7 @@ mod tests {
             let t = transition_table(&d, &index, &p, &NoProgress);
             for i in 0..n {
                 for j in 0..n {
-                    let naive = naive_transition(&d, &index, i, j, &p);
+                    let naive = naive_transition(&d, &SegmentRoom::new(&index), i, j, &p);
                     let k = i * n + j;
                     match naive {
                         None => assert!(t.cost[k].is_infinite(), "({i},{j}) {slope:?}"),
@@ -231,7 +248,7 @@ mod tests {
         // DTW with variable lengths is never worse than the standard transition of any length.
         for (i, j) in [(0, 15), (2, 19), (5, 9)] {
             for l in 4..=7 {
-                if let Some(s) = standard_transition(&d, &index, i, j, l) {
+                if let Some(s) = standard_transition(&d, &SegmentRoom::new(&index), i, j, l) {
                     assert!(t.cost[i * 20 + j] <= s + 1e-12);
                 }
             }

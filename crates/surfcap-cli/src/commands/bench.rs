@@ -180,7 +180,7 @@ fn transitions_bench(
     fps: Option<f64>,
 ) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
-    use surfcap_motion::transition_table::{naive_transition, transition_table};
+    use surfcap_motion::transition_table::{SegmentRoom, naive_transition, transition_table};
     let s = match subject {
         Some(p) => open_quietly(&p, fps)?,
         None => worm_subject(&WormParams { frames: frames.div_ceil(2), ..Default::default() })?,
@@ -201,10 +201,11 @@ fn transitions_bench(
     let picks: Vec<usize> = (0..sample.max(1) as u64)
         .map(|k| candidates[(k.wrapping_mul(2_654_435_761) % candidates.len() as u64) as usize])
         .collect();
+    let room = SegmentRoom::new(s.frame_index());
     let t2 = Instant::now();
     let mut mismatches = 0;
     for &k in &picks {
-        let naive = naive_transition(&d.values, s.frame_index(), k / n, k % n, &p);
+        let naive = naive_transition(&d.values, &room, k / n, k % n, &p);
         if naive.is_none_or(|(c, ..)| (c - t.cost[k]).abs() > 1e-9 * c.abs().max(1.0)) {
             mismatches += 1;
         }

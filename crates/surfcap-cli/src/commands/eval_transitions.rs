@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_motion::segment_bounds;
-use surfcap_motion::transition_table::{TableParams, fixed_length_dtw, standard_transition};
+use surfcap_motion::transition_table::{SegmentRoom, TableParams, fixed_length_dtw, standard_transition};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::distance::{CacheOpts, cached_distance_matrix};
@@ -40,16 +40,18 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
     let fixed = o.fixed.unwrap_or(s.fps.round() as usize).clamp(l_min, l_max);
     let (d, _, _) = cached_distance_matrix(ctx, &s, &DistanceParams::default(), &o.cache)?;
     let n = s.n_frames();
-    let ix = s.frame_index();
+    let room = SegmentRoom::new(s.frame_index());
     let standard: Vec<Option<f64>> =
-        (0..n * n).into_par_iter().map(|k| standard_transition(&d.data, ix, k / n, k % n, fixed)).collect();
+        (0..n * n).into_par_iter().map(|k| standard_transition(&d.data, &room, k / n, k % n, fixed)).collect();
     let mut rows = Vec::new();
     let mut plot_data = None;
     for &p in &o.slopes {
         let params = TableParams { l_min, l_max, slope: Some(p) };
         let (table, _) = cached_table(ctx, &s, &params, &o.cache)?;
-        let dtw: Vec<Option<(f64, u32)>> =
-            (0..n * n).into_par_iter().map(|k| fixed_length_dtw(&d.data, ix, k / n, k % n, fixed, Some(p))).collect();
+        let dtw: Vec<Option<(f64, u32)>> = (0..n * n)
+            .into_par_iter()
+            .map(|k| fixed_length_dtw(&d.data, &room, k / n, k % n, fixed, Some(p)))
+            .collect();
         let pairs: Vec<usize> =
             (0..n * n).filter(|&k| standard[k].is_some() && dtw[k].is_some() && table.cost[k].is_finite()).collect();
         let pick = |f: &dyn Fn(usize) -> f64| pairs.iter().map(|&k| f(k)).collect::<Vec<f64>>();
