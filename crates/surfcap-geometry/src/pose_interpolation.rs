@@ -112,11 +112,22 @@ pub struct NonlinearInterpolator {
 impl NonlinearInterpolator {
     /// `pj` is aligned onto `pi` (motion plane) first.
     pub fn new(topology: &Topology, pi: &[f32], pj: &[f32], up: UpAxis) -> Result<Self, PoissonError> {
+        Self::with_pattern(&Arc::new(PoissonPattern::new(topology)?), topology, pi, pj, up)
+    }
+
+    /// As [`NonlinearInterpolator::new`], reusing the topology's symbolic factorisation (for
+    /// callers that interpolate many pairs of one mesh, such as Blend).
+    pub fn with_pattern(
+        pattern: &Arc<PoissonPattern>,
+        topology: &Topology,
+        pi: &[f32],
+        pj: &[f32],
+        up: UpAxis,
+    ) -> Result<Self, PoissonError> {
         let pj = align_onto(pi, pj, up);
-        // The two sides are independent: factorise them on two threads.
-        // One symbolic factorisation serves both poses (same topology).
-        let pattern = Arc::new(PoissonPattern::new(topology)?);
-        let (from_i, from_j) = rayon::join(|| side(&pattern, topology, pi, &pj), || side(&pattern, topology, &pj, pi));
+        // The two sides are independent: factorise them on two threads; one symbolic
+        // factorisation serves both poses (same topology).
+        let (from_i, from_j) = rayon::join(|| side(pattern, topology, pi, &pj), || side(pattern, topology, &pj, pi));
         let (from_i, from_j) = (from_i?, from_j?);
         Ok(NonlinearInterpolator { pi: pi.to_vec(), pj, from_i, from_j })
     }

@@ -13,8 +13,10 @@
 //!   its step is taken as zero.
 //! - The centre of mass of a frame is its vertex mean.
 
+use std::sync::Arc;
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, motion_plane_alignment, plane_axes};
-use surfcap_geometry::poisson_reconstruction::PoissonError;
+
+use surfcap_geometry::poisson_reconstruction::{PoissonError, PoissonPattern};
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation, linear_interpolation};
 use surfcap_mesh::{Topology, UpAxis};
 
@@ -79,6 +81,10 @@ pub fn blend(
     let l = path.len();
     let mut out = Vec::with_capacity(l);
     let mut p = centre(&src[0]);
+    let pattern = match mixing {
+        Mixing::Nonlinear => Some(Arc::new(PoissonPattern::new(topology)?)),
+        Mixing::Linear => None,
+    };
     for (t, &(n, m)) in path.iter().enumerate() {
         let lam = match lambda {
             Lambda::Ramp if l > 1 => t as f64 / (l - 1) as f64,
@@ -94,11 +100,10 @@ pub fn blend(
         let tm = [p[iu] - cm[iu], p[iv] - cm[iv]];
         move_frames(&mut src[n..], -lam * theta, cn, tn, up);
         move_frames(&mut dst[m..], (1.0 - lam) * theta, cm, tm, up);
-        let frame = match mixing {
-            Mixing::Nonlinear => {
-                NonlinearInterpolator::new(topology, &src[n], &dst[m], up)?.at(lam, StretchInterpolation::Linear)
-            }
-            Mixing::Linear => linear_interpolation(&src[n], &dst[m], lam),
+        let frame = match &pattern {
+            Some(pat) => NonlinearInterpolator::with_pattern(pat, topology, &src[n], &dst[m], up)?
+                .at(lam, StretchInterpolation::Linear),
+            None => linear_interpolation(&src[n], &dst[m], lam),
         };
         out.push(frame);
         let step = |seg: &[Vec<f32>], k: usize| -> [f64; 2] {
