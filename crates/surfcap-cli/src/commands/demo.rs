@@ -95,8 +95,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         println!("\nsurfcap info {}:", cache.display());
         super::info::run(ctx, super::info::Args { subject: cache.clone(), source: Default::default() })?;
         println!(
-            "\nplay {} in Blender (File > Import > glTF) or any three.js viewer",
-            a.output.join("export/worm.glb").display()
+            "\nplay {} and {} in Blender (File > Import > glTF) or any three.js viewer",
+            a.output.join("export/worm.glb").display(),
+            interp_path.display()
         );
     }
     Ok(())
