@@ -6,6 +6,7 @@
 
 pub mod bvh;
 pub mod mannequin;
+pub mod retarget;
 mod worm;
 
 pub use worm::{WormParams, worm_subject};
