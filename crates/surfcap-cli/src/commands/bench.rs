@@ -133,7 +133,7 @@ fn distance_bench(
             }
             all.truncate(frames * 3 * nv);
             let seq = Sequence::new("all", nv, all)?;
-            Subject::new("bench", w.topology().clone(), vec![seq], 30.0, w.up_axis, w.units.clone())?
+            w.derived("bench", seq)?
         }
     };
     let n = s.n_frames();

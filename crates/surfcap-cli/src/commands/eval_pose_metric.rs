@@ -10,7 +10,7 @@ use surfcap_eval::skeleton_distance::{euler_distance, joint_selection, local_eul
 use surfcap_eval::{condensed, pair_index};
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_distance::PoseMetric;
-use surfcap_mesh::{Sequence, Subject};
+use surfcap_mesh::Sequence;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::eval::PoseMetricOpts;
@@ -49,14 +49,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpt
     for &g in &chosen {
         pos.extend_from_slice(s.frame(g).expect("in range"));
     }
-    let sub = Subject::new(
-        format!("{}-eval", s.name),
-        s.topology().clone(),
-        vec![Sequence::new("frames", nv, pos)?],
-        s.fps,
-        s.up_axis,
-        s.units.clone(),
-    )?;
+    let sub = s.derived(format!("{}-eval", s.name), Sequence::new("frames", nv, pos)?)?;
     let dist = |metric| -> anyhow::Result<Vec<f64>> {
         let params = DistanceParams { metric, ..Default::default() };
         let (m, _, _) = super::distance::cached_distance_matrix(ctx, &sub, &params, &o.cache)?;
