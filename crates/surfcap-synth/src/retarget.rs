@@ -91,9 +91,13 @@ pub fn retarget(bvh: &Bvh, m: &Mannequin, metres_per_unit: f64) -> Result<Vec<Ve
             if j == pelvis || j == thorax {
                 continue;
             }
+            // The parent's rotation, then the smallest swing that turns the bone (as the parent
+            // carries it) onto the BVH bone: the joint's rotation relative to its parent is a
+            // pure swing, with no twist about the bone that would wring the skin around it.
+            let parent = q[sk.parents[j].expect("only the pelvis is a root")];
             q[j] = match child[j] {
-                Some(c) => swing(sk.rest[c] - sk.rest[j], at(c) - at(j)),
-                None => q[sk.parents[j].expect("only the pelvis is a root")],
+                Some(c) => swing(parent * (sk.rest[c] - sk.rest[j]), at(c) - at(j)) * parent,
+                None => parent,
             };
         }
         let mut pos = vec![Point3::origin(); sk.names.len()];
