@@ -278,6 +278,41 @@ impl Bvh {
         Isometry3::from_parts(Translation3::from(t), r)
     }
 
+    /// Vertical extent (y) of the rest pose (offsets only, every rotation zero), end sites
+    /// included: the standing height of the skeleton, in the file's units.
+    pub fn rest_height(&self) -> f64 {
+        let mut pos: Vec<Vector3<f64>> = Vec::with_capacity(self.joints.len());
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for joint in &self.joints {
+            let p = joint.parent.map_or(Vector3::zeros(), |q| pos[q]) + Vector3::from(joint.offset);
+            for e in std::iter::once(Vector3::zeros()).chain(joint.end_sites.iter().map(|&e| Vector3::from(e))) {
+                lo = lo.min(p.y + e.y);
+                hi = hi.max(p.y + e.y);
+            }
+            pos.push(p);
+        }
+        hi - lo
+    }
+
+    /// BVH files carry no unit. Guess it from the rest pose's height: of metres, centimetres,
+    /// millimetres, inches and CMU's ASF length unit (1/0.45 inch = 0.056444 m, used by the
+    /// cgspeed conversions), the one that makes the skeleton closest to 1.6 m tall
+    /// (in ratio). Returns metres per unit and the unit's name.
+    pub fn guess_metres_per_unit(&self) -> (f64, &'static str) {
+        const UNITS: [(f64, &str); 5] = [
+            (1.0, "metres"),
+            (0.01, "centimetres"),
+            (0.001, "millimetres"),
+            (0.0254, "inches"),
+            (0.0254 / 0.45, "CMU ASF length units (1/0.45 inch)"),
+        ];
+        let h = self.rest_height().max(1e-12);
+        UNITS
+            .into_iter()
+            .min_by(|a, b| (a.0 * h / 1.6).ln().abs().total_cmp(&(b.0 * h / 1.6).ln().abs()))
+            .expect("a list of units")
+    }
+
     /// World transforms of every joint at frame `f` (forward kinematics).
     pub fn world(&self, f: usize) -> Vec<Isometry3<f64>> {
         let mut out: Vec<Isometry3<f64>> = Vec::with_capacity(self.joints.len());

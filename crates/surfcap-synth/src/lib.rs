@@ -5,7 +5,9 @@
 //! mannequin of the built-in-subjects issue will join it here.
 
 pub mod bvh;
+pub mod locomotion;
 pub mod mannequin;
+pub mod mannequin_subject;
 pub mod retarget;
 mod worm;
 

@@ -96,7 +96,7 @@ pub struct Bone {
 }
 
 /// The rest pose's arms: this far below the horizontal (radians).
-const ARM_DROP: f64 = 0.7;
+pub const ARM_DROP: f64 = 0.7;
 
 /// Builds the skeleton of a body shape.
 pub fn skeleton(s: &BodyShape) -> Skeleton {

@@ -2,7 +2,9 @@
 //! (frames, frame time, joints, end sites, channels, root name and start position), and its
 //! root travel read through forward kinematics.
 
-use nalgebra::Vector3;
+mod common;
+
+use common::{assert_clean_skinning, closed_two_manifold};
 use surfcap_synth::bvh::read_bvh;
 
 #[test]
@@ -64,26 +66,6 @@ fn heading_change(path: &[[f64; 2]]) -> f64 {
     d
 }
 
-/// Every undirected edge is used by exactly two triangles, once in each direction.
-fn closed_two_manifold(t: &surfcap_mesh::Topology) -> bool {
-    let mut directed = std::collections::HashMap::new();
-    for tri in t.triangles() {
-        for k in 0..3 {
-            *directed.entry((tri[k], tri[(k + 1) % 3])).or_insert(0u32) += 1;
-        }
-    }
-    directed.iter().all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
-}
-
-fn point(s: &[f32], i: u32) -> Vector3<f64> {
-    let k = 3 * i as usize;
-    Vector3::new(s[k] as f64, s[k + 1] as f64, s[k + 2] as f64)
-}
-
-fn normal(s: &[f32], t: &[u32; 3]) -> Vector3<f64> {
-    (point(s, t[1]) - point(s, t[0])).cross(&(point(s, t[2]) - point(s, t[0])))
-}
-
 /// The checks, on every frame of every clip, for two body shapes at two resolutions:
 /// the mannequin's start-to-end horizontal travel and heading change match the BVH root's
 /// (travel within 1%, heading within 1% or half a degree), the mesh is closed and 2-manifold
@@ -120,36 +102,30 @@ fn the_mannequin_follows_each_cmu_clip_with_its_real_travel() {
                 let got = heading_change(&root);
                 assert!((got - h).abs() <= (0.01 * h.abs()).max(0.5), "{name}: heading change {got} vs {h}");
             }
-            let mut stretches = Vec::new();
-            for (frame, w) in poses.iter().enumerate() {
-                let posed = m.pose(w);
-                let turn = m.vertex_rotations(w);
-                assert_eq!(m.topology.count_degenerate_triangles(&posed, 1e-12), 0, "{name} frame {frame}");
-                for t in m.topology.triangles() {
-                    // A fold: the posed normal points against the rest normal turned by the
-                    // skinning rotations at the triangle's corners (turning the body is no fold).
-                    let rest = normal(&m.positions, t);
-                    let expected: Vector3<f64> = t.iter().map(|&v| turn[v as usize] * rest).sum();
-                    assert!(expected.dot(&normal(&posed, t)) > 0.0, "{name} frame {frame}: triangle {t:?} folded over");
-                    for k in 0..3 {
-                        let (a, b) = (t[k], t[(k + 1) % 3]);
-                        stretches.push(
-                            (point(&posed, a) - point(&posed, b)).norm()
-                                / (point(&m.positions, a) - point(&m.positions, b)).norm(),
-                        );
-                    }
-                }
-            }
-            stretches.sort_by(f64::total_cmp);
-            let p999 = stretches[(stretches.len() as f64 * 0.999) as usize];
+            let [p999, largest, smallest] = assert_clean_skinning(name, &m, &poses);
+            let tags = surfcap_synth::mannequin_subject::motion_tags(&poses, b.fps());
             eprintln!(
-                "{name} ({} vertices): travel {t_root:.3} m (BVH {want:.3}), heading change {:.1} deg; edge length ratio 99.9th percentile {p999:.2}, largest {:.2}, smallest {:.2}",
+                "{name} ({} vertices): travel {t_root:.3} m (BVH {want:.3}), heading change {:.1} deg; edge length ratio 99.9th percentile {p999:.2}, largest {largest:.2}, smallest {smallest:.2}; tags {tags:?}",
                 m.topology.n_vertices(),
                 heading_change(&root),
-                stretches.last().unwrap(),
-                stretches[0]
             );
-            assert!(p999 <= 2.5, "{name}: 99.9th percentile edge stretch {p999}");
+            // The heuristic tags on the real clips (16_57, a run to a sudden stop, averages
+            // walking speed).
+            let want_tags: &[&str] = match name {
+                "16_17.bvh" => &["walk", "turn_left"],
+                "16_19.bvh" => &["walk", "turn_right"],
+                "16_36.bvh" => &["run"],
+                "16_07.bvh" => &["jump"],
+                "05_18.bvh" => &["jump", "in_place"],
+                _ => &["walk"],
+            };
+            assert_eq!(tags, want_tags, "{name}: tags");
+            // The guessed unit is the one meta.json gives.
+            assert!(
+                (b.guess_metres_per_unit().0 - mpu).abs() < 1e-4 * mpu,
+                "{name}: unit {:?}",
+                b.guess_metres_per_unit()
+            );
         }
     }
 }
