@@ -40,9 +40,12 @@ enum Command {
     Transitions(commands::transitions::Args),
     /// One optimal transition between two frames, blended (thesis 2.5.4, Algorithm 2), as .glb.
     Transition(commands::transition::Args),
+    /// Build the mannequin moved by BVH motion capture or procedural locomotion, as a subject.
+    Synth(commands::synth::Args),
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
-    /// Run the main job on built-in data: build a subject, import it, export it.
+    /// Run the main job on built-in data: the procedural mannequin (or --bvh files), imported,
+    /// exported, its pose distances and an interpolation.
     Demo(commands::demo::Args),
     /// Measure speed and memory (loading a subject).
     Bench(commands::bench::Args),
@@ -102,6 +105,7 @@ fn main() -> ExitCode {
         Command::Eval(a) => commands::eval::run(&ctx, a),
         Command::Transitions(a) => commands::transitions::run(&ctx, a),
         Command::Transition(a) => commands::transition::run(&ctx, a),
+        Command::Synth(a) => commands::synth::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
     });

@@ -23,19 +23,19 @@ fn demo_runs_and_its_glb_is_valid() {
     let o = surfcap(&["demo", "-o", p(&out), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     for f in [
-        "worm.subject/subject.json",
-        "export/worm.glb",
-        "export/worm.json",
+        "mannequin.subject/subject.json",
+        "export/mannequin.glb",
+        "export/mannequin.json",
         "export/npy/meta.json",
-        "export/pc2/slither.pc2",
+        "export/pc2/walk.pc2",
     ] {
         assert!(out.join(f).is_file(), "demo did not write {f}");
     }
-    assert!(out.join("export/obj/slither/frame_00059.obj").is_file());
-    surfcap_testkit::validate_glb(&[out.join("export/worm.glb"), out.join("export/interpolation.glb")]);
+    assert!(out.join("export/obj/walk/frame_00090.obj").is_file());
+    surfcap_testkit::validate_glb(&[out.join("export/mannequin.glb"), out.join("export/interpolation.glb")]);
     assert!(out.join("distances.npy").is_file());
     let side: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("export/worm.json")).unwrap()).unwrap();
+        serde_json::from_slice(&std::fs::read(out.join("export/mannequin.json")).unwrap()).unwrap();
     assert_eq!(side["sequences"][0]["frame_labels"][0], "original");
 }
 
@@ -196,9 +196,9 @@ fn manifest_with_tags_and_a_point_cache() {
         &manifest,
         format!(
             "name = \"tube\"\nfps = 30\nup_axis = \"+y\"\nunits = \"m\"\n\n[[sequence]]\nsource = \"{}\"\ntags = [\"crawl\"]\n\n\
-             [[sequence]]\nsource = \"{}\"\ntemplate = \"{}\"\nname = \"curl_from_pc2\"\n",
-            p(&demo.join("export/obj/slither")),
-            p(&demo.join("export/pc2/curl.pc2")),
+             [[sequence]]\nsource = \"{}\"\ntemplate = \"{}\"\nname = \"jog_from_pc2\"\n",
+            p(&demo.join("export/obj/walk")),
+            p(&demo.join("export/pc2/jog.pc2")),
             p(&demo.join("export/pc2/template.obj"))
         ),
     )
@@ -208,8 +208,8 @@ fn manifest_with_tags_and_a_point_cache() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["subject"], "tube");
     assert_eq!(v["sequences"][0]["tags"], serde_json::json!(["crawl"]));
-    assert_eq!(v["sequences"][1]["name"], "curl_from_pc2");
-    assert_eq!(v["frames"], 120);
+    assert_eq!(v["sequences"][1]["name"], "jog_from_pc2");
+    assert_eq!(v["frames"], 182);
 
     std::fs::write(&manifest, "name = \"tube\"\nfps = -3\n\n[[sequence]]\nsource = \"nowhere\"\n").unwrap();
     let o = surfcap(&["info", p(&manifest)]);
@@ -342,4 +342,67 @@ fn one_transition_is_blended_and_valid() {
     let o = surfcap(&["transition", p(&horse), "--from", "gallop:2", "--to", "gallop:3", "-o", p(&out)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("no transition"), "{}", stderr(&o));
+}
+
+#[test]
+fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let bvh = data.join("cmu_bvh");
+    let heavy = tmp.path().join("heavy.subject");
+    let o = surfcap(&[
+        "synth",
+        "--bvh",
+        p(&bvh.join("16_15.bvh")),
+        p(&bvh.join("16_17.bvh")),
+        "--shape",
+        "heavy",
+        "--vertices",
+        "4000",
+        "-o",
+        p(&heavy),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["fps"], 30.0);
+    assert_eq!(v["sequences"][0]["name"], "16_15");
+    assert_eq!(v["sequences"][0]["frames"], 117);
+    assert_eq!(v["sequences"][1]["tags"], serde_json::json!(["walk", "turn_left"]));
+    let slim = tmp.path().join("slim.subject");
+    let args = ["synth", "--procedural", "walk,jump", "--shape", "slim", "--seed", "3", "--vertices", "1500", "-o"];
+    let o = surfcap(&[&args[..], &[p(&slim), "--quiet"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Same seed, same subject.
+    let again = tmp.path().join("again.subject");
+    assert!(surfcap(&[&args[..], &[p(&again), "--quiet"]].concat()).status.success());
+    let positions = |s: &Path| std::fs::read(s.join("positions_0.npy")).unwrap();
+    assert_eq!(positions(&slim), positions(&again));
+    let mut glbs = Vec::new();
+    for s in [&heavy, &slim] {
+        let glb = s.with_extension("glb");
+        let o = surfcap(&["export", p(s), "--format", "glb", "-o", p(&glb), "--quiet"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        glbs.push(glb);
+    }
+    // Two shapes, two topologies.
+    let info =
+        |s: &Path| -> serde_json::Value { serde_json::from_slice(&surfcap(&["info", p(s), "--json"]).stdout).unwrap() };
+    assert_ne!(info(&heavy)["vertices"], info(&slim)["vertices"]);
+    surfcap_testkit::validate_glb(&glbs);
+
+    // Errors name what was wrong.
+    let bad = tmp.path().join("bad.subject");
+    for (args, want) in [
+        (vec!["synth", "-o", p(&bad)], "--procedural"),
+        (vec!["synth", "--procedural", "walk,moonwalk", "-o", p(&bad)], "turn_left"),
+        (vec!["synth", "--procedural", "walk", "--shape", "tall", "-o", p(&bad)], "tall"),
+        (vec!["synth", "--bvh", "missing.bvh", "-o", p(&bad)], "missing.bvh"),
+        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "1,000 to 20,000"),
+    ] {
+        let o = surfcap(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
+    }
+    assert!(!bad.exists(), "nothing written on error");
 }

@@ -248,8 +248,11 @@ impl Bvh {
         self.motion.len().checked_div(self.n_channels).unwrap_or(0)
     }
 
+    /// Frames per second. Files write the frame time rounded (0.0333333 for 30 fps): a rate
+    /// within 0.01% of a whole number is that number.
     pub fn fps(&self) -> f64 {
-        1.0 / self.frame_time
+        let fps = 1.0 / self.frame_time;
+        if (fps - fps.round()).abs() < 1e-4 * fps { fps.round() } else { fps }
     }
 
     /// Local transform of joint `j` at frame `f`.

@@ -1,8 +1,7 @@
-//! Built-in subjects with known answers, so surfcap runs out of the box.
-//!
-//! `bvh` reads motion capture (BVH) with forward kinematics. For now one procedural subject: a closed tube ("worm") that slithers and curls on the ground.
-//! Its motion is analytic, deterministic and seeded, with real root travel; the skinned human
-//! mannequin of the built-in-subjects issue will join it here.
+//! Built-in subjects with known answers, so surfcap runs out of the box: the skinned human
+//! mannequin (`mannequin`), moved by BVH motion capture (`bvh`, `retarget`) or by procedural
+//! locomotion (`locomotion`), assembled into subjects with tags and ground-truth joints
+//! (`mannequin_subject`); and a procedural tube (`worm`) whose size benchmarks can choose.
 
 pub mod bvh;
 pub mod locomotion;

@@ -2,8 +2,9 @@
 //! right, jump and idle, at any frame rate, seeded and deterministic.
 //!
 //! Each motion is a handful of periodic or phased joint angles (hip and knee flexion, arm swing,
-//! elbow bend, pelvis bob and sway, torso lean) driving the mannequin's skeleton by forward
-//! kinematics, plus a root that really travels: along its heading at the gait's speed, the
+//! elbow bend, pelvis sway, torso lean) driving the mannequin's skeleton by forward
+//! kinematics, the body then set on the ground by its lower ankle (so bent knees lower the
+//! pelvis), plus a root that really travels: along its heading at the gait's speed, the
 //! heading turning at a constant rate for the turns, a ballistic arc for the jump. A seed varies
 //! every amplitude, speed and frequency by up to +-5% and the gait's starting phase, through a
 //! ChaCha8 stream (platform-independent), so seeds give different but reproducible motions.
@@ -19,6 +20,9 @@ use rand_chacha::ChaCha8Rng;
 use surfcap_mesh::{Error, ErrorKind, Result};
 
 use crate::mannequin::{ARM_DROP, Skeleton};
+
+/// Largest bend of an ankle (radians).
+const MAX_ANKLE: f64 = 0.5;
 
 /// A procedural motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,7 +90,8 @@ struct Angles {
     lean: f64,
     chest_lean: f64,
     twist: f64,
-    /// Root: horizontal position (x, z), height offset from standing, heading.
+    /// Root: horizontal position (x, z), height of the lower ankle above its standing height
+    /// (0 while a foot is on the ground: the pelvis height follows from the legs), heading.
     root: [f64; 2],
     lift: f64,
     heading: f64,
@@ -131,7 +136,7 @@ pub fn locomotion(sk: &Skeleton, gait: Gait, fps: f64, duration: f64, seed: u64)
                 knee_rest: 0.1,
                 arm: 0.3 * v.f(),
                 elbow: 0.25 * v.f(),
-                bob: 0.02 * v.f(),
+                flight: 0.0,
                 lean: 0.04,
             };
             (0..frames).map(|f| c.at(f as f64 / fps, phase0, turn / duration)).collect()
@@ -145,7 +150,7 @@ pub fn locomotion(sk: &Skeleton, gait: Gait, fps: f64, duration: f64, seed: u64)
                 knee_rest: 0.3,
                 arm: 0.45 * v.f(),
                 elbow: 1.3 * v.f(),
-                bob: 0.04 * v.f(),
+                flight: 0.04 * v.f(),
                 lean: 0.12,
             };
             (0..frames).map(|f| c.at(f as f64 / fps, phase0, 0.0)).collect()
@@ -177,7 +182,7 @@ pub fn locomotion(sk: &Skeleton, gait: Gait, fps: f64, duration: f64, seed: u64)
 }
 
 /// A periodic gait: hips swing in antiphase, knees bend in the swing phase, arms swing against
-/// the legs, the pelvis bobs twice per cycle; the root advances at `speed` along a heading that
+/// the legs, the body leaves the ground twice per cycle when running; the root advances at `speed` along a heading that
 /// turns at `turn_rate` (radians per second).
 struct Cycle {
     speed: f64,
@@ -187,7 +192,8 @@ struct Cycle {
     knee_rest: f64,
     arm: f64,
     elbow: f64,
-    bob: f64,
+    /// Height reached between steps (a jog's flight phase; 0 for walking).
+    flight: f64,
     lean: f64,
 }
 
@@ -219,7 +225,7 @@ impl Cycle {
             chest_lean: 0.0,
             twist: 0.08 * p.sin(),
             root,
-            lift: -self.bob * (0.5 - 0.5 * (2.0 * p).cos()),
+            lift: self.flight * (0.5 - 0.5 * (2.0 * p).cos()),
             heading,
         }
     }
@@ -251,9 +257,7 @@ fn jump(s: f64, distance: f64, height: f64) -> Angles {
         chest_lean: 0.1 * crouch,
         twist: 0.0,
         root: [0.0, forward],
-        // The crouch lowers the pelvis: legs of length L bent at the hip by a and the knee by
-        // 2a drop it by about L (1 - cos a) each.
-        lift: arc - 0.22 * crouch,
+        lift: arc,
         heading: 0.0,
     }
 }
@@ -293,12 +297,28 @@ fn pose(sk: &Skeleton, a: &Angles) -> Vec<Isometry3<f64>> {
                 pos[j] = Point3::new(a.root[0], sk.rest[j].y + a.lift, a.root[1]);
             }
             Some(p) => {
-                world_q[j] = world_q[p] * local[j];
+                world_q[j] = if sk.names[j].ends_with("foot") {
+                    // Feet keep as flat as an ankle allows (turned by the heading only, the
+                    // ankle bending at most MAX_ANKLE): a foot rigid with its shin would dig its
+                    // toes into the floor, one always flat would fold the ankle in a jog's swing.
+                    let flat = world_q[p].inverse() * heading;
+                    let t = (MAX_ANKLE / flat.angle().max(1e-12)).min(1.0);
+                    world_q[p] * UnitQuaternion::identity().slerp(&flat, t)
+                } else {
+                    world_q[p] * local[j]
+                };
                 pos[j] = pos[p] + world_q[p] * (sk.rest[j] - sk.rest[p]);
             }
         }
     }
-    (0..n).map(|j| Isometry3::from_parts(Translation3::from(pos[j].coords), world_q[j])).collect()
+    // Feet on the ground: the whole body moves vertically so that the lower ankle is at its
+    // standing height (plus the lift in the air): bent knees lower the pelvis instead of
+    // sinking the feet into the floor.
+    let ankles = sk.names.iter().enumerate().filter(|(_, n)| n.ends_with("foot")).map(|(j, _)| j);
+    let lowest = ankles.clone().map(|j| pos[j].y).fold(f64::INFINITY, f64::min);
+    let standing = ankles.map(|j| sk.rest[j].y).fold(f64::INFINITY, f64::min);
+    let dy = standing + a.lift - lowest;
+    (0..n).map(|j| Isometry3::from_parts(Translation3::new(pos[j].x, pos[j].y + dy, pos[j].z), world_q[j])).collect()
 }
 
 #[cfg(test)]

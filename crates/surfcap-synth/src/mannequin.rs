@@ -54,6 +54,41 @@ impl BodyShape {
         BodyShape { height: 1.62, torso_girth: 1.35, limb_girth: 1.25, leg_ratio: 0.47, shoulder_ratio: 0.125 }
     }
 
+    /// `average`, `slim`, `heavy`, or `key=value` pairs separated by commas changing the
+    /// average (`height=1.8,torso_girth=1.2`; keys: height, torso_girth, limb_girth,
+    /// leg_ratio, shoulder_ratio), optionally after a named shape (`slim,height=2`).
+    pub fn parse(text: &str) -> Result<Self> {
+        let bad = |msg: String| Error::new(ErrorKind::Unsupported, format!("body shape {text:?}: {msg}"));
+        let mut shape = BodyShape::average();
+        for (i, part) in text.split(',').map(str::trim).enumerate() {
+            let Some((key, value)) = part.split_once('=') else {
+                match Self::named(part) {
+                    Some(s) if i == 0 => shape = s,
+                    _ => return Err(bad(format!("{part:?}: expected average, slim, heavy or key=value"))),
+                }
+                continue;
+            };
+            let v: f64 = value.trim().parse().map_err(|_| bad(format!("{value:?} is not a number")))?;
+            let (field, range) = match key.trim() {
+                "height" => (&mut shape.height, 0.5..=2.5),
+                "torso_girth" => (&mut shape.torso_girth, 0.5..=2.0),
+                "limb_girth" => (&mut shape.limb_girth, 0.5..=2.0),
+                "leg_ratio" => (&mut shape.leg_ratio, 0.35..=0.6),
+                "shoulder_ratio" => (&mut shape.shoulder_ratio, 0.08..=0.15),
+                k => {
+                    return Err(bad(format!(
+                        "unknown key {k:?}: expected height, torso_girth, limb_girth, leg_ratio or shoulder_ratio"
+                    )));
+                }
+            };
+            if !range.contains(&v) {
+                return Err(bad(format!("{key} = {v}: expected {} to {}", range.start(), range.end())));
+            }
+            *field = v;
+        }
+        Ok(shape)
+    }
+
     /// `average`, `slim` or `heavy`.
     pub fn named(name: &str) -> Option<Self> {
         match name {
@@ -108,7 +143,11 @@ pub fn skeleton(s: &BodyShape) -> Skeleton {
     // Hip joints far enough apart that the thighs never touch, even on the coarsest grid (a
     // gap of 10 cm at 1.75 m): touching thighs would be meshed and skinned as one.
     let hip_x = thigh_r + 0.05 * h / 1.75;
-    let (thigh, shin) = (0.52 * leg, 0.43 * leg);
+    // The ankle sits one shin radius above the ground (y = 0), so that the rest mesh stands on
+    // it; the shin takes what the thigh leaves of the leg.
+    let ankle_y = 0.05 * lg;
+    let thigh = 0.52 * leg;
+    let shin = hip_y - 0.03 * h - thigh - ankle_y;
     let sh = s.shoulder_ratio * h;
     let (upper_arm, forearm) = (0.17 * h, 0.15 * h);
     // Arms hang ARM_DROP below the horizontal (an A-pose): captured arms spend most of their time
@@ -754,6 +793,16 @@ mod tests {
             }
         }
         directed.iter().all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
+    }
+
+    #[test]
+    fn shapes_parse_from_names_and_parameters() {
+        assert_eq!(BodyShape::parse("heavy").unwrap(), BodyShape::heavy());
+        let s = BodyShape::parse("slim, height=2.0,limb_girth=0.9").unwrap();
+        assert_eq!((s.height, s.limb_girth, s.torso_girth), (2.0, 0.9, BodyShape::slim().torso_girth));
+        for bad in ["tall", "height=abc", "height=9", "girth=1", "height=1.8,slim"] {
+            assert!(BodyShape::parse(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

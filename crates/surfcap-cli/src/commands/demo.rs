@@ -1,5 +1,6 @@
-//! `surfcap demo`: the main job on built-in data. For now: build the built-in subject, write it
-//! as source files, import them into a subject cache, describe it, export it in every format,
+//! `surfcap demo`: the main job on built-in data. Build the built-in subject (the mannequin
+//! walking, jogging, turning, jumping and idling, or driven by `--bvh` files), write it as
+//! source files, import them into a subject cache, describe it, export it in every format,
 //! compute its pose distance matrix and a non-linear interpolation between two of its poses.
 
 use std::path::PathBuf;
@@ -10,7 +11,6 @@ use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpo
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::io::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
-use surfcap_synth::{WormParams, worm_subject};
 
 use super::print_json;
 
@@ -22,6 +22,12 @@ pub struct Args {
     /// Seed of the built-in motion.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// BVH files to drive the mannequin instead of the procedural motions.
+    #[arg(long, num_args = 1..)]
+    pub bvh: Vec<PathBuf>,
+    /// Target vertex count of the mannequin.
+    #[arg(long, default_value_t = 2500)]
+    pub vertices: usize,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -31,13 +37,32 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             println!("{s}");
         }
     };
-    let built = worm_subject(&WormParams { seed: a.seed, ..Default::default() })?;
+    let procedural: Vec<String> = if a.bvh.is_empty() {
+        ["walk", "jog", "turn_left", "turn_right", "jump", "idle"].map(String::from).to_vec()
+    } else {
+        Vec::new()
+    };
+    let spec = super::synth::Args {
+        bvh: a.bvh.clone(),
+        procedural,
+        shape: "average".into(),
+        vertices: a.vertices,
+        seed: a.seed,
+        fps: None,
+        duration: None,
+        bvh_units: None,
+        name: Some("mannequin".into()),
+        output: a.output.join("mannequin.subject"),
+    };
+    let built = super::synth::build(ctx, &spec)?;
     say(&format!(
-        "1. built the built-in subject {:?}: {} sequences, {} frames, {} vertices",
-        built.name,
+        "1. built the mannequin ({} vertices) {}: {} sequences ({}), {} frames at {} fps",
+        built.topology().n_vertices(),
+        if a.bvh.is_empty() { "with procedural motions" } else { "driven by the BVH files" },
         built.sequences().len(),
+        built.sequences().iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", "),
         built.n_frames(),
-        built.topology().n_vertices()
+        built.fps
     ));
     let source = a.output.join("source");
     export(&built, ExportFormat::Npy, &source, ExportOptions::default(), &bar)?;
@@ -49,12 +74,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         built.sequences().iter().all(|b| subject.sequence(&b.name).is_some_and(|(_, a)| a == b)),
         "the imported sequences differ from the built ones"
     );
-    let cache = a.output.join("worm.subject");
+    let cache = spec.output.clone();
     surfcap_mesh::cache::write_cache(&cache, &subject, &bar)?;
     say(&format!("3. imported them into the subject cache {}", cache.display()));
     let mut written = Vec::new();
     for (fmt, name) in [
-        (ExportFormat::Glb, "worm.glb"),
+        (ExportFormat::Glb, "mannequin.glb"),
         (ExportFormat::Obj, "obj"),
         (ExportFormat::Ply, "ply"),
         (ExportFormat::Pc2, "pc2"),
@@ -69,7 +94,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let dist_path = a.output.join("distances.npy");
     surfcap_mesh::atomic::write_file(&dist_path, |w| write_npy(w, &[d.n, d.n], &d.values))?;
     say(&format!("5. computed the {0} x {0} deformation-gradient pose distances -> {1}", d.n, dist_path.display()));
-    let (from, to) = (subject.resolve_frame("slither:0")?, subject.resolve_frame("curl:40")?);
+    // From the first frame of the first sequence to the middle of the last one (with the
+    // procedural motions: standing in the walk -> the jump's crouch).
+    let (mut first, mut last) = (&subject.sequences()[0], &subject.sequences()[subject.sequences().len() - 1]);
+    if a.bvh.is_empty() {
+        first = subject.sequence("walk").map_or(first, |(_, s)| s);
+        last = subject.sequence("jump").map_or(last, |(_, s)| s);
+    }
+    let (from_spec, to_spec) = (format!("{}:0", first.name), format!("{}:{}", last.name, last.n_frames() / 4));
+    let (from, to) = (subject.resolve_frame(&from_spec)?, subject.resolve_frame(&to_spec)?);
     let interp = NonlinearInterpolator::new(
         subject.topology(),
         subject.frame(from).expect("resolved"),
@@ -84,11 +117,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         let lambda = k as f64 / (steps - 1) as f64;
         pos.extend_from_slice(&interp.at(lambda, StretchInterpolation::Linear));
     }
-    let seq = Sequence::new("slither_0_to_curl_40", nv, pos)?.with_labels(FrameLabel::original_ends(steps))?;
-    let blend = subject.derived("worm-interpolation", seq)?;
+    let seq = Sequence::new(format!("{from_spec}_to_{to_spec}").replace(':', "_"), nv, pos)?
+        .with_labels(FrameLabel::original_ends(steps))?;
+    let blend = subject.derived("mannequin-interpolation", seq)?;
     let interp_path = a.output.join("export/interpolation.glb");
     written.extend(export(&blend, ExportFormat::Glb, &interp_path, ExportOptions::default(), &bar)?);
-    say(&format!("6. interpolated slither:0 -> curl:40 non-linearly in {steps} poses -> {}", interp_path.display()));
+    say(&format!(
+        "6. interpolated {from_spec} -> {to_spec} non-linearly in {steps} poses -> {}",
+        interp_path.display()
+    ));
     if ctx.json {
         print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written }));
     } else if !ctx.quiet {
@@ -96,7 +133,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         super::info::run(ctx, super::info::Args { subject: cache.clone(), source: Default::default() })?;
         println!(
             "\nplay {} and {} in Blender (File > Import > glTF) or any three.js viewer",
-            a.output.join("export/worm.glb").display(),
+            a.output.join("export/mannequin.glb").display(),
             interp_path.display()
         );
     }

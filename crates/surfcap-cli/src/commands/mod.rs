@@ -10,6 +10,7 @@ pub mod export;
 pub mod import;
 pub mod info;
 pub mod interpolate;
+pub mod synth;
 pub mod transition;
 pub mod transitions;
 

@@ -1,0 +1,123 @@
+//! `surfcap synth --bvh <files...> | --procedural walk,jog,... -o <subject>`: the built-in
+//! mannequin moved by motion capture or by procedural locomotion, written as a subject cache
+//! with per-sequence tags and ground-truth joints.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde_json::json;
+use surfcap_mesh::Subject;
+use surfcap_synth::bvh::read_bvh;
+use surfcap_synth::locomotion::Gait;
+use surfcap_synth::mannequin::{BodyShape, mannequin};
+use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
+
+use super::print_json;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// BVH files to retarget onto the mannequin (joints matched by CMU names), one sequence each.
+    #[arg(long, num_args = 1..)]
+    pub bvh: Vec<PathBuf>,
+    /// Procedural motions, comma-separated: walk, jog, turn_left, turn_right, jump, idle.
+    #[arg(long, value_delimiter = ',')]
+    pub procedural: Vec<String>,
+    /// Body shape: average, slim, heavy, or key=value pairs (height, torso_girth, limb_girth,
+    /// leg_ratio, shoulder_ratio), e.g. "slim,height=1.95".
+    #[arg(long, default_value = "average")]
+    pub shape: String,
+    /// Target vertex count of the mannequin (1,000 to 20,000).
+    #[arg(long, default_value_t = 3000)]
+    pub vertices: usize,
+    /// Seed of the procedural motions (same seed, same motion).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Frame rate of the subject (default: 30, or the first BVH file's).
+    #[arg(long)]
+    pub fps: Option<f64>,
+    /// Duration of each procedural motion in seconds (default: 3, the jump 2).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Metres per BVH unit (default: guessed from each file's rest-pose height and printed).
+    #[arg(long)]
+    pub bvh_units: Option<f64>,
+    /// Subject name (default: mannequin-<shape>).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// The subject cache folder to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Builds the subject the arguments describe (shared with `surfcap demo`).
+pub fn build(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<Subject> {
+    if a.bvh.is_empty() && a.procedural.is_empty() {
+        anyhow::bail!("nothing to synthesise: give --bvh <files...> and/or --procedural walk,jog,...");
+    }
+    if let Some(f) = a.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+        anyhow::bail!("--fps {f}: expected a positive number of frames per second");
+    }
+    if let Some(u) = a.bvh_units.filter(|u| !(u.is_finite() && *u > 0.0)) {
+        anyhow::bail!("--bvh-units {u}: expected a positive number of metres per unit");
+    }
+    let gaits: Vec<Gait> = a.procedural.iter().map(|g| Gait::parse(g)).collect::<Result<_, _>>()?;
+    let shape = BodyShape::parse(&a.shape)?;
+    let m = mannequin(&shape, a.vertices)?;
+    let mut clips = Vec::new();
+    for path in &a.bvh {
+        let b = read_bvh(path)?;
+        let mpu = match a.bvh_units {
+            Some(u) => u,
+            None => {
+                let (u, unit) = b.guess_metres_per_unit();
+                ctx.note(&format!(
+                    "{}: unit guessed as {unit} ({u} m; rest pose {:.2} m tall); --bvh-units overrides",
+                    path.display(),
+                    b.rest_height() * u
+                ));
+                u
+            }
+        };
+        clips.push(Clip::from_bvh(path, &b, &m, mpu)?);
+    }
+    let fps = a.fps.unwrap_or_else(|| clips.first().map_or(30.0, |c| c.fps));
+    for g in gaits {
+        clips.push(Clip::procedural(&m, g, fps, a.duration.unwrap_or(g.duration()), a.seed)?);
+    }
+    let default_name = format!("mannequin-{}", a.shape.split(',').next().unwrap_or("custom"));
+    Ok(mannequin_subject(a.name.as_deref().unwrap_or(&default_name), &m, &clips, fps)?)
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let s = build(ctx, &a)?;
+    let bar = crate::progress::Bar::new(ctx);
+    surfcap_mesh::cache::write_cache(&a.output, &s, &bar)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let sequences: Vec<serde_json::Value> =
+        s.sequences().iter().map(|q| json!({ "name": q.name, "frames": q.n_frames(), "tags": q.tags })).collect();
+    if ctx.json {
+        print_json(&json!({
+            "subject": s.name,
+            "output": a.output,
+            "fps": s.fps,
+            "vertices": s.topology().n_vertices(),
+            "triangles": s.topology().n_triangles(),
+            "sequences": sequences,
+            "seconds": secs,
+        }));
+    } else if !ctx.quiet {
+        println!(
+            "synthesised {:?}: {} vertices, {} triangles, {} fps -> {} ({secs:.2} s)",
+            s.name,
+            s.topology().n_vertices(),
+            s.topology().n_triangles(),
+            s.fps,
+            a.output.display()
+        );
+        for q in s.sequences() {
+            println!("  {:<12} {:>5} frames  tags {}", q.name, q.n_frames(), q.tags.join(", "));
+        }
+    }
+    Ok(())
+}
