@@ -1,10 +1,15 @@
-//! surfcap motion layer (thesis 2.5): optimal transitions between frames.
+//! surfcap motion layer (thesis 2.5 and 3.3): optimal transitions between frames, the
+//! essential graph and the motion-graph baseline.
 //!
 //! Frames are global frame indices of a subject; pose distances come as an N x N row-major
 //! matrix (surfcap-geometry's distance matrix).
 
 pub mod blend;
 pub mod dtw;
+pub mod edge_weights;
+pub mod essential_graph;
+pub mod graph;
+pub mod motion_graph;
 pub mod transition_table;
 
 /// Segment length bounds from the frame rate (thesis 2.5.3: a third of a second to two seconds):

@@ -1,0 +1,84 @@
+//! Edge weights of the complete digraph over all frames (thesis 3.3.2, Algorithm 1,
+//! eq. 3.2-3.3): the realism of going from frame i to frame j, E_ij = D_ij + alpha L_ij, the
+//! optimal transition's normalised deformation cost plus alpha times its duration; successive
+//! frames of a sequence cost alpha (no deformation, one time unit).
+//!
+//! Reading of eq. 3.2 (same sequence, i < j: E_ij = min(alpha (j - i), D_ij + alpha L_ij)): the
+//! value alpha (j - i) is exactly the cost of the chain of successive-frame edges from i to j,
+//! which the graph always holds. So a same-sequence pair gets a transition edge only when the
+//! transition is strictly cheaper than playing the original frames; otherwise no edge, and
+//! shortest paths go through the chain at the same cost. This keeps the essential graph free of
+//! "skip" edges that only duplicate original playback (equal-cost ties otherwise decided by
+//! rounding).
+
+use surfcap_mesh::FrameIndex;
+
+use crate::transition_table::TransitionTable;
+
+/// Dense N x N edge weights (row-major, `f64::INFINITY` where there is no edge; the diagonal
+/// has none).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EdgeWeights {
+    pub n: usize,
+    pub alpha: f64,
+    pub weight: Vec<f64>,
+}
+
+impl EdgeWeights {
+    pub fn at(&self, i: usize, j: usize) -> f64 {
+        self.weight[i * self.n + j]
+    }
+
+    /// Whether (i, j) is an edge between successive frames of one sequence.
+    pub fn is_original(index: &FrameIndex, i: usize, j: usize) -> bool {
+        j == i + 1 && index.locate(i).map(|l| l.0) == index.locate(j).map(|l| l.0)
+    }
+}
+
+/// Algorithm 1 over a transition table. `alpha` must be positive and finite.
+pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> EdgeWeights {
+    assert!(alpha.is_finite() && alpha > 0.0, "alpha must be positive");
+    let n = table.n;
+    let seq: Vec<usize> = (0..n).map(|g| index.locate(g).expect("frame in range").0).collect();
+    let mut weight = vec![f64::INFINITY; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            if i == j {
+                continue;
+            }
+            let k = i * n + j;
+            let transition = table.cost[k] + alpha * table.len[k] as f64;
+            weight[k] = if seq[i] == seq[j] && j == i + 1 {
+                alpha
+            } else if seq[i] == seq[j] && j > i {
+                if transition < alpha * (j - i) as f64 { transition } else { f64::INFINITY }
+            } else {
+                transition
+            };
+        }
+    }
+    EdgeWeights { n, alpha, weight }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn algorithm_1() {
+        // Two sequences of 3 frames; every transition costs D = 0.5 with L = 2.
+        let index = FrameIndex::new([3, 3]);
+        let n = 6;
+        let t =
+            TransitionTable { n, cost: vec![0.5; n * n], len: vec![2; n * n], li: vec![1; n * n], lj: vec![1; n * n] };
+        let e = edge_weights(&t, &index, 0.1);
+        assert_eq!(e.at(0, 1), 0.1, "successive frames");
+        assert!(e.at(0, 2).is_infinite(), "0.7 > 0.2: the original chain is cheaper");
+        assert!((e.at(2, 0) - 0.7).abs() < 1e-12, "backwards in a sequence: a transition");
+        assert!((e.at(0, 4) - 0.7).abs() < 1e-12, "across sequences");
+        assert!(e.at(3, 3).is_infinite());
+        let e = edge_weights(&t, &index, 1.0);
+        assert!(e.at(0, 2).is_infinite(), "2.5 > 2");
+        assert!(EdgeWeights::is_original(&index, 1, 2) && !EdgeWeights::is_original(&index, 2, 3));
+    }
+}
