@@ -40,6 +40,8 @@ enum Command {
     Transitions(commands::transitions::Args),
     /// One optimal transition between two frames, blended (thesis 2.5.4, Algorithm 2), as .glb.
     Transition(commands::transition::Args),
+    /// The essential graph or the motion-graph baseline over all frames (thesis 3.3), cached.
+    Graph(commands::graph::Args),
     /// Build the mannequin moved by BVH motion capture or procedural locomotion, as a subject.
     Synth(commands::synth::Args),
     /// Evaluations that produce the numbers of the thesis's tables.
@@ -106,6 +108,7 @@ fn main() -> ExitCode {
         Command::Transitions(a) => commands::transitions::run(&ctx, a),
         Command::Transition(a) => commands::transition::run(&ctx, a),
         Command::Synth(a) => commands::synth::run(&ctx, a),
+        Command::Graph(a) => commands::graph::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
     });

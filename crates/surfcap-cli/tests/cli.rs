@@ -406,3 +406,49 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
     }
     assert!(!bad.exists(), "nothing written on error");
 }
+
+/// Thesis 3.3.3 on a real capture: the essential graph's shortest paths are never dearer than
+/// the motion graph's and cheaper on average, for every alpha; `graph build` writes its files.
+#[test]
+fn essential_graph_beats_the_motion_graph_on_the_vlasic_crane() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let crane = data.join("vlasic2008/crane");
+    let o = surfcap(&[
+        "eval",
+        "graphs",
+        p(&crane),
+        "--alpha",
+        "0.01,0.05,0.2",
+        "-o",
+        p(&tmp.path().join("ge")),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for r in v["rows"].as_array().unwrap() {
+        let (mg, eg) = (r["motion_graph"]["mean"].as_f64().unwrap(), r["essential_graph"]["mean"].as_f64().unwrap());
+        assert!(eg < mg, "alpha {}: essential {eg} vs motion {mg}", r["alpha"]);
+        assert_eq!(r["pairs_where_motion_graph_is_cheaper"], 0);
+        assert!(r["pairs_compared"].as_u64().unwrap() > 10_000);
+    }
+    assert!(tmp.path().join("ge/density.svg").is_file() && tmp.path().join("ge/paths_alpha_0_2.png").is_file());
+    let out = tmp.path().join("g");
+    let o =
+        surfcap(&["graph", "build", p(&crane), "--alpha", "0.05", "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let g: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(g["cached"], true, "built by the evaluation above");
+    assert_eq!(g["original_edges"], 174);
+    for f in ["edges.npy", "weights.npy", "graph.json"] {
+        assert!(out.join(f).is_file());
+    }
+    for (args, want) in [(vec!["--alpha", "0"], "--alpha"), (vec!["--kind", "kovar"], "essential or motion")] {
+        let o = surfcap(&[&["graph", "build", p(&crane), "-o", p(&out)][..], &args[..]].concat());
+        assert_eq!(o.status.code(), Some(1));
+        assert!(stderr(&o).contains(want), "{}", stderr(&o));
+    }
+}

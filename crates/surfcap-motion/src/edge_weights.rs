@@ -3,6 +3,13 @@
 //! optimal transition's normalised deformation cost plus alpha times its duration; successive
 //! frames of a sequence cost alpha (no deformation, one time unit).
 //!
+//! Scale of D: our pose distance (eq. 2.13) sums over triangles, so D grows with the mesh
+//! resolution (about 3,000 on the 20,000-triangle Vlasic crane, against path costs of 2 to 7 in
+//! the thesis's Fig. 3.8-3.10, whose alpha range 0.01-0.2 presumes D of order one). D is
+//! therefore divided by the median finite D of the subject: a typical transition's deformation
+//! costs 1, and alpha reads the same on every subject (how much one frame of duration weighs
+//! against a typical transition's deformation). The scale is kept in `EdgeWeights::d_scale`.
+//!
 //! Reading of eq. 3.2 (same sequence, i < j: E_ij = min(alpha (j - i), D_ij + alpha L_ij)): the
 //! value alpha (j - i) is exactly the cost of the chain of successive-frame edges from i to j,
 //! which the graph always holds. So a same-sequence pair gets a transition edge only when the
@@ -21,6 +28,8 @@ use crate::transition_table::TransitionTable;
 pub struct EdgeWeights {
     pub n: usize,
     pub alpha: f64,
+    /// D was divided by this (the median finite D).
+    pub d_scale: f64,
     pub weight: Vec<f64>,
 }
 
@@ -40,6 +49,15 @@ pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> 
     assert!(alpha.is_finite() && alpha > 0.0, "alpha must be positive");
     let n = table.n;
     let seq: Vec<usize> = (0..n).map(|g| index.locate(g).expect("frame in range").0).collect();
+    let mut finite: Vec<f64> = table.cost.iter().copied().filter(|c| c.is_finite()).collect();
+    let d_scale = if finite.is_empty() {
+        1.0
+    } else {
+        let mid = finite.len() / 2;
+        *finite.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    // All-identical poses (median 0) keep D as it is.
+    let d_scale = if d_scale > 0.0 { d_scale } else { 1.0 };
     let mut weight = vec![f64::INFINITY; n * n];
     for i in 0..n {
         for j in 0..n {
@@ -47,7 +65,7 @@ pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> 
                 continue;
             }
             let k = i * n + j;
-            let transition = table.cost[k] + alpha * table.len[k] as f64;
+            let transition = table.cost[k] / d_scale + alpha * table.len[k] as f64;
             weight[k] = if seq[i] == seq[j] && j == i + 1 {
                 alpha
             } else if seq[i] == seq[j] && j > i {
@@ -57,7 +75,7 @@ pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> 
             };
         }
     }
-    EdgeWeights { n, alpha, weight }
+    EdgeWeights { n, alpha, d_scale, weight }
 }
 
 #[cfg(test)]
@@ -66,19 +84,22 @@ mod tests {
 
     #[test]
     fn algorithm_1() {
-        // Two sequences of 3 frames; every transition costs D = 0.5 with L = 2.
+        // Two sequences of 3 frames; every transition costs D = 0.5 (the median: 1 once
+        // scaled) with L = 2, except 0 -> 4 (D = 0.25).
         let index = FrameIndex::new([3, 3]);
         let n = 6;
-        let t =
-            TransitionTable { n, cost: vec![0.5; n * n], len: vec![2; n * n], li: vec![1; n * n], lj: vec![1; n * n] };
+        let mut cost = vec![0.5; n * n];
+        cost[4] = 0.25;
+        let t = TransitionTable { n, cost, len: vec![2; n * n], li: vec![1; n * n], lj: vec![1; n * n] };
         let e = edge_weights(&t, &index, 0.1);
         assert_eq!(e.at(0, 1), 0.1, "successive frames");
-        assert!(e.at(0, 2).is_infinite(), "0.7 > 0.2: the original chain is cheaper");
-        assert!((e.at(2, 0) - 0.7).abs() < 1e-12, "backwards in a sequence: a transition");
+        assert_eq!(e.d_scale, 0.5);
+        assert!(e.at(0, 2).is_infinite(), "1.2 > 0.2: the original chain is cheaper");
+        assert!((e.at(2, 0) - 1.2).abs() < 1e-12, "backwards in a sequence: a transition");
         assert!((e.at(0, 4) - 0.7).abs() < 1e-12, "across sequences");
         assert!(e.at(3, 3).is_infinite());
         let e = edge_weights(&t, &index, 1.0);
-        assert!(e.at(0, 2).is_infinite(), "2.5 > 2");
+        assert!(e.at(0, 2).is_infinite(), "3 > 2");
         assert!(EdgeWeights::is_original(&index, 1, 2) && !EdgeWeights::is_original(&index, 2, 3));
     }
 }

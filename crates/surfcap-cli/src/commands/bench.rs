@@ -70,6 +70,20 @@ pub enum What {
         fps: Option<f64>,
     },
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
+    /// Essential and motion graph build time for --frames nodes (thesis 3.3; target: 2,000
+    /// nodes in under 60 s on 2 cores, after the transition table). The table is seeded random
+    /// (costs and durations): the build's work does not depend on the values.
+    Graph {
+        #[arg(long, default_value_t = 2000)]
+        frames: usize,
+        /// Sequences the frames are split into.
+        #[arg(long, default_value_t = 20)]
+        sequences: usize,
+        #[arg(long, default_value_t = 0.05)]
+        alpha: f64,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     Interpolate {
         /// A subject cache or source.
         subject: PathBuf,
@@ -332,6 +346,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Interpolate { subject, from, to, repeat, fps } => {
             return interpolate_bench(ctx, subject, &from, &to, repeat, fps);
         }
+        What::Graph { frames, sequences, alpha, seed } => return graph_bench(ctx, frames, sequences, alpha, seed),
     };
     if in_process {
         let path = subject.context("--in-process needs --subject")?;
@@ -400,6 +415,60 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             secs[secs.len() / 2],
             runs.len(),
             mb(peak)
+        );
+    }
+    Ok(())
+}
+
+fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, seed: u64) -> anyhow::Result<()> {
+    use surfcap_motion::edge_weights::edge_weights;
+    use surfcap_motion::essential_graph::essential_graph;
+    use surfcap_motion::motion_graph::motion_graph;
+    use surfcap_motion::transition_table::TransitionTable;
+    anyhow::ensure!(
+        sequences >= 1 && frames >= 2 * sequences,
+        "--frames {frames} --sequences {sequences}: expected at least two frames per sequence"
+    );
+    super::graph::check_alpha(alpha)?;
+    let index =
+        surfcap_mesh::FrameIndex::new((0..sequences).map(|k| frames / sequences + usize::from(k < frames % sequences)));
+    let n = frames;
+    // splitmix64: a seeded, platform-independent stream for the table's values.
+    let mut x = seed;
+    let mut next = || {
+        x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = x;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let cost: Vec<f64> = (0..n * n).map(|_| 0.5 + next()).collect();
+    let len: Vec<u32> = (0..n * n).map(|_| 10 + (next() * 50.0) as u32).collect();
+    let table = TransitionTable { n, cost, len, li: vec![10; n * n], lj: vec![10; n * n] };
+    let t0 = Instant::now();
+    let w = edge_weights(&table, &index, alpha);
+    let t_weights = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let eg = essential_graph(&w, &crate::progress::Bar::new(ctx));
+    let t_essential = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let mg = motion_graph(&w, &index);
+    let t_motion = t2.elapsed().as_secs_f64();
+    let report = json!({
+        "frames": n, "sequences": sequences, "alpha": alpha, "threads": rayon::current_num_threads(),
+        "edge_weights_seconds": t_weights, "essential_graph_seconds": t_essential, "motion_graph_seconds": t_motion,
+        "essential_edges": eg.graph.edges().len(), "essential_density": eg.graph.density(),
+        "motion_edges": mg.graph.edges().len(), "motion_density": mg.graph.density(),
+    });
+    if ctx.json {
+        print_json(&report);
+    } else {
+        println!(
+            "{n} nodes ({sequences} sequences), {} threads: edge weights {t_weights:.2} s, essential graph {t_essential:.2} s ({} edges, density {:.4}), motion graph {t_motion:.2} s ({} edges)",
+            rayon::current_num_threads(),
+            eg.graph.edges().len(),
+            eg.graph.density(),
+            mg.graph.edges().len()
         );
     }
     Ok(())

@@ -66,6 +66,27 @@ pub enum What {
         #[command(flatten)]
         source: SourceOpts,
     },
+    /// Essential graph vs motion graph for several alphas (thesis 3.3.3, Fig. 3.2 and 3.8):
+    /// densities and the mean and standard deviation of all-pairs shortest-path costs, with plots.
+    Graphs {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// Values of alpha.
+        #[arg(long = "alpha", value_delimiter = ',', default_value = "0.01,0.02,0.03,0.05,0.1,0.2")]
+        alphas: Vec<f64>,
+        /// Frame pairs in the shortest-path plots.
+        #[arg(long, default_value_t = 200)]
+        plot_pairs: usize,
+        /// Folder for the report (graphs.json) and the plots.
+        #[arg(short, long, default_value = "graphs-eval")]
+        output: PathBuf,
+        #[command(flatten)]
+        table: super::transitions::TableOpts,
+        #[command(flatten)]
+        cache: super::distance::CacheOpts,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
     /// Our pose distance and the Euclidean one against the skeleton ground truth (thesis 2.3.2,
     /// Fig. 2.5-2.7): Pearson and distance correlation, Mantel test, Mantel correlogram plot.
     PoseMetric {
@@ -99,6 +120,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Transitions { subject, slopes, fixed, plot_pairs, output, cache, source } => {
             let opts = super::eval_transitions::Opts { slopes, fixed, plot_pairs, output, cache };
             return super::eval_transitions::run(ctx, &subject, &source, &opts);
+        }
+        What::Graphs { subject, alphas, plot_pairs, output, table, cache, source } => {
+            let opts = super::graph::EvalOpts { alphas, plot_pairs, output, table, cache };
+            return super::graph::eval(ctx, &subject, &source, &opts);
         }
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
             let opts = PoseMetricOpts { max_frames, permutations, classes, seed, output, cache };

@@ -7,6 +7,7 @@ pub mod eval;
 pub mod eval_pose_metric;
 pub mod eval_transitions;
 pub mod export;
+pub mod graph;
 pub mod import;
 pub mod info;
 pub mod interpolate;
