@@ -27,7 +27,8 @@ pub struct Opts {
     pub cache: CacheOpts,
 }
 
-fn mean_std(v: &[f64]) -> (f64, f64) {
+/// Mean and (population) standard deviation; (0, 0) for no values.
+pub fn mean_std(v: &[f64]) -> (f64, f64) {
     let n = v.len().max(1) as f64;
     let m = v.iter().sum::<f64>() / n;
     (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt())

@@ -17,6 +17,7 @@ use surfcap_motion::transition_table::TableParams;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::distance::CacheOpts;
+use super::eval_transitions::mean_std;
 use super::transitions::{TableOpts, cached_table};
 use super::{SourceOpts, print_json};
 
@@ -181,12 +182,6 @@ pub struct EvalOpts {
     pub output: PathBuf,
     pub table: TableOpts,
     pub cache: CacheOpts,
-}
-
-fn mean_std(v: &[f64]) -> (f64, f64) {
-    let n = v.len().max(1) as f64;
-    let m = v.iter().sum::<f64>() / n;
-    (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt())
 }
 
 /// Thesis 3.3.3, Fig. 3.2 and 3.8: for each alpha, both graphs' densities and the mean and
