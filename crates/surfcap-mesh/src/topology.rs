@@ -75,6 +75,19 @@ impl Topology {
         self.uv.as_ref()
     }
 
+    /// Whether the surface is closed and 2-manifold with consistent orientation: every
+    /// directed edge is used by exactly one triangle and its reverse by exactly one other (no
+    /// boundary, no edge shared by three triangles, no flipped neighbour).
+    pub fn is_closed_manifold(&self) -> bool {
+        let mut directed: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        directed.iter().all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
+    }
+
     /// Index of the first triangle that differs from `other`'s, or a vertex-count mismatch.
     /// `None` when both topologies have the same vertex count and the same triangles in order.
     pub fn first_difference(&self, other: &Topology) -> Option<String> {
@@ -154,6 +167,18 @@ pub(crate) fn first_triangle_difference(expected: &[[u32; 3]], got: &[[u32; 3]])
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn closed_manifold_detects_boundaries_and_flips() {
+        // A tetrahedron is closed; without a face it has a boundary; with a face reversed its
+        // orientation is inconsistent.
+        let tet = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+        assert!(Topology::new(4, tet.clone(), None).unwrap().is_closed_manifold());
+        assert!(!Topology::new(4, tet[..3].to_vec(), None).unwrap().is_closed_manifold());
+        let mut flipped = tet;
+        flipped[0] = [0, 1, 2];
+        assert!(!Topology::new(4, flipped, None).unwrap().is_closed_manifold());
+    }
 
     #[test]
     fn rejects_bad_triangles() {

@@ -784,17 +784,6 @@ impl Mannequin {
 mod tests {
     use super::*;
 
-    /// Every undirected edge is used by exactly two triangles, once in each direction.
-    fn closed_two_manifold(t: &Topology) -> bool {
-        let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-        for tri in t.triangles() {
-            for k in 0..3 {
-                *directed.entry((tri[k], tri[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        directed.iter().all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
-    }
-
     #[test]
     fn shapes_parse_from_names_and_parameters() {
         assert_eq!(BodyShape::parse("heavy").unwrap(), BodyShape::heavy());
@@ -812,7 +801,7 @@ mod tests {
         for m in [&a, &b] {
             let n = m.topology.n_vertices();
             assert!((2400..=3600).contains(&n), "{n} vertices for a target of 3000");
-            assert!(closed_two_manifold(&m.topology), "not a closed 2-manifold");
+            assert!(m.topology.is_closed_manifold(), "not a closed 2-manifold");
             assert_eq!(surfcap_mesh::connected_components(&m.topology).count, 1, "one body");
             assert_eq!(m.topology.count_degenerate_triangles(&m.positions, 1e-12), 0);
             assert!(m.weights.iter().all(|w| (w.iter().map(|x| x.1).sum::<f32>() - 1.0).abs() < 1e-4));
@@ -837,7 +826,7 @@ mod tests {
         assert_ne!(a.topology.n_vertices(), b.topology.n_vertices(), "two shapes, two topologies");
         let big = mannequin(&BodyShape::slim(), 12000).unwrap();
         assert!((10000..=14000).contains(&big.topology.n_vertices()), "{}", big.topology.n_vertices());
-        assert!(closed_two_manifold(&big.topology));
+        assert!(big.topology.is_closed_manifold());
         assert!(mannequin(&BodyShape::average(), 500).is_err());
     }
 

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_clean_skinning, closed_two_manifold};
+use common::assert_clean_skinning;
 use surfcap_synth::bvh::read_bvh;
 
 #[test]
@@ -80,7 +80,7 @@ fn the_mannequin_follows_each_cmu_clip_with_its_real_travel() {
     let meta = surfcap_testkit::meta(&dir);
     for (shape, vertices) in [(BodyShape::average(), 2000), (BodyShape::heavy(), 6000)] {
         let m = mannequin(&shape, vertices).unwrap();
-        assert!(closed_two_manifold(&m.topology), "the mannequin is not a closed 2-manifold");
+        assert!(m.topology.is_closed_manifold(), "the mannequin is not a closed 2-manifold");
         assert_eq!(surfcap_mesh::connected_components(&m.topology).count, 1);
         for f in meta["files"].as_array().unwrap() {
             let name = f["file"].as_str().unwrap();

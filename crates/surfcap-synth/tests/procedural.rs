@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{assert_clean_skinning, closed_two_manifold};
+use common::assert_clean_skinning;
 use surfcap_synth::locomotion::{Gait, locomotion};
 use surfcap_synth::mannequin::{BodyShape, mannequin};
 
@@ -10,7 +10,7 @@ use surfcap_synth::mannequin::{BodyShape, mannequin};
 fn every_gait_skins_without_folds_on_both_shapes() {
     for (shape, vertices) in [(BodyShape::average(), 1500), (BodyShape::heavy(), 4000), (BodyShape::slim(), 3000)] {
         let m = mannequin(&shape, vertices).unwrap();
-        assert!(closed_two_manifold(&m.topology));
+        assert!(m.topology.is_closed_manifold());
         for gait in Gait::ALL {
             for seed in [0, 1] {
                 let poses = locomotion(&m.skeleton, gait, 30.0, gait.duration(), seed).unwrap();

@@ -1,18 +1,7 @@
-//! Checks shared by the mannequin's tests: closed 2-manifold, folds and edge stretch.
+//! Checks shared by the mannequin's tests: folds and edge stretch.
 
 use nalgebra::{Isometry3, Vector3};
 use surfcap_synth::mannequin::Mannequin;
-
-/// Every undirected edge is used by exactly two triangles, once in each direction.
-pub fn closed_two_manifold(t: &surfcap_mesh::Topology) -> bool {
-    let mut directed = std::collections::HashMap::new();
-    for tri in t.triangles() {
-        for k in 0..3 {
-            *directed.entry((tri[k], tri[(k + 1) % 3])).or_insert(0u32) += 1;
-        }
-    }
-    directed.iter().all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
-}
 
 fn point(s: &[f32], i: u32) -> Vector3<f64> {
     let k = 3 * i as usize;
