@@ -294,7 +294,8 @@ fn pose(sk: &Skeleton, a: &Angles) -> Vec<Isometry3<f64>> {
         match sk.parents[j] {
             None => {
                 world_q[j] = local[j];
-                pos[j] = Point3::new(a.root[0], sk.rest[j].y + a.lift, a.root[1]);
+                // Height is set below, from the feet.
+                pos[j] = Point3::new(a.root[0], sk.rest[j].y, a.root[1]);
             }
             Some(p) => {
                 world_q[j] = if sk.names[j].ends_with("foot") {

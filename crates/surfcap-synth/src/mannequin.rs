@@ -345,8 +345,8 @@ fn collapse_short_edges(positions: &[f32], tris: &[[u32; 3]], min_length: f64) -
 /// to more than pi is replaced by the other diagonal of its two triangles, when the two
 /// triangles are nearly coplanar (so the shape is kept), the new edge is not already an edge,
 /// and neither end of the old edge drops below four neighbours. Removes the slivers marching
-/// tetrahedra leaves, whose normals no skinning could keep steady. Returns the number flipped.
-fn flip_edges(positions: &[f32], tris: &mut [[u32; 3]]) -> usize {
+/// tetrahedra leaves, whose normals no skinning could keep steady.
+fn flip_edges(positions: &[f32], tris: &mut [[u32; 3]]) {
     let at = |v: u32| {
         let k = 3 * v as usize;
         Vector3::new(positions[k] as f64, positions[k + 1] as f64, positions[k + 2] as f64)
@@ -365,7 +365,6 @@ fn flip_edges(positions: &[f32], tris: &mut [[u32; 3]]) -> usize {
             *valence.entry(t[k]).or_default() += 1;
         }
     }
-    let mut flipped = 0;
     for i in 0..tris.len() {
         for k in 0..3 {
             let t1 = tris[i];
@@ -404,16 +403,14 @@ fn flip_edges(positions: &[f32], tris: &mut [[u32; 3]]) -> usize {
             *valence.get_mut(&b).expect("vertex") -= 1;
             *valence.get_mut(&c).expect("vertex") += 1;
             *valence.get_mut(&d).expect("vertex") += 1;
-            flipped += 1;
         }
     }
-    flipped
 }
 
-/// Vertex neighbour lists of a closed mesh (each undirected edge once per side).
-fn vertex_neighbours(topology: &Topology) -> Vec<Vec<u32>> {
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); topology.n_vertices()];
-    for t in topology.triangles() {
+/// Vertex neighbour lists of a closed mesh of `n` vertices (each undirected edge once per side).
+fn vertex_neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in triangles {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             // On a closed oriented mesh each undirected edge appears once in each direction.
@@ -707,11 +704,10 @@ pub fn mannequin(shape: &BodyShape, target_vertices: usize) -> Result<Mannequin>
     // Then rounds of edge flips, each followed by two rounds of tangential smoothing.
     for _ in 0..RELAX_ROUNDS {
         flip_edges(&positions, &mut tris);
-        let topology = Topology::new(nv, tris.clone(), None)?;
-        relax(&f, &mut positions, &vertex_neighbours(&topology), 2, 1e-3 * shape.height);
+        relax(&f, &mut positions, &vertex_neighbours(nv, &tris), 2, 1e-3 * shape.height);
     }
+    let neighbours = vertex_neighbours(nv, &tris);
     let topology = Topology::new(nv, tris, None)?;
-    let neighbours = vertex_neighbours(&topology);
     let weights =
         diffused_weights(&sk, &positions, &neighbours, SKIN_BLEND_WIDTH * shape.height * shape.limb_girth.max(1.0));
     Ok(Mannequin { skeleton: sk, topology, positions, weights })
