@@ -2,6 +2,7 @@
 //! the motion-graph baseline over a subject's frames (thesis 3.3), cached; and
 //! `surfcap eval graphs`: both graphs for several alphas (thesis Fig. 3.2 and 3.8).
 
+use std::cell::{OnceCell, RefCell};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -13,7 +14,7 @@ use surfcap_motion::edge_weights::{EdgeWeights, edge_weights};
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::motion_graph::motion_graph;
-use surfcap_motion::transition_table::TableParams;
+use surfcap_motion::transition_table::{TableParams, TransitionTable};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::distance::CacheOpts;
@@ -81,42 +82,68 @@ pub fn check_alpha(alpha: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The graph of a subject (built from the cached transition table, and cached itself as an
-/// [E, 3] array of from, to, weight).
-pub fn cached_graph(
-    ctx: &crate::Ctx,
-    s: &Subject,
-    kind: Kind,
-    alpha: f64,
-    p: &TableParams,
-    cache: &CacheOpts,
-) -> anyhow::Result<(Graph, bool)> {
-    check_alpha(alpha)?;
-    let store = cache.cache();
-    let key = format!(
-        "distance=deformation w=0.01 l={}..{} slope={:?} kind={} alpha={alpha:e} algo=2",
-        p.l_min,
-        p.l_max,
-        p.slope,
-        kind.name()
-    );
-    let path = store.path("graph", &subject_hash(s), &key);
-    if cache.no_cache {
-        let _ = std::fs::remove_file(&path);
+/// The graphs of one subject and table parameters. The transition table is read (from its
+/// cache, or computed) at most once, and the edge weights of the last alpha are kept, so the
+/// essential and motion graphs of one alpha share them.
+pub struct SubjectGraphs<'a> {
+    ctx: &'a crate::Ctx,
+    s: &'a Subject,
+    p: TableParams,
+    cache: &'a CacheOpts,
+    table: OnceCell<TransitionTable>,
+    weights: RefCell<Option<EdgeWeights>>,
+}
+
+impl<'a> SubjectGraphs<'a> {
+    pub fn new(ctx: &'a crate::Ctx, s: &'a Subject, p: TableParams, cache: &'a CacheOpts) -> Self {
+        SubjectGraphs { ctx, s, p, cache, table: OnceCell::new(), weights: RefCell::new(None) }
     }
-    let n = s.n_frames();
-    let (a, cached) = store.get_or_compute(&path, || {
-        let (table, _) = cached_table(ctx, s, p, cache).map_err(|e| {
-            surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Unsupported, format!("transition table: {e}"))
+
+    fn weights(&self, alpha: f64) -> surfcap_mesh::Result<EdgeWeights> {
+        if let Some(w) = self.weights.borrow().as_ref().filter(|w| w.alpha == alpha) {
+            return Ok(w.clone());
+        }
+        let table = match self.table.get() {
+            Some(t) => t,
+            None => {
+                let (t, _) = cached_table(self.ctx, self.s, &self.p, self.cache).map_err(|e| {
+                    surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Unsupported, format!("transition table: {e}"))
+                })?;
+                self.table.get_or_init(|| t)
+            }
+        };
+        let w = edge_weights(table, self.s.frame_index(), alpha);
+        *self.weights.borrow_mut() = Some(w.clone());
+        Ok(w)
+    }
+
+    /// The graph of `kind` at `alpha` (cached on disk as an [E, 3] array of from, to, weight),
+    /// and whether it came from the cache.
+    pub fn graph(&self, kind: Kind, alpha: f64) -> anyhow::Result<(Graph, bool)> {
+        check_alpha(alpha)?;
+        let (s, p) = (self.s, &self.p);
+        let store = self.cache.cache();
+        let key = format!(
+            "distance=deformation w=0.01 l={}..{} slope={:?} kind={} alpha={alpha:e} algo=2",
+            p.l_min,
+            p.l_max,
+            p.slope,
+            kind.name()
+        );
+        let path = store.path("graph", &subject_hash(s), &key);
+        if self.cache.no_cache {
+            let _ = std::fs::remove_file(&path);
+        }
+        let (a, cached) = store.get_or_compute(&path, || {
+            let w = self.weights(alpha)?;
+            let g = build(&w, s, kind, self.ctx);
+            let data = g.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
+            Ok(NpyArray { shape: vec![g.edges().len(), 3], data })
         })?;
-        let w = edge_weights(&table, s.frame_index(), alpha);
-        let g = build(&w, s, kind, ctx);
-        let data = g.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
-        Ok(NpyArray { shape: vec![g.edges().len(), 3], data })
-    })?;
-    anyhow::ensure!(a.shape.len() == 2 && a.shape[1] == 3, "cached graph has shape {:?}, expected [E, 3]", a.shape);
-    let edges = a.data.chunks_exact(3).map(|e| Edge { from: e[0] as u32, to: e[1] as u32, weight: e[2] }).collect();
-    Ok((Graph::new(n, edges), cached))
+        anyhow::ensure!(a.shape.len() == 2 && a.shape[1] == 3, "cached graph has shape {:?}, expected [E, 3]", a.shape);
+        let edges = a.data.chunks_exact(3).map(|e| Edge { from: e[0] as u32, to: e[1] as u32, weight: e[2] }).collect();
+        Ok((Graph::new(s.n_frames(), edges), cached))
+    }
 }
 
 fn build(w: &EdgeWeights, s: &Subject, kind: Kind, ctx: &crate::Ctx) -> Graph {
@@ -140,7 +167,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = super::open(ctx, &subject, &source)?;
     let p = table.params(s.fps)?;
     let t0 = Instant::now();
-    let (g, cached) = cached_graph(ctx, &s, kind, alpha, &p, &cache)?;
+    let (g, cached) = SubjectGraphs::new(ctx, &s, p, &cache).graph(kind, alpha)?;
     let secs = t0.elapsed().as_secs_f64();
     let (original, transitions) = edge_kinds(&g, &s);
     std::fs::create_dir_all(&output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
@@ -201,9 +228,10 @@ pub fn eval(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &EvalOpts) ->
     type Curve = Vec<(f64, f64)>;
     let mut path_plots: Vec<(f64, Curve, Curve)> = Vec::new();
     let t0 = Instant::now();
+    let graphs = SubjectGraphs::new(ctx, &s, p, &o.cache);
     for &alpha in &o.alphas {
-        let (eg, _) = cached_graph(ctx, &s, Kind::Essential, alpha, &p, &o.cache)?;
-        let (mg, _) = cached_graph(ctx, &s, Kind::Motion, alpha, &p, &o.cache)?;
+        let (eg, _) = graphs.graph(Kind::Essential, alpha)?;
+        let (mg, _) = graphs.graph(Kind::Motion, alpha)?;
         let (ce, cm) = (eg.all_pairs(), mg.all_pairs());
         let (mut on_mg, mut on_eg, mut eg_all) = (Vec::new(), Vec::new(), Vec::new());
         let mut lower_in_motion = 0usize;
