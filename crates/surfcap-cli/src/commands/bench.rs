@@ -433,17 +433,11 @@ fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, se
     let index =
         surfcap_mesh::FrameIndex::new((0..sequences).map(|k| frames / sequences + usize::from(k < frames % sequences)));
     let n = frames;
-    // splitmix64: a seeded, platform-independent stream for the table's values.
-    let mut x = seed;
-    let mut next = || {
-        x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = x;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let cost: Vec<f64> = (0..n * n).map(|_| 0.5 + next()).collect();
-    let len: Vec<u32> = (0..n * n).map(|_| 10 + (next() * 50.0) as u32).collect();
+    // A seeded, platform-independent stream for the table's values (as surfcap-eval's Mantel test).
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let cost: Vec<f64> = (0..n * n).map(|_| rng.random_range(0.5..1.5)).collect();
+    let len: Vec<u32> = (0..n * n).map(|_| rng.random_range(10..60)).collect();
     let table = TransitionTable { n, cost, len, li: vec![10; n * n], lj: vec![10; n * n] };
     let t0 = Instant::now();
     let w = edge_weights(&table, &index, alpha);
