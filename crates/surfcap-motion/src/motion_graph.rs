@@ -47,21 +47,17 @@ pub fn motion_graph(w: &EdgeWeights, index: &FrameIndex) -> MotionGraph {
                         continue;
                     }
                     let mut minimum = true;
-                    'scan: for di in -1i64..=1 {
-                        for dj in -1i64..=1 {
-                            let (ii, jj) = (i as i64 + di, j as i64 + dj);
-                            if (di, dj) == (0, 0)
-                                || !ra.contains(&(ii as usize))
-                                || !rb.contains(&(jj as usize))
-                                || ii < 0
-                                || jj < 0
-                            {
+                    'scan: for di in -1i32..=1 {
+                        for dj in -1i32..=1 {
+                            // Off the block (including below 0, which wraps past it) or itself.
+                            let (ii, jj) = (i.wrapping_add_signed(di as isize), j.wrapping_add_signed(dj as isize));
+                            if (di, dj) == (0, 0) || !ra.contains(&ii) || !rb.contains(&jj) {
                                 continue;
                             }
-                            if EdgeWeights::is_original(index, ii as usize, jj as usize) {
+                            if EdgeWeights::is_original(index, ii, jj) {
                                 continue;
                             }
-                            let u = w.at(ii as usize, jj as usize);
+                            let u = w.at(ii, jj);
                             let earlier = (di, dj) < (0, 0);
                             if u < v || (earlier && u == v) {
                                 minimum = false;
