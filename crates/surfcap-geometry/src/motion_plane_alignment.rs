@@ -43,6 +43,36 @@ impl PlaneMotion {
         rotation_about_up(self.up, self.theta)
     }
 
+    /// Move(S, theta, C, T) of the thesis (Algorithms 2-3): rotation by `theta` about the up axis
+    /// through `centre`, then the ground-plane translation `t`.
+    pub fn about(theta: f64, centre: [f64; 3], t: [f64; 2], up: UpAxis) -> Self {
+        let (iu, iv, _) = plane_axes(up);
+        let (s, c) = theta.sin_cos();
+        let (cu, cv) = (centre[iu], centre[iv]);
+        PlaneMotion { theta, t: [cu - (cu * c + cv * s) + t[0], cv - (-cu * s + cv * c) + t[1]], up }
+    }
+
+    /// `self` after `first`: x -> self(first(x)).
+    pub fn after(&self, first: &PlaneMotion) -> PlaneMotion {
+        let (s, c) = self.theta.sin_cos();
+        let [u, v] = first.t;
+        PlaneMotion {
+            theta: self.theta + first.theta,
+            t: [u * c + v * s + self.t[0], -u * s + v * c + self.t[1]],
+            up: self.up,
+        }
+    }
+
+    /// The motion applied to one point.
+    pub fn apply_point(&self, p: [f64; 3]) -> [f64; 3] {
+        let (iu, iv, _) = plane_axes(self.up);
+        let (s, c) = self.theta.sin_cos();
+        let mut q = p;
+        q[iu] = p[iu] * c + p[iv] * s + self.t[0];
+        q[iv] = -p[iu] * s + p[iv] * c + self.t[1];
+        q
+    }
+
     /// Applies the motion to `[n][3]` positions in place.
     pub fn apply(&self, positions: &mut [f32]) {
         let (iu, iv, _) = plane_axes(self.up);
@@ -144,6 +174,27 @@ pub fn procrustes(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn composition_and_move_about_a_centre() {
+        let up = UpAxis::PosY;
+        let a = PlaneMotion { theta: 0.7, t: [1.0, -2.0], up };
+        let b = PlaneMotion { theta: -2.1, t: [0.3, 0.5], up };
+        let p = [0.4, 1.5, -0.8];
+        let ab = a.after(&b).apply_point(p);
+        let seq = a.apply_point(b.apply_point(p));
+        for k in 0..3 {
+            assert!((ab[k] - seq[k]).abs() < 1e-12);
+        }
+        let c = [2.0, 7.0, 3.0];
+        let m = PlaneMotion::about(1.1, c, [0.5, -0.25], up);
+        let q = m.apply_point(c);
+        assert!((q[0] - 2.5).abs() < 1e-12 && (q[1] - 7.0).abs() < 1e-12 && (q[2] - 2.75).abs() < 1e-12);
+        let mut f = vec![p[0] as f32, p[1] as f32, p[2] as f32];
+        m.apply(&mut f);
+        let r = m.apply_point(p);
+        assert!((f[0] as f64 - r[0]).abs() < 1e-6 && (f[2] as f64 - r[2]).abs() < 1e-6);
+    }
+
     use super::*;
 
     fn pose() -> Vec<f32> {

@@ -38,7 +38,8 @@ pub enum Mixing {
     Linear,
 }
 
-fn centre(p: &[f32]) -> [f64; 3] {
+/// Centre of mass of a frame (its vertex mean).
+pub fn centre(p: &[f32]) -> [f64; 3] {
     let n = (p.len() / 3).max(1) as f64;
     let mut c = [0.0; 3];
     for v in p.chunks_exact(3) {
@@ -49,19 +50,80 @@ fn centre(p: &[f32]) -> [f64; 3] {
     c.map(|x| x / n)
 }
 
-/// Move(S, theta, C, T): rotate frames about the vertical axis through C by theta, then
-/// translate them by T in the ground plane.
-fn move_frames(frames: &mut [Vec<f32>], theta: f64, c: [f64; 3], t: [f64; 2], up: UpAxis) {
+/// One output frame of Blend as rigid placements: output frame t interpolates source frame
+/// `n` moved by `src` with destination frame `m` moved by `dst`, at `lambda`; its centre of
+/// mass is `centre` (in the plane that is P of Algorithm 2, vertically the lambda-mix).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlendStep {
+    pub n: usize,
+    pub m: usize,
+    pub lambda: f64,
+    pub src: PlaneMotion,
+    pub dst: PlaneMotion,
+    pub centre: [f64; 3],
+}
+
+/// The rigid part of Algorithm 2: for every output frame, where the remaining source and
+/// destination segments have been moved, without interpolating a single pose. Only the frames'
+/// centres and the raw alignment angles are needed, so the search can predict a transition's
+/// centre-of-mass track and final placement cheaply; [`blend`] builds its frames from these.
+///
+/// Align on the moved frames equals Align on the raw ones plus the difference of the two
+/// segments' accumulated rotations (eq. 2.3 is equivariant under ground-plane motions); it is
+/// wrapped back to (-pi, pi] as the atan2 of eq. 2.3 on the moved frames would give.
+pub fn blend_placements(
+    up: UpAxis,
+    source: &[&[f32]],
+    destination: &[&[f32]],
+    path: &[(usize, usize)],
+    lambda: Lambda,
+) -> Vec<BlendStep> {
     let (iu, iv, _) = plane_axes(up);
-    let (s, co) = theta.sin_cos();
-    // As a PlaneMotion: x -> R x + (C - R C + T) in the plane.
-    let (cu, cv) = (c[iu], c[iv]);
-    let tu = cu - (cu * co + cv * s) + t[0];
-    let tv = cv - (-cu * s + cv * co) + t[1];
-    let m = PlaneMotion { theta, t: [tu, tv], up };
-    for f in frames {
-        m.apply(f);
+    let cs: Vec<[f64; 3]> = source.iter().map(|f| centre(f)).collect();
+    let cd: Vec<[f64; 3]> = destination.iter().map(|f| centre(f)).collect();
+    let (mut gs, mut gd) = (PlaneMotion::identity(up), PlaneMotion::identity(up));
+    let l = path.len();
+    let mut p = cs[0];
+    let mut out = Vec::with_capacity(l);
+    for (t, &(n, m)) in path.iter().enumerate() {
+        let lam = match lambda {
+            Lambda::Ramp if l > 1 => t as f64 / (l - 1) as f64,
+            Lambda::Ramp => 1.0,
+            Lambda::Constant(x) => x,
+        };
+        let raw = motion_plane_alignment(source[n], destination[m], None, up).0.theta;
+        let theta = wrap_angle(raw + gs.theta - gd.theta);
+        let (cn, cm) = (gs.apply_point(cs[n]), gd.apply_point(cd[m]));
+        gs = PlaneMotion::about(-lam * theta, cn, [p[iu] - cn[iu], p[iv] - cn[iv]], up).after(&gs);
+        gd = PlaneMotion::about((1.0 - lam) * theta, cm, [p[iu] - cm[iu], p[iv] - cm[iv]], up).after(&gd);
+        let mut c = p;
+        let (yn, ym) = (gs.apply_point(cs[n]), gd.apply_point(cd[m]));
+        for k in 0..3 {
+            if k != iu && k != iv {
+                c[k] = (1.0 - lam) * yn[k] + lam * ym[k];
+            }
+        }
+        out.push(BlendStep { n, m, lambda: lam, src: gs, dst: gd, centre: c });
+        let step = |g: &PlaneMotion, cs: &[[f64; 3]], k: usize| -> [f64; 2] {
+            if k + 1 < cs.len() {
+                let (a, b) = (g.apply_point(cs[k]), g.apply_point(cs[k + 1]));
+                [b[iu] - a[iu], b[iv] - a[iv]]
+            } else {
+                [0.0, 0.0]
+            }
+        };
+        let (sn, sm) = (step(&gs, &cs, n), step(&gd, &cd, m));
+        p[iu] += (1.0 - lam) * sn[0] + lam * sm[0];
+        p[iv] += (1.0 - lam) * sn[1] + lam * sm[1];
     }
+    out
+}
+
+/// An angle wrapped to (-pi, pi].
+pub fn wrap_angle(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let w = a - t * (a / t).round();
+    if w <= -std::f64::consts::PI { w + t } else { w }
 }
 
 /// Blends `source` (frames i .. i + l^i - 1) into `destination` (frames j - l^j + 1 .. j) along
@@ -75,50 +137,24 @@ pub fn blend(
     lambda: Lambda,
     mixing: Mixing,
 ) -> Result<Vec<Vec<f32>>, PoissonError> {
-    let (iu, iv, _) = plane_axes(up);
-    let mut src: Vec<Vec<f32>> = source.iter().map(|f| f.to_vec()).collect();
-    let mut dst: Vec<Vec<f32>> = destination.iter().map(|f| f.to_vec()).collect();
-    let l = path.len();
-    let mut out = Vec::with_capacity(l);
-    let mut p = centre(&src[0]);
     let pattern = match mixing {
         Mixing::Nonlinear => Some(Arc::new(PoissonPattern::new(topology)?)),
         Mixing::Linear => None,
     };
-    for (t, &(n, m)) in path.iter().enumerate() {
-        let lam = match lambda {
-            Lambda::Ramp if l > 1 => t as f64 / (l - 1) as f64,
-            Lambda::Ramp => 1.0,
-            Lambda::Constant(x) => x,
-        };
-        let (theta, _) = {
-            let (mo, r) = motion_plane_alignment(&src[n], &dst[m], None, up);
-            (mo.theta, r)
-        };
-        let (cn, cm) = (centre(&src[n]), centre(&dst[m]));
-        let tn = [p[iu] - cn[iu], p[iv] - cn[iv]];
-        let tm = [p[iu] - cm[iu], p[iv] - cm[iv]];
-        move_frames(&mut src[n..], -lam * theta, cn, tn, up);
-        move_frames(&mut dst[m..], (1.0 - lam) * theta, cm, tm, up);
-        let frame = match &pattern {
-            Some(pat) => NonlinearInterpolator::with_pattern(pat, topology, &src[n], &dst[m], up)?
-                .at(lam, StretchInterpolation::Linear),
-            None => linear_interpolation(&src[n], &dst[m], lam),
-        };
-        out.push(frame);
-        let step = |seg: &[Vec<f32>], k: usize| -> [f64; 2] {
-            if k + 1 < seg.len() {
-                let (a, b) = (centre(&seg[k]), centre(&seg[k + 1]));
-                [b[iu] - a[iu], b[iv] - a[iv]]
-            } else {
-                [0.0, 0.0]
-            }
-        };
-        let (sn, sm) = (step(&src, n), step(&dst, m));
-        p[iu] += (1.0 - lam) * sn[0] + lam * sm[0];
-        p[iv] += (1.0 - lam) * sn[1] + lam * sm[1];
-    }
-    Ok(out)
+    blend_placements(up, source, destination, path, lambda)
+        .iter()
+        .map(|st| {
+            let (mut a, mut b) = (source[st.n].to_vec(), destination[st.m].to_vec());
+            st.src.apply(&mut a);
+            st.dst.apply(&mut b);
+            Ok(match &pattern {
+                Some(pat) => {
+                    NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?.at(st.lambda, StretchInterpolation::Linear)
+                }
+                None => linear_interpolation(&a, &b, st.lambda),
+            })
+        })
+        .collect()
 }
 
 /// Length of the ground-plane path of the frames' centres of mass.

@@ -10,7 +10,10 @@ pub mod edge_weights;
 pub mod essential_graph;
 pub mod graph;
 pub mod motion_graph;
+pub mod path_following;
+pub mod timed_walk;
 pub mod transition_table;
+pub mod walk_sequence;
 
 /// Segment length bounds from the frame rate (thesis 2.5.3: a third of a second to two seconds):
 /// ceil(fps / 3) ..= round(2 fps), i.e. 8..48 at 24 fps and 10..60 at 30 fps as in the thesis. At

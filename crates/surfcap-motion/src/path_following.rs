@@ -1,0 +1,392 @@
+//! Behavioural path synthesis (thesis 3.5.1, eq. 3.5): the walk whose centre of mass (or the
+//! centre of any vertex set) follows a user curve by arc length, optionally restricted to some
+//! motion types on parts of the curve; found by depth-first branch-and-bound in the graph.
+//!
+//! Cost of appending a node (j_c of eq. 3.5): every output frame the appended edge adds (one for
+//! successive frames, the Blend's frames and the destination for a transition) costs the
+//! distance from its tracked centre to the curve point at the same arc length as the walk's
+//! centre trajectory so far. The thesis evaluates only the appended node; counting the
+//! transition's inner frames too keeps a long transition from cutting corners unseen. Halting:
+//! the walk's travelled length reaches the curve's length.
+//!
+//! Search (our decision, documented in the issue note): an exhaustive depth-first search over
+//! walks of a whole curve is exponential in its length (a 15 m path is some 400 frames), so the
+//! branch-and-bound runs over a receding window, as Kovar et al. 2002 did for their path
+//! synthesis: from the current state, every walk that covers the next `window` of arc length
+//! with at most `max_transitions` transitions is explored depth-first, successive frames before
+//! transitions and transitions by increasing edge weight; a branch is cut as soon as its cost
+//! reaches the best complete one (costs only grow). The first half of the best walk is kept and
+//! the search goes on from there. A walk that cannot cover its window within `max_frames` frames
+//! is ranked after every walk that can, by its remaining length, so standing still (which stays
+//! close to the curve's start at no cost) never wins over walking.
+//!
+//! The walk starts where the user says, or at the best of all frames: each candidate is placed
+//! with its centre on the curve's start and its direction of travel (the centre's displacement
+//! over the next half second of its own sequence) along the curve's first tangent.
+
+use std::time::Instant;
+
+use surfcap_geometry::motion_plane_alignment::PlaneMotion;
+
+use crate::graph::Graph;
+use crate::walk_sequence::{Step, WalkModel};
+
+/// A polyline parametrised by arc length. In planar mode only the ground-plane coordinates
+/// count (for the arc length of the curve and of the walk, and for the error).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    points: Vec<[f64; 3]>,
+    cumulative: Vec<f64>,
+    /// Indices of the coordinates that count: the two ground-plane axes, or all three.
+    axes: Vec<usize>,
+}
+
+impl Curve {
+    /// `points` in the subject's coordinates; `axes` the coordinates that count. Consecutive
+    /// duplicate points are dropped. Errors when fewer than two distinct points remain.
+    pub fn new(points: Vec<[f64; 3]>, axes: Vec<usize>) -> Result<Self, String> {
+        if points.iter().flatten().any(|x| !x.is_finite()) {
+            return Err("the curve has a non-finite coordinate".into());
+        }
+        let mut kept: Vec<[f64; 3]> = Vec::with_capacity(points.len());
+        let mut cumulative = Vec::with_capacity(points.len());
+        for p in points {
+            match kept.last() {
+                None => cumulative.push(0.0),
+                Some(q) => {
+                    let d = dist(&axes, q, &p);
+                    if d <= 0.0 {
+                        continue;
+                    }
+                    cumulative.push(cumulative.last().unwrap() + d);
+                }
+            }
+            kept.push(p);
+        }
+        if kept.len() < 2 {
+            return Err("the curve needs at least two distinct points".into());
+        }
+        Ok(Curve { points: kept, cumulative, axes })
+    }
+
+    pub fn length(&self) -> f64 {
+        *self.cumulative.last().expect("two points at least")
+    }
+
+    pub fn axes(&self) -> &[usize] {
+        &self.axes
+    }
+
+    /// The point at arc length `s` (clamped to the curve).
+    pub fn at(&self, s: f64) -> [f64; 3] {
+        let s = s.clamp(0.0, self.length());
+        let k = self.cumulative.partition_point(|&c| c <= s).clamp(1, self.points.len() - 1);
+        let (a, b) = (self.points[k - 1], self.points[k]);
+        let t = (s - self.cumulative[k - 1]) / (self.cumulative[k] - self.cumulative[k - 1]);
+        std::array::from_fn(|i| a[i] + t * (b[i] - a[i]))
+    }
+
+    /// Distance between two points in the curve's coordinates.
+    pub fn distance(&self, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+        dist(&self.axes, a, b)
+    }
+}
+
+fn dist(axes: &[usize], a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    axes.iter().map(|&k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// Only sequences marked in `allowed` (one flag per sequence) between arc lengths `from` and
+/// `to` (a node is checked at the arc length where it is shown).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Restriction {
+    pub from: f64,
+    pub to: f64,
+    pub allowed: Vec<bool>,
+}
+
+/// Search settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathSearch {
+    /// Arc length each branch-and-bound window covers (half of it is kept).
+    pub window: f64,
+    /// Transitions allowed inside one window.
+    pub max_transitions: usize,
+    /// Frames a walk may take to cover a window before it counts as stalled.
+    pub max_frames: usize,
+    /// Candidate start frames kept for the full first-window search when no start is given.
+    pub start_candidates: usize,
+}
+
+impl PathSearch {
+    /// Defaults for a subject in metres at `fps`: 1.5 m windows, two transitions each, and a
+    /// walker must cover a window within 4 seconds.
+    pub fn for_fps(fps: f64) -> Self {
+        PathSearch { window: 1.5, max_transitions: 2, max_frames: (4.0 * fps).round() as usize, start_candidates: 8 }
+    }
+}
+
+/// The walk found, with its predicted per-frame errors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathResult {
+    pub walk: Vec<u32>,
+    pub start: PlaneMotion,
+    /// Predicted tracked centre and curve error of every output frame.
+    pub centres: Vec<[f64; 3]>,
+    pub errors: Vec<f64>,
+    /// Arc length the walk travelled.
+    pub travelled: f64,
+    pub windows: usize,
+    /// Nodes visited by the depth-first searches.
+    pub expanded: u64,
+    pub seconds: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct State {
+    node: u32,
+    g: PlaneMotion,
+    s: f64,
+    last: [f64; 3],
+    cost: f64,
+    frames: usize,
+}
+
+/// The query, shared by every window.
+struct Query<'a> {
+    model: &'a WalkModel,
+    graph: &'a Graph,
+    curve: &'a Curve,
+    restrictions: &'a [Restriction],
+}
+
+impl Query<'_> {
+    fn allowed(&self, node: u32, s: f64) -> bool {
+        let seq = self.model.index.locate(node as usize).map_or(usize::MAX, |l| l.0);
+        self.restrictions.iter().all(|r| s < r.from || s > r.to || r.allowed.get(seq).copied().unwrap_or(false))
+    }
+
+    /// Appends edge `step` to `st` (j_c of eq. 3.5 added to the cost); `None` when a
+    /// restriction forbids its destination.
+    fn append(&self, st: &State, step: Step<'_>, v: u32) -> Option<State> {
+        let mut n = *st;
+        let g = self.model.advance(step, &st.g, v, |c, _| {
+            n.s += self.curve.distance(&n.last, &c);
+            n.last = c;
+            n.cost += self.curve.distance(&c, &self.curve.at(n.s));
+            n.frames += 1;
+        });
+        n.g = g;
+        n.node = v;
+        self.allowed(v, n.s).then_some(n)
+    }
+}
+
+/// Penalty per unit of arc length a stalled walk leaves uncovered: above any complete walk.
+const STALL: f64 = 1e6;
+
+/// One depth-first branch-and-bound over the walks that cover [s, end].
+struct Window<'a> {
+    q: &'a Query<'a>,
+    end: f64,
+    max_frames: usize,
+    best: f64,
+    best_walk: Vec<u32>,
+    path: Vec<u32>,
+    expanded: u64,
+}
+
+impl Window<'_> {
+    fn finish(&mut self, st: &State, complete: bool) {
+        let cost = if complete { st.cost } else { st.cost + (self.end - st.s) * STALL };
+        if cost < self.best {
+            self.best = cost;
+            self.best_walk = self.path.clone();
+        }
+    }
+
+    fn dfs(&mut self, st: State, transitions_left: usize) {
+        self.expanded += 1;
+        if st.cost >= self.best {
+            return;
+        }
+        if st.s >= self.end {
+            return self.finish(&st, true);
+        }
+        if st.frames >= self.max_frames {
+            return self.finish(&st, false);
+        }
+        let (q, u) = (self.q, st.node);
+        let mut any = false;
+        if let Some(step @ Step::Original) = q.model.step(u, u + 1)
+            && let Some(next) = q.append(&st, step, u + 1)
+        {
+            any = true;
+            self.path.push(u + 1);
+            self.dfs(next, transitions_left);
+            self.path.pop();
+        }
+        if transitions_left > 0 {
+            let mut out: Vec<(f64, u32)> = q.graph.out(u as usize).iter().map(|e| (e.weight, e.to)).collect();
+            out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            for (_, v) in out {
+                let Some(step @ Step::Transition(_)) = q.model.step(u, v) else { continue };
+                if let Some(next) = q.append(&st, step, v) {
+                    any = true;
+                    self.path.push(v);
+                    self.dfs(next, transitions_left - 1);
+                    self.path.pop();
+                }
+            }
+        }
+        if !any {
+            self.finish(&st, false);
+        }
+    }
+}
+
+/// The placement that puts node `u` at the curve's start, heading along its first tangent.
+pub fn start_placement(model: &WalkModel, curve: &Curve, u: u32) -> PlaneMotion {
+    let (iu, iv) = model.plane();
+    let range = model.index.range(model.index.locate(u as usize).expect("node is a frame").0);
+    let h = (model.fps / 2.0).round().max(1.0) as usize;
+    let (a, b) = if u as usize + h < range.end {
+        (u as usize, u as usize + h)
+    } else {
+        (u as usize - h.min(u as usize - range.start), u as usize)
+    };
+    let (ca, cb) = (model.centres[a], model.centres[b]);
+    let dir = [cb[iu] - ca[iu], cb[iv] - ca[iv]];
+    let c0 = curve.at(0.0);
+    let c1 = curve.at((0.5f64).min(curve.length()));
+    let tan = [c1[iu] - c0[iu], c1[iv] - c0[iv]];
+    let norm = |v: [f64; 2]| v[0].hypot(v[1]);
+    // Rotation by theta maps (u, v) to (u cos + v sin, -u sin + v cos): the angle from dir to tan.
+    let theta = if norm(dir) > 1e-3 && norm(tan) > 1e-9 {
+        (dir[1].atan2(dir[0])) - (tan[1].atan2(tan[0]))
+    } else {
+        0.0
+    };
+    let cu = model.centres[u as usize];
+    let rot = PlaneMotion { theta, t: [0.0, 0.0], up: model.up };
+    let r = rot.apply_point(cu);
+    PlaneMotion { theta, t: [c0[iu] - r[iu], c0[iv] - r[iv]], up: model.up }
+}
+
+/// Follows `curve` (thesis 3.5.1). `start`: the first node, or `None` to try every frame.
+pub fn follow_path(
+    model: &WalkModel,
+    graph: &Graph,
+    curve: &Curve,
+    restrictions: &[Restriction],
+    start: Option<u32>,
+    p: &PathSearch,
+) -> Result<PathResult, String> {
+    let t0 = Instant::now();
+    if !(p.window > 0.0 && p.window.is_finite()) || p.max_frames == 0 {
+        return Err(format!("window {} / {} frames: expected a positive arc length and frame count", p.window, p.max_frames));
+    }
+    let q = Query { model, graph, curve, restrictions };
+    let initial = |u: u32| -> State {
+        let g = start_placement(model, curve, u);
+        let c = g.apply_point(model.centres[u as usize]);
+        State { node: u, g, s: 0.0, last: c, cost: curve.distance(&c, &curve.at(0.0)), frames: 1 }
+    };
+    let mut expanded = 0;
+    // Best walk over the next window from `st` (its cost, its nodes after st.node).
+    let window = |st: State, max_transitions: usize, expanded: &mut u64| -> (f64, Vec<u32>) {
+        let mut w = Window {
+            q: &q,
+            end: (st.s + p.window).min(curve.length()),
+            max_frames: st.frames + p.max_frames,
+            best: f64::INFINITY,
+            best_walk: Vec::new(),
+            path: Vec::new(),
+            expanded: 0,
+        };
+        w.dfs(st, max_transitions);
+        *expanded += w.expanded;
+        (w.best, w.best_walk)
+    };
+    let starts: Vec<u32> = match start {
+        Some(u) => vec![u],
+        None => {
+            // Rank every frame by playing its own sequence over the first window, then search
+            // the best few with transitions.
+            let mut scored: Vec<(f64, u32)> = (0..model.centres.len() as u32)
+                .filter(|&u| !graph.out(u as usize).is_empty() && q.allowed(u, 0.0))
+                .map(|u| (window(initial(u), 0, &mut expanded).0, u))
+                .collect();
+            scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            scored.into_iter().take(p.start_candidates.max(1)).map(|(_, u)| u).collect()
+        }
+    };
+    if let Some(&u) = starts.first()
+        && !q.allowed(u, 0.0)
+    {
+        return Err(format!("the start frame {u} is not allowed by the restriction at the curve's start"));
+    }
+    let mut best_start: Option<(f64, u32)> = None;
+    for &u in &starts {
+        let (c, _) = window(initial(u), p.max_transitions, &mut expanded);
+        if best_start.is_none_or(|(b, _)| c < b) {
+            best_start = Some((c, u));
+        }
+    }
+    let (_, u0) = best_start.ok_or("no frame can start the path: the restrictions exclude every start frame")?;
+    let mut st = initial(u0);
+    let start_g = st.g;
+    let mut walk = vec![u0];
+    let mut windows = 0;
+    // A walk that stalls (covers no ground window after window) is stopped with an error.
+    let frame_budget = ((curve.length() / p.window).ceil() as usize + 2) * p.max_frames;
+    while st.s < curve.length() {
+        windows += 1;
+        let (_, found) = window(st, p.max_transitions, &mut expanded);
+        if found.is_empty() {
+            return Err(format!(
+                "the walk is stuck at frame {} after {:.2} of {:.2} along the curve: no edge leads on",
+                st.node,
+                st.s,
+                curve.length()
+            ));
+        }
+        // Keep the first half of the window (at least one step).
+        let keep_until = st.s + 0.5 * p.window;
+        for &v in &found {
+            let step = model.step(st.node, v).expect("the search only takes edges");
+            st = q.append(&st, step, v).expect("the search only takes allowed edges");
+            walk.push(v);
+            if st.s >= keep_until {
+                break;
+            }
+        }
+        if st.frames > frame_budget {
+            return Err(format!(
+                "the walk stalls: {} frames cover only {:.2} of {:.2} along the curve (do the allowed motions travel?)",
+                st.frames,
+                st.s,
+                curve.length()
+            ));
+        }
+    }
+    let centres = model.walk_centres(&walk, &start_g).map_err(|e| e.to_string())?;
+    let mut s = 0.0;
+    let mut errors = Vec::with_capacity(centres.len());
+    for (k, c) in centres.iter().enumerate() {
+        if k > 0 {
+            s += curve.distance(&centres[k - 1], c);
+        }
+        errors.push(curve.distance(c, &curve.at(s)));
+    }
+    Ok(PathResult {
+        walk,
+        start: start_g,
+        centres,
+        errors,
+        travelled: s,
+        windows,
+        expanded,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
