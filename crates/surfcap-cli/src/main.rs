@@ -42,8 +42,9 @@ enum Command {
     Transition(commands::transition::Args),
     /// The essential graph or the motion-graph baseline over all frames (thesis 3.3), cached.
     Graph(commands::graph::Args),
-    /// Build the mannequin moved by BVH motion capture or procedural locomotion, as a subject.
-    Synth(commands::synth::Args),
+    /// Build the mannequin moved by BVH motion capture or procedural locomotion, as a subject;
+    /// or synthesise an animation from a subject's graph: path, keyposes, reach (thesis 3.5).
+    Synth(commands::synth::Cmd),
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
     /// Run the main job on built-in data: the procedural mannequin (or --bvh files), imported,

@@ -24,12 +24,13 @@
 //! with its centre on the curve's start and its direction of travel (the centre's displacement
 //! over the next half second of its own sequence) along the curve's first tangent.
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 
 use crate::graph::Graph;
-use crate::walk_sequence::{Step, WalkModel};
+use crate::walk_sequence::{Step, TransitionTrack, WalkModel};
 
 /// A polyline parametrised by arc length. In planar mode only the ground-plane coordinates
 /// count (for the arc length of the curve and of the walk, and for the error).
@@ -116,13 +117,26 @@ pub struct PathSearch {
     pub max_frames: usize,
     /// Candidate start frames kept for the full first-window search when no start is given.
     pub start_candidates: usize,
+    /// Transitions tried at each node (its cheapest ones): essential graphs keep tens of
+    /// transitions per frame, and trying all of them at every frame of a window is what makes
+    /// the exhaustive search exponential.
+    pub branching: usize,
+    /// Bin of the dominance rule, in subject units (and radians for the heading).
+    pub state_bin: f64,
 }
 
 impl PathSearch {
     /// Defaults for a subject in metres at `fps`: 1.5 m windows, two transitions each, and a
     /// walker must cover a window within 4 seconds.
     pub fn for_fps(fps: f64) -> Self {
-        PathSearch { window: 1.5, max_transitions: 2, max_frames: (4.0 * fps).round() as usize, start_candidates: 8 }
+        PathSearch {
+            window: 3.0,
+            max_transitions: 2,
+            max_frames: (6.0 * fps).round() as usize,
+            start_candidates: 8,
+            branching: 16,
+            state_bin: 0.1,
+        }
     }
 }
 
@@ -155,12 +169,59 @@ struct State {
 /// The query, shared by every window.
 struct Query<'a> {
     model: &'a WalkModel,
-    graph: &'a Graph,
     curve: &'a Curve,
     restrictions: &'a [Restriction],
+    /// Transition edges leaving each node: the cheapest into each sequence, then the second
+    /// cheapest into each, and so on.
+    transitions: Vec<Vec<(u32, &'a TransitionTrack)>>,
+    /// Whether a node has no transition left ahead of it in its sequence: a walk that enters
+    /// it can only play to the sequence's end.
+    doomed: Vec<bool>,
 }
 
-impl Query<'_> {
+impl<'a> Query<'a> {
+    fn new(model: &'a WalkModel, graph: &Graph, curve: &'a Curve, restrictions: &'a [Restriction]) -> Self {
+        let n = model.centres.len();
+        let transitions: Vec<Vec<(u32, &TransitionTrack)>> = (0..n)
+            .map(|u| {
+                let mut out: Vec<(f64, u32, &TransitionTrack)> = graph
+                    .out(u)
+                    .iter()
+                    .filter_map(|e| match model.step(e.from, e.to) {
+                        Some(Step::Transition(t)) => Some((e.weight, e.to, t)),
+                        _ => None,
+                    })
+                    .collect();
+                out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                // Round robin over destination sequences (cheapest first within each), so the
+                // first few transitions tried reach every kind of motion, not only the many
+                // near-identical poses of the closest sequence.
+                let seq = |v: u32| model.index.locate(v as usize).map_or(0, |l| l.0);
+                let mut rank = vec![0usize; model.index.n_sequences()];
+                let mut keyed: Vec<(usize, usize, u32, &TransitionTrack)> = out
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, (_, v, t))| {
+                        let r = rank[seq(v)];
+                        rank[seq(v)] += 1;
+                        (r, k, v, t)
+                    })
+                    .collect();
+                keyed.sort_by_key(|x| (x.0, x.1));
+                keyed.into_iter().map(|(_, _, v, t)| (v, t)).collect()
+            })
+            .collect();
+        let mut doomed = vec![true; n];
+        for q in 0..model.index.n_sequences() {
+            let mut escape = false;
+            for u in model.index.range(q).rev() {
+                escape |= !transitions[u].is_empty();
+                doomed[u] = !escape;
+            }
+        }
+        Query { model, curve, restrictions, transitions, doomed }
+    }
+
     fn allowed(&self, node: u32, s: f64) -> bool {
         let seq = self.model.index.locate(node as usize).map_or(usize::MAX, |l| l.0);
         self.restrictions.iter().all(|r| s < r.from || s > r.to || r.allowed.get(seq).copied().unwrap_or(false))
@@ -171,9 +232,10 @@ impl Query<'_> {
     fn append(&self, st: &State, step: Step<'_>, v: u32) -> Option<State> {
         let mut n = *st;
         let g = self.model.advance(step, &st.g, v, |c, _| {
-            n.s += self.curve.distance(&n.last, &c);
+            let ds = self.curve.distance(&n.last, &c);
+            n.s += ds;
             n.last = c;
-            n.cost += self.curve.distance(&c, &self.curve.at(n.s));
+            n.cost += self.curve.distance(&c, &self.curve.at(n.s)) * ds;
             n.frames += 1;
         });
         n.g = g;
@@ -194,6 +256,23 @@ struct Window<'a> {
     best_walk: Vec<u32>,
     path: Vec<u32>,
     expanded: u64,
+    /// Cheapest cost seen per coarse state (see [`state_key`]).
+    seen: HashMap<StateKey, f64>,
+    branching: usize,
+    bin: f64,
+}
+
+/// Node, arc length, position and heading (in bins of `state_bin`) and transitions left.
+type StateKey = (u32, i32, i32, i32, i32, u8);
+
+/// Two partial walks at the same node with nearly the same arc length, placement and
+/// transition budget have the same futures: the dearer one is cut (a dominance rule that
+/// turns the depth-first search from exponential into a search over coarse states).
+fn state_key(q: &Query<'_>, st: &State, left: usize, bin: f64) -> StateKey {
+    let (iu, iv) = q.model.plane();
+    let b = |x: f64| (x / bin).round() as i32;
+    let theta = crate::blend::wrap_angle(st.g.theta);
+    (st.node, b(st.s), b(st.last[iu]), b(st.last[iv]), b(theta), left.min(255) as u8)
 }
 
 impl Window<'_> {
@@ -216,31 +295,41 @@ impl Window<'_> {
         if st.frames >= self.max_frames {
             return self.finish(&st, false);
         }
+        let key = state_key(self.q, &st, transitions_left, self.bin);
+        match self.seen.get_mut(&key) {
+            Some(c) if *c <= st.cost => return,
+            Some(c) => *c = st.cost,
+            None => {
+                self.seen.insert(key, st.cost);
+            }
+        }
         let (q, u) = (self.q, st.node);
-        let mut any = false;
+        let last_window = self.end >= q.curve.length();
+        let open = |v: u32| last_window || !q.doomed[v as usize];
+        // Children: the next original frame, then up to `branching` transitions; explored
+        // cheapest first so that good complete walks tighten the bound early.
+        let mut children: Vec<(State, usize)> = Vec::new();
         if let Some(step @ Step::Original) = q.model.step(u, u + 1)
+            && open(u + 1)
             && let Some(next) = q.append(&st, step, u + 1)
         {
-            any = true;
-            self.path.push(u + 1);
-            self.dfs(next, transitions_left);
-            self.path.pop();
+            children.push((next, transitions_left));
         }
         if transitions_left > 0 {
-            let mut out: Vec<(f64, u32)> = q.graph.out(u as usize).iter().map(|e| (e.weight, e.to)).collect();
-            out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            for (_, v) in out {
-                let Some(step @ Step::Transition(_)) = q.model.step(u, v) else { continue };
-                if let Some(next) = q.append(&st, step, v) {
-                    any = true;
-                    self.path.push(v);
-                    self.dfs(next, transitions_left - 1);
-                    self.path.pop();
+            for &(v, t) in q.transitions[u as usize].iter().filter(|(v, _)| open(*v)).take(self.branching) {
+                if let Some(next) = q.append(&st, Step::Transition(t), v) {
+                    children.push((next, transitions_left - 1));
                 }
             }
         }
-        if !any {
-            self.finish(&st, false);
+        if children.is_empty() {
+            return self.finish(&st, false);
+        }
+        children.sort_by(|a, b| a.0.cost.total_cmp(&b.0.cost).then(b.1.cmp(&a.1)).then(a.0.node.cmp(&b.0.node)));
+        for (next, left) in children {
+            self.path.push(next.node);
+            self.dfs(next, left);
+            self.path.pop();
         }
     }
 }
@@ -273,6 +362,20 @@ pub fn start_placement(model: &WalkModel, curve: &Curve, u: u32) -> PlaneMotion 
     PlaneMotion { theta, t: [c0[iu] - r[iu], c0[iv] - r[iv]], up: model.up }
 }
 
+/// Error of every frame of a centre trajectory against `curve` (distance to the curve point at
+/// the trajectory's arc length so far), and the trajectory's length.
+pub fn path_errors(curve: &Curve, centres: &[[f64; 3]]) -> (Vec<f64>, f64) {
+    let mut s = 0.0;
+    let mut errors = Vec::with_capacity(centres.len());
+    for (k, c) in centres.iter().enumerate() {
+        if k > 0 {
+            s += curve.distance(&centres[k - 1], c);
+        }
+        errors.push(curve.distance(c, &curve.at(s)));
+    }
+    (errors, s)
+}
+
 /// Follows `curve` (thesis 3.5.1). `start`: the first node, or `None` to try every frame.
 pub fn follow_path(
     model: &WalkModel,
@@ -286,7 +389,7 @@ pub fn follow_path(
     if !(p.window > 0.0 && p.window.is_finite()) || p.max_frames == 0 {
         return Err(format!("window {} / {} frames: expected a positive arc length and frame count", p.window, p.max_frames));
     }
-    let q = Query { model, graph, curve, restrictions };
+    let q = Query::new(model, graph, curve, restrictions);
     let initial = |u: u32| -> State {
         let g = start_placement(model, curve, u);
         let c = g.apply_point(model.centres[u as usize]);
@@ -303,6 +406,9 @@ pub fn follow_path(
             best_walk: Vec::new(),
             path: Vec::new(),
             expanded: 0,
+            seen: HashMap::new(),
+            branching: p.branching,
+            bin: p.state_bin,
         };
         w.dfs(st, max_transitions);
         *expanded += w.expanded;
@@ -314,7 +420,7 @@ pub fn follow_path(
             // Rank every frame by playing its own sequence over the first window, then search
             // the best few with transitions.
             let mut scored: Vec<(f64, u32)> = (0..model.centres.len() as u32)
-                .filter(|&u| !graph.out(u as usize).is_empty() && q.allowed(u, 0.0))
+                .filter(|&u| !q.doomed[u as usize] && q.allowed(u, 0.0))
                 .map(|u| (window(initial(u), 0, &mut expanded).0, u))
                 .collect();
             scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -371,20 +477,13 @@ pub fn follow_path(
         }
     }
     let centres = model.walk_centres(&walk, &start_g).map_err(|e| e.to_string())?;
-    let mut s = 0.0;
-    let mut errors = Vec::with_capacity(centres.len());
-    for (k, c) in centres.iter().enumerate() {
-        if k > 0 {
-            s += curve.distance(&centres[k - 1], c);
-        }
-        errors.push(curve.distance(c, &curve.at(s)));
-    }
+    let (errors, travelled) = path_errors(curve, &centres);
     Ok(PathResult {
         walk,
         start: start_g,
         centres,
         errors,
-        travelled: s,
+        travelled,
         windows,
         expanded,
         seconds: t0.elapsed().as_secs_f64(),

@@ -52,7 +52,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         duration: None,
         bvh_units: None,
         name: Some("mannequin".into()),
-        output: a.output.join("mannequin.subject"),
+        output: None,
     };
     let built = super::synth::build(ctx, &spec)?;
     say(&format!(
@@ -74,7 +74,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         built.sequences().iter().all(|b| subject.sequence(&b.name).is_some_and(|(_, a)| a == b)),
         "the imported sequences differ from the built ones"
     );
-    let cache = spec.output.clone();
+    let cache = a.output.join("mannequin.subject");
     surfcap_mesh::cache::write_cache(&cache, &subject, &bar)?;
     say(&format!("3. imported them into the subject cache {}", cache.display()));
     let mut written = Vec::new();

@@ -99,20 +99,22 @@ impl<'a> SubjectGraphs<'a> {
         SubjectGraphs { ctx, s, p, cache, table: OnceCell::new(), weights: RefCell::new(None) }
     }
 
+    /// The transition table (from its cache, or computed), read once.
+    pub fn table(&self) -> surfcap_mesh::Result<&TransitionTable> {
+        if let Some(t) = self.table.get() {
+            return Ok(t);
+        }
+        let (t, _) = cached_table(self.ctx, self.s, &self.p, self.cache).map_err(|e| {
+            surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Unsupported, format!("transition table: {e}"))
+        })?;
+        Ok(self.table.get_or_init(|| t))
+    }
+
     fn weights(&self, alpha: f64) -> surfcap_mesh::Result<EdgeWeights> {
         if let Some(w) = self.weights.borrow().as_ref().filter(|w| w.alpha == alpha) {
             return Ok(w.clone());
         }
-        let table = match self.table.get() {
-            Some(t) => t,
-            None => {
-                let (t, _) = cached_table(self.ctx, self.s, &self.p, self.cache).map_err(|e| {
-                    surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Unsupported, format!("transition table: {e}"))
-                })?;
-                self.table.get_or_init(|| t)
-            }
-        };
-        let w = edge_weights(table, self.s.frame_index(), alpha);
+        let w = edge_weights(self.table()?, self.s.frame_index(), alpha);
         *self.weights.borrow_mut() = Some(w.clone());
         Ok(w)
     }

@@ -12,6 +12,7 @@ pub mod import;
 pub mod info;
 pub mod interpolate;
 pub mod synth;
+pub mod synth_walk;
 pub mod transition;
 pub mod transitions;
 

@@ -14,6 +14,26 @@ use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
 use super::print_json;
 
+/// `surfcap synth`: build a mannequin subject (flat arguments), or one of the subcommands.
+#[derive(clap::Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct Cmd {
+    #[command(subcommand)]
+    pub what: Option<What>,
+    #[command(flatten)]
+    pub build: Args,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum What {
+    /// Follow a 3D or ground-plane curve with the centre of mass (thesis 3.5.1).
+    Path(super::synth_walk::PathArgs),
+    /// Move key poses to new times (thesis 3.5.2, Fig. 3.18).
+    Keyposes(super::synth_walk::KeyposesArgs),
+    /// Go from one frame to another covering a distance in a time (Huang et al. 2009).
+    Reach(super::synth_walk::ReachArgs),
+}
+
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// BVH files to retarget onto the mannequin (joints matched by CMU names), one sequence each.
@@ -46,7 +66,7 @@ pub struct Args {
     pub name: Option<String>,
     /// The subject cache folder to write.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub output: Option<PathBuf>,
 }
 
 /// Builds the subject the arguments describe (shared with `surfcap demo`).
@@ -88,18 +108,30 @@ pub fn build(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<Subject> {
     Ok(mannequin_subject(a.name.as_deref().unwrap_or(&default_name), &m, &clips, fps)?)
 }
 
-pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
+    match c.what {
+        Some(What::Path(a)) => super::synth_walk::path(ctx, a),
+        Some(What::Keyposes(a)) => super::synth_walk::keyposes(ctx, a),
+        Some(What::Reach(a)) => super::synth_walk::reach(ctx, a),
+        None => build_and_write(ctx, c.build),
+    }
+}
+
+fn build_and_write(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let Some(output) = a.output.clone() else {
+        anyhow::bail!("-o/--output: the subject cache folder to write is required");
+    };
     let t0 = Instant::now();
     let s = build(ctx, &a)?;
     let bar = crate::progress::Bar::new(ctx);
-    surfcap_mesh::cache::write_cache(&a.output, &s, &bar)?;
+    surfcap_mesh::cache::write_cache(&output, &s, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
     let sequences: Vec<serde_json::Value> =
         s.sequences().iter().map(|q| json!({ "name": q.name, "frames": q.n_frames(), "tags": q.tags })).collect();
     if ctx.json {
         print_json(&json!({
             "subject": s.name,
-            "output": a.output,
+            "output": output,
             "fps": s.fps,
             "vertices": s.topology().n_vertices(),
             "triangles": s.topology().n_triangles(),
@@ -113,7 +145,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             s.topology().n_vertices(),
             s.topology().n_triangles(),
             s.fps,
-            a.output.display()
+            output.display()
         );
         for q in s.sequences() {
             println!("  {:<12} {:>5} frames  tags {}", q.name, q.n_frames(), q.tags.join(", "));
