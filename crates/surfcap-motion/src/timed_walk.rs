@@ -22,6 +22,8 @@
 //!   candidate seen. Distances on the lower convex hull of the achievable (distance, realism)
 //!   pairs are reached exactly; the report gives the true errors of the walk found.
 
+use rayon::prelude::*;
+
 use crate::graph::Graph;
 use crate::walk_sequence::{Step, WalkModel};
 
@@ -63,7 +65,10 @@ impl TimedGraph {
                 length += plane(last, c);
                 last = c;
             });
-            edges.push(TimedEdge { from: e.from, to: e.to, frames, weight: e.weight, length });
+            // Realism cost: the transitions' weights (Huang et al.'s C_s sums transition costs
+            // only); successive frames cost nothing, so no duration is favoured by it.
+            let weight = if matches!(step, Step::Original) { 0.0 } else { e.weight };
+            edges.push(TimedEdge { from: e.from, to: e.to, frames, weight, length });
         }
         let mut out = vec![Vec::new(); graph.n];
         let mut into = vec![Vec::new(); graph.n];
@@ -167,19 +172,15 @@ fn cheapest_by_duration(
         }
     }
     // Join: durations up to h end in the forward table; longer walks cross h on one edge.
-    let mut best: Vec<Option<(f64, usize, usize, usize)>> = vec![None; hi + 1]; // cost, t1, edge, t2
-    let mut better = |d: usize, cost: f64, t1: usize, k: usize, t2: usize| {
-        if best[d].is_none_or(|(c0, ..)| cost < c0) {
-            best[d] = Some((cost, t1, k, t2));
-        }
-    };
-    for d in lo..=hi.min(h) {
-        let x = f.at(d, b as usize);
-        if x.is_finite() && d > 0 {
-            better(d, x, d, usize::MAX, 0);
+    // Edges are joined in parallel; ties keep the smallest (edge, t1, t2), whatever the split.
+    type Best = Vec<Option<(f64, usize, usize, usize)>>; // cost, t1, edge, t2
+    fn better(best: &mut Best, d: usize, cand: (f64, usize, usize, usize)) {
+        let key = |x: &(f64, usize, usize, usize)| (x.2, x.1, x.3);
+        if best[d].is_none_or(|b0| cand.0 < b0.0 || (cand.0 == b0.0 && key(&cand) < key(&b0))) {
+            best[d] = Some(cand);
         }
     }
-    for (k, e) in g.edges.iter().enumerate() {
+    let join_edge = |mut best: Best, (k, e): (usize, &TimedEdge)| -> Best {
         let dur = e.frames as usize;
         for t1 in (h + 1).saturating_sub(dur)..=h {
             let x = f.at(t1, e.from as usize);
@@ -187,19 +188,39 @@ fn cheapest_by_duration(
                 continue;
             }
             let t_mid = t1 + dur; // > h
-            for t2 in 0..bw.times() {
+            for t2 in lo.saturating_sub(t_mid)..bw.times() {
                 let d = t_mid + t2;
                 if d > hi {
                     break;
                 }
-                if d < lo {
-                    continue;
-                }
                 let y = bw.at(t2, e.to as usize);
                 if y.is_finite() {
-                    better(d, x + c[k] + y, t1, k, t2);
+                    better(&mut best, d, (x + c[k] + y, t1, k, t2));
                 }
             }
+        }
+        best
+    };
+    let mut best: Best = g
+        .edges
+        .par_iter()
+        .enumerate()
+        .fold(|| vec![None; hi + 1], join_edge)
+        .reduce(
+            || vec![None; hi + 1],
+            |mut a, b| {
+                for (d, x) in b.into_iter().enumerate() {
+                    if let Some(x) = x {
+                        better(&mut a, d, x);
+                    }
+                }
+                a
+            },
+        );
+    for d in lo..=hi.min(h) {
+        let x = f.at(d, b as usize);
+        if x.is_finite() && d > 0 && best[d].is_none_or(|b0| x <= b0.0) {
+            best[d] = Some((x, d, usize::MAX, 0));
         }
     }
     best.into_iter()
@@ -259,21 +280,28 @@ impl TimedGraph {
     }
 
     /// Thesis 3.5.2: the walk from `a` to `b` whose duration is closest to `frames`, then of
-    /// least realism cost. Durations from half to twice the request (and at least one
-    /// transition's length) are searched.
+    /// least realism cost. Durations within 2 frames of the request are searched first, then
+    /// within 8, 32, ..., up to twice the request plus two transitions.
     pub fn walk_with_duration(&self, a: u32, b: u32, frames: i64, longest_edge: usize) -> Result<TimedWalk, String> {
         self.check(a, b)?;
         let target = frames.max(1) as usize;
-        let hi = (2 * target).max(target + 2 * longest_edge);
-        let found = cheapest_by_duration(self, a, b, 1, hi, |w, _| w);
-        let best = found
-            .iter()
-            .enumerate()
-            .filter_map(|(d, x)| x.as_ref().map(|(c, w)| ((d as i64 - frames).abs(), *c, w)))
-            .min_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
-        match best {
-            Some((_, _, w)) => Ok(self.measure(w)),
-            None => Err(format!("no walk from frame {a} to frame {b} lasts between 1 and {hi} frames")),
+        let widest = (2 * target).max(target + 2 * longest_edge);
+        let mut tol = 2;
+        loop {
+            let (lo, hi) = (target.saturating_sub(tol).max(1), (target + tol).min(widest));
+            let found = cheapest_by_duration(self, a, b, lo, hi, |w, _| w);
+            let best = found
+                .iter()
+                .enumerate()
+                .filter_map(|(d, x)| x.as_ref().map(|(c, w)| ((d as i64 - frames).abs(), *c, w)))
+                .min_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
+            if let Some((_, _, w)) = best {
+                return Ok(self.measure(w));
+            }
+            if lo == 1 && hi == widest {
+                return Err(format!("no walk from frame {a} to frame {b} lasts between 1 and {widest} frames"));
+            }
+            tol *= 4;
         }
     }
 
@@ -292,8 +320,19 @@ impl TimedGraph {
         self.check(a, b)?;
         let (wd, wt) = (1.0 / scales.0, 1.0 / scales.1);
         let total = |w: &TimedWalk| w.cost + wd * (w.distance - distance).abs() + wt * (w.frames as f64 - frames as f64).abs();
-        let lo = frames.saturating_sub(frames / 4).max(1);
-        let hi = frames + frames / 4 + longest_edge;
+        // Durations near the target first (a time error of w_t^-1 frames costs as much as one
+        // unit of realism), widened when no walk has them.
+        let mut tol = (frames / 20).max(3);
+        let (lo, hi) = loop {
+            let (lo, hi) = (frames.saturating_sub(tol).max(1), frames + tol);
+            if cheapest_by_duration(self, a, b, lo, hi, |w, _| w).iter().any(Option::is_some) {
+                break (lo, hi);
+            }
+            if lo == 1 && tol > frames + longest_edge {
+                return Err(format!("no walk from frame {a} to frame {b} lasts between 1 and {hi} frames"));
+            }
+            tol *= 3;
+        };
         let mut best: Option<(f64, TimedWalk)> = None;
         let consider = |mu: f64, best: &mut Option<(f64, TimedWalk)>| -> Option<f64> {
             let found = cheapest_by_duration(self, a, b, lo, hi, |w, l| w + mu * l);
@@ -318,7 +357,7 @@ impl TimedGraph {
         let scale = self.edges.iter().map(|e| e.weight).sum::<f64>()
             / self.edges.iter().map(|e| e.length).sum::<f64>().max(1e-9);
         let (mut lo_mu, mut hi_mu) = if d0 > distance { (0.0, 64.0 * scale) } else { (-64.0 * scale, 0.0) };
-        for _ in 0..14 {
+        for _ in 0..10 {
             let mu = 0.5 * (lo_mu + hi_mu);
             match consider(mu, &mut best) {
                 Some(d) if d > distance => lo_mu = mu,
