@@ -78,9 +78,24 @@ pub fn blend_placements(
     path: &[(usize, usize)],
     lambda: Lambda,
 ) -> Vec<BlendStep> {
-    let (iu, iv, _) = plane_axes(up);
     let cs: Vec<[f64; 3]> = source.iter().map(|f| centre(f)).collect();
     let cd: Vec<[f64; 3]> = destination.iter().map(|f| centre(f)).collect();
+    let angle = |n: usize, m: usize| motion_plane_alignment(source[n], destination[m], None, up).0.theta;
+    blend_placements_from(up, &cs, &cd, path, lambda, angle)
+}
+
+/// [`blend_placements`] from the segments' centres of mass and `raw_angle(n, m)`, the eq. 2.3
+/// angle aligning destination frame m onto source frame n as captured (e.g. read from the
+/// subject's alignment Gram matrices, see surfcap-geometry's `alignment_gram`).
+pub fn blend_placements_from(
+    up: UpAxis,
+    cs: &[[f64; 3]],
+    cd: &[[f64; 3]],
+    path: &[(usize, usize)],
+    lambda: Lambda,
+    raw_angle: impl Fn(usize, usize) -> f64,
+) -> Vec<BlendStep> {
+    let (iu, iv, _) = plane_axes(up);
     let (mut gs, mut gd) = (PlaneMotion::identity(up), PlaneMotion::identity(up));
     let l = path.len();
     let mut p = cs[0];
@@ -91,8 +106,7 @@ pub fn blend_placements(
             Lambda::Ramp => 1.0,
             Lambda::Constant(x) => x,
         };
-        let raw = motion_plane_alignment(source[n], destination[m], None, up).0.theta;
-        let theta = wrap_angle(raw + gs.theta - gd.theta);
+        let theta = wrap_angle(raw_angle(n, m) + gs.theta - gd.theta);
         let (cn, cm) = (gs.apply_point(cs[n]), gd.apply_point(cd[m]));
         gs = PlaneMotion::about(-lam * theta, cn, [p[iu] - cn[iu], p[iv] - cn[iv]], up).after(&gs);
         gd = PlaneMotion::about((1.0 - lam) * theta, cm, [p[iu] - cm[iu], p[iv] - cm[iv]], up).after(&gd);
@@ -112,7 +126,7 @@ pub fn blend_placements(
                 [0.0, 0.0]
             }
         };
-        let (sn, sm) = (step(&gs, &cs, n), step(&gd, &cd, m));
+        let (sn, sm) = (step(&gs, cs, n), step(&gd, cd, m));
         p[iu] += (1.0 - lam) * sn[0] + lam * sm[0];
         p[iv] += (1.0 - lam) * sn[1] + lam * sm[1];
     }

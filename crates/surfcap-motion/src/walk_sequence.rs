@@ -19,11 +19,12 @@
 use std::collections::HashMap;
 
 use rayon::prelude::*;
+use surfcap_geometry::distance_matrix::alignment_gram;
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_geometry::poisson_reconstruction::PoissonError;
 use surfcap_mesh::{FrameIndex, FrameLabel, Subject, UpAxis};
 
-use crate::blend::{Lambda, Mixing, blend, blend_placements, centre};
+use crate::blend::{Lambda, Mixing, blend, blend_placements_from, centre};
 use crate::dtw::{Slope, dtw_window};
 use crate::graph::Graph;
 use crate::transition_table::TransitionTable;
@@ -134,6 +135,13 @@ impl WalkModel {
             }
         };
         let centres: Vec<[f64; 3]> = (0..subject.n_frames()).map(tracked_centre).collect();
+        let mass: Vec<[f64; 3]> = match tracked {
+            None => centres.clone(),
+            Some(_) => (0..subject.n_frames()).map(|g| centre(frame(g))).collect(),
+        };
+        // Eq. 2.3 angles of every pair from three matrix products instead of one pass over the
+        // vertices per warp cell.
+        let gram = alignment_gram(subject, None);
         let up = subject.up_axis;
         let edges: Vec<(u32, u32)> = graph
             .edges()
@@ -150,11 +158,16 @@ impl WalkModel {
                     return None;
                 }
                 let warp = dtw_window(d, n, u as usize, li, v as usize, lj, slope)?;
-                let src: Vec<&[f32]> = (u as usize..u as usize + li).map(frame).collect();
-                let d0 = v as usize + 1 - lj;
-                let dst: Vec<&[f32]> = (d0..=v as usize).map(frame).collect();
-                let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(a, b)| (a - u as usize, b - d0)).collect();
-                let steps = blend_placements(up, &src, &dst, &offsets, Lambda::Ramp);
+                let (s0, d0) = (u as usize, v as usize + 1 - lj);
+                let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(a, b)| (a - s0, b - d0)).collect();
+                let steps = blend_placements_from(
+                    up,
+                    &mass[s0..s0 + li],
+                    &mass[d0..=v as usize],
+                    &offsets,
+                    Lambda::Ramp,
+                    |n, m| gram.theta(s0 + n, d0 + m),
+                );
                 let last = steps.last()?;
                 let mix = |st: &crate::blend::BlendStep| -> [f64; 3] {
                     let a = st.src.apply_point(centres[u as usize + st.n]);

@@ -481,16 +481,8 @@ fn read_keys(path: &Path, s: &Subject) -> anyhow::Result<Vec<Key>> {
     Ok(keys)
 }
 
-/// Result of a key-pose run.
-pub struct KeyposeOutcome {
-    pub requested: Vec<i64>,
-    pub obtained: Vec<i64>,
-    pub mean_abs_error: f64,
-    pub search_seconds: f64,
-    pub played: Played,
-}
-
-pub fn run_keyposes(ctx: &crate::Ctx, prep: &Prepared, keys_path: &Path, out: &OutOpts) -> anyhow::Result<KeyposeOutcome> {
+/// Key-pose timing (thesis 3.5.2): prints the table of Fig. 3.18 and writes the animation.
+pub fn run_keyposes(ctx: &crate::Ctx, prep: &Prepared, keys_path: &Path, out: &OutOpts) -> anyhow::Result<Played> {
     let keys = read_keys(keys_path, &prep.s)?;
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
@@ -526,16 +518,16 @@ pub fn run_keyposes(ctx: &crate::Ctx, prep: &Prepared, keys_path: &Path, out: &O
         row("Obtained", obtained.iter().map(|x| x.to_string()).collect());
         println!("mean absolute timing error {mean_abs_error:.2} frames; search {search_seconds:.3} s");
     }
-    Ok(KeyposeOutcome { requested, obtained, mean_abs_error, search_seconds, played })
+    Ok(played)
 }
 
 pub fn keyposes(ctx: &crate::Ctx, a: KeyposesArgs) -> anyhow::Result<()> {
     let prep = prepare(ctx, &a.subject, &a.graph, None)?;
-    let o = run_keyposes(ctx, &prep, &a.keys, &a.out)?;
+    let played = run_keyposes(ctx, &prep, &a.keys, &a.out)?;
     if ctx.json {
-        print_json(&serde_json::from_slice(&std::fs::read(&o.played.report_path)?)?);
+        print_json(&serde_json::from_slice(&std::fs::read(&played.report_path)?)?);
     }
-    print_written(ctx, &o.played);
+    print_written(ctx, &played);
     Ok(())
 }
 

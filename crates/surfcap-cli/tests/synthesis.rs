@@ -1,0 +1,227 @@
+//! Animation synthesis under user constraints (thesis 3.5) on real data, end to end:
+//! `surfcap synth path | keyposes | reach`, their reports and their files.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn surfcap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_surfcap")).args(args).output().expect("surfcap runs")
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn example(name: &str) -> PathBuf {
+    surfcap_testkit::workspace_root().join("examples").join(name)
+}
+
+fn report(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).expect("--json prints the report")
+}
+
+/// Frame labels of a glb's sidecar, and checks that they agree with the report's counts.
+fn check_labels(glb: &Path, r: &serde_json::Value) {
+    let side: serde_json::Value = serde_json::from_slice(&std::fs::read(glb.with_extension("json")).unwrap()).unwrap();
+    let labels = side["sequences"][0]["frame_labels"].as_array().unwrap();
+    assert_eq!(labels.len() as u64, r["frames"].as_u64().unwrap());
+    let synthetic = labels.iter().filter(|l| *l == "synthetic").count() as u64;
+    assert_eq!(synthetic, r["synthetic_frames"].as_u64().unwrap());
+    assert_eq!(r["original_frames"].as_u64().unwrap() + synthetic, r["frames"].as_u64().unwrap());
+    assert!(r["transitions"].as_u64().unwrap() > 0 && synthetic > 0, "a synthesis that never transitions");
+}
+
+/// Issue acceptance: on the mannequin driven by the real CMU locomotion clips, a 15 m S-shaped
+/// ground path is followed with a mean centre-of-mass error under 0.25 m (measured on the
+/// written frames); `reach` meets a distance and a time; restrictions and bad input.
+#[test]
+fn path_and_reach_on_cmu_locomotion() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let subject = tmp.path().join("cmu.subject");
+    let bvh: Vec<PathBuf> = ["16_15", "16_17", "16_19", "16_31", "16_36", "16_57", "16_07"]
+        .iter()
+        .map(|c| data.join("cmu_bvh").join(format!("{c}.bvh")))
+        .collect();
+    let mut args = vec!["synth", "--bvh"];
+    args.extend(bvh.iter().map(|b| p(b)));
+    args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
+    let o = surfcap(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let glb = tmp.path().join("path.glb");
+    let curve = example("s_path_15m.csv");
+    let o = surfcap(&[
+        "synth",
+        "path",
+        p(&subject),
+        "--curve",
+        p(&curve),
+        "-o",
+        p(&glb),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    let r = report(&o);
+    let (mean, max) = (r["mean_error"].as_f64().unwrap(), r["max_error"].as_f64().unwrap());
+    eprintln!(
+        "S-path 15 m: mean error {mean:.3} m, max {max:.3} m, {} frames ({} synthetic), {} transitions, search {:.2} s",
+        r["frames"], r["synthetic_frames"], r["transitions"], r["search"]["seconds"]
+    );
+    assert!(mean < 0.25, "mean centre-of-mass error {mean} m");
+    assert!(r["curve_length"].as_f64().unwrap() > 14.9 && r["travelled"].as_f64().unwrap() >= 14.9);
+    // The search's prediction is the played animation's centre track.
+    let predicted = r["predicted"]["mean_error"].as_f64().unwrap();
+    assert!((predicted - mean).abs() < 0.01, "predicted {predicted} vs measured {mean}");
+    check_labels(&glb, &r);
+    surfcap_testkit::validate_glb(&[glb.clone()]);
+
+    // Only running between 4 and 8 m: every original frame shown there is from the run clip.
+    let o = surfcap(&[
+        "synth",
+        "path",
+        p(&subject),
+        "--curve",
+        p(&curve),
+        "--tags",
+        "run:4-8",
+        "-o",
+        p(&tmp.path().join("run.glb")),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    let r = report(&o);
+    let centres = r["per_frame"]["centre"].as_array().unwrap();
+    let (mut s, mut prev) = (0.0, None::<(f64, f64)>);
+    let mut arc = Vec::new();
+    for c in centres {
+        let q = (c[0].as_f64().unwrap(), c[2].as_f64().unwrap());
+        if let Some(a) = prev {
+            s += ((q.0 - a.0).powi(2) + (q.1 - a.1).powi(2)).sqrt();
+        }
+        arc.push(s);
+        prev = Some(q);
+    }
+    let side: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("run.json")).unwrap()).unwrap();
+    let labels = side["sequences"][0]["frame_labels"].as_array().unwrap();
+    let walk: Vec<u64> = r["walk"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect();
+    // Original frames are the walk's nodes, in order.
+    let run_frames = 117 + 129 + 102 + 106..117 + 129 + 102 + 106 + 47;
+    let mut node = 0;
+    let mut checked = 0;
+    for (k, l) in labels.iter().enumerate() {
+        if l == "original" {
+            if (4.05..=7.95).contains(&arc[k]) {
+                assert!(run_frames.contains(&walk[node]), "frame {k} at {:.2} m shows node {}", arc[k], walk[node]);
+                checked += 1;
+            }
+            node += 1;
+        }
+    }
+    assert!(checked > 10, "{checked} frames checked in the run section");
+
+    let o = surfcap(&[
+        "synth",
+        "reach",
+        p(&subject),
+        "--from",
+        "16_15:10",
+        "--to",
+        "16_31:80",
+        "--distance",
+        "10",
+        "--time",
+        "9",
+        "-o",
+        p(&tmp.path().join("reach.glb")),
+        "--cache-dir",
+        p(&cache),
+        "--json",
+    ]);
+    let r = report(&o);
+    eprintln!(
+        "reach 10 m in 9 s: {:.2} m in {} frames, search {:.2} s",
+        r["distance"], r["obtained_frames"], r["search_seconds"]
+    );
+    assert!(r["distance_error"].as_f64().unwrap() < 0.3, "{}", r["distance_error"]);
+    assert!(r["time_error_frames"].as_u64().unwrap() <= 10, "{}", r["time_error_frames"]);
+
+    // Bad input names the file and line, or what is known.
+    let bad_curve = tmp.path().join("bad.csv");
+    std::fs::write(&bad_curve, "x,z\n0,0\n1,zero\n").unwrap();
+    let out = tmp.path().join("never.glb");
+    for (extra, want) in [
+        (vec!["--curve", p(&bad_curve)], "bad.csv:3"),
+        (vec!["--curve", p(&curve), "--tags", "moonwalk:1-2"], "jump, run, turn_left"),
+        (vec!["--curve", p(&curve), "--tags", "run:9-5"], "FROM < TO"),
+        (vec!["--curve", p(&curve), "--start", "16_15:500"], "16_15"),
+    ] {
+        let o = surfcap(&[&["synth", "path", p(&subject), "-o", p(&out), "--cache-dir", p(&cache)][..], &extra[..]].concat());
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
+    }
+    assert!(!out.exists());
+}
+
+/// Issue acceptance: ten key poses moved to new times on the Vlasic samba and the Briceno dance,
+/// mean absolute timing error at most 3 frames (thesis Fig. 3.18).
+#[test]
+fn key_pose_timing_on_samba_and_dance() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    for (subject, keys) in
+        [(data.join("vlasic2008/samba"), "samba_keys.csv"), (data.join("briceno2003/dance"), "dance_keys.csv")]
+    {
+        let glb = tmp.path().join(keys.replace(".csv", ".glb"));
+        let o = surfcap(&[
+            "synth",
+            "keyposes",
+            p(&subject),
+            "--keys",
+            p(&example(keys)),
+            "-o",
+            p(&glb),
+            "--cache-dir",
+            p(&cache),
+            "--json",
+        ]);
+        let r = report(&o);
+        let err = r["mean_abs_error_frames"].as_f64().unwrap();
+        let rows = r["keys"].as_array().unwrap();
+        eprintln!(
+            "{keys}: requested {:?}, obtained {:?}, mean error {err:.2} frames",
+            rows.iter().map(|k| k["requested_time"].as_i64().unwrap()).collect::<Vec<_>>(),
+            rows.iter().map(|k| k["obtained_time"].as_i64().unwrap()).collect::<Vec<_>>()
+        );
+        assert_eq!(rows.len(), 10);
+        assert!(err <= 3.0, "{keys}: {err}");
+        // The output's length is the last key's obtained time plus one frame.
+        assert_eq!(r["frames"].as_i64().unwrap(), rows[9]["obtained_time"].as_i64().unwrap() + 1);
+        check_labels(&glb, &r);
+    }
+    let bad = tmp.path().join("bad_keys.csv");
+    std::fs::write(&bad, "frame,time\nsamba:10,0\nsamba:20,40\nsamba:30,20\n").unwrap();
+    let o = surfcap(&[
+        "synth",
+        "keyposes",
+        p(&data.join("vlasic2008/samba")),
+        "--keys",
+        p(&bad),
+        "-o",
+        p(&tmp.path().join("x.glb")),
+        "--cache-dir",
+        p(&cache),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("bad_keys.csv:4"), "{}", stderr(&o));
+}
