@@ -48,7 +48,8 @@ enum Command {
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
     /// Run the main job on built-in data: the procedural mannequin (or --bvh files), imported,
-    /// exported, its pose distances and an interpolation.
+    /// exported, its pose distances, an interpolation, its essential graph and a path-following
+    /// animation.
     Demo(commands::demo::Args),
     /// Measure speed and memory (loading a subject).
     Bench(commands::bench::Args),

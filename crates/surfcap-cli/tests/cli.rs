@@ -32,8 +32,18 @@ fn demo_runs_and_its_glb_is_valid() {
         assert!(out.join(f).is_file(), "demo did not write {f}");
     }
     assert!(out.join("export/obj/walk/frame_00090.obj").is_file());
-    surfcap_testkit::validate_glb(&[out.join("export/mannequin.glb"), out.join("export/interpolation.glb")]);
+    surfcap_testkit::validate_glb(&[
+        out.join("export/mannequin.glb"),
+        out.join("export/interpolation.glb"),
+        out.join("export/path.glb"),
+    ]);
     assert!(out.join("distances.npy").is_file());
+    // The path-following step: its report says how closely the S-shaped path was followed.
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("export/path.report.json")).unwrap()).unwrap();
+    assert!(r["mean_error"].as_f64().unwrap() < 0.3, "demo path error {}", r["mean_error"]);
+    assert!(r["transitions"].as_u64().unwrap() > 0);
+    assert!(out.join("s_path.csv").is_file());
     let side: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("export/mannequin.json")).unwrap()).unwrap();
     assert_eq!(side["sequences"][0]["frame_labels"][0], "original");

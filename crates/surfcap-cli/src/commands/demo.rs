@@ -1,18 +1,24 @@
 //! `surfcap demo`: the main job on built-in data. Build the built-in subject (the mannequin
 //! walking, jogging, turning, jumping and idling, or driven by `--bvh` files), write it as
 //! source files, import them into a subject cache, describe it, export it in every format,
-//! compute its pose distance matrix and a non-linear interpolation between two of its poses.
+//! compute its pose distance matrix and a non-linear interpolation between two of its poses;
+//! then its transitions, essential graph, and an animation that follows an S-shaped path.
 
 use std::path::PathBuf;
 
 use serde_json::json;
-use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+use surfcap_geometry::distance_matrix::DistanceParams;
+use surfcap_motion::path_following::PathSearch;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::io::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
 
+use super::distance::{CacheOpts, cached_distance_matrix};
+use super::graph::Kind;
 use super::print_json;
+use super::synth_walk::{GraphOpts, OutOpts, prepare_subject, read_curve, run_path};
+use super::transitions::{SlopeArg, TableOpts};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -89,11 +95,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     say(&format!("4. exported it as glb, OBJ, PLY, PC2 and npy in {}", a.output.join("export").display()));
 
-    // Pose geometry (thesis 2.3-2.4): all-pairs distances and a non-linear interpolation.
-    let d = distance_matrix(&subject, &DistanceParams::default(), &bar);
+    // Pose geometry (thesis 2.3-2.4): all-pairs distances and a non-linear interpolation. The
+    // distances go to the demo's own cache, where the later steps read them.
+    let cache_opts = CacheOpts { cache_dir: Some(a.output.join("cache")), no_cache: false };
+    let (d, _, _) = cached_distance_matrix(ctx, &subject, &DistanceParams::default(), &cache_opts)?;
+    let n = d.shape[0];
     let dist_path = a.output.join("distances.npy");
-    surfcap_mesh::atomic::write_file(&dist_path, |w| write_npy(w, &[d.n, d.n], &d.values))?;
-    say(&format!("5. computed the {0} x {0} deformation-gradient pose distances -> {1}", d.n, dist_path.display()));
+    surfcap_mesh::atomic::write_file(&dist_path, |w| write_npy(w, &[n, n], &d.data))?;
+    say(&format!("5. computed the {n} x {n} deformation-gradient pose distances -> {}", dist_path.display()));
     // From the first frame of the first sequence to the middle of the last one (with the
     // procedural motions: standing in the walk -> the jump's crouch).
     let (mut first, mut last) = (&subject.sequences()[0], &subject.sequences()[subject.sequences().len() - 1]);
@@ -126,15 +135,59 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "6. interpolated {from_spec} -> {to_spec} non-linearly in {steps} poses -> {}",
         interp_path.display()
     ));
+
+    // Transitions, essential graph and a path-following animation (thesis 2.5, 3.3, 3.5.1).
+    let opts = GraphOpts {
+        kind: "essential".into(),
+        alpha: 0.05,
+        table: TableOpts { slope: SlopeArg(Some(3)), l_min: None, l_max: None },
+        cache: cache_opts,
+        source: Default::default(),
+    };
+    let prep = prepare_subject(ctx, subject.clone(), &opts, Kind::Essential, None)?;
+    say(&format!(
+        "7. found the optimal transition between every pair of frames (DTW, thesis 2.5) and built the essential graph: {} edges, {} of them transitions ({:.1} s)",
+        prep.graph.edges().len(),
+        prep.model.n_transitions(),
+        prep.seconds
+    ));
+    // An S-shaped path on the ground, 9 units long, starting at the subject's first frame.
+    let (iu, iv, _) = surfcap_geometry::motion_plane_alignment::plane_axes(subject.up_axis);
+    let c0 = surfcap_motion::blend::centre(subject.frame(0).expect("a frame"));
+    let curve_path = a.output.join("s_path.csv");
+    let mut csv = String::from("# the demo's path on the ground plane\nu,v\n");
+    for k in 0..=72 {
+        let x = k as f64 * 0.1;
+        csv += &format!("{:.4},{:.4}\n", c0[iu] + x, c0[iv] + (2.0 * std::f64::consts::PI * x / 7.2).sin());
+    }
+    surfcap_mesh::atomic::write_file(&curve_path, |w| w.write_all(csv.as_bytes()))?;
+    let curve = read_curve(&curve_path, subject.up_axis, true)?;
+    let out = OutOpts { output: a.output.join("export/path.glb"), format: None };
+    let path = run_path(ctx, &prep, &curve, &[], None, &PathSearch::for_fps(subject.fps), None, &out)?;
+    say(&format!(
+        "8. followed the S-shaped path {} ({:.1} long): {} frames, {} transitions, centre-of-mass error mean {:.3}, max {:.3} -> {} and {}",
+        curve_path.display(),
+        curve.length(),
+        path.frames,
+        path.transitions,
+        path.mean_error,
+        path.max_error,
+        out.output.display(),
+        path.played.report_path.display()
+    ));
+    written.extend(path.played.written.iter().cloned());
+    written.push(path.played.report_path.clone());
     if ctx.json {
-        print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written }));
+        print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written,
+            "path": { "mean_error": path.mean_error, "max_error": path.max_error, "frames": path.frames } }));
     } else if !ctx.quiet {
         println!("\nsurfcap info {}:", cache.display());
         super::info::run(ctx, super::info::Args { subject: cache.clone(), source: Default::default() })?;
         println!(
-            "\nplay {} and {} in Blender (File > Import > glTF) or any three.js viewer",
+            "\nplay {}, {} and {} in Blender (File > Import > glTF) or any three.js viewer",
             a.output.join("export/mannequin.glb").display(),
-            interp_path.display()
+            interp_path.display(),
+            out.output.display()
         );
     }
     Ok(())
