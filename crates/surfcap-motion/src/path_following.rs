@@ -489,3 +489,55 @@ pub fn follow_path(
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn curve_by_arc_length_and_planar_distances() {
+        let c = Curve::new(vec![[0.0, 5.0, 0.0], [3.0, 9.0, 0.0], [3.0, 9.0, 0.0], [3.0, 0.0, 4.0]], vec![0, 2]).unwrap();
+        assert_eq!(c.length(), 7.0); // 3 then 4 in the ground plane; the duplicate is dropped
+        let p = c.at(5.0);
+        assert!((p[0] - 3.0).abs() < 1e-12 && (p[2] - 2.0).abs() < 1e-12);
+        assert_eq!(c.at(99.0), [3.0, 0.0, 4.0]);
+        assert_eq!(c.distance(&[0.0, 100.0, 0.0], &[3.0, -7.0, 4.0]), 5.0);
+        assert!(Curve::new(vec![[1.0, 2.0, 3.0], [1.0, 7.0, 3.0]], vec![0, 2]).is_err(), "one point on the ground");
+        let (e, len) = path_errors(&c, &[[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 0.0, 1.0]]);
+        assert_eq!((e, len), (vec![0.0, 0.0, 0.0], 4.0));
+    }
+
+    #[test]
+    fn the_tube_follows_a_straight_line_and_restrictions_hold() {
+        let (s, g, model) = crate::walk_sequence::tests::setup();
+        // The tube crawls along +x: a straight line as long as about two sequences' crawl.
+        let (c0, c1) = (model.centres[0], model.centres[29]);
+        let crawl = c1[0] - c0[0];
+        assert!(crawl > 0.05);
+        let pts = vec![[0.0, 0.0, 0.0], [1.8 * crawl, 0.0, 0.0]];
+        let curve = Curve::new(pts, vec![0, 2]).unwrap();
+        let p = PathSearch { window: crawl / 2.0, ..PathSearch::for_fps(s.fps) };
+        let r = follow_path(&model, &g, &curve, &[], None, &p).unwrap();
+        let mean = r.errors.iter().sum::<f64>() / r.errors.len() as f64;
+        assert!(r.travelled >= curve.length() && mean < 0.1 * crawl, "mean error {mean} for a crawl of {crawl}");
+        let played = model.walk_centres(&r.walk, &r.start).unwrap();
+        assert_eq!(played, r.centres);
+        // Only the second sequence after a fifth of the curve.
+        let only_second = Restriction { from: 0.2 * curve.length(), to: curve.length(), allowed: vec![false, true] };
+        let r = follow_path(&model, &g, &curve, std::slice::from_ref(&only_second), None, &p).unwrap();
+        // Replay the walk: every node shown inside the restricted stretch is of sequence 1.
+        let (mut g0, mut last, mut arc, mut checked) = (r.start, r.centres[0], 0.0, 0);
+        for w in r.walk.windows(2) {
+            let step = model.step(w[0], w[1]).unwrap();
+            g0 = model.advance(step, &g0, w[1], |c, _| {
+                arc += curve.distance(&last, &c);
+                last = c;
+            });
+            if arc > only_second.from + 1e-9 && arc <= only_second.to {
+                assert_eq!(s.frame_index().locate(w[1] as usize).unwrap().0, 1, "node {} at {arc}", w[1]);
+                checked += 1;
+            }
+        }
+        assert!(checked >= 3, "{checked}");
+    }
+}

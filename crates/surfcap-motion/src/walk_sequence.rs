@@ -308,3 +308,78 @@ pub fn walk_sequence(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::edge_weights::edge_weights;
+    use crate::essential_graph::essential_graph;
+    use crate::transition_table::{TableParams, transition_table};
+    use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+    use surfcap_mesh::NoProgress;
+    use surfcap_synth::{WormParams, worm_subject};
+
+    /// The built-in tube (two crawling sequences), its essential graph and walk model.
+    pub(crate) fn setup() -> (Subject, Graph, WalkModel) {
+        let s = worm_subject(&WormParams { rings: 10, segments: 8, frames: 30, ..Default::default() }).unwrap();
+        let d = distance_matrix(&s, &DistanceParams::default(), &NoProgress);
+        let p = TableParams { l_min: 4, l_max: 8, slope: Some(3) };
+        let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress);
+        let w = edge_weights(&table, s.frame_index(), 0.05);
+        let g = essential_graph(&w, &NoProgress).graph;
+        let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
+        (s, g, model)
+    }
+
+    #[test]
+    fn the_model_predicts_the_played_centres_and_labels_follow_algorithm_3() {
+        let (s, g, model) = setup();
+        assert!(model.n_transitions() > 0);
+        let n = s.n_frames() as u32;
+        // Two transitions, each entered after a few original frames.
+        let (u, v) = g
+            .edges()
+            .iter()
+            .map(|e| (e.from, e.to))
+            .find(|&(a, b)| matches!(model.step(a, b), Some(Step::Transition(_))) && a >= 2 && b + 3 < n)
+            .expect("a transition edge");
+        // Then a second transition after a run of original frames, when there is one.
+        let second = g.edges().iter().map(|e| (e.from, e.to)).find(|&(a, b)| {
+            a > v
+                && (v..a).all(|k| matches!(model.step(k, k + 1), Some(Step::Original)))
+                && matches!(model.step(a, b), Some(Step::Transition(_)))
+        });
+        let mut walk: Vec<u32> = (u - 2..=u).collect();
+        match second {
+            Some((x, y)) => {
+                walk.extend(v..=x);
+                walk.push(y);
+            }
+            None => walk.extend(v..=v + 2),
+        }
+        let start = PlaneMotion { theta: 0.8, t: [1.0, -2.0], up: s.up_axis };
+        let out = walk_sequence(&s, &model, &walk, &start).unwrap();
+        let predicted = model.walk_centres(&walk, &start).unwrap();
+        assert_eq!(out.n_frames(), predicted.len());
+        assert_eq!(out.n_frames(), model.walk_duration(&walk).unwrap() + 1);
+        let nv = s.topology().n_vertices();
+        for (k, f) in out.positions.chunks_exact(3 * nv).enumerate() {
+            let c = centre(f);
+            let e = (0..3).map(|a| (c[a] - predicted[k][a]).abs()).fold(0.0, f64::max);
+            assert!(e < 1e-4, "frame {k}: centre {c:?} vs predicted {:?}", predicted[k]);
+        }
+        // Original frames are the walk's nodes, placed by the running alignment; the first one
+        // is the start placement of node walk[0].
+        let originals: Vec<u32> = out.nodes.iter().flatten().copied().collect();
+        assert_eq!(originals, walk);
+        assert_eq!(out.labels.iter().filter(|l| **l == FrameLabel::Original).count(), walk.len());
+        assert!(out.n_transitions >= 1);
+        let mut first = s.frame(walk[0] as usize).unwrap().to_vec();
+        start.apply(&mut first);
+        let d0 = first.iter().zip(&out.positions[..3 * nv]).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+        assert!(d0 < 1e-5);
+        // A step that is not an edge is refused with its position.
+        let bad = [walk[0], walk[0] + 5];
+        assert!(matches!(walk_sequence(&s, &model, &bad, &start), Err(WalkError::NotAnEdge { at: 0, .. })));
+    }
+}

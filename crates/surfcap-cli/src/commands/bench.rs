@@ -69,7 +69,6 @@ pub enum What {
         #[arg(long)]
         fps: Option<f64>,
     },
-    /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     /// Essential and motion graph build time for --frames nodes (thesis 3.3; target: 2,000
     /// nodes in under 60 s on 2 cores, after the transition table). The table is seeded random
     /// (costs and durations): the build's work does not depend on the values.
@@ -84,6 +83,25 @@ pub enum What {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// Constrained synthesis on a real-geometry graph of --frames nodes (the procedural
+    /// mannequin, six gaits with varied seeds): transition table, essential graph and walk-model
+    /// build times, then the latency of one query of each kind: a 15 m S-path, ten key poses,
+    /// and a distance-and-time query (target: under 1 s each).
+    Synth {
+        #[arg(long, default_value_t = 2000)]
+        frames: usize,
+        #[arg(long, default_value_t = 1000)]
+        vertices: usize,
+        #[arg(long, default_value_t = 0.05)]
+        alpha: f64,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Cache folder for the distance matrix and transition table (default: a temporary one,
+        /// so every phase is measured).
+        #[arg(long)]
+        cache_dir: Option<PathBuf>,
+    },
+    /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate {
         /// A subject cache or source.
         subject: PathBuf,
@@ -347,6 +365,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             return interpolate_bench(ctx, subject, &from, &to, repeat, fps);
         }
         What::Graph { frames, sequences, alpha, seed } => return graph_bench(ctx, frames, sequences, alpha, seed),
+        What::Synth { frames, vertices, alpha, seed, cache_dir } => {
+            return synth_bench(ctx, frames, vertices, alpha, seed, cache_dir);
+        }
     };
     if in_process {
         let path = subject.context("--in-process needs --subject")?;
@@ -464,6 +485,118 @@ fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, se
             eg.graph.density(),
             mg.graph.edges().len()
         );
+    }
+    Ok(())
+}
+
+fn synth_bench(
+    ctx: &crate::Ctx,
+    frames: usize,
+    vertices: usize,
+    alpha: f64,
+    seed: u64,
+    cache_dir: Option<PathBuf>,
+) -> anyhow::Result<()> {
+    use rand::{Rng, SeedableRng};
+    use surfcap_motion::path_following::{Curve, PathSearch, follow_path};
+    use surfcap_motion::timed_walk::TimedGraph;
+    use surfcap_synth::locomotion::Gait;
+    use surfcap_synth::mannequin::{BodyShape, mannequin};
+    use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
+    anyhow::ensure!(frames >= 200, "--frames {frames}: expected at least 200");
+    let t0 = Instant::now();
+    let m = mannequin(&BodyShape::average(), vertices)?;
+    let gaits = [Gait::Walk, Gait::Jog, Gait::TurnLeft, Gait::TurnRight, Gait::Jump, Gait::Idle];
+    let mut clips = Vec::new();
+    let mut total = 0;
+    for k in 0.. {
+        if total >= frames {
+            break;
+        }
+        let g = gaits[k % gaits.len()];
+        let mut c = Clip::procedural(&m, g, 30.0, g.duration(), seed + k as u64)?;
+        c.name = format!("{}_{k}", c.name);
+        // The last clip is cut so the graph has exactly --frames nodes.
+        c.poses.truncate(frames - total);
+        total += c.poses.len();
+        clips.push(c);
+    }
+    let s = mannequin_subject("bench", &m, &clips, 30.0)?;
+    let build_secs = t0.elapsed().as_secs_f64();
+    let tmp = tempfile::TempDir::new()?;
+    let cache = super::distance::CacheOpts { cache_dir: Some(cache_dir.unwrap_or_else(|| tmp.path().into())), no_cache: false };
+    let t1 = Instant::now();
+    let params = surfcap_geometry::distance_matrix::DistanceParams::default();
+    let _ = super::distance::cached_distance_matrix(ctx, &s, &params, &cache)?;
+    let dist_secs = t1.elapsed().as_secs_f64();
+    let opts = super::synth_walk::GraphOpts {
+        kind: "essential".into(),
+        alpha,
+        table: super::transitions::TableOpts { slope: super::transitions::SlopeArg(Some(3)), l_min: None, l_max: None },
+        cache,
+        source: Default::default(),
+    };
+    let p = opts.table.params(s.fps)?;
+    let t2 = Instant::now();
+    let _ = super::transitions::cached_table(ctx, &s, &p, &opts.cache)?;
+    let table_secs = t2.elapsed().as_secs_f64();
+    let prep = super::synth_walk::prepare_subject(ctx, s, &opts, super::graph::Kind::Essential, None)?;
+    let graph_secs = prep.seconds;
+    let n = prep.graph.n;
+    // 15 m S-path.
+    let points: Vec<[f64; 3]> = (0..=272).map(|k| {
+        let x = k as f64 * 0.05;
+        [x, 0.0, 1.5 * (2.0 * std::f64::consts::PI * x / 14.0).sin()]
+    }).collect();
+    let curve = Curve::new(points, vec![0, 2]).map_err(anyhow::Error::msg)?;
+    let search = PathSearch::for_fps(prep.s.fps);
+    let t3 = Instant::now();
+    let path = follow_path(&prep.model, &prep.graph, &curve, &[], None, &search).map_err(anyhow::Error::msg)?;
+    let path_secs = t3.elapsed().as_secs_f64();
+    let path_err = path.errors.iter().sum::<f64>() / path.errors.len() as f64;
+    // Ten key poses, 60 frames apart, and one distance-and-time query.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let t4 = Instant::now();
+    let tg = TimedGraph::new(&prep.graph, &prep.model);
+    let timed_secs = t4.elapsed().as_secs_f64();
+    let longest = tg.longest_edge();
+    let keys: Vec<u32> = (0..10).map(|_| rng.random_range(0..n as u32)).collect();
+    let t5 = Instant::now();
+    let mut now = 0i64;
+    let mut key_err = 0i64;
+    for (k, w) in keys.windows(2).enumerate() {
+        let want = 60 * (k as i64 + 1);
+        let walk = tg.walk_with_duration(w[0], w[1], want - now, longest).map_err(anyhow::Error::msg)?;
+        now += walk.frames as i64;
+        key_err += (now - want).abs();
+    }
+    let key_secs = t5.elapsed().as_secs_f64();
+    let (a, b) = (rng.random_range(0..n as u32), rng.random_range(0..n as u32));
+    let t6 = Instant::now();
+    let (reach, _) = tg
+        .walk_with_distance_and_time(a, b, 10.0, 300, (0.3, 10.0), longest)
+        .map_err(anyhow::Error::msg)?;
+    let reach_secs = t6.elapsed().as_secs_f64();
+    let report = json!({
+        "frames": n, "vertices": prep.s.topology().n_vertices(), "alpha": alpha, "threads": rayon::current_num_threads(),
+        "subject_seconds": build_secs, "distance_seconds": dist_secs, "table_seconds": table_secs,
+        "graph_and_walk_model_seconds": graph_secs, "timed_graph_seconds": timed_secs,
+        "edges": prep.graph.edges().len(), "transitions": prep.model.n_transitions(),
+        "path": { "seconds": path_secs, "mean_error": path_err, "frames": path.errors.len() },
+        "keyposes": { "seconds": key_secs, "mean_abs_error_frames": key_err as f64 / 9.0 },
+        "reach": { "seconds": reach_secs, "distance": reach.distance, "frames": reach.frames, "target_distance": 10.0, "target_frames": 300 },
+    });
+    if ctx.json {
+        print_json(&report);
+    } else {
+        println!(
+            "{n} frames x {} vertices, {} threads: distances {dist_secs:.1} s, transition table {table_secs:.1} s, essential graph + walk model {graph_secs:.1} s ({} edges)",
+            prep.s.topology().n_vertices(),
+            rayon::current_num_threads(),
+            prep.graph.edges().len()
+        );
+        println!("query latency: 15 m S-path {path_secs:.2} s (mean error {path_err:.3} m), ten key poses {key_secs:.2} s (mean error {:.2} frames), distance and time {reach_secs:.2} s ({:.2} m in {} frames for 10 m in 300)",
+            key_err as f64 / 9.0, reach.distance, reach.frames);
     }
     Ok(())
 }
