@@ -44,7 +44,7 @@ enum Command {
     Graph(commands::graph::Args),
     /// Build the mannequin moved by BVH motion capture or procedural locomotion, as a subject;
     /// or synthesise an animation from a subject's graph: path, keyposes, reach (thesis 3.5).
-    Synth(commands::synth::Cmd),
+    Synth(Box<commands::synth::Cmd>),
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
     /// Run the main job on built-in data: the procedural mannequin (or --bvh files), imported,
@@ -109,7 +109,7 @@ fn main() -> ExitCode {
         Command::Eval(a) => commands::eval::run(&ctx, a),
         Command::Transitions(a) => commands::transitions::run(&ctx, a),
         Command::Transition(a) => commands::transition::run(&ctx, a),
-        Command::Synth(a) => commands::synth::run(&ctx, a),
+        Command::Synth(a) => commands::synth::run(&ctx, *a),
         Command::Graph(a) => commands::graph::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),

@@ -81,7 +81,7 @@ fn path_and_reach_on_cmu_locomotion() {
     let predicted = r["predicted"]["mean_error"].as_f64().unwrap();
     assert!((predicted - mean).abs() < 0.01, "predicted {predicted} vs measured {mean}");
     check_labels(&glb, &r);
-    surfcap_testkit::validate_glb(&[glb.clone()]);
+    surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
 
     // Only running between 4 and 8 m: every original frame shown there is from the run clip.
     let o = surfcap(&[
@@ -110,8 +110,7 @@ fn path_and_reach_on_cmu_locomotion() {
         arc.push(s);
         prev = Some(q);
     }
-    let side: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(tmp.path().join("run.json")).unwrap()).unwrap();
+    let side: serde_json::Value = serde_json::from_slice(&std::fs::read(tmp.path().join("run.json")).unwrap()).unwrap();
     let labels = side["sequences"][0]["frame_labels"].as_array().unwrap();
     let walk: Vec<u64> = r["walk"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect();
     // Original frames are the walk's nodes, in order.
@@ -165,7 +164,9 @@ fn path_and_reach_on_cmu_locomotion() {
         (vec!["--curve", p(&curve), "--tags", "run:9-5"], "FROM < TO"),
         (vec!["--curve", p(&curve), "--start", "16_15:500"], "16_15"),
     ] {
-        let o = surfcap(&[&["synth", "path", p(&subject), "-o", p(&out), "--cache-dir", p(&cache)][..], &extra[..]].concat());
+        let o = surfcap(
+            &[&["synth", "path", p(&subject), "-o", p(&out), "--cache-dir", p(&cache)][..], &extra[..]].concat(),
+        );
         assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
         assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
     }

@@ -162,9 +162,8 @@ pub fn blend(
             st.src.apply(&mut a);
             st.dst.apply(&mut b);
             Ok(match &pattern {
-                Some(pat) => {
-                    NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?.at(st.lambda, StretchInterpolation::Linear)
-                }
+                Some(pat) => NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?
+                    .at(st.lambda, StretchInterpolation::Linear),
                 None => linear_interpolation(&a, &b, st.lambda),
             })
         })

@@ -351,11 +351,8 @@ pub fn start_placement(model: &WalkModel, curve: &Curve, u: u32) -> PlaneMotion 
     let tan = [c1[iu] - c0[iu], c1[iv] - c0[iv]];
     let norm = |v: [f64; 2]| v[0].hypot(v[1]);
     // Rotation by theta maps (u, v) to (u cos + v sin, -u sin + v cos): the angle from dir to tan.
-    let theta = if norm(dir) > 1e-3 && norm(tan) > 1e-9 {
-        (dir[1].atan2(dir[0])) - (tan[1].atan2(tan[0]))
-    } else {
-        0.0
-    };
+    let theta =
+        if norm(dir) > 1e-3 && norm(tan) > 1e-9 { (dir[1].atan2(dir[0])) - (tan[1].atan2(tan[0])) } else { 0.0 };
     let cu = model.centres[u as usize];
     let rot = PlaneMotion { theta, t: [0.0, 0.0], up: model.up };
     let r = rot.apply_point(cu);
@@ -387,7 +384,10 @@ pub fn follow_path(
 ) -> Result<PathResult, String> {
     let t0 = Instant::now();
     if !(p.window > 0.0 && p.window.is_finite()) || p.max_frames == 0 {
-        return Err(format!("window {} / {} frames: expected a positive arc length and frame count", p.window, p.max_frames));
+        return Err(format!(
+            "window {} / {} frames: expected a positive arc length and frame count",
+            p.window, p.max_frames
+        ));
     }
     let q = Query::new(model, graph, curve, restrictions);
     let initial = |u: u32| -> State {
@@ -496,7 +496,8 @@ mod tests {
 
     #[test]
     fn curve_by_arc_length_and_planar_distances() {
-        let c = Curve::new(vec![[0.0, 5.0, 0.0], [3.0, 9.0, 0.0], [3.0, 9.0, 0.0], [3.0, 0.0, 4.0]], vec![0, 2]).unwrap();
+        let c =
+            Curve::new(vec![[0.0, 5.0, 0.0], [3.0, 9.0, 0.0], [3.0, 9.0, 0.0], [3.0, 0.0, 4.0]], vec![0, 2]).unwrap();
         assert_eq!(c.length(), 7.0); // 3 then 4 in the ground plane; the duplicate is dropped
         let p = c.at(5.0);
         assert!((p[0] - 3.0).abs() < 1e-12 && (p[2] - 2.0).abs() < 1e-12);

@@ -74,7 +74,11 @@ pub struct WalkModel {
 pub enum WalkError {
     Empty,
     /// Step `at` (u -> v) is neither successive frames nor a transition of the graph.
-    NotAnEdge { at: usize, from: u32, to: u32 },
+    NotAnEdge {
+        at: usize,
+        from: u32,
+        to: u32,
+    },
     Poisson(String),
 }
 
@@ -197,7 +201,13 @@ impl WalkModel {
 
     /// Calls `emit(centre, is_original)` for every frame edge u -> v adds to a walk placed by
     /// `g`, and returns the placement after it.
-    pub fn advance(&self, step: Step<'_>, g: &PlaneMotion, v: u32, mut emit: impl FnMut([f64; 3], bool)) -> PlaneMotion {
+    pub fn advance(
+        &self,
+        step: Step<'_>,
+        g: &PlaneMotion,
+        v: u32,
+        mut emit: impl FnMut([f64; 3], bool),
+    ) -> PlaneMotion {
         match step {
             Step::Original => {
                 emit(g.apply_point(self.centres[v as usize]), true);

@@ -524,7 +524,8 @@ fn synth_bench(
     let s = mannequin_subject("bench", &m, &clips, 30.0)?;
     let build_secs = t0.elapsed().as_secs_f64();
     let tmp = tempfile::TempDir::new()?;
-    let cache = super::distance::CacheOpts { cache_dir: Some(cache_dir.unwrap_or_else(|| tmp.path().into())), no_cache: false };
+    let cache =
+        super::distance::CacheOpts { cache_dir: Some(cache_dir.unwrap_or_else(|| tmp.path().into())), no_cache: false };
     let t1 = Instant::now();
     let params = surfcap_geometry::distance_matrix::DistanceParams::default();
     let _ = super::distance::cached_distance_matrix(ctx, &s, &params, &cache)?;
@@ -544,10 +545,12 @@ fn synth_bench(
     let graph_secs = prep.seconds;
     let n = prep.graph.n;
     // 15 m S-path.
-    let points: Vec<[f64; 3]> = (0..=272).map(|k| {
-        let x = k as f64 * 0.05;
-        [x, 0.0, 1.5 * (2.0 * std::f64::consts::PI * x / 14.0).sin()]
-    }).collect();
+    let points: Vec<[f64; 3]> = (0..=272)
+        .map(|k| {
+            let x = k as f64 * 0.05;
+            [x, 0.0, 1.5 * (2.0 * std::f64::consts::PI * x / 14.0).sin()]
+        })
+        .collect();
     let curve = Curve::new(points, vec![0, 2]).map_err(anyhow::Error::msg)?;
     let search = PathSearch::for_fps(prep.s.fps);
     let t3 = Instant::now();
@@ -573,9 +576,8 @@ fn synth_bench(
     let key_secs = t5.elapsed().as_secs_f64();
     let (a, b) = (rng.random_range(0..n as u32), rng.random_range(0..n as u32));
     let t6 = Instant::now();
-    let (reach, _) = tg
-        .walk_with_distance_and_time(a, b, 10.0, 300, (0.3, 10.0), longest)
-        .map_err(anyhow::Error::msg)?;
+    let (reach, _) =
+        tg.walk_with_distance_and_time(a, b, 10.0, 300, (0.3, 10.0), longest).map_err(anyhow::Error::msg)?;
     let reach_secs = t6.elapsed().as_secs_f64();
     let report = json!({
         "frames": n, "vertices": prep.s.topology().n_vertices(), "alpha": alpha, "threads": rayon::current_num_threads(),
@@ -595,8 +597,12 @@ fn synth_bench(
             rayon::current_num_threads(),
             prep.graph.edges().len()
         );
-        println!("query latency: 15 m S-path {path_secs:.2} s (mean error {path_err:.3} m), ten key poses {key_secs:.2} s (mean error {:.2} frames), distance and time {reach_secs:.2} s ({:.2} m in {} frames for 10 m in 300)",
-            key_err as f64 / 9.0, reach.distance, reach.frames);
+        println!(
+            "query latency: 15 m S-path {path_secs:.2} s (mean error {path_err:.3} m), ten key poses {key_secs:.2} s (mean error {:.2} frames), distance and time {reach_secs:.2} s ({:.2} m in {} frames for 10 m in 300)",
+            key_err as f64 / 9.0,
+            reach.distance,
+            reach.frames
+        );
     }
     Ok(())
 }

@@ -8,11 +8,11 @@ use std::path::PathBuf;
 
 use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
-use surfcap_motion::path_following::PathSearch;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::io::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
+use surfcap_motion::path_following::PathSearch;
 
 use super::distance::{CacheOpts, cached_distance_matrix};
 use super::graph::Kind;
@@ -163,7 +163,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::atomic::write_file(&curve_path, |w| w.write_all(csv.as_bytes()))?;
     let curve = read_curve(&curve_path, subject.up_axis, true)?;
     let out = OutOpts { output: a.output.join("export/path.glb"), format: None };
-    let path = run_path(ctx, &prep, &curve, &[], None, &PathSearch::for_fps(subject.fps), None, &out)?;
+    let path = run_path(ctx, &prep, &curve, &[], None, &PathSearch::for_fps(subject.fps), &out)?;
     say(&format!(
         "8. followed the S-shaped path {} ({:.1} long): {} frames, {} transitions, centre-of-mass error mean {:.3}, max {:.3} -> {} and {}",
         curve_path.display(),

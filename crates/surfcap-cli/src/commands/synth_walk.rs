@@ -134,6 +134,8 @@ pub struct Prepared {
     pub model: WalkModel,
     pub kind: Kind,
     pub alpha: f64,
+    /// The vertices whose centre is followed (`None`: all).
+    pub tracked: Option<Vec<usize>>,
     pub seconds: f64,
 }
 
@@ -166,7 +168,8 @@ pub fn prepare_subject(
     let (d, _, _) = cached_distance_matrix(ctx, &s, &DistanceParams::default(), &o.cache)?;
     let model = WalkModel::new(&s, &graph, table, &d.data, p.slope, tracked);
     drop(sg);
-    Ok(Prepared { s, graph, model, kind, alpha: o.alpha, seconds: t0.elapsed().as_secs_f64() })
+    let tracked = tracked.map(<[usize]>::to_vec);
+    Ok(Prepared { s, graph, model, kind, alpha: o.alpha, tracked, seconds: t0.elapsed().as_secs_f64() })
 }
 
 fn format_of(out: &OutOpts) -> anyhow::Result<ExportFormat> {
@@ -221,10 +224,10 @@ pub fn write_walk(
     walk: &[u32],
     start: &PlaneMotion,
     name: &str,
-    tracked: Option<&[usize]>,
     out: &OutOpts,
     mut report: serde_json::Value,
 ) -> anyhow::Result<Played> {
+    let tracked = prep.tracked.as_deref();
     let format = format_of(out)?;
     let s = &prep.s;
     let t0 = Instant::now();
@@ -310,12 +313,19 @@ pub fn read_curve(path: &Path, up: surfcap_mesh::UpAxis, planar: bool) -> anyhow
     let (iu, iv, iw) = plane_axes(up);
     let mut points = Vec::with_capacity(rows.len());
     for (line, cells) in &rows {
-        anyhow::ensure!(cells.len() == cols, "{}:{line}: {} columns, expected {cols} like the first row", path.display(), cells.len());
+        anyhow::ensure!(
+            cells.len() == cols,
+            "{}:{line}: {} columns, expected {cols} like the first row",
+            path.display(),
+            cells.len()
+        );
         let mut v = [0.0; 3];
         for (k, c) in cells.iter().enumerate() {
-            v[k] = c.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| {
-                format!("{}:{line}: {c:?} is not a finite number", path.display())
-            })?;
+            v[k] = c
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .with_context(|| format!("{}:{line}: {c:?} is not a finite number", path.display()))?;
         }
         points.push(if cols == 2 {
             let mut p = [0.0; 3];
@@ -337,14 +347,19 @@ fn parse_restrictions(s: &Subject, tags: &[String]) -> anyhow::Result<Vec<Restri
             let bad = || format!("--tags {t:?}: expected TAG:FROM-TO with arc lengths FROM < TO, e.g. run:5-9");
             let (tag, range) = t.rsplit_once(':').with_context(bad)?;
             let (a, b) = range.split_once('-').with_context(bad)?;
-            let (from, to): (f64, f64) = (a.trim().parse().ok().with_context(bad)?, b.trim().parse().ok().with_context(bad)?);
+            let (from, to): (f64, f64) =
+                (a.trim().parse().ok().with_context(bad)?, b.trim().parse().ok().with_context(bad)?);
             anyhow::ensure!(from < to && from.is_finite() && to.is_finite(), bad());
             let allowed: Vec<bool> = s.sequences().iter().map(|q| q.tags.iter().any(|x| x == tag)).collect();
             if !allowed.iter().any(|&x| x) {
-                let mut known: Vec<&str> = s.sequences().iter().flat_map(|q| q.tags.iter().map(|x| x.as_str())).collect();
+                let mut known: Vec<&str> =
+                    s.sequences().iter().flat_map(|q| q.tags.iter().map(|x| x.as_str())).collect();
                 known.sort();
                 known.dedup();
-                anyhow::bail!("--tags {t:?}: no sequence is tagged {tag:?}; the subject's tags are {}", known.join(", "));
+                anyhow::bail!(
+                    "--tags {t:?}: no sequence is tagged {tag:?}; the subject's tags are {}",
+                    known.join(", ")
+                );
             }
             Ok(Restriction { from, to, allowed })
         })
@@ -366,7 +381,6 @@ pub struct PathOutcome {
 }
 
 /// Follows `curve` on a prepared subject and writes the animation and report.
-#[allow(clippy::too_many_arguments)]
 pub fn run_path(
     ctx: &crate::Ctx,
     prep: &Prepared,
@@ -374,7 +388,6 @@ pub fn run_path(
     restrictions: &[Restriction],
     start: Option<u32>,
     search: &PathSearch,
-    tracked: Option<&[usize]>,
     out: &OutOpts,
 ) -> anyhow::Result<PathOutcome> {
     let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search).map_err(anyhow::Error::msg)?;
@@ -387,7 +400,7 @@ pub fn run_path(
             "expanded": r.expanded, "seconds": r.seconds },
         "predicted": { "mean_error": pred_mean, "max_error": pred_max },
     });
-    let played = write_walk(ctx, prep, &r.walk, &r.start, "path", tracked, out, report)?;
+    let played = write_walk(ctx, prep, &r.walk, &r.start, "path", out, report)?;
     let (errors, travelled) = path_errors(curve, &played.centres);
     let (mean, max) = mean_max(&errors);
     // Add the measured errors (from the written frames) to the report.
@@ -403,7 +416,14 @@ pub fn run_path(
         serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })?;
-    Ok(PathOutcome { frames: errors.len(), played, mean_error: mean, max_error: max, transitions, search_seconds: r.seconds })
+    Ok(PathOutcome {
+        frames: errors.len(),
+        played,
+        mean_error: mean,
+        max_error: max,
+        transitions,
+        search_seconds: r.seconds,
+    })
 }
 
 fn print_written(ctx: &crate::Ctx, played: &Played) {
@@ -426,7 +446,7 @@ pub fn path(ctx: &crate::Ctx, a: PathArgs) -> anyhow::Result<()> {
         branching: a.branching,
         ..PathSearch::for_fps(prep.s.fps)
     };
-    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, tracked, &a.out)?;
+    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     if ctx.json {
         print_json(&serde_json::from_slice(&std::fs::read(&o.played.report_path)?)?);
     } else if !ctx.quiet {
@@ -459,13 +479,16 @@ fn read_keys(path: &Path, s: &Subject) -> anyhow::Result<Vec<Key>> {
     }
     let mut keys: Vec<Key> = Vec::new();
     for (line, cells) in rows {
-        anyhow::ensure!(cells.len() == 2, "{}:{line}: expected frame,time (2 columns), found {}", path.display(), cells.len());
+        anyhow::ensure!(
+            cells.len() == 2,
+            "{}:{line}: expected frame,time (2 columns), found {}",
+            path.display(),
+            cells.len()
+        );
         let frame = s.resolve_frame(&cells[0]).with_context(|| format!("{}:{line}", path.display()))?;
-        let requested: i64 = cells[1]
-            .parse()
-            .ok()
-            .filter(|t| *t >= 0)
-            .with_context(|| format!("{}:{line}: time {:?}: expected a whole number of frames >= 0", path.display(), cells[1]))?;
+        let requested: i64 = cells[1].parse().ok().filter(|t| *t >= 0).with_context(|| {
+            format!("{}:{line}: time {:?}: expected a whole number of frames >= 0", path.display(), cells[1])
+        })?;
         if let Some(prev) = keys.last() {
             anyhow::ensure!(
                 requested > prev.requested,
@@ -509,10 +532,12 @@ pub fn run_keyposes(ctx: &crate::Ctx, prep: &Prepared, keys_path: &Path, out: &O
         "mean_abs_error_frames": mean_abs_error,
         "search_seconds": search_seconds,
     });
-    let played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.s.up_axis), "keyposes", None, out, report)?;
+    let played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.s.up_axis), "keyposes", out, report)?;
     if !ctx.json && !ctx.quiet {
         // Thesis Fig. 3.18: input, requested and obtained times.
-        let row = |label: &str, v: Vec<String>| println!("{label:<10}{}", v.iter().map(|x| format!("{x:>7}")).collect::<String>());
+        let row = |label: &str, v: Vec<String>| {
+            println!("{label:<10}{}", v.iter().map(|x| format!("{x:>7}")).collect::<String>())
+        };
         row("Input", keys.iter().map(|k| k.input.to_string()).collect());
         row("Requested", requested.iter().map(|x| x.to_string()).collect());
         row("Obtained", obtained.iter().map(|x| x.to_string()).collect());
@@ -534,10 +559,7 @@ pub fn keyposes(ctx: &crate::Ctx, a: KeyposesArgs) -> anyhow::Result<()> {
 pub fn reach(ctx: &crate::Ctx, a: ReachArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.distance.is_finite() && a.distance >= 0.0, "--distance {}: expected a distance >= 0", a.distance);
     anyhow::ensure!(a.time.is_finite() && a.time > 0.0, "--time {}: expected a positive number of seconds", a.time);
-    anyhow::ensure!(
-        a.distance_scale > 0.0 && a.time_scale > 0.0,
-        "--distance-scale and --time-scale must be positive"
-    );
+    anyhow::ensure!(a.distance_scale > 0.0 && a.time_scale > 0.0, "--distance-scale and --time-scale must be positive");
     let prep = prepare(ctx, &a.subject, &a.graph, None)?;
     let (from, to) = (prep.s.resolve_frame(&a.from)? as u32, prep.s.resolve_frame(&a.to)? as u32);
     let frames = (a.time * prep.s.fps).round().max(1.0) as usize;
@@ -553,7 +575,7 @@ pub fn reach(ctx: &crate::Ctx, a: ReachArgs) -> anyhow::Result<()> {
         "target_frames": frames, "obtained_frames": w.frames, "time_error_frames": (w.frames as i64 - frames as i64).abs(),
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
-    let played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.s.up_axis), "reach", None, &a.out, report)?;
+    let played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.s.up_axis), "reach", &a.out, report)?;
     if ctx.json {
         print_json(&serde_json::from_slice(&std::fs::read(&played.report_path)?)?);
     } else if !ctx.quiet {
