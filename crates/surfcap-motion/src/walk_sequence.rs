@@ -123,22 +123,7 @@ impl WalkModel {
         let index = subject.frame_index().clone();
         let n = table.n;
         let frame = |g: usize| subject.frame(g).expect("graph nodes are frames of the subject");
-        let tracked_centre = |g: usize| -> [f64; 3] {
-            match tracked {
-                None => centre(frame(g)),
-                Some(ids) => {
-                    let p = frame(g);
-                    let mut c = [0.0; 3];
-                    for &k in ids {
-                        for a in 0..3 {
-                            c[a] += p[3 * k + a] as f64;
-                        }
-                    }
-                    c.map(|x| x / ids.len().max(1) as f64)
-                }
-            }
-        };
-        let centres: Vec<[f64; 3]> = (0..subject.n_frames()).map(tracked_centre).collect();
+        let centres: Vec<[f64; 3]> = (0..subject.n_frames()).map(|g| tracked_centre(frame(g), tracked)).collect();
         let mass: Vec<[f64; 3]> = match tracked {
             None => centres.clone(),
             Some(_) => (0..subject.n_frames()).map(|g| centre(frame(g))).collect(),
@@ -253,6 +238,18 @@ impl WalkModel {
         let (u, v, _) = plane_axes(self.up);
         (u, v)
     }
+}
+
+/// Centre of the `tracked` vertices of a frame (of all vertices when `None`).
+pub fn tracked_centre(p: &[f32], tracked: Option<&[usize]>) -> [f64; 3] {
+    let Some(ids) = tracked else { return centre(p) };
+    let mut c = [0.0; 3];
+    for &k in ids {
+        for a in 0..3 {
+            c[a] += p[3 * k + a] as f64;
+        }
+    }
+    c.map(|x| x / ids.len().max(1) as f64)
 }
 
 fn is_successive(index: &FrameIndex, u: usize, v: usize) -> bool {

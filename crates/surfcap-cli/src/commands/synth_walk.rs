@@ -13,7 +13,7 @@ use surfcap_mesh::{FrameLabel, Sequence, Subject};
 use surfcap_motion::graph::Graph;
 use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path, path_errors};
 use surfcap_motion::timed_walk::TimedGraph;
-use surfcap_motion::walk_sequence::{WalkModel, walk_sequence};
+use surfcap_motion::walk_sequence::{WalkModel, tracked_centre, walk_sequence};
 
 use super::distance::{CacheOpts, cached_distance_matrix};
 use super::graph::{Kind, SubjectGraphs, check_alpha};
@@ -211,13 +211,15 @@ fn walk_segments(s: &Subject, model: &WalkModel, walk: &[u32]) -> Vec<serde_json
 /// What playing a walk produced.
 pub struct Played {
     pub written: Vec<PathBuf>,
+    /// Where [`save_report`] writes `report`.
     pub report_path: PathBuf,
+    pub report: serde_json::Value,
     /// Tracked centre of every output frame, from the written positions.
     pub centres: Vec<[f64; 3]>,
 }
 
-/// Plays `walk` (Algorithm 3), writes the animation and `report` (completed with frame counts,
-/// the walk and timings) as `<output>.report.json`.
+/// Plays `walk` (Algorithm 3), writes the animation, and completes `report` with frame counts,
+/// the walk and timings (the caller adds what it measures, then calls [`save_report`]).
 pub fn write_walk(
     ctx: &crate::Ctx,
     prep: &Prepared,
@@ -234,20 +236,7 @@ pub fn write_walk(
     let ws = walk_sequence(s, &prep.model, walk, start)?;
     let blend_seconds = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
-    let centres: Vec<[f64; 3]> = ws
-        .positions
-        .chunks_exact(3 * nv)
-        .map(|f| {
-            let ids: Vec<usize> = tracked.map_or_else(|| (0..nv).collect(), |t| t.to_vec());
-            let mut c = [0.0; 3];
-            for &v in &ids {
-                for a in 0..3 {
-                    c[a] += f[3 * v + a] as f64;
-                }
-            }
-            c.map(|x| x / ids.len() as f64)
-        })
-        .collect();
+    let centres: Vec<[f64; 3]> = ws.positions.chunks_exact(3 * nv).map(|f| tracked_centre(f, tracked)).collect();
     let original = ws.labels.iter().filter(|l| **l == FrameLabel::Original).count();
     let frames = ws.n_frames();
     let seq = Sequence::new(name, nv, ws.positions)?.with_labels(ws.labels)?.with_tags(vec!["synthesised".into()]);
@@ -267,12 +256,16 @@ pub fn write_walk(
     obj.insert("walk".into(), json!(walk));
     obj.insert("segments".into(), json!(walk_segments(s, &prep.model, walk)));
     obj.insert("outputs".into(), json!(written));
-    let report_path = report_path(&out.output);
-    surfcap_mesh::atomic::write_file(&report_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;
+    Ok(Played { written, report_path: report_path(&out.output), report, centres })
+}
+
+/// Writes a played walk's report to its `report_path`.
+pub fn save_report(played: &Played) -> anyhow::Result<()> {
+    surfcap_mesh::atomic::write_file(&played.report_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &played.report).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })?;
-    Ok(Played { written, report_path, centres })
+    Ok(())
 }
 
 /// `x.glb` -> `x.report.json`, `dir/out` -> `dir/out.report.json`.
@@ -400,22 +393,18 @@ pub fn run_path(
             "expanded": r.expanded, "seconds": r.seconds },
         "predicted": { "mean_error": pred_mean, "max_error": pred_max },
     });
-    let played = write_walk(ctx, prep, &r.walk, &r.start, "path", out, report)?;
+    let mut played = write_walk(ctx, prep, &r.walk, &r.start, "path", out, report)?;
     let (errors, travelled) = path_errors(curve, &played.centres);
     let (mean, max) = mean_max(&errors);
-    // Add the measured errors (from the written frames) to the report.
-    let mut report: serde_json::Value = serde_json::from_slice(&std::fs::read(&played.report_path)?)?;
-    let o = report.as_object_mut().expect("object");
+    // The errors measured on the written frames.
+    let o = played.report.as_object_mut().expect("object");
     o.insert("mean_error".into(), json!(mean));
     o.insert("max_error".into(), json!(max));
     o.insert("travelled".into(), json!(travelled));
     o.insert("per_frame".into(), json!({ "error": errors, "centre": played.centres }));
     o.insert("curve".into(), json!((0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect::<Vec<_>>()));
     let transitions = o["transitions"].as_u64().unwrap_or(0) as usize;
-    surfcap_mesh::atomic::write_file(&played.report_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
-    })?;
+    save_report(&played)?;
     Ok(PathOutcome {
         frames: errors.len(),
         played,
@@ -448,7 +437,7 @@ pub fn path(ctx: &crate::Ctx, a: PathArgs) -> anyhow::Result<()> {
     };
     let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     if ctx.json {
-        print_json(&serde_json::from_slice(&std::fs::read(&o.played.report_path)?)?);
+        print_json(&o.played.report);
     } else if !ctx.quiet {
         println!(
             "followed a {:.2}-long curve: {} frames, {} transitions; centre error mean {:.3}, max {:.3}; search {:.2} s",
@@ -533,6 +522,7 @@ pub fn run_keyposes(ctx: &crate::Ctx, prep: &Prepared, keys_path: &Path, out: &O
         "search_seconds": search_seconds,
     });
     let played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.s.up_axis), "keyposes", out, report)?;
+    save_report(&played)?;
     if !ctx.json && !ctx.quiet {
         // Thesis Fig. 3.18: input, requested and obtained times.
         let row = |label: &str, v: Vec<String>| {
@@ -550,7 +540,7 @@ pub fn keyposes(ctx: &crate::Ctx, a: KeyposesArgs) -> anyhow::Result<()> {
     let prep = prepare(ctx, &a.subject, &a.graph, None)?;
     let played = run_keyposes(ctx, &prep, &a.keys, &a.out)?;
     if ctx.json {
-        print_json(&serde_json::from_slice(&std::fs::read(&played.report_path)?)?);
+        print_json(&played.report);
     }
     print_written(ctx, &played);
     Ok(())
@@ -576,8 +566,9 @@ pub fn reach(ctx: &crate::Ctx, a: ReachArgs) -> anyhow::Result<()> {
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
     let played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.s.up_axis), "reach", &a.out, report)?;
+    save_report(&played)?;
     if ctx.json {
-        print_json(&serde_json::from_slice(&std::fs::read(&played.report_path)?)?);
+        print_json(&played.report);
     } else if !ctx.quiet {
         println!(
             "{} -> {}: {:.2} travelled (asked {:.2}) in {} frames (asked {frames}); realism cost {:.3}; search {search_seconds:.3} s",
