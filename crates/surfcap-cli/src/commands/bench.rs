@@ -87,20 +87,7 @@ pub enum What {
     /// mannequin, six gaits with varied seeds): transition table, essential graph and walk-model
     /// build times, then the latency of one query of each kind: a 15 m S-path, ten key poses,
     /// and a distance-and-time query (target: under 1 s each).
-    Synth {
-        #[arg(long, default_value_t = 2000)]
-        frames: usize,
-        #[arg(long, default_value_t = 1000)]
-        vertices: usize,
-        #[arg(long, default_value_t = 0.05)]
-        alpha: f64,
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Cache folder for the distance matrix and transition table (default: a temporary one,
-        /// so every phase is measured).
-        #[arg(long)]
-        cache_dir: Option<PathBuf>,
-    },
+    Synth(SynthBench),
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate {
         /// A subject cache or source.
@@ -365,8 +352,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             return interpolate_bench(ctx, subject, &from, &to, repeat, fps);
         }
         What::Graph { frames, sequences, alpha, seed } => return graph_bench(ctx, frames, sequences, alpha, seed),
-        What::Synth { frames, vertices, alpha, seed, cache_dir } => {
-            return synth_bench(ctx, frames, vertices, alpha, seed, cache_dir);
+        What::Synth(b) => {
+            return synth_bench(ctx, b);
         }
     };
     if in_process {
@@ -489,14 +476,28 @@ fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, se
     Ok(())
 }
 
-fn synth_bench(
-    ctx: &crate::Ctx,
+/// `bench synth`: graph build and query latency on a procedural subject.
+#[derive(clap::Args, Debug)]
+pub struct SynthBench {
+    #[arg(long, default_value_t = 2000)]
     frames: usize,
+    #[arg(long, default_value_t = 1000)]
     vertices: usize,
+    #[arg(long, default_value_t = 0.05)]
     alpha: f64,
+    #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Cache folder for the distance matrix and transition table (default: a temporary one,
+    /// so every phase is measured).
+    #[arg(long)]
     cache_dir: Option<PathBuf>,
-) -> anyhow::Result<()> {
+    /// Transitions the path search tries per frame (default: `surfcap synth path`'s).
+    #[arg(long)]
+    branching: Option<usize>,
+}
+
+fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
+    let SynthBench { frames, vertices, alpha, seed, cache_dir, branching } = b;
     use rand::{Rng, SeedableRng};
     use surfcap_motion::path_following::{Curve, PathSearch, follow_path};
     use surfcap_motion::timed_walk::TimedGraph;
@@ -552,7 +553,8 @@ fn synth_bench(
         })
         .collect();
     let curve = Curve::new(points, vec![0, 2]).map_err(anyhow::Error::msg)?;
-    let search = PathSearch::for_fps(prep.s.fps);
+    let mut search = PathSearch::for_fps(prep.s.fps);
+    search.branching = branching.unwrap_or(search.branching);
     let t3 = Instant::now();
     let path = follow_path(&prep.model, &prep.graph, &curve, &[], None, &search).map_err(anyhow::Error::msg)?;
     let path_secs = t3.elapsed().as_secs_f64();
@@ -596,7 +598,7 @@ fn synth_bench(
         "subject_seconds": build_secs, "distance_seconds": dist_secs, "table_seconds": table_secs,
         "graph_and_walk_model_seconds": graph_secs, "timed_graph_seconds": timed_secs,
         "edges": prep.graph.edges().len(), "transitions": prep.model.n_transitions(),
-        "path": { "seconds": path_secs, "mean_error": path_err, "frames": path.errors.len() },
+        "path": { "seconds": path_secs, "mean_error": path_err, "frames": path.errors.len(), "branching": search.branching, "expanded": path.expanded },
         "keyposes": { "seconds": key_secs, "mean_abs_error_frames": key_err as f64 / 9.0 },
         "reach": { "seconds": reach_secs, "distance": reach.distance, "frames": reach.frames, "target_distance": 10.0, "target_frames": 300 },
     });

@@ -76,8 +76,9 @@ pub struct PathArgs {
     /// Transitions allowed within one window.
     #[arg(long, default_value_t = 2)]
     pub max_transitions: usize,
-    /// Transitions tried at each frame (its cheapest ones).
-    #[arg(long, default_value_t = 16)]
+    /// Transitions tried at each frame (its cheapest ones, round robin over destination
+    /// sequences); the search's speed knob.
+    #[arg(long, default_value_t = 10)]
     pub branching: usize,
     #[command(flatten)]
     pub graph: GraphOpts,
