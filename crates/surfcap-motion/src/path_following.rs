@@ -129,17 +129,18 @@ pub struct PathSearch {
 
 impl PathSearch {
     /// Defaults for a subject in metres at `fps`: 3 m windows (the first half kept), two
-    /// transitions each, the 10 cheapest (round robin over destination sequences) tried per
+    /// transitions each, the 8 cheapest (round robin over destination sequences) tried per
     /// frame, and a walker must cover a window within 6 seconds. Branching is the speed knob:
-    /// on the 2,000-frame bench graph (~337 transitions per frame) 16 took 3.6 s for a 15 m
-    /// path and 10 takes ~0.7 s, with mean errors of 0.012 and 0.015 m (`surfcap bench synth`).
+    /// on the 2,000-frame bench graph (~337 transitions per frame) a 15 m path took 3.6 s with
+    /// 16, 0.7 s with 10 and 0.4 s with 8, mean errors 0.012, 0.015 and 0.018 m (`surfcap bench
+    /// synth --branching B`); on the CMU-16 subject 8 and 10 both give 0.08 m.
     pub fn for_fps(fps: f64) -> Self {
         PathSearch {
             window: 3.0,
             max_transitions: 2,
             max_frames: (6.0 * fps).round() as usize,
             start_candidates: 8,
-            branching: 10,
+            branching: 8,
             state_bin: 0.1,
         }
     }
@@ -525,7 +526,7 @@ mod tests {
 
     #[test]
     fn the_tube_follows_a_straight_line_and_restrictions_hold() {
-        let (s, g, model) = crate::walk_sequence::tests::setup();
+        let (s, g, model, _) = crate::walk_sequence::tests::setup();
         // The tube crawls along +x: a straight line as long as about two sequences' crawl.
         let (c0, c1) = (model.centres[0], model.centres[29]);
         let crawl = c1[0] - c0[0];

@@ -35,8 +35,6 @@ pub struct TransitionTrack {
     /// Source segment u .. u + li, destination segment v + 1 - lj ..= v (global frames).
     pub li: u32,
     pub lj: u32,
-    /// The DTW warp (global source, global destination frame) of the transition, L cells.
-    pub warp: Vec<(u32, u32)>,
     /// Centres of mass of the Blend's frames S(2..L-1).
     pub centres: Vec<[f64; 3]>,
     /// Where frame v (and the rest of its sequence) is placed after the transition.
@@ -67,6 +65,9 @@ pub struct WalkModel {
     /// Centre of mass of every global frame, as captured.
     pub centres: Vec<[f64; 3]>,
     tracks: HashMap<(u32, u32), TransitionTrack>,
+    /// The DTW slope constraint the tracks were computed with (their warps are recomputed, not
+    /// stored: a dense graph has hundreds of thousands of transitions and plays a few).
+    slope: Slope,
 }
 
 /// Why a walk cannot be played.
@@ -123,7 +124,7 @@ impl WalkModel {
         let index = subject.frame_index().clone();
         let n = table.n;
         let frame = |g: usize| subject.frame(g).expect("graph nodes are frames of the subject");
-        let centres: Vec<[f64; 3]> = (0..subject.n_frames()).map(|g| tracked_centre(frame(g), tracked)).collect();
+        let centres = frame_centres(subject, tracked);
         let mass: Vec<[f64; 3]> = match tracked {
             None => centres.clone(),
             Some(_) => (0..subject.n_frames()).map(|g| centre(frame(g))).collect(),
@@ -164,11 +165,21 @@ impl WalkModel {
                     std::array::from_fn(|k| (1.0 - st.lambda) * a[k] + st.lambda * b[k])
                 };
                 let inner = if steps.len() > 2 { steps[1..steps.len() - 1].iter().map(mix).collect() } else { vec![] };
-                let warp = warp.path.iter().map(|&(a, b)| (a as u32, b as u32)).collect();
-                Some(((u, v), TransitionTrack { li: li as u32, lj: lj as u32, warp, centres: inner, end: last.dst }))
+                Some(((u, v), TransitionTrack { li: li as u32, lj: lj as u32, centres: inner, end: last.dst }))
             })
             .collect();
-        WalkModel { up, fps: subject.fps, index, centres, tracks: tracks.into_iter().flatten().collect() }
+        WalkModel { up, fps: subject.fps, index, centres, tracks: tracks.into_iter().flatten().collect(), slope }
+    }
+
+    /// The DTW warp of transition u -> v as (source, destination) offsets into its segments
+    /// u .. u + li and v + 1 - lj ..= v, recomputed from the distance matrix `d` the model was
+    /// built from (the same deterministic DTW, so the same warp).
+    pub fn warp(&self, d: &[f64], u: u32, v: u32) -> Option<Vec<(usize, usize)>> {
+        let t = self.tracks.get(&(u, v))?;
+        let (li, lj) = (t.li as usize, t.lj as usize);
+        let w = dtw_window(d, self.centres.len(), u as usize, li, v as usize, lj, self.slope)?;
+        let d0 = v as usize + 1 - lj;
+        Some(w.path.iter().map(|&(a, b)| (a - u as usize, b - d0)).collect())
     }
 
     /// What the edge u -> v does, or `None` when it is not playable.
@@ -238,6 +249,80 @@ impl WalkModel {
         let (u, v, _) = plane_axes(self.up);
         (u, v)
     }
+
+    /// The transition tracks as rows of three numbers, for an on-disk cache (`.npy` [R, 3]),
+    /// tracks in (u, v) order, each as: `[u, v, C]`, `[li, lj, 0]`, `[end theta, end t0,
+    /// end t1]`, then its C inner centres. Frame numbers are exact in f64.
+    pub fn tracks_to_rows(&self) -> Vec<f64> {
+        let mut keys: Vec<&(u32, u32)> = self.tracks.keys().collect();
+        keys.sort();
+        let mut rows = Vec::new();
+        for &(u, v) in keys {
+            let t = &self.tracks[&(u, v)];
+            rows.extend([u as f64, v as f64, t.centres.len() as f64]);
+            rows.extend([t.li as f64, t.lj as f64, 0.0]);
+            rows.extend([t.end.theta, t.end.t[0], t.end.t[1]]);
+            for c in &t.centres {
+                rows.extend(c);
+            }
+        }
+        rows
+    }
+
+    /// The model of [`WalkModel::new`] from rows written by [`WalkModel::tracks_to_rows`] for
+    /// the same subject and tracked vertices. Errors name the first row that does not fit (a
+    /// cache written for another subject, or damaged).
+    pub fn from_rows(subject: &Subject, rows: &[f64], tracked: Option<&[usize]>, slope: Slope) -> Result<Self, String> {
+        let nf = subject.n_frames();
+        if rows.len() % 3 != 0 {
+            return Err(format!("{} numbers: expected rows of 3", rows.len()));
+        }
+        let rows: Vec<[f64; 3]> = rows.chunks_exact(3).map(|r| [r[0], r[1], r[2]]).collect();
+        let frame = |x: f64, at: usize| -> Result<u32, String> {
+            if x.fract() == 0.0 && x >= 0.0 && (x as usize) < nf {
+                Ok(x as u32)
+            } else {
+                Err(format!("row {at}: {x} is not a frame of the subject (0..{nf})"))
+            }
+        };
+        let count = |x: f64, at: usize| -> Result<usize, String> {
+            if x.fract() == 0.0 && x >= 0.0 && x <= (rows.len() - at) as f64 {
+                Ok(x as usize)
+            } else {
+                Err(format!("row {at}: {x} is not a count of the rows that follow"))
+            }
+        };
+        let mut tracks = HashMap::new();
+        let mut at = 0;
+        while at < rows.len() {
+            if at + 3 > rows.len() {
+                return Err(format!("row {at}: a track header needs 3 rows, {} left", rows.len() - at));
+            }
+            let [u, v, nc] = rows[at];
+            let [li, lj, _] = rows[at + 1];
+            let [theta, t0, t1] = rows[at + 2];
+            let (u, v, nc) = (frame(u, at)?, frame(v, at)?, count(nc, at)?);
+            let (li, lj) = (count(li, at + 1)? as u32, count(lj, at + 1)? as u32);
+            if ![theta, t0, t1].iter().all(|x| x.is_finite()) || at + 3 + nc > rows.len() {
+                return Err(format!("row {at}: the track {u} -> {v} is cut short or not finite"));
+            }
+            let centres: Vec<[f64; 3]> = rows[at + 3..at + 3 + nc].to_vec();
+            if centres.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(format!("row {at}: the track {u} -> {v} has a non-finite centre"));
+            }
+            let end = PlaneMotion { theta, t: [t0, t1], up: subject.up_axis };
+            tracks.insert((u, v), TransitionTrack { li, lj, centres, end });
+            at += 3 + nc;
+        }
+        let index = subject.frame_index().clone();
+        let centres = frame_centres(subject, tracked);
+        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, slope })
+    }
+}
+
+/// The tracked centre of every frame of the subject.
+fn frame_centres(subject: &Subject, tracked: Option<&[usize]>) -> Vec<[f64; 3]> {
+    (0..subject.n_frames()).map(|g| tracked_centre(subject.frame(g).expect("frames of the subject"), tracked)).collect()
 }
 
 /// Centre of the `tracked` vertices of a frame (of all vertices when `None`).
@@ -274,10 +359,12 @@ impl WalkSequence {
 }
 
 /// Algorithm 3: the mesh sequence of `walk` placed by `start`, with frames labelled original or
-/// synthetic. Transitions are blended non-linearly (thesis 2.4.3) along their DTW warps.
+/// synthetic. Transitions are blended non-linearly (thesis 2.4.3) along their DTW warps
+/// (recomputed from `d`, the distance matrix the model was built from).
 pub fn walk_sequence(
     subject: &Subject,
     model: &WalkModel,
+    d: &[f64],
     walk: &[u32],
     start: &PlaneMotion,
 ) -> Result<WalkSequence, WalkError> {
@@ -301,8 +388,7 @@ pub fn walk_sequence(
                 let src: Vec<&[f32]> = (u..u + t.li).map(frame).collect();
                 let d0 = v + 1 - t.lj;
                 let dst: Vec<&[f32]> = (d0..=v).map(frame).collect();
-                let offsets: Vec<(usize, usize)> =
-                    t.warp.iter().map(|&(a, b)| ((a - u) as usize, (b - d0) as usize)).collect();
+                let offsets = model.warp(d, u, v).ok_or(WalkError::NotAnEdge { at, from: u, to: v })?;
                 let s = blend(subject.topology(), model.up, &src, &dst, &offsets, Lambda::Ramp, Mixing::Nonlinear)?;
                 for f in &s[1..s.len().saturating_sub(1)] {
                     push(&mut out, f, &g, FrameLabel::Synthetic, None);
@@ -327,7 +413,7 @@ pub(crate) mod tests {
     use surfcap_synth::{WormParams, worm_subject};
 
     /// The built-in tube (two crawling sequences), its essential graph and walk model.
-    pub(crate) fn setup() -> (Subject, Graph, WalkModel) {
+    pub(crate) fn setup() -> (Subject, Graph, WalkModel, Vec<f64>) {
         let s = worm_subject(&WormParams { rings: 10, segments: 8, frames: 30, ..Default::default() }).unwrap();
         let d = distance_matrix(&s, &DistanceParams::default(), &NoProgress);
         let p = TableParams { l_min: 4, l_max: 8, slope: Some(3) };
@@ -335,12 +421,27 @@ pub(crate) mod tests {
         let w = edge_weights(&table, s.frame_index(), 0.05);
         let g = essential_graph(&w, &NoProgress).graph;
         let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
-        (s, g, model)
+        (s, g, model, d.values)
+    }
+
+    #[test]
+    fn tracks_round_trip_through_rows_and_damaged_rows_are_refused() {
+        let (s, _, model, _) = setup();
+        let rows = model.tracks_to_rows();
+        let back = WalkModel::from_rows(&s, &rows, None, model.slope).unwrap();
+        assert_eq!(back.tracks, model.tracks);
+        assert_eq!(back.centres, model.centres);
+        let slope = model.slope;
+        assert!(WalkModel::from_rows(&s, &rows[..rows.len() - 3], None, slope).unwrap_err().contains("row "));
+        let mut bad = rows.clone();
+        bad[0] = s.n_frames() as f64;
+        assert!(WalkModel::from_rows(&s, &bad, None, slope).unwrap_err().contains("row 0"));
+        assert!(WalkModel::from_rows(&s, &rows[..4], None, slope).is_err());
     }
 
     #[test]
     fn the_model_predicts_the_played_centres_and_labels_follow_algorithm_3() {
-        let (s, g, model) = setup();
+        let (s, g, model, d) = setup();
         assert!(model.n_transitions() > 0);
         let n = s.n_frames() as u32;
         // Two transitions, each entered after a few original frames.
@@ -365,7 +466,7 @@ pub(crate) mod tests {
             None => walk.extend(v..=v + 2),
         }
         let start = PlaneMotion { theta: 0.8, t: [1.0, -2.0], up: s.up_axis };
-        let out = walk_sequence(&s, &model, &walk, &start).unwrap();
+        let out = walk_sequence(&s, &model, &d, &walk, &start).unwrap();
         let predicted = model.walk_centres(&walk, &start).unwrap();
         assert_eq!(out.n_frames(), predicted.len());
         assert_eq!(out.n_frames(), model.walk_duration(&walk).unwrap() + 1);
@@ -387,6 +488,6 @@ pub(crate) mod tests {
         assert!(d0 < 1e-5);
         // A step that is not an edge is refused with its position.
         let bad = [walk[0], walk[0] + 5];
-        assert!(matches!(walk_sequence(&s, &model, &bad, &start), Err(WalkError::NotAnEdge { at: 0, .. })));
+        assert!(matches!(walk_sequence(&s, &model, &d, &bad, &start), Err(WalkError::NotAnEdge { at: 0, .. })));
     }
 }

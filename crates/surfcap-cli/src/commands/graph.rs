@@ -99,6 +99,14 @@ impl<'a> SubjectGraphs<'a> {
         SubjectGraphs { ctx, s, p, cache, table: OnceCell::new(), weights: RefCell::new(None) }
     }
 
+    pub fn subject(&self) -> &'a Subject {
+        self.s
+    }
+
+    pub fn params(&self) -> &TableParams {
+        &self.p
+    }
+
     /// The transition table (from its cache, or computed), read once.
     pub fn table(&self) -> surfcap_mesh::Result<&TransitionTable> {
         if let Some(t) = self.table.get() {

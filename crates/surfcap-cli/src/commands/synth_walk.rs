@@ -78,7 +78,7 @@ pub struct PathArgs {
     pub max_transitions: usize,
     /// Transitions tried at each frame (its cheapest ones, round robin over destination
     /// sequences); the search's speed knob.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 8)]
     pub branching: usize,
     #[command(flatten)]
     pub graph: GraphOpts,
@@ -137,6 +137,8 @@ pub struct Prepared {
     pub alpha: f64,
     /// The vertices whose centre is followed (`None`: all).
     pub tracked: Option<Vec<usize>>,
+    /// Where the distance matrix is cached (playing a walk recomputes its transitions' warps).
+    pub cache: CacheOpts,
     pub seconds: f64,
 }
 
@@ -165,12 +167,65 @@ pub fn prepare_subject(
     let p = o.table.params(s.fps)?;
     let sg = SubjectGraphs::new(ctx, &s, p, &o.cache);
     let (graph, _) = sg.graph(kind, o.alpha)?;
-    let table = sg.table()?;
-    let (d, _, _) = cached_distance_matrix(ctx, &s, &DistanceParams::default(), &o.cache)?;
-    let model = WalkModel::new(&s, &graph, table, &d.data, p.slope, tracked);
+    let model = cached_walk_model(ctx, &sg, &graph, &o.cache, tracked)?;
     drop(sg);
     let tracked = tracked.map(<[usize]>::to_vec);
-    Ok(Prepared { s, graph, model, kind, alpha: o.alpha, tracked, seconds: t0.elapsed().as_secs_f64() })
+    let cache = o.cache.clone();
+    Ok(Prepared { s, graph, model, kind, alpha: o.alpha, tracked, cache, seconds: t0.elapsed().as_secs_f64() })
+}
+
+/// The walk model of `graph` (every transition's rigid track: its DTW warp, the centres of its
+/// Blend frames, its end placement), from the derived-matrix cache when possible: a
+/// `walkmodel-*.npy` of f32 rows of three numbers ([`WalkModel::tracks_to_rows`] documents the
+/// layout), keyed by the subject's geometry, the graph's edges, the DTW slope and the tracked
+/// vertices. On a dense graph it costs as much as the graph itself (one DTW per transition).
+/// A freshly computed model is rounded to f32 the same way, so a cached and an uncached run
+/// search the same numbers and find the same walk (f32 keeps frame numbers exact below 2^24).
+fn cached_walk_model(
+    ctx: &crate::Ctx,
+    sg: &SubjectGraphs,
+    graph: &Graph,
+    cache: &CacheOpts,
+    tracked: Option<&[usize]>,
+) -> anyhow::Result<WalkModel> {
+    let s = sg.subject();
+    let mut h = blake3::Hasher::new();
+    for e in graph.edges() {
+        h.update(&e.from.to_le_bytes());
+        h.update(&e.to.to_le_bytes());
+    }
+    let tracked_hash =
+        blake3::hash(&tracked.unwrap_or(&[]).iter().flat_map(|v| (*v as u64).to_le_bytes()).collect::<Vec<u8>>());
+    let slope = sg.params().slope;
+    let key = format!(
+        "graph={} slope={slope:?} tracked={}:{} v1",
+        h.finalize().to_hex(),
+        tracked.is_some(),
+        tracked_hash.to_hex()
+    );
+    let store = cache.cache();
+    let path = store.path("walkmodel", &surfcap_mesh::derived_cache::subject_hash(s), &key);
+    // An unreadable or mismatched entry is recomputed and replaced, as for every cached matrix.
+    if !cache.no_cache
+        && path.is_file()
+        && let Ok(a) = surfcap_mesh::io::npy::read_npy::<f32>(&path)
+        && a.shape.len() == 2
+        && a.shape[1] == 3
+        && let Ok(model) =
+            WalkModel::from_rows(s, &a.data.iter().map(|&x| x as f64).collect::<Vec<_>>(), tracked, slope)
+    {
+        return Ok(model);
+    }
+    anyhow::ensure!(s.n_frames() < 1 << 24, "{} frames: the walk model cache holds fewer than 2^24", s.n_frames());
+    let table = sg.table()?;
+    let (d, _, _) = cached_distance_matrix(ctx, s, &DistanceParams::default(), cache)?;
+    let model = WalkModel::new(s, graph, table, &d.data, slope, tracked);
+    let rows: Vec<f32> = model.tracks_to_rows().iter().map(|&x| x as f32).collect();
+    let shape = vec![rows.len() / 3, 3];
+    surfcap_mesh::atomic::write_file(&path, |w| surfcap_mesh::io::npy::write_npy(w, &shape, &rows))
+        .with_context(|| format!("writing the walk model cache {}", path.display()))?;
+    let rounded: Vec<f64> = rows.iter().map(|&x| x as f64).collect();
+    WalkModel::from_rows(s, &rounded, tracked, slope).map_err(anyhow::Error::msg)
 }
 
 fn format_of(out: &OutOpts) -> anyhow::Result<ExportFormat> {
@@ -234,7 +289,8 @@ pub fn write_walk(
     let format = format_of(out)?;
     let s = &prep.s;
     let t0 = Instant::now();
-    let ws = walk_sequence(s, &prep.model, walk, start)?;
+    let (d, _, _) = cached_distance_matrix(ctx, s, &DistanceParams::default(), &prep.cache)?;
+    let ws = walk_sequence(s, &prep.model, &d.data, walk, start)?;
     let blend_seconds = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
     let centres: Vec<[f64; 3]> = ws.positions.chunks_exact(3 * nv).map(|f| tracked_centre(f, tracked)).collect();
