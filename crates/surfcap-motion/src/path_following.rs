@@ -557,4 +557,33 @@ mod tests {
         }
         assert!(checked >= 3, "{checked}");
     }
+
+    /// A 3D curve counts the height: at the tube's own centre height it is followed as well as
+    /// on the ground plane; lifted above it, every frame misses by at least the lift.
+    #[test]
+    fn three_dimensional_curves_count_the_height() {
+        let (s, g, model, _) = crate::walk_sequence::tests::setup();
+        let (iu, iv) = model.plane();
+        let up = 3 - iu - iv;
+        let crawl = model.centres[29][0] - model.centres[0][0];
+        let height = model.centres.iter().map(|c| c[up]).sum::<f64>() / model.centres.len() as f64;
+        let p = PathSearch { window: crawl / 2.0, ..PathSearch::for_fps(s.fps) };
+        let mut means = Vec::new();
+        for lift in [0.0, 0.5 * crawl] {
+            let point = |x: f64| {
+                let mut q = [0.0; 3];
+                q[0] = x;
+                q[up] = height + lift;
+                q
+            };
+            let curve = Curve::new(vec![point(0.0), point(1.8 * crawl)], vec![0, 1, 2]).unwrap();
+            let r = follow_path(&model, &g, &curve, &[], None, &p).unwrap();
+            assert!(r.travelled >= curve.length());
+            let min = r.errors.iter().copied().fold(f64::INFINITY, f64::min);
+            means.push((r.errors.iter().sum::<f64>() / r.errors.len() as f64, min));
+        }
+        let ((level, _), (lifted, lifted_min)) = (means[0], means[1]);
+        assert!(level < 0.1 * crawl, "level curve: mean error {level} for a crawl of {crawl}");
+        assert!(lifted_min >= 0.45 * crawl && lifted >= 0.5 * crawl - level, "lifted: {lifted} (min {lifted_min})");
+    }
 }
