@@ -274,7 +274,7 @@ impl WalkModel {
     /// cache written for another subject, or damaged).
     pub fn from_rows(subject: &Subject, rows: &[f64], tracked: Option<&[usize]>, slope: Slope) -> Result<Self, String> {
         let nf = subject.n_frames();
-        if rows.len() % 3 != 0 {
+        if !rows.len().is_multiple_of(3) {
             return Err(format!("{} numbers: expected rows of 3", rows.len()));
         }
         let rows: Vec<[f64; 3]> = rows.chunks_exact(3).map(|r| [r[0], r[1], r[2]]).collect();
