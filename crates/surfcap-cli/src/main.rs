@@ -53,6 +53,9 @@ enum Command {
     Demo(commands::demo::Args),
     /// Measure speed and memory (loading a subject).
     Bench(commands::bench::Args),
+    /// Play sequences in the browser: a local server (127.0.0.1) with a three.js page; original
+    /// frames green, synthetic red, paths and centre trajectories overlaid, side by side.
+    View(commands::view::Args),
 }
 
 /// What every command gets: how to report.
@@ -113,6 +116,7 @@ fn main() -> ExitCode {
         Command::Graph(a) => commands::graph::run(&ctx, a),
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
+        Command::View(a) => commands::view::run(&ctx, a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

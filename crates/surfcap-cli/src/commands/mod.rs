@@ -15,6 +15,7 @@ pub mod synth;
 pub mod synth_walk;
 pub mod transition;
 pub mod transitions;
+pub mod view;
 
 use std::path::Path;
 

@@ -1,0 +1,119 @@
+//! `surfcap view`: plays sequences in the browser (see `surfcap-view`). Accepts anything
+//! `surfcap import` reads (a glb, a subject cache, a capture folder) and report folders written
+//! by `surfcap report` or `surfcap demo`; several at once play side by side.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use surfcap_mesh::{FrameLabel, Subject};
+use surfcap_view::server::{ServeOptions, serve};
+use surfcap_view::{Overlay, ViewItem};
+
+use super::SourceOpts;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// What to play: .glb files, subject caches, capture folders, or a report folder.
+    #[arg(required = true)]
+    pub paths: Vec<PathBuf>,
+    /// Port on 127.0.0.1 (default: any free one; the URL is printed).
+    #[arg(long, default_value_t = 0)]
+    pub port: u16,
+    /// Only these sequences (comma-separated names).
+    #[arg(long, value_delimiter = ',')]
+    pub sequences: Vec<String>,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+/// Whether `p` is a report folder (an `index.html` and no subject cache).
+fn is_report(p: &Path) -> bool {
+    p.is_dir() && p.join("index.html").is_file() && !surfcap_mesh::cache::is_cache(p)
+}
+
+/// Every .glb under `dir`, sorted.
+fn glbs_under(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).with_context(|| format!("reading the folder {}", d.display()))? {
+            let p = e?.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "glb") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// The path and achieved centres a synthesis report (`x.report.json` next to `x.glb`) holds.
+fn overlay_of(glb: &Path, frames: usize) -> Option<Overlay> {
+    let report = super::synth_walk::report_path(glb);
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(report).ok()?).ok()?;
+    let points = |x: &serde_json::Value| -> Option<Vec<[f64; 3]>> {
+        x.as_array()?.iter().map(|p| Some([p[0].as_f64()?, p[1].as_f64()?, p[2].as_f64()?])).collect()
+    };
+    let curve = points(&v["curve"])?;
+    let centres = points(&v["per_frame"]["centre"])?;
+    (centres.len() == frames).then_some(Overlay { curve, centres })
+}
+
+fn items_of(s: &Subject, only: &[String], glb: Option<&Path>) -> Vec<ViewItem> {
+    let faces: Vec<u32> = s.topology().triangles().iter().flatten().copied().collect();
+    let n_sequences = s.sequences().len();
+    s.sequences()
+        .iter()
+        .filter(|q| only.is_empty() || only.contains(&q.name))
+        .map(|q| ViewItem {
+            name: q.name.clone(),
+            fps: s.fps,
+            up: s.up_axis.as_str().to_string(),
+            n_vertices: q.n_vertices(),
+            n_frames: q.n_frames(),
+            synthetic: q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect(),
+            faces: faces.clone(),
+            positions: q.positions().to_vec(),
+            overlay: glb.filter(|_| n_sequences == 1).and_then(|g| overlay_of(g, q.n_frames())),
+        })
+        .collect()
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let mut items = Vec::new();
+    let mut report = None;
+    for p in &a.paths {
+        anyhow::ensure!(p.exists(), "view {}: no such file or folder", p.display());
+        if is_report(p) {
+            anyhow::ensure!(report.is_none(), "view {}: only one report folder at a time", p.display());
+            let glbs = glbs_under(p)?;
+            anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
+            for g in glbs {
+                let s = super::open(ctx, &g, &a.source)?;
+                items.extend(items_of(&s, &a.sequences, Some(&g)));
+            }
+            report = Some(p.clone());
+        } else {
+            let s = super::open(ctx, p, &a.source)?;
+            let glb = p.extension().is_some_and(|x| x == "glb").then_some(p.as_path());
+            items.extend(items_of(&s, &a.sequences, glb));
+        }
+    }
+    anyhow::ensure!(!items.is_empty(), "view: no sequence named {} in what was given", a.sequences.join(", "));
+    let n = items.len();
+    let json = ctx.json;
+    serve(items, ServeOptions { port: a.port, report }, |addr| {
+        let url = format!("http://{addr}/");
+        if json {
+            super::print_json(&serde_json::json!({ "url": url, "sequences": n }));
+        } else {
+            println!("{url}");
+            eprintln!("surfcap view: playing {n} sequence(s) at {url} (Ctrl-C to stop)");
+        }
+        let _ = std::io::stdout().flush();
+    })?;
+    Ok(())
+}

@@ -1,0 +1,115 @@
+//! `surfcap view` end to end: the server on a real capture (Vlasic crane), its routes, and the
+//! page driven by headless Chromium (tools/browser-test.mjs: loads with no console error, the
+//! frame counter advances, the scrubber jumps, the canvas is not blank).
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+
+/// The server, killed when dropped.
+struct Server(Child);
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn start(args: &[&str]) -> (Server, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .arg("view")
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("surfcap runs");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let url = line.trim().to_string();
+    assert!(url.starts_with("http://127.0.0.1:"), "printed {url:?}");
+    (Server(child), url)
+}
+
+/// A raw HTTP/1.1 request (the target is sent as written, no normalisation): status and body.
+fn request(url: &str, method: &str, target: &str) -> (u16, Vec<u8>) {
+    let host = url.trim_start_matches("http://").trim_end_matches('/');
+    let mut s = TcpStream::connect(host).unwrap();
+    write!(s, "{method} {target} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut buf = Vec::new();
+    s.read_to_end(&mut buf).unwrap();
+    let head_end = buf.windows(4).position(|w| w == b"\r\n\r\n").expect("an HTTP response") + 4;
+    let head = String::from_utf8_lossy(&buf[..head_end]).into_owned();
+    let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+    (status, buf[head_end..].to_vec())
+}
+
+#[test]
+fn the_viewer_plays_a_real_capture_in_chromium() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let crane = data.join("vlasic2008/crane");
+    let (_server, url) = start(&[crane.to_str().unwrap()]);
+    // Routes: the page, its assets and the data; nothing else.
+    let (status, body) = request(&url, "GET", "/");
+    assert_eq!(status, 200);
+    assert!(String::from_utf8_lossy(&body).contains("surfcap viewer"));
+    let (status, body) = request(&url, "GET", "/api/items");
+    assert_eq!(status, 200);
+    let v: serde_json::Value = serde_json::from_slice(&body).unwrap();
+    let item = &v["items"][0];
+    assert_eq!(item["n_frames"], 175);
+    let (status, body) = request(&url, "GET", "/api/items/0/positions");
+    assert_eq!(status, 200);
+    assert_eq!(body.len() as u64, 175 * 3 * 4 * item["n_vertices"].as_u64().unwrap());
+    for (method, target, want) in [
+        ("GET", "/../../etc/passwd", 404),
+        ("GET", "/assets/../../../etc/passwd", 404),
+        ("GET", "/report/index.html", 404),
+        ("GET", "/api/items/1/positions", 404),
+        ("GET", "/etc/passwd", 404),
+        ("POST", "/api/items", 405),
+    ] {
+        assert_eq!(request(&url, method, target).0, want, "{method} {target}");
+    }
+    // The page in headless Chromium.
+    let tools = surfcap_testkit::workspace_root().join("tools");
+    assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
+    let shot = tempfile::tempdir().unwrap();
+    let png = shot.path().join("viewer.png");
+    let o = Command::new("node")
+        .arg(tools.join("browser-test.mjs"))
+        .args([&url, png.to_str().unwrap()])
+        .output()
+        .expect("node runs");
+    assert!(
+        o.status.success(),
+        "browser test failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let seen: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(seen["painted"].as_f64().unwrap() > 0.001);
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+}
+
+#[test]
+fn bad_paths_get_a_clear_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = tmp.path().join("notes.txt");
+    std::fs::write(&text, "not a mesh").unwrap();
+    let empty_report = tmp.path().join("report");
+    std::fs::create_dir(&empty_report).unwrap();
+    std::fs::write(empty_report.join("index.html"), "<html></html>").unwrap();
+    let missing = tmp.path().join("missing.glb");
+    for (path, want) in [(&missing, "no such file or folder"), (&text, "notes.txt"), (&empty_report, "no .glb")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_surfcap")).args(["view", p(path)]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{}: {err}", path.display());
+        assert!(err.contains(want), "{}: {err}", path.display());
+    }
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}

@@ -1,0 +1,23 @@
+//! The page's files, embedded at build time: our page and script, and three.js (with its
+//! orbit controls) from the npm package `build.rs` installs.
+
+/// (route under `/assets/`, content type, bytes).
+pub const ASSETS: &[(&str, &str, &str)] = &[
+    ("viewer.js", JS, include_str!("../web/viewer.js")),
+    ("three.module.js", JS, include_str!("../web/node_modules/three/build/three.module.js")),
+    ("three.core.js", JS, include_str!("../web/node_modules/three/build/three.core.js")),
+    (
+        "addons/controls/OrbitControls.js",
+        JS,
+        include_str!("../web/node_modules/three/examples/jsm/controls/OrbitControls.js"),
+    ),
+];
+
+const JS: &str = "text/javascript; charset=utf-8";
+
+pub const INDEX_HTML: &str = include_str!("../web/index.html");
+
+/// The asset at `route`, if there is one.
+pub fn asset(route: &str) -> Option<(&'static str, &'static str)> {
+    ASSETS.iter().find(|(r, _, _)| *r == route).map(|(_, t, b)| (*t, *b))
+}

@@ -1,0 +1,79 @@
+//! surfcap's viewer: a local web server (bound to 127.0.0.1) serving a three.js page that plays
+//! mesh sequences, colours original frames green and synthetic frames red (as the thesis's
+//! figures do), overlays a user's path and the achieved centre-of-mass trajectory, and plays
+//! several sequences side by side or overlaid.
+//!
+//! three.js is installed from npm at build time and embedded in the binary ([`assets`]), so the
+//! page works offline. The server answers only its page, its assets, the items' data
+//! (`/api/...`) and, when given, the files of one report folder (`/report/...`); anything else
+//! is 404, and report paths that leave the folder are refused.
+
+pub mod assets;
+pub mod server;
+
+use serde::Serialize;
+
+/// One playable sequence.
+#[derive(Debug, Clone, Serialize)]
+pub struct ViewItem {
+    pub name: String,
+    pub fps: f64,
+    /// Subject up axis as `+y`, `-z`...: the page turns it onto its own +Y.
+    pub up: String,
+    pub n_vertices: usize,
+    pub n_frames: usize,
+    /// One flag per frame: whether surfcap made it (red) rather than captured it (green).
+    pub synthetic: Vec<bool>,
+    #[serde(skip)]
+    pub faces: Vec<u32>,
+    /// `[frames][vertices][3]` positions.
+    #[serde(skip)]
+    pub positions: Vec<f32>,
+    /// A path the sequence was asked to follow and the centre trajectory it achieved.
+    pub overlay: Option<Overlay>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Overlay {
+    pub curve: Vec<[f64; 3]>,
+    pub centres: Vec<[f64; 3]>,
+}
+
+/// Why an item cannot be shown.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    #[error("{0}: {1} positions is not frames x vertices x 3 with {2} vertices")]
+    Shape(String, usize, usize),
+    #[error("{0}: {1} frame labels for {2} frames")]
+    Labels(String, usize, usize),
+    #[error("{0}: face index {1} is not a vertex (0..{2})")]
+    Face(String, u32, usize),
+    #[error("{0}: the sequence has no frames")]
+    Empty(String),
+    #[error("nothing to show: no sequence was given")]
+    NoItems,
+    #[error("cannot listen on {0}: {1}")]
+    Bind(String, std::io::Error),
+    #[error("the server stopped: {0}")]
+    Serve(std::io::Error),
+}
+
+impl ViewItem {
+    /// Checks that the arrays agree (so the page never reads past an array).
+    pub fn check(&self) -> Result<(), ViewError> {
+        let per_frame = 3 * self.n_vertices;
+        if self.n_frames == 0 {
+            return Err(ViewError::Empty(self.name.clone()));
+        }
+        if per_frame == 0 || self.positions.len() != per_frame * self.n_frames {
+            return Err(ViewError::Shape(self.name.clone(), self.positions.len(), self.n_vertices));
+        }
+        if self.synthetic.len() != self.n_frames {
+            return Err(ViewError::Labels(self.name.clone(), self.synthetic.len(), self.n_frames));
+        }
+        if let Some(&f) = self.faces.iter().find(|&&f| f as usize >= self.n_vertices) {
+            return Err(ViewError::Face(self.name.clone(), f, self.n_vertices));
+        }
+        Ok(())
+    }
+}

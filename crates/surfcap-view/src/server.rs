@@ -1,0 +1,158 @@
+//! The HTTP server: GET-only routes for the page, its assets, the items and one report folder.
+
+use std::net::SocketAddr;
+use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
+
+use axum::Router;
+use axum::body::Body;
+use axum::extract::{Path as UrlPath, State};
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+
+use crate::assets::{INDEX_HTML, asset};
+use crate::{ViewError, ViewItem};
+
+struct App {
+    items: Vec<ViewItem>,
+    report: Option<PathBuf>,
+}
+
+/// What the page is served with.
+pub struct ServeOptions {
+    /// Port on 127.0.0.1 (0: any free one).
+    pub port: u16,
+    /// A report folder whose files are served under `/report/` (its `index.html` is linked).
+    pub report: Option<PathBuf>,
+}
+
+/// Serves `items` until the process ends; `ready(address)` is called once it listens.
+pub fn serve(items: Vec<ViewItem>, opts: ServeOptions, ready: impl FnOnce(SocketAddr)) -> Result<(), ViewError> {
+    if items.is_empty() {
+        return Err(ViewError::NoItems);
+    }
+    for it in &items {
+        it.check()?;
+    }
+    let report = match opts.report {
+        Some(r) => Some(r.canonicalize().map_err(|e| ViewError::Bind(r.display().to_string(), e))?),
+        None => None,
+    };
+    let app = Arc::new(App { items, report });
+    let rt = tokio::runtime::Builder::new_current_thread().enable_io().build().map_err(ViewError::Serve)?;
+    rt.block_on(async move {
+        let addr = SocketAddr::from(([127, 0, 0, 1], opts.port));
+        let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| ViewError::Bind(addr.to_string(), e))?;
+        ready(listener.local_addr().map_err(ViewError::Serve)?);
+        axum::serve(listener, router(app)).await.map_err(ViewError::Serve)
+    })
+}
+
+fn router(app: Arc<App>) -> Router {
+    Router::new()
+        .route("/", get(index))
+        .route("/assets/{*path}", get(assets))
+        .route("/api/items", get(items))
+        .route("/api/items/{id}/positions", get(positions))
+        .route("/api/items/{id}/faces", get(faces))
+        .route("/report/{*path}", get(report))
+        .fallback(not_found)
+        .with_state(app)
+}
+
+fn respond(content_type: &str, body: impl Into<Body>) -> Response {
+    ([(header::CONTENT_TYPE, content_type.to_string()), (header::CACHE_CONTROL, "no-store".into())], body.into())
+        .into_response()
+}
+
+async fn not_found() -> Response {
+    (StatusCode::NOT_FOUND, "not found: this server answers /, /assets/..., /api/items... and /report/...\n")
+        .into_response()
+}
+
+async fn index() -> Response {
+    respond("text/html; charset=utf-8", INDEX_HTML)
+}
+
+async fn assets(UrlPath(path): UrlPath<String>) -> Response {
+    match asset(&path) {
+        Some((t, body)) => respond(t, body),
+        None => not_found().await,
+    }
+}
+
+async fn items(State(app): State<Arc<App>>) -> Response {
+    let v = serde_json::json!({ "items": app.items, "report": app.report.as_ref().map(|_| "/report/index.html") });
+    respond("application/json", serde_json::to_vec(&v).expect("JSON values serialise"))
+}
+
+fn item(app: &App, id: &str) -> Option<usize> {
+    id.parse::<usize>().ok().filter(|&k| k < app.items.len())
+}
+
+async fn positions(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
+    let Some(k) = item(&app, &id) else { return not_found().await };
+    let bytes: Vec<u8> = app.items[k].positions.iter().flat_map(|x| x.to_le_bytes()).collect();
+    respond("application/octet-stream", bytes)
+}
+
+async fn faces(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
+    let Some(k) = item(&app, &id) else { return not_found().await };
+    let bytes: Vec<u8> = app.items[k].faces.iter().flat_map(|x| x.to_le_bytes()).collect();
+    respond("application/octet-stream", bytes)
+}
+
+/// The report file at `rel`, when `rel` is a plain relative path (no `..`, no root) naming a
+/// file inside the report folder (also after resolving links).
+pub fn report_file(root: &Path, rel: &str) -> Option<PathBuf> {
+    let rel = Path::new(rel);
+    if rel.components().any(|c| !matches!(c, Component::Normal(_))) {
+        return None;
+    }
+    let p = root.join(rel).canonicalize().ok()?;
+    (p.starts_with(root) && p.is_file()).then_some(p)
+}
+
+fn content_type(p: &Path) -> &'static str {
+    match p.extension().and_then(|e| e.to_str()).unwrap_or("") {
+        "html" => "text/html; charset=utf-8",
+        "svg" => "image/svg+xml",
+        "png" => "image/png",
+        "json" => "application/json",
+        "csv" | "txt" => "text/plain; charset=utf-8",
+        "css" => "text/css",
+        "glb" => "model/gltf-binary",
+        _ => "application/octet-stream",
+    }
+}
+
+async fn report(State(app): State<Arc<App>>, UrlPath(path): UrlPath<String>) -> Response {
+    let Some(root) = &app.report else { return not_found().await };
+    let Some(file) = report_file(root, &path) else { return not_found().await };
+    match std::fs::read(&file) {
+        Ok(bytes) => respond(content_type(&file), bytes),
+        Err(_) => not_found().await,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_paths_stay_inside_the_folder() {
+        let d = tempfile::tempdir().unwrap();
+        let root = d.path().join("r");
+        std::fs::create_dir_all(root.join("plots")).unwrap();
+        std::fs::write(root.join("index.html"), "x").unwrap();
+        std::fs::write(root.join("plots/a.svg"), "x").unwrap();
+        std::fs::write(d.path().join("secret.txt"), "x").unwrap();
+        let root = root.canonicalize().unwrap();
+        assert!(report_file(&root, "index.html").is_some());
+        assert!(report_file(&root, "plots/a.svg").is_some());
+        for bad in ["../secret.txt", "plots/../../secret.txt", "/etc/passwd", "plots", "missing.html", ""] {
+            assert!(report_file(&root, bad).is_none(), "{bad}");
+        }
+    }
+}
