@@ -348,6 +348,10 @@ fn one_transition_is_blended_and_valid() {
     assert_eq!(labels.len(), warp.len());
     assert_eq!(labels[0], "original");
     assert_eq!(labels[1], "synthetic");
+    // The distance matrix around the transition, with the warp drawn on it.
+    let svg = std::fs::read_to_string(tmp.path().join("t-dtw.svg")).unwrap();
+    assert!(svg.contains("DTW warp") && svg.contains("<polyline"), "heat map with the warp");
+    assert!(tmp.path().join("t-dtw.png").is_file());
     // A destination too close to its sequence start has no room for a segment.
     let o = surfcap(&["transition", p(&horse), "--from", "gallop:2", "--to", "gallop:3", "-o", p(&out)]);
     assert_eq!(o.status.code(), Some(1));

@@ -1,4 +1,4 @@
-//! Line charts written as SVG and PNG (plotters), with an embedded font (DejaVu Sans) so that
+//! Line charts and heat maps written as SVG and PNG (plotters), with an embedded font (DejaVu Sans) so that
 //! text renders on machines without system fonts. Files are written under a temporary name and
 //! renamed into place.
 
@@ -7,6 +7,10 @@ use std::sync::Once;
 
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
+
+pub mod heat_map;
+
+pub use heat_map::{HeatMap, write_heat_map};
 
 static FONT: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
@@ -122,6 +126,17 @@ fn temp_sibling(path: &Path) -> PathBuf {
 
 /// Writes `<stem>.svg` and `<stem>.png` (800 x 500) and returns their paths.
 pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>, PlotError> {
+    write_svg_and_png(stem, (800, 500), |root| draw(root, chart), |root| draw(root, chart))
+}
+
+/// Draws a figure twice (SVG, PNG) into `<stem>.svg` and `<stem>.png`, each written under a
+/// temporary name and renamed into place.
+pub(crate) fn write_svg_and_png(
+    stem: &Path,
+    size: (u32, u32),
+    svg_draw: impl FnOnce(DrawingArea<SVGBackend, plotters::coord::Shift>) -> Result<(), String>,
+    png_draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,
+) -> Result<Vec<PathBuf>, PlotError> {
     ensure_font();
     if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| PlotError(format!("{}: cannot create: {e}", dir.display())))?;
@@ -129,14 +144,14 @@ pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>, 
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
     let mut text = String::new();
-    draw(SVGBackend::with_string(&mut text, (800, 500)).into_drawing_area(), chart)
+    svg_draw(SVGBackend::with_string(&mut text, size).into_drawing_area())
         .map_err(|e| PlotError(format!("{}: {e}", svg.display())))?;
     let tmp = temp_sibling(&svg);
     std::fs::write(&tmp, text)
         .and_then(|_| std::fs::rename(&tmp, &svg))
         .map_err(|e| PlotError(format!("{}: cannot write: {e}", svg.display())))?;
     let tmp = temp_sibling(&png);
-    draw(BitMapBackend::new(&tmp, (800, 500)).into_drawing_area(), chart)
+    png_draw(BitMapBackend::new(&tmp, size).into_drawing_area())
         .map_err(|e| PlotError(format!("{}: {e}", png.display())))?;
     std::fs::rename(&tmp, &png).map_err(|e| PlotError(format!("{}: cannot write: {e}", png.display())))?;
     Ok(vec![svg, png])

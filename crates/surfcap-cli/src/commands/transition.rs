@@ -79,6 +79,24 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)
     })?;
     written.push(rp);
+    // The distance matrix around the transition with its DTW warp on it (thesis Fig. 2.10):
+    // source frames down, destination frames across, a margin of a few frames around both
+    // segments (kept inside the matrix).
+    let margin = li.max(lj) / 2 + 2;
+    let (r0, r1) = (i.saturating_sub(margin), (i + li + margin).min(n));
+    let (c0, c1) = ((j + 1 - lj).saturating_sub(margin), (j + 1 + margin).min(n));
+    let heat = surfcap_plot::HeatMap {
+        title: format!("pose distances and DTW warp, {} -> {}", a.from, a.to),
+        x_label: "destination frame".into(),
+        y_label: "source frame".into(),
+        values: (r0..r1).flat_map(|r| (c0..c1).map(move |c| (r, c))).map(|(r, c)| d.data[r * n + c]).collect(),
+        rows: r1 - r0,
+        cols: c1 - c0,
+        origin: (r0, c0),
+        path: warp.path.clone(),
+    };
+    let stem = a.output.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
+    written.extend(surfcap_plot::write_heat_map(&a.output.with_file_name(format!("{stem}-dtw")), &heat)?);
     if ctx.json {
         print_json(&json!({ "transition": report, "written": written }));
     } else {

@@ -1,0 +1,151 @@
+//! Heat maps of matrices (pose distance matrices, transition costs), optionally with a path
+//! drawn on them (a DTW warp, thesis Fig. 2.10-2.11), as SVG and PNG.
+//!
+//! Large matrices are averaged into at most `MAX_CELLS` x `MAX_CELLS` blocks before drawing, so
+//! a 2,000-frame distance matrix gives a light SVG; the axes keep the matrix's own indices.
+
+use std::path::{Path, PathBuf};
+
+use plotters::prelude::*;
+
+use crate::{PlotError, write_svg_and_png};
+
+/// Drawn cells per side at most.
+const MAX_CELLS: usize = 200;
+
+/// A matrix to draw: row `r` (y axis, from the top) and column `c` (x axis).
+#[derive(Debug, Clone)]
+pub struct HeatMap {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// Row-major `rows x cols` values; non-finite cells are drawn grey.
+    pub values: Vec<f64>,
+    pub rows: usize,
+    pub cols: usize,
+    /// Index of the first row and column (a window of a larger matrix keeps its indices).
+    pub origin: (usize, usize),
+    /// Cells (row, col) joined by a line on top (in matrix indices, origin included).
+    pub path: Vec<(usize, usize)>,
+}
+
+/// Viridis-like colour ramp (5 stops) for t in [0, 1].
+fn ramp(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] =
+        [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
+    let x = t.clamp(0.0, 1.0) * 4.0;
+    let k = (x.floor() as usize).min(3);
+    let f = x - k as f64;
+    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    let mix = |p: f64, q: f64| (p + f * (q - p)).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Block means: (block rows, block cols, values, rows per block, cols per block).
+fn blocks(h: &HeatMap) -> (usize, usize, Vec<f64>, usize, usize) {
+    let (sr, sc) = (h.rows.div_ceil(MAX_CELLS).max(1), h.cols.div_ceil(MAX_CELLS).max(1));
+    let (br, bc) = (h.rows.div_ceil(sr), h.cols.div_ceil(sc));
+    let mut out = vec![0.0; br * bc];
+    for i in 0..br {
+        for j in 0..bc {
+            let (mut s, mut n) = (0.0, 0usize);
+            for r in i * sr..((i + 1) * sr).min(h.rows) {
+                for c in j * sc..((j + 1) * sc).min(h.cols) {
+                    let v = h.values[r * h.cols + c];
+                    if v.is_finite() {
+                        s += v;
+                        n += 1;
+                    }
+                }
+            }
+            out[i * bc + j] = if n > 0 { s / n as f64 } else { f64::NAN };
+        }
+    }
+    (br, bc, out, sr, sc)
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, h: &HeatMap) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let (br, bc, v, sr, sc) = blocks(h);
+    let finite = v.iter().copied().filter(|x| x.is_finite());
+    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    let (r0, c0) = (h.origin.0 as f64, h.origin.1 as f64);
+    let mut c = ChartBuilder::on(&root)
+        .caption(&h.title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(c0..c0 + h.cols as f64, (r0 + h.rows as f64)..r0)
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .disable_mesh()
+        .x_label_formatter(&|x| format!("{x:.0}"))
+        .y_label_formatter(&|y| format!("{y:.0}"))
+        .x_desc(h.x_label.as_str())
+        .y_desc(h.y_label.as_str())
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let cells = (0..br).flat_map(|i| (0..bc).map(move |j| (i, j))).map(|(i, j)| {
+        let x = v[i * bc + j];
+        let colour = if x.is_finite() { ramp((x - lo) / span) } else { RGBColor(200, 200, 200) };
+        let (y0, x0) = (r0 + (i * sr) as f64, c0 + (j * sc) as f64);
+        let (y1, x1) = (r0 + ((i + 1) * sr).min(h.rows) as f64, c0 + ((j + 1) * sc).min(h.cols) as f64);
+        Rectangle::new([(x0, y0), (x1, y1)], colour.filled())
+    });
+    c.draw_series(cells).map_err(|e| e.to_string())?;
+    if h.path.len() > 1 {
+        let pts = h.path.iter().map(|&(r, col)| (col as f64 + 0.5, r as f64 + 0.5));
+        c.draw_series(LineSeries::new(pts, RGBColor(230, 30, 30).stroke_width(2))).map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+/// Writes `<stem>.svg` and `<stem>.png` (700 x 640) and returns their paths.
+pub fn write_heat_map(stem: &Path, h: &HeatMap) -> Result<Vec<PathBuf>, PlotError> {
+    if h.rows == 0 || h.cols == 0 || h.values.len() != h.rows * h.cols {
+        return Err(PlotError(format!(
+            "{}: {} values for a {} x {} heat map",
+            stem.display(),
+            h.values.len(),
+            h.rows,
+            h.cols
+        )));
+    }
+    write_svg_and_png(stem, (700, 640), |root| draw(root, h), |root| draw(root, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn large_matrices_are_averaged_and_paths_drawn() {
+        let d = tempfile::tempdir().unwrap();
+        let n = 450;
+        let values: Vec<f64> = (0..n * n).map(|k| ((k / n) as f64 - (k % n) as f64).abs()).collect();
+        let h = HeatMap {
+            title: "distances".into(),
+            x_label: "frame".into(),
+            y_label: "frame".into(),
+            values,
+            rows: n,
+            cols: n,
+            origin: (0, 0),
+            path: (0..n).map(|k| (k, k)).collect(),
+        };
+        let (br, bc, v, sr, _) = blocks(&h);
+        assert_eq!((br, bc, sr), (150, 150, 3));
+        assert!((v[0] - 8.0 / 9.0).abs() < 1e-12, "mean |r - c| over a 3 x 3 block: {}", v[0]);
+        let files = write_heat_map(&d.path().join("h"), &h).unwrap();
+        let svg = std::fs::read_to_string(&files[0]).unwrap();
+        assert!(svg.contains("distances") && svg.matches("<rect").count() >= br * bc);
+        assert_eq!(&std::fs::read(&files[1]).unwrap()[1..4], b"PNG");
+        let bad = HeatMap { rows: 3, ..h };
+        assert!(write_heat_map(&d.path().join("bad"), &bad).is_err());
+    }
+}
