@@ -56,6 +56,9 @@ enum Command {
     /// Play sequences in the browser: a local server (127.0.0.1) with a three.js page; original
     /// frames green, synthetic red, paths and centre trajectories overlaid, side by side.
     View(commands::view::Args),
+    /// One static HTML page of what exists for a subject: summary, cached distance matrix,
+    /// included evaluations (tables, plots) and animations (with their path errors).
+    Report(commands::report::Args),
 }
 
 /// What every command gets: how to report.
@@ -117,6 +120,7 @@ fn main() -> ExitCode {
         Command::Demo(a) => commands::demo::run(&ctx, a),
         Command::Bench(a) => commands::bench::run(&ctx, a),
         Command::View(a) => commands::view::run(&ctx, a),
+        Command::Report(a) => commands::report::run(&ctx, a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

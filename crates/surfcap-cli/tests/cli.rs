@@ -47,6 +47,21 @@ fn demo_runs_and_its_glb_is_valid() {
     let side: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("export/mannequin.json")).unwrap()).unwrap();
     assert_eq!(side["sequences"][0]["frame_labels"][0], "original");
+    // The report, and `surfcap view` on it: both animations, the page under /report/, nothing
+    // outside the report folder.
+    let html = std::fs::read_to_string(out.join("report/index.html")).unwrap();
+    assert!(html.contains("Pose distances") && html.contains("anim/path.glb"), "report: {html}");
+    assert!(out.join("report/plots/distances.svg").is_file() && out.join("report/anim/path.report.json").is_file());
+    let view = surfcap_testkit::ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&out.join("report"))]);
+    let (status, body) = view.get("/api/items");
+    assert_eq!(status, 200);
+    let items: serde_json::Value = serde_json::from_slice(&body).unwrap();
+    assert_eq!(items["items"].as_array().unwrap().len(), 2, "interpolation and path");
+    assert!(items["items"].as_array().unwrap().iter().any(|it| it["overlay"]["curve"].is_array()), "path overlay");
+    assert_eq!(view.get("/report/index.html").0, 200);
+    assert_eq!(view.get("/report/plots/distances.svg").0, 200);
+    assert_eq!(view.get("/report/../cache").0, 404);
+    assert_eq!(view.get("/report/../mannequin.subject/subject.json").0, 404);
 }
 
 #[test]

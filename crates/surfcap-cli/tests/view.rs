@@ -2,54 +2,17 @@
 //! page driven by headless Chromium (tools/browser-test.mjs: loads with no console error, the
 //! frame counter advances, the scrubber jumps, the canvas is not blank).
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
-/// The server, killed when dropped.
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn start(args: &[&str]) -> (Server, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_surfcap"))
-        .arg("view")
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("surfcap runs");
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let url = line.trim().to_string();
-    assert!(url.starts_with("http://127.0.0.1:"), "printed {url:?}");
-    (Server(child), url)
-}
-
-/// A raw HTTP/1.1 request (the target is sent as written, no normalisation): status and body.
-fn request(url: &str, method: &str, target: &str) -> (u16, Vec<u8>) {
-    let host = url.trim_start_matches("http://").trim_end_matches('/');
-    let mut s = TcpStream::connect(host).unwrap();
-    write!(s, "{method} {target} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut buf = Vec::new();
-    s.read_to_end(&mut buf).unwrap();
-    let head_end = buf.windows(4).position(|w| w == b"\r\n\r\n").expect("an HTTP response") + 4;
-    let head = String::from_utf8_lossy(&buf[..head_end]).into_owned();
-    let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
-    (status, buf[head_end..].to_vec())
-}
+use surfcap_testkit::{ViewServer, http_request as request};
 
 #[test]
 fn the_viewer_plays_a_real_capture_in_chromium() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let crane = data.join("vlasic2008/crane");
-    let (_server, url) = start(&[crane.to_str().unwrap()]);
+    let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[crane.to_str().unwrap()]);
+    let url = server.url.clone();
     // Routes: the page, its assets and the data; nothing else.
     let (status, body) = request(&url, "GET", "/");
     assert_eq!(status, 200);

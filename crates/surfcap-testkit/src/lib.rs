@@ -65,3 +65,57 @@ pub fn validate_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
     assert_eq!(reports.len(), files.len());
     reports
 }
+
+/// A raw HTTP/1.1 request to `url` (`http://host:port/`), the target sent exactly as written
+/// (no normalisation, so path-traversal attempts reach the server): status and body.
+///
+/// # Panics
+/// When the server cannot be reached or does not answer HTTP.
+pub fn http_request(url: &str, method: &str, target: &str) -> (u16, Vec<u8>) {
+    use std::io::{Read, Write};
+    let host = url.trim_start_matches("http://").trim_end_matches('/');
+    let mut s = std::net::TcpStream::connect(host).expect("the server accepts connections");
+    write!(s, "{method} {target} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut buf = Vec::new();
+    s.read_to_end(&mut buf).unwrap();
+    let head_end = buf.windows(4).position(|w| w == b"\r\n\r\n").expect("an HTTP response") + 4;
+    let head = String::from_utf8_lossy(&buf[..head_end]).into_owned();
+    let status = head.split_whitespace().nth(1).and_then(|x| x.parse().ok()).expect("an HTTP status line");
+    (status, buf[head_end..].to_vec())
+}
+
+/// A running `surfcap view`, killed when dropped.
+pub struct ViewServer {
+    child: std::process::Child,
+    pub url: String,
+}
+
+impl ViewServer {
+    /// Starts `<surfcap> view <args>` and waits for the URL it prints.
+    pub fn start(surfcap: &str, args: &[&str]) -> Self {
+        use std::io::BufRead;
+        let mut child = std::process::Command::new(surfcap)
+            .arg("view")
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("surfcap runs");
+        let mut line = String::new();
+        std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        let url = line.trim().to_string();
+        assert!(url.starts_with("http://127.0.0.1:"), "surfcap view printed {url:?}");
+        ViewServer { child, url }
+    }
+
+    pub fn get(&self, target: &str) -> (u16, Vec<u8>) {
+        http_request(&self.url, "GET", target)
+    }
+}
+
+impl Drop for ViewServer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}

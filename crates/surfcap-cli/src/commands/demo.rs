@@ -141,7 +141,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         kind: "essential".into(),
         alpha: 0.05,
         table: TableOpts { slope: SlopeArg(Some(3)), l_min: None, l_max: None },
-        cache: cache_opts,
+        cache: cache_opts.clone(),
         source: Default::default(),
     };
     let prep = prepare_subject(ctx, subject.clone(), &opts, Kind::Essential, None)?;
@@ -180,6 +180,18 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ));
     written.extend(path.played.written.iter().cloned());
     written.push(path.played.report_path.clone());
+    // The report of what the demo made, and the command that plays it.
+    let report_dir = a.output.join("report");
+    let include = vec![interp_path.clone(), out.output.clone()];
+    let rep = super::report::write_report(&subject, &cache, &report_dir, &include, &cache_opts)?;
+    say(&format!(
+        "9. wrote the report {} ({} plots, {} animations); play them in the browser with: surfcap view {}",
+        rep.index.display(),
+        rep.plots,
+        rep.animations,
+        report_dir.display()
+    ));
+    written.push(rep.index.clone());
     if ctx.json {
         print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written,
             "path": { "mean_error": path.mean_error, "max_error": path.max_error, "frames": path.frames } }));
@@ -187,7 +199,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         println!("\nsurfcap info {}:", cache.display());
         super::info::run(ctx, super::info::Args { subject: cache.clone(), source: Default::default() })?;
         println!(
-            "\nplay {}, {} and {} in Blender (File > Import > glTF) or any three.js viewer",
+            "\nsee the report: {}\nplay the animations in the browser: surfcap view {}\n(or open {}, {} and {} in Blender: File > Import > glTF)",
+            rep.index.display(),
+            report_dir.display(),
             a.output.join("export/mannequin.glb").display(),
             interp_path.display(),
             out.output.display()

@@ -65,6 +65,12 @@ impl CacheOpts {
     }
 }
 
+/// Where the distance matrix of `subject` with `params` is (or would be) cached.
+pub fn distance_cache_path(subject: &Subject, params: &DistanceParams, cache: &CacheOpts) -> PathBuf {
+    let key = format!("metric={} w={} weights=none algo=1", params.metric.name(), params.w);
+    cache.cache().path(&format!("distance-{}", params.metric.name()), &subject_hash(subject), &key)
+}
+
 /// The distance matrix of a subject, from the cache when possible. Returns it, whether it was
 /// cached, and the cache file.
 pub fn cached_distance_matrix(
@@ -74,8 +80,7 @@ pub fn cached_distance_matrix(
     cache: &CacheOpts,
 ) -> anyhow::Result<(NpyArray<f64>, bool, PathBuf)> {
     let store = cache.cache();
-    let key = format!("metric={} w={} weights=none algo=1", params.metric.name(), params.w);
-    let path = store.path(&format!("distance-{}", params.metric.name()), &subject_hash(subject), &key);
+    let path = distance_cache_path(subject, params, cache);
     if cache.no_cache {
         let _ = std::fs::remove_file(&path);
     }

@@ -11,6 +11,7 @@ pub mod graph;
 pub mod import;
 pub mod info;
 pub mod interpolate;
+pub mod report;
 pub mod synth;
 pub mod synth_walk;
 pub mod transition;
