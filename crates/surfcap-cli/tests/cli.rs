@@ -485,3 +485,32 @@ fn essential_graph_beats_the_motion_graph_on_real_captures() {
         assert!(stderr(&o).contains(want), "{}", stderr(&o));
     }
 }
+
+/// Thesis Fig. 2.8 on a real capture: the non-linear interpolation distorts edges and volume
+/// less than the linear blend; `-o` adds the curves over lambda as JSON, SVG and PNG.
+#[test]
+fn interpolation_evaluation_writes_its_curves() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let crane = data.join("vlasic2008/crane");
+    let out = tmp.path().join("ei");
+    let o = surfcap(&["eval", "interpolation", p(&crane), "--pair", "crane:0,crane:90", "-o", p(&out), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let r = &v["rows"][0];
+    for m in ["edge_distortion", "volume_change"] {
+        assert!(r["nonlinear"][m].as_f64().unwrap() < r["linear"][m].as_f64().unwrap(), "{m}: {r}");
+    }
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("interpolation.json")).unwrap()).unwrap();
+    let sweep = j["sweeps"][0]["lambda_linear_edge_nonlinear_edge_linear_volume_nonlinear_volume"].as_array().unwrap();
+    assert_eq!(sweep.len(), 11);
+    for end in [&sweep[0], &sweep[10]] {
+        assert!(
+            end[1].as_f64().unwrap().abs() < 1e-3 && end[2].as_f64().unwrap().abs() < 1e-3,
+            "no distortion at the ends: {end}"
+        );
+    }
+    for f in ["distortion.svg", "distortion.png", "volume.svg", "volume.png"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context;
 use serde_json::json;
 use surfcap_geometry::pose_interpolation::NonlinearInterpolator;
 use surfcap_geometry::shape_distortion::{edge_length_distortion, volume_change};
@@ -40,6 +41,10 @@ pub enum What {
         /// Stretch interpolation: linear (eq. 2.45) or log (eq. 2.46).
         #[arg(long, default_value = "linear")]
         stretch: String,
+        /// Also write interpolation.json and distortion.svg/png (both measures over lambda in
+        /// 0, 0.1, ..., 1, linear dashed, non-linear solid) into this folder.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
         #[command(flatten)]
         source: SourceOpts,
     },
@@ -115,8 +120,10 @@ pub enum What {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let (subject, pairs, lambda, stretch, source) = match a.what {
-        What::Interpolation { subject, pairs, lambda, stretch, source } => (subject, pairs, lambda, stretch, source),
+    let (subject, pairs, lambda, stretch, output, source) = match a.what {
+        What::Interpolation { subject, pairs, lambda, stretch, output, source } => {
+            (subject, pairs, lambda, stretch, output, source)
+        }
         What::Transitions { subject, slopes, fixed, plot_pairs, output, cache, source } => {
             let opts = super::eval_transitions::Opts { slopes, fixed, plot_pairs, output, cache };
             return super::eval_transitions::run(ctx, &subject, &source, &opts);
@@ -134,6 +141,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = super::open(ctx, &subject, &source)?;
     let topo = s.topology();
     let mut rows = Vec::new();
+    // Per pair: (lambda, linear edge distortion, non-linear edge distortion, linear volume
+    // change, non-linear volume change) over lambda = 0, 0.1, ..., 1, when plots are asked for.
+    let mut sweeps: Vec<(String, Vec<[f64; 5]>)> = Vec::new();
     for pair in &pairs {
         let (from, to) = pair.split_once(',').ok_or_else(|| anyhow::anyhow!("--pair {pair:?}: expected FROM,TO"))?;
         let (gi, gj) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
@@ -153,6 +163,25 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "nonlinear_seconds": secs,
         });
         rows.push(row);
+        if output.is_some() {
+            let sweep = (0..=10)
+                .map(|k| {
+                    let l = k as f64 / 10.0;
+                    let (lin, non) = (interp.linear(l), interp.at(l, stretch));
+                    [
+                        l,
+                        edge_length_distortion(topo, pi, pj, &lin, l),
+                        edge_length_distortion(topo, pi, pj, &non, l),
+                        volume_change(topo, pi, pj, &lin, l),
+                        volume_change(topo, pi, pj, &non, l),
+                    ]
+                })
+                .collect();
+            sweeps.push((pair.clone(), sweep));
+        }
+    }
+    if let Some(dir) = &output {
+        write_interpolation_plots(dir, &s.name, &rows, &sweeps)?;
     }
     if ctx.json {
         print_json(&json!({ "subject": s.name, "rows": rows }));
@@ -179,5 +208,48 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             r["nonlinear_seconds"].as_f64().unwrap_or(f64::NAN),
         );
     }
+    Ok(())
+}
+
+/// `interpolation.json` and `distortion.svg/png`: each measure over lambda, one colour per pair,
+/// linear dashed and non-linear solid (thesis Fig. 2.8 reads them at lambda = 0.5).
+fn write_interpolation_plots(
+    dir: &std::path::Path,
+    name: &str,
+    rows: &[serde_json::Value],
+    sweeps: &[(String, Vec<[f64; 5]>)],
+) -> anyhow::Result<()> {
+    use surfcap_plot::{LineChart, Series, write_line_chart};
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let palette = [(31, 95, 191), (208, 48, 48), (46, 158, 68), (224, 138, 0), (120, 60, 170)];
+    for (stem, title, lin, non) in
+        [("distortion", "edge-length distortion over lambda", 1, 2), ("volume", "volume change over lambda", 3, 4)]
+    {
+        let mut series = Vec::new();
+        for (k, (pair, sweep)) in sweeps.iter().enumerate() {
+            let color = palette[k % palette.len()];
+            for (col, dashed, kind) in [(lin, true, "linear"), (non, false, "non-linear")] {
+                series.push(Series {
+                    name: format!("{pair} {kind}"),
+                    points: sweep.iter().map(|r| (r[0], r[col])).collect(),
+                    color,
+                    dashed,
+                    markers: false,
+                });
+            }
+        }
+        let chart = LineChart {
+            title: format!("{name}: {title}"),
+            x_label: "lambda".into(),
+            y_label: if stem == "volume" { "relative volume change".into() } else { "relative edge distortion".into() },
+            series,
+        };
+        write_line_chart(&dir.join(stem), &chart)?;
+    }
+    let v = json!({ "subject": name, "rows": rows, "sweeps": sweeps.iter().map(|(p, s)| json!({ "pair": p, "lambda_linear_edge_nonlinear_edge_linear_volume_nonlinear_volume": s })).collect::<Vec<_>>() });
+    let path = dir.join("interpolation.json");
+    surfcap_mesh::atomic::write_file(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+    })?;
     Ok(())
 }
