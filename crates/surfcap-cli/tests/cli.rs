@@ -325,7 +325,15 @@ fn transitions_table_and_evaluation_on_the_horse() {
         assert!(m("dtw_vls") <= m("dtw") && m("dtw") <= m("standard"), "{r}");
         assert!(r["pairs"].as_u64().unwrap() > 0);
     }
-    for f in ["transitions.json", "costs.svg", "costs.png", "durations.svg", "durations.png"] {
+    for f in [
+        "transitions.json",
+        "costs.svg",
+        "costs.png",
+        "durations.svg",
+        "durations.png",
+        "distances.svg",
+        "distances.png",
+    ] {
         assert!(ev.join(f).is_file(), "{f}");
     }
 }

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
+use surfcap_motion::dtw::dtw_window;
 use surfcap_motion::segment_bounds;
 use surfcap_motion::transition_table::{SegmentRoom, TableParams, fixed_length_dtw, standard_transition};
 use surfcap_plot::{LineChart, Series, write_line_chart};
@@ -68,16 +69,30 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
         if p == 3 || plot_data.is_none() {
             let step = (pairs.len() / o.plot_pairs.max(1)).max(1);
             let sample: Vec<usize> = pairs.iter().step_by(step).take(o.plot_pairs).copied().collect();
+            // The cheapest transition whose source and destination segments do not overlap
+            // (overlapping ones replay nearly the same frames), drawn on the distance matrix
+            // (thesis Fig. 2.10).
+            let disjoint = |k: usize| {
+                let (i, j, li, lj) = (k / n, k % n, table.li[k] as usize, table.lj[k] as usize);
+                j < i || j + 1 >= i + li + lj
+            };
+            let shown = pairs
+                .iter()
+                .copied()
+                .filter(|&k| disjoint(k))
+                .min_by(|&a, &b| table.cost[a].total_cmp(&table.cost[b]))
+                .map(|k| (k / n, table.li[k] as usize, k % n, table.lj[k] as usize));
             plot_data = Some((
                 p,
                 sample
                     .iter()
                     .map(|&k| (standard[k].expect("filtered"), table.cost[k], table.len[k]))
                     .collect::<Vec<_>>(),
+                shown,
             ));
         }
     }
-    let (p_plot, sample) = plot_data.expect("at least one slope");
+    let (p_plot, sample, shown) = plot_data.expect("at least one slope");
     let xs = |f: &dyn Fn(&(f64, f64, u32)) -> f64| {
         sample.iter().enumerate().map(|(x, v)| (x as f64, f(v))).collect::<Vec<_>>()
     };
@@ -102,6 +117,21 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
     };
     let mut plots = write_line_chart(&o.output.join("costs"), &costs).map_err(|e| anyhow::anyhow!("{e}"))?;
     plots.extend(write_line_chart(&o.output.join("durations"), &durations).map_err(|e| anyhow::anyhow!("{e}"))?);
+    let warp = shown.and_then(|(i, li, j, lj)| Some((i, j, dtw_window(&d.data, n, i, li, j, lj, Some(p_plot))?)));
+    let heat = surfcap_plot::HeatMap {
+        title: match &warp {
+            Some((i, j, _)) => format!("{}: pose distances, DTW warp of transition {i} -> {j} (p = {p_plot})", s.name),
+            None => format!("{}: pose distances", s.name),
+        },
+        x_label: "destination frame".into(),
+        y_label: "source frame".into(),
+        values: d.data.clone(),
+        rows: n,
+        cols: n,
+        origin: (0, 0),
+        path: warp.map(|w| w.2.path).unwrap_or_default(),
+    };
+    plots.extend(surfcap_plot::write_heat_map(&o.output.join("distances"), &heat)?);
     let report = json!({
         "subject": s.name, "frames": n, "fps": s.fps, "l_min": l_min, "l_max": l_max, "fixed_length": fixed,
         "rows": rows, "plots": plots,
