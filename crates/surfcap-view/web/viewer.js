@@ -123,14 +123,14 @@ function frameCamera() {
 function showFrame(f) {
   state.frame = f;
   for (const it of state.items) {
-    const m = it.meta, k = Math.min(f, m.n_frames - 1), n = 3 * m.n_vertices;
+    const m = it.meta, k = f % m.n_frames, n = 3 * m.n_vertices;  // shorter sequences loop
     const attr = it.geometry.getAttribute('position');
     attr.array.set(it.positions.subarray(k * n, (k + 1) * n));
     attr.needsUpdate = true;
     it.geometry.computeVertexNormals();
     it.material.color.copy($('hues').checked ? it.hue : (m.synthetic[k] ? RED : GREEN));
   }
-  const first = state.items[0].meta, k = Math.min(f, first.n_frames - 1);
+  const first = state.items[0].meta, k = f % first.n_frames;
   $('counter').textContent = `frame ${f} / ${state.frames - 1} (${first.synthetic[k] ? 'synthetic' : 'original'})`;
   $('scrub').value = String(f);
 }
