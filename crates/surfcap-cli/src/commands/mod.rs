@@ -64,3 +64,23 @@ pub fn open(ctx: &crate::Ctx, path: &Path, opts: &SourceOpts) -> anyhow::Result<
 pub fn print_json(v: &serde_json::Value) {
     println!("{}", serde_json::to_string_pretty(v).expect("JSON values always serialise"));
 }
+
+/// Every file under the folder `dir` (recursively) whose extension is one of `extensions`,
+/// sorted.
+pub fn files_under(dir: &Path, extensions: &[&str]) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let entries = std::fs::read_dir(&d).map_err(|e| anyhow::anyhow!("reading the folder {}: {e}", d.display()))?;
+        for e in entries {
+            let f = e?.path();
+            if f.is_dir() {
+                stack.push(f);
+            } else if f.extension().is_some_and(|x| extensions.iter().any(|k| x == *k)) {
+                out.push(f);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}

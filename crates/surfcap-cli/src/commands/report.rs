@@ -116,20 +116,7 @@ fn files_of(p: &Path) -> anyhow::Result<Vec<PathBuf>> {
     if p.is_file() {
         return Ok(vec![p.to_path_buf()]);
     }
-    let mut out = Vec::new();
-    let mut stack = vec![p.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).with_context(|| format!("reading {}", d.display()))? {
-            let f = e?.path();
-            if f.is_dir() {
-                stack.push(f);
-            } else if f.extension().is_some_and(|x| ["json", "svg", "png", "glb"].iter().any(|k| x == *k)) {
-                out.push(f);
-            }
-        }
-    }
-    out.sort();
-    Ok(out)
+    super::files_under(p, &["json", "svg", "png", "glb"])
 }
 
 /// A unique name inside `dir` for `file` (`name`, `name-2`, ...).
@@ -303,18 +290,8 @@ pub fn write_report(
                 let _ = writeln!(tables, "<p><a href=\"{}\">{}</a></p>", rel(out, &to), rel(out, &to));
                 n_tables += 1;
             }
-            Some("svg") => {
-                let to = copy_into(&plots_dir, f)?;
-                let _ = writeln!(
-                    images,
-                    "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
-                    rel(out, &to),
-                    esc(&name),
-                    esc(&name)
-                );
-                n_plots += 1;
-            }
-            Some("png") if !f.with_extension("svg").is_file() => {
+            // A plot: its SVG when there is one, else its PNG.
+            Some(ext @ ("svg" | "png")) if ext == "svg" || !f.with_extension("svg").is_file() => {
                 let to = copy_into(&plots_dir, f)?;
                 let _ = writeln!(
                     images,

@@ -5,7 +5,6 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use surfcap_mesh::{FrameLabel, Subject};
 use surfcap_view::server::{ServeOptions, serve};
 use surfcap_view::{Overlay, ViewItem};
@@ -30,24 +29,6 @@ pub struct Args {
 /// Whether `p` is a report folder (an `index.html` and no subject cache).
 fn is_report(p: &Path) -> bool {
     p.is_dir() && p.join("index.html").is_file() && !surfcap_mesh::cache::is_cache(p)
-}
-
-/// Every .glb under `dir`, sorted.
-fn glbs_under(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).with_context(|| format!("reading the folder {}", d.display()))? {
-            let p = e?.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "glb") {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    Ok(out)
 }
 
 /// The path and achieved centres a synthesis report (`x.report.json` next to `x.glb`) holds.
@@ -89,7 +70,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         anyhow::ensure!(p.exists(), "view {}: no such file or folder", p.display());
         if is_report(p) {
             anyhow::ensure!(report.is_none(), "view {}: only one report folder at a time", p.display());
-            let glbs = glbs_under(p)?;
+            let glbs = super::files_under(p, &["glb"])?;
             anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
             for g in glbs {
                 let s = super::open(ctx, &g, &a.source)?;
