@@ -558,6 +558,21 @@ mod tests {
         assert!(checked >= 3, "{checked}");
     }
 
+    /// Same walk whatever the number of threads (the start candidates are searched in parallel).
+    #[test]
+    fn one_and_two_threads_find_the_same_walk() {
+        let (s, g, model, _) = crate::walk_sequence::tests::setup();
+        let crawl = model.centres[29][0] - model.centres[0][0];
+        let curve = Curve::new(vec![[0.0, 0.0, 0.0], [1.8 * crawl, 0.0, 0.4 * crawl]], vec![0, 2]).unwrap();
+        let p = PathSearch { window: crawl / 2.0, ..PathSearch::for_fps(s.fps) };
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| follow_path(&model, &g, &curve, &[], None, &p).unwrap())
+        };
+        let (a, b) = (run(1), run(2));
+        assert_eq!((a.walk, a.start, a.errors), (b.walk, b.start, b.errors));
+    }
+
     /// A 3D curve counts the height: at the tube's own centre height it is followed as well as
     /// on the ground plane; lifted above it, every frame misses by at least the lift.
     #[test]

@@ -614,6 +614,22 @@ mod tests {
         }
     }
 
+    /// The layered search pulls rows in parallel: one and two threads give the same walks.
+    #[test]
+    fn one_and_two_threads_give_the_same_walks() {
+        let g = line_graph();
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                (
+                    cheapest_by_duration(&g, (0, 3), (1, 30), 0.3, |r, l| r + (l - 5.0).abs()),
+                    g.walk_with_distance_and_time(0, 3, 7.0, 10, (0.3, 10.0), 5).unwrap(),
+                )
+            })
+        };
+        assert_eq!(run(1), run(2));
+    }
+
     #[test]
     fn durations_and_distances_are_met_when_reachable() {
         let g = line_graph();
