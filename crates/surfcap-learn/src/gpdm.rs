@@ -46,7 +46,7 @@ use crate::error::{LearnError, Result};
 use crate::hybrid_monte_carlo::{HmcChain, HmcOptions, LogDensity, standard_normal};
 use crate::kernels::{Kernel, Pairwise, row_norms};
 use crate::lbfgs::{LbfgsOptions, minimize};
-use crate::matrix::{centred, check_finite, check_finite_slice, cholesky_jitter, column_means, serde_mat};
+use crate::matrix::{centred, check_finite, check_finite_slice, cholesky_jitter, column_means, matmul_seq, serde_mat};
 use crate::pca::{Pca, PcaMethod};
 
 /// Options of [`Gpdm::fit`].
@@ -517,9 +517,23 @@ impl LogDensity for TrajectoryDensity<'_> {
         let k = &g.spec.kernel_x;
         // Previous points x_1..x_{n-1} (steps x d) and next points x_2..x_n.
         let prev = Mat::from_fn(steps, d, |i, j| if i == 0 { self.x1[j] } else { z[(i - 1) * d + j] });
-        let Ok(kc) = k.cross(prev.as_ref(), g.x_in.as_ref()) else { return f64::NAN };
-        let mu = &kc * &g.a_x;
-        let v = &kc * &g.kx_inv;
+        // Cross-covariances from the inner products (sequential products: small matrices).
+        let dots = matmul_seq(prev.as_ref(), g.x_in.transpose());
+        let pn = row_norms(prev.as_ref());
+        crate::matrix::clear_upper_vector_state();
+        let m = g.x_in.nrows();
+        let (mut kc, mut cm, mut em) = (Mat::zeros(steps, m), Mat::zeros(steps, m), Mat::zeros(steps, m));
+        for j in 0..m {
+            for i in 0..steps {
+                let (kv, c, e) = k.value_and_product_derivatives(dots[(i, j)], pn[i], g.x_in_norms[j]);
+                kc[(i, j)] = kv;
+                cm[(i, j)] = c;
+                em[(i, j)] = e;
+            }
+        }
+        let mu = matmul_seq(kc.as_ref(), g.a_x.as_ref());
+        let v = matmul_seq(kc.as_ref(), g.kx_inv.as_ref());
+        crate::matrix::clear_upper_vector_state();
         let white = k.white_variance();
         let mut logp = 0.0;
         let mut u = Mat::<f64>::zeros(steps, d);
@@ -540,22 +554,23 @@ impl LogDensity for TrajectoryDensity<'_> {
             gamma[i] = -0.5 * d as f64 / s2 + 0.5 * r2 / (s2 * s2);
         }
         // Gradient through x_{i-1} (rows 1.. of prev are variables): W = U A^T - 2 diag(gamma) V.
-        let ua = &u * g.a_x.transpose();
-        let xn = &g.x_in_norms;
+        // sum_j w_ij c_ij x_in[j] for all rows at once: (W o C) X_in.
+        let ua = matmul_seq(u.as_ref(), g.a_x.transpose());
+        let mut wc = Mat::<f64>::zeros(steps, m);
+        let mut esums = vec![0.0; steps];
+        for j in 0..m {
+            for i in 0..steps {
+                let w = ua[(i, j)] - 2.0 * gamma[i] * v[(i, j)];
+                wc[(i, j)] = w * cm[(i, j)];
+                esums[i] += w * em[(i, j)];
+            }
+        }
+        let accs = matmul_seq(wc.as_ref(), g.x_in.as_ref());
+        crate::matrix::clear_upper_vector_state();
         for i in 1..steps {
             let row: Vec<f64> = (0..d).map(|j| prev[(i, j)]).collect();
-            let nx: f64 = row.iter().map(|v| v * v).sum();
-            let mut acc = vec![0.0; d];
-            let mut esum = 0.0;
-            for j in 0..kc.ncols() {
-                let w = ua[(i, j)] - 2.0 * gamma[i] * v[(i, j)];
-                let dot: f64 = (0..d).map(|a| row[a] * g.x_in[(j, a)]).sum();
-                let (c, e) = k.product_derivatives(dot, nx, xn[j]);
-                for a in 0..d {
-                    acc[a] += w * c * g.x_in[(j, a)];
-                }
-                esum += w * e;
-            }
+            let acc: Vec<f64> = (0..d).map(|a| accs[(i, a)]).collect();
+            let esum = esums[i];
             let sg = k.self_covariance_gradient(&row);
             for a in 0..d {
                 grad[(i - 1) * d + a] += acc[a] + 2.0 * esum * row[a] + gamma[i] * sg[a];

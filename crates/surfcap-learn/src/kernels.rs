@@ -290,6 +290,32 @@ impl Kernel {
         }
     }
 
+    /// `(k, dk/d dot, dk/d n1)` in one pass (one `exp` per SE term): the value of
+    /// [`Kernel::from_products`] and the derivatives of [`Kernel::product_derivatives`].
+    pub fn value_and_product_derivatives(&self, dot: f64, n1: f64, n2: f64) -> (f64, f64, f64) {
+        match self {
+            Kernel::SquaredExponential { log_variance, log_length_scale } => {
+                let inv_l2 = (-2.0 * log_length_scale).exp();
+                let r2 = (n1 + n2 - 2.0 * dot).max(0.0);
+                let k = (log_variance - 0.5 * r2 * inv_l2).exp();
+                (k, k * inv_l2, -0.5 * k * inv_l2)
+            }
+            Kernel::Linear { log_variance } => {
+                let s2 = log_variance.exp();
+                (s2 * dot, s2, 0.0)
+            }
+            Kernel::White { .. } => (0.0, 0.0, 0.0),
+            Kernel::NeuralNetwork { .. } => {
+                let (c, e) = self.product_derivatives(dot, n1, n2);
+                (self.from_products(dot, n1, n2), c, e)
+            }
+            Kernel::Sum(ks) => ks.iter().fold((0.0, 0.0, 0.0), |(a, b, c), k| {
+                let (x, y, z) = k.value_and_product_derivatives(dot, n1, n2);
+                (a + x, b + y, c + z)
+            }),
+        }
+    }
+
     /// Training covariance matrix K (N x N), white noise on the diagonal.
     pub fn matrix(&self, p: &Pairwise) -> Mat<f64> {
         crate::matrix::clear_upper_vector_state();
@@ -483,6 +509,9 @@ mod tests {
                     let fd = (cp[(0, j)] - cm[(0, j)]) / (2.0 * h);
                     assert!((fd - gc[(j, d)]).abs() < 1e-6 * (1.0 + fd.abs()), "{k:?} cross");
                 }
+                let (v, c, e) = k.value_and_product_derivatives(0.3, 1.1, 0.7);
+                assert!((v - k.from_products(0.3, 1.1, 0.7)).abs() < 1e-14);
+                assert_eq!((c, e), k.product_derivatives(0.3, 1.1, 0.7));
                 let fd = (k.self_covariance(&xp) - k.self_covariance(&xm)) / (2.0 * h);
                 assert!((fd - gs[d]).abs() < 1e-6 * (1.0 + fd.abs()), "{k:?} self: {fd} vs {}", gs[d]);
             }

@@ -229,6 +229,14 @@ unsafe fn zeroupper() {
     std::arch::x86_64::_mm256_zeroupper();
 }
 
+/// `a * b` on the calling thread: for the small products of per-step work (HMC), where
+/// spreading a few-hundred-row product over threads costs more than it saves.
+pub fn matmul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::zeros(a.nrows(), b.ncols());
+    faer::linalg::matmul::matmul(out.as_mut(), faer::Accum::Replace, a, b, 1.0, faer::Par::Seq);
+    out
+}
+
 /// Column means of the rows of `y` (N x D).
 pub fn column_means(y: MatRef<'_, f64>) -> Vec<f64> {
     let n = y.nrows().max(1) as f64;
