@@ -16,12 +16,19 @@
 //!
 //! Choices where the thesis is silent or loose (documented in the issue note too):
 //! - **Centring**: Y is centred by its mean frame (the reconstruction GP has a zero mean).
-//! - **Units**: the thesis initialises alpha, beta to 1 and the noise variances to 0.1; here the
+//! - **Units**: the thesis initialises alpha, beta to 1 and the noise variances to 0.1. Here the
 //!   output variance alpha_1 starts at the mean per-coordinate variance of Y and the noise
-//!   1/alpha_3 at 0.1 times it, so the start does not depend on the data's units. The latent PCA
-//!   coordinates are scaled so the first has unit standard deviation (RBF width alpha_2 = 1 then
-//!   spans the data); beta starts at 1 with noise 1/beta_4 = 0.1... times 0.01 (the latent steps
-//!   of a sequence of hundreds of frames are much smaller than 1).
+//!   1/alpha_3 at 0.1 times it, so the start does not depend on the data's units; the latent PCA
+//!   coordinates are scaled so the first has unit standard deviation (then alpha_2 = beta_2 = 1
+//!   span the data). beta_1 = beta_3 = 1 as in the thesis, and the dynamics noise 1/beta_4 starts
+//!   at 1e-3, not 0.1: consecutive latent points of a sequence of hundreds of frames are a few
+//!   hundredths apart, and a noise of 0.1 would make the dynamics term flat.
+//! - **Noise floors**: each white-noise variance is `floor + exp(theta)` with theta optimised
+//!   (floor 1e-6 times the data variance for K_Y, 1e-8 for K_X): on noise-free data (synthetic
+//!   meshes) the likelihood otherwise drives the noise to 0 and K_Y singular.
+//! - **Balance**: eq. 6.7 weighs the D-dimensional reconstruction term against the d-dimensional
+//!   dynamics term as they are; [`GpdmOptions::dynamics_weight`] (default 1, the thesis) allows
+//!   Wang et al. 2008's balanced GPDM (D / d).
 //! - **Priors** (6.5.1): `P(alpha) = prod alpha_k^-1` in the thesis's parametrisation (alpha_2 a
 //!   precision, alpha_3 an inverse variance), i.e. `sum ln alpha_k` is added to the negative log
 //!   posterior (PAPER-NOTES.md); optimisation is over the logarithms. `x_1` of each sequence has
@@ -55,6 +62,10 @@ pub struct GpdmOptions {
     /// Latent dimension d (thesis: 3).
     pub latent_dim: usize,
     pub lbfgs: LbfgsOptions,
+    /// Weight of the dynamics term `-ln P(X | beta)` in the objective. 1 is the thesis's eq. 6.7;
+    /// Wang et al. 2008's "balanced GPDM" uses D / d, which stops the D-dimensional
+    /// reconstruction term from drowning the dynamics (smoother latent trajectories).
+    pub dynamics_weight: f64,
 }
 
 impl Default for GpdmOptions {
@@ -62,6 +73,7 @@ impl Default for GpdmOptions {
         GpdmOptions {
             latent_dim: 3,
             lbfgs: LbfgsOptions { memory: 10, max_iters: 400, max_evals: 500, grad_tol: 1e-4, f_tol: 1e-10 },
+            dynamics_weight: 1.0,
         }
     }
 }
@@ -151,7 +163,16 @@ pub struct GpdmObjective {
     lengths: Vec<usize>,
     kernel_y: Kernel,
     kernel_x: Kernel,
+    /// Lower bounds of the two white-noise variances: the optimiser sees
+    /// `variance = floor + exp(theta)`, so noise-free data cannot drive K_Y or K_X singular.
+    floor_y: f64,
+    floor_x: f64,
+    dynamics_weight: f64,
 }
+
+/// Index of the white-noise parameter in the eq. 6.4 and eq. 6.6 kernels.
+const WHITE_Y: usize = 2;
+const WHITE_X: usize = 3;
 
 impl GpdmObjective {
     /// Number of variables: N d latent coordinates, then the kernel log-parameters of eq. 6.4
@@ -165,15 +186,22 @@ impl GpdmObjective {
         let x = Mat::from_fn(n, d, |i, j| v[i * d + j]);
         let (mut ky, mut kx) = (self.kernel_y.clone(), self.kernel_x.clone());
         let ny = ky.n_params();
-        ky.set_params(&v[n * d..n * d + ny])?;
-        kx.set_params(&v[n * d + ny..])?;
+        let mut py = v[n * d..n * d + ny].to_vec();
+        let mut px = v[n * d + ny..].to_vec();
+        py[WHITE_Y] = (self.floor_y + py[WHITE_Y].exp()).ln();
+        px[WHITE_X] = (self.floor_x + px[WHITE_X].exp()).ln();
+        ky.set_params(&py)?;
+        kx.set_params(&px)?;
         Ok((x, ky, kx))
     }
 
     fn pack(&self, x: MatRef<'_, f64>, ky: &Kernel, kx: &Kernel) -> Vec<f64> {
         let mut v: Vec<f64> = (0..x.nrows()).flat_map(|i| (0..x.ncols()).map(move |j| x[(i, j)])).collect();
-        v.extend(ky.params());
-        v.extend(kx.params());
+        let (mut py, mut px) = (ky.params(), kx.params());
+        py[WHITE_Y] = (py[WHITE_Y].exp() - self.floor_y).max(self.floor_y).ln();
+        px[WHITE_X] = (px[WHITE_X].exp() - self.floor_x).max(self.floor_x).ln();
+        v.extend(py);
+        v.extend(px);
         v
     }
 
@@ -205,10 +233,11 @@ impl GpdmObjective {
         let kx_inv = fx.inverse();
         let a = &kx_inv * &x_out;
         let fit: f64 = (0..a.nrows()).map(|i| (0..d).map(|j| a[(i, j)] * x_out[(i, j)]).sum::<f64>()).sum();
-        f += 0.5 * d as f64 * fx.log_det() + 0.5 * fit;
+        let lambda = self.dynamics_weight;
+        f += lambda * (0.5 * d as f64 * fx.log_det() + 0.5 * fit);
         let aat = &a * a.transpose();
         let m = rows_in.len();
-        let wx = Mat::from_fn(m, m, |i, j| 0.5 * (d as f64 * kx_inv[(i, j)] - aat[(i, j)]));
+        let wx = Mat::from_fn(m, m, |i, j| 0.5 * lambda * (d as f64 * kx_inv[(i, j)] - aat[(i, j)]));
         let gx_in = kx.input_gradient(x_in.as_ref(), &px, wx.as_ref());
         let gxp = kx.param_gradients(&px, wx.as_ref());
         // Latent gradient.
@@ -220,7 +249,7 @@ impl GpdmObjective {
         for (r, (&ri, &ro)) in rows_in.iter().zip(&rows_out).enumerate() {
             for j in 0..d {
                 grad[ri * d + j] += gx_in[(r, j)];
-                grad[ro * d + j] += a[(r, j)];
+                grad[ro * d + j] += lambda * a[(r, j)];
             }
         }
         for &s in &firsts {
@@ -229,18 +258,22 @@ impl GpdmObjective {
                 grad[s * d + j] += x[(s, j)];
             }
         }
-        // Hyper-parameters with the priors sum ln alpha + sum ln beta.
+        // Hyper-parameters with the priors sum ln alpha + sum ln beta, then the chain rule of
+        // the noise floors (d ln(floor + e^t) / dt = e^t / (floor + e^t)).
         let at = n * d;
         let (py_c, px_c) = (ky.thesis_log_coefficients(), kx.thesis_log_coefficients());
+        let (pyv, pxv) = (ky.params(), kx.params());
         for (k, (&g, &c)) in gy.iter().zip(&py_c).enumerate() {
             grad[at + k] = g + c;
-            f += c * v[at + k];
+            f += c * pyv[k];
         }
+        grad[at + WHITE_Y] *= v[at + WHITE_Y].exp() / pyv[WHITE_Y].exp();
         let at = at + gy.len();
         for (k, (&g, &c)) in gxp.iter().zip(&px_c).enumerate() {
             grad[at + k] = g + c;
-            f += c * v[at + k];
+            f += c * pxv[k];
         }
+        grad[at + WHITE_X] *= v[at + WHITE_X].exp() / pxv[WHITE_X].exp();
         if !f.is_finite() {
             return Err(LearnError::NonFinite(format!("GPDM objective {f}")));
         }
@@ -283,7 +316,11 @@ fn concatenate(sequences: &[MatRef<'_, f64>]) -> Result<(Mat<f64>, Vec<usize>)> 
 
 impl Gpdm {
     /// The objective of eq. 6.7 for these sequences (for gradient checks and custom fits).
-    pub fn objective(sequences: &[MatRef<'_, f64>], latent_dim: usize) -> Result<(GpdmObjective, Vec<f64>)> {
+    pub fn objective(sequences: &[MatRef<'_, f64>], opts: &GpdmOptions) -> Result<(GpdmObjective, Vec<f64>)> {
+        let latent_dim = opts.latent_dim;
+        if !(opts.dynamics_weight.is_finite() && opts.dynamics_weight >= 0.0) {
+            return Err(LearnError::Invalid(format!("dynamics weight {}: expected >= 0", opts.dynamics_weight)));
+        }
         let (y, lengths) = concatenate(sequences)?;
         let n = y.nrows();
         if latent_dim == 0 || latent_dim >= n {
@@ -310,7 +347,17 @@ impl Gpdm {
         }
         let kernel_y = Kernel::rbf_white([var_y, 1.0, 10.0 / var_y]);
         let kernel_x = Kernel::rbf_linear_white([1.0, 1.0, 1.0, 1000.0]);
-        let obj = GpdmObjective { yyt, n_dims: yc.ncols(), d: latent_dim, lengths, kernel_y, kernel_x };
+        let obj = GpdmObjective {
+            yyt,
+            n_dims: yc.ncols(),
+            d: latent_dim,
+            lengths,
+            kernel_y,
+            kernel_x,
+            floor_y: 1e-6 * var_y,
+            floor_x: 1e-8,
+            dynamics_weight: opts.dynamics_weight,
+        };
         let v0 = obj.pack(x.as_ref(), &obj.kernel_y, &obj.kernel_x);
         Ok((obj, v0))
     }
@@ -318,7 +365,7 @@ impl Gpdm {
     /// Fits latent positions and hyper-parameters (MAP of eq. 6.7) to one or more sequences
     /// (each N_j frames x D values) sharing one latent space.
     pub fn fit(sequences: &[MatRef<'_, f64>], opts: &GpdmOptions) -> Result<(Gpdm, GpdmFitReport)> {
-        let (obj, v0) = Gpdm::objective(sequences, opts.latent_dim)?;
+        let (obj, v0) = Gpdm::objective(sequences, opts)?;
         let mut g = vec![0.0; v0.len()];
         let initial_objective = obj.eval(&v0, &mut g)?;
         let m = minimize(|v, g| obj.eval(v, g).unwrap_or(f64::INFINITY), &v0, &opts.lbfgs)?;
@@ -380,6 +427,15 @@ impl Gpdm {
     /// The kernels of eq. 6.4 and 6.6 with their fitted parameters.
     pub fn kernels(&self) -> (&Kernel, &Kernel) {
         (&self.spec.kernel_y, &self.spec.kernel_x)
+    }
+
+    /// The fitted hyper-parameters in the thesis's parametrisation: `alpha` of eq. 6.4
+    /// (RBF variance, RBF precision, inverse noise variance) and `beta` of eq. 6.6 (RBF variance,
+    /// RBF precision, linear variance, inverse noise variance).
+    pub fn thesis_parameters(&self) -> ([f64; 3], [f64; 4]) {
+        let a = self.spec.kernel_y.params();
+        let b = self.spec.kernel_x.params();
+        ([a[0].exp(), (-2.0 * a[1]).exp(), (-a[2]).exp()], [b[0].exp(), (-2.0 * b[1]).exp(), b[2].exp(), (-b[3]).exp()])
     }
 
     fn check_latent(&self, xs: MatRef<'_, f64>) -> Result<()> {
@@ -611,7 +667,8 @@ mod tests {
     fn objective_gradient_matches_finite_differences() {
         let seqs = toy_sequences(&[9, 7], 12, 1);
         let refs: Vec<MatRef<'_, f64>> = seqs.iter().map(|s| s.as_ref()).collect();
-        let (obj, mut v) = Gpdm::objective(&refs, 3).unwrap();
+        let opts = GpdmOptions { dynamics_weight: 2.5, ..Default::default() };
+        let (obj, mut v) = Gpdm::objective(&refs, &opts).unwrap();
         // Move away from the start so every term is generic.
         for (k, x) in v.iter_mut().enumerate() {
             *x += 0.05 * ((k * 7919 % 13) as f64 - 6.0) / 6.0;
