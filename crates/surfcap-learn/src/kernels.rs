@@ -316,20 +316,20 @@ impl Kernel {
         }
     }
 
-    /// Training covariance matrix K (N x N), white noise on the diagonal.
+    /// Training covariance matrix K (N x N), white noise on the diagonal. Columns are filled in
+    /// parallel (each entry is computed on its own: the result does not depend on the threads).
     pub fn matrix(&self, p: &Pairwise) -> Mat<f64> {
-        crate::matrix::clear_upper_vector_state();
+        use rayon::prelude::*;
         let n = p.len();
         let white = self.white_variance();
         let mut k = Mat::zeros(n, n);
-        for j in 0..n {
-            for i in j..n {
-                let v = self.from_products(p.dot[(i, j)], p.norms[i], p.norms[j]);
-                k[(i, j)] = v;
-                k[(j, i)] = v;
+        k.par_col_iter_mut().enumerate().for_each(|(j, mut col)| {
+            crate::matrix::clear_upper_vector_state();
+            for i in 0..n {
+                col[i] = self.from_products(p.dot[(i, j)], p.norms[i], p.norms[j]);
             }
-            k[(j, j)] += white;
-        }
+            col[j] += white;
+        });
         k
     }
 
@@ -352,18 +352,32 @@ impl Kernel {
 
     /// `sum_ij W_ij dK_ij / d theta_p` for every hyper-parameter, for a symmetric `w` (the
     /// derivative of any objective of K whose matrix gradient is `w`).
+    ///
+    /// Columns are summed in parallel and their partial sums added in column order, so the
+    /// result is the same whatever the number of threads.
     pub fn param_gradients(&self, p: &Pairwise, w: MatRef<'_, f64>) -> Vec<f64> {
-        crate::matrix::clear_upper_vector_state();
+        use rayon::prelude::*;
         let n = p.len();
-        let mut g = vec![0.0; self.n_params()];
-        let mut trace = 0.0;
-        for j in 0..n {
-            for i in j..n {
-                let wij = if i == j { w[(i, i)] } else { w[(i, j)] + w[(j, i)] };
-                self.add_param_grads(p.dot[(i, j)], p.norms[i], p.norms[j], wij, &mut g);
+        let np = self.n_params();
+        let partial: Vec<Vec<f64>> = (0..n)
+            .into_par_iter()
+            .map(|j| {
+                crate::matrix::clear_upper_vector_state();
+                let mut g = vec![0.0; np];
+                for i in j..n {
+                    let wij = if i == j { w[(i, i)] } else { w[(i, j)] + w[(j, i)] };
+                    self.add_param_grads(p.dot[(i, j)], p.norms[i], p.norms[j], wij, &mut g);
+                }
+                g
+            })
+            .collect();
+        let mut g = vec![0.0; np];
+        for col in &partial {
+            for (a, b) in g.iter_mut().zip(col) {
+                *a += b;
             }
-            trace += w[(j, j)];
         }
+        let trace: f64 = (0..n).map(|j| w[(j, j)]).sum();
         self.add_white_grads(trace, &mut g);
         g
     }
