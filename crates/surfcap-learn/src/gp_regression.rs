@@ -494,6 +494,21 @@ mod tests {
     }
 
     #[test]
+    fn same_seed_same_fit_on_one_or_two_threads() {
+        let (x, y) = samples(120, 4, 0.1);
+        let fit = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let opts = GpFitOptions { restarts: 1, seed: 5, ..Default::default() };
+                let (gp, _) =
+                    GpRegression::fit(Kernel::neural_network(1.0, 1.0), 0.1, x.clone(), y.clone(), &opts).unwrap();
+                gp.kernel().params()
+            })
+        };
+        assert_eq!(fit(1), fit(2));
+    }
+
+    #[test]
     fn bad_input_is_an_error() {
         let x = Mat::<f64>::zeros(3, 2);
         assert!(GpRegression::new(Kernel::linear(1.0), 0.1, x.clone(), Mat::zeros(2, 1)).is_err());
