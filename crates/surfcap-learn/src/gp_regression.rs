@@ -21,7 +21,7 @@
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{LearnError, Result};
@@ -76,7 +76,8 @@ pub struct Prediction {
     /// Variance of the latent function `f(x*)`, shared by all outputs:
     /// `k(x*, x*) - k*^T K^-1 k*` (eq. 5.16).
     pub latent_variance: Vec<f64>,
-    /// Variance of a new observation `y* = f(x*) + noise`: latent variance plus `s_n^2`.
+    /// Variance of a new observation `y* = f(x*) + noise`: latent variance plus `s_n^2` (plus
+    /// any white term of the kernel and the jitter the factorisation needed).
     pub observation_variance: Vec<f64>,
 }
 
@@ -278,7 +279,6 @@ impl GpRegression {
                 }
                 Err(_) => start_values.push(f64::NAN),
             }
-            let _ = rng.random::<u64>();
         }
         let best = best.ok_or_else(|| {
             LearnError::Optimisation("no start of the hyper-parameter fit had a finite marginal likelihood".into())
@@ -342,7 +342,8 @@ impl GpRegression {
         // v = L^-1 k*^T: variance k** - |v|^2.
         let mut v = ks.transpose().to_owned();
         self.l.as_ref().solve_lower_triangular_in_place(v.as_mut());
-        let noise = self.noise_variance() + self.jitter;
+        // A white term inside the kernel is observation noise too.
+        let noise = self.noise_variance() + self.jitter + kernel.white_variance();
         let latent_variance: Vec<f64> = (0..xs.nrows())
             .map(|i| {
                 let row: Vec<f64> = (0..xs.ncols()).map(|j| xs[(i, j)]).collect();
@@ -381,6 +382,7 @@ impl GpRegression {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::Rng;
 
     fn target(x: f64, z: f64) -> f64 {
         (2.0 * x).sin() + 0.5 * z * z

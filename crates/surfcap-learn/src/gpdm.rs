@@ -380,7 +380,11 @@ impl Gpdm {
     /// Rebuilds the factorisations from a spec.
     pub fn from_spec(spec: GpdmSpec) -> Result<Gpdm> {
         let n: usize = spec.sequence_lengths.iter().sum();
-        if spec.sequence_lengths.iter().any(|&l| l < 2) || n != spec.latent.nrows() || n != spec.y.nrows() {
+        if spec.sequence_lengths.iter().any(|&l| l < 2)
+            || n != spec.latent.nrows()
+            || n != spec.y.nrows()
+            || spec.latent.ncols() == 0
+        {
             return Err(LearnError::Dimension(format!(
                 "sequence lengths {:?} for {} latent points and {} frames",
                 spec.sequence_lengths,
