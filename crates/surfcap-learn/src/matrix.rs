@@ -98,19 +98,28 @@ pub mod serde_mats {
     }
 }
 
-/// Writes `m` as a C-order `<f8` `.npy` array of shape `[rows, cols]`.
+/// Writes `m` as a C-order `<f8` `.npy` array of shape `[rows, cols]`, through a temporary file
+/// in the same folder renamed at the end (an interrupted write leaves no half-written file).
 pub fn save_npy(path: &Path, m: MatRef<'_, f64>) -> Result<()> {
     let io = |source| LearnError::Io { path: path.display().to_string(), source };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let shape = [m.nrows() as u64, m.ncols() as u64];
-    let mut w = npyz::WriteOptions::<f64>::new()
-        .default_dtype()
-        .shape(&shape)
-        .writer(std::io::BufWriter::new(file))
-        .begin_nd()
-        .map_err(io)?;
-    w.extend(to_rows(m)).map_err(io)?;
-    w.finish().map_err(io)
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        let shape = [m.nrows() as u64, m.ncols() as u64];
+        let mut w = npyz::WriteOptions::<f64>::new()
+            .default_dtype()
+            .shape(&shape)
+            .writer(std::io::BufWriter::new(file))
+            .begin_nd()?;
+        w.extend(to_rows(m))?;
+        w.finish()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
 }
 
 /// Reads a 2-D (or 1-D, as one column) `.npy` array of `f64` or `f32` values.
@@ -259,6 +268,8 @@ mod tests {
         let p = dir.path().join("m.npy");
         save_npy(&p, m.as_ref()).unwrap();
         let back = load_npy(&p).unwrap();
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary file left");
+        assert!(save_npy(&dir.path().join("missing/m.npy"), m.as_ref()).is_err());
         assert_eq!(to_rows(back.as_ref()), to_rows(m.as_ref()));
         #[derive(Serialize, Deserialize)]
         struct W(#[serde(with = "serde_mat")] Mat<f64>);
