@@ -87,6 +87,12 @@ pub struct GpFitOptions {
     /// Extra starts besides the given hyper-parameters, each a seeded random perturbation
     /// (standard normal in log space) of them; the best optimum wins.
     pub restarts: usize,
+    /// With restarts and more training points than this, every start is first optimised on
+    /// this many evenly spaced rows (64 times cheaper per evaluation at 2,000 points for 500),
+    /// and only the best of those optima is refined on the whole set. Multi-start search is
+    /// about finding the right basin, which a subset already shows; the O(N^3) full-data
+    /// evaluations are then spent once. 0 disables the screening.
+    pub screen_points: usize,
     pub seed: u64,
     pub lbfgs: LbfgsOptions,
     /// Lower bound on the noise variance (relative to the output variance), keeping `K`
@@ -98,8 +104,16 @@ impl Default for GpFitOptions {
     fn default() -> Self {
         GpFitOptions {
             restarts: 2,
+            screen_points: 500,
             seed: 0,
-            lbfgs: LbfgsOptions { max_iters: 60, max_evals: 80, grad_tol: 1e-4, f_tol: 1e-7, memory: 10 },
+            lbfgs: LbfgsOptions {
+                max_iters: 60,
+                max_evals: 80,
+                grad_tol: 1e-4,
+                f_tol: 1e-7,
+                memory: 10,
+                initial_step: 1.0,
+            },
             min_relative_noise: 1e-8,
         }
     }
@@ -110,10 +124,15 @@ impl Default for GpFitOptions {
 pub struct GpFitReport {
     /// Negative log marginal likelihood at the optimum.
     pub nlml: f64,
-    /// Objective evaluations over all starts.
+    /// Objective evaluations over all starts (screening included).
     pub evals: usize,
-    /// Best value reached from each start (NaN when a start failed).
+    /// Of those, evaluations on the whole training set (each O(N^3)).
+    pub full_data_evals: usize,
+    /// Best value reached from each start (NaN when a start failed); on the screening subset
+    /// when `screened_rows` is not `None`.
     pub start_values: Vec<f64>,
+    /// Rows of the screening subset, when the starts were screened on one.
+    pub screened_rows: Option<usize>,
 }
 
 /// Checks the training set shape.
@@ -260,26 +279,62 @@ impl GpRegression {
         theta0.push((noise_variance - noise_floor).max(noise_floor).ln());
         crate::matrix::check_finite_slice(&theta0, "initial hyper-parameters")?;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
-        let mut best: Option<crate::lbfgs::Minimum> = None;
-        let mut evals = 0;
-        let mut start_values = Vec::new();
-        for s in 0..=opts.restarts {
-            let start: Vec<f64> = if s == 0 {
-                theta0.clone()
-            } else {
-                theta0.iter().map(|t| t + crate::hybrid_monte_carlo::standard_normal(&mut rng)).collect()
-            };
-            match minimize(|t, g| obj.eval(t, g), &start, &opts.lbfgs) {
-                Ok(m) => {
-                    evals += m.evals;
-                    start_values.push(m.f);
-                    if best.as_ref().is_none_or(|b| m.f < b.f) {
-                        best = Some(m);
-                    }
+        let starts: Vec<Vec<f64>> = (0..=opts.restarts)
+            .map(|s| {
+                if s == 0 {
+                    theta0.clone()
+                } else {
+                    theta0.iter().map(|t| t + crate::hybrid_monte_carlo::standard_normal(&mut rng)).collect()
                 }
-                Err(_) => start_values.push(f64::NAN),
+            })
+            .collect();
+        let n = x.nrows();
+        let screen = opts.restarts > 0 && opts.screen_points >= 2 && n > opts.screen_points;
+        let mut evals = 0;
+        let mut full_data_evals = 0;
+        let mut start_values = Vec::new();
+        // Runs every start on `o`, returning the best optimum.
+        let mut run_all = |o: &Objective<'_>, starts: &[Vec<f64>], evals: &mut usize| {
+            let mut best: Option<crate::lbfgs::Minimum> = None;
+            for start in starts {
+                match minimize(|t, g| o.eval(t, g), start, &opts.lbfgs) {
+                    Ok(m) => {
+                        *evals += m.evals;
+                        start_values.push(m.f);
+                        if best.as_ref().is_none_or(|b| m.f < b.f) {
+                            best = Some(m);
+                        }
+                    }
+                    Err(_) => start_values.push(f64::NAN),
+                }
             }
-        }
+            best
+        };
+        let best = if screen {
+            let rows: Vec<usize> = (0..opts.screen_points).map(|k| k * n / opts.screen_points).collect();
+            let xs = Mat::from_fn(rows.len(), x.ncols(), |i, j| x[(rows[i], j)]);
+            let ys = Mat::from_fn(rows.len(), yc.ncols(), |i, j| yc[(rows[i], j)]);
+            let sub = Objective {
+                pairwise: Pairwise::new(xs.as_ref()),
+                yc: ys.as_ref(),
+                template: kernel.clone(),
+                noise_floor,
+            };
+            let screened = run_all(&sub, &starts, &mut evals);
+            let start = screened.map_or_else(|| theta0.clone(), |m| m.x);
+            // Near the optimum already: a first step of 0.1 in log space (10%), not 1.
+            let refine = LbfgsOptions { initial_step: 0.1 * opts.lbfgs.initial_step, ..opts.lbfgs };
+            let m = minimize(|t, g| obj.eval(t, g), &start, &refine);
+            if let Ok(m) = &m {
+                evals += m.evals;
+                full_data_evals = m.evals;
+            }
+            m.ok()
+        } else {
+            let b = run_all(&obj, &starts, &mut evals);
+            full_data_evals = evals;
+            b
+        };
         let best = best.ok_or_else(|| {
             LearnError::Optimisation("no start of the hyper-parameter fit had a finite marginal likelihood".into())
         })?;
@@ -287,7 +342,13 @@ impl GpRegression {
         let mut fitted = kernel;
         fitted.set_params(&best.x[..np])?;
         let gp = GpRegression::new(fitted, noise_floor + best.x[np].exp(), x, y)?;
-        let report = GpFitReport { nlml: gp.nlml, evals, start_values };
+        let report = GpFitReport {
+            nlml: gp.nlml,
+            evals,
+            full_data_evals,
+            start_values,
+            screened_rows: screen.then_some(opts.screen_points),
+        };
         Ok((gp, report))
     }
 
@@ -486,6 +547,18 @@ mod tests {
             l0.exp(),
             rep.evals,
             rep.start_values.len()
+        );
+        // Screening the starts on 200 rows ends at the same optimum as running them all on 400.
+        let opts = GpFitOptions { screen_points: 200, ..Default::default() };
+        let (k0, n0) = squared_exponential_guess(gp.inputs(), gp.spec.y.as_ref()).unwrap();
+        let (screened, srep) = GpRegression::fit(k0, n0, gp.spec.x.clone(), gp.spec.y.clone(), &opts).unwrap();
+        assert_eq!(srep.screened_rows, Some(200));
+        assert!((screened.negative_log_marginal_likelihood() - gp.negative_log_marginal_likelihood()).abs() < 1e-3);
+        assert!(
+            srep.full_data_evals < rep.full_data_evals,
+            "screened {} vs unscreened {} full-data evaluations",
+            srep.full_data_evals,
+            rep.full_data_evals
         );
         // Round trip through serde gives the same predictions.
         let s = serde_json::to_string(&gp).unwrap();

@@ -74,7 +74,14 @@ impl Default for GpdmOptions {
     fn default() -> Self {
         GpdmOptions {
             latent_dim: 3,
-            lbfgs: LbfgsOptions { memory: 10, max_iters: 400, max_evals: 500, grad_tol: 1e-4, f_tol: 1e-10 },
+            lbfgs: LbfgsOptions {
+                memory: 10,
+                max_iters: 400,
+                max_evals: 500,
+                grad_tol: 1e-4,
+                f_tol: 1e-10,
+                initial_step: 1.0,
+            },
             dynamics_weight: 1.0,
         }
     }

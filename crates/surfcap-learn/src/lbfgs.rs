@@ -23,11 +23,14 @@ pub struct LbfgsOptions {
     pub grad_tol: f64,
     /// Stop when an iteration lowers the objective by less than `f_tol * max(1, |f|)`.
     pub f_tol: f64,
+    /// Length (in the variables' units) of the first, steepest-descent trial step, before any
+    /// curvature is known: 1 by default; smaller when starting near an optimum.
+    pub initial_step: f64,
 }
 
 impl Default for LbfgsOptions {
     fn default() -> Self {
-        LbfgsOptions { memory: 10, max_iters: 200, max_evals: 300, grad_tol: 1e-6, f_tol: 1e-10 }
+        LbfgsOptions { memory: 10, max_iters: 200, max_evals: 300, grad_tol: 1e-6, f_tol: 1e-10, initial_step: 1.0 }
     }
 }
 
@@ -111,7 +114,7 @@ pub fn minimize<F: FnMut(&[f64], &mut [f64]) -> f64>(mut f: F, x0: &[f64], opts:
             d = g.iter().map(|v| -v).collect();
             dphi0 = dot(&g, &d);
         }
-        let a0 = if s_hist.is_empty() { (1.0 / dphi0.abs().sqrt()).min(1.0) } else { 1.0 };
+        let a0 = if s_hist.is_empty() { (opts.initial_step / dphi0.abs().sqrt()).min(1.0) } else { 1.0 };
         let mut eval = |a: f64, xt: &mut Vec<f64>, evals: &mut usize| -> Trial {
             for i in 0..n {
                 xt[i] = x[i] + a * d[i];
