@@ -72,9 +72,134 @@ pub fn row_norms(x: MatRef<'_, f64>) -> Vec<f64> {
     (0..x.nrows()).map(|i| (0..x.ncols()).map(|j| x[(i, j)] * x[(i, j)]).sum()).collect()
 }
 
+/// A kernel with its hyper-parameters exponentiated once: the form the O(N^2) loops evaluate
+/// (one `exp` per squared-exponential entry instead of one per parameter per entry).
+#[derive(Debug, Clone)]
+pub struct PreparedKernel {
+    terms: Vec<Term>,
+    white: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Term {
+    Se { var: f64, inv_l2: f64, at: usize },
+    Nn { var: f64, a: f64, b: f64, at: usize },
+    Lin { var: f64, at: usize },
+}
+
+impl PreparedKernel {
+    fn push(&mut self, k: &Kernel, at: &mut usize) {
+        match k {
+            Kernel::SquaredExponential { log_variance, log_length_scale } => {
+                self.terms.push(Term::Se { var: log_variance.exp(), inv_l2: (-2.0 * log_length_scale).exp(), at: *at });
+                *at += 2;
+            }
+            Kernel::NeuralNetwork { log_variance, log_length_scale, bias } => {
+                self.terms.push(Term::Nn {
+                    var: log_variance.exp(),
+                    a: 0.5 * (-2.0 * log_length_scale).exp(),
+                    b: if *bias { 1.0 } else { 0.0 },
+                    at: *at,
+                });
+                *at += 2;
+            }
+            Kernel::Linear { log_variance } => {
+                self.terms.push(Term::Lin { var: log_variance.exp(), at: *at });
+                *at += 1;
+            }
+            Kernel::White { log_variance } => {
+                self.white += log_variance.exp();
+                *at += 1;
+            }
+            Kernel::Sum(ks) => ks.iter().for_each(|k| self.push(k, at)),
+        }
+    }
+
+    /// Variance of the white-noise terms.
+    pub fn white_variance(&self) -> f64 {
+        self.white
+    }
+
+    /// The covariance from the products (no white noise), as [`Kernel::from_products`].
+    #[inline]
+    pub fn value(&self, dot: f64, n1: f64, n2: f64) -> f64 {
+        let mut v = 0.0;
+        for t in &self.terms {
+            v += match *t {
+                Term::Se { var, inv_l2, .. } => var * (-0.5 * (n1 + n2 - 2.0 * dot).max(0.0) * inv_l2).exp(),
+                Term::Nn { var, a, b, .. } => {
+                    let z = a * (b + dot) / ((1.0 + a * (b + n1)) * (1.0 + a * (b + n2))).sqrt();
+                    var * z.clamp(-Z_MAX, Z_MAX).asin()
+                }
+                Term::Lin { var, .. } => var * dot,
+            };
+        }
+        v
+    }
+
+    /// `(k, dk/d dot, dk/d n1)`, as [`Kernel::value_and_product_derivatives`].
+    #[inline]
+    pub fn value_and_product_derivatives(&self, dot: f64, n1: f64, n2: f64) -> (f64, f64, f64) {
+        let (mut v, mut c, mut e) = (0.0, 0.0, 0.0);
+        for t in &self.terms {
+            match *t {
+                Term::Se { var, inv_l2, .. } => {
+                    let k = var * (-0.5 * (n1 + n2 - 2.0 * dot).max(0.0) * inv_l2).exp();
+                    v += k;
+                    c += k * inv_l2;
+                    e -= 0.5 * k * inv_l2;
+                }
+                Term::Nn { var, a, b, .. } => {
+                    let (p, q) = (1.0 + a * (b + n1), 1.0 + a * (b + n2));
+                    let z = (a * (b + dot) / (p * q).sqrt()).clamp(-Z_MAX, Z_MAX);
+                    let dk_dz = var / (1.0 - z * z).sqrt();
+                    v += var * z.asin();
+                    c += dk_dz * a / (p * q).sqrt();
+                    e += dk_dz * (-0.5 * z * a / p);
+                }
+                Term::Lin { var, .. } => {
+                    v += var * dot;
+                    c += var;
+                }
+            }
+        }
+        (v, c, e)
+    }
+
+    /// Adds `w * dk/d theta_p` (no white noise) to `out`.
+    #[inline]
+    fn add_param_grads(&self, dot: f64, n1: f64, n2: f64, w: f64, out: &mut [f64]) {
+        for t in &self.terms {
+            match *t {
+                Term::Se { var, inv_l2, at } => {
+                    let r2 = (n1 + n2 - 2.0 * dot).max(0.0);
+                    let k = var * (-0.5 * r2 * inv_l2).exp();
+                    out[at] += w * k;
+                    out[at + 1] += w * k * r2 * inv_l2;
+                }
+                Term::Nn { var, a, b, at } => {
+                    let (p, q) = (1.0 + a * (b + n1), 1.0 + a * (b + n2));
+                    let z = (a * (b + dot) / (p * q).sqrt()).clamp(-Z_MAX, Z_MAX);
+                    out[at] += w * var * z.asin();
+                    let dz = -2.0 * z * (1.0 - 0.5 * a * ((b + n1) / p + (b + n2) / q));
+                    out[at + 1] += w * var * dz / (1.0 - z * z).sqrt();
+                }
+                Term::Lin { var, at } => out[at] += w * var * dot,
+            }
+        }
+    }
+}
+
 const Z_MAX: f64 = 1.0 - 1e-12;
 
 impl Kernel {
+    /// The kernel with its parameters exponentiated, for evaluation loops.
+    pub fn prepare(&self) -> PreparedKernel {
+        let mut p = PreparedKernel { terms: Vec::new(), white: 0.0 };
+        p.push(self, &mut 0);
+        p
+    }
+
     /// `s^2 exp(-r^2 / (2 l^2))` with the given variance and length scale (not logarithms).
     pub fn squared_exponential(variance: f64, length_scale: f64) -> Kernel {
         Kernel::SquaredExponential { log_variance: variance.ln(), log_length_scale: length_scale.ln() }
@@ -214,40 +339,6 @@ impl Kernel {
         }
     }
 
-    /// Adds `w * d k / d theta_p` (no white noise) to `out` (one slot per parameter).
-    fn add_param_grads(&self, dot: f64, n1: f64, n2: f64, w: f64, out: &mut [f64]) {
-        match self {
-            Kernel::SquaredExponential { log_variance, log_length_scale } => {
-                let inv_l2 = (-2.0 * log_length_scale).exp();
-                let r2 = (n1 + n2 - 2.0 * dot).max(0.0);
-                let k = (log_variance - 0.5 * r2 * inv_l2).exp();
-                out[0] += w * k;
-                out[1] += w * k * r2 * inv_l2;
-            }
-            Kernel::NeuralNetwork { log_variance, log_length_scale, bias } => {
-                let b = if *bias { 1.0 } else { 0.0 };
-                let a = 0.5 * (-2.0 * log_length_scale).exp();
-                let (p, q) = (1.0 + a * (b + n1), 1.0 + a * (b + n2));
-                let z = (a * (b + dot) / (p * q).sqrt()).clamp(-Z_MAX, Z_MAX);
-                let s2 = log_variance.exp();
-                out[0] += w * s2 * z.asin();
-                // dz/d ln l = -2a dz/da, dz/da = z (1/a - (b+n1)/(2p) - (b+n2)/(2q)).
-                let dz = -2.0 * z * (1.0 - 0.5 * a * ((b + n1) / p + (b + n2) / q));
-                out[1] += w * s2 * dz / (1.0 - z * z).sqrt();
-            }
-            Kernel::Linear { log_variance } => out[0] += w * log_variance.exp() * dot,
-            Kernel::White { .. } => {}
-            Kernel::Sum(ks) => {
-                let mut at = 0;
-                for k in ks {
-                    let m = k.n_params();
-                    k.add_param_grads(dot, n1, n2, w, &mut out[at..at + m]);
-                    at += m;
-                }
-            }
-        }
-    }
-
     /// Adds `w * d(white variance)/d theta_p` (the diagonal contribution of white terms).
     fn add_white_grads(&self, w: f64, out: &mut [f64]) {
         match self {
@@ -321,12 +412,13 @@ impl Kernel {
     pub fn matrix(&self, p: &Pairwise) -> Mat<f64> {
         use rayon::prelude::*;
         let n = p.len();
-        let white = self.white_variance();
+        let pk = self.prepare();
+        let white = pk.white_variance();
         let mut k = Mat::zeros(n, n);
         k.par_col_iter_mut().enumerate().for_each(|(j, mut col)| {
             crate::matrix::clear_upper_vector_state();
             for i in 0..n {
-                col[i] = self.from_products(p.dot[(i, j)], p.norms[i], p.norms[j]);
+                col[i] = pk.value(p.dot[(i, j)], p.norms[i], p.norms[j]);
             }
             col[j] += white;
         });
@@ -340,8 +432,9 @@ impl Kernel {
         }
         let dot = a * b.transpose();
         let (na, nb) = (row_norms(a), row_norms(b));
+        let pk = self.prepare();
         crate::matrix::clear_upper_vector_state();
-        Ok(Mat::from_fn(a.nrows(), b.nrows(), |i, j| self.from_products(dot[(i, j)], na[i], nb[j])))
+        Ok(Mat::from_fn(a.nrows(), b.nrows(), |i, j| pk.value(dot[(i, j)], na[i], nb[j])))
     }
 
     /// `k(x, x)` of one input (no white noise).
@@ -359,6 +452,7 @@ impl Kernel {
         use rayon::prelude::*;
         let n = p.len();
         let np = self.n_params();
+        let pk = self.prepare();
         let partial: Vec<Vec<f64>> = (0..n)
             .into_par_iter()
             .map(|j| {
@@ -366,7 +460,7 @@ impl Kernel {
                 let mut g = vec![0.0; np];
                 for i in j..n {
                     let wij = if i == j { w[(i, i)] } else { w[(i, j)] + w[(j, i)] };
-                    self.add_param_grads(p.dot[(i, j)], p.norms[i], p.norms[j], wij, &mut g);
+                    pk.add_param_grads(p.dot[(i, j)], p.norms[i], p.norms[j], wij, &mut g);
                 }
                 g
             })
@@ -386,6 +480,7 @@ impl Kernel {
     /// (N x d) and a matrix gradient `w` of an objective L of K(x). The white term depends on
     /// the index, not the position, and contributes nothing.
     pub fn input_gradient(&self, x: MatRef<'_, f64>, p: &Pairwise, w: MatRef<'_, f64>) -> Mat<f64> {
+        let pk = self.prepare();
         crate::matrix::clear_upper_vector_state();
         let n = p.len();
         // dk(x_i,x_j)/dx_i = c_ij x_j + 2 e_ij x_i with (c, e) the product derivatives.
@@ -394,13 +489,13 @@ impl Kernel {
         for j in 0..n {
             for i in j..n {
                 let wij = w[(i, j)] + w[(j, i)];
-                let (c, e) = self.product_derivatives(p.dot[(i, j)], p.norms[i], p.norms[j]);
+                let (_, c, e) = pk.value_and_product_derivatives(p.dot[(i, j)], p.norms[i], p.norms[j]);
                 cw[(i, j)] = wij * c;
                 cw[(j, i)] = wij * c;
                 // e_ji = d k/d n1 at (x_j, x_i): same function with n1 and n2 swapped.
                 ew[i] += wij * e;
                 if i != j {
-                    let (_, e2) = self.product_derivatives(p.dot[(i, j)], p.norms[j], p.norms[i]);
+                    let (_, _, e2) = pk.value_and_product_derivatives(p.dot[(i, j)], p.norms[j], p.norms[i]);
                     ew[j] += wij * e2;
                 }
             }
@@ -418,10 +513,11 @@ impl Kernel {
     pub fn cross_input_gradient(&self, x: &[f64], b: MatRef<'_, f64>, b_norms: &[f64]) -> Mat<f64> {
         let nx: f64 = x.iter().map(|v| v * v).sum();
         let d = x.len();
+        let pk = self.prepare();
         let mut g = Mat::zeros(b.nrows(), d);
         for j in 0..b.nrows() {
             let dot: f64 = (0..d).map(|k| x[k] * b[(j, k)]).sum();
-            let (c, e) = self.product_derivatives(dot, nx, b_norms[j]);
+            let (_, c, e) = pk.value_and_product_derivatives(dot, nx, b_norms[j]);
             for k in 0..d {
                 g[(j, k)] = c * b[(j, k)] + 2.0 * e * x[k];
             }
@@ -526,6 +622,9 @@ mod tests {
                 let (v, c, e) = k.value_and_product_derivatives(0.3, 1.1, 0.7);
                 assert!((v - k.from_products(0.3, 1.1, 0.7)).abs() < 1e-14);
                 assert_eq!((c, e), k.product_derivatives(0.3, 1.1, 0.7));
+                let (pv, pc, pe) = k.prepare().value_and_product_derivatives(0.3, 1.1, 0.7);
+                assert!((pv - v).abs() < 1e-12 && (pc - c).abs() < 1e-12 && (pe - e).abs() < 1e-12);
+                assert!((k.prepare().value(0.3, 1.1, 0.7) - v).abs() < 1e-12);
                 let fd = (k.self_covariance(&xp) - k.self_covariance(&xm)) / (2.0 * h);
                 assert!((fd - gs[d]).abs() < 1e-6 * (1.0 + fd.abs()), "{k:?} self: {fd} vs {}", gs[d]);
             }

@@ -219,8 +219,8 @@ pub fn cholesky_jitter(k: MatRef<'_, f64>, what: &str) -> Result<Factor> {
 }
 
 /// Clears the upper halves of the AVX registers. faer's AVX-512 kernels leave them dirty, and
-/// scalar code calling libm (`exp`, `asin`) afterwards on the same thread ran 5-6x slower here
-/// (see ARCHITECTURE.md, performance notes). Called before the kernel-evaluation loops.
+/// scalar SSE code calling libm (`exp`, `asin`) afterwards on the same thread ran 5-6x slower
+/// here (see ARCHITECTURE.md, performance notes). Called before the kernel-evaluation loops.
 #[inline]
 pub fn clear_upper_vector_state() {
     #[cfg(target_arch = "x86_64")]
