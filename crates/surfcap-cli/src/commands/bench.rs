@@ -88,6 +88,10 @@ pub enum What {
     /// build times, then the latency of one query of each kind: a 15 m S-path, ten key poses,
     /// and a distance-and-time query (target: under 1 s each).
     Synth(SynthBench),
+    /// The learning toolkit's speed targets (thesis chapters 5-6): GP fit and prediction on
+    /// 2,000 x 20 points (< 5 s), a GPDM fit on 400 frames x ~3,000 coordinates (< 60 s), 20 HMC
+    /// trajectory samples of 100 frames (< 30 s).
+    Learn(super::bench_learn::LearnArgs),
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate {
         /// A subject cache or source.
@@ -352,6 +356,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             return interpolate_bench(ctx, subject, &from, &to, repeat, fps);
         }
         What::Graph { frames, sequences, alpha, seed } => return graph_bench(ctx, frames, sequences, alpha, seed),
+        What::Learn(l) => return super::bench_learn::run(ctx, &l),
         What::Synth(b) => {
             return synth_bench(ctx, b);
         }

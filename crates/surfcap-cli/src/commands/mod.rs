@@ -1,6 +1,7 @@
 //! One file per subcommand.
 
 pub mod bench;
+pub mod bench_learn;
 pub mod demo;
 pub mod distance;
 pub mod eval;

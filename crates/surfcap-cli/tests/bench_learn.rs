@@ -1,0 +1,43 @@
+//! `surfcap bench learn` at a small size: it runs, reports every phase with its target, and
+//! rejects sizes it cannot use.
+
+use std::process::Command;
+
+fn surfcap(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_surfcap")).args(args).output().expect("surfcap runs")
+}
+
+#[test]
+fn bench_learn_reports_each_phase_against_its_target() {
+    let small = [
+        "--json",
+        "bench",
+        "learn",
+        "--gp-points",
+        "60",
+        "--gp-dims",
+        "3",
+        "--frames",
+        "30",
+        "--hmc-samples",
+        "2",
+        "--hmc-frames",
+        "6",
+    ];
+    let o = surfcap(&small);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for (phase, target) in [("gp", 5.0), ("gpdm", 60.0), ("hmc", 30.0)] {
+        assert_eq!(v[phase]["target_seconds"].as_f64(), Some(target), "{phase}");
+        assert!(v[phase]["seconds"].as_f64().unwrap() > 0.0, "{phase}");
+        assert!(["met", "NOT met"].contains(&v[phase]["target"].as_str().unwrap()), "{phase}");
+    }
+    assert_eq!(v["hmc"]["samples"].as_u64(), Some(2));
+    let rate = v["hmc"]["acceptance_rate"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&rate));
+    assert!(
+        v["gpdm"]["mean_vertex_error_m"].as_f64().unwrap() < v["gpdm"]["pca3_mean_vertex_error_m"].as_f64().unwrap()
+    );
+    let bad = surfcap(&["bench", "learn", "--frames", "4"]);
+    assert_eq!(bad.status.code(), Some(1), "{}", String::from_utf8_lossy(&bad.stderr));
+}
