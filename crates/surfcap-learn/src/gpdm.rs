@@ -96,6 +96,9 @@ pub struct GpdmFitReport {
     pub iters: usize,
     pub evals: usize,
     pub converged: bool,
+    /// The objective at the start and after every L-BFGS iteration (a learning curve).
+    #[serde(default)]
+    pub history: Vec<f64>,
 }
 
 /// The serialised form of a [`Gpdm`].
@@ -381,8 +384,14 @@ impl Gpdm {
         let (x, ky, kx) = obj.unpack(&m.x)?;
         let (y, lengths) = concatenate(sequences)?;
         let gpdm = Gpdm::from_spec(GpdmSpec { latent: x, sequence_lengths: lengths, y, kernel_y: ky, kernel_x: kx })?;
-        let report =
-            GpdmFitReport { initial_objective, objective: m.f, iters: m.iters, evals: m.evals, converged: m.converged };
+        let report = GpdmFitReport {
+            initial_objective,
+            objective: m.f,
+            iters: m.iters,
+            evals: m.evals,
+            converged: m.converged,
+            history: m.history,
+        };
         Ok((gpdm, report))
     }
 

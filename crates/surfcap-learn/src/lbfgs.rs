@@ -43,6 +43,9 @@ pub struct Minimum {
     pub evals: usize,
     /// True when a tolerance was met (false: a budget ran out or the line search stalled).
     pub converged: bool,
+    /// The objective at the start and after every iteration (a learning curve).
+    #[serde(default)]
+    pub history: Vec<f64>,
 }
 
 struct Trial {
@@ -78,6 +81,7 @@ pub fn minimize<F: FnMut(&[f64], &mut [f64]) -> f64>(mut f: F, x0: &[f64], opts:
     let mut y_hist: Vec<Vec<f64>> = Vec::new();
     let mut iters = 0;
     let mut converged = false;
+    let mut history = vec![fx];
     let mut xt = vec![0.0; n];
     while iters < opts.max_iters && evals < opts.max_evals {
         if g.iter().fold(0.0f64, |m, v| m.max(v.abs())) <= opts.grad_tol {
@@ -137,6 +141,7 @@ pub fn minimize<F: FnMut(&[f64], &mut [f64]) -> f64>(mut f: F, x0: &[f64], opts:
             x[i] += s[i];
         }
         fx = t.f;
+        history.push(fx);
         g = t.g;
         let sy = dot(&s, &y);
         if sy > 1e-12 * dot(&y, &y).sqrt() * dot(&s, &s).sqrt() {
@@ -152,7 +157,7 @@ pub fn minimize<F: FnMut(&[f64], &mut [f64]) -> f64>(mut f: F, x0: &[f64], opts:
             break;
         }
     }
-    Ok(Minimum { x, f: fx, iters, evals, converged })
+    Ok(Minimum { x, f: fx, iters, evals, converged, history })
 }
 
 /// Strong-Wolfe line search: bracketing (Algorithm 3.5) then zoom by safeguarded quadratic
@@ -263,6 +268,9 @@ mod tests {
         let x0 = vec![-1.2; 20];
         let opts = LbfgsOptions { max_iters: 2000, max_evals: 4000, ..Default::default() };
         let m = minimize(rosen, &x0, &opts).unwrap();
+        // The learning curve starts at the start and never goes up.
+        assert_eq!(m.history.len(), m.iters + 1);
+        assert!(m.history.windows(2).all(|w| w[1] <= w[0]));
         assert!(m.x.iter().all(|v| (v - 1.0).abs() < 1e-4), "{m:?}");
         // log barrier: f = x - ln(x) is infinite for x <= 0; minimum at x = 1.
         let barrier = |x: &[f64], g: &mut [f64]| {

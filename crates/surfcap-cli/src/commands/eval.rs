@@ -92,6 +92,34 @@ pub enum What {
         #[command(flatten)]
         source: SourceOpts,
     },
+    /// A Gaussian-process dynamical model of the subject's motion (thesis 6.4-6.5): learning
+    /// curve, latent trajectories with HMC variations, training-frame error vs PCA (Fig. 6.4).
+    Gpdm {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// Sequences to learn (comma-separated; default: all, sharing one latent space, 6.5.2).
+        #[arg(long, value_delimiter = ',')]
+        sequences: Vec<String>,
+        /// Vertices describing a frame (evenly spaced over the mesh).
+        #[arg(long, default_value_t = 300)]
+        vertices: usize,
+        /// Frames at most (longer subjects are subsampled in time by one stride).
+        #[arg(long, default_value_t = 400)]
+        max_frames: usize,
+        /// Latent dimension d.
+        #[arg(long, default_value_t = 3)]
+        latent_dim: usize,
+        /// HMC latent trajectories to sample (0: none).
+        #[arg(long, default_value_t = 3)]
+        samples: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Folder for gpdm.json, the plots, latent.npy and the model.
+        #[arg(short, long, default_value = "gpdm-eval")]
+        output: PathBuf,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
     /// Our pose distance and the Euclidean one against the skeleton ground truth (thesis 2.3.2,
     /// Fig. 2.5-2.7): Pearson and distance correlation, Mantel test, Mantel correlogram plot.
     PoseMetric {
@@ -131,6 +159,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Graphs { subject, alphas, plot_pairs, output, table, cache, source } => {
             let opts = super::graph::EvalOpts { alphas, plot_pairs, output, table, cache };
             return super::graph::eval(ctx, &subject, &source, &opts);
+        }
+        What::Gpdm { subject, sequences, vertices, max_frames, latent_dim, samples, seed, output, source } => {
+            let opts = super::eval_gpdm::Opts { sequences, vertices, max_frames, latent_dim, samples, seed, output };
+            return super::eval_gpdm::run(ctx, &subject, &source, &opts);
         }
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
             let opts = PoseMetricOpts { max_frames, permutations, classes, seed, output, cache };

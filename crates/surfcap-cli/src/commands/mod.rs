@@ -5,6 +5,7 @@ pub mod bench_learn;
 pub mod demo;
 pub mod distance;
 pub mod eval;
+pub mod eval_gpdm;
 pub mod eval_pose_metric;
 pub mod eval_transitions;
 pub mod export;
