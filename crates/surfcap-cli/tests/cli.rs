@@ -532,7 +532,8 @@ fn gpdm_evaluation_on_a_real_capture() {
     let tmp = tempfile::tempdir().unwrap();
     let crane = data.join("vlasic2008/crane");
     let out = tmp.path().join("gpdm");
-    let o = surfcap(&["eval", "gpdm", p(&crane), "--vertices", "200", "--samples", "2", "-o", p(&out), "--json"]);
+    let args = ["--vertices", "200", "--max-frames", "100", "--samples", "2", "-o", p(&out), "--json"];
+    let o = surfcap(&[&["eval", "gpdm", p(&crane)][..], &args[..]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let e = &v["training_mean_vertex_error"];
@@ -540,6 +541,7 @@ fn gpdm_evaluation_on_a_real_capture() {
     let history: Vec<f64> = v["fit"]["history"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     assert!(history.len() > 10 && history.windows(2).all(|w| w[1] <= w[0]));
     assert_eq!(v["hmc"]["samples"], 2);
+    assert_eq!((v["frame_stride"].as_u64(), v["sequences"][0]["frames"].as_u64()), (Some(2), Some(88)));
     for f in [
         "gpdm.json",
         "learning_curve.svg",

@@ -174,7 +174,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
     // Variations: seeded HMC over whole latent trajectories from the first sequence's x1.
     let x1: Vec<f64> = (0..gpdm.latent_dim()).map(|j| gpdm.latent()[(0, j)]).collect();
     let len = data[0].1.nrows();
-    let hmc = HmcOptions { warmup: 100, samples: o.samples, thin: 2, seed: o.seed, ..Default::default() };
+    let hmc = HmcOptions { warmup: 300, samples: o.samples, thin: 5, seed: o.seed, ..Default::default() };
     let t1 = std::time::Instant::now();
     let (samples, chain) = if o.samples > 0 {
         let (t, c) = gpdm.sample_trajectories(&x1, len, &hmc).context("sampling latent trajectories")?;
