@@ -112,6 +112,9 @@ pub enum What {
         /// HMC latent trajectories to sample (0: none).
         #[arg(long, default_value_t = 3)]
         samples: usize,
+        /// L-BFGS iterations at most (default 400).
+        #[arg(long)]
+        iterations: Option<usize>,
         #[arg(long, default_value_t = 0)]
         seed: u64,
         /// Folder for gpdm.json, the plots, latent.npy and the model.
@@ -160,8 +163,28 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let opts = super::graph::EvalOpts { alphas, plot_pairs, output, table, cache };
             return super::graph::eval(ctx, &subject, &source, &opts);
         }
-        What::Gpdm { subject, sequences, vertices, max_frames, latent_dim, samples, seed, output, source } => {
-            let opts = super::eval_gpdm::Opts { sequences, vertices, max_frames, latent_dim, samples, seed, output };
+        What::Gpdm {
+            subject,
+            sequences,
+            vertices,
+            max_frames,
+            latent_dim,
+            samples,
+            iterations,
+            seed,
+            output,
+            source,
+        } => {
+            let opts = super::eval_gpdm::Opts {
+                sequences,
+                vertices,
+                max_frames,
+                latent_dim,
+                samples,
+                seed,
+                iterations,
+                output,
+            };
             return super::eval_gpdm::run(ctx, &subject, &source, &opts);
         }
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {

@@ -29,6 +29,8 @@ pub struct Opts {
     pub latent_dim: usize,
     pub samples: usize,
     pub seed: u64,
+    /// L-BFGS iterations at most (None: the library's default).
+    pub iterations: Option<usize>,
     pub output: PathBuf,
 }
 
@@ -152,7 +154,11 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
     let (data, stride, kept) = training_data(&s, o)?;
     let refs: Vec<_> = data.iter().map(|(_, y)| y.as_ref()).collect();
     let t0 = std::time::Instant::now();
-    let opts = GpdmOptions { latent_dim: o.latent_dim, ..Default::default() };
+    let mut opts = GpdmOptions { latent_dim: o.latent_dim, ..Default::default() };
+    if let Some(n) = o.iterations {
+        opts.lbfgs.max_iters = n;
+        opts.lbfgs.max_evals = n + n / 4;
+    }
     let (gpdm, rep) = Gpdm::fit(&refs, &opts).context("fitting the GPDM")?;
     let fit_secs = t0.elapsed().as_secs_f64();
     // Training frames: GPDM reconstruction (eq. 6.12-6.13 at the learnt latents) vs PCA.
