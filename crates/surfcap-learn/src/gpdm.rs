@@ -741,7 +741,7 @@ mod tests {
         let mut opts = GpdmOptions::default();
         opts.lbfgs.max_iters = 150;
         let (gpdm, rep) = Gpdm::fit(&refs, &opts).unwrap();
-        assert!(rep.objective < rep.initial_objective, "{rep:?}");
+        assert!(rep.objective < rep.initial_objective, "{} -> {}", rep.initial_objective, rep.objective);
         let (rec, var) = gpdm.reconstruct(gpdm.latent()).unwrap();
         let (y, _) = concatenate(&refs).unwrap();
         let pca = Pca::fit(y.as_ref(), 3, PcaMethod::Auto).unwrap();
@@ -790,8 +790,13 @@ mod tests {
         assert!((rec2[(3, 4)] - rec[(3, 4)]).abs() < 1e-8);
         assert!(gpdm.reconstruct(Mat::<f64>::zeros(1, 2).as_ref()).is_err());
         eprintln!(
-            "toy GPDM: mean frame error {eg:.4} vs PCA {ep:.4}; {rep:?}; HMC acceptance {:.2}, step {:.4}, {} leapfrog steps",
-            chain.acceptance_rate, chain.step_size, chain.leapfrog_steps
+            "toy GPDM: mean frame error {eg:.4} vs PCA {ep:.4}; objective {:.1} -> {:.1} in {} iterations; HMC acceptance {:.2}, step {:.4}, {} leapfrog steps",
+            rep.initial_objective,
+            rep.objective,
+            rep.iters,
+            chain.acceptance_rate,
+            chain.step_size,
+            chain.leapfrog_steps
         );
     }
 

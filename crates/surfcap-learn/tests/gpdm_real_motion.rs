@@ -80,7 +80,14 @@ fn gpdm_reconstructs_real_walk_and_run_better_than_pca() {
         pca.explained_variance_ratio().iter().sum::<f64>(),
         rep.iters
     );
-    eprintln!("fit: {rep:?}; alpha, beta = {:?}", gpdm.thesis_parameters());
+    eprintln!(
+        "fit: objective {:.1} -> {:.1}, {} iterations, converged {}; alpha, beta = {:?}",
+        rep.initial_objective,
+        rep.objective,
+        rep.iters,
+        rep.converged,
+        gpdm.thesis_parameters()
+    );
     assert!(e_gpdm < e_pca, "GPDM {e_gpdm} m vs PCA {e_pca} m");
     // Mean prediction (eq. 6.8-6.10) from the walk's first latent point replays the captured
     // walk: over its first half second its poses are closer to the captured frames than half the
