@@ -557,3 +557,31 @@ fn gpdm_evaluation_on_a_real_capture() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("nope") && stderr(&o).contains("crane"), "{}", stderr(&o));
 }
+
+/// `surfcap report` replaces an earlier report in its folder but never writes into another
+/// non-empty folder; a missing --include is named.
+#[test]
+fn report_replaces_its_own_folder_only() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let crane = data.join("vlasic2008/crane");
+    let cache = tmp.path().join("cache");
+    let out = tmp.path().join("rep");
+    for _ in 0..2 {
+        let o = surfcap(&["report", p(&crane), "-o", p(&out), "--cache-dir", p(&cache)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("crane") && html.contains("Not computed yet"), "no cached distances: {html}");
+    let other = tmp.path().join("site");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("index.html"), "<html>mine</html>").unwrap();
+    let o = surfcap(&["report", p(&crane), "-o", p(&other)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("not empty"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(other.join("index.html")).unwrap(), "<html>mine</html>");
+    let missing = tmp.path().join("nope");
+    let o = surfcap(&["report", p(&crane), "-o", p(&out), "--include", p(&missing)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("nope"), "{}", stderr(&o));
+}

@@ -54,6 +54,8 @@ pub enum ViewError {
     NoItems,
     #[error("cannot listen on {0}: {1}")]
     Bind(String, std::io::Error),
+    #[error("report folder {0}: {1}")]
+    Report(String, std::io::Error),
     #[error("the server stopped: {0}")]
     Serve(std::io::Error),
 }

@@ -36,7 +36,7 @@ pub fn serve(items: Vec<ViewItem>, opts: ServeOptions, ready: impl FnOnce(Socket
         it.check()?;
     }
     let report = match opts.report {
-        Some(r) => Some(r.canonicalize().map_err(|e| ViewError::Bind(r.display().to_string(), e))?),
+        Some(r) => Some(r.canonicalize().map_err(|e| ViewError::Report(r.display().to_string(), e))?),
         None => None,
     };
     let app = Arc::new(App { items, report });

@@ -144,6 +144,9 @@ fn rel(root: &Path, p: &Path) -> String {
     p.strip_prefix(root).unwrap_or(p).to_string_lossy().replace('\\', "/")
 }
 
+/// Written into every report's page: how a later run knows the folder is a report it may replace.
+const REPORT_MARK: &str = "<meta name=\"generator\" content=\"surfcap report\">";
+
 /// What a report holds, for the caller's message.
 pub struct Written {
     pub index: PathBuf,
@@ -164,11 +167,18 @@ pub fn write_report(
     for p in include {
         files.extend(files_of(p)?);
     }
-    // A folder this command writes into is replaced whole, never mixed with an older report.
-    if out.join("index.html").is_file() {
+    // An older report in `out` is replaced whole (never mixed with the new one); any other
+    // non-empty folder is left alone.
+    let is_old_report = std::fs::read_to_string(out.join("index.html")).is_ok_and(|h| h.contains(REPORT_MARK));
+    if is_old_report {
         for sub in ["plots", "anim", "data"] {
             let _ = std::fs::remove_dir_all(out.join(sub));
         }
+    } else if out.read_dir().is_ok_and(|mut d| d.next().is_some()) {
+        anyhow::bail!(
+            "-o {}: the folder is not empty and holds no surfcap report; choose a new or empty folder",
+            out.display()
+        );
     }
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (plots_dir, anim_dir, data_dir) = (out.join("plots"), out.join("anim"), out.join("data"));
@@ -323,7 +333,7 @@ pub fn write_report(
         body += &anims;
     }
     let html = format!(
-        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>surfcap report: {name}</title>\n<style>\nbody {{ font: 14px system-ui, sans-serif; max-width: 60em; margin: 2em auto; color: #222; }}\ntable {{ border-collapse: collapse; margin: 0.5em 0; display: block; overflow-x: auto; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; font-variant-numeric: tabular-nums; }}\nimg {{ max-width: 100%; }}\nfigure {{ margin: 1em 0; }}\n</style></head><body>\n<h1>surfcap report: {name}</h1>\n{body}</body></html>\n",
+        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">{REPORT_MARK}<title>surfcap report: {name}</title>\n<style>\nbody {{ font: 14px system-ui, sans-serif; max-width: 60em; margin: 2em auto; color: #222; }}\ntable {{ border-collapse: collapse; margin: 0.5em 0; display: block; overflow-x: auto; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; font-variant-numeric: tabular-nums; }}\nimg {{ max-width: 100%; }}\nfigure {{ margin: 1em 0; }}\n</style></head><body>\n<h1>surfcap report: {name}</h1>\n{body}</body></html>\n",
         name = esc(&s.name)
     );
     let index = out.join("index.html");
