@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use crate::atomic::write_file;
 use crate::error::Result;
-use crate::io::npy::{NpyArray, read_npy, write_npy};
+use crate::io::npy::{NpyArray, NpyElement, read_npy, write_npy};
 use crate::subject::Subject;
 
 /// Hash of the subject's geometry: topology, positions of every sequence (in order), up axis.
@@ -58,15 +58,15 @@ impl DerivedCache {
     }
 
     /// Reads the cached matrix, or computes, stores and returns it. The bool says whether it
-    /// came from the cache.
-    pub fn get_or_compute(
+    /// came from the cache. `compute` may fail with any error a data-layer error converts into.
+    pub fn get_or_compute<T: NpyElement + npyz::AutoSerialize, E: From<crate::Error>>(
         &self,
         path: &Path,
-        compute: impl FnOnce() -> Result<NpyArray<f64>>,
-    ) -> Result<(NpyArray<f64>, bool)> {
+        compute: impl FnOnce() -> Result<NpyArray<T>, E>,
+    ) -> Result<(NpyArray<T>, bool), E> {
         // An unreadable entry (older format, damaged disk) is recomputed and replaced.
         if path.is_file()
-            && let Ok(a) = read_npy::<f64>(path)
+            && let Ok(a) = read_npy::<T>(path)
         {
             return Ok((a, true));
         }
@@ -92,7 +92,7 @@ mod tests {
             let (a, cached) = c
                 .get_or_compute(&p, || {
                     calls += 1;
-                    Ok(NpyArray { shape: vec![2, 2], data: vec![0.0, 1.5, 1.5, 0.0] })
+                    Ok::<_, crate::Error>(NpyArray { shape: vec![2, 2], data: vec![0.0, 1.5, 1.5, 0.0] })
                 })
                 .unwrap();
             assert_eq!(cached, expect_cached);

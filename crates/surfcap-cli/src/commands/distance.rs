@@ -87,7 +87,7 @@ pub fn cached_distance_matrix(
     let bar = crate::progress::Bar::new(ctx);
     let (a, cached) = store.get_or_compute(&path, || {
         let d = distance_matrix(subject, params, &bar);
-        Ok(NpyArray { shape: vec![d.n, d.n], data: d.values })
+        Ok::<_, surfcap_mesh::Error>(NpyArray { shape: vec![d.n, d.n], data: d.values })
     })?;
     Ok((a, cached, path))
 }

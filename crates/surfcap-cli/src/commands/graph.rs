@@ -148,7 +148,7 @@ impl<'a> SubjectGraphs<'a> {
             let w = self.weights(alpha)?;
             let g = build(&w, s, kind, self.ctx);
             let data = g.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
-            Ok(NpyArray { shape: vec![g.edges().len(), 3], data })
+            Ok::<_, surfcap_mesh::Error>(NpyArray { shape: vec![g.edges().len(), 3], data })
         })?;
         anyhow::ensure!(a.shape.len() == 2 && a.shape[1] == 3, "cached graph has shape {:?}, expected [E, 3]", a.shape);
         let edges = a.data.chunks_exact(3).map(|e| Edge { from: e[0] as u32, to: e[1] as u32, weight: e[2] }).collect();

@@ -9,6 +9,7 @@ use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::io::npy::NpyArray;
 use surfcap_mesh::{FrameLabel, Sequence, Subject};
 use surfcap_motion::graph::Graph;
 use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path, path_errors};
@@ -174,13 +175,13 @@ pub fn prepare_subject(
     Ok(Prepared { s, graph, model, kind, alpha: o.alpha, tracked, cache, seconds: t0.elapsed().as_secs_f64() })
 }
 
-/// The walk model of `graph` (every transition's rigid track: its DTW warp, the centres of its
-/// Blend frames, its end placement), from the derived-matrix cache when possible: a
-/// `walkmodel-*.npy` of f32 rows of three numbers ([`WalkModel::tracks_to_rows`] documents the
-/// layout), keyed by the subject's geometry, the graph's edges, the DTW slope and the tracked
-/// vertices. On a dense graph it costs as much as the graph itself (one DTW per transition).
-/// A freshly computed model is rounded to f32 the same way, so a cached and an uncached run
-/// search the same numbers and find the same walk (f32 keeps frame numbers exact below 2^24).
+/// The walk model of `graph` (every transition's rigid track: the centres of its Blend frames
+/// and its end placement), from the derived-matrix cache when possible: a `walkmodel-*.npy` of
+/// f32 rows of three numbers ([`WalkModel::tracks_to_rows`] documents the layout), keyed by the
+/// subject's geometry, the graph's edges, the DTW slope and the tracked vertices. On a dense
+/// graph it costs as much as the graph itself (one DTW per transition). A freshly computed model
+/// is read back from its f32 rows too, so a cached and an uncached run search the same numbers
+/// and find the same walk (f32 keeps frame numbers exact below 2^24).
 fn cached_walk_model(
     ctx: &crate::Ctx,
     sg: &SubjectGraphs,
@@ -189,6 +190,7 @@ fn cached_walk_model(
     tracked: Option<&[usize]>,
 ) -> anyhow::Result<WalkModel> {
     let s = sg.subject();
+    anyhow::ensure!(s.n_frames() < 1 << 24, "{} frames: the walk model cache holds fewer than 2^24", s.n_frames());
     let mut h = blake3::Hasher::new();
     for e in graph.edges() {
         h.update(&e.from.to_le_bytes());
@@ -205,27 +207,37 @@ fn cached_walk_model(
     );
     let store = cache.cache();
     let path = store.path("walkmodel", &surfcap_mesh::derived_cache::subject_hash(s), &key);
-    // An unreadable or mismatched entry is recomputed and replaced, as for every cached matrix.
-    if !cache.no_cache
-        && path.is_file()
-        && let Ok(a) = surfcap_mesh::io::npy::read_npy::<f32>(&path)
-        && a.shape.len() == 2
-        && a.shape[1] == 3
-        && let Ok(model) =
-            WalkModel::from_rows(s, &a.data.iter().map(|&x| x as f64).collect::<Vec<_>>(), tracked, slope)
-    {
-        return Ok(model);
+    if cache.no_cache {
+        let _ = std::fs::remove_file(&path);
     }
-    anyhow::ensure!(s.n_frames() < 1 << 24, "{} frames: the walk model cache holds fewer than 2^24", s.n_frames());
-    let table = sg.table()?;
-    let (d, _, _) = cached_distance_matrix(ctx, s, &DistanceParams::default(), cache)?;
-    let model = WalkModel::new(s, graph, table, &d.data, slope, tracked);
-    let rows: Vec<f32> = model.tracks_to_rows().iter().map(|&x| x as f32).collect();
-    let shape = vec![rows.len() / 3, 3];
-    surfcap_mesh::atomic::write_file(&path, |w| surfcap_mesh::io::npy::write_npy(w, &shape, &rows))
-        .with_context(|| format!("writing the walk model cache {}", path.display()))?;
-    let rounded: Vec<f64> = rows.iter().map(|&x| x as f64).collect();
-    WalkModel::from_rows(s, &rounded, tracked, slope).map_err(anyhow::Error::msg)
+    let compute = || -> anyhow::Result<NpyArray<f32>> {
+        let table = sg.table()?;
+        let (d, _, _) = cached_distance_matrix(ctx, s, &DistanceParams::default(), cache)?;
+        let rows: Vec<f32> = WalkModel::new(s, graph, table, &d.data, slope, tracked)
+            .tracks_to_rows()
+            .iter()
+            .map(|&x| x as f32)
+            .collect();
+        Ok(NpyArray { shape: vec![rows.len() / 3, 3], data: rows })
+    };
+    let parse = |a: &NpyArray<f32>| -> Result<WalkModel, String> {
+        if a.shape.len() != 2 || a.shape[1] != 3 {
+            return Err(format!("shape {:?}, expected [R, 3]", a.shape));
+        }
+        WalkModel::from_rows(s, &a.data.iter().map(|&x| x as f64).collect::<Vec<_>>(), tracked, slope)
+    };
+    let (a, cached) = store.get_or_compute(&path, compute)?;
+    match parse(&a) {
+        Ok(model) => Ok(model),
+        // A readable entry that does not fit this subject (damaged, or an older layout) is
+        // recomputed and replaced, as unreadable ones are.
+        Err(_) if cached => {
+            let _ = std::fs::remove_file(&path);
+            let (a, _) = store.get_or_compute(&path, compute)?;
+            parse(&a).map_err(|e| anyhow::anyhow!("the walk model just computed: {e}"))
+        }
+        Err(e) => anyhow::bail!("the walk model just computed: {e}"),
+    }
 }
 
 fn format_of(out: &OutOpts) -> anyhow::Result<ExportFormat> {

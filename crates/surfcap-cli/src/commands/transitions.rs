@@ -88,7 +88,7 @@ pub fn cached_table(
         data.extend(t.len.iter().map(|&x| x as f64));
         data.extend(t.li.iter().map(|&x| x as f64));
         data.extend(t.lj.iter().map(|&x| x as f64));
-        Ok(NpyArray { shape: vec![4, n, n], data })
+        Ok::<_, surfcap_mesh::Error>(NpyArray { shape: vec![4, n, n], data })
     })?;
     anyhow::ensure!(a.shape == [4, n, n], "cached transition table has shape {:?}, expected [4, {n}, {n}]", a.shape);
     let part = |k: usize| &a.data[k * n * n..(k + 1) * n * n];
