@@ -67,16 +67,7 @@ fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, Value)>) {
 fn json_section(title: &str, v: &Value) -> String {
     let mut h = format!("<h3>{}</h3>\n", esc(title));
     let mut scalars = Vec::new();
-    if let Value::Object(m) = v {
-        for (k, x) in m {
-            if !matches!(x, Value::Array(_)) {
-                flatten(k, x, &mut scalars);
-                if !matches!(x, Value::Object(_)) {
-                    scalars.push((k.clone(), x.clone()));
-                }
-            }
-        }
-    }
+    flatten("", v, &mut scalars);
     if !scalars.is_empty() {
         h += "<table>";
         for (k, x) in &scalars {
