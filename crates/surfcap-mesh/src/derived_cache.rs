@@ -33,6 +33,7 @@ pub fn subject_hash(subject: &Subject) -> blake3::Hash {
 }
 
 /// A cache folder of derived matrices.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DerivedCache {
     dir: PathBuf,
 }
@@ -74,6 +75,34 @@ impl DerivedCache {
         write_file(path, |w| write_npy(w, &a.shape, &a.data))?;
         Ok((a, false))
     }
+
+    /// Reads and decodes the entry at `path`, or computes, stores and decodes it; the bool says
+    /// whether it came from the cache. An entry that cannot be read or decoded (damaged, an
+    /// older layout, another subject's) is recomputed and replaced; `refresh` recomputes and
+    /// replaces even a good one. A freshly computed array is decoded too, so a cached and an
+    /// uncached run see the same numbers (e.g. after rounding to f32).
+    pub fn fetch<T, V, E>(
+        &self,
+        path: &Path,
+        refresh: bool,
+        compute: impl Fn() -> Result<NpyArray<T>, E>,
+        decode: impl Fn(NpyArray<T>) -> Result<V, E>,
+    ) -> Result<(V, bool), E>
+    where
+        T: NpyElement + npyz::AutoSerialize,
+        E: From<crate::Error>,
+    {
+        if !refresh
+            && path.is_file()
+            && let Ok(a) = read_npy::<T>(path)
+            && let Ok(v) = decode(a)
+        {
+            return Ok((v, true));
+        }
+        let a = compute()?;
+        write_file(path, |w| write_npy(w, &a.shape, &a.data))?;
+        Ok((decode(a)?, false))
+    }
 }
 
 #[cfg(test)]
@@ -99,5 +128,29 @@ mod tests {
             assert_eq!(a.data[1], 1.5);
         }
         assert_eq!(calls, 1);
+    }
+
+    #[test]
+    fn fetch_recomputes_entries_it_cannot_decode_and_on_refresh() {
+        let d = tempfile::tempdir().unwrap();
+        let c = DerivedCache::new(d.path());
+        let p = c.path("test", &blake3::hash(b"x"), "");
+        let calls = std::cell::Cell::new(0);
+        let compute = || {
+            calls.set(calls.get() + 1);
+            Ok::<_, crate::Error>(NpyArray { shape: vec![2], data: vec![1.0f64, 2.0] })
+        };
+        let decode = |a: NpyArray<f64>| {
+            if a.shape == [2] { Ok(a.data) } else { Err(crate::Error::new(crate::ErrorKind::Shape, "expected [2]")) }
+        };
+        assert_eq!(c.fetch(&p, false, compute, decode).unwrap(), (vec![1.0, 2.0], false));
+        assert_eq!(c.fetch(&p, false, compute, decode).unwrap(), (vec![1.0, 2.0], true));
+        assert_eq!(calls.get(), 1);
+        assert_eq!(c.fetch(&p, true, compute, decode).unwrap().1, false);
+        assert_eq!(calls.get(), 2);
+        // A readable entry of the wrong shape is recomputed and replaced.
+        write_file(&p, |w| write_npy(w, &[3], &[1.0f64, 2.0, 3.0])).unwrap();
+        assert_eq!(c.fetch(&p, false, compute, decode).unwrap(), (vec![1.0, 2.0], false));
+        assert_eq!(read_npy::<f64>(&p).unwrap().shape, vec![2]);
     }
 }

@@ -12,6 +12,7 @@ pub mod graph;
 pub mod motion_graph;
 pub mod path_following;
 pub mod timed_walk;
+pub mod transition_frames;
 pub mod transition_table;
 pub mod walk_sequence;
 

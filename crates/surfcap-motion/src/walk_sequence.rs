@@ -24,9 +24,10 @@ use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_geometry::poisson_reconstruction::PoissonError;
 use surfcap_mesh::{FrameIndex, FrameLabel, Subject, UpAxis};
 
-use crate::blend::{Lambda, Mixing, blend, blend_placements_from, centre};
+use crate::blend::{Lambda, blend_placements_from, centre};
 use crate::dtw::{Slope, dtw_window};
 use crate::graph::Graph;
+use crate::transition_frames::transition_frames;
 use crate::transition_table::TransitionTable;
 
 /// The rigid track of one transition edge u -> v, in the coordinates where frame u is unmoved.
@@ -385,11 +386,10 @@ pub fn walk_sequence(
         match model.step(u, v).ok_or(WalkError::NotAnEdge { at, from: u, to: v })? {
             Step::Original => push(&mut out, frame(v), &g, FrameLabel::Original, Some(v)),
             Step::Transition(t) => {
-                let src: Vec<&[f32]> = (u..u + t.li).map(frame).collect();
-                let d0 = v + 1 - t.lj;
-                let dst: Vec<&[f32]> = (d0..=v).map(frame).collect();
-                let offsets = model.warp(d, u, v).ok_or(WalkError::NotAnEdge { at, from: u, to: v })?;
-                let s = blend(subject.topology(), model.up, &src, &dst, &offsets, Lambda::Ramp, Mixing::Nonlinear)?;
+                let ends = ((u as usize, t.li as usize), (v as usize, t.lj as usize));
+                let s = transition_frames(subject, d, ends.0, ends.1, model.slope)?
+                    .ok_or(WalkError::NotAnEdge { at, from: u, to: v })?
+                    .frames;
                 for f in &s[1..s.len().saturating_sub(1)] {
                     push(&mut out, f, &g, FrameLabel::Synthetic, None);
                 }

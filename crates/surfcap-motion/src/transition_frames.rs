@@ -1,0 +1,46 @@
+//! The frames of one optimal transition: its DTW warp (thesis eq. 2.50-2.54) recomputed from the
+//! distance matrix, then Blend (Algorithm 2: recurring motion-plane alignment and non-linear
+//! interpolation along the warp, lambda ramping from 0 to 1). Used both to play walks
+//! (Algorithm 3, [`crate::walk_sequence::walk_sequence`]) and to show one transition.
+
+use surfcap_geometry::poisson_reconstruction::PoissonError;
+use surfcap_mesh::Subject;
+
+use crate::blend::{Lambda, Mixing, blend};
+use crate::dtw::{Slope, Warp, dtw_window};
+
+/// A transition's frames and its warp.
+#[derive(Debug, Clone)]
+pub struct TransitionFrames {
+    /// One frame per warp cell, in the source's placement: the first is source frame `i`
+    /// itself, the last destination frame `j` moved by the transition's rigid end placement.
+    pub frames: Vec<Vec<f32>>,
+    /// The warp over global frame numbers (source frame, destination frame) per cell.
+    pub warp: Warp,
+}
+
+/// The transition from global frame `i` (source segment `i .. i + li`) to global frame `j`
+/// (destination segment `j + 1 - lj ..= j`) of `subject`, whose all-pairs distances are `d`
+/// (row-major over the global frame index). `None` when the segments do not fit in the subject
+/// or the slope constraint admits no warp.
+pub fn transition_frames(
+    subject: &Subject,
+    d: &[f64],
+    (i, li): (usize, usize),
+    (j, lj): (usize, usize),
+    slope: Slope,
+) -> Result<Option<TransitionFrames>, PoissonError> {
+    let Some(warp) = dtw_window(d, subject.n_frames(), i, li, j, lj, slope) else {
+        return Ok(None);
+    };
+    let d0 = j + 1 - lj;
+    let (Some(src), Some(dst)) = (
+        (i..i + li).map(|g| subject.frame(g)).collect::<Option<Vec<&[f32]>>>(),
+        (d0..=j).map(|g| subject.frame(g)).collect::<Option<Vec<&[f32]>>>(),
+    ) else {
+        return Ok(None);
+    };
+    let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(a, b)| (a - i, b - d0)).collect();
+    let frames = blend(subject.topology(), subject.up_axis, &src, &dst, &offsets, Lambda::Ramp, Mixing::Nonlinear)?;
+    Ok(Some(TransitionFrames { frames, warp }))
+}

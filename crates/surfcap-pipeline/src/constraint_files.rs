@@ -1,0 +1,235 @@
+//! The files users write to constrain a synthesis (thesis 3.5): curves to follow, key poses
+//! with their new times, and motion-type restrictions along a curve. Errors name the file and
+//! the line.
+
+use std::path::Path;
+
+use surfcap_geometry::motion_plane_alignment::plane_axes;
+use surfcap_mesh::{Subject, UpAxis};
+use surfcap_motion::path_following::{Curve, Restriction};
+
+use crate::error::{Error, Result};
+
+/// Rows of a CSV file: blank lines and '#' comments skipped, cells split at ',', ';' or tab.
+/// Each row comes with its 1-based line number.
+fn csv_rows(path: &Path) -> Result<Vec<(usize, Vec<String>)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, None, format!("cannot read: {e}")))?;
+    let mut rows = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        rows.push((k + 1, line.split([',', ';', '\t']).map(|c| c.trim().to_string()).collect()));
+    }
+    Ok(rows)
+}
+
+/// Reads a curve: rows of x,y,z in the subject's axes and units, or two columns for a path on
+/// the ground plane (the two horizontal axes of `up`, e.g. x,z for +y up). A first row that is
+/// not numeric is a header. `planar` follows only the ground-plane projection (implied by two
+/// columns).
+pub fn read_curve(path: &Path, up: UpAxis, planar: bool) -> Result<Curve> {
+    let mut rows = csv_rows(path)?;
+    if rows.first().is_some_and(|(_, c)| c.iter().any(|x| x.parse::<f64>().is_err())) {
+        rows.remove(0); // header
+    }
+    let Some((first_line, first)) = rows.first() else {
+        return Err(Error::file(path, None, "no curve points"));
+    };
+    let cols = first.len();
+    if cols != 2 && cols != 3 {
+        return Err(Error::file(
+            path,
+            Some(*first_line),
+            format!("{cols} columns; expected x,y,z or two ground-plane coordinates"),
+        ));
+    }
+    let (iu, iv, iw) = plane_axes(up);
+    let mut points = Vec::with_capacity(rows.len());
+    for (line, cells) in &rows {
+        if cells.len() != cols {
+            return Err(Error::file(
+                path,
+                Some(*line),
+                format!("{} columns, expected {cols} like the first row", cells.len()),
+            ));
+        }
+        let mut v = [0.0; 3];
+        for (k, c) in cells.iter().enumerate() {
+            v[k] = c
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| Error::file(path, Some(*line), format!("{c:?} is not a finite number")))?;
+        }
+        points.push(if cols == 2 {
+            let mut p = [0.0; 3];
+            p[iu] = v[0];
+            p[iv] = v[1];
+            p[iw] = 0.0;
+            p
+        } else {
+            v
+        });
+    }
+    let axes = if planar || cols == 2 { vec![iu, iv] } else { vec![0, 1, 2] };
+    Curve::new(points, axes).map_err(|e| Error::file(path, None, e.to_string()))
+}
+
+/// One key pose (thesis 3.5.2): a frame of the subject and the output frame number at which it
+/// must appear.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyPose {
+    /// The frame as the user wrote it (`sequence:frame` or a global index).
+    pub spec: String,
+    /// Its global frame index.
+    pub frame: u32,
+    /// Its frame number inside its own sequence.
+    pub input: usize,
+    /// The requested output frame number.
+    pub requested: i64,
+}
+
+/// Reads key poses: `frame,time` rows (an optional header), times whole, >= 0 and increasing;
+/// at least two keys.
+pub fn read_key_poses(path: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
+    let mut rows = csv_rows(path)?;
+    if rows.first().is_some_and(|(_, c)| c.len() == 2 && c[1].parse::<i64>().is_err()) {
+        rows.remove(0);
+    }
+    let mut keys: Vec<KeyPose> = Vec::new();
+    for (line, cells) in rows {
+        if cells.len() != 2 {
+            return Err(Error::file(
+                path,
+                Some(line),
+                format!("expected frame,time (2 columns), found {}", cells.len()),
+            ));
+        }
+        let frame = s.resolve_frame(&cells[0]).map_err(|e| Error::file(path, Some(line), e.to_string()))?;
+        let requested: i64 = cells[1].parse().ok().filter(|t| *t >= 0).ok_or_else(|| {
+            Error::file(path, Some(line), format!("time {:?}: expected a whole number of frames >= 0", cells[1]))
+        })?;
+        if let Some(prev) = keys.last()
+            && requested <= prev.requested
+        {
+            return Err(Error::file(
+                path,
+                Some(line),
+                format!("time {requested} is not after the previous key's {}", prev.requested),
+            ));
+        }
+        let input = s.frame_index().locate(frame).map_or(0, |l| l.1);
+        keys.push(KeyPose { spec: cells[0].clone(), frame: frame as u32, input, requested });
+    }
+    if keys.len() < 2 {
+        return Err(Error::file(path, None, format!("{} key pose(s); expected at least two", keys.len())));
+    }
+    Ok(keys)
+}
+
+/// Parses a motion-type restriction `TAG:FROM-TO` (arc lengths along the curve, FROM < TO):
+/// there only sequences tagged TAG are used. The tag must be one of the subject's.
+pub fn parse_restriction(s: &Subject, text: &str) -> Result<Restriction> {
+    let bad = || Error::Request(format!("{text:?}: expected TAG:FROM-TO with arc lengths FROM < TO, e.g. run:5-9"));
+    let (tag, range) = text.rsplit_once(':').ok_or_else(bad)?;
+    let (a, b) = range.split_once('-').ok_or_else(bad)?;
+    let (from, to): (f64, f64) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
+    if !(from < to && from.is_finite() && to.is_finite()) {
+        return Err(bad());
+    }
+    let allowed: Vec<bool> = s.sequences().iter().map(|q| q.tags.iter().any(|x| x == tag)).collect();
+    if !allowed.iter().any(|&x| x) {
+        let mut known: Vec<&str> = s.sequences().iter().flat_map(|q| q.tags.iter().map(|x| x.as_str())).collect();
+        known.sort();
+        known.dedup();
+        return Err(Error::Request(format!(
+            "{text:?}: no sequence is tagged {tag:?}; the subject's tags are {}",
+            known.join(", ")
+        )));
+    }
+    Ok(Restriction { from, to, allowed })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use surfcap_synth::{WormParams, worm_subject};
+
+    fn file(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("c.csv");
+        std::fs::write(&p, text).unwrap();
+        (d, p)
+    }
+
+    #[test]
+    fn curves_with_headers_comments_and_two_or_three_columns() {
+        let (_d, p) = file("# a path\nx,z\n0,0\n\n3,4 # end\n");
+        let c = read_curve(&p, UpAxis::PosY, false).unwrap();
+        assert!((c.length() - 5.0).abs() < 1e-12);
+        assert_eq!(c.axes(), &[0, 2]);
+        let (_d, p) = file("0,0,0\n0,2,3\n");
+        let c = read_curve(&p, UpAxis::PosY, false).unwrap();
+        assert!((c.length() - 13f64.sqrt()).abs() < 1e-12);
+        assert_eq!(c.axes().len(), 3);
+        // Planar: only the ground-plane (x, z) projection counts.
+        assert!((read_curve(&p, UpAxis::PosY, true).unwrap().length() - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn curve_errors_name_the_file_and_line() {
+        for (text, want) in [
+            ("x,z\n0,0\n1,zero\n", "c.csv:3: \"zero\" is not a finite number"),
+            ("0,0\n1,1,1\n", "c.csv:2: 3 columns, expected 2"),
+            ("0\n1\n", "c.csv:1: 1 columns"),
+            ("# nothing\n", "c.csv: no curve points"),
+        ] {
+            let (_d, p) = file(text);
+            let e = read_curve(&p, UpAxis::PosY, false).unwrap_err().to_string();
+            assert!(e.contains(want), "{text:?}: {e}");
+        }
+        let e = read_curve(Path::new("/nonexistent/c.csv"), UpAxis::PosY, false).unwrap_err().to_string();
+        assert!(e.contains("/nonexistent/c.csv: cannot read"), "{e}");
+    }
+
+    fn worm() -> Subject {
+        worm_subject(&WormParams { rings: 6, segments: 6, frames: 12, ..Default::default() }).unwrap()
+    }
+
+    #[test]
+    fn key_poses_and_their_errors() {
+        let s = worm();
+        let q = s.sequences()[0].name.clone();
+        let (_d, p) = file(&format!("frame,time\n{q}:2,0\n{q}:5,10\n"));
+        let keys = read_key_poses(&p, &s).unwrap();
+        assert_eq!(keys.len(), 2);
+        assert_eq!((keys[1].frame, keys[1].input, keys[1].requested), (5, 5, 10));
+        for (text, want) in [
+            (format!("{q}:2,5\n{q}:5,5\n"), "c.csv:2: time 5 is not after"),
+            (format!("{q}:2,0\n{q}:5,-1\n"), "c.csv:2: time \"-1\""),
+            (format!("{q}:2,0\n{q}:500,4\n"), "c.csv:2:"),
+            (format!("{q}:2,0,1\n"), "c.csv:1: expected frame,time"),
+            (format!("{q}:2,0\n"), "1 key pose(s)"),
+        ] {
+            let (_d, p) = file(&text);
+            let e = read_key_poses(&p, &s).unwrap_err().to_string();
+            assert!(e.contains(want), "{text:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn restrictions_name_known_tags() {
+        let s = worm();
+        let tag = s.sequences()[0].tags.first().cloned();
+        if let Some(tag) = tag {
+            let r = parse_restriction(&s, &format!("{tag}:1-2.5")).unwrap();
+            assert_eq!((r.from, r.to), (1.0, 2.5));
+            assert!(r.allowed[0]);
+        }
+        assert!(parse_restriction(&s, "run:9-5").unwrap_err().to_string().contains("FROM < TO"));
+        assert!(parse_restriction(&s, "run").unwrap_err().to_string().contains("TAG:FROM-TO"));
+        assert!(parse_restriction(&s, "moonwalk:1-2").unwrap_err().to_string().contains("no sequence is tagged"));
+    }
+}
