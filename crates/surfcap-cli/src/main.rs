@@ -4,7 +4,16 @@
 //! where), 2 internal error (a bug: please report it).
 
 mod commands;
+mod files;
+mod html_report;
+mod mannequin_spec;
+mod options;
+mod output;
 mod progress;
+mod subject_summary;
+mod synthesis;
+
+pub use output::Ctx;
 
 use std::process::ExitCode;
 
@@ -59,21 +68,6 @@ enum Command {
     /// One static HTML page of what exists for a subject: summary, cached distance matrix,
     /// included evaluations (tables, plots) and animations (with their path errors).
     Report(commands::report::Args),
-}
-
-/// What every command gets: how to report.
-pub struct Ctx {
-    pub quiet: bool,
-    pub json: bool,
-}
-
-impl Ctx {
-    /// A note for humans (assumptions, hints); silent with --quiet or --json.
-    pub fn note(&self, text: &str) {
-        if !self.quiet && !self.json {
-            eprintln!("note: {text}");
-        }
-    }
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line

@@ -58,6 +58,30 @@ impl PoseMetric {
     }
 }
 
+/// Parses `euclidean`, `deformation` or `deformation-log`; the error says what was expected.
+impl std::str::FromStr for PoseMetric {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
+        PoseMetric::parse(s)
+            .ok_or_else(|| UnknownName { given: s.to_string(), expected: "deformation, deformation-log or euclidean" })
+    }
+}
+
+/// A name that is not one of a parameter's values.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnknownName {
+    pub given: String,
+    pub expected: &'static str,
+}
+
+impl std::fmt::Display for UnknownName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:?}: expected {}", self.given, self.expected)
+    }
+}
+
+impl std::error::Error for UnknownName {}
+
 /// Floats stored per triangle and frame: t, b, n (9), edge coordinates a11, a12, a22 (3) and
 /// the inverse's 1/a11, -a12/(a11 a22), 1/a22 (3). Zero-area triangles store zeros.
 pub const FRAME_FLOATS: usize = 15;

@@ -37,6 +37,17 @@ pub enum StretchInterpolation {
     Log,
 }
 
+impl std::str::FromStr for StretchInterpolation {
+    type Err = crate::pose_distance::UnknownName;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "linear" => Ok(StretchInterpolation::Linear),
+            "log" => Ok(StretchInterpolation::Log),
+            _ => Err(crate::pose_distance::UnknownName { given: s.to_string(), expected: "linear or log" }),
+        }
+    }
+}
+
 /// Pose j moved onto pose i by the motion-plane alignment.
 pub fn align_onto(pi: &[f32], pj: &[f32], up: UpAxis) -> Vec<f32> {
     let (m, _) = motion_plane_alignment(pi, pj, None, up);

@@ -40,6 +40,15 @@ impl ExportFormat {
     }
 }
 
+impl std::str::FromStr for ExportFormat {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        ExportFormat::parse(s).ok_or_else(|| {
+            crate::Error::new(crate::ErrorKind::Unsupported, format!("{s:?}: expected glb, obj, ply, pc2 or npy"))
+        })
+    }
+}
+
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ExportOptions {
     /// Write ascii rather than binary PLY.

@@ -23,6 +23,13 @@ pub enum UpAxis {
     NegZ,
 }
 
+impl std::str::FromStr for UpAxis {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> Result<Self> {
+        UpAxis::parse(s)
+    }
+}
+
 impl UpAxis {
     /// Parses `y`, `+Y`, `-z`, and also descriptive strings that start with an axis, such as
     /// `+Y (Maya default; verify)` found in dataset metadata.

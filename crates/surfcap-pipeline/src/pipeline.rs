@@ -301,10 +301,7 @@ impl Pipeline {
     pub fn walk_model(&self, p: &GraphParams, tracked: Option<&[usize]>) -> Result<Fetched<WalkModel>> {
         let s = &self.subject;
         if s.n_frames() >= 1 << 24 {
-            return Err(Error::Request(format!(
-                "{} frames: the walk model cache holds fewer than 2^24",
-                s.n_frames()
-            )));
+            return Err(Error::Request(format!("{} frames: the walk model cache holds fewer than 2^24", s.n_frames())));
         }
         if let Some(ids) = tracked {
             let nv = s.topology().n_vertices();
@@ -381,7 +378,11 @@ mod tests {
     }
 
     fn params() -> GraphParams {
-        GraphParams { table: TableParams { l_min: 3, l_max: 6, slope: Some(3) }, kind: GraphKind::Essential, alpha: 0.05 }
+        GraphParams {
+            table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
+            kind: GraphKind::Essential,
+            alpha: 0.05,
+        }
     }
 
     #[test]

@@ -64,8 +64,7 @@ pub fn play_walk(
     let centres = ws.positions.chunks_exact(3 * nv).map(|f| tracked_centre(f, tracked)).collect();
     let original_frames = ws.labels.iter().filter(|l| **l == FrameLabel::Original).count();
     let synthetic_frames = ws.labels.len() - original_frames;
-    let sequence =
-        Sequence::new(name, nv, ws.positions)?.with_labels(ws.labels)?.with_tags(vec!["synthesised".into()]);
+    let sequence = Sequence::new(name, nv, ws.positions)?.with_labels(ws.labels)?.with_tags(vec!["synthesised".into()]);
     Ok(PlayedWalk {
         sequence,
         centres,

@@ -14,11 +14,15 @@ use surfcap_mesh::io::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::path_following::PathSearch;
 
-use super::distance::{CacheOpts, cached_distance_matrix};
-use super::graph::Kind;
-use super::print_json;
-use super::synth_walk::{GraphOpts, OutOpts, prepare_subject, read_curve, run_path};
-use super::transitions::{SlopeArg, TableOpts};
+use surfcap_pipeline::constraint_files::read_curve;
+use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
+
+use crate::html_report::write_report;
+use crate::mannequin_spec::{MannequinArgs, build};
+use crate::options::{OutOpts, TableOpts};
+use crate::output::print_json;
+use crate::subject_summary::{describe, print_summary};
+use crate::synthesis::{Prepared, run_path};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -38,17 +42,13 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
-    let say = |s: &str| {
-        if !ctx.json && !ctx.quiet {
-            println!("{s}");
-        }
-    };
+    let say = |s: &str| ctx.say(s);
     let procedural: Vec<String> = if a.bvh.is_empty() {
         ["walk", "jog", "turn_left", "turn_right", "jump", "idle"].map(String::from).to_vec()
     } else {
         Vec::new()
     };
-    let spec = super::synth::Args {
+    let spec = MannequinArgs {
         bvh: a.bvh.clone(),
         procedural,
         shape: "average".into(),
@@ -60,7 +60,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         name: Some("mannequin".into()),
         output: None,
     };
-    let built = super::synth::build(ctx, &spec)?;
+    let built = build(ctx, &spec)?;
     say(&format!(
         "1. built the mannequin ({} vertices) {}: {} sequences ({}), {} frames at {} fps",
         built.topology().n_vertices(),
@@ -97,11 +97,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 
     // Pose geometry (thesis 2.3-2.4): all-pairs distances and a non-linear interpolation. The
     // distances go to the demo's own cache, where the later steps read them.
-    let cache_opts = CacheOpts { cache_dir: Some(a.output.join("cache")), no_cache: false };
-    let (d, _, _) = cached_distance_matrix(ctx, &subject, &DistanceParams::default(), &cache_opts)?;
-    let n = d.shape[0];
+    let store = CacheStore::in_folder(a.output.join("cache"), false);
+    let pipe = Pipeline::new(subject.clone(), store, Box::new(crate::progress::Bar::new(ctx)));
+    let d = pipe.distances(&DistanceParams::default())?.value;
+    let n = d.n;
     let dist_path = a.output.join("distances.npy");
-    surfcap_mesh::atomic::write_file(&dist_path, |w| write_npy(w, &[n, n], &d.data))?;
+    surfcap_mesh::atomic::write_file(&dist_path, |w| write_npy(w, &[n, n], &d.values))?;
     say(&format!("5. computed the {n} x {n} deformation-gradient pose distances -> {}", dist_path.display()));
     // From the first frame of the first sequence to the middle of the last one (with the
     // procedural motions: standing in the walk -> the jump's crouch).
@@ -137,14 +138,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ));
 
     // Transitions, essential graph and a path-following animation (thesis 2.5, 3.3, 3.5.1).
-    let opts = GraphOpts {
-        kind: "essential".into(),
-        alpha: 0.05,
-        table: TableOpts { slope: SlopeArg(Some(3)), l_min: None, l_max: None },
-        cache: cache_opts.clone(),
-        source: Default::default(),
-    };
-    let prep = prepare_subject(ctx, subject.clone(), &opts, Kind::Essential, None)?;
+    let params =
+        GraphParams { table: TableOpts::default().params(subject.fps)?, kind: GraphKind::Essential, alpha: 0.05 };
+    let prep = Prepared::new(pipe, params, None)?;
     say(&format!(
         "7. found the optimal transition between every pair of frames (DTW, thesis 2.5) and built the essential graph: {} edges, {} of them transitions ({:.1} s)",
         prep.graph.edges().len(),
@@ -172,7 +168,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         curve_path.display(),
         curve.length(),
         path.frames,
-        path.transitions,
+        path.played.transitions,
         path.mean_error,
         path.max_error,
         out.output.display(),
@@ -183,7 +179,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     // The report of what the demo made, and the command that plays it.
     let report_dir = a.output.join("report");
     let include = vec![interp_path.clone(), out.output.clone()];
-    let rep = super::report::write_report(&subject, &cache, &report_dir, &include, &cache_opts)?;
+    let rep = write_report(&prep.pipe, &cache, &report_dir, &include)?;
     say(&format!(
         "9. wrote the report {} ({} plots, {} animations); play them in the browser with: surfcap view {}",
         rep.index.display(),
@@ -193,11 +189,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ));
     written.push(rep.index.clone());
     if ctx.json {
-        print_json(&json!({ "subject": super::info::describe(&subject), "cache": cache, "written": written,
+        print_json(&json!({ "subject": describe(&subject), "cache": cache, "written": written,
             "path": { "mean_error": path.mean_error, "max_error": path.max_error, "frames": path.frames } }));
     } else if !ctx.quiet {
         println!("\nsurfcap info {}:", cache.display());
-        super::info::run(ctx, super::info::Args { subject: cache.clone(), source: Default::default() })?;
+        print_summary(&subject, &describe(&subject));
         println!(
             "\nsee the report: {}\nplay the animations in the browser: surfcap view {}\n(or open {}, {} and {} in Blender: File > Import > glTF)",
             rep.index.display(),

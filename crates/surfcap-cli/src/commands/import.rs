@@ -5,7 +5,8 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use super::{SourceOpts, print_json};
+use crate::options::SourceOpts;
+use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

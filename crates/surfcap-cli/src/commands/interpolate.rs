@@ -2,13 +2,13 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use serde_json::json;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 
-use super::{SourceOpts, print_json};
+use crate::options::{SourceOpts, open};
+use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -25,39 +25,42 @@ pub struct Args {
     pub steps: usize,
     /// nonlinear (thesis eq. 2.45-2.49) or linear (eq. 2.23).
     #[arg(long, default_value = "nonlinear")]
-    pub method: String,
+    pub method: Method,
     /// Stretch interpolation of the non-linear method: linear (eq. 2.45) or log (eq. 2.46).
     #[arg(long, default_value = "linear")]
-    pub stretch: String,
+    pub stretch: StretchInterpolation,
     /// Output .glb (a sidecar .json is written next to it); .npy, .obj folders via --format.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output format: glb, obj, ply, pc2 or npy.
     #[arg(long, default_value = "glb")]
-    pub format: String,
+    pub format: ExportFormat,
     #[command(flatten)]
     pub source: SourceOpts,
 }
 
-pub fn stretch_of(s: &str) -> anyhow::Result<StretchInterpolation> {
-    match s {
-        "linear" => Ok(StretchInterpolation::Linear),
-        "log" => Ok(StretchInterpolation::Log),
-        _ => anyhow::bail!("--stretch {s:?}: expected linear or log"),
+/// How the poses in between are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    Nonlinear,
+    Linear,
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "nonlinear" => Ok(Method::Nonlinear),
+            "linear" => Ok(Method::Linear),
+            _ => Err(format!("{s:?}: expected nonlinear or linear")),
+        }
     }
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.steps >= 2, "--steps {}: expected at least 2 (both ends are included)", a.steps);
-    let format = ExportFormat::parse(&a.format)
-        .with_context(|| format!("--format {:?}: expected glb, obj, ply, pc2 or npy", a.format))?;
-    let stretch = stretch_of(&a.stretch)?;
-    let nonlinear = match a.method.as_str() {
-        "nonlinear" => true,
-        "linear" => false,
-        m => anyhow::bail!("--method {m:?}: expected nonlinear or linear"),
-    };
-    let s = super::open(ctx, &a.subject, &a.source)?;
+    let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == Method::Nonlinear);
+    let s = open(ctx, &a.subject, &a.source)?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let t0 = std::time::Instant::now();
@@ -89,7 +92,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     } else {
         println!(
             "{} interpolation of global frames {gi} -> {gj} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",
-            a.method,
+            if nonlinear { "nonlinear" } else { "linear" },
             a.steps,
             a.output.display(),
             setup,

@@ -5,15 +5,12 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::{FrameLabel, Sequence};
-use surfcap_motion::blend::{Lambda, Mixing, blend};
-use surfcap_motion::dtw::dtw_window;
+use surfcap_motion::transition_frames::transition_frames;
 
-use super::distance::{CacheOpts, cached_distance_matrix};
-use super::transitions::{TableOpts, cached_table};
-use super::{SourceOpts, print_json};
+use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
+use crate::output::write_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -37,10 +34,11 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let s = super::open(ctx, &a.subject, &a.source)?;
+    let s = open(ctx, &a.subject, &a.source)?;
     let p = a.table.params(s.fps)?;
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
-    let (table, _) = cached_table(ctx, &s, &p, &a.cache)?;
+    let pipe = a.cache.pipeline(ctx, s);
+    let table = pipe.table(&p)?.value;
     let n = table.n;
     let k = i * n + j;
     anyhow::ensure!(
@@ -52,15 +50,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         p.l_min
     );
     let (li, lj) = (table.li[k] as usize, table.lj[k] as usize);
-    let (d, _, _) = cached_distance_matrix(ctx, &s, &DistanceParams::default(), &a.cache)?;
-    let warp = dtw_window(&d.data, n, i, li, j, lj, p.slope).context("the table's warp could not be recovered")?;
-    let src: Vec<&[f32]> = (i..i + li).map(|g| s.frame(g).expect("in range")).collect();
-    let dst: Vec<&[f32]> = (j + 1 - lj..=j).map(|g| s.frame(g).expect("in range")).collect();
-    let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(x, y)| (x - i, y - (j + 1 - lj))).collect();
+    let d = pipe.chain_distances()?.value;
+    let s = pipe.subject();
     let t0 = std::time::Instant::now();
-    let frames = blend(s.topology(), s.up_axis, &src, &dst, &offsets, Lambda::Ramp, Mixing::Nonlinear)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let t = transition_frames(s, &d.values, (i, li), (j, lj), p.slope)
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .context("the table's warp could not be recovered")?;
     let secs = t0.elapsed().as_secs_f64();
+    let (frames, warp) = (t.frames, t.warp);
     let nv = s.topology().n_vertices();
     let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
     let seq = Sequence::new(name, nv, frames.concat())?
@@ -75,9 +72,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "warp": warp.path, "blend_seconds": secs,
     });
     let rp = a.output.with_extension("transition.json");
-    surfcap_mesh::atomic::write_file(&rp, |w| {
-        serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)
-    })?;
+    write_json(&rp, &report)?;
     written.push(rp);
     // The distance matrix around the transition with its DTW warp on it (thesis Fig. 2.10):
     // source frames down, destination frames across, a margin of a few frames around both
@@ -89,7 +84,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         title: format!("pose distances and DTW warp, {} -> {}", a.from, a.to),
         x_label: "destination frame".into(),
         y_label: "source frame".into(),
-        values: (r0..r1).flat_map(|r| (c0..c1).map(move |c| (r, c))).map(|(r, c)| d.data[r * n + c]).collect(),
+        values: (r0..r1).flat_map(|r| (c0..c1).map(move |c| (r, c))).map(|(r, c)| d.values[r * n + c]).collect(),
         rows: r1 - r0,
         cols: c1 - c0,
         origin: (r0, c0),
@@ -97,16 +92,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let stem = a.output.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
     written.extend(surfcap_plot::write_heat_map(&a.output.with_file_name(format!("{stem}-dtw")), &heat)?);
-    if ctx.json {
-        print_json(&json!({ "transition": report, "written": written }));
-    } else {
+    ctx.result(&json!({ "transition": report, "written": written }), || {
         println!(
             "transition {i} -> {j}: source segment {li} frames, destination {lj}, duration {} frames, normalised cost {:.3}; blended in {secs:.2} s",
             warp.len, warp.cost
         );
-        for w in &written {
-            println!("wrote {}", w.display());
-        }
-    }
+    });
+    ctx.wrote(&written);
     Ok(())
 }

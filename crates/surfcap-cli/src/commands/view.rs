@@ -9,7 +9,8 @@ use surfcap_mesh::{FrameLabel, Subject};
 use surfcap_view::server::{ServeOptions, serve};
 use surfcap_view::{Overlay, ViewItem};
 
-use super::SourceOpts;
+use crate::options::{SourceOpts, open};
+use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -33,7 +34,7 @@ fn is_report(p: &Path) -> bool {
 
 /// The path and achieved centres a synthesis report (`x.report.json` next to `x.glb`) holds.
 fn overlay_of(glb: &Path, frames: usize) -> Option<Overlay> {
-    let report = super::synth_walk::report_path(glb);
+    let report = crate::synthesis::report_path(glb);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(report).ok()?).ok()?;
     let points = |x: &serde_json::Value| -> Option<Vec<[f64; 3]>> {
         x.as_array()?.iter().map(|p| Some([p[0].as_f64()?, p[1].as_f64()?, p[2].as_f64()?])).collect()
@@ -70,15 +71,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         anyhow::ensure!(p.exists(), "view {}: no such file or folder", p.display());
         if is_report(p) {
             anyhow::ensure!(report.is_none(), "view {}: only one report folder at a time", p.display());
-            let glbs = super::files_under(p, &["glb"])?;
+            let glbs = crate::files::files_under(p, &["glb"])?;
             anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
             for g in glbs {
-                let s = super::open(ctx, &g, &a.source)?;
+                let s = open(ctx, &g, &a.source)?;
                 items.extend(items_of(&s, &a.sequences, Some(&g)));
             }
             report = Some(p.clone());
         } else {
-            let s = super::open(ctx, p, &a.source)?;
+            let s = open(ctx, p, &a.source)?;
             let glb = p.extension().is_some_and(|x| x == "glb").then_some(p.as_path());
             items.extend(items_of(&s, &a.sequences, glb));
         }
@@ -89,7 +90,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     serve(items, ServeOptions { port: a.port, report }, |addr| {
         let url = format!("http://{addr}/");
         if json {
-            super::print_json(&serde_json::json!({ "url": url, "sequences": n }));
+            print_json(&serde_json::json!({ "url": url, "sequences": n }));
         } else {
             println!("{url}");
             eprintln!("surfcap view: playing {n} sequence(s) at {url} (Ctrl-C to stop)");

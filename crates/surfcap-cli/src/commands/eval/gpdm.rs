@@ -19,7 +19,8 @@ use surfcap_learn::pca::{Pca, PcaMethod};
 use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use super::{SourceOpts, print_json};
+use crate::options::{SourceOpts, open};
+use crate::output::print_json;
 
 #[derive(Debug)]
 pub struct Opts {
@@ -149,7 +150,7 @@ fn plots(
 }
 
 pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyhow::Result<()> {
-    let s = super::open(ctx, path, source)?;
+    let s = open(ctx, path, source)?;
     anyhow::ensure!(o.latent_dim >= 1, "--latent-dim: expected at least 1");
     let (data, stride, kept) = training_data(&s, o)?;
     let refs: Vec<_> = data.iter().map(|(_, y)| y.as_ref()).collect();

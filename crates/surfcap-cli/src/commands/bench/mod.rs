@@ -9,7 +9,10 @@ use serde_json::json;
 use surfcap_mesh::{NoProgress, Sequence, Subject};
 use surfcap_synth::{WormParams, worm_subject};
 
-use super::print_json;
+use crate::options::TableOpts;
+use crate::output::print_json;
+
+mod learn;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -64,7 +67,7 @@ pub enum What {
         #[arg(long, default_value_t = 12)]
         sample: usize,
         #[command(flatten)]
-        table: super::transitions::TableOpts,
+        table: TableOpts,
         /// Frame rate for sources that do not give one.
         #[arg(long)]
         fps: Option<f64>,
@@ -91,7 +94,7 @@ pub enum What {
     /// The learning toolkit's speed targets (thesis chapters 5-6): GP fit and prediction on
     /// 2,000 x 20 points (< 5 s), a GPDM fit on 400 frames x ~3,000 coordinates (< 60 s), 20 HMC
     /// trajectory samples of 100 frames (< 30 s).
-    Learn(super::bench_learn::LearnArgs),
+    Learn(learn::LearnArgs),
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate {
         /// A subject cache or source.
@@ -199,7 +202,7 @@ fn transitions_bench(
     subject: Option<PathBuf>,
     frames: usize,
     sample: usize,
-    table: &super::transitions::TableOpts,
+    table: &TableOpts,
     fps: Option<f64>,
 ) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
@@ -356,7 +359,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             return interpolate_bench(ctx, subject, &from, &to, repeat, fps);
         }
         What::Graph { frames, sequences, alpha, seed } => return graph_bench(ctx, frames, sequences, alpha, seed),
-        What::Learn(l) => return super::bench_learn::run(ctx, &l),
+        What::Learn(l) => return learn::run(ctx, &l),
         What::Synth(b) => {
             return synth_bench(ctx, b);
         }
@@ -442,7 +445,7 @@ fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, se
         sequences >= 1 && frames >= 2 * sequences,
         "--frames {frames} --sequences {sequences}: expected at least two frames per sequence"
     );
-    super::graph::check_alpha(alpha)?;
+    surfcap_pipeline::pipeline::check_alpha(alpha)?;
     let index =
         surfcap_mesh::FrameIndex::new((0..sequences).map(|k| frames / sequences + usize::from(k < frames % sequences)));
     let n = frames;
@@ -530,24 +533,20 @@ fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
     let s = mannequin_subject("bench", &m, &clips, 30.0)?;
     let build_secs = t0.elapsed().as_secs_f64();
     let tmp = tempfile::TempDir::new()?;
-    let cache =
-        super::distance::CacheOpts { cache_dir: Some(cache_dir.unwrap_or_else(|| tmp.path().into())), no_cache: false };
-    let t1 = Instant::now();
-    let params = surfcap_geometry::distance_matrix::DistanceParams::default();
-    let _ = super::distance::cached_distance_matrix(ctx, &s, &params, &cache)?;
-    let dist_secs = t1.elapsed().as_secs_f64();
-    let opts = super::synth_walk::GraphOpts {
-        kind: "essential".into(),
+    let store = surfcap_pipeline::CacheStore::in_folder(cache_dir.unwrap_or_else(|| tmp.path().into()), false);
+    let params = surfcap_pipeline::GraphParams {
+        table: TableOpts::default().params(s.fps)?,
+        kind: surfcap_pipeline::GraphKind::Essential,
         alpha,
-        table: super::transitions::TableOpts { slope: super::transitions::SlopeArg(Some(3)), l_min: None, l_max: None },
-        cache,
-        source: Default::default(),
     };
-    let p = opts.table.params(s.fps)?;
+    let pipe = surfcap_pipeline::Pipeline::new(s, store, Box::new(crate::progress::Bar::new(ctx)));
+    let t1 = Instant::now();
+    let _ = pipe.chain_distances()?;
+    let dist_secs = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let _ = super::transitions::cached_table(ctx, &s, &p, &opts.cache)?;
+    let _ = pipe.table(&params.table)?;
     let table_secs = t2.elapsed().as_secs_f64();
-    let prep = super::synth_walk::prepare_subject(ctx, s, &opts, super::graph::Kind::Essential, None)?;
+    let prep = crate::synthesis::Prepared::new(pipe, params, None)?;
     let graph_secs = prep.seconds;
     let n = prep.graph.n;
     // 15 m S-path.
@@ -558,7 +557,7 @@ fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
         })
         .collect();
     let curve = Curve::new(points, vec![0, 2]).map_err(anyhow::Error::msg)?;
-    let mut search = PathSearch::for_fps(prep.s.fps);
+    let mut search = PathSearch::for_fps(prep.subject().fps);
     search.branching = branching.unwrap_or(search.branching);
     let t3 = Instant::now();
     let path = follow_path(&prep.model, &prep.graph, &curve, &[], None, &search).map_err(anyhow::Error::msg)?;
@@ -599,7 +598,7 @@ fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
         tg.walk_with_distance_and_time(a, b, 10.0, 300, (0.3, 10.0), longest).map_err(anyhow::Error::msg)?;
     let reach_secs = t6.elapsed().as_secs_f64();
     let report = json!({
-        "frames": n, "vertices": prep.s.topology().n_vertices(), "alpha": alpha, "threads": rayon::current_num_threads(),
+        "frames": n, "vertices": prep.subject().topology().n_vertices(), "alpha": alpha, "threads": rayon::current_num_threads(),
         "subject_seconds": build_secs, "distance_seconds": dist_secs, "table_seconds": table_secs,
         "graph_and_walk_model_seconds": graph_secs, "timed_graph_seconds": timed_secs,
         "edges": prep.graph.edges().len(), "transitions": prep.model.n_transitions(),
@@ -612,7 +611,7 @@ fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
     } else {
         println!(
             "{n} frames x {} vertices, {} threads: distances {dist_secs:.1} s, transition table {table_secs:.1} s, essential graph + walk model {graph_secs:.1} s ({} edges)",
-            prep.s.topology().n_vertices(),
+            prep.subject().topology().n_vertices(),
             rayon::current_num_threads(),
             prep.graph.edges().len()
         );

@@ -16,7 +16,7 @@ use surfcap_learn::hybrid_monte_carlo::{HmcOptions, standard_normal};
 use surfcap_learn::kernels::Kernel;
 use surfcap_learn::pca::{Pca, PcaMethod};
 
-use super::print_json;
+use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct LearnArgs {

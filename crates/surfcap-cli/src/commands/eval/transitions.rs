@@ -16,9 +16,8 @@ use surfcap_motion::segment_bounds;
 use surfcap_motion::transition_table::{SegmentRoom, TableParams, fixed_length_dtw, standard_transition};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use super::distance::{CacheOpts, cached_distance_matrix};
-use super::transitions::cached_table;
-use super::{SourceOpts, print_json};
+use crate::options::{CacheOpts, SourceOpts, open};
+use crate::output::print_json;
 
 pub struct Opts {
     pub slopes: Vec<usize>,
@@ -37,23 +36,24 @@ pub fn mean_std(v: &[f64]) -> (f64, f64) {
 
 pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyhow::Result<()> {
     anyhow::ensure!(!o.slopes.is_empty() && o.slopes.iter().all(|&p| p >= 1), "--slopes: expected whole numbers >= 1");
-    let s = super::open(ctx, path, source)?;
+    let s = open(ctx, path, source)?;
+    let pipe = o.cache.pipeline(ctx, s);
+    let s = pipe.subject();
     let (l_min, l_max) = segment_bounds(s.fps);
     let fixed = o.fixed.unwrap_or(s.fps.round() as usize).clamp(l_min, l_max);
-    let (d, _, _) = cached_distance_matrix(ctx, &s, &DistanceParams::default(), &o.cache)?;
+    let d = pipe.distances(&DistanceParams::default())?.value;
+    let d = &d.values;
     let n = s.n_frames();
     let room = SegmentRoom::new(s.frame_index());
     let standard: Vec<Option<f64>> =
-        (0..n * n).into_par_iter().map(|k| standard_transition(&d.data, &room, k / n, k % n, fixed)).collect();
+        (0..n * n).into_par_iter().map(|k| standard_transition(d, &room, k / n, k % n, fixed)).collect();
     let mut rows = Vec::new();
     let mut plot_data = None;
     for &p in &o.slopes {
         let params = TableParams { l_min, l_max, slope: Some(p) };
-        let (table, _) = cached_table(ctx, &s, &params, &o.cache)?;
-        let dtw: Vec<Option<(f64, u32)>> = (0..n * n)
-            .into_par_iter()
-            .map(|k| fixed_length_dtw(&d.data, &room, k / n, k % n, fixed, Some(p)))
-            .collect();
+        let table = pipe.table(&params)?.value;
+        let dtw: Vec<Option<(f64, u32)>> =
+            (0..n * n).into_par_iter().map(|k| fixed_length_dtw(d, &room, k / n, k % n, fixed, Some(p))).collect();
         let pairs: Vec<usize> =
             (0..n * n).filter(|&k| standard[k].is_some() && dtw[k].is_some() && table.cost[k].is_finite()).collect();
         let pick = |f: &dyn Fn(usize) -> f64| pairs.iter().map(|&k| f(k)).collect::<Vec<f64>>();
@@ -117,7 +117,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
     };
     let mut plots = write_line_chart(&o.output.join("costs"), &costs).map_err(|e| anyhow::anyhow!("{e}"))?;
     plots.extend(write_line_chart(&o.output.join("durations"), &durations).map_err(|e| anyhow::anyhow!("{e}"))?);
-    let warp = shown.and_then(|(i, li, j, lj)| Some((i, j, dtw_window(&d.data, n, i, li, j, lj, Some(p_plot))?)));
+    let warp = shown.and_then(|(i, li, j, lj)| Some((i, j, dtw_window(d, n, i, li, j, lj, Some(p_plot))?)));
     let heat = surfcap_plot::HeatMap {
         title: match &warp {
             Some((i, j, _)) => format!("{}: pose distances, DTW warp of transition {i} -> {j} (p = {p_plot})", s.name),
@@ -125,7 +125,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
         },
         x_label: "destination frame".into(),
         y_label: "source frame".into(),
-        values: d.data.clone(),
+        values: d.clone(),
         rows: n,
         cols: n,
         origin: (0, 0),

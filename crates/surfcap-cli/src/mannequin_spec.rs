@@ -1,41 +1,16 @@
-//! `surfcap synth --bvh <files...> | --procedural walk,jog,... -o <subject>`: the built-in
-//! mannequin moved by motion capture or by procedural locomotion, written as a subject cache
-//! with per-sequence tags and ground-truth joints.
+//! The built-in mannequin as the command line describes it (`surfcap synth` and `demo`): BVH
+//! files and/or procedural motions, a body shape, a vertex count; notes on guessed BVH units.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use serde_json::json;
 use surfcap_mesh::Subject;
 use surfcap_synth::bvh::read_bvh;
 use surfcap_synth::locomotion::Gait;
 use surfcap_synth::mannequin::{BodyShape, mannequin};
 use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
-use super::print_json;
-
-/// `surfcap synth`: build a mannequin subject (flat arguments), or one of the subcommands.
-#[derive(clap::Args, Debug)]
-#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
-pub struct Cmd {
-    #[command(subcommand)]
-    pub what: Option<What>,
-    #[command(flatten)]
-    pub build: Args,
-}
-
-#[derive(clap::Subcommand, Debug)]
-pub enum What {
-    /// Follow a 3D or ground-plane curve with the centre of mass (thesis 3.5.1).
-    Path(super::synth_walk::PathArgs),
-    /// Move key poses to new times (thesis 3.5.2, Fig. 3.18).
-    Keyposes(super::synth_walk::KeyposesArgs),
-    /// Go from one frame to another covering a distance in a time (Huang et al. 2009).
-    Reach(super::synth_walk::ReachArgs),
-}
-
 #[derive(clap::Args, Debug, Clone)]
-pub struct Args {
+pub struct MannequinArgs {
     /// BVH files to retarget onto the mannequin (joints matched by CMU names), one sequence each.
     #[arg(long, num_args = 1..)]
     pub bvh: Vec<PathBuf>,
@@ -69,8 +44,8 @@ pub struct Args {
     pub output: Option<PathBuf>,
 }
 
-/// Builds the subject the arguments describe (shared with `surfcap demo`).
-pub fn build(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<Subject> {
+/// Builds the subject the arguments describe.
+pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     if a.bvh.is_empty() && a.procedural.is_empty() {
         anyhow::bail!("nothing to synthesise: give --bvh <files...> and/or --procedural walk,jog,...");
     }
@@ -106,50 +81,4 @@ pub fn build(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<Subject> {
     }
     let default_name = format!("mannequin-{}", a.shape.split(',').next().unwrap_or("custom"));
     Ok(mannequin_subject(a.name.as_deref().unwrap_or(&default_name), &m, &clips, fps)?)
-}
-
-pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
-    match c.what {
-        Some(What::Path(a)) => super::synth_walk::path(ctx, a),
-        Some(What::Keyposes(a)) => super::synth_walk::keyposes(ctx, a),
-        Some(What::Reach(a)) => super::synth_walk::reach(ctx, a),
-        None => build_and_write(ctx, c.build),
-    }
-}
-
-fn build_and_write(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let Some(output) = a.output.clone() else {
-        anyhow::bail!("-o/--output: the subject cache folder to write is required");
-    };
-    let t0 = Instant::now();
-    let s = build(ctx, &a)?;
-    let bar = crate::progress::Bar::new(ctx);
-    surfcap_mesh::cache::write_cache(&output, &s, &bar)?;
-    let secs = t0.elapsed().as_secs_f64();
-    let sequences: Vec<serde_json::Value> =
-        s.sequences().iter().map(|q| json!({ "name": q.name, "frames": q.n_frames(), "tags": q.tags })).collect();
-    if ctx.json {
-        print_json(&json!({
-            "subject": s.name,
-            "output": output,
-            "fps": s.fps,
-            "vertices": s.topology().n_vertices(),
-            "triangles": s.topology().n_triangles(),
-            "sequences": sequences,
-            "seconds": secs,
-        }));
-    } else if !ctx.quiet {
-        println!(
-            "synthesised {:?}: {} vertices, {} triangles, {} fps -> {} ({secs:.2} s)",
-            s.name,
-            s.topology().n_vertices(),
-            s.topology().n_triangles(),
-            s.fps,
-            output.display()
-        );
-        for q in s.sequences() {
-            println!("  {:<12} {:>5} frames  tags {}", q.name, q.n_frames(), q.tags.join(", "));
-        }
-    }
-    Ok(())
 }

@@ -4,10 +4,16 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_geometry::pose_interpolation::NonlinearInterpolator;
+use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_geometry::shape_distortion::{edge_length_distortion, volume_change};
 
-use super::{SourceOpts, print_json};
+use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
+use crate::output::print_json;
+
+mod gpdm;
+mod graphs;
+mod pose_metric;
+mod transitions;
 
 /// Options of `eval pose-metric`.
 pub struct PoseMetricOpts {
@@ -16,7 +22,7 @@ pub struct PoseMetricOpts {
     pub classes: usize,
     pub seed: u64,
     pub output: PathBuf,
-    pub cache: super::distance::CacheOpts,
+    pub cache: CacheOpts,
 }
 
 #[derive(clap::Args, Debug)]
@@ -40,7 +46,7 @@ pub enum What {
         lambda: f64,
         /// Stretch interpolation: linear (eq. 2.45) or log (eq. 2.46).
         #[arg(long, default_value = "linear")]
-        stretch: String,
+        stretch: StretchInterpolation,
         /// Also write interpolation.json and distortion.svg/png (both measures over lambda in
         /// 0, 0.1, ..., 1, linear dashed, non-linear solid) into this folder.
         #[arg(short, long)]
@@ -67,7 +73,7 @@ pub enum What {
         #[arg(short, long, default_value = "transitions-eval")]
         output: PathBuf,
         #[command(flatten)]
-        cache: super::distance::CacheOpts,
+        cache: CacheOpts,
         #[command(flatten)]
         source: SourceOpts,
     },
@@ -86,9 +92,9 @@ pub enum What {
         #[arg(short, long, default_value = "graphs-eval")]
         output: PathBuf,
         #[command(flatten)]
-        table: super::transitions::TableOpts,
+        table: TableOpts,
         #[command(flatten)]
-        cache: super::distance::CacheOpts,
+        cache: CacheOpts,
         #[command(flatten)]
         source: SourceOpts,
     },
@@ -144,7 +150,7 @@ pub enum What {
         #[arg(short, long, default_value = "pose-metric")]
         output: PathBuf,
         #[command(flatten)]
-        cache: super::distance::CacheOpts,
+        cache: CacheOpts,
         #[command(flatten)]
         source: SourceOpts,
     },
@@ -156,12 +162,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             (subject, pairs, lambda, stretch, output, source)
         }
         What::Transitions { subject, slopes, fixed, plot_pairs, output, cache, source } => {
-            let opts = super::eval_transitions::Opts { slopes, fixed, plot_pairs, output, cache };
-            return super::eval_transitions::run(ctx, &subject, &source, &opts);
+            let opts = transitions::Opts { slopes, fixed, plot_pairs, output, cache };
+            return transitions::run(ctx, &subject, &source, &opts);
         }
         What::Graphs { subject, alphas, plot_pairs, output, table, cache, source } => {
-            let opts = super::graph::EvalOpts { alphas, plot_pairs, output, table, cache };
-            return super::graph::eval(ctx, &subject, &source, &opts);
+            let opts = graphs::EvalOpts { alphas, plot_pairs, output, table, cache };
+            return graphs::eval(ctx, &subject, &source, &opts);
         }
         What::Gpdm {
             subject,
@@ -175,25 +181,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             output,
             source,
         } => {
-            let opts = super::eval_gpdm::Opts {
-                sequences,
-                vertices,
-                max_frames,
-                latent_dim,
-                samples,
-                seed,
-                iterations,
-                output,
-            };
-            return super::eval_gpdm::run(ctx, &subject, &source, &opts);
+            let opts = gpdm::Opts { sequences, vertices, max_frames, latent_dim, samples, seed, iterations, output };
+            return gpdm::run(ctx, &subject, &source, &opts);
         }
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
             let opts = PoseMetricOpts { max_frames, permutations, classes, seed, output, cache };
-            return super::eval_pose_metric::run(ctx, &subject, &source, &opts);
+            return pose_metric::run(ctx, &subject, &source, &opts);
         }
     };
-    let stretch = super::interpolate::stretch_of(&stretch)?;
-    let s = super::open(ctx, &subject, &source)?;
+    let s = open(ctx, &subject, &source)?;
     let topo = s.topology();
     let mut rows = Vec::new();
     // Per pair: (lambda, linear edge distortion, non-linear edge distortion, linear volume

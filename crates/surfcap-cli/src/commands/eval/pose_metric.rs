@@ -13,14 +13,15 @@ use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_mesh::Sequence;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use super::eval::PoseMetricOpts;
-use super::{SourceOpts, print_json};
+use super::PoseMetricOpts;
+use crate::options::{SourceOpts, open};
+use crate::output::print_json;
 
 /// Permutations behind each correlogram class's 95% null limits.
 const CLASS_PERMUTATIONS: usize = 999;
 
 pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpts) -> anyhow::Result<()> {
-    let s = super::open(ctx, path, source)?;
+    let s = open(ctx, path, source)?;
     for q in s.sequences() {
         anyhow::ensure!(
             q.joints.is_some(),
@@ -50,10 +51,10 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpt
         pos.extend_from_slice(s.frame(g).expect("in range"));
     }
     let sub = s.derived(format!("{}-eval", s.name), Sequence::new("frames", nv, pos)?)?;
+    let pipe = o.cache.pipeline(ctx, sub);
     let dist = |metric| -> anyhow::Result<Vec<f64>> {
         let params = DistanceParams { metric, ..Default::default() };
-        let (m, _, _) = super::distance::cached_distance_matrix(ctx, &sub, &params, &o.cache)?;
-        Ok(condensed(n, &m.data))
+        Ok(condensed(n, &pipe.distances(&params)?.value.values))
     };
     let ours = dist(PoseMetric::Deformation)?;
     let eucl = dist(PoseMetric::Euclidean)?;

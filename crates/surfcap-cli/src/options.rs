@@ -1,0 +1,187 @@
+//! The options several commands share, in one place: what the sources do not say
+//! ([`SourceOpts`]), where derived products are cached ([`CacheOpts`]), the transition table
+//! ([`TableOpts`]), the graph ([`GraphOpts`]) and where an animation goes ([`OutOpts`]).
+//!
+//! Option values are parsed by `FromStr` (clap calls it): library types implement it
+//! (`UpAxis`, `ExportFormat`, `PoseMetric`, `StretchInterpolation`, `GraphKind`), and the few
+//! values that are only the command line's ([`SlopeArg`], [`Positive`]) are newtypes here.
+
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use surfcap_mesh::export::ExportFormat;
+use surfcap_mesh::import::ImportOptions;
+use surfcap_mesh::{Subject, Units, UpAxis};
+use surfcap_motion::dtw::Slope;
+use surfcap_motion::segment_bounds;
+use surfcap_motion::transition_table::TableParams;
+use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
+
+/// Options that say what the sources do not (shared by every command that opens a subject).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SourceOpts {
+    /// Frame rate, when the sources do not give it (or to override them).
+    #[arg(long)]
+    pub fps: Option<f64>,
+    /// Up axis: +x, +y, +z, -x, -y or -z.
+    #[arg(long)]
+    pub up_axis: Option<UpAxis>,
+    /// Length unit: m, cm, mm, in, or any other word for arbitrary units.
+    #[arg(long)]
+    pub units: Option<String>,
+}
+
+impl SourceOpts {
+    pub fn to_import(&self, name: Option<String>) -> anyhow::Result<ImportOptions> {
+        if let Some(f) = self.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+            anyhow::bail!("--fps {f}: expected a positive number of frames per second");
+        }
+        Ok(ImportOptions { name, fps: self.fps, up_axis: self.up_axis, units: self.units.as_deref().map(Units::parse) })
+    }
+}
+
+/// Where derived matrices are cached.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct CacheOpts {
+    /// Cache folder for derived matrices (default: $XDG_CACHE_HOME/surfcap or ~/.cache/surfcap).
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+    /// Recompute even if a cached result exists.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+impl CacheOpts {
+    /// The cache folder: `--cache-dir`, else `$XDG_CACHE_HOME/surfcap`, else `~/.cache/surfcap`.
+    pub fn dir(&self) -> PathBuf {
+        self.cache_dir.clone().unwrap_or_else(|| {
+            std::env::var_os("XDG_CACHE_HOME")
+                .map(PathBuf::from)
+                .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))
+                .unwrap_or_else(|| PathBuf::from(".cache"))
+                .join("surfcap")
+        })
+    }
+
+    pub fn store(&self) -> CacheStore {
+        CacheStore::in_folder(self.dir(), self.no_cache)
+    }
+
+    /// The derived-product pipeline of `subject`, with progress bars.
+    pub fn pipeline(&self, ctx: &crate::Ctx, subject: Subject) -> Pipeline {
+        Pipeline::new(subject, self.store(), Box::new(crate::progress::Bar::new(ctx)))
+    }
+}
+
+/// A slope constraint p of a warping path (thesis eq. 2.53): a whole number >= 1, or `inf`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SlopeArg(pub Slope);
+
+impl FromStr for SlopeArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "inf" | "infinity" => Ok(SlopeArg(None)),
+            _ => match s.parse::<usize>() {
+                Ok(p) if p >= 1 => Ok(SlopeArg(Some(p))),
+                _ => Err(format!("{s:?}: expected a whole number >= 1 or inf")),
+            },
+        }
+    }
+}
+
+/// A finite number > 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Positive(pub f64);
+
+impl FromStr for Positive {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() && x > 0.0 => Ok(Positive(x)),
+            _ => Err(format!("{s:?}: expected a positive number")),
+        }
+    }
+}
+
+/// Options of a transition table.
+#[derive(clap::Args, Debug, Clone)]
+pub struct TableOpts {
+    /// Slope constraint p of the warping path (thesis eq. 2.53; "inf" for none).
+    #[arg(long, default_value = "3")]
+    pub slope: SlopeArg,
+    /// Shortest segment, frames (default: a third of a second at the subject's fps).
+    #[arg(long)]
+    pub l_min: Option<usize>,
+    /// Longest segment, frames (default: two seconds).
+    #[arg(long)]
+    pub l_max: Option<usize>,
+}
+
+impl Default for TableOpts {
+    fn default() -> Self {
+        TableOpts { slope: SlopeArg(Some(3)), l_min: None, l_max: None }
+    }
+}
+
+impl TableOpts {
+    pub fn params(&self, fps: f64) -> anyhow::Result<TableParams> {
+        let (lo, hi) = segment_bounds(fps);
+        let (l_min, l_max) = (self.l_min.unwrap_or(lo), self.l_max.unwrap_or(hi));
+        anyhow::ensure!(1 <= l_min && l_min <= l_max, "segment lengths {l_min}..{l_max}: expected 1 <= l-min <= l-max");
+        Ok(TableParams { l_min, l_max, slope: self.slope.0 })
+    }
+}
+
+/// Which graph to search, and how it is built.
+#[derive(clap::Args, Debug, Clone)]
+pub struct GraphOpts {
+    /// essential (union of all shortest-path trees) or motion (Kovar's baseline).
+    #[arg(long, default_value = "essential")]
+    pub kind: GraphKind,
+    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
+    #[arg(long, default_value = "0.05")]
+    pub alpha: Positive,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+impl GraphOpts {
+    pub fn params(&self, fps: f64) -> anyhow::Result<GraphParams> {
+        Ok(GraphParams { table: self.table.params(fps)?, kind: self.kind, alpha: self.alpha.0 })
+    }
+}
+
+/// Where an animation goes.
+#[derive(clap::Args, Debug, Clone)]
+pub struct OutOpts {
+    /// Output: a .glb file, or a folder for --format obj, pc2 or npy. The JSON report is written
+    /// beside it as <output>.report.json.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// glb, obj, ply, pc2 or npy (default: from the output's extension, else glb).
+    #[arg(long)]
+    pub format: Option<ExportFormat>,
+}
+
+impl OutOpts {
+    pub fn format(&self) -> ExportFormat {
+        self.format.unwrap_or_else(|| {
+            self.output.extension().and_then(|e| e.to_str()).and_then(ExportFormat::parse).unwrap_or(ExportFormat::Glb)
+        })
+    }
+}
+
+/// Opens a subject (cache or any importable source) with a progress bar and shows the notes.
+pub fn open(ctx: &crate::Ctx, path: &Path, opts: &SourceOpts) -> anyhow::Result<Subject> {
+    let bar = crate::progress::Bar::new(ctx);
+    let imported = surfcap_mesh::import::open_subject(path, &opts.to_import(None)?, &bar)?;
+    for n in &imported.notes {
+        ctx.note(n);
+    }
+    Ok(imported.subject)
+}

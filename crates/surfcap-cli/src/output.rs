@@ -1,0 +1,65 @@
+//! How every command reports: one place decides what `--json` and `--quiet` show.
+//!
+//! - results (a command's summary, the files it wrote): as JSON on stdout with `--json`, else
+//!   as text on stdout, `--quiet` included (`--quiet` hides progress and notes, not results);
+//! - notes (assumptions, hints) and narration (the demo's steps): on stderr and stdout
+//!   respectively, hidden by `--quiet` and `--json`;
+//! - progress bars: `crate::progress::Bar`, hidden by `--quiet` and `--json`.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+/// What every command gets: how to report.
+pub struct Ctx {
+    pub quiet: bool,
+    pub json: bool,
+}
+
+impl Ctx {
+    /// A note for humans (assumptions, hints) on stderr; silent with --quiet or --json.
+    pub fn note(&self, text: &str) {
+        if !self.quiet && !self.json {
+            eprintln!("note: {text}");
+        }
+    }
+
+    /// Narration of a long job's steps; silent with --quiet or --json.
+    pub fn say(&self, text: &str) {
+        if !self.quiet && !self.json {
+            println!("{text}");
+        }
+    }
+
+    /// A command's result: `value` as JSON with --json, else the human text `human` prints.
+    pub fn result<T: Serialize + ?Sized>(&self, value: &T, human: impl FnOnce()) {
+        if self.json {
+            print_json(value);
+        } else {
+            human();
+        }
+    }
+
+    /// `wrote <file>` for each file, unless --json (the JSON result lists them).
+    pub fn wrote<'a>(&self, files: impl IntoIterator<Item = &'a PathBuf>) {
+        if !self.json {
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+        }
+    }
+}
+
+/// Prints a serialisable value as pretty JSON on stdout.
+pub fn print_json<T: Serialize + ?Sized>(v: &T) {
+    println!("{}", serde_json::to_string_pretty(v).expect("results always serialise"));
+}
+
+/// Writes a serialisable value as pretty JSON (a final newline) to `path`, atomically.
+pub fn write_json<T: Serialize + ?Sized>(path: &std::path::Path, v: &T) -> anyhow::Result<()> {
+    surfcap_mesh::atomic::write_file(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, v).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })?;
+    Ok(())
+}
