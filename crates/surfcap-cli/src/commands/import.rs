@@ -6,7 +6,6 @@ use std::time::Instant;
 use serde_json::json;
 
 use crate::options::SourceOpts;
-use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -34,8 +33,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = &imported.subject;
     surfcap_mesh::cache::write_cache(&a.output, s, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
-    if ctx.json {
-        print_json(&json!({
+    ctx.result(&json!({
             "subject": s.name,
             "output": a.output,
             "sequences": s.sequences().len(),
@@ -44,8 +42,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "triangles": s.topology().n_triangles(),
             "notes": imported.notes,
             "seconds": secs,
-        }));
-    } else {
+        }), || {
         println!(
             "imported {:?}: {} sequences, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
             s.name,
@@ -55,6 +52,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             s.topology().n_triangles(),
             a.output.display()
         );
-    }
+    });
     Ok(())
 }

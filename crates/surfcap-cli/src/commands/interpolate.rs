@@ -8,7 +8,6 @@ use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 
 use crate::options::{SourceOpts, open};
-use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -85,11 +84,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let out = s.derived(format!("{}-interpolation", s.name), seq)?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&out, format, &a.output, ExportOptions::default(), &bar)?;
-    if ctx.json {
-        print_json(
-            &json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() }),
-        );
-    } else {
+    ctx.result(&json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() }), || {
         println!(
             "{} interpolation of global frames {gi} -> {gj} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",
             if nonlinear { "nonlinear" } else { "linear" },
@@ -98,6 +93,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             setup,
             t0.elapsed().as_secs_f64()
         );
-    }
+    });
     Ok(())
 }

@@ -16,7 +16,6 @@ use surfcap_learn::hybrid_monte_carlo::{HmcOptions, standard_normal};
 use surfcap_learn::kernels::Kernel;
 use surfcap_learn::pca::{Pca, PcaMethod};
 
-use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct LearnArgs {
@@ -177,9 +176,7 @@ pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
             "divergences": chain.divergences, "gradient_evaluations": chain.gradient_evals,
         },
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         println!(
             "GP regression, {n} x {d}: fit with {} restarts {t_fit:.2} s ({} evaluations, {} on all points) + prediction of 1,000 points {t_pred:.3} s = {gp_secs:.2} s (target 5 s: {}); length scale {:.3}, noise variance {:.4} (true 0.01), test RMSE {rmse:.4}",
             a.gp_restarts,
@@ -209,6 +206,6 @@ pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
             chain.leapfrog_steps,
             chain.divergences
         );
-    }
+    });
     Ok(())
 }

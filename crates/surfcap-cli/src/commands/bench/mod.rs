@@ -180,9 +180,7 @@ fn distance_bench(
         "max_skipped_triangles": d.max_skipped_triangles,
         "peak_rss_bytes": peak_rss(),
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         println!(
             "{n} x {n} deformation distances, {m} triangles: {secs:.2} s, {:.1} M triangle pairs/s on {} threads; \
              ~{:.1} GFLOP/s = {:.1}% of the machine's dense f64 GEMM rate ({:.1} GFLOP/s); peak memory {:.0} MB",
@@ -193,7 +191,7 @@ fn distance_bench(
             peak / 1e9,
             peak_rss().unwrap_or(0) as f64 / 1e6
         );
-    }
+    });
     Ok(())
 }
 
@@ -245,9 +243,7 @@ fn transitions_bench(
         "naive_seconds_estimated": naive_total, "speed_up": naive_total / table_secs,
         "naive_pairs_checked": picks.len(), "naive_mismatches": mismatches, "threads": rayon::current_num_threads(),
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         println!(
             "{n} frames at {} fps, segments {}..{}, slope {}: table {table_secs:.2} s on {} threads (distances {dist_secs:.2} s); \
              naive one-DTW-per-length: {:.3} s per pair on {} sampled pairs (all agree: {}), ~{:.0} s for all {} pairs: speed-up {:.0}x",
@@ -263,7 +259,7 @@ fn transitions_bench(
             candidates.len(),
             naive_total / table_secs
         );
-    }
+    });
     Ok(())
 }
 
@@ -299,9 +295,7 @@ fn interpolate_bench(
         "setup_seconds_median": su, "lambda_seconds_median": so, "total_seconds_median": su + so,
         "runs": repeat.max(1),
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         println!(
             "non-linear interpolation, {} vertices: set-up (alignment, polar factors, 1 symbolic + 2 numeric Cholesky) \
              {:.1} ms, one lambda (2 x Poisson solves) {:.1} ms, total {:.1} ms (medians of {})",
@@ -311,7 +305,7 @@ fn interpolate_bench(
             (su + so) * 1e3,
             repeat.max(1)
         );
-    }
+    });
     Ok(())
 }
 
@@ -418,9 +412,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "peak_rss_bytes": peak,
         "runs": runs.len(),
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         let mb = |b: Option<u64>| b.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1e6));
         println!(
             "loaded {} frames x {} vertices ({} of positions): best {:.3} s, median {:.3} s over {} runs; peak resident memory {}",
@@ -432,7 +424,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             runs.len(),
             mb(peak)
         );
-    }
+    });
     Ok(())
 }
 
@@ -470,9 +462,7 @@ fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, se
         "essential_edges": eg.graph.edges().len(), "essential_density": eg.graph.density(),
         "motion_edges": mg.graph.edges().len(), "motion_density": mg.graph.density(),
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         println!(
             "{n} nodes ({sequences} sequences), {} threads: edge weights {t_weights:.2} s, essential graph {t_essential:.2} s ({} edges, density {:.4}), motion graph {t_motion:.2} s ({} edges)",
             rayon::current_num_threads(),
@@ -480,7 +470,7 @@ fn graph_bench(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, se
             eg.graph.density(),
             mg.graph.edges().len()
         );
-    }
+    });
     Ok(())
 }
 
@@ -606,9 +596,7 @@ fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
         "keyposes": { "seconds": key_secs, "mean_abs_error_frames": key_err as f64 / 9.0 },
         "reach": { "seconds": reach_secs, "distance": reach.distance, "frames": reach.frames, "target_distance": 10.0, "target_frames": 300 },
     });
-    if ctx.json {
-        print_json(&report);
-    } else {
+    ctx.result(&report, || {
         println!(
             "{n} frames x {} vertices, {} threads: distances {dist_secs:.1} s, transition table {table_secs:.1} s, essential graph + walk model {graph_secs:.1} s ({} edges)",
             prep.subject().topology().n_vertices(),
@@ -621,6 +609,6 @@ fn synth_bench(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
             reach.distance,
             reach.frames
         );
-    }
+    });
     Ok(())
 }
