@@ -33,7 +33,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = &imported.subject;
     surfcap_mesh::cache::write_cache(&a.output, s, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
-    ctx.result(&json!({
+    ctx.result(
+        &json!({
             "subject": s.name,
             "output": a.output,
             "sequences": s.sequences().len(),
@@ -42,16 +43,18 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "triangles": s.topology().n_triangles(),
             "notes": imported.notes,
             "seconds": secs,
-        }), || {
-        println!(
-            "imported {:?}: {} sequences, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
-            s.name,
-            s.sequences().len(),
-            s.n_frames(),
-            s.topology().n_vertices(),
-            s.topology().n_triangles(),
-            a.output.display()
-        );
-    });
+        }),
+        || {
+            println!(
+                "imported {:?}: {} sequences, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
+                s.name,
+                s.sequences().len(),
+                s.n_frames(),
+                s.topology().n_vertices(),
+                s.topology().n_triangles(),
+                a.output.display()
+            );
+        },
+    );
     Ok(())
 }

@@ -16,7 +16,6 @@ use surfcap_learn::hybrid_monte_carlo::{HmcOptions, standard_normal};
 use surfcap_learn::kernels::Kernel;
 use surfcap_learn::pca::{Pca, PcaMethod};
 
-
 #[derive(clap::Args, Debug)]
 pub struct LearnArgs {
     /// GP training points.

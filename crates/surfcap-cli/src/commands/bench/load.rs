@@ -1,0 +1,113 @@
+//! `surfcap bench load`: time and peak resident memory of loading a subject. The load runs in a
+//! child process so that its peak memory is its own (not that of generating the test data).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use serde_json::json;
+use surfcap_mesh::{NoProgress, Sequence, Subject};
+use surfcap_synth::{WormParams, worm_subject};
+
+use super::peak_rss;
+use crate::output::print_json;
+
+pub(super) fn run(
+    ctx: &crate::Ctx,
+    subject: Option<PathBuf>,
+    frames: usize,
+    vertices: usize,
+    repeat: usize,
+    in_process: bool,
+    fps: Option<f64>,
+) -> anyhow::Result<()> {
+    if in_process {
+        let path = subject.context("--in-process needs --subject")?;
+        let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+        let t0 = Instant::now();
+        let s = surfcap_mesh::import::open_subject(&path, &opts, &NoProgress)?.subject;
+        let secs = t0.elapsed().as_secs_f64();
+        let bytes = s.sequences().iter().map(|q| std::mem::size_of_val(q.positions())).sum::<usize>();
+        print_json(&json!({
+            "seconds": secs,
+            "peak_rss_bytes": peak_rss(),
+            "position_bytes": bytes,
+            "frames": s.n_frames(),
+            "vertices": s.topology().n_vertices(),
+        }));
+        return Ok(());
+    }
+    let tmp;
+    let path = match subject {
+        Some(p) => p,
+        None => {
+            tmp = tempfile::tempdir().context("creating a temporary folder")?;
+            let p = tmp.path().join("bench.subject");
+            let s = generated(frames, vertices)?;
+            surfcap_mesh::cache::write_cache(&p, &s, &NoProgress)?;
+            p
+        }
+    };
+    let exe = std::env::current_exe().context("finding the surfcap executable")?;
+    let mut runs = Vec::new();
+    for _ in 0..repeat.max(1) {
+        let mut cmd = std::process::Command::new(&exe);
+        cmd.args(["bench", "load", "--in-process", "--subject"]).arg(&path);
+        if let Some(f) = fps {
+            cmd.arg("--fps").arg(f.to_string());
+        }
+        let out = cmd.output().context("running the measuring child process")?;
+        anyhow::ensure!(out.status.success(), "loading failed: {}", String::from_utf8_lossy(&out.stderr).trim());
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).context("reading the child's report")?;
+        runs.push(v);
+    }
+    let mut secs: Vec<f64> = runs.iter().map(|r| r["seconds"].as_f64().unwrap_or(f64::NAN)).collect();
+    secs.sort_by(f64::total_cmp);
+    let peak = runs.iter().filter_map(|r| r["peak_rss_bytes"].as_u64()).max();
+    let r0 = &runs[0];
+    let report = json!({
+        "subject": path,
+        "frames": r0["frames"],
+        "vertices": r0["vertices"],
+        "position_bytes": r0["position_bytes"],
+        "load_seconds_best": secs[0],
+        "load_seconds_median": secs[secs.len() / 2],
+        "peak_rss_bytes": peak,
+        "runs": runs.len(),
+    });
+    ctx.result(&report, || {
+        let mb = |b: Option<u64>| b.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1e6));
+        println!(
+            "loaded {} frames x {} vertices ({} of positions): best {:.3} s, median {:.3} s over {} runs; peak resident memory {}",
+            r0["frames"],
+            r0["vertices"],
+            mb(r0["position_bytes"].as_u64()),
+            secs[0],
+            secs[secs.len() / 2],
+            runs.len(),
+            mb(peak)
+        );
+    });
+    Ok(())
+}
+
+/// A subject of `frames` frames (split in sequences of 500) with about `vertices` vertices.
+pub(super) fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
+    let segments = 25usize;
+    let rings = vertices.saturating_sub(2).div_ceil(segments).max(2);
+    let per_seq = 500usize.min(frames.max(1));
+    let base = worm_subject(&WormParams { rings, segments, frames: per_seq, ..Default::default() })?;
+    let nv = base.topology().n_vertices();
+    let mut seqs = Vec::new();
+    let mut left = frames;
+    let mut k = 0;
+    while left > 0 {
+        let n = left.min(per_seq);
+        let src = &base.sequences()[k % 2];
+        let p = src.positions()[..n * 3 * nv].to_vec();
+        seqs.push(Sequence::new(format!("{}_{k}", src.name), nv, p)?);
+        left -= n;
+        k += 1;
+    }
+    Ok(Subject::new("bench", base.topology().clone(), seqs, 30.0, base.up_axis, base.units.clone())?)
+}
