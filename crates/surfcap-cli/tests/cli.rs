@@ -2,25 +2,15 @@
 //! checked by the Khronos glTF validator.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn surfcap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surfcap")).args(args).output().expect("surfcap runs")
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use surfcap_testkit::{p, stderr, surfcap};
 
 #[test]
 fn demo_runs_and_its_glb_is_valid() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("demo");
-    let o = surfcap(&["demo", "-o", p(&out), "--quiet"]);
+    let o = surfcap!(&["demo", "-o", p(&out), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     for f in [
         "mannequin.subject/subject.json",
@@ -72,7 +62,7 @@ fn import_info_export_on_real_data_with_valid_glb() {
     let tmp = tempfile::tempdir().unwrap();
     let subject = tmp.path().join("knight.subject");
     let k = data.join("kaykit_adventurers");
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "import",
         p(&k.join("knight_Idle")),
         p(&k.join("knight_Running_A")),
@@ -86,7 +76,7 @@ fn import_info_export_on_real_data_with_valid_glb() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["sequences"], 2);
 
-    let o = surfcap(&["info", p(&subject), "--json"]);
+    let o = surfcap!(&["info", p(&subject), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(info["vertices"], 2145);
@@ -95,19 +85,19 @@ fn import_info_export_on_real_data_with_valid_glb() {
     assert_eq!(info["sequences"][1]["name"], "knight_Running_A");
     assert_eq!(info["sequences"][0]["joints"], 41);
 
-    let o = surfcap(&["info", p(&subject)]);
+    let o = surfcap!(&["info", p(&subject)]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("components") && text.contains("knight_Running_A"), "{text}");
 
     let glb = tmp.path().join("knight.glb");
-    let o = surfcap(&["export", p(&subject), "--format", "glb", "-o", p(&glb), "--quiet"]);
+    let o = surfcap!(&["export", p(&subject), "--format", "glb", "-o", p(&glb), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let crane = tmp.path().join("crane.glb");
-    let o = surfcap(&["export", p(&data.join("vlasic2008/crane")), "--format", "glb", "-o", p(&crane), "--quiet"]);
+    let o = surfcap!(&["export", p(&data.join("vlasic2008/crane")), "--format", "glb", "-o", p(&crane), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     // A z-up subject is stored as is and turned upright by the node's rotation.
     let zup = tmp.path().join("cat_zup.glb");
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "export",
         p(&data.join("walking_cat_depraz/walk")),
         "--format",
@@ -125,7 +115,7 @@ fn import_info_export_on_real_data_with_valid_glb() {
 
     for format in ["obj", "ply", "pc2", "npy"] {
         let out = tmp.path().join(format);
-        let o = surfcap(&[
+        let o = surfcap!(&[
             "export",
             p(&subject),
             "--format",
@@ -150,7 +140,7 @@ fn user_errors_exit_1_and_name_the_file_and_line() {
     std::fs::write(dir.join("f_1.obj"), tri).unwrap();
     std::fs::write(dir.join("f_2.obj"), tri).unwrap();
     std::fs::write(dir.join("f_10.obj"), tri.replace("f 1 3 4", "f 1 3 9")).unwrap();
-    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30"]);
+    let o = surfcap!(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30"]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
     assert!(e.contains("f_10.obj") && e.contains("line 6") && e.contains("frame 2"), "{e}");
@@ -158,26 +148,26 @@ fn user_errors_exit_1_and_name_the_file_and_line() {
 
     // Natural order: f_10 is the last frame, so a vertex-count mismatch there names frame 2.
     std::fs::write(dir.join("f_10.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
-    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30"]);
+    let o = surfcap!(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30"]);
     let e = stderr(&o);
     assert!(e.contains("f_10.obj") && e.contains("3 vertices, expected 4") && e.contains("frame 2"), "{e}");
 
     // No frame rate: a clear request for one.
     std::fs::write(dir.join("f_10.obj"), tri).unwrap();
-    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s"))]);
+    let o = surfcap!(&["import", p(&dir), "-o", p(&tmp.path().join("s"))]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--fps"), "{}", stderr(&o));
-    let o = surfcap(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30", "--quiet"]);
+    let o = surfcap!(&["import", p(&dir), "-o", p(&tmp.path().join("s")), "--fps", "30", "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
 
-    let o = surfcap(&["info", p(&tmp.path().join("missing"))]);
+    let o = surfcap!(&["info", p(&tmp.path().join("missing"))]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("missing"), "{}", stderr(&o));
 
-    let o = surfcap(&["export", p(&tmp.path().join("s")), "--format", "fbx", "-o", "x"]);
+    let o = surfcap!(&["export", p(&tmp.path().join("s")), "--format", "fbx", "-o", "x"]);
     assert_eq!(o.status.code(), Some(1), "bad arguments are user errors");
 
-    let o = surfcap(&["info", p(&tmp.path().join("missing")), "--json"]);
+    let o = surfcap!(&["info", p(&tmp.path().join("missing")), "--json"]);
     let v: serde_json::Value = serde_json::from_str(stderr(&o).trim()).expect("--json errors are JSON");
     assert!(v["error"].as_str().unwrap().contains("missing"));
 }
@@ -196,7 +186,7 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
         b.extend_from_slice(h.as_bytes());
         b.extend_from_slice(&vec![0u8; data]);
         std::fs::write(seq.join("positions.npy"), b).unwrap();
-        let o = surfcap(&["info", p(&seq), "--fps", "30"]);
+        let o = surfcap!(&["info", p(&seq), "--fps", "30"]);
         assert_eq!(o.status.code(), Some(1));
         assert!(stderr(&o).contains("positions.npy"), "{}", stderr(&o));
         stderr(&o)
@@ -206,7 +196,7 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
     assert!(npy("<f4", "(2, 3, 3)", 40).contains("file holds only 40"));
     let ply = tmp.path().join("x.ply");
     std::fs::write(&ply, "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0").unwrap();
-    let o = surfcap(&["info", p(&ply), "--fps", "30"]);
+    let o = surfcap!(&["info", p(&ply), "--fps", "30"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("x.ply") && stderr(&o).contains("file ends"), "{}", stderr(&o));
 }
@@ -215,7 +205,7 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
 fn manifest_with_tags_and_a_point_cache() {
     let tmp = tempfile::tempdir().unwrap();
     let demo = tmp.path().join("demo");
-    assert!(surfcap(&["demo", "-o", p(&demo), "--quiet"]).status.success());
+    assert!(surfcap!(&["demo", "-o", p(&demo), "--quiet"]).status.success());
     let manifest = tmp.path().join("surfcap.toml");
     std::fs::write(
         &manifest,
@@ -228,7 +218,7 @@ fn manifest_with_tags_and_a_point_cache() {
         ),
     )
     .unwrap();
-    let o = surfcap(&["info", p(&manifest), "--json"]);
+    let o = surfcap!(&["info", p(&manifest), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["subject"], "tube");
@@ -237,11 +227,11 @@ fn manifest_with_tags_and_a_point_cache() {
     assert_eq!(v["frames"], 182);
 
     std::fs::write(&manifest, "name = \"tube\"\nfps = -3\n\n[[sequence]]\nsource = \"nowhere\"\n").unwrap();
-    let o = surfcap(&["info", p(&manifest)]);
+    let o = surfcap!(&["info", p(&manifest)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("surfcap.toml") && stderr(&o).contains("line 2"), "{}", stderr(&o));
     std::fs::write(&manifest, "name = \"tube\"\nfrobnicate = 1\n").unwrap();
-    let o = surfcap(&["info", p(&manifest)]);
+    let o = surfcap!(&["info", p(&manifest)]);
     assert!(stderr(&o).contains("line 2") && stderr(&o).contains("frobnicate"), "{}", stderr(&o));
 }
 
@@ -255,13 +245,13 @@ fn pose_metric_evaluation_on_kaykit_prefers_our_distance() {
     let mut args: Vec<String> = vec!["import".into()];
     args.extend(clips.iter().map(|c| p(&k.join(c)).to_string()));
     args.extend(["-o".into(), p(&subject).into(), "--quiet".into()]);
-    let o = surfcap(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = surfcap!(&args.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(o.status.success(), "{}", stderr(&o));
     let out = tmp.path().join("pm");
     let cache = tmp.path().join("cache");
     let evaluate = |cache: &Path| {
         let args = ["--max-frames", "60", "--permutations", "500", "--classes", "5", "--json"];
-        surfcap(
+        surfcap!(
             &[&["eval", "pose-metric", p(&subject), "-o", p(&out), "--cache-dir", p(cache)][..], &args[..]].concat(),
         )
     };
@@ -298,7 +288,7 @@ fn transitions_table_and_evaluation_on_the_horse() {
     let horse = data.join("sumner2004-horse/gallop");
     let cache = tmp.path().join("cache");
     let out = tmp.path().join("tr");
-    let o = surfcap(&["transitions", p(&horse), "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
+    let o = surfcap!(&["transitions", p(&horse), "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!((v["l_min"].as_u64(), v["l_max"].as_u64()), (Some(8), Some(48)), "24 fps bounds");
@@ -306,7 +296,7 @@ fn transitions_table_and_evaluation_on_the_horse() {
         assert!(out.join(f).is_file(), "{f}");
     }
     let ev = tmp.path().join("ev");
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "eval",
         "transitions",
         p(&horse),
@@ -344,7 +334,7 @@ fn one_transition_is_blended_and_valid() {
     let tmp = tempfile::tempdir().unwrap();
     let horse = data.join("sumner2004-horse/gallop");
     let out = tmp.path().join("t.glb");
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "transition",
         p(&horse),
         "--from",
@@ -376,7 +366,7 @@ fn one_transition_is_blended_and_valid() {
     assert!(svg.contains("DTW warp") && svg.contains("<polyline"), "heat map with the warp");
     assert!(tmp.path().join("t-dtw.png").is_file());
     // A destination too close to its sequence start has no room for a segment.
-    let o = surfcap(&["transition", p(&horse), "--from", "gallop:2", "--to", "gallop:3", "-o", p(&out)]);
+    let o = surfcap!(&["transition", p(&horse), "--from", "gallop:2", "--to", "gallop:3", "-o", p(&out)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("no transition"), "{}", stderr(&o));
 }
@@ -387,7 +377,7 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
     let tmp = tempfile::tempdir().unwrap();
     let bvh = data.join("cmu_bvh");
     let heavy = tmp.path().join("heavy.subject");
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "synth",
         "--bvh",
         p(&bvh.join("16_15.bvh")),
@@ -408,23 +398,24 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
     assert_eq!(v["sequences"][1]["tags"], serde_json::json!(["walk", "turn_left"]));
     let slim = tmp.path().join("slim.subject");
     let args = ["synth", "--procedural", "walk,jump", "--shape", "slim", "--seed", "3", "--vertices", "1500", "-o"];
-    let o = surfcap(&[&args[..], &[p(&slim), "--quiet"]].concat());
+    let o = surfcap!(&[&args[..], &[p(&slim), "--quiet"]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     // Same seed, same subject.
     let again = tmp.path().join("again.subject");
-    assert!(surfcap(&[&args[..], &[p(&again), "--quiet"]].concat()).status.success());
+    assert!(surfcap!(&[&args[..], &[p(&again), "--quiet"]].concat()).status.success());
     let positions = |s: &Path| std::fs::read(s.join("positions_0.npy")).unwrap();
     assert_eq!(positions(&slim), positions(&again));
     let mut glbs = Vec::new();
     for s in [&heavy, &slim] {
         let glb = s.with_extension("glb");
-        let o = surfcap(&["export", p(s), "--format", "glb", "-o", p(&glb), "--quiet"]);
+        let o = surfcap!(&["export", p(s), "--format", "glb", "-o", p(&glb), "--quiet"]);
         assert!(o.status.success(), "{}", stderr(&o));
         glbs.push(glb);
     }
     // Two shapes, two topologies.
-    let info =
-        |s: &Path| -> serde_json::Value { serde_json::from_slice(&surfcap(&["info", p(s), "--json"]).stdout).unwrap() };
+    let info = |s: &Path| -> serde_json::Value {
+        serde_json::from_slice(&surfcap!(&["info", p(s), "--json"]).stdout).unwrap()
+    };
     assert_ne!(info(&heavy)["vertices"], info(&slim)["vertices"]);
     surfcap_testkit::validate_glb(&glbs);
 
@@ -437,7 +428,7 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
         (vec!["synth", "--bvh", "missing.bvh", "-o", p(&bad)], "missing.bvh"),
         (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "1,000 to 20,000"),
     ] {
-        let o = surfcap(&args);
+        let o = surfcap!(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
         assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
     }
@@ -454,7 +445,7 @@ fn essential_graph_beats_the_motion_graph_on_real_captures() {
     let cache = tmp.path().join("cache");
     let crane = data.join("vlasic2008/crane");
     for subject in [data.join("vlasic2008/samba"), data.join("briceno2003/dance"), crane.clone()] {
-        let o = surfcap(&[
+        let o = surfcap!(&[
             "eval",
             "graphs",
             p(&subject),
@@ -479,7 +470,7 @@ fn essential_graph_beats_the_motion_graph_on_real_captures() {
     assert!(tmp.path().join("ge/density.svg").is_file() && tmp.path().join("ge/paths_alpha_0_2.png").is_file());
     let out = tmp.path().join("g");
     let o =
-        surfcap(&["graph", "build", p(&crane), "--alpha", "0.05", "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
+        surfcap!(&["graph", "build", p(&crane), "--alpha", "0.05", "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let g: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(g["cached"], true, "built by the evaluation above");
@@ -488,7 +479,7 @@ fn essential_graph_beats_the_motion_graph_on_real_captures() {
         assert!(out.join(f).is_file());
     }
     for (args, want) in [(vec!["--alpha", "0"], "--alpha"), (vec!["--kind", "kovar"], "essential or motion")] {
-        let o = surfcap(&[&["graph", "build", p(&crane), "-o", p(&out)][..], &args[..]].concat());
+        let o = surfcap!(&[&["graph", "build", p(&crane), "-o", p(&out)][..], &args[..]].concat());
         assert_eq!(o.status.code(), Some(1));
         assert!(stderr(&o).contains(want), "{}", stderr(&o));
     }
@@ -502,7 +493,7 @@ fn interpolation_evaluation_writes_its_curves() {
     let tmp = tempfile::tempdir().unwrap();
     let crane = data.join("vlasic2008/crane");
     let out = tmp.path().join("ei");
-    let o = surfcap(&["eval", "interpolation", p(&crane), "--pair", "crane:0,crane:90", "-o", p(&out), "--json"]);
+    let o = surfcap!(&["eval", "interpolation", p(&crane), "--pair", "crane:0,crane:90", "-o", p(&out), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let r = &v["rows"][0];
@@ -533,7 +524,7 @@ fn gpdm_evaluation_on_a_real_capture() {
     let crane = data.join("vlasic2008/crane");
     let out = tmp.path().join("gpdm");
     let args = ["--vertices", "200", "--max-frames", "100", "--samples", "2", "-o", p(&out), "--json"];
-    let o = surfcap(&[&["eval", "gpdm", p(&crane)][..], &args[..]].concat());
+    let o = surfcap!(&[&["eval", "gpdm", p(&crane)][..], &args[..]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let e = &v["training_mean_vertex_error"];
@@ -553,7 +544,7 @@ fn gpdm_evaluation_on_a_real_capture() {
     ] {
         assert!(out.join(f).is_file(), "{f}");
     }
-    let o = surfcap(&["eval", "gpdm", p(&crane), "--sequences", "nope", "-o", p(&out)]);
+    let o = surfcap!(&["eval", "gpdm", p(&crane), "--sequences", "nope", "-o", p(&out)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("nope") && stderr(&o).contains("crane"), "{}", stderr(&o));
 }
@@ -568,7 +559,7 @@ fn report_replaces_its_own_folder_only() {
     let cache = tmp.path().join("cache");
     let out = tmp.path().join("rep");
     for _ in 0..2 {
-        let o = surfcap(&["report", p(&crane), "-o", p(&out), "--cache-dir", p(&cache)]);
+        let o = surfcap!(&["report", p(&crane), "-o", p(&out), "--cache-dir", p(&cache)]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
@@ -576,12 +567,12 @@ fn report_replaces_its_own_folder_only() {
     let other = tmp.path().join("site");
     std::fs::create_dir(&other).unwrap();
     std::fs::write(other.join("index.html"), "<html>mine</html>").unwrap();
-    let o = surfcap(&["report", p(&crane), "-o", p(&other)]);
+    let o = surfcap!(&["report", p(&crane), "-o", p(&other)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("not empty"), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(other.join("index.html")).unwrap(), "<html>mine</html>");
     let missing = tmp.path().join("nope");
-    let o = surfcap(&["report", p(&crane), "-o", p(&out), "--include", p(&missing)]);
+    let o = surfcap!(&["report", p(&crane), "-o", p(&out), "--include", p(&missing)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("nope"), "{}", stderr(&o));
 }

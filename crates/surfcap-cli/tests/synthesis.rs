@@ -2,19 +2,9 @@
 //! `surfcap synth path | keyposes | reach`, their reports and their files.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn surfcap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surfcap")).args(args).output().expect("surfcap runs")
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use surfcap_testkit::{p, stderr, surfcap};
 
 fn example(name: &str) -> PathBuf {
     surfcap_testkit::workspace_root().join("examples").join(name)
@@ -52,12 +42,12 @@ fn path_and_reach_on_cmu_locomotion() {
     let mut args = vec!["synth", "--bvh"];
     args.extend(bvh.iter().map(|b| p(b)));
     args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
-    let o = surfcap(&args);
+    let o = surfcap!(&args);
     assert!(o.status.success(), "{}", stderr(&o));
 
     let glb = tmp.path().join("path.glb");
     let curve = example("s_path_15m.csv");
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "synth",
         "path",
         p(&subject),
@@ -84,7 +74,7 @@ fn path_and_reach_on_cmu_locomotion() {
     surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
 
     // Only running between 4 and 8 m: every original frame shown there is from the run clip.
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "synth",
         "path",
         p(&subject),
@@ -128,7 +118,7 @@ fn path_and_reach_on_cmu_locomotion() {
     }
     assert!(checked > 10, "{checked} frames checked in the run section");
 
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "synth",
         "reach",
         p(&subject),
@@ -164,7 +154,7 @@ fn path_and_reach_on_cmu_locomotion() {
         (vec!["--curve", p(&curve), "--tags", "run:9-5"], "FROM < TO"),
         (vec!["--curve", p(&curve), "--start", "16_15:500"], "16_15"),
     ] {
-        let o = surfcap(
+        let o = surfcap!(
             &[&["synth", "path", p(&subject), "-o", p(&out), "--cache-dir", p(&cache)][..], &extra[..]].concat(),
         );
         assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
@@ -184,7 +174,7 @@ fn key_pose_timing_on_samba_and_dance() {
         [(data.join("vlasic2008/samba"), "samba_keys.csv"), (data.join("briceno2003/dance"), "dance_keys.csv")]
     {
         let glb = tmp.path().join(keys.replace(".csv", ".glb"));
-        let o = surfcap(&[
+        let o = surfcap!(&[
             "synth",
             "keyposes",
             p(&subject),
@@ -212,7 +202,7 @@ fn key_pose_timing_on_samba_and_dance() {
     }
     let bad = tmp.path().join("bad_keys.csv");
     std::fs::write(&bad, "frame,time\nsamba:10,0\nsamba:20,40\nsamba:30,20\n").unwrap();
-    let o = surfcap(&[
+    let o = surfcap!(&[
         "synth",
         "keyposes",
         p(&data.join("vlasic2008/samba")),

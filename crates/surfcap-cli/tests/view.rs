@@ -2,10 +2,9 @@
 //! page driven by headless Chromium (tools/browser-test.mjs: loads with no console error, the
 //! frame counter advances, the scrubber jumps, the canvas is not blank).
 
-use std::path::Path;
 use std::process::Command;
 
-use surfcap_testkit::{ViewServer, http_request as request};
+use surfcap_testkit::{ViewServer, http_request as request, p, surfcap};
 
 #[test]
 fn the_viewer_plays_a_real_capture_in_chromium() {
@@ -66,13 +65,9 @@ fn bad_paths_get_a_clear_error() {
     std::fs::write(empty_report.join("index.html"), "<html></html>").unwrap();
     let missing = tmp.path().join("missing.glb");
     for (path, want) in [(&missing, "no such file or folder"), (&text, "notes.txt"), (&empty_report, "no .glb")] {
-        let o = Command::new(env!("CARGO_BIN_EXE_surfcap")).args(["view", p(path)]).output().unwrap();
+        let o = surfcap!(&["view", p(path)]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{}: {err}", path.display());
         assert!(err.contains(want), "{}: {err}", path.display());
     }
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
 }

@@ -1,31 +1,123 @@
 //! Test support shared by the surfcap crates' tests (a dev-dependency only).
 //!
+//! # Real data
+//!
 //! Real data lives in `../shared/data` next to the project (or where `SURFCAP_DATA` points).
-//! A test that needs it fails when `CI=true` and it is missing, and otherwise skips with a
-//! message, so a newcomer without the data can still run the unit tests.
+//! A test that needs it calls [`shared_data`], which makes it tell the truth:
+//!
+//! - data present: the test runs;
+//! - data missing: the test **fails**, naming the folder it looked in, and saying that
+//!   `SURFCAP_DATA` points elsewhere and that `SURFCAP_SKIP_REAL_DATA=1` skips real-data tests;
+//! - data missing and `SURFCAP_SKIP_REAL_DATA=1`: the test is skipped deliberately. It still
+//!   shows as passed (libtest has no "skipped" at run time), so it prints
+//!   `SKIPPED <test name>: real data missing at <dir>` to stderr; the test harness captures a
+//!   passing test's output, so run `cargo test -- --nocapture` to see those lines;
+//! - `CI=true`: never skipped; a missing folder fails even with `SURFCAP_SKIP_REAL_DATA=1`.
+//!
+//! # The `surfcap` program
+//!
+//! [`surfcap!`] runs the program under test (in surfcap-cli's integration tests), [`p`] and
+//! [`stderr`] shorten what those tests write around it.
 
 use std::path::{Path, PathBuf};
+use std::process::Output;
 
 /// The workspace root (two levels above a crate's manifest).
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("workspace root exists")
 }
 
-/// The shared real-data folder, or `None` (after printing why) when it is missing outside CI.
+/// The shared real-data folder: `SURFCAP_DATA`, or `../shared/data` next to the workspace.
+///
+/// Returns `None` only when the folder is missing and `SURFCAP_SKIP_REAL_DATA=1` (and `CI` is
+/// not `true`), after printing `SKIPPED <test name>: real data missing at <dir>` to stderr;
+/// the caller then returns from the test. The test name is the current thread's, which the
+/// test harness names after the test.
 ///
 /// # Panics
-/// When `CI=true` and the folder is missing: CI must not silently skip real-data tests.
+/// When the folder (its `README.md`) is missing and the skip was not asked for, or `CI=true`:
+/// a real-data test that did not run must not show as passed. The panic names the caller.
+#[track_caller]
 pub fn shared_data() -> Option<PathBuf> {
-    let dir =
-        std::env::var_os("SURFCAP_DATA").map(PathBuf::from).unwrap_or_else(|| workspace_root().join("../shared/data"));
-    if dir.join("README.md").is_file() {
-        return Some(dir);
+    let from_env = std::env::var_os("SURFCAP_DATA").map(PathBuf::from);
+    let dir = from_env.clone().unwrap_or_else(|| workspace_root().join("../shared/data"));
+    let found = dir.join("README.md").is_file();
+    let skip = std::env::var_os("SURFCAP_SKIP_REAL_DATA").is_some_and(|v| v == "1");
+    let ci = std::env::var_os("CI").is_some_and(|v| v == "true");
+    match real_data(&dir, from_env.is_some(), found, skip, ci) {
+        RealData::Found => Some(dir),
+        RealData::Skip(line) => {
+            let thread = std::thread::current();
+            eprintln!("SKIPPED {}: {line}", thread.name().unwrap_or("<unnamed test>"));
+            None
+        }
+        RealData::Fail(message) => panic!("{message}"),
     }
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("real data missing at {} (CI=true: real-data tests must not be skipped)", dir.display());
+}
+
+/// What [`shared_data`] does, decided from what it read.
+#[derive(Debug, PartialEq)]
+enum RealData {
+    Found,
+    /// Skip the test; the text after `SKIPPED <test name>: `.
+    Skip(String),
+    /// Fail the test with this message.
+    Fail(String),
+}
+
+fn real_data(dir: &Path, from_env: bool, found: bool, skip: bool, ci: bool) -> RealData {
+    if found {
+        return RealData::Found;
     }
-    eprintln!("skipping: real data missing at {} (set SURFCAP_DATA)", dir.display());
-    None
+    let missing = format!("real data missing at {}", dir.display());
+    if skip && !ci {
+        return RealData::Skip(missing);
+    }
+    let looked = if from_env {
+        "the folder SURFCAP_DATA names".to_string()
+    } else {
+        format!("../shared/data next to the workspace {}; SURFCAP_DATA is not set", workspace_root().display())
+    };
+    let what_now = if ci {
+        "CI=true: real-data tests never skip, SURFCAP_SKIP_REAL_DATA=1 is ignored".to_string()
+    } else {
+        "Set SURFCAP_DATA=<folder> to read the data from elsewhere, or SURFCAP_SKIP_REAL_DATA=1 to \
+         skip real-data tests deliberately (each then prints SKIPPED; see it with --nocapture)"
+            .to_string()
+    };
+    RealData::Fail(format!("{missing}: no README.md there (it is {looked}). {what_now}"))
+}
+
+/// Runs the `surfcap` program with the given arguments (`&[&str]`) and waits for its
+/// [`Output`] (exit status, stdout, stderr).
+///
+/// Usable only in surfcap-cli's integration tests: a macro, so that
+/// `env!("CARGO_BIN_EXE_surfcap")` is expanded in the test being compiled, where cargo sets it.
+/// (Cargo 1.95 also sets it in the environment when `cargo test` runs the test, but not when
+/// the test executable is started on its own, so this crate does not read it at run time.)
+#[macro_export]
+macro_rules! surfcap {
+    ($args:expr $(,)?) => {
+        $crate::run(env!("CARGO_BIN_EXE_surfcap"), $args)
+    };
+}
+
+/// Runs the program `exe` with `args` and waits for its output.
+///
+/// # Panics
+/// When the program cannot be started.
+pub fn run(exe: &str, args: &[&str]) -> Output {
+    std::process::Command::new(exe).args(args).output().unwrap_or_else(|e| panic!("{exe} runs: {e}"))
+}
+
+/// A path as a command-line argument (the tests' temporary paths are UTF-8).
+pub fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// A program's stderr as text (for assertion messages).
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Reads a dataset's `meta.json`.
@@ -117,5 +209,42 @@ impl Drop for ViewServer {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn present_data_is_used_whatever_the_switches() {
+        for (skip, ci) in [(false, false), (true, false), (false, true), (true, true)] {
+            assert_eq!(real_data(Path::new("/d"), false, true, skip, ci), RealData::Found);
+        }
+    }
+
+    #[test]
+    fn missing_data_fails_and_says_where_it_looked_and_how_to_skip() {
+        let RealData::Fail(m) = real_data(Path::new("/nowhere/data"), true, false, false, false) else {
+            panic!("a missing folder must fail")
+        };
+        assert!(m.contains("real data missing at /nowhere/data"), "{m}");
+        assert!(m.contains("SURFCAP_DATA"), "{m}");
+        assert!(m.contains("SURFCAP_SKIP_REAL_DATA=1"), "{m}");
+        let RealData::Fail(m) = real_data(Path::new("/x"), false, false, false, false) else { panic!() };
+        assert!(m.contains("../shared/data next to the workspace") && m.contains("SURFCAP_DATA is not set"), "{m}");
+    }
+
+    #[test]
+    fn missing_data_skips_only_when_asked_and_never_under_ci() {
+        assert_eq!(
+            real_data(Path::new("/nowhere"), false, false, true, false),
+            RealData::Skip("real data missing at /nowhere".into())
+        );
+        let RealData::Fail(m) = real_data(Path::new("/nowhere"), false, false, true, true) else {
+            panic!("CI=true must fail even with the skip")
+        };
+        assert!(m.contains("CI=true"), "{m}");
+        assert!(matches!(real_data(Path::new("/nowhere"), false, false, false, true), RealData::Fail(_)));
     }
 }
