@@ -225,6 +225,7 @@ fn cached_walk_model(
             return Err(format!("shape {:?}, expected [R, 3]", a.shape));
         }
         WalkModel::from_rows(s, &a.data.iter().map(|&x| x as f64).collect::<Vec<_>>(), tracked, slope)
+            .map_err(|e| e.to_string())
     };
     let (a, cached) = store.get_or_compute(&path, compute)?;
     match parse(&a) {
