@@ -8,6 +8,7 @@
 
 pub mod deformation_gradient;
 pub mod distance_matrix;
+pub mod error;
 pub mod gradient_operator;
 pub mod motion_plane_alignment;
 pub mod poisson_reconstruction;
@@ -16,3 +17,5 @@ pub mod pose_distance;
 pub mod pose_interpolation;
 pub mod rotation_log_exp;
 pub mod shape_distortion;
+
+pub use error::{Error, Result};

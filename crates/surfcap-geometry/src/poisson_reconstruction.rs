@@ -22,6 +22,7 @@ use faer::{Conj, Mat, Par, Side};
 use nalgebra::{Matrix3, Vector3};
 use surfcap_mesh::{Components, Topology, connected_components};
 
+use crate::error::{Error, Result};
 use crate::gradient_operator::GradientOperator;
 
 /// What a Poisson system owes to its topology alone: the connected components, the pinned
@@ -41,18 +42,6 @@ pub struct PoissonSolver {
     pattern: Arc<PoissonPattern>,
     numeric: Vec<f64>,
 }
-
-/// Why a factorisation failed (it should not on a mesh with positive areas).
-#[derive(Debug)]
-pub struct PoissonError(pub String);
-
-impl std::fmt::Display for PoissonError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Poisson system: {}", self.0)
-    }
-}
-
-impl std::error::Error for PoissonError {}
 
 /// Lower-triangle triplets of the reduced Laplacian (values from `op`, or 1 for the pattern)
 /// plus the diagonal shift; the same entries in the same order for every pose of a topology.
@@ -85,7 +74,7 @@ fn reduced_triplets(
 
 impl PoissonPattern {
     /// Components, pinned vertices and the symbolic factorisation for `topology`.
-    pub fn new(topology: &Topology) -> Result<Self, PoissonError> {
+    pub fn new(topology: &Topology) -> Result<Self> {
         let components = connected_components(topology);
         let mut pinned = vec![false; components.count];
         let mut reduced = vec![None; topology.n_vertices()];
@@ -100,32 +89,27 @@ impl PoissonPattern {
             }
         }
         let trip = reduced_triplets(topology, None, &reduced, next);
-        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(next, next, &trip)
-            .map_err(|e| PoissonError(format!("cannot assemble: {e:?}")))?;
+        let mat =
+            SparseColMat::<usize, f64>::try_new_from_triplets(next, next, &trip).map_err(Error::PoissonAssemble)?;
         let symbolic = factorize_symbolic_cholesky(mat.symbolic(), Side::Lower, Default::default(), Default::default())
-            .map_err(|e| PoissonError(format!("symbolic factorisation: {e:?}")))?;
+            .map_err(Error::PoissonSymbolic)?;
         Ok(PoissonPattern { components, reduced, n_reduced: next, symbolic })
     }
 }
 
 impl PoissonSolver {
     /// Builds and factorises the system for `topology` in the pose `positions`.
-    pub fn new(topology: &Topology, positions: &[f32]) -> Result<Self, PoissonError> {
+    pub fn new(topology: &Topology, positions: &[f32]) -> Result<Self> {
         Self::with_pattern(Arc::new(PoissonPattern::new(topology)?), topology, positions)
     }
 
     /// Factorises the system of another pose of a topology whose pattern is already known (the
     /// symbolic factorisation is reused: only the numeric one is done).
-    pub fn with_pattern(
-        pattern: Arc<PoissonPattern>,
-        topology: &Topology,
-        positions: &[f32],
-    ) -> Result<Self, PoissonError> {
+    pub fn with_pattern(pattern: Arc<PoissonPattern>, topology: &Topology, positions: &[f32]) -> Result<Self> {
         let op = GradientOperator::new(topology, positions);
         let trip = reduced_triplets(topology, Some(&op), &pattern.reduced, pattern.n_reduced);
         let n = pattern.n_reduced;
-        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
-            .map_err(|e| PoissonError(format!("cannot assemble: {e:?}")))?;
+        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).map_err(Error::PoissonAssemble)?;
         let symbolic = &pattern.symbolic;
         let mut numeric = vec![0.0f64; symbolic.len_val()];
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
@@ -139,7 +123,7 @@ impl PoissonSolver {
                 MemStack::new(&mut MemBuffer::new(scratch)),
                 Default::default(),
             )
-            .map_err(|e| PoissonError(format!("numeric factorisation: {e:?}")))?;
+            .map_err(Error::PoissonNumeric)?;
         Ok(PoissonSolver { op, pattern, numeric })
     }
 

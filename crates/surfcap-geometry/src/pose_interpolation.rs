@@ -24,8 +24,9 @@ use nalgebra::{Matrix3, Vector3};
 use surfcap_mesh::{Topology, UpAxis};
 
 use crate::deformation_gradient::deformation_polar_factors;
+use crate::error::Result;
 use crate::motion_plane_alignment::motion_plane_alignment;
-use crate::poisson_reconstruction::{PoissonError, PoissonPattern, PoissonSolver};
+use crate::poisson_reconstruction::{PoissonPattern, PoissonSolver};
 use crate::rotation_log_exp::{exp_rotation, log_rotation};
 
 /// How the stretch factor S is interpolated.
@@ -70,7 +71,7 @@ struct Side {
     centroids: Vec<Vector3<f64>>,
 }
 
-fn side(pattern: &Arc<PoissonPattern>, topology: &Topology, from: &[f32], to: &[f32]) -> Result<Side, PoissonError> {
+fn side(pattern: &Arc<PoissonPattern>, topology: &Topology, from: &[f32], to: &[f32]) -> Result<Side> {
     let solver = PoissonSolver::with_pattern(pattern.clone(), topology, from)?;
     let grads = solver.operator().gradients(from);
     let mut log_r = Vec::with_capacity(topology.n_triangles());
@@ -122,7 +123,7 @@ pub struct NonlinearInterpolator {
 
 impl NonlinearInterpolator {
     /// `pj` is aligned onto `pi` (motion plane) first.
-    pub fn new(topology: &Topology, pi: &[f32], pj: &[f32], up: UpAxis) -> Result<Self, PoissonError> {
+    pub fn new(topology: &Topology, pi: &[f32], pj: &[f32], up: UpAxis) -> Result<Self> {
         Self::with_pattern(&Arc::new(PoissonPattern::new(topology)?), topology, pi, pj, up)
     }
 
@@ -134,7 +135,7 @@ impl NonlinearInterpolator {
         pi: &[f32],
         pj: &[f32],
         up: UpAxis,
-    ) -> Result<Self, PoissonError> {
+    ) -> Result<Self> {
         let pj = align_onto(pi, pj, up);
         // The two sides are independent: factorise them on two threads; one symbolic
         // factorisation serves both poses (same topology).

@@ -16,7 +16,7 @@
 use std::sync::Arc;
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, motion_plane_alignment, plane_axes};
 
-use surfcap_geometry::poisson_reconstruction::{PoissonError, PoissonPattern};
+use surfcap_geometry::poisson_reconstruction::PoissonPattern;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation, linear_interpolation};
 use surfcap_mesh::{Topology, UpAxis};
 
@@ -150,7 +150,7 @@ pub fn blend(
     path: &[(usize, usize)],
     lambda: Lambda,
     mixing: Mixing,
-) -> Result<Vec<Vec<f32>>, PoissonError> {
+) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
     let pattern = match mixing {
         Mixing::Nonlinear => Some(Arc::new(PoissonPattern::new(topology)?)),
         Mixing::Linear => None,

@@ -7,6 +7,7 @@
 pub mod blend;
 pub mod dtw;
 pub mod edge_weights;
+pub mod error;
 pub mod essential_graph;
 pub mod graph;
 pub mod motion_graph;
@@ -15,6 +16,8 @@ pub mod timed_walk;
 pub mod transition_frames;
 pub mod transition_table;
 pub mod walk_sequence;
+
+pub use error::{Error, Result};
 
 /// Segment length bounds from the frame rate (thesis 2.5.3: a third of a second to two seconds):
 /// ceil(fps / 3) ..= round(2 fps), i.e. 8..48 at 24 fps and 10..60 at 30 fps as in the thesis. At

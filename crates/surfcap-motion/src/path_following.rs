@@ -31,6 +31,7 @@ use rayon::prelude::*;
 
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 
+use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::walk_sequence::{Step, TransitionTrack, WalkModel};
 
@@ -47,9 +48,9 @@ pub struct Curve {
 impl Curve {
     /// `points` in the subject's coordinates; `axes` the coordinates that count. Consecutive
     /// duplicate points are dropped. Errors when fewer than two distinct points remain.
-    pub fn new(points: Vec<[f64; 3]>, axes: Vec<usize>) -> Result<Self, String> {
+    pub fn new(points: Vec<[f64; 3]>, axes: Vec<usize>) -> Result<Self> {
         if points.iter().flatten().any(|x| !x.is_finite()) {
-            return Err("the curve has a non-finite coordinate".into());
+            return Err(Error::CurveNonFinite);
         }
         let mut kept: Vec<[f64; 3]> = Vec::with_capacity(points.len());
         let mut cumulative = Vec::with_capacity(points.len());
@@ -67,7 +68,7 @@ impl Curve {
             kept.push(p);
         }
         if kept.len() < 2 {
-            return Err("the curve needs at least two distinct points".into());
+            return Err(Error::CurveTooShort);
         }
         Ok(Curve { points: kept, cumulative, axes })
     }
@@ -387,13 +388,10 @@ pub fn follow_path(
     restrictions: &[Restriction],
     start: Option<u32>,
     p: &PathSearch,
-) -> Result<PathResult, String> {
+) -> Result<PathResult> {
     let t0 = Instant::now();
     if !(p.window > 0.0 && p.window.is_finite()) || p.max_frames == 0 {
-        return Err(format!(
-            "window {} / {} frames: expected a positive arc length and frame count",
-            p.window, p.max_frames
-        ));
+        return Err(Error::PathSearchParameters { window: p.window, max_frames: p.max_frames });
     }
     let q = Query::new(model, graph, curve, restrictions);
     let initial = |u: u32| -> State {
@@ -436,7 +434,7 @@ pub fn follow_path(
     if let Some(&u) = starts.first()
         && !q.allowed(u, 0.0)
     {
-        return Err(format!("the start frame {u} is not allowed by the restriction at the curve's start"));
+        return Err(Error::StartNotAllowed { frame: u });
     }
     // The candidates' first windows are independent: searched in parallel, the first of the
     // cheapest wins (the same choice whatever the number of threads).
@@ -455,7 +453,7 @@ pub fn follow_path(
             best_start = Some((c, u));
         }
     }
-    let (_, u0) = best_start.ok_or("no frame can start the path: the restrictions exclude every start frame")?;
+    let (_, u0) = best_start.ok_or(Error::NoStartFrame)?;
     let mut st = initial(u0);
     let start_g = st.g;
     let mut walk = vec![u0];
@@ -466,12 +464,7 @@ pub fn follow_path(
         windows += 1;
         let (_, found) = window(st, p.max_transitions, &mut expanded);
         if found.is_empty() {
-            return Err(format!(
-                "the walk is stuck at frame {} after {:.2} of {:.2} along the curve: no edge leads on",
-                st.node,
-                st.s,
-                curve.length()
-            ));
+            return Err(Error::PathStuck { frame: st.node, travelled: st.s, length: curve.length() });
         }
         // Keep the first half of the window (at least one step).
         let keep_until = st.s + 0.5 * p.window;
@@ -484,15 +477,10 @@ pub fn follow_path(
             }
         }
         if st.frames > frame_budget {
-            return Err(format!(
-                "the walk stalls: {} frames cover only {:.2} of {:.2} along the curve (do the allowed motions travel?)",
-                st.frames,
-                st.s,
-                curve.length()
-            ));
+            return Err(Error::PathStalls { frames: st.frames, travelled: st.s, length: curve.length() });
         }
     }
-    let centres = model.walk_centres(&walk, &start_g).map_err(|e| e.to_string())?;
+    let centres = model.walk_centres(&walk, &start_g)?;
     let (errors, travelled) = path_errors(curve, &centres);
     Ok(PathResult {
         walk,

@@ -31,6 +31,7 @@
 
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::walk_sequence::{Step, WalkModel};
 
@@ -380,10 +381,10 @@ impl TimedGraph {
         TimedWalk { walk: walk.to_vec(), frames, cost, distance }
     }
 
-    fn check(&self, a: u32, b: u32) -> Result<(), String> {
+    fn check(&self, a: u32, b: u32) -> Result<()> {
         for x in [a, b] {
             if x as usize >= self.n {
-                return Err(format!("frame {x} is not in the graph (0..{})", self.n));
+                return Err(Error::FrameNotInGraph { frame: x, frames: self.n });
             }
         }
         Ok(())
@@ -392,7 +393,7 @@ impl TimedGraph {
     /// Thesis 3.5.2: the walk from `a` to `b` whose duration is closest to `frames`, then of
     /// least realism cost. Durations within 2 frames of the request are searched first, then
     /// within 8, 32, ..., up to twice the request plus two transitions.
-    pub fn walk_with_duration(&self, a: u32, b: u32, frames: i64, longest_edge: usize) -> Result<TimedWalk, String> {
+    pub fn walk_with_duration(&self, a: u32, b: u32, frames: i64, longest_edge: usize) -> Result<TimedWalk> {
         self.check(a, b)?;
         let target = frames.max(1) as usize;
         let widest = (2 * target).max(target + 2 * longest_edge);
@@ -409,7 +410,7 @@ impl TimedGraph {
                 return Ok(self.measure(w));
             }
             if lo == 1 && hi == widest {
-                return Err(format!("no walk from frame {a} to frame {b} lasts between 1 and {widest} frames"));
+                return Err(Error::NoWalkWithDuration { from: a, to: b, longest: widest });
             }
             tol *= 4;
         }
@@ -426,7 +427,7 @@ impl TimedGraph {
         frames: usize,
         scales: (f64, f64),
         longest_edge: usize,
-    ) -> Result<(TimedWalk, f64), String> {
+    ) -> Result<(TimedWalk, f64)> {
         self.check(a, b)?;
         let (wd, wt) = (1.0 / scales.0, 1.0 / scales.1);
         let total =
@@ -462,7 +463,7 @@ impl TimedGraph {
                 break (lo, hi, d0);
             }
             if lo == 1 && tol > frames + longest_edge {
-                return Err(format!("no walk from frame {a} to frame {b} lasts between 1 and {hi} frames"));
+                return Err(Error::NoWalkWithDuration { from: a, to: b, longest: hi });
             }
             tol *= 3;
         };

@@ -3,7 +3,6 @@
 //! interpolation along the warp, lambda ramping from 0 to 1). Used both to play walks
 //! (Algorithm 3, [`crate::walk_sequence::walk_sequence`]) and to show one transition.
 
-use surfcap_geometry::poisson_reconstruction::PoissonError;
 use surfcap_mesh::Subject;
 
 use crate::blend::{Lambda, Mixing, blend};
@@ -29,7 +28,7 @@ pub fn transition_frames(
     (i, li): (usize, usize),
     (j, lj): (usize, usize),
     slope: Slope,
-) -> Result<Option<TransitionFrames>, PoissonError> {
+) -> Result<Option<TransitionFrames>, surfcap_geometry::Error> {
     let Some(warp) = dtw_window(d, subject.n_frames(), i, li, j, lj, slope) else {
         return Ok(None);
     };

@@ -21,11 +21,11 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 use surfcap_geometry::distance_matrix::alignment_gram;
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
-use surfcap_geometry::poisson_reconstruction::PoissonError;
 use surfcap_mesh::{FrameIndex, FrameLabel, Subject, UpAxis};
 
 use crate::blend::{Lambda, blend_placements_from, centre};
 use crate::dtw::{Slope, dtw_window};
+use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::transition_frames::transition_frames;
 use crate::transition_table::TransitionTable;
@@ -69,40 +69,6 @@ pub struct WalkModel {
     /// The DTW slope constraint the tracks were computed with (their warps are recomputed, not
     /// stored: a dense graph has hundreds of thousands of transitions and plays a few).
     slope: Slope,
-}
-
-/// Why a walk cannot be played.
-#[derive(Debug, Clone, PartialEq)]
-pub enum WalkError {
-    Empty,
-    /// Step `at` (u -> v) is neither successive frames nor a transition of the graph.
-    NotAnEdge {
-        at: usize,
-        from: u32,
-        to: u32,
-    },
-    Poisson(String),
-}
-
-impl std::fmt::Display for WalkError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            WalkError::Empty => write!(f, "the walk has no nodes"),
-            WalkError::NotAnEdge { at, from, to } => write!(
-                f,
-                "step {at} of the walk, frame {from} -> {to}, is neither a successive-frame step nor a transition of the graph"
-            ),
-            WalkError::Poisson(e) => write!(f, "blending a transition: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for WalkError {}
-
-impl From<PoissonError> for WalkError {
-    fn from(e: PoissonError) -> Self {
-        WalkError::Poisson(e.to_string())
-    }
 }
 
 impl WalkModel {
@@ -222,22 +188,22 @@ impl WalkModel {
     }
 
     /// Predicted centre of mass of every output frame of `walk` placed by `start`.
-    pub fn walk_centres(&self, walk: &[u32], start: &PlaneMotion) -> Result<Vec<[f64; 3]>, WalkError> {
-        let first = *walk.first().ok_or(WalkError::Empty)?;
+    pub fn walk_centres(&self, walk: &[u32], start: &PlaneMotion) -> Result<Vec<[f64; 3]>> {
+        let first = *walk.first().ok_or(Error::EmptyWalk)?;
         let mut out = vec![start.apply_point(self.centres[first as usize])];
         let mut g = *start;
         for (at, w) in walk.windows(2).enumerate() {
-            let step = self.step(w[0], w[1]).ok_or(WalkError::NotAnEdge { at, from: w[0], to: w[1] })?;
+            let step = self.step(w[0], w[1]).ok_or(Error::NotAnEdge { at, from: w[0], to: w[1] })?;
             g = self.advance(step, &g, w[1], |c, _| out.push(c));
         }
         Ok(out)
     }
 
     /// Duration of a walk in frame intervals.
-    pub fn walk_duration(&self, walk: &[u32]) -> Result<usize, WalkError> {
+    pub fn walk_duration(&self, walk: &[u32]) -> Result<usize> {
         let mut t = 0;
         for (at, w) in walk.windows(2).enumerate() {
-            t += match self.step(w[0], w[1]).ok_or(WalkError::NotAnEdge { at, from: w[0], to: w[1] })? {
+            t += match self.step(w[0], w[1]).ok_or(Error::NotAnEdge { at, from: w[0], to: w[1] })? {
                 Step::Original => 1,
                 Step::Transition(tr) => tr.duration(),
             };
@@ -273,31 +239,31 @@ impl WalkModel {
     /// The model of [`WalkModel::new`] from rows written by [`WalkModel::tracks_to_rows`] for
     /// the same subject and tracked vertices. Errors name the first row that does not fit (a
     /// cache written for another subject, or damaged).
-    pub fn from_rows(subject: &Subject, rows: &[f64], tracked: Option<&[usize]>, slope: Slope) -> Result<Self, String> {
+    pub fn from_rows(subject: &Subject, rows: &[f64], tracked: Option<&[usize]>, slope: Slope) -> Result<Self> {
         let nf = subject.n_frames();
         if !rows.len().is_multiple_of(3) {
-            return Err(format!("{} numbers: expected rows of 3", rows.len()));
+            return Err(Error::RowsNotTriples { numbers: rows.len() });
         }
         let rows: Vec<[f64; 3]> = rows.chunks_exact(3).map(|r| [r[0], r[1], r[2]]).collect();
-        let frame = |x: f64, at: usize| -> Result<u32, String> {
+        let frame = |x: f64, at: usize| -> Result<u32> {
             if x.fract() == 0.0 && x >= 0.0 && (x as usize) < nf {
                 Ok(x as u32)
             } else {
-                Err(format!("row {at}: {x} is not a frame of the subject (0..{nf})"))
+                Err(Error::RowNotAFrame { row: at, value: x, frames: nf })
             }
         };
-        let count = |x: f64, at: usize| -> Result<usize, String> {
+        let count = |x: f64, at: usize| -> Result<usize> {
             if x.fract() == 0.0 && x >= 0.0 && x <= (rows.len() - at) as f64 {
                 Ok(x as usize)
             } else {
-                Err(format!("row {at}: {x} is not a count of the rows that follow"))
+                Err(Error::RowNotACount { row: at, value: x })
             }
         };
         let mut tracks = HashMap::new();
         let mut at = 0;
         while at < rows.len() {
             if at + 3 > rows.len() {
-                return Err(format!("row {at}: a track header needs 3 rows, {} left", rows.len() - at));
+                return Err(Error::TrackHeaderCutShort { row: at, left: rows.len() - at });
             }
             let [u, v, nc] = rows[at];
             let [li, lj, _] = rows[at + 1];
@@ -305,11 +271,11 @@ impl WalkModel {
             let (u, v, nc) = (frame(u, at)?, frame(v, at)?, count(nc, at)?);
             let (li, lj) = (count(li, at + 1)? as u32, count(lj, at + 1)? as u32);
             if ![theta, t0, t1].iter().all(|x| x.is_finite()) || at + 3 + nc > rows.len() {
-                return Err(format!("row {at}: the track {u} -> {v} is cut short or not finite"));
+                return Err(Error::TrackCutShort { row: at, from: u, to: v });
             }
             let centres: Vec<[f64; 3]> = rows[at + 3..at + 3 + nc].to_vec();
             if centres.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(format!("row {at}: the track {u} -> {v} has a non-finite centre"));
+                return Err(Error::TrackNonFiniteCentre { row: at, from: u, to: v });
             }
             let end = PlaneMotion { theta, t: [t0, t1], up: subject.up_axis };
             tracks.insert((u, v), TransitionTrack { li, lj, centres, end });
@@ -368,8 +334,8 @@ pub fn walk_sequence(
     d: &[f64],
     walk: &[u32],
     start: &PlaneMotion,
-) -> Result<WalkSequence, WalkError> {
-    let first = *walk.first().ok_or(WalkError::Empty)?;
+) -> Result<WalkSequence> {
+    let first = *walk.first().ok_or(Error::EmptyWalk)?;
     let frame = |g: u32| subject.frame(g as usize).expect("walk nodes are frames of the subject");
     let mut out = WalkSequence { positions: Vec::new(), labels: Vec::new(), nodes: Vec::new(), n_transitions: 0 };
     let push = |out: &mut WalkSequence, p: &[f32], g: &PlaneMotion, label, node| {
@@ -383,12 +349,12 @@ pub fn walk_sequence(
     push(&mut out, frame(first), &g, FrameLabel::Original, Some(first));
     for (at, w) in walk.windows(2).enumerate() {
         let (u, v) = (w[0], w[1]);
-        match model.step(u, v).ok_or(WalkError::NotAnEdge { at, from: u, to: v })? {
+        match model.step(u, v).ok_or(Error::NotAnEdge { at, from: u, to: v })? {
             Step::Original => push(&mut out, frame(v), &g, FrameLabel::Original, Some(v)),
             Step::Transition(t) => {
                 let ends = ((u as usize, t.li as usize), (v as usize, t.lj as usize));
                 let s = transition_frames(subject, d, ends.0, ends.1, model.slope)?
-                    .ok_or(WalkError::NotAnEdge { at, from: u, to: v })?
+                    .ok_or(Error::NotAnEdge { at, from: u, to: v })?
                     .frames;
                 for f in &s[1..s.len().saturating_sub(1)] {
                     push(&mut out, f, &g, FrameLabel::Synthetic, None);
@@ -432,10 +398,12 @@ pub(crate) mod tests {
         assert_eq!(back.tracks, model.tracks);
         assert_eq!(back.centres, model.centres);
         let slope = model.slope;
-        assert!(WalkModel::from_rows(&s, &rows[..rows.len() - 3], None, slope).unwrap_err().contains("row "));
+        assert!(
+            WalkModel::from_rows(&s, &rows[..rows.len() - 3], None, slope).unwrap_err().to_string().contains("row ")
+        );
         let mut bad = rows.clone();
         bad[0] = s.n_frames() as f64;
-        assert!(WalkModel::from_rows(&s, &bad, None, slope).unwrap_err().contains("row 0"));
+        assert!(WalkModel::from_rows(&s, &bad, None, slope).unwrap_err().to_string().contains("row 0"));
         assert!(WalkModel::from_rows(&s, &rows[..4], None, slope).is_err());
     }
 
@@ -488,6 +456,6 @@ pub(crate) mod tests {
         assert!(d0 < 1e-5);
         // A step that is not an edge is refused with its position.
         let bad = [walk[0], walk[0] + 5];
-        assert!(matches!(walk_sequence(&s, &model, &d, &bad, &start), Err(WalkError::NotAnEdge { at: 0, .. })));
+        assert!(matches!(walk_sequence(&s, &model, &d, &bad, &start), Err(Error::NotAnEdge { at: 0, .. })));
     }
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use crate::{PlotError, write_svg_and_png};
+use crate::{Error, Result, write_svg_and_png};
 
 /// Drawn cells per side at most.
 const MAX_CELLS: usize = 200;
@@ -64,11 +64,11 @@ fn blocks(h: &HeatMap) -> (usize, usize, Vec<f64>, usize, usize) {
     (br, bc, out, sr, sc)
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, h: &HeatMap) -> Result<(), String>
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, h: &HeatMap) -> DrawResult<(), DB>
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    root.fill(&WHITE)?;
     let (br, bc, v, sr, sc) = blocks(h);
     let finite = v.iter().copied().filter(|x| x.is_finite());
     let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
@@ -79,8 +79,7 @@ where
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(c0..c0 + h.cols as f64, (r0 + h.rows as f64)..r0)
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(c0..c0 + h.cols as f64, (r0 + h.rows as f64)..r0)?;
     c.configure_mesh()
         .disable_mesh()
         .x_label_formatter(&|x| format!("{x:.0}"))
@@ -88,8 +87,7 @@ where
         .x_desc(h.x_label.as_str())
         .y_desc(h.y_label.as_str())
         .label_style(("sans-serif", 13))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     let cells = (0..br).flat_map(|i| (0..bc).map(move |j| (i, j))).map(|(i, j)| {
         let x = v[i * bc + j];
         let colour = if x.is_finite() { ramp((x - lo) / span) } else { RGBColor(200, 200, 200) };
@@ -97,24 +95,23 @@ where
         let (y1, x1) = (r0 + ((i + 1) * sr).min(h.rows) as f64, c0 + ((j + 1) * sc).min(h.cols) as f64);
         Rectangle::new([(x0, y0), (x1, y1)], colour.filled())
     });
-    c.draw_series(cells).map_err(|e| e.to_string())?;
+    c.draw_series(cells)?;
     if h.path.len() > 1 {
         let pts = h.path.iter().map(|&(r, col)| (col as f64 + 0.5, r as f64 + 0.5));
-        c.draw_series(LineSeries::new(pts, RGBColor(230, 30, 30).stroke_width(2))).map_err(|e| e.to_string())?;
+        c.draw_series(LineSeries::new(pts, RGBColor(230, 30, 30).stroke_width(2)))?;
     }
-    root.present().map_err(|e| e.to_string())
+    root.present()
 }
 
 /// Writes `<stem>.svg` and `<stem>.png` (700 x 640) and returns their paths.
-pub fn write_heat_map(stem: &Path, h: &HeatMap) -> Result<Vec<PathBuf>, PlotError> {
+pub fn write_heat_map(stem: &Path, h: &HeatMap) -> Result<Vec<PathBuf>> {
     if h.rows == 0 || h.cols == 0 || h.values.len() != h.rows * h.cols {
-        return Err(PlotError(format!(
-            "{}: {} values for a {} x {} heat map",
-            stem.display(),
-            h.values.len(),
-            h.rows,
-            h.cols
-        )));
+        return Err(Error::HeatMapShape {
+            stem: stem.to_path_buf(),
+            values: h.values.len(),
+            rows: h.rows,
+            cols: h.cols,
+        });
     }
     write_svg_and_png(stem, (700, 640), |root| draw(root, h), |root| draw(root, h))
 }

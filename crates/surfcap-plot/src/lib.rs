@@ -8,8 +8,10 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
+pub mod error;
 pub mod heat_map;
 
+pub use error::{Error, PngDrawingError, Result, SvgDrawingError};
 pub use heat_map::{HeatMap, write_heat_map};
 
 static FONT: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
@@ -43,18 +45,6 @@ pub struct LineChart {
     pub series: Vec<Series>,
 }
 
-/// Why a chart could not be written.
-#[derive(Debug)]
-pub struct PlotError(pub String);
-
-impl std::fmt::Display for PlotError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for PlotError {}
-
 fn bounds(series: &[Series]) -> ((f64, f64), (f64, f64)) {
     let pts = series.iter().flat_map(|s| s.points.iter()).filter(|p| p.0.is_finite() && p.1.is_finite());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
@@ -74,48 +64,45 @@ fn bounds(series: &[Series]) -> ((f64, f64), (f64, f64)) {
     (pad(x0, x1), pad(y0, y1))
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, chart: &LineChart) -> Result<(), String>
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, chart: &LineChart) -> DrawResult<(), DB>
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    root.fill(&WHITE)?;
     let ((x0, x1), (y0, y1)) = bounds(&chart.series);
     let mut c = ChartBuilder::on(&root)
         .caption(&chart.title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(x0..x1, y0..y1)?;
     c.configure_mesh()
         .x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
         .label_style(("sans-serif", 14))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     for s in &chart.series {
         let color = RGBColor(s.color.0, s.color.1, s.color.2);
         let style = color.stroke_width(2);
         let anno = if s.dashed {
-            c.draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style)).map_err(|e| e.to_string())?
+            c.draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style))?
         } else {
-            c.draw_series(LineSeries::new(s.points.iter().copied(), style)).map_err(|e| e.to_string())?
+            c.draw_series(LineSeries::new(s.points.iter().copied(), style))?
         };
         if !s.name.is_empty() {
             anno.label(s.name.as_str())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
         }
         if s.markers {
-            c.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+            c.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
         }
     }
     c.configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())
+        .draw()?;
+    root.present()
 }
 
 fn temp_sibling(path: &Path) -> PathBuf {
@@ -125,7 +112,7 @@ fn temp_sibling(path: &Path) -> PathBuf {
 }
 
 /// Writes `<stem>.svg` and `<stem>.png` (800 x 500) and returns their paths.
-pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>, PlotError> {
+pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>> {
     write_svg_and_png(stem, (800, 500), |root| draw(root, chart), |root| draw(root, chart))
 }
 
@@ -134,26 +121,26 @@ pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>, 
 pub(crate) fn write_svg_and_png(
     stem: &Path,
     size: (u32, u32),
-    svg_draw: impl FnOnce(DrawingArea<SVGBackend, plotters::coord::Shift>) -> Result<(), String>,
-    png_draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,
-) -> Result<Vec<PathBuf>, PlotError> {
+    svg_draw: impl FnOnce(DrawingArea<SVGBackend, plotters::coord::Shift>) -> Result<(), SvgDrawingError>,
+    png_draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), PngDrawingError>,
+) -> Result<Vec<PathBuf>> {
     ensure_font();
     if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| PlotError(format!("{}: cannot create: {e}", dir.display())))?;
+        std::fs::create_dir_all(dir).map_err(|source| Error::CreateDir { dir: dir.to_path_buf(), source })?;
     }
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
     let mut text = String::new();
     svg_draw(SVGBackend::with_string(&mut text, size).into_drawing_area())
-        .map_err(|e| PlotError(format!("{}: {e}", svg.display())))?;
+        .map_err(|source| Error::DrawSvg { path: svg.clone(), source })?;
     let tmp = temp_sibling(&svg);
     std::fs::write(&tmp, text)
         .and_then(|_| std::fs::rename(&tmp, &svg))
-        .map_err(|e| PlotError(format!("{}: cannot write: {e}", svg.display())))?;
+        .map_err(|source| Error::Write { path: svg.clone(), source })?;
     let tmp = temp_sibling(&png);
     png_draw(BitMapBackend::new(&tmp, size).into_drawing_area())
-        .map_err(|e| PlotError(format!("{}: {e}", png.display())))?;
-    std::fs::rename(&tmp, &png).map_err(|e| PlotError(format!("{}: cannot write: {e}", png.display())))?;
+        .map_err(|source| Error::DrawPng { path: png.clone(), source })?;
+    std::fs::rename(&tmp, &png).map_err(|source| Error::Write { path: png.clone(), source })?;
     Ok(vec![svg, png])
 }
 

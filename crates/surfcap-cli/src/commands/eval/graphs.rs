@@ -103,7 +103,7 @@ pub fn eval(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &EvalOpts) ->
             series("motion graph", curve("motion_graph", field), red),
         ],
     };
-    let err = |e: surfcap_plot::PlotError| anyhow::anyhow!("{e}");
+    let err = |e: surfcap_plot::Error| anyhow::anyhow!("{e}");
     plots.extend(
         write_line_chart(&o.output.join("density"), &chart("Graph density (eq. 3.4)", "density", "density"))
             .map_err(err)?,

@@ -1,0 +1,96 @@
+//! The one error type of surfcap-motion.
+
+/// What can fail in the motion layer: playing a walk (a step that is not an edge of the graph, a
+/// transition whose Blend fails), reading a walk model back from its cached rows, following a
+/// path (thesis 3.5.1) and the timed-walk searches (thesis 3.5.2). Variants carry the frames,
+/// rows and counts they name; a failed Poisson solve keeps the geometry error as its source.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum Error {
+    /// A walk without a single node.
+    #[error("the walk has no nodes")]
+    EmptyWalk,
+    /// Step `at` (frame `from` -> `to`) is neither successive frames nor a transition of the
+    /// graph.
+    #[error(
+        "step {at} of the walk, frame {from} -> {to}, is neither a successive-frame step nor a transition of the graph"
+    )]
+    NotAnEdge { at: usize, from: u32, to: u32 },
+    /// The Blend of a transition failed (its Poisson system).
+    #[error("blending a transition: {0}")]
+    Poisson(#[from] surfcap_geometry::Error),
+
+    /// Walk-model rows: a count of numbers that is not a multiple of 3.
+    #[error("{numbers} numbers: expected rows of 3")]
+    RowsNotTriples { numbers: usize },
+    /// Walk-model rows: `value` at row `row` should be a frame of the subject (0..`frames`).
+    #[error("row {row}: {value} is not a frame of the subject (0..{frames})")]
+    RowNotAFrame { row: usize, value: f64, frames: usize },
+    /// Walk-model rows: `value` at row `row` should count rows that follow.
+    #[error("row {row}: {value} is not a count of the rows that follow")]
+    RowNotACount { row: usize, value: f64 },
+    /// Walk-model rows: a track header at row `row` with only `left` rows left.
+    #[error("row {row}: a track header needs 3 rows, {left} left")]
+    TrackHeaderCutShort { row: usize, left: usize },
+    /// Walk-model rows: the track `from` -> `to` at row `row` has fewer centres than it says, or
+    /// a non-finite end placement.
+    #[error("row {row}: the track {from} -> {to} is cut short or not finite")]
+    TrackCutShort { row: usize, from: u32, to: u32 },
+    /// Walk-model rows: the track `from` -> `to` at row `row` has a non-finite centre.
+    #[error("row {row}: the track {from} -> {to} has a non-finite centre")]
+    TrackNonFiniteCentre { row: usize, from: u32, to: u32 },
+
+    /// A curve with a NaN or infinite coordinate.
+    #[error("the curve has a non-finite coordinate")]
+    CurveNonFinite,
+    /// A curve with fewer than two distinct points (in the coordinates that count).
+    #[error("the curve needs at least two distinct points")]
+    CurveTooShort,
+    /// Path search parameters: the window must be a positive arc length and `max_frames`
+    /// positive.
+    #[error("window {window} / {max_frames} frames: expected a positive arc length and frame count")]
+    PathSearchParameters { window: f64, max_frames: usize },
+    /// The given start frame is excluded by the restriction at the curve's start.
+    #[error("the start frame {frame} is not allowed by the restriction at the curve's start")]
+    StartNotAllowed { frame: u32 },
+    /// No frame may start the path.
+    #[error("no frame can start the path: the restrictions exclude every start frame")]
+    NoStartFrame,
+    /// The path search found no edge leading on from `frame`, `travelled` of `length` along
+    /// the curve.
+    #[error("the walk is stuck at frame {frame} after {travelled:.2} of {length:.2} along the curve: no edge leads on")]
+    PathStuck { frame: u32, travelled: f64, length: f64 },
+    /// The walk used more than its frame budget (`frames`) and covered only `travelled` of
+    /// `length` along the curve.
+    #[error(
+        "the walk stalls: {frames} frames cover only {travelled:.2} of {length:.2} along the curve (do the allowed motions travel?)"
+    )]
+    PathStalls { frames: usize, travelled: f64, length: f64 },
+
+    /// A timed-walk endpoint outside the graph's frames (0..`frames`).
+    #[error("frame {frame} is not in the graph (0..{frames})")]
+    FrameNotInGraph { frame: u32, frames: usize },
+    /// No walk from `from` to `to` has a duration between 1 and `longest` frames.
+    #[error("no walk from frame {from} to frame {to} lasts between 1 and {longest} frames")]
+    NoWalkWithDuration { from: u32, to: u32, longest: usize },
+}
+
+/// Result with the crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::Error;
+
+    #[test]
+    fn messages_are_the_ones_callers_know() {
+        let stuck = Error::PathStuck { frame: 7, travelled: 1.234, length: 10.0 };
+        assert_eq!(
+            stuck.to_string(),
+            "the walk is stuck at frame 7 after 1.23 of 10.00 along the curve: no edge leads on"
+        );
+        let row = Error::RowNotAFrame { row: 3, value: 40.0, frames: 30 };
+        assert_eq!(row.to_string(), "row 3: 40 is not a frame of the subject (0..30)");
+        let none = Error::NoWalkWithDuration { from: 1, to: 2, longest: 9 };
+        assert_eq!(none.to_string(), "no walk from frame 1 to frame 2 lasts between 1 and 9 frames");
+    }
+}
