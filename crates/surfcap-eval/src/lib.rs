@@ -1,13 +1,35 @@
-//! Evaluations of surfcap's algorithms against ground truth (thesis 2.3.2, Evaluation): the
-//! skeleton ground-truth pose distance (eq. 2.15-2.16), Pearson correlation (eq. 2.18), the
-//! Mantel permutation test and correlogram, and distance correlation (eq. 2.19-2.22).
+//! Evaluations of surfcap's algorithms against ground truth and baselines.
+//!
+//! Statistics (thesis 2.3.2, Evaluation): the skeleton ground-truth pose distance
+//! (eq. 2.15-2.16), Pearson correlation (eq. 2.18), the Mantel permutation test and correlogram,
+//! and distance correlation (eq. 2.19-2.22).
+//!
+//! Experiments (the computations behind `surfcap eval ...`), one file each, each a function
+//! returning a typed, serialisable result that carries everything a front end prints, writes or
+//! plots: [`interpolation_eval()`] (thesis 2.4, Fig. 2.8), [`pose_metric_eval()`] (2.3.2,
+//! Fig. 2.5-2.7), [`transition_costs_eval()`] (2.5.5, Fig. 2.15), [`graph_comparison_eval()`]
+//! (3.3.3, Fig. 3.2 and 3.8) and [`gpdm_eval()`] (6.4-6.5, Fig. 6.4). They never print, open
+//! files or draw.
 //!
 //! Pairwise distances are passed as the condensed upper triangle of an N x N matrix
 //! (`i < j`, row by row), as in scipy's `squareform`.
 
 pub mod correlation;
+pub mod error;
+pub mod gpdm_eval;
+pub mod graph_comparison_eval;
+pub mod interpolation_eval;
 pub mod mantel_test;
+pub mod pose_metric_eval;
 pub mod skeleton_distance;
+pub mod transition_costs_eval;
+
+pub use error::{Error, Result};
+pub use gpdm_eval::{GpdmEval, GpdmEvalOptions, gpdm_eval};
+pub use graph_comparison_eval::{GraphComparisonEval, GraphComparisonOptions, graph_comparison_eval};
+pub use interpolation_eval::{InterpolationEval, InterpolationOptions, interpolation_eval};
+pub use pose_metric_eval::{PoseMetricEval, PoseMetricOptions, pose_metric_eval};
+pub use transition_costs_eval::{TransitionCostsEval, TransitionCostsOptions, transition_costs_eval};
 
 /// The condensed upper triangle (i < j, row-major) of a row-major N x N matrix.
 pub fn condensed(n: usize, full: &[f64]) -> Vec<f64> {
@@ -19,4 +41,48 @@ pub fn condensed(n: usize, full: &[f64]) -> Vec<f64> {
 pub fn pair_index(n: usize, i: usize, j: usize) -> usize {
     debug_assert!(i < j && j < n);
     i * n - i * (i + 1) / 2 + (j - i - 1)
+}
+
+/// Mean and population standard deviation of some values, serialised as `{"mean", "std"}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct MeanStd {
+    pub mean: f64,
+    pub std: f64,
+}
+
+impl MeanStd {
+    /// (0, 0) for no values.
+    pub fn of(v: &[f64]) -> MeanStd {
+        let (mean, std) = mean_std(v);
+        MeanStd { mean, std }
+    }
+}
+
+/// Mean and (population) standard deviation; (0, 0) for no values.
+pub fn mean_std(v: &[f64]) -> (f64, f64) {
+    let n = v.len().max(1) as f64;
+    let m = v.iter().sum::<f64>() / n;
+    (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt())
+}
+
+#[cfg(test)]
+pub(crate) mod test_subjects {
+    use surfcap_mesh::{NoProgress, Subject};
+    use surfcap_pipeline::{CacheStore, Pipeline};
+    use surfcap_synth::{WormParams, worm_subject};
+
+    /// The procedural tube: 8 rings of 6 vertices, 24 frames at `fps`.
+    pub fn worm(fps: f64) -> Subject {
+        worm_subject(&WormParams { rings: 8, segments: 6, frames: 24, fps, ..Default::default() }).unwrap()
+    }
+
+    /// A pipeline without a disk cache.
+    pub fn pipeline(s: Subject) -> Pipeline {
+        Pipeline::new(s, CacheStore::memory_only(), Box::new(NoProgress))
+    }
+
+    /// The keys of a JSON object, sorted.
+    pub fn keys(v: &serde_json::Value) -> Vec<&str> {
+        v.as_object().expect("an object").keys().map(String::as_str).collect()
+    }
 }

@@ -74,8 +74,9 @@ pub fn mantel(n: usize, x: &[f64], y: &[f64], permutations: usize, seed: u64) ->
     }
 }
 
-/// One distance class of a correlogram.
-#[derive(Debug, Clone, PartialEq)]
+/// One distance class of a correlogram (serialised with these field names in the
+/// `eval pose-metric` report).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CorrelogramClass {
     /// Range of the reference (ground-truth) distance in this class.
     pub lo: f64,

@@ -1,0 +1,229 @@
+//! Essential graph vs motion graph for several alphas (thesis 3.3.3, Fig. 3.2 and 3.8):
+//! densities and the mean and standard deviation of all-pairs shortest-path costs.
+
+use std::time::Instant;
+
+use serde::Serialize;
+use surfcap_motion::transition_table::TableParams;
+use surfcap_pipeline::{GraphKind, GraphParams, Pipeline};
+
+use crate::MeanStd;
+use crate::error::{Error, Result};
+
+/// Options of [`graph_comparison_eval`] (`surfcap eval graphs`).
+#[derive(Debug, Clone)]
+pub struct GraphComparisonOptions {
+    /// Values of alpha (each > 0).
+    pub alphas: Vec<f64>,
+    /// Frame pairs in the sampled shortest-path curves ([`PathCostCurves`]).
+    pub plot_pairs: usize,
+    /// The transition table both graphs are built on.
+    pub table: TableParams,
+}
+
+/// The motion graph at one alpha; `mean`/`std` over the compared pairs.
+#[derive(Debug, Clone, Serialize)]
+pub struct MotionGraphStats {
+    pub mean: f64,
+    pub std: f64,
+    /// Eq. 3.4.
+    pub density: f64,
+    pub edges: usize,
+    /// Frames with an outgoing edge (the rest were pruned as dead ends).
+    pub frames: usize,
+}
+
+/// The essential graph at one alpha; `mean`/`std` over the compared pairs, `*_all_pairs` over
+/// every pair it connects.
+#[derive(Debug, Clone, Serialize)]
+pub struct EssentialGraphStats {
+    pub mean: f64,
+    pub std: f64,
+    /// Eq. 3.4.
+    pub density: f64,
+    pub edges: usize,
+    pub mean_all_pairs: f64,
+    pub std_all_pairs: f64,
+    /// Ordered pairs (i != j) the essential graph connects.
+    pub pairs: usize,
+}
+
+/// Both graphs at one alpha.
+#[derive(Debug, Clone, Serialize)]
+pub struct AlphaRow {
+    pub alpha: f64,
+    pub motion_graph: MotionGraphStats,
+    pub essential_graph: EssentialGraphStats,
+    /// Ordered pairs (i != j) the motion graph connects: both graphs are compared on these.
+    pub pairs_compared: usize,
+    /// Compared pairs where the motion graph's path is cheaper (relative tolerance 1e-12).
+    pub pairs_where_motion_graph_is_cheaper: usize,
+}
+
+/// A sample of the compared pairs at one alpha, sorted by the essential graph's cost
+/// (Fig. 3.8b-c): points (index in the sample, path cost) of each graph.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathCostCurves {
+    pub alpha: f64,
+    pub essential_graph: Vec<(f64, f64)>,
+    pub motion_graph: Vec<(f64, f64)>,
+}
+
+/// Result of [`graph_comparison_eval`]; serialised, the report `graphs.json` without its
+/// `plots`.
+#[derive(Debug, Clone, Serialize)]
+pub struct GraphComparisonEval {
+    pub subject: String,
+    pub frames: usize,
+    pub l_min: usize,
+    pub l_max: usize,
+    pub rows: Vec<AlphaRow>,
+    /// Time to build (or read) the graphs and compare them, seconds.
+    pub seconds: f64,
+    /// One per alpha, in the order of `rows` (the `paths_alpha_*` plots).
+    #[serde(skip)]
+    pub path_costs: Vec<PathCostCurves>,
+}
+
+/// Thesis 3.3.3, Fig. 3.2 and 3.8: for each alpha, both graphs' densities and the mean and
+/// standard deviation of all-pairs shortest-path costs. Pairs: ordered (i, j), i != j, that
+/// the motion graph connects (its dead ends are pruned), so both graphs are compared on the
+/// same pairs; the essential graph's mean over all its pairs is reported beside.
+pub fn graph_comparison_eval(pipe: &Pipeline, o: &GraphComparisonOptions) -> Result<GraphComparisonEval> {
+    if o.alphas.is_empty() {
+        return Err(Error::parameter("--alpha", None, "expected at least one value"));
+    }
+    for &a in &o.alphas {
+        if !(a.is_finite() && a > 0.0) {
+            return Err(Error::parameter("--alpha", Some(a.to_string()), "expected a positive number"));
+        }
+    }
+    let s = pipe.subject();
+    let n = s.n_frames();
+    let mut rows = Vec::new();
+    let mut path_costs = Vec::new();
+    let t0 = Instant::now();
+    for &alpha in &o.alphas {
+        let graph = |kind| pipe.graph(&GraphParams { table: o.table, kind, alpha });
+        let eg = graph(GraphKind::Essential)?.value;
+        let mg = graph(GraphKind::Motion)?.value;
+        let (ce, cm) = (eg.all_pairs(), mg.all_pairs());
+        let (mut on_mg, mut on_eg, mut eg_all) = (Vec::new(), Vec::new(), Vec::new());
+        let mut lower_in_motion = 0usize;
+        for k in 0..n * n {
+            if k / n == k % n {
+                continue;
+            }
+            if ce[k].is_finite() {
+                eg_all.push(ce[k]);
+            }
+            if cm[k].is_finite() {
+                on_mg.push(cm[k]);
+                on_eg.push(ce[k]);
+                if cm[k] < ce[k] * (1.0 - 1e-12) {
+                    lower_in_motion += 1;
+                }
+            }
+        }
+        let (m, e, all) = (MeanStd::of(&on_mg), MeanStd::of(&on_eg), MeanStd::of(&eg_all));
+        rows.push(AlphaRow {
+            alpha,
+            motion_graph: MotionGraphStats {
+                mean: m.mean,
+                std: m.std,
+                density: mg.density(),
+                edges: mg.edges().len(),
+                frames: (0..n).filter(|&i| !mg.out(i).is_empty()).count(),
+            },
+            essential_graph: EssentialGraphStats {
+                mean: e.mean,
+                std: e.std,
+                density: eg.density(),
+                edges: eg.edges().len(),
+                mean_all_pairs: all.mean,
+                std_all_pairs: all.std,
+                pairs: eg_all.len(),
+            },
+            pairs_compared: on_mg.len(),
+            pairs_where_motion_graph_is_cheaper: lower_in_motion,
+        });
+        // A sample of the compared pairs, sorted by the essential graph's cost (Fig. 3.8b-c).
+        let step = (on_mg.len() / o.plot_pairs.max(1)).max(1);
+        let mut sample: Vec<(f64, f64)> = on_eg.iter().zip(&on_mg).step_by(step).map(|(&e, &m)| (e, m)).collect();
+        sample.sort_by(|a, b| a.0.total_cmp(&b.0));
+        path_costs.push(PathCostCurves {
+            alpha,
+            essential_graph: sample.iter().enumerate().map(|(x, v)| (x as f64, v.0)).collect(),
+            motion_graph: sample.iter().enumerate().map(|(x, v)| (x as f64, v.1)).collect(),
+        });
+    }
+    Ok(GraphComparisonEval {
+        subject: s.name.clone(),
+        frames: n,
+        l_min: o.table.l_min,
+        l_max: o.table.l_max,
+        rows,
+        seconds: t0.elapsed().as_secs_f64(),
+        path_costs,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use serde_json::json;
+
+    use super::*;
+    use crate::test_subjects::{pipeline, worm};
+
+    fn options(alphas: Vec<f64>) -> GraphComparisonOptions {
+        GraphComparisonOptions { alphas, plot_pairs: 20, table: TableParams { l_min: 3, l_max: 6, slope: Some(3) } }
+    }
+
+    #[test]
+    fn essential_paths_are_never_dearer_and_the_report_is_the_cli_json() {
+        let pipe = pipeline(worm(30.0));
+        let r = graph_comparison_eval(&pipe, &options(vec![0.05, 0.2])).unwrap();
+        let n = pipe.subject().n_frames();
+        assert_eq!((r.frames, r.l_min, r.l_max), (n, 3, 6));
+        assert_eq!(r.rows.len(), 2);
+        assert_eq!(r.path_costs.iter().map(|c| c.alpha).collect::<Vec<_>>(), [0.05, 0.2]);
+        for (row, curves) in r.rows.iter().zip(&r.path_costs) {
+            assert!(row.pairs_compared > 0, "{row:?}");
+            // Thesis 3.3.3: the essential graph keeps every shortest path.
+            assert_eq!(row.pairs_where_motion_graph_is_cheaper, 0);
+            assert!(row.essential_graph.mean <= row.motion_graph.mean, "{row:?}");
+            assert!(row.essential_graph.pairs >= row.pairs_compared);
+            assert!(row.motion_graph.frames <= n);
+            assert!(curves.essential_graph.len() <= 20 + 1 && !curves.essential_graph.is_empty());
+            assert_eq!(curves.essential_graph.len(), curves.motion_graph.len());
+            assert!(curves.essential_graph.windows(2).all(|w| w[0].1 <= w[1].1), "sorted by essential cost");
+            assert!(curves.essential_graph.iter().zip(&curves.motion_graph).all(|(e, m)| e.1 <= m.1 * (1.0 + 1e-12)));
+        }
+        // graphs.json as the CLI wrote it, without "plots".
+        let rows: Vec<_> = r
+            .rows
+            .iter()
+            .map(|x| {
+                let (m, e) = (&x.motion_graph, &x.essential_graph);
+                json!({
+                    "alpha": x.alpha,
+                    "motion_graph": { "mean": m.mean, "std": m.std, "density": m.density, "edges": m.edges, "frames": m.frames },
+                    "essential_graph": { "mean": e.mean, "std": e.std, "density": e.density, "edges": e.edges, "mean_all_pairs": e.mean_all_pairs, "std_all_pairs": e.std_all_pairs, "pairs": e.pairs },
+                    "pairs_compared": x.pairs_compared,
+                    "pairs_where_motion_graph_is_cheaper": x.pairs_where_motion_graph_is_cheaper,
+                })
+            })
+            .collect();
+        let cli =
+            json!({ "subject": r.subject, "frames": n, "l_min": 3, "l_max": 6, "rows": rows, "seconds": r.seconds });
+        assert_eq!(serde_json::to_value(&r).unwrap(), cli);
+    }
+
+    #[test]
+    fn alphas_are_checked_first() {
+        let pipe = pipeline(worm(30.0));
+        let e = |alphas| graph_comparison_eval(&pipe, &options(alphas)).unwrap_err().to_string();
+        assert_eq!(e(vec![]), "--alpha: expected at least one value");
+        assert_eq!(e(vec![0.05, 0.0]), "--alpha 0: expected a positive number");
+    }
+}
