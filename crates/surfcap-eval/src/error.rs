@@ -11,7 +11,7 @@ pub enum Error {
     Data(#[from] surfcap_mesh::Error),
     /// Factorising a Poisson system (non-linear interpolation).
     #[error(transparent)]
-    Poisson(#[from] surfcap_geometry::poisson_reconstruction::PoissonError),
+    Poisson(#[from] surfcap_geometry::Error),
     /// A learning step failed; `context` says which (e.g. "fitting the GPDM").
     #[error("{context}")]
     Learn {

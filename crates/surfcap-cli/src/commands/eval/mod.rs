@@ -2,16 +2,13 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
-use serde_json::json;
-use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_geometry::shape_distortion::{edge_length_distortion, volume_change};
+use surfcap_geometry::pose_interpolation::StretchInterpolation;
 
-use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
-use crate::output::print_json;
+use crate::options::{CacheOpts, SourceOpts, TableOpts};
 
 mod gpdm;
 mod graphs;
+mod interpolation;
 mod pose_metric;
 mod transitions;
 
@@ -189,118 +186,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             return pose_metric::run(ctx, &subject, &source, &opts);
         }
     };
-    let s = open(ctx, &subject, &source)?;
-    let topo = s.topology();
-    let mut rows = Vec::new();
-    // Per pair: (lambda, linear edge distortion, non-linear edge distortion, linear volume
-    // change, non-linear volume change) over lambda = 0, 0.1, ..., 1, when plots are asked for.
-    let mut sweeps: Vec<(String, Vec<[f64; 5]>)> = Vec::new();
-    for pair in &pairs {
-        let (from, to) = pair.split_once(',').ok_or_else(|| anyhow::anyhow!("--pair {pair:?}: expected FROM,TO"))?;
-        let (gi, gj) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
-        let pi = s.frame(gi).expect("resolved");
-        let t0 = std::time::Instant::now();
-        let interp = NonlinearInterpolator::new(topo, pi, s.frame(gj).expect("resolved"), s.up_axis)
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        let nonlinear = interp.at(lambda, stretch);
-        let secs = t0.elapsed().as_secs_f64();
-        let linear = interp.linear(lambda);
-        let pj = interp.aligned_target();
-        let row = json!({
-            "pair": pair,
-            "lambda": lambda,
-            "linear": { "edge_distortion": edge_length_distortion(topo, pi, pj, &linear, lambda), "volume_change": volume_change(topo, pi, pj, &linear, lambda) },
-            "nonlinear": { "edge_distortion": edge_length_distortion(topo, pi, pj, &nonlinear, lambda), "volume_change": volume_change(topo, pi, pj, &nonlinear, lambda) },
-            "nonlinear_seconds": secs,
-        });
-        rows.push(row);
-        if output.is_some() {
-            let sweep = (0..=10)
-                .map(|k| {
-                    let l = k as f64 / 10.0;
-                    let (lin, non) = (interp.linear(l), interp.at(l, stretch));
-                    [
-                        l,
-                        edge_length_distortion(topo, pi, pj, &lin, l),
-                        edge_length_distortion(topo, pi, pj, &non, l),
-                        volume_change(topo, pi, pj, &lin, l),
-                        volume_change(topo, pi, pj, &non, l),
-                    ]
-                })
-                .collect();
-            sweeps.push((pair.clone(), sweep));
-        }
-    }
-    if let Some(dir) = &output {
-        write_interpolation_plots(dir, &s.name, &rows, &sweeps)?;
-    }
-    if ctx.json {
-        print_json(&json!({ "subject": s.name, "rows": rows }));
-        return Ok(());
-    }
-    println!(
-        "subject {} ({} vertices, {} triangles), lambda = {lambda}",
-        s.name,
-        topo.n_vertices(),
-        topo.n_triangles()
-    );
-    println!(
-        "{:<28} {:>14} {:>14} {:>14} {:>14} {:>9}",
-        "pair", "edge lin.", "edge nonlin.", "volume lin.", "volume nonlin.", "time"
-    );
-    for r in &rows {
-        println!(
-            "{:<28} {:>14.5} {:>14.5} {:>14.5} {:>14.5} {:>8.3}s",
-            r["pair"].as_str().unwrap_or(""),
-            r["linear"]["edge_distortion"].as_f64().unwrap_or(f64::NAN),
-            r["nonlinear"]["edge_distortion"].as_f64().unwrap_or(f64::NAN),
-            r["linear"]["volume_change"].as_f64().unwrap_or(f64::NAN),
-            r["nonlinear"]["volume_change"].as_f64().unwrap_or(f64::NAN),
-            r["nonlinear_seconds"].as_f64().unwrap_or(f64::NAN),
-        );
-    }
-    Ok(())
-}
-
-/// `interpolation.json` and `distortion.svg/png`: each measure over lambda, one colour per pair,
-/// linear dashed and non-linear solid (thesis Fig. 2.8 reads them at lambda = 0.5).
-fn write_interpolation_plots(
-    dir: &std::path::Path,
-    name: &str,
-    rows: &[serde_json::Value],
-    sweeps: &[(String, Vec<[f64; 5]>)],
-) -> anyhow::Result<()> {
-    use surfcap_plot::{LineChart, Series, write_line_chart};
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let palette = [(31, 95, 191), (208, 48, 48), (46, 158, 68), (224, 138, 0), (120, 60, 170)];
-    for (stem, title, lin, non) in
-        [("distortion", "edge-length distortion over lambda", 1, 2), ("volume", "volume change over lambda", 3, 4)]
-    {
-        let mut series = Vec::new();
-        for (k, (pair, sweep)) in sweeps.iter().enumerate() {
-            let color = palette[k % palette.len()];
-            for (col, dashed, kind) in [(lin, true, "linear"), (non, false, "non-linear")] {
-                series.push(Series {
-                    name: format!("{pair} {kind}"),
-                    points: sweep.iter().map(|r| (r[0], r[col])).collect(),
-                    color,
-                    dashed,
-                    markers: false,
-                });
-            }
-        }
-        let chart = LineChart {
-            title: format!("{name}: {title}"),
-            x_label: "lambda".into(),
-            y_label: if stem == "volume" { "relative volume change".into() } else { "relative edge distortion".into() },
-            series,
-        };
-        write_line_chart(&dir.join(stem), &chart)?;
-    }
-    let v = json!({ "subject": name, "rows": rows, "sweeps": sweeps.iter().map(|(p, s)| json!({ "pair": p, "lambda_linear_edge_nonlinear_edge_linear_volume_nonlinear_volume": s })).collect::<Vec<_>>() });
-    let path = dir.join("interpolation.json");
-    surfcap_mesh::atomic::write_file(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
-    })?;
-    Ok(())
+    interpolation::run(ctx, &subject, &source, pairs, lambda, stretch, output.as_deref())
 }

@@ -1,102 +1,35 @@
-//! `surfcap eval pose-metric <subject>`: thesis 2.3.2, Evaluation (Fig. 2.5-2.7).
+//! `surfcap eval pose-metric`: our pose distance and the Euclidean one against the skeleton
+//! ground truth (thesis 2.3.2, Fig. 2.5-2.7; `surfcap_eval::pose_metric_eval` computes it; this
+//! command writes the report and the correlogram plot and prints the table).
 
 use std::path::Path;
 
-use anyhow::Context;
-use serde_json::json;
-use surfcap_eval::correlation::{distance_correlation, pearson};
-use surfcap_eval::mantel_test::{correlogram, mantel};
-use surfcap_eval::skeleton_distance::{euler_distance, joint_selection, local_euler_angles};
-use surfcap_eval::{condensed, pair_index};
-use surfcap_geometry::distance_matrix::DistanceParams;
-use surfcap_geometry::pose_distance::PoseMetric;
-use surfcap_mesh::Sequence;
+use surfcap_eval::mantel_test::CorrelogramClass;
+use surfcap_eval::pose_metric_eval::{MetricAgreement, PoseMetricOptions, pose_metric_eval};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::PoseMetricOpts;
 use crate::options::{SourceOpts, open};
-use crate::output::print_json;
-
-/// Permutations behind each correlogram class's 95% null limits.
-const CLASS_PERMUTATIONS: usize = 999;
+use crate::output::write_json;
 
 pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpts) -> anyhow::Result<()> {
     let s = open(ctx, path, source)?;
-    for q in s.sequences() {
-        anyhow::ensure!(
-            q.joints.is_some(),
-            "sequence {:?} has no ground-truth joints: eval pose-metric needs joint matrices \
-             (joints.npy, as in the KayKit and robot datasets)",
-            q.name
-        );
-    }
-    let first = s.sequences()[0].joints.as_ref().expect("checked");
-    for q in s.sequences() {
-        anyhow::ensure!(
-            q.joints.as_ref().expect("checked").names == first.names,
-            "sequence {:?} has another skeleton",
-            q.name
-        );
-    }
-    let joints = joint_selection(first);
-    anyhow::ensure!(!joints.is_empty(), "no joints left after leaving out roots and rig helpers");
-    let n_all = s.n_frames();
-    let n = n_all.min(o.max_frames.max(3));
-    let chosen: Vec<usize> = (0..n).map(|k| k * n_all / n).collect();
-
-    // A subject of the chosen frames, in order, for the mesh distances.
-    let nv = s.topology().n_vertices();
-    let mut pos = Vec::with_capacity(n * 3 * nv);
-    for &g in &chosen {
-        pos.extend_from_slice(s.frame(g).expect("in range"));
-    }
-    let sub = s.derived(format!("{}-eval", s.name), Sequence::new("frames", nv, pos)?)?;
-    let pipe = o.cache.pipeline(ctx, sub);
-    let dist = |metric| -> anyhow::Result<Vec<f64>> {
-        let params = DistanceParams { metric, ..Default::default() };
-        Ok(condensed(n, &pipe.distances(&params)?.value.values))
-    };
-    let ours = dist(PoseMetric::Deformation)?;
-    let eucl = dist(PoseMetric::Euclidean)?;
-    let angles: Vec<Vec<[f64; 3]>> = chosen
-        .iter()
-        .map(|&g| {
-            let (si, f) = s.frame_index().locate(g).expect("in range");
-            local_euler_angles(s.sequences()[si].joints.as_ref().expect("checked"), f, &joints)
-        })
-        .collect();
-    let mut truth = vec![0.0; n * (n - 1) / 2];
-    for i in 0..n {
-        for j in i + 1..n {
-            truth[pair_index(n, i, j)] = euler_distance(&angles[i], &angles[j]);
-        }
-    }
-    let stats = |d: &[f64], seed: u64| {
-        let m = mantel(n, &truth, d, o.permutations, seed);
-        json!({
-            "pearson": pearson(&truth, d),
-            "distance_correlation": distance_correlation(&truth, d),
-            "mantel_p_value": m.p_value,
-            "mantel_exceed": m.exceed,
-            "mantel_null_mean": m.null_mean,
-            "mantel_null_std": m.null_std,
-        })
-    };
-    let (s_ours, s_eucl) = (stats(&ours, o.seed), stats(&eucl, o.seed));
-    let c_ours = correlogram(&truth, &ours, o.classes, CLASS_PERMUTATIONS, o.seed);
-    let c_eucl = correlogram(&truth, &eucl, o.classes, CLASS_PERMUTATIONS, o.seed);
-    let mid = |c: &surfcap_eval::mantel_test::CorrelogramClass| 0.5 * (c.lo + c.hi);
-    let line = |name: &str, pts: Vec<(f64, f64)>, color, dashed, markers| Series {
+    let opts =
+        PoseMetricOptions { max_frames: o.max_frames, permutations: o.permutations, classes: o.classes, seed: o.seed };
+    let progress = Box::new(crate::progress::Bar::new(ctx));
+    let r = pose_metric_eval(&s, &o.cache.store(), progress, &opts)?;
+    let mid = |c: &CorrelogramClass| 0.5 * (c.lo + c.hi);
+    let line = |name: &str, points: Vec<(f64, f64)>, color, dashed, markers| Series {
         name: name.into(),
-        points: pts,
+        points,
         color,
         dashed,
         markers,
     };
-    let red = (210, 30, 30);
-    let blue = (30, 70, 210);
+    let (red, blue) = ((210, 30, 30), (30, 70, 210));
+    let (c_ours, c_eucl) = (&r.correlogram.ours, &r.correlogram.euclidean);
     let chart = LineChart {
-        title: format!("Mantel correlogram: {} ({} frames)", s.name, n),
+        title: format!("Mantel correlogram: {} ({} frames)", r.subject, r.frames_used),
         x_label: "ground-truth distance (class centre, rad)".into(),
         y_label: "Pearson r within class".into(),
         series: vec![
@@ -108,50 +41,35 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpt
             line("", c_eucl.iter().map(|c| (mid(c), c.null_lo)).collect(), blue, true, false),
         ],
     };
-    let plots = write_line_chart(&o.output.join("correlogram"), &chart).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let classes = |c: &[surfcap_eval::mantel_test::CorrelogramClass]| {
-        c.iter()
-            .map(|k| json!({"lo": k.lo, "hi": k.hi, "pairs": k.pairs, "r": k.r, "null_lo": k.null_lo, "null_hi": k.null_hi}))
-            .collect::<Vec<_>>()
-    };
-    let report = json!({
-        "subject": s.name,
-        "frames_used": n,
-        "frames_total": n_all,
-        "joints_used": joints.iter().map(|&j| first.names[j].clone()).collect::<Vec<_>>(),
-        "permutations": o.permutations,
-        "seed": o.seed,
-        "ours": s_ours,
-        "euclidean": s_eucl,
-        "correlogram": { "ours": classes(&c_ours), "euclidean": classes(&c_eucl), "class_permutations": CLASS_PERMUTATIONS },
-        "plots": plots,
-    });
+    let plots = write_line_chart(&o.output.join("correlogram"), &chart)?;
+    let mut report = serde_json::to_value(&r)?;
+    report["plots"] = serde_json::to_value(&plots)?;
     let rp = o.output.join("pose-metric.json");
-    surfcap_mesh::atomic::write_file(&rp, |w| {
-        serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)
-    })
-    .with_context(|| format!("writing {}", rp.display()))?;
-    if ctx.json {
-        print_json(&report);
-        return Ok(());
-    }
-    println!(
-        "subject {}: {n} of {n_all} frames, {} joints (roots and rig helpers left out), {} Mantel permutations",
-        s.name,
-        joints.len(),
-        o.permutations
-    );
-    println!("{:<18} {:>10} {:>10}", "", "Eucl.", "Ours");
-    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-    for (label, key) in
-        [("Pearson Corr.", "pearson"), ("Distance Corr.", "distance_correlation"), ("Mantel p-value", "mantel_p_value")]
-    {
-        println!("{label:<18} {:>10.4} {:>10.4}", f(&s_eucl, key), f(&s_ours, key));
-    }
-    println!(
-        "wrote {}, {}",
-        rp.display(),
-        plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-    );
+    write_json(&rp, &report)?;
+    ctx.result(&report, || {
+        println!(
+            "subject {}: {} of {} frames, {} joints (roots and rig helpers left out), {} Mantel permutations",
+            r.subject,
+            r.frames_used,
+            r.frames_total,
+            r.joints_used.len(),
+            o.permutations
+        );
+        println!("{:<18} {:>10} {:>10}", "", "Eucl.", "Ours");
+        type Field = fn(&MetricAgreement) -> f64;
+        let rows: [(&str, Field); 3] = [
+            ("Pearson Corr.", |m| m.pearson),
+            ("Distance Corr.", |m| m.distance_correlation),
+            ("Mantel p-value", |m| m.mantel_p_value),
+        ];
+        for (label, f) in rows {
+            println!("{label:<18} {:>10.4} {:>10.4}", f(&r.euclidean), f(&r.ours));
+        }
+        println!(
+            "wrote {}, {}",
+            rp.display(),
+            plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+        );
+    });
     Ok(())
 }
