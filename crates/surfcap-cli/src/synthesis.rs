@@ -146,7 +146,7 @@ pub fn run_path(
     search: &PathSearch,
     out: &OutOpts,
 ) -> anyhow::Result<PathOutcome> {
-    let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search).map_err(anyhow::Error::msg)?;
+    let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search)?;
     let (pred_mean, pred_max) = mean_max(&r.errors);
     let report = json!({
         "constraint": "path",

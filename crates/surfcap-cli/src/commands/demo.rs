@@ -118,8 +118,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         subject.frame(from).expect("resolved"),
         subject.frame(to).expect("resolved"),
         subject.up_axis,
-    )
-    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    )?;
     let steps = 12usize;
     let nv = subject.topology().n_vertices();
     let mut pos = Vec::with_capacity(steps * 3 * nv);

@@ -63,7 +63,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let t0 = std::time::Instant::now();
-    let interp = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let interp = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis)?;
     let setup = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
     let mut positions = Vec::with_capacity(a.steps * 3 * nv);

@@ -53,8 +53,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let d = pipe.chain_distances()?.value;
     let s = pipe.subject();
     let t0 = std::time::Instant::now();
-    let t = transition_frames(s, &d.values, (i, li), (j, lj), p.slope)
-        .map_err(|e| anyhow::anyhow!("{e}"))?
+    let t = transition_frames(s, &d.values, (i, li), (j, lj), p.slope)?
         .context("the table's warp could not be recovered")?;
     let secs = t0.elapsed().as_secs_f64();
     let (frames, warp) = (t.frames, t.warp);

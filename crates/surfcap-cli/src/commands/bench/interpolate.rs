@@ -23,7 +23,7 @@ pub(super) fn run(
     let mut solve = Vec::new();
     for _ in 0..repeat.max(1) {
         let t0 = Instant::now();
-        let it = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let it = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis)?;
         setup.push(t0.elapsed().as_secs_f64());
         let t1 = Instant::now();
         std::hint::black_box(it.at(0.5, StretchInterpolation::Linear));

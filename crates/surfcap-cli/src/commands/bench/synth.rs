@@ -80,11 +80,11 @@ pub(super) fn run(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
             [x, 0.0, 1.5 * (2.0 * std::f64::consts::PI * x / 14.0).sin()]
         })
         .collect();
-    let curve = Curve::new(points, vec![0, 2]).map_err(anyhow::Error::msg)?;
+    let curve = Curve::new(points, vec![0, 2])?;
     let mut search = PathSearch::for_fps(prep.subject().fps);
     search.branching = branching.unwrap_or(search.branching);
     let t3 = Instant::now();
-    let path = follow_path(&prep.model, &prep.graph, &curve, &[], None, &search).map_err(anyhow::Error::msg)?;
+    let path = follow_path(&prep.model, &prep.graph, &curve, &[], None, &search)?;
     let path_secs = t3.elapsed().as_secs_f64();
     let path_err = path.errors.iter().sum::<f64>() / path.errors.len() as f64;
     // Ten key poses, 60 frames apart, and one distance-and-time query.
@@ -111,15 +111,14 @@ pub(super) fn run(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
     let mut key_err = 0i64;
     for (k, w) in keys.windows(2).enumerate() {
         let want = 60 * (k as i64 + 1);
-        let walk = tg.walk_with_duration(w[0], w[1], want - now, longest).map_err(anyhow::Error::msg)?;
+        let walk = tg.walk_with_duration(w[0], w[1], want - now, longest)?;
         now += walk.frames as i64;
         key_err += (now - want).abs();
     }
     let key_secs = t5.elapsed().as_secs_f64();
     let (a, b) = (hubs[rng.random_range(0..hubs.len())], hubs[rng.random_range(0..hubs.len())]);
     let t6 = Instant::now();
-    let (reach, _) =
-        tg.walk_with_distance_and_time(a, b, 10.0, 300, (0.3, 10.0), longest).map_err(anyhow::Error::msg)?;
+    let (reach, _) = tg.walk_with_distance_and_time(a, b, 10.0, 300, (0.3, 10.0), longest)?;
     let reach_secs = t6.elapsed().as_secs_f64();
     let report = json!({
         "frames": n, "vertices": prep.subject().topology().n_vertices(), "alpha": alpha, "threads": rayon::current_num_threads(),

@@ -51,9 +51,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
     let scales = (a.distance_scale.0, a.time_scale.0);
-    let (w, cost) = tg
-        .walk_with_distance_and_time(from, to, a.distance, frames, scales, tg.longest_edge())
-        .map_err(anyhow::Error::msg)?;
+    let (w, cost) = tg.walk_with_distance_and_time(from, to, a.distance, frames, scales, tg.longest_edge())?;
     let search_seconds = t0.elapsed().as_secs_f64();
     let report = json!({
         "constraint": "reach", "from": a.from, "to": a.to,
