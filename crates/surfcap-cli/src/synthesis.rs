@@ -169,14 +169,23 @@ pub fn run_path(
     Ok(PathOutcome { frames: errors.len(), played, mean_error: mean, max_error: max, search_seconds: r.seconds })
 }
 
+/// Summary of a key-pose timing run.
+pub struct KeyposesOutcome {
+    pub played: Played,
+    /// The output frame at which each key pose appears.
+    pub obtained: Vec<i64>,
+    pub mean_abs_error: f64,
+    pub search_seconds: f64,
+}
+
 /// Key-pose timing (thesis 3.5.2): the walk through `keys` meeting their requested times as
-/// closely as the graph allows, written with its report; returns it with the obtained times.
+/// closely as the graph allows, written with its report.
 pub fn run_keyposes(
     ctx: &crate::Ctx,
     prep: &Prepared,
     keys: &[KeyPose],
     out: &OutOpts,
-) -> anyhow::Result<(Played, Vec<i64>, f64)> {
+) -> anyhow::Result<KeyposesOutcome> {
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
     let longest = tg.longest_edge();
@@ -203,5 +212,5 @@ pub fn run_keyposes(
     });
     let played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.up()), "keyposes", out, report)?;
     played.save_report()?;
-    Ok((played, obtained, search_seconds))
+    Ok(KeyposesOutcome { played, obtained, mean_abs_error, search_seconds })
 }

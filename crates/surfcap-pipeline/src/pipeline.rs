@@ -57,6 +57,8 @@ impl<T> Clone for Fetched<T> {
 /// The all-pairs pose distances of a subject.
 ///
 /// On disk: `distance-<metric>-<key>.npy`, f64 `[F, F]`, row-major over the global frame index.
+/// (Not geometry's `DistanceMatrix`: its count of skipped zero-area triangles is not stored, so a
+/// matrix read from the cache could not fill it truthfully.)
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseDistances {
     pub n: usize,
@@ -347,7 +349,7 @@ fn check_shape(shape: &[usize], expected: &[usize], what: &'static str) -> Resul
 }
 
 /// alpha must be a positive number (thesis eq. 3.2-3.3).
-pub fn check_alpha(alpha: f64) -> Result<()> {
+fn check_alpha(alpha: f64) -> Result<()> {
     if alpha.is_finite() && alpha > 0.0 {
         Ok(())
     } else {

@@ -15,11 +15,11 @@ use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::path_following::PathSearch;
 
 use surfcap_pipeline::constraint_files::read_curve;
-use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
+use surfcap_pipeline::{GraphKind, GraphParams};
 
 use crate::html_report::write_report;
 use crate::mannequin_spec::{MannequinArgs, build};
-use crate::options::{OutOpts, TableOpts};
+use crate::options::{CacheOpts, OutOpts, TableOpts};
 use crate::output::print_json;
 use crate::subject_summary::{describe, print_summary};
 use crate::synthesis::{Prepared, run_path};
@@ -97,8 +97,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 
     // Pose geometry (thesis 2.3-2.4): all-pairs distances and a non-linear interpolation. The
     // distances go to the demo's own cache, where the later steps read them.
-    let store = CacheStore::in_folder(a.output.join("cache"), false);
-    let pipe = Pipeline::new(subject.clone(), store, Box::new(crate::progress::Bar::new(ctx)));
+    let pipe = CacheOpts { cache_dir: Some(a.output.join("cache")), no_cache: false }.pipeline(ctx, subject.clone());
     let d = pipe.distances(&DistanceParams::default())?.value;
     let n = d.n;
     let dist_path = a.output.join("distances.npy");

@@ -13,7 +13,6 @@ pub(super) fn run(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64,
         sequences >= 1 && frames >= 2 * sequences,
         "--frames {frames} --sequences {sequences}: expected at least two frames per sequence"
     );
-    surfcap_pipeline::pipeline::check_alpha(alpha)?;
     let index =
         surfcap_mesh::FrameIndex::new((0..sequences).map(|k| frames / sequences + usize::from(k < frames % sequences)));
     let n = frames;

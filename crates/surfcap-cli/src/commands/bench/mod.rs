@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use surfcap_mesh::{NoProgress, Subject};
 
-use crate::options::TableOpts;
+use crate::options::{Positive, TableOpts};
 
 mod distance;
 mod graph;
@@ -82,8 +82,8 @@ pub enum What {
         /// Sequences the frames are split into.
         #[arg(long, default_value_t = 20)]
         sequences: usize,
-        #[arg(long, default_value_t = 0.05)]
-        alpha: f64,
+        #[arg(long, default_value = "0.05")]
+        alpha: Positive,
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
@@ -136,7 +136,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             transitions::run(ctx, subject, frames, sample, &table, fps)
         }
         What::Interpolate { subject, from, to, repeat, fps } => interpolate::run(ctx, subject, &from, &to, repeat, fps),
-        What::Graph { frames, sequences, alpha, seed } => graph::run(ctx, frames, sequences, alpha, seed),
+        What::Graph { frames, sequences, alpha, seed } => graph::run(ctx, frames, sequences, alpha.0, seed),
         What::Learn(l) => learn::run(ctx, &l),
         What::Synth(b) => synth::run(ctx, b),
     }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use crate::options::TableOpts;
+use crate::options::{CacheOpts, TableOpts};
 
 /// `bench synth`: graph build and query latency on a procedural subject.
 #[derive(clap::Args, Debug)]
@@ -57,13 +57,13 @@ pub(super) fn run(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
     let s = mannequin_subject("bench", &m, &clips, 30.0)?;
     let build_secs = t0.elapsed().as_secs_f64();
     let tmp = tempfile::TempDir::new()?;
-    let store = surfcap_pipeline::CacheStore::in_folder(cache_dir.unwrap_or_else(|| tmp.path().into()), false);
     let params = surfcap_pipeline::GraphParams {
         table: TableOpts::default().params(s.fps)?,
         kind: surfcap_pipeline::GraphKind::Essential,
         alpha,
     };
-    let pipe = surfcap_pipeline::Pipeline::new(s, store, Box::new(crate::progress::Bar::new(ctx)));
+    let cache = CacheOpts { cache_dir: Some(cache_dir.unwrap_or_else(|| tmp.path().into())), no_cache: false };
+    let pipe = cache.pipeline(ctx, s);
     let t1 = Instant::now();
     let _ = pipe.chain_distances()?;
     let dist_secs = t1.elapsed().as_secs_f64();

@@ -8,23 +8,10 @@ use std::path::{Path, PathBuf};
 
 use surfcap_eval::gpdm_eval::{GpdmEvalOptions, gpdm_eval};
 use surfcap_learn::Mat;
+use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use crate::options::{SourceOpts, open};
 use crate::output::write_json;
-
-#[derive(Debug)]
-pub struct Opts {
-    pub sequences: Vec<String>,
-    pub vertices: usize,
-    pub max_frames: usize,
-    pub latent_dim: usize,
-    pub samples: usize,
-    pub seed: u64,
-    /// L-BFGS iterations at most (None: the library's default).
-    pub iterations: Option<usize>,
-    pub output: PathBuf,
-}
 
 /// The learning curve and the latent trajectories (dimensions 1 and 2) with the HMC variations.
 fn plots(
@@ -81,31 +68,18 @@ fn plots(
     Ok(written)
 }
 
-pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyhow::Result<()> {
-    let s = open(ctx, path, source)?;
-    let opts = GpdmEvalOptions {
-        sequences: o.sequences.clone(),
-        vertices: o.vertices,
-        max_frames: o.max_frames,
-        latent_dim: o.latent_dim,
-        samples: o.samples,
-        seed: o.seed,
-        iterations: o.iterations,
-    };
-    let r = gpdm_eval(&s, &opts)?;
-    std::fs::create_dir_all(&o.output).map_err(|e| anyhow::anyhow!("creating {}: {e}", o.output.display()))?;
+pub fn run(ctx: &crate::Ctx, s: &Subject, opts: &GpdmEvalOptions, output: &Path) -> anyhow::Result<()> {
+    let r = gpdm_eval(s, opts)?;
+    std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("creating {}: {e}", output.display()))?;
     let latents: Vec<(String, &Mat<f64>)> = r.sequences.iter().map(|q| q.name.clone()).zip(r.latents.iter()).collect();
-    let mut written = plots(&o.output, &r.subject, &r.fit.history, &latents, &r.trajectories)?;
-    let latent_path = o.output.join("latent.npy");
+    let mut written = plots(output, &r.subject, &r.fit.history, &latents, &r.trajectories)?;
+    let latent_path = output.join("latent.npy");
     surfcap_learn::matrix::save_npy(&latent_path, r.model.latent())?;
     written.push(latent_path);
-    let model_path = o.output.join("gpdm.model.json");
+    let model_path = output.join("gpdm.model.json");
     write_json(&model_path, &r.model)?;
     written.push(model_path);
-    let mut report = serde_json::to_value(&r)?;
-    report["written"] = serde_json::to_value(&written)?;
-    let rp = o.output.join("gpdm.json");
-    write_json(&rp, &report)?;
+    let (report, rp) = super::save_report(output, "gpdm.json", &r, "written", &written)?;
     ctx.result(&report, || {
         let (fit, e) = (&r.fit, &r.training_mean_vertex_error);
         let n: usize = r.sequences.iter().map(|q| q.frames).sum();
@@ -134,7 +108,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
                 h.samples, h.frames, h.seconds, h.acceptance_rate, h.divergences
             );
         }
-        println!("wrote {} and {} more files in {}", rp.display(), written.len(), o.output.display());
+        println!("wrote {} and {} more files in {}", rp.display(), written.len(), output.display());
     });
     Ok(())
 }

@@ -2,34 +2,15 @@
 //! 3.3.3, Fig. 3.2 and 3.8; `surfcap_eval::graph_comparison_eval` computes it; this command
 //! writes the report and plots and prints the table).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use surfcap_eval::graph_comparison_eval::{AlphaRow, GraphComparisonOptions, graph_comparison_eval};
+use surfcap_pipeline::Pipeline;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
-use crate::output::write_json;
-
-/// Options of `surfcap eval graphs`.
-pub struct EvalOpts {
-    pub alphas: Vec<f64>,
-    pub plot_pairs: usize,
-    pub output: PathBuf,
-    pub table: TableOpts,
-    pub cache: CacheOpts,
-}
-
-pub fn eval(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &EvalOpts) -> anyhow::Result<()> {
-    anyhow::ensure!(!o.alphas.is_empty(), "--alpha: expected at least one value");
-    for &a in &o.alphas {
-        surfcap_pipeline::pipeline::check_alpha(a)?;
-    }
-    let s = open(ctx, path, source)?;
-    let table = o.table.params(s.fps)?;
-    let pipe = o.cache.pipeline(ctx, s);
-    let opts = GraphComparisonOptions { alphas: o.alphas.clone(), plot_pairs: o.plot_pairs, table };
-    let r = graph_comparison_eval(&pipe, &opts)?;
-    std::fs::create_dir_all(&o.output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", o.output.display()))?;
+pub fn run(ctx: &crate::Ctx, pipe: Pipeline, opts: &GraphComparisonOptions, output: &Path) -> anyhow::Result<()> {
+    let r = graph_comparison_eval(&pipe, opts)?;
+    std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
     let (blue, red) = ((31, 119, 180), (214, 39, 40));
     let series = |name: &str, points: Vec<(f64, f64)>, color, markers| Series {
         name: name.into(),
@@ -48,11 +29,11 @@ pub fn eval(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &EvalOpts) ->
         ],
     };
     let mut plots = write_line_chart(
-        &o.output.join("density"),
+        &output.join("density"),
         &chart("Graph density (eq. 3.4)", "density", &|x| x.essential_graph.density, &|x| x.motion_graph.density),
     )?;
     plots.extend(write_line_chart(
-        &o.output.join("mean_cost"),
+        &output.join("mean_cost"),
         &chart("Mean shortest-path cost", "mean cost", &|x| x.essential_graph.mean, &|x| x.motion_graph.mean),
     )?);
     for c in &r.path_costs {
@@ -66,12 +47,9 @@ pub fn eval(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &EvalOpts) ->
             ],
         };
         let stem = format!("paths_alpha_{}", c.alpha.to_string().replace('.', "_"));
-        plots.extend(write_line_chart(&o.output.join(stem), &chart)?);
+        plots.extend(write_line_chart(&output.join(stem), &chart)?);
     }
-    let mut report = serde_json::to_value(&r)?;
-    report["plots"] = serde_json::to_value(&plots)?;
-    let rp = o.output.join("graphs.json");
-    write_json(&rp, &report)?;
+    let (report, rp) = super::save_report(output, "graphs.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
             "subject {} ({} frames); shortest-path costs over the pairs the motion graph connects (thesis Fig. 3.8)",
@@ -88,7 +66,7 @@ pub fn eval(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &EvalOpts) ->
                 x.alpha, m.mean, m.std, e.mean, e.std, m.density, e.density, x.pairs_where_motion_graph_is_cheaper
             );
         }
-        println!("wrote {} and {} plots in {} ({:.1} s)", rp.display(), plots.len(), o.output.display(), r.seconds);
+        println!("wrote {} and {} plots in {} ({:.1} s)", rp.display(), plots.len(), output.display(), r.seconds);
     });
     Ok(())
 }

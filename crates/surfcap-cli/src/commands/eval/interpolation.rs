@@ -7,24 +7,14 @@ use std::path::Path;
 use anyhow::Context;
 use serde_json::json;
 use surfcap_eval::interpolation_eval::{InterpolationEval, InterpolationOptions, interpolation_eval};
-use surfcap_geometry::pose_interpolation::StretchInterpolation;
+use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use crate::options::{SourceOpts, open};
 use crate::output::write_json;
 
-pub fn run(
-    ctx: &crate::Ctx,
-    subject: &Path,
-    source: &SourceOpts,
-    pairs: Vec<String>,
-    lambda: f64,
-    stretch: StretchInterpolation,
-    output: Option<&Path>,
-) -> anyhow::Result<()> {
-    let s = open(ctx, subject, source)?;
-    let opts = InterpolationOptions { pairs, lambda, stretch, sweeps: output.is_some() };
-    let r = interpolation_eval(&s, &opts)?;
+pub fn run(ctx: &crate::Ctx, s: &Subject, opts: &InterpolationOptions, output: Option<&Path>) -> anyhow::Result<()> {
+    let lambda = opts.lambda;
+    let r = interpolation_eval(s, opts)?;
     if let Some(dir) = output {
         write_plots(dir, &r)?;
     }

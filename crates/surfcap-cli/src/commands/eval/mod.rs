@@ -1,26 +1,20 @@
 //! `surfcap eval ...`: the numbers the issues ask for, reproducible by anyone.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use surfcap_eval::{
+    GpdmEvalOptions, GraphComparisonOptions, InterpolationOptions, PoseMetricOptions, TransitionCostsOptions,
+};
 use surfcap_geometry::pose_interpolation::StretchInterpolation;
 
-use crate::options::{CacheOpts, SourceOpts, TableOpts};
+use crate::options::{CacheOpts, Positive, SourceOpts, TableOpts, open};
+use crate::output::write_json;
 
 mod gpdm;
 mod graphs;
 mod interpolation;
 mod pose_metric;
 mod transitions;
-
-/// Options of `eval pose-metric`.
-pub struct PoseMetricOpts {
-    pub max_frames: usize,
-    pub permutations: usize,
-    pub classes: usize,
-    pub seed: u64,
-    pub output: PathBuf,
-    pub cache: CacheOpts,
-}
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -81,7 +75,7 @@ pub enum What {
         subject: PathBuf,
         /// Values of alpha.
         #[arg(long = "alpha", value_delimiter = ',', default_value = "0.01,0.02,0.03,0.05,0.1,0.2")]
-        alphas: Vec<f64>,
+        alphas: Vec<Positive>,
         /// Frame pairs in the shortest-path plots.
         #[arg(long, default_value_t = 200)]
         plot_pairs: usize,
@@ -154,17 +148,21 @@ pub enum What {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let (subject, pairs, lambda, stretch, output, source) = match a.what {
+    match a.what {
         What::Interpolation { subject, pairs, lambda, stretch, output, source } => {
-            (subject, pairs, lambda, stretch, output, source)
+            let opts = InterpolationOptions { pairs, lambda, stretch, sweeps: output.is_some() };
+            interpolation::run(ctx, &open(ctx, &subject, &source)?, &opts, output.as_deref())
         }
         What::Transitions { subject, slopes, fixed, plot_pairs, output, cache, source } => {
-            let opts = transitions::Opts { slopes, fixed, plot_pairs, output, cache };
-            return transitions::run(ctx, &subject, &source, &opts);
+            let opts = TransitionCostsOptions { slopes, fixed, plot_pairs };
+            transitions::run(ctx, cache.pipeline(ctx, open(ctx, &subject, &source)?), &opts, &output)
         }
         What::Graphs { subject, alphas, plot_pairs, output, table, cache, source } => {
-            let opts = graphs::EvalOpts { alphas, plot_pairs, output, table, cache };
-            return graphs::eval(ctx, &subject, &source, &opts);
+            anyhow::ensure!(!alphas.is_empty(), "--alpha: expected at least one value");
+            let s = open(ctx, &subject, &source)?;
+            let alphas = alphas.iter().map(|a| a.0).collect();
+            let opts = GraphComparisonOptions { alphas, plot_pairs, table: table.params(s.fps)? };
+            graphs::run(ctx, cache.pipeline(ctx, s), &opts, &output)
         }
         What::Gpdm {
             subject,
@@ -178,13 +176,37 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             output,
             source,
         } => {
-            let opts = gpdm::Opts { sequences, vertices, max_frames, latent_dim, samples, seed, iterations, output };
-            return gpdm::run(ctx, &subject, &source, &opts);
+            let opts = GpdmEvalOptions { sequences, vertices, max_frames, latent_dim, samples, seed, iterations };
+            gpdm::run(ctx, &open(ctx, &subject, &source)?, &opts, &output)
         }
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
-            let opts = PoseMetricOpts { max_frames, permutations, classes, seed, output, cache };
-            return pose_metric::run(ctx, &subject, &source, &opts);
+            let opts = PoseMetricOptions { max_frames, permutations, classes, seed };
+            pose_metric::run(ctx, &open(ctx, &subject, &source)?, &cache, &opts, &output)
         }
-    };
-    interpolation::run(ctx, &subject, &source, pairs, lambda, stretch, output.as_deref())
+    }
+}
+
+/// Writes an evaluation's report to `dir/name`: `result` as JSON with the files the command
+/// wrote beside it added under `files_key`. Returns the report and its path.
+fn save_report<T: serde::Serialize>(
+    dir: &Path,
+    name: &str,
+    result: &T,
+    files_key: &str,
+    files: &[PathBuf],
+) -> anyhow::Result<(serde_json::Value, PathBuf)> {
+    let mut report = serde_json::to_value(result)?;
+    report[files_key] = serde_json::to_value(files)?;
+    let path = dir.join(name);
+    write_json(&path, &report)?;
+    Ok((report, path))
+}
+
+/// `wrote <report>, <plot>, <plot>...`
+fn print_wrote(report: &Path, plots: &[PathBuf]) {
+    println!(
+        "wrote {}, {}",
+        report.display(),
+        plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    );
 }

@@ -6,18 +6,21 @@ use std::path::Path;
 
 use surfcap_eval::mantel_test::CorrelogramClass;
 use surfcap_eval::pose_metric_eval::{MetricAgreement, PoseMetricOptions, pose_metric_eval};
+use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use super::PoseMetricOpts;
-use crate::options::{SourceOpts, open};
-use crate::output::write_json;
+use super::{print_wrote, save_report};
+use crate::options::CacheOpts;
 
-pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpts) -> anyhow::Result<()> {
-    let s = open(ctx, path, source)?;
-    let opts =
-        PoseMetricOptions { max_frames: o.max_frames, permutations: o.permutations, classes: o.classes, seed: o.seed };
+pub fn run(
+    ctx: &crate::Ctx,
+    s: &Subject,
+    cache: &CacheOpts,
+    opts: &PoseMetricOptions,
+    output: &Path,
+) -> anyhow::Result<()> {
     let progress = Box::new(crate::progress::Bar::new(ctx));
-    let r = pose_metric_eval(&s, &o.cache.store(), progress, &opts)?;
+    let r = pose_metric_eval(s, &cache.store(), progress, opts)?;
     let mid = |c: &CorrelogramClass| 0.5 * (c.lo + c.hi);
     let line = |name: &str, points: Vec<(f64, f64)>, color, dashed, markers| Series {
         name: name.into(),
@@ -41,11 +44,8 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpt
             line("", c_eucl.iter().map(|c| (mid(c), c.null_lo)).collect(), blue, true, false),
         ],
     };
-    let plots = write_line_chart(&o.output.join("correlogram"), &chart)?;
-    let mut report = serde_json::to_value(&r)?;
-    report["plots"] = serde_json::to_value(&plots)?;
-    let rp = o.output.join("pose-metric.json");
-    write_json(&rp, &report)?;
+    let plots = write_line_chart(&output.join("correlogram"), &chart)?;
+    let (report, rp) = save_report(output, "pose-metric.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
             "subject {}: {} of {} frames, {} joints (roots and rig helpers left out), {} Mantel permutations",
@@ -53,7 +53,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpt
             r.frames_used,
             r.frames_total,
             r.joints_used.len(),
-            o.permutations
+            opts.permutations
         );
         println!("{:<18} {:>10} {:>10}", "", "Eucl.", "Ours");
         type Field = fn(&MetricAgreement) -> f64;
@@ -65,11 +65,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &PoseMetricOpt
         for (label, f) in rows {
             println!("{label:<18} {:>10.4} {:>10.4}", f(&r.euclidean), f(&r.ours));
         }
-        println!(
-            "wrote {}, {}",
-            rp.display(),
-            plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-        );
+        print_wrote(&rp, &plots);
     });
     Ok(())
 }

@@ -2,27 +2,16 @@
 //! transition_costs_eval` computes it; this command writes the report and plots and prints
 //! the table).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use surfcap_eval::transition_costs_eval::{TransitionCostsOptions, transition_costs_eval};
+use surfcap_pipeline::Pipeline;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use crate::options::{CacheOpts, SourceOpts, open};
-use crate::output::write_json;
+use super::{print_wrote, save_report};
 
-pub struct Opts {
-    pub slopes: Vec<usize>,
-    pub fixed: Option<usize>,
-    pub plot_pairs: usize,
-    pub output: PathBuf,
-    pub cache: CacheOpts,
-}
-
-pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyhow::Result<()> {
-    let s = open(ctx, path, source)?;
-    let pipe = o.cache.pipeline(ctx, s);
-    let opts = TransitionCostsOptions { slopes: o.slopes.clone(), fixed: o.fixed, plot_pairs: o.plot_pairs };
-    let r = transition_costs_eval(&pipe, &opts)?;
+pub fn run(ctx: &crate::Ctx, pipe: Pipeline, opts: &TransitionCostsOptions, output: &Path) -> anyhow::Result<()> {
+    let r = transition_costs_eval(&pipe, opts)?;
     let (name, fixed, p_plot, sample) = (&r.subject, r.fixed_length, r.plot.slope, &r.plot.sample);
     let xs = |f: &dyn Fn(usize) -> f64| (0..sample.len()).map(|x| (x as f64, f(x))).collect::<Vec<_>>();
     let series = |name: String, points, color| Series { name, points, color, dashed: false, markers: false };
@@ -44,8 +33,8 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
             series(format!("DTW + variable lengths (p = {p_plot})"), xs(&|k| sample[k].duration as f64), (210, 30, 30)),
         ],
     };
-    let mut plots = write_line_chart(&o.output.join("costs"), &costs)?;
-    plots.extend(write_line_chart(&o.output.join("durations"), &durations)?);
+    let mut plots = write_line_chart(&output.join("costs"), &costs)?;
+    plots.extend(write_line_chart(&output.join("durations"), &durations)?);
     let d = &r.plot.distances;
     let heat = surfcap_plot::HeatMap {
         title: match &r.plot.shown {
@@ -63,11 +52,8 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
         origin: (0, 0),
         path: r.plot.shown.as_ref().map(|w| w.path.clone()).unwrap_or_default(),
     };
-    plots.extend(surfcap_plot::write_heat_map(&o.output.join("distances"), &heat)?);
-    let mut report = serde_json::to_value(&r)?;
-    report["plots"] = serde_json::to_value(&plots)?;
-    let rp = o.output.join("transitions.json");
-    write_json(&rp, &report)?;
+    plots.extend(surfcap_plot::write_heat_map(&output.join("distances"), &heat)?);
+    let (report, rp) = save_report(output, "transitions.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
             "subject {name}: {} frames at {} fps; segments {}..{}; standard and DTW-only length {fixed}",
@@ -89,11 +75,7 @@ pub fn run(ctx: &crate::Ctx, path: &Path, source: &SourceOpts, o: &Opts) -> anyh
                 row.dtw_vls_mean_duration
             );
         }
-        println!(
-            "wrote {}, {}",
-            rp.display(),
-            plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-        );
+        print_wrote(&rp, &plots);
     });
     Ok(())
 }

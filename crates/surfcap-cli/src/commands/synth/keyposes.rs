@@ -27,19 +27,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let params = a.graph.params(s.fps)?;
     let keys = read_key_poses(&a.keys, &s)?;
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
-    let (played, obtained, search_seconds) = run_keyposes(ctx, &prep, &keys, &a.out)?;
-    ctx.result(&played.report, || {
+    let o = run_keyposes(ctx, &prep, &keys, &a.out)?;
+    ctx.result(&o.played.report, || {
         // Thesis Fig. 3.18: input, requested and obtained times.
         let row = |label: &str, v: Vec<String>| {
             println!("{label:<10}{}", v.iter().map(|x| format!("{x:>7}")).collect::<String>())
         };
         row("Input", keys.iter().map(|k| k.input.to_string()).collect());
         row("Requested", keys.iter().map(|k| k.requested.to_string()).collect());
-        row("Obtained", obtained.iter().map(|x| x.to_string()).collect());
-        let mean =
-            keys.iter().zip(&obtained).map(|(k, o)| (o - k.requested).abs()).sum::<i64>() as f64 / keys.len() as f64;
-        println!("mean absolute timing error {mean:.2} frames; search {search_seconds:.3} s");
+        row("Obtained", o.obtained.iter().map(|x| x.to_string()).collect());
+        println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
     });
-    ctx.wrote(played.written.iter().chain([&played.report_path]));
+    ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
     Ok(())
 }
