@@ -4,7 +4,7 @@
 
 use std::process::Command;
 
-use surfcap_testkit::{ViewServer, http_request as request, p, surfcap};
+use surfcap_testkit::{ViewServer, http_request as request, http_request_as, p, surfcap};
 
 #[test]
 fn the_viewer_plays_a_real_capture_in_chromium() {
@@ -34,6 +34,16 @@ fn the_viewer_plays_a_real_capture_in_chromium() {
     ] {
         assert_eq!(request(&url, method, target).0, want, "{method} {target}");
     }
+    // DNS rebinding: a request naming another host (or another port) is refused, whatever the route.
+    let port = url.trim_end_matches('/').rsplit(':').next().unwrap().to_string();
+    for host in [format!("evil.example:{port}"), format!("localhost.evil.example:{port}"), "127.0.0.1:1".into()] {
+        for target in ["/", "/api/items", "/api/items/0/positions"] {
+            let (status, body) = http_request_as(&url, "GET", target, &host);
+            assert_eq!(status, 403, "Host {host} {target}");
+            assert!(String::from_utf8_lossy(&body).contains("refused"), "Host {host}");
+        }
+    }
+    assert_eq!(http_request_as(&url, "GET", "/api/items", &format!("localhost:{port}")).0, 200);
     // The page in headless Chromium.
     let tools = surfcap_testkit::workspace_root().join("tools");
     assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");

@@ -164,10 +164,16 @@ pub fn validate_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
 /// # Panics
 /// When the server cannot be reached or does not answer HTTP.
 pub fn http_request(url: &str, method: &str, target: &str) -> (u16, Vec<u8>) {
+    let host = url.trim_start_matches("http://").trim_end_matches('/');
+    http_request_as(url, method, target, host)
+}
+
+/// [`http_request`] with the given `Host` header (as a DNS-rebinding page would send it).
+pub fn http_request_as(url: &str, method: &str, target: &str, host_header: &str) -> (u16, Vec<u8>) {
     use std::io::{Read, Write};
     let host = url.trim_start_matches("http://").trim_end_matches('/');
     let mut s = std::net::TcpStream::connect(host).expect("the server accepts connections");
-    write!(s, "{method} {target} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").unwrap();
+    write!(s, "{method} {target} HTTP/1.1\r\nHost: {host_header}\r\nConnection: close\r\n\r\n").unwrap();
     let mut buf = Vec::new();
     s.read_to_end(&mut buf).unwrap();
     let head_end = buf.windows(4).position(|w| w == b"\r\n\r\n").expect("an HTTP response") + 4;

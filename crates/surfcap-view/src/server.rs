@@ -17,6 +17,8 @@ use crate::{ViewError, ViewItem};
 struct App {
     items: Vec<ViewItem>,
     report: Option<PathBuf>,
+    /// The port the server listens on: requests must name it in their `Host` header.
+    port: u16,
 }
 
 /// What the page is served with.
@@ -39,12 +41,13 @@ pub fn serve(items: Vec<ViewItem>, opts: ServeOptions, ready: impl FnOnce(Socket
         Some(r) => Some(r.canonicalize().map_err(|e| ViewError::Report(r.display().to_string(), e))?),
         None => None,
     };
-    let app = Arc::new(App { items, report });
     let rt = tokio::runtime::Builder::new_current_thread().enable_io().build().map_err(ViewError::Serve)?;
     rt.block_on(async move {
         let addr = SocketAddr::from(([127, 0, 0, 1], opts.port));
         let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| ViewError::Bind(addr.to_string(), e))?;
-        ready(listener.local_addr().map_err(ViewError::Serve)?);
+        let bound = listener.local_addr().map_err(ViewError::Serve)?;
+        let app = Arc::new(App { items, report, port: bound.port() });
+        ready(bound);
         axum::serve(listener, router(app)).await.map_err(ViewError::Serve)
     })
 }
@@ -58,7 +61,37 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/items/{id}/faces", get(faces))
         .route("/report/{*path}", get(report))
         .fallback(not_found)
+        .layer(axum::middleware::from_fn_with_state(app.clone(), check_host))
         .with_state(app)
+}
+
+/// Whether a `Host` header names this server: `127.0.0.1`, `localhost` or `[::1]` with the
+/// port it listens on (a missing port means 80). Anything else is refused, so a page on another
+/// site that re-binds its DNS name to 127.0.0.1 cannot read the items (DNS rebinding).
+pub fn is_local_host(host: &str, port: u16) -> bool {
+    let (name, given) = match host.rsplit_once(':') {
+        Some((n, p)) if !n.is_empty() && (n.ends_with(']') || !n.contains(':')) => (n, p.parse::<u16>().ok()),
+        _ => (host, Some(80)),
+    };
+    let name_ok = ["127.0.0.1", "localhost", "[::1]"].iter().any(|h| name.eq_ignore_ascii_case(h));
+    name_ok && given == Some(port)
+}
+
+async fn check_host(
+    State(app): State<Arc<App>>,
+    request: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
+    let host = request.headers().get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
+    if is_local_host(host, app.port) {
+        next.run(request).await
+    } else {
+        let msg = format!(
+            "refused: this server only answers requests addressed to 127.0.0.1:{p}, localhost:{p} or [::1]:{p} (Host was {host:?})\n",
+            p = app.port
+        );
+        (StatusCode::FORBIDDEN, msg).into_response()
+    }
 }
 
 fn respond(content_type: &str, body: impl Into<Body>) -> Response {
@@ -139,6 +172,28 @@ async fn report(State(app): State<Arc<App>>, UrlPath(path): UrlPath<String>) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_local_host_headers_are_answered() {
+        for ok in ["127.0.0.1:8080", "localhost:8080", "LocalHost:8080", "[::1]:8080"] {
+            assert!(is_local_host(ok, 8080), "{ok}");
+        }
+        for bad in [
+            "",
+            "127.0.0.1",
+            "127.0.0.1:8081",
+            "evil.example:8080",
+            "localhost.evil.example:8080",
+            "127.0.0.1.nip.io:8080",
+            "[::1]",
+            "::1:8080",
+            "localhost:8080:8080",
+            "localhost:",
+        ] {
+            assert!(!is_local_host(bad, 8080), "{bad}");
+        }
+        assert!(is_local_host("localhost", 80));
+    }
 
     #[test]
     fn report_paths_stay_inside_the_folder() {
