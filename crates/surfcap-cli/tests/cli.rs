@@ -564,6 +564,15 @@ fn report_replaces_its_own_folder_only() {
     }
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("crane") && html.contains("Not computed yet"), "no cached distances: {html}");
+    // An included folder's surfcap marker is not one of its results.
+    let inc = tmp.path().join("inc");
+    std::fs::create_dir(&inc).unwrap();
+    std::fs::write(inc.join("scores.json"), r#"{"mean_error": 0.5}"#).unwrap();
+    std::fs::write(inc.join(".surfcap-output.json"), r#"{"written_by": "surfcap", "kind": "eval-graphs"}"#).unwrap();
+    let o = surfcap!(&["report", p(&crane), "-o", p(&out), "--cache-dir", p(&cache), "--include", p(&inc)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("mean_error") && !html.contains("eval-graphs"), "{html}");
     let other = tmp.path().join("site");
     std::fs::create_dir(&other).unwrap();
     std::fs::write(other.join("index.html"), "<html>mine</html>").unwrap();
