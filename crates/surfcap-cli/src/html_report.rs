@@ -129,27 +129,31 @@ pub struct Written {
     pub tables: usize,
 }
 
-/// Writes the report of `s` into `out` (replacing an earlier report there).
-pub fn write_report(pipe: &Pipeline, source: &Path, out: &Path, include: &[PathBuf]) -> anyhow::Result<Written> {
+/// Writes the report of `s` into `out`, replacing an earlier report there; any other non-empty
+/// folder is refused unless `force` (then the new report is written among its files).
+pub fn write_report(
+    pipe: &Pipeline,
+    source: &Path,
+    out: &Path,
+    include: &[PathBuf],
+    force: bool,
+) -> anyhow::Result<Written> {
     let s = pipe.subject();
     let mut files = Vec::new();
     for p in include {
         files.extend(files_of(p)?);
     }
-    // An older report in `out` is replaced whole (never mixed with the new one); any other
-    // non-empty folder is left alone.
-    let is_old_report = std::fs::read_to_string(out.join("index.html")).is_ok_and(|h| h.contains(REPORT_MARK));
-    if is_old_report {
+    // An earlier report in `out` (marked, or older than the marker: its page names surfcap as
+    // generator) is replaced whole, never mixed with the new one; any other non-empty folder is
+    // refused unless `force`.
+    let unmarked_report = std::fs::read_to_string(out.join("index.html")).is_ok_and(|h| h.contains(REPORT_MARK));
+    let old_report = unmarked_report || surfcap_mesh::output_path::is_output_of(out, "report");
+    surfcap_mesh::output_path::claim_dir(out, "report", force || unmarked_report)?;
+    if old_report {
         for sub in ["plots", "anim", "data"] {
             let _ = std::fs::remove_dir_all(out.join(sub));
         }
-    } else if out.read_dir().is_ok_and(|mut d| d.next().is_some()) {
-        anyhow::bail!(
-            "-o {}: the folder is not empty and holds no surfcap report; choose a new or empty folder",
-            out.display()
-        );
     }
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (plots_dir, anim_dir, data_dir) = (out.join("plots"), out.join("anim"), out.join("data"));
     let mut body = String::new();
     let (mut n_plots, mut n_anim, mut n_tables) = (0, 0, 0);

@@ -10,6 +10,7 @@ mod mannequin_spec;
 mod options;
 mod output;
 mod progress;
+mod signals;
 mod subject_summary;
 mod synthesis;
 
@@ -29,6 +30,10 @@ struct Cli {
     /// Print results (and errors) as JSON for scripts.
     #[arg(long, global = true)]
     json: bool,
+    /// Let a folder output replace a non-empty folder that surfcap did not write (by default
+    /// only an empty folder or surfcap's own earlier output of the same kind is replaced).
+    #[arg(long, global = true)]
+    force: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -93,7 +98,8 @@ fn main() -> ExitCode {
             };
         }
     };
-    let ctx = Ctx { quiet: cli.quiet, json: cli.json };
+    let ctx = Ctx { quiet: cli.quiet, json: cli.json, force: cli.force };
+    signals::remove_temporaries_on_signals();
     let json = cli.json;
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {

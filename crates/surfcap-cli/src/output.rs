@@ -6,17 +6,31 @@
 //!   respectively, hidden by `--quiet` and `--json`;
 //! - progress bars: `crate::progress::Bar`, hidden by `--quiet` and `--json`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
+use surfcap_mesh::export::ExportOptions;
 
 /// What every command gets: how to report.
 pub struct Ctx {
     pub quiet: bool,
     pub json: bool,
+    /// `--force`: a folder output may replace a folder surfcap did not write.
+    pub force: bool,
 }
 
 impl Ctx {
+    /// Export options honouring `--force`.
+    pub fn export_options(&self) -> ExportOptions {
+        ExportOptions { force: self.force, ..Default::default() }
+    }
+
+    /// Makes `dir` a folder output of `kind` that the command fills file by file: refused when
+    /// it is a folder surfcap did not write (unless `--force`), else created with its marker.
+    pub fn claim_dir(&self, dir: &Path, kind: &str) -> anyhow::Result<PathBuf> {
+        Ok(surfcap_mesh::output_path::claim_dir(dir, kind, self.force)?)
+    }
+
     /// A note for humans (assumptions, hints) on stderr; silent with --quiet or --json.
     pub fn note(&self, text: &str) {
         if !self.quiet && !self.json {

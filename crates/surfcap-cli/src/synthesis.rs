@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use serde_json::json;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
-use surfcap_mesh::export::{ExportOptions, export};
+use surfcap_mesh::export::export;
 use surfcap_mesh::{Subject, UpAxis};
 use surfcap_motion::graph::Graph;
 use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path, path_errors};
@@ -93,7 +93,7 @@ pub fn write_walk(
     let frames = played.frames();
     let result = s.derived(format!("{}-{name}", s.name), played.sequence)?;
     let bar = crate::progress::Bar::new(ctx);
-    let written = export(&result, out.format(), &out.output, ExportOptions::default(), &bar)?;
+    let written = export(&result, out.format(), &out.output, ctx.export_options(), &bar)?;
     let obj = report.as_object_mut().expect("reports are JSON objects");
     obj.insert("subject".into(), json!(s.name));
     obj.insert("graph".into(), json!({ "kind": prep.params.kind, "alpha": prep.params.alpha,

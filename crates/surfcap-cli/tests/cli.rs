@@ -564,15 +564,281 @@ fn report_replaces_its_own_folder_only() {
     }
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("crane") && html.contains("Not computed yet"), "no cached distances: {html}");
+    // An included folder's surfcap marker is not one of its results.
+    let inc = tmp.path().join("inc");
+    std::fs::create_dir(&inc).unwrap();
+    std::fs::write(inc.join("scores.json"), r#"{"mean_error": 0.5}"#).unwrap();
+    std::fs::write(inc.join(".surfcap-output.json"), r#"{"written_by": "surfcap", "kind": "eval-graphs"}"#).unwrap();
+    let o = surfcap!(&["report", p(&crane), "-o", p(&out), "--cache-dir", p(&cache), "--include", p(&inc)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("mean_error") && !html.contains("eval-graphs"), "{html}");
     let other = tmp.path().join("site");
     std::fs::create_dir(&other).unwrap();
     std::fs::write(other.join("index.html"), "<html>mine</html>").unwrap();
     let o = surfcap!(&["report", p(&crane), "-o", p(&other)]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("not empty"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("did not write") && stderr(&o).contains("--force"), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(other.join("index.html")).unwrap(), "<html>mine</html>");
     let missing = tmp.path().join("nope");
     let o = surfcap!(&["report", p(&crane), "-o", p(&out), "--include", p(&missing)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("nope"), "{}", stderr(&o));
+}
+
+/// A small real subject for the output tests: the three.js horse gallop (16 frames, 494 vertices).
+fn small_source() -> Option<std::path::PathBuf> {
+    Some(surfcap_testkit::shared_data()?.join("threejs_morph_animals/horse_gallop"))
+}
+
+/// Sorted names in `dir` (hidden ones included).
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+/// Issue 15, case 1: a folder output replaces only an empty folder or surfcap's own earlier
+/// output of the same kind; a folder holding anything else is refused (its files untouched)
+/// unless --force.
+#[test]
+fn folder_outputs_never_replace_folders_surfcap_did_not_write() {
+    let Some(src) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let keep = tmp.path().join("keep");
+    std::fs::create_dir_all(keep.join("sub")).unwrap();
+    std::fs::write(keep.join("notes.txt"), "mine").unwrap();
+    std::fs::write(keep.join("sub/data.csv"), "1,2").unwrap();
+    let subject = tmp.path().join("h.subject");
+    let o = surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cache = tmp.path().join("c");
+    let refused: Vec<Vec<&str>> = vec![
+        vec!["import", p(&src), "-o", p(&keep)],
+        vec!["export", p(&subject), "--format", "npy", "-o", p(&keep)],
+        vec!["export", p(&subject), "--format", "obj", "-o", p(&keep)],
+        vec!["export", p(&subject), "--format", "ply", "-o", p(&keep)],
+        vec!["export", p(&subject), "--format", "pc2", "-o", p(&keep)],
+        vec!["transitions", p(&subject), "-o", p(&keep), "--cache-dir", p(&cache)],
+    ];
+    for args in refused {
+        let o = surfcap!(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains("keep") && e.contains("did not write") && e.contains("--force"), "{args:?}: {e}");
+        assert_eq!(names(&keep), ["notes.txt", "sub"], "{args:?} touched the folder");
+        assert_eq!(std::fs::read_to_string(keep.join("sub/data.csv")).unwrap(), "1,2");
+    }
+    assert_eq!(names(tmp.path()), ["h.subject", "keep"], "no temporaries left");
+    // Its own earlier output is replaced, again and again; another kind's is not.
+    for _ in 0..2 {
+        let o = surfcap!(&["export", p(&subject), "--format", "obj", "-o", p(&tmp.path().join("frames")), "--quiet"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = surfcap!(&["export", p(&subject), "--format", "npy", "-o", p(&tmp.path().join("frames"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("another kind of surfcap output (export-obj"), "{}", stderr(&o));
+    // A subject cache written before the marker existed (the exact cache layout) is still
+    // replaced; with a user's file beside it, it is not.
+    std::fs::remove_file(subject.join(".surfcap-output.json")).unwrap();
+    let o = surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(subject.join(".surfcap-output.json")).unwrap();
+    std::fs::write(subject.join("my-notes.txt"), "x").unwrap();
+    let o = surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(subject.join("my-notes.txt").is_file());
+    // --force replaces the foreign folder.
+    let o = surfcap!(&["import", p(&src), "-o", p(&keep), "--quiet", "--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(keep.join("subject.json").is_file() && !keep.join("notes.txt").exists());
+}
+
+/// Issue 15, cases 2 and 3: an output that is, contains or lies inside an input is refused
+/// before anything is written (`import src -o src` deleted the sources; `export dataset
+/// --format npy -o dataset` deleted its licence).
+#[test]
+fn an_output_overlapping_an_input_is_refused() {
+    let Some(src) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let dataset = tmp.path().join("dataset");
+    let seq = dataset.join("horse_gallop");
+    std::fs::create_dir_all(&seq).unwrap();
+    for f in ["template.obj", "positions.npy"] {
+        std::fs::copy(src.join(f), seq.join(f)).unwrap();
+    }
+    std::fs::write(dataset.join("LICENSE.txt"), "CC0").unwrap();
+    let meta = r#"{"source": "three.js", "license": "MIT", "fps": 30}"#;
+    std::fs::write(dataset.join("meta.json"), meta).unwrap();
+    let before = |f: &str| std::fs::read(seq.join(f)).unwrap();
+    let (template, positions) = (before("template.obj"), before("positions.npy"));
+    for (args, how) in [
+        (vec!["import", p(&seq), "--fps", "10", "-o", p(&seq)], "is the input"),
+        (vec!["import", p(&seq), "--fps", "10", "-o", p(&seq.join("x.subject"))], "lies inside the input"),
+        (vec!["import", p(&seq), "--fps", "10", "-o", p(&dataset)], "contains the input"),
+        (vec!["export", p(&dataset), "--format", "npy", "-o", p(&dataset)], "is the input"),
+        (vec!["export", p(&dataset), "--format", "glb", "-o", p(&seq.join("positions.npy"))], "lies inside"),
+        (vec!["distance", p(&dataset), "-o", p(&dataset.join("meta.json"))], "lies inside"),
+    ] {
+        let o = surfcap!(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(how), "{args:?}: {}", stderr(&o));
+    }
+    assert_eq!(before("template.obj"), template);
+    assert_eq!(before("positions.npy"), positions);
+    assert_eq!(std::fs::read_to_string(dataset.join("LICENSE.txt")).unwrap(), "CC0");
+    assert_eq!(std::fs::read_to_string(dataset.join("meta.json")).unwrap(), meta);
+    assert_eq!(names(&dataset), ["LICENSE.txt", "horse_gallop", "meta.json"]);
+    assert_eq!(names(&seq), ["positions.npy", "template.obj"]);
+}
+
+/// Issue 15, case 4: a file output replaces only a regular file: a device, a FIFO or a folder
+/// is an error (and stays what it was); a symlink is written through to its target.
+#[cfg(unix)]
+#[test]
+fn file_outputs_never_replace_devices_fifos_or_folders() {
+    use std::os::unix::fs::FileTypeExt;
+    let Some(src) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let subject = tmp.path().join("h.subject");
+    assert!(surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]).status.success());
+    let fifo = tmp.path().join("pipe");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let dir = tmp.path().join("a-folder");
+    std::fs::create_dir(&dir).unwrap();
+    let cache = tmp.path().join("cache");
+    for (out, what) in [("/dev/null", "a device"), ("/dev/full", "a device"), (p(&fifo), "FIFO"), (p(&dir), "a folder")]
+    {
+        for args in [
+            vec!["export", p(&subject), "--format", "glb", "-o", out],
+            vec!["distance", p(&subject), "-o", out, "--cache-dir", p(&cache)],
+        ] {
+            let o = surfcap!(&args);
+            assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+            assert!(stderr(&o).contains(out) && stderr(&o).contains(what), "{args:?}: {}", stderr(&o));
+        }
+    }
+    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    assert_eq!(names(&dir), Vec::<String>::new());
+    // A symlink to a regular file is written through: the link stays, the target is replaced.
+    let target = tmp.path().join("target.glb");
+    std::fs::write(&target, "old").unwrap();
+    let link = tmp.path().join("link.glb");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let o = surfcap!(&["export", p(&subject), "--format", "glb", "-o", p(&link), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(std::fs::read(&target).unwrap().starts_with(b"glTF"));
+    let leftovers: Vec<String> = names(tmp.path()).into_iter().filter(|n| n.contains(".tmp-")).collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// Runs `args` until a temporary named `.NAME.tmp-PID` of `output` appears, then sends `signal`;
+/// returns the exit code, or None when the run finished before the signal reached it.
+#[cfg(unix)]
+fn interrupt(args: &[&str], output: &Path, signal: i32) -> Option<i32> {
+    use std::os::unix::process::ExitStatusExt;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let name = output.file_name().unwrap().to_string_lossy();
+    let tmp = output.with_file_name(format!(".{name}.tmp-{}", child.id()));
+    while !tmp.exists() {
+        if child.try_wait().unwrap().is_some() {
+            return None;
+        }
+        std::thread::yield_now();
+    }
+    // SAFETY: sending a signal to our own child process.
+    unsafe { libc::kill(child.id() as i32, signal) };
+    let status = child.wait().unwrap();
+    assert_eq!(status.signal(), None, "the program must catch {signal}, not die of it");
+    status.code().filter(|&c| c != 0)
+}
+
+/// Issue 15, case 9: SIGINT or SIGTERM during `export` removes the temporaries, keeps the
+/// previous output and exits 130 or 143; a temporary of a killed run is swept by the next run.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_export_leaves_no_temporary_and_keeps_the_previous_output() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let subject = tmp.path().join("crane.subject");
+    let o = surfcap!(&["import", p(&data.join("vlasic2008/crane")), "-o", p(&subject), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (glb, obj) = (tmp.path().join("crane.glb"), tmp.path().join("frames"));
+    for (format, out) in [("glb", &glb), ("obj", &obj)] {
+        let o = surfcap!(&["export", p(&subject), "--format", format, "-o", p(out), "--quiet"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let glb_bytes = std::fs::read(&glb).unwrap();
+    let frame = obj.join("crane/frame_00174.obj");
+    let frame_bytes = std::fs::read(&frame).unwrap();
+    let obj_names = names(&obj.join("crane"));
+    let all = names(tmp.path());
+    // A glb is written in a fraction of a second: retry until a signal lands during the write.
+    for (format, out, signal, code) in
+        [("obj", &obj, libc::SIGINT, 130), ("glb", &glb, libc::SIGTERM, 143), ("glb", &glb, libc::SIGINT, 130)]
+    {
+        let args = ["export", p(&subject), "--format", format, "-o", p(out)];
+        let got = (0..50).find_map(|_| interrupt(&args, out, signal));
+        assert_eq!(got, Some(code), "{format}: exit code after signal {signal}");
+        assert_eq!(names(tmp.path()), all, "{format}: temporaries left behind");
+        assert_eq!(std::fs::read(&glb).unwrap(), glb_bytes);
+        assert_eq!(std::fs::read(&frame).unwrap(), frame_bytes);
+        assert_eq!(names(&obj.join("crane")), obj_names);
+    }
+    // A killed run's temporaries (a PID no process has) are swept by the next export of that
+    // output; names that are not exactly surfcap's pattern are left alone.
+    let stale = [".crane.glb.tmp-99999999", ".frames.tmp-99999999"];
+    std::fs::write(tmp.path().join(stale[0]), "half a glb").unwrap();
+    std::fs::create_dir_all(tmp.path().join(stale[1]).join("crane")).unwrap();
+    let user = [".crane.glb.tmp-99999999.bak", "crane.glb.tmp-99999999"];
+    for u in user {
+        std::fs::write(tmp.path().join(u), "user").unwrap();
+    }
+    for (format, out) in [("glb", &glb), ("obj", &obj)] {
+        let o = surfcap!(&["export", p(&subject), "--format", format, "-o", p(out), "--quiet"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let mut expected = all.clone();
+    expected.extend(user.map(String::from));
+    expected.sort();
+    assert_eq!(names(tmp.path()), expected);
+}
+
+/// Issue 15, case 10: `cd dir; surfcap import x -o .` is a clear error (the output folder is the
+/// current folder, or contains the input), with no `.out.tmp-PID` left; a relative output with
+/// `..` is written where it points.
+#[test]
+fn import_into_the_current_folder_is_a_clear_error() {
+    let Some(src) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let run = |dir: &Path, args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_surfcap")).args(args).current_dir(dir).output().unwrap()
+    };
+    let o = run(&work, &["import", p(&src), "-o", "."]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("is the current folder"), "{}", stderr(&o));
+    let seq = work.join("horse");
+    std::fs::create_dir(&seq).unwrap();
+    std::fs::copy(src.join("template.obj"), seq.join("template.obj")).unwrap();
+    std::fs::copy(src.join("positions.npy"), seq.join("positions.npy")).unwrap();
+    let o = run(&work, &["import", "horse", "--fps", "30", "-o", "."]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("contains the input horse"), "{}", stderr(&o));
+    assert_eq!(names(&work), ["horse"]);
+    assert_eq!(names(tmp.path()), ["work"]);
+    let o = run(&work, &["import", "horse", "--fps", "30", "-o", "../missing/../h.subject", "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(names(tmp.path()), ["h.subject", "work"]);
 }

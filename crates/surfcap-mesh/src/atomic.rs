@@ -1,16 +1,19 @@
-//! Outputs are written to a temporary sibling and renamed into place, so an interrupted run
-//! never leaves a half-written file or directory, and a failed run keeps the previous output.
+//! Outputs are written to a temporary sibling (`.NAME.tmp-PID`) and renamed into place, so an
+//! interrupted run never leaves a half-written file or folder, and a failed run keeps the
+//! previous output. The output path is resolved first (`crate::output_path`), so `-o .`,
+//! `-o ../x` and symlinks name their real place, and what is there is checked before anything is
+//! written: a file output replaces only a regular file, a folder output only an empty folder or
+//! surfcap's own earlier output of the same kind. Temporaries are registered
+//! (`crate::temporaries`) so a front end can remove them on SIGINT/SIGTERM, and stale ones of
+//! killed runs are swept before the next write of the same output.
 
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-
-fn sibling(path: &Path, tag: &str) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
-    path.with_file_name(format!(".{name}.{tag}-{}", std::process::id()))
-}
+use crate::output_path::{check_dir_place, check_file_place, resolve, write_marker};
+use crate::temporaries::{inside_live, register, register_aside, sibling, sweep_stale};
 
 fn ensure_parent(path: &Path) -> Result<()> {
     match path.parent() {
@@ -19,10 +22,24 @@ fn ensure_parent(path: &Path) -> Result<()> {
     }
 }
 
-/// Writes a file through `write`, then renames it onto `path`.
+/// Resolves an output path and sweeps the stale temporaries next to it (not inside a folder
+/// being built, which is new: sweeping there per file would cost a listing per file).
+fn prepare(path: &Path) -> Result<PathBuf> {
+    let path = resolve(path)?;
+    if !inside_live(&path) {
+        sweep_stale(&path);
+    }
+    Ok(path)
+}
+
+/// Writes a file through `write`, then renames it onto `path`. `path` may be new or a regular
+/// file (a symlink is written through to its target); anything else is refused.
 pub fn write_file(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+    let path = &prepare(path)?;
+    check_file_place(path)?;
     ensure_parent(path)?;
     let tmp = sibling(path, "tmp");
+    let _live = register(&tmp);
     let result = (|| {
         let f = fs::File::create(&tmp)?;
         let mut w = BufWriter::with_capacity(1 << 20, f);
@@ -37,25 +54,25 @@ pub fn write_file(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Re
     })
 }
 
-/// Builds a directory through `fill` (given the temporary directory), then swaps it in for
-/// `path`; a previous directory at `path` is removed only once the new one is complete.
-pub fn write_dir(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+/// Builds a folder output of `kind` through `fill` (given the temporary folder, which already
+/// holds the marker of `kind`), then swaps it in for `path`; a previous folder at `path` is
+/// removed only once the new one is complete. `path` may be new, an empty folder, or surfcap's
+/// earlier output of the same `kind`; any other folder only with `force` (see
+/// `crate::output_path`).
+pub fn write_dir(path: &Path, kind: &str, force: bool, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let path = &prepare(path)?;
+    check_dir_place(path, kind, force)?;
     ensure_parent(path)?;
-    if path.is_file() {
-        return Err(Error::io(
-            path,
-            "write directory",
-            std::io::Error::new(std::io::ErrorKind::AlreadyExists, "a file is in the way"),
-        ));
-    }
     let tmp = sibling(path, "tmp");
+    let _live = register(&tmp);
     let _ = fs::remove_dir_all(&tmp);
     fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, "create directory", e))?;
-    if let Err(e) = fill(&tmp) {
+    if let Err(e) = write_marker(&tmp, kind).and_then(|()| fill(&tmp)) {
         let _ = fs::remove_dir_all(&tmp);
         return Err(e);
     }
     let old = sibling(path, "old");
+    let _aside = register_aside(&old, path);
     let had_old = path.exists();
     if had_old {
         fs::rename(path, &old).map_err(|e| Error::io(path, "move the previous output aside", e))?;
@@ -76,6 +93,15 @@ pub fn write_dir(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ErrorKind;
+    use crate::output_path::MARKER;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
 
     #[test]
     fn failed_writes_keep_the_previous_output() {
@@ -89,10 +115,61 @@ mod tests {
         assert!(r.is_err());
         assert_eq!(fs::read(&f).unwrap(), b"first");
         let dir = d.path().join("out");
-        write_dir(&dir, |t| write_file(&t.join("x"), |w| w.write_all(b"1"))).unwrap();
-        let r = write_dir(&dir, |_| Err(crate::error::Error::new(crate::ErrorKind::Io, "boom")));
+        write_dir(&dir, "test", false, |t| write_file(&t.join("x"), |w| w.write_all(b"1"))).unwrap();
+        let r = write_dir(&dir, "test", false, |_| Err(crate::error::Error::new(crate::ErrorKind::Io, "boom")));
         assert!(r.is_err());
         assert_eq!(fs::read(dir.join("x")).unwrap(), b"1");
-        assert_eq!(fs::read_dir(d.path()).unwrap().count(), 2, "no temporaries left behind");
+        assert_eq!(names(d.path()), ["a.txt", "out"], "no temporaries left behind");
+    }
+
+    #[test]
+    fn a_folder_output_replaces_its_own_kind_only() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path().join("keep");
+        fs::create_dir_all(dir.join("sub")).unwrap();
+        fs::write(dir.join("sub/mine.txt"), b"user data").unwrap();
+        let e = write_dir(&dir, "test", false, |t| write_file(&t.join("x"), |w| w.write_all(b"1"))).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Refused);
+        assert_eq!(fs::read(dir.join("sub/mine.txt")).unwrap(), b"user data");
+        assert_eq!(names(d.path()), ["keep"]);
+        write_dir(&dir, "test", true, |t| write_file(&t.join("x"), |w| w.write_all(b"1"))).unwrap();
+        assert_eq!(names(&dir), [MARKER, "x"], "--force replaced it");
+        write_dir(&dir, "test", false, |t| write_file(&t.join("y"), |w| w.write_all(b"2"))).unwrap();
+        assert_eq!(names(&dir), [MARKER, "y"], "its own earlier output is replaced whole");
+        assert!(write_dir(&dir, "other", false, |_| Ok(())).is_err());
+    }
+
+    #[test]
+    fn file_outputs_never_replace_a_folder() {
+        let d = tempfile::tempdir().unwrap();
+        fs::create_dir(d.path().join("x")).unwrap();
+        assert_eq!(write_file(&d.path().join("x"), |w| w.write_all(b"1")).unwrap_err().kind, ErrorKind::Refused);
+        assert!(d.path().join("x").is_dir());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_symlink_is_written_through_to_its_file() {
+        let d = tempfile::tempdir().unwrap();
+        fs::write(d.path().join("target.txt"), b"old").unwrap();
+        std::os::unix::fs::symlink("target.txt", d.path().join("link.txt")).unwrap();
+        write_file(&d.path().join("link.txt"), |w| w.write_all(b"new")).unwrap();
+        assert!(fs::symlink_metadata(d.path().join("link.txt")).unwrap().file_type().is_symlink());
+        assert_eq!(fs::read(d.path().join("target.txt")).unwrap(), b"new");
+        std::os::unix::fs::symlink("/dev/null", d.path().join("null")).unwrap();
+        assert!(write_file(&d.path().join("null"), |w| w.write_all(b"x")).is_err());
+    }
+
+    #[test]
+    fn relative_outputs_get_their_temporary_beside_the_real_folder() {
+        let d = tempfile::tempdir().unwrap();
+        let inner = d.path().join("a");
+        fs::create_dir(&inner).unwrap();
+        // `a/..` names the temporary folder's parent: its temporary is a sibling of it, not `.out.tmp`.
+        let e = write_dir(&inner.join(".."), "test", false, |_| Ok(())).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Refused, "{e}");
+        assert_eq!(names(d.path()), ["a"]);
+        write_dir(&inner.join("../b"), "test", false, |_| Ok(())).unwrap();
+        assert_eq!(names(d.path()), ["a", "b"]);
     }
 }

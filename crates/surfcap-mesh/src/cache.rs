@@ -58,8 +58,38 @@ pub fn is_cache(path: &Path) -> bool {
     path.join("subject.json").is_file()
 }
 
-/// Writes the subject as a cache folder (atomically: all or nothing).
-pub fn write_cache(path: &Path, subject: &Subject, progress: &dyn Progress) -> Result<()> {
+/// The kind of output a subject cache is, in its folder's marker.
+pub const OUTPUT_KIND: &str = "subject";
+
+/// Whether `path` is a subject cache written before surfcap marked its outputs: a folder whose
+/// `subject.json` is surfcap's and whose every entry is a name the cache layout uses. Such a
+/// folder holds nothing surfcap did not write (a user's file beside the arrays makes it
+/// foreign), so re-importing over it is safe without `--force`.
+fn is_unmarked_cache(path: &Path) -> bool {
+    let ours = |name: &str| {
+        let indexed = |prefix: &str| {
+            name.strip_prefix(prefix)
+                .and_then(|r| r.strip_suffix(".npy"))
+                .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+        };
+        matches!(name, "subject.json" | "faces.npy" | "uv.npy" | "uv_faces.npy")
+            || ["positions_", "labels_", "joints_"].into_iter().any(indexed)
+    };
+    let Ok(entries) = std::fs::read_dir(path) else { return false };
+    let all_ours = entries
+        .into_iter()
+        .all(|e| e.is_ok_and(|e| e.file_type().is_ok_and(|t| t.is_file()) && e.file_name().to_str().is_some_and(ours)));
+    all_ours
+        && std::fs::read(path.join("subject.json"))
+            .ok()
+            .and_then(|t| serde_json::from_slice::<Header>(&t).ok())
+            .is_some_and(|h| h.format == FORMAT)
+}
+
+/// Writes the subject as a cache folder (atomically: all or nothing). `path` may be new, empty,
+/// or a subject cache surfcap wrote (marked, or unmarked but of the exact cache layout); any
+/// other folder only with `force`.
+pub fn write_cache(path: &Path, subject: &Subject, force: bool, progress: &dyn Progress) -> Result<()> {
     let topo = subject.topology();
     let header = Header {
         format: FORMAT.into(),
@@ -82,7 +112,8 @@ pub fn write_cache(path: &Path, subject: &Subject, progress: &dyn Progress) -> R
             .collect(),
     };
     progress.start("writing subject cache", subject.sequences().len() as u64);
-    write_dir(path, |dir| {
+    let force = force || is_unmarked_cache(path);
+    write_dir(path, OUTPUT_KIND, force, |dir| {
         let flat: Vec<u32> = topo.triangles().iter().flatten().copied().collect();
         write_file(&dir.join("faces.npy"), |w| write_npy(w, &[topo.n_triangles(), 3], &flat))?;
         if let Some(uv) = topo.uv() {

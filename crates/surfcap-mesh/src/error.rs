@@ -60,6 +60,9 @@ pub enum ErrorKind {
     Metadata,
     /// A request the program does not support (unknown format, bad argument value).
     Unsupported,
+    /// An output that would destroy what surfcap did not write: one of the command's inputs, a
+    /// device, FIFO or socket, or a folder without surfcap's marker.
+    Refused,
 }
 
 /// An error of the data layer: what went wrong, in which file, and where.

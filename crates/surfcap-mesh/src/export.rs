@@ -28,6 +28,17 @@ pub enum ExportFormat {
 }
 
 impl ExportFormat {
+    /// The kind of output a folder of this format is, in its marker (`crate::output_path`).
+    pub fn output_kind(self) -> &'static str {
+        match self {
+            ExportFormat::Glb => "export-glb",
+            ExportFormat::Obj => "export-obj",
+            ExportFormat::Ply => "export-ply",
+            ExportFormat::Pc2 => "export-pc2",
+            ExportFormat::Npy => "export-npy",
+        }
+    }
+
     pub fn parse(s: &str) -> Option<Self> {
         Some(match s.to_ascii_lowercase().as_str() {
             "glb" | "gltf" => ExportFormat::Glb,
@@ -53,6 +64,8 @@ impl std::str::FromStr for ExportFormat {
 pub struct ExportOptions {
     /// Write ascii rather than binary PLY.
     pub ply_ascii: bool,
+    /// Replace a non-empty output folder that holds no surfcap marker of the same format.
+    pub force: bool,
 }
 
 /// A file-system-safe version of a sequence name.
@@ -116,7 +129,7 @@ pub fn export(
         ExportFormat::Obj | ExportFormat::Ply => {
             let ext = if format == ExportFormat::Obj { "obj" } else { "ply" };
             progress.start(&format!("writing {ext} frames"), subject.n_frames() as u64);
-            write_dir(out, |dir| {
+            write_dir(out, format.output_kind(), opts.force, |dir| {
                 for s in subject.sequences() {
                     let sd = dir.join(safe_name(&s.name));
                     for f in 0..s.n_frames() {
@@ -135,7 +148,7 @@ pub fn export(
             Ok(vec![out.to_path_buf()])
         }
         ExportFormat::Pc2 => {
-            write_dir(out, |dir| {
+            write_dir(out, format.output_kind(), opts.force, |dir| {
                 write_file(&dir.join("template.obj"), |w| obj::write_obj(w, topo, subject.sequences()[0].frame(0)))?;
                 for s in subject.sequences() {
                     let p = dir.join(format!("{}.pc2", safe_name(&s.name)));
@@ -147,7 +160,7 @@ pub fn export(
         }
         ExportFormat::Npy => {
             progress.start("writing npy sequences", subject.sequences().len() as u64);
-            write_dir(out, |dir| {
+            write_dir(out, format.output_kind(), opts.force, |dir| {
                 let mut seqs = serde_json::Map::new();
                 for (s, m) in subject.sequences().iter().zip(meta["sequences"].as_array().unwrap()) {
                     let sd = dir.join(safe_name(&s.name));

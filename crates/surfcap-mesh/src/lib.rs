@@ -18,8 +18,10 @@ pub mod import;
 pub mod io;
 pub mod manifest;
 pub mod natural_order;
+pub mod output_path;
 pub mod progress;
 pub mod subject;
+pub mod temporaries;
 pub mod topology;
 
 pub use connected_components::{Components, connected_components};

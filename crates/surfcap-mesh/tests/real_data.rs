@@ -45,7 +45,7 @@ fn round_trip(subject: &Subject, fps: f64, tmp: &Path) {
         assert_same(subject, &back, true, &format!("{format:?}"));
     }
     let out = tmp.join("ascii");
-    export(subject, ExportFormat::Ply, &out, ExportOptions { ply_ascii: true }, &NoProgress).unwrap();
+    export(subject, ExportFormat::Ply, &out, ExportOptions { ply_ascii: true, force: false }, &NoProgress).unwrap();
     assert_same(subject, &open(&[out.join(&seq_name)], fps), true, "ascii PLY");
 
     let out = tmp.join("npy");
@@ -64,7 +64,7 @@ fn round_trip(subject: &Subject, fps: f64, tmp: &Path) {
     assert_eq!(back.fps, subject.fps);
 
     let out = tmp.join("cache");
-    surfcap_mesh::cache::write_cache(&out, subject, &NoProgress).unwrap();
+    surfcap_mesh::cache::write_cache(&out, subject, false, &NoProgress).unwrap();
     let back = surfcap_mesh::cache::read_cache(&out, &NoProgress).unwrap();
     assert_eq!(&back, subject, "cache round trip");
 }
@@ -188,7 +188,7 @@ fn head_scan_with_uv_atlas() {
     let uv = s.topology().uv().expect("the head has a UV atlas");
     assert_eq!(uv.corners.len(), s.topology().n_triangles());
     let tmp = tempfile::tempdir().unwrap();
-    surfcap_mesh::cache::write_cache(&tmp.path().join("c"), &s, &NoProgress).unwrap();
+    surfcap_mesh::cache::write_cache(&tmp.path().join("c"), &s, false, &NoProgress).unwrap();
     assert_eq!(surfcap_mesh::cache::read_cache(&tmp.path().join("c"), &NoProgress).unwrap(), s);
 }
 

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::io::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::path_following::PathSearch;
@@ -41,6 +41,9 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let inputs: Vec<&std::path::Path> = a.bvh.iter().map(|p| p.as_path()).collect();
+    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
+    ctx.claim_dir(&a.output, "demo")?;
     let bar = crate::progress::Bar::new(ctx);
     let say = |s: &str| ctx.say(s);
     let procedural: Vec<String> = if a.bvh.is_empty() {
@@ -71,7 +74,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         built.fps
     ));
     let source = a.output.join("source");
-    export(&built, ExportFormat::Npy, &source, ExportOptions::default(), &bar)?;
+    export(&built, ExportFormat::Npy, &source, ctx.export_options(), &bar)?;
     say(&format!("2. wrote it as source files (template.obj + positions.npy) in {}", source.display()));
     let opts = surfcap_mesh::import::ImportOptions { name: Some(built.name.clone()), ..Default::default() };
     let imported = surfcap_mesh::import::import(std::slice::from_ref(&source), &opts, &bar)?;
@@ -81,7 +84,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "the imported sequences differ from the built ones"
     );
     let cache = a.output.join("mannequin.subject");
-    surfcap_mesh::cache::write_cache(&cache, &subject, &bar)?;
+    surfcap_mesh::cache::write_cache(&cache, &subject, ctx.force, &bar)?;
     say(&format!("3. imported them into the subject cache {}", cache.display()));
     let mut written = Vec::new();
     for (fmt, name) in [
@@ -91,7 +94,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         (ExportFormat::Pc2, "pc2"),
         (ExportFormat::Npy, "npy"),
     ] {
-        written.extend(export(&subject, fmt, &a.output.join("export").join(name), ExportOptions::default(), &bar)?);
+        written.extend(export(&subject, fmt, &a.output.join("export").join(name), ctx.export_options(), &bar)?);
     }
     say(&format!("4. exported it as glb, OBJ, PLY, PC2 and npy in {}", a.output.join("export").display()));
 
@@ -129,7 +132,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .with_labels(FrameLabel::original_ends(steps))?;
     let blend = subject.derived("mannequin-interpolation", seq)?;
     let interp_path = a.output.join("export/interpolation.glb");
-    written.extend(export(&blend, ExportFormat::Glb, &interp_path, ExportOptions::default(), &bar)?);
+    written.extend(export(&blend, ExportFormat::Glb, &interp_path, ctx.export_options(), &bar)?);
     say(&format!(
         "6. interpolated {from_spec} -> {to_spec} non-linearly in {steps} poses -> {}",
         interp_path.display()
@@ -177,7 +180,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     // The report of what the demo made, and the command that plays it.
     let report_dir = a.output.join("report");
     let include = vec![interp_path.clone(), out.output.clone()];
-    let rep = write_report(&prep.pipe, &cache, &report_dir, &include)?;
+    let rep = write_report(&prep.pipe, &cache, &report_dir, &include, ctx.force)?;
     say(&format!(
         "9. wrote the report {} ({} plots, {} animations); play them in the browser with: surfcap view {}",
         rep.index.display(),

@@ -31,6 +31,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let subject = open(ctx, &a.subject, &a.source)?;
     let params = DistanceParams { metric: a.metric, w: a.w, vertex_weights: None };
     let pipe = a.cache.pipeline(ctx, subject);

@@ -30,9 +30,10 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?.select(&a.sequences)?;
     let bar = crate::progress::Bar::new(ctx);
-    let written = export(&s, a.format, &a.output, ExportOptions { ply_ascii: a.ascii }, &bar)
+    let written = export(&s, a.format, &a.output, ExportOptions { ply_ascii: a.ascii, ..ctx.export_options() }, &bar)
         .with_context(|| format!("exporting {:?}", s.name))?;
     ctx.result(&json!({ "written": written, "frames": s.n_frames(), "sequences": s.sequences().len() }), || {
         ctx.wrote(&written)

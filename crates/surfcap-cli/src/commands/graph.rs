@@ -43,6 +43,8 @@ fn edge_kinds(g: &Graph, s: &Subject) -> (usize, usize) {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let What::Build { subject, output, graph } = a.what;
+    surfcap_mesh::output_path::check_not_input(&output, &[&subject])?;
+    let output = ctx.claim_dir(&output, "graph")?;
     let s = open(ctx, &subject, &graph.source)?;
     let p = graph.params(s.fps)?;
     let pipe = graph.cache.pipeline(ctx, s);
@@ -51,7 +53,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let secs = t0.elapsed().as_secs_f64();
     let (g, s) = (&fetched.value, pipe.subject());
     let (original, transitions) = edge_kinds(g, s);
-    std::fs::create_dir_all(&output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
     let ends: Vec<u32> = g.edges().iter().flat_map(|e| [e.from, e.to]).collect();
     let weights: Vec<f64> = g.edges().iter().map(|e| e.weight).collect();
     surfcap_mesh::atomic::write_file(&output.join("edges.npy"), |o| write_npy(o, &[g.edges().len(), 2], &ends))?;

@@ -24,6 +24,8 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let inputs: Vec<&std::path::Path> = a.sources.iter().map(PathBuf::as_path).collect();
+    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
     let imported = surfcap_mesh::import::import(&a.sources, &a.source.to_import(a.name.clone())?, &bar)?;
@@ -31,7 +33,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         ctx.note(n);
     }
     let s = &imported.subject;
-    surfcap_mesh::cache::write_cache(&a.output, s, &bar)?;
+    surfcap_mesh::cache::write_cache(&a.output, s, ctx.force, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
     ctx.result(
         &json!({

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use serde_json::json;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 
 use crate::options::{SourceOpts, open};
@@ -59,6 +59,7 @@ impl std::str::FromStr for Method {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.steps >= 2, "--steps {}: expected at least 2 (both ends are included)", a.steps);
     let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == Method::Nonlinear);
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
@@ -83,7 +84,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .with_tags(vec!["interpolation".into()]);
     let out = s.derived(format!("{}-interpolation", s.name), seq)?;
     let bar = crate::progress::Bar::new(ctx);
-    let written = export(&out, format, &a.output, ExportOptions::default(), &bar)?;
+    let written = export(&out, format, &a.output, ctx.export_options(), &bar)?;
     ctx.result(&json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() }), || {
         println!(
             "{} interpolation of global frames {gi} -> {gj} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",

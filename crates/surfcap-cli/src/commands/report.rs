@@ -26,9 +26,12 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let mut inputs = vec![a.subject.as_path()];
+    inputs.extend(a.include.iter().map(|p| p.as_path()));
+    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
     let s = open(ctx, &a.subject, &a.source)?;
     let pipe = a.cache.pipeline(ctx, s);
-    let w = write_report(&pipe, &a.subject, &a.output, &a.include)?;
+    let w = write_report(&pipe, &a.subject, &a.output, &a.include, ctx.force)?;
     let result = json!({ "index": w.index, "plots": w.plots, "animations": w.animations, "tables": w.tables });
     ctx.result(&result, || {
         println!(

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::transition_frames::transition_frames;
 
@@ -34,6 +34,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?;
     let p = a.table.params(s.fps)?;
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
@@ -64,7 +65,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .with_tags(vec!["transition".into()]);
     let out = s.derived(format!("{}-transition", s.name), seq)?;
     let bar = crate::progress::Bar::new(ctx);
-    let mut written = export(&out, ExportFormat::Glb, &a.output, ExportOptions::default(), &bar)?;
+    let mut written = export(&out, ExportFormat::Glb, &a.output, ctx.export_options(), &bar)?;
     let report = json!({
         "from": i, "to": j, "source_length": li, "destination_length": lj, "duration": warp.len,
         "normalised_cost": warp.cost, "table_cost": table.cost[k], "slope": p.slope,

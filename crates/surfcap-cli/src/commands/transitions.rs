@@ -24,6 +24,8 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
+    ctx.claim_dir(&a.output, "transitions")?;
     let s = open(ctx, &a.subject, &a.source)?;
     let p = a.table.params(s.fps)?;
     let pipe = a.cache.pipeline(ctx, s);
@@ -32,7 +34,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let secs = t0.elapsed().as_secs_f64();
     let t = &fetched.value;
     let n = t.n;
-    std::fs::create_dir_all(&a.output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", a.output.display()))?;
     let w = |name: &str, f: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
         surfcap_mesh::atomic::write_file(&a.output.join(name), |out| f(out))
     };

@@ -44,7 +44,7 @@ pub(super) fn run(
             tmp = tempfile::tempdir().context("creating a temporary folder")?;
             let p = tmp.path().join("bench.subject");
             let s = generated(frames, vertices)?;
-            surfcap_mesh::cache::write_cache(&p, &s, &NoProgress)?;
+            surfcap_mesh::cache::write_cache(&p, &s, false, &NoProgress)?;
             p
         }
     };

@@ -147,7 +147,22 @@ pub enum What {
     },
 }
 
+/// Refuses an output that overlaps the subject, then makes it an evaluation folder of `kind`.
+fn claim(ctx: &crate::Ctx, output: &Path, subject: &Path, kind: &str) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(output, &[subject])?;
+    ctx.claim_dir(output, kind)?;
+    Ok(())
+}
+
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    match &a.what {
+        What::Interpolation { subject, output: Some(o), .. } => claim(ctx, o, subject, "eval-interpolation")?,
+        What::Interpolation { output: None, .. } => {}
+        What::Transitions { subject, output, .. } => claim(ctx, output, subject, "eval-transitions")?,
+        What::Graphs { subject, output, .. } => claim(ctx, output, subject, "eval-graphs")?,
+        What::Gpdm { subject, output, .. } => claim(ctx, output, subject, "eval-gpdm")?,
+        What::PoseMetric { subject, output, .. } => claim(ctx, output, subject, "eval-pose-metric")?,
+    }
     match a.what {
         What::Interpolation { subject, pairs, lambda, stretch, output, source } => {
             let opts = InterpolationOptions { pairs, lambda, stretch, sweeps: output.is_some() };

@@ -23,6 +23,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject, &a.keys])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let keys = read_key_poses(&a.keys, &s)?;

@@ -45,10 +45,12 @@ fn build_and_write(ctx: &crate::Ctx, a: MannequinArgs) -> anyhow::Result<()> {
     let Some(output) = a.output.clone() else {
         anyhow::bail!("-o/--output: the subject cache folder to write is required");
     };
+    let inputs: Vec<&std::path::Path> = a.bvh.iter().map(|p| p.as_path()).collect();
+    surfcap_mesh::output_path::check_not_input(&output, &inputs)?;
     let t0 = Instant::now();
     let s = build(ctx, &a)?;
     let bar = crate::progress::Bar::new(ctx);
-    surfcap_mesh::cache::write_cache(&output, &s, &bar)?;
+    surfcap_mesh::cache::write_cache(&output, &s, ctx.force, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
     let sequences: Vec<serde_json::Value> =
         s.sequences().iter().map(|q| json!({ "name": q.name, "frames": q.n_frames(), "tags": q.tags })).collect();

@@ -43,6 +43,7 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.distance.is_finite() && a.distance >= 0.0, "--distance {}: expected a distance >= 0", a.distance);
     anyhow::ensure!(a.time.is_finite() && a.time > 0.0, "--time {}: expected a positive number of seconds", a.time);
+    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);

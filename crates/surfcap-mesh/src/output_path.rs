@@ -1,0 +1,290 @@
+//! Where an output may go, decided before anything is written, so that an output never destroys
+//! what surfcap did not write:
+//!
+//! - [`resolve`]: the absolute path an output really names (symlinks followed, `.` and `..`
+//!   resolved), so that `-o .` or `-o link.glb` are judged and replaced by what they are;
+//! - [`check_not_input`]: an output that is, contains or lies inside one of the command's inputs
+//!   is refused (`import src -o src` would delete the sources);
+//! - a file output replaces only a regular file (never a device such as `/dev/null`, a FIFO, a
+//!   socket or a folder); a symlink is written through to its target;
+//! - a folder output replaces only an empty folder or surfcap's own earlier output of the same
+//!   kind, recognised by the marker file [`MARKER`] surfcap writes in every folder it creates;
+//!   anything else needs `force` (the CLI's `--force`).
+
+use std::fs;
+use std::path::{Component, Path, PathBuf};
+
+use crate::error::{Error, ErrorKind, Result, err};
+
+/// The marker file in every folder surfcap writes: `{"written_by": "surfcap", "version", "kind"}`.
+pub const MARKER: &str = ".surfcap-output.json";
+
+/// Symlink hops followed before giving up (as the kernel's ELOOP limit).
+const MAX_HOPS: usize = 40;
+
+fn refused(path: &Path, message: String) -> Error {
+    Error::new(ErrorKind::Refused, message).in_file(path)
+}
+
+/// The absolute path `path` names: every existing component resolved (symlinks followed,
+/// dangling ones too), the part that does not exist yet taken as written. Refuses a path with
+/// no name of its own (`/`).
+pub fn resolve(path: &Path) -> Result<PathBuf> {
+    let r = resolve_hops(path, 0)?;
+    if r.file_name().is_none() {
+        return Err(refused(path, "cannot write an output here: expected a file or folder name".into()));
+    }
+    Ok(r)
+}
+
+fn resolve_hops(path: &Path, hops: usize) -> Result<PathBuf> {
+    if hops > MAX_HOPS {
+        return Err(refused(path, format!("more than {MAX_HOPS} symbolic links to follow")));
+    }
+    let abs = std::path::absolute(path).map_err(|e| Error::io(path, "resolve the path", e))?;
+    let mut out = PathBuf::new();
+    let mut exists = true;
+    for c in abs.components() {
+        match c {
+            Component::Prefix(_) | Component::RootDir => out.push(c),
+            Component::CurDir => {}
+            // `out` holds no symlink (they were followed), so `..` is its parent.
+            Component::ParentDir => {
+                out.pop();
+            }
+            Component::Normal(name) => {
+                out.push(name);
+                if !exists {
+                    continue;
+                }
+                match fs::symlink_metadata(&out) {
+                    Ok(m) if m.file_type().is_symlink() => {
+                        let target = fs::read_link(&out).map_err(|e| Error::io(&out, "read the symbolic link", e))?;
+                        out.pop();
+                        out = resolve_hops(&out.join(target), hops + 1)?;
+                        exists = fs::symlink_metadata(&out).is_ok();
+                    }
+                    Ok(_) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => exists = false,
+                    Err(e) => return Err(Error::io(&out, "look at", e)),
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn what_is(m: &fs::Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = m.file_type();
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if m.is_dir() {
+        "a folder"
+    } else if m.is_file() {
+        "a file"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// A file output (resolved) replaces nothing or a regular file.
+pub(crate) fn check_file_place(path: &Path) -> Result<()> {
+    match fs::symlink_metadata(path) {
+        Ok(m) if m.is_file() => Ok(()),
+        Ok(m) => Err(refused(
+            path,
+            format!(
+                "is {}: expected a file name (surfcap replaces only regular files it can write whole); choose another output",
+                what_is(&m)
+            ),
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io(path, "look at", e)),
+    }
+}
+
+/// The kind recorded in `dir`'s marker, if it holds a marker surfcap wrote.
+fn marker_kind(dir: &Path) -> Option<String> {
+    let v: serde_json::Value = serde_json::from_slice(&fs::read(dir.join(MARKER)).ok()?).ok()?;
+    (v["written_by"] == "surfcap").then(|| v["kind"].as_str().map(str::to_owned)).flatten()
+}
+
+/// Whether `dir` is surfcap's earlier output of `kind` (holds its marker).
+pub fn is_output_of(dir: &Path, kind: &str) -> bool {
+    marker_kind(dir).is_some_and(|k| k == kind)
+}
+
+/// Writes the marker of a folder output of `kind` into `dir`.
+pub(crate) fn write_marker(dir: &Path, kind: &str) -> Result<()> {
+    let v = serde_json::json!({ "written_by": "surfcap", "version": env!("CARGO_PKG_VERSION"), "kind": kind });
+    let p = dir.join(MARKER);
+    fs::write(&p, format!("{v:#}\n")).map_err(|e| Error::io(&p, "write", e))
+}
+
+/// A folder output of `kind` (resolved) may replace what is at `path`: nothing, an empty folder,
+/// surfcap's earlier output of the same kind, or any folder with `force`; never a file, a device,
+/// or the current working directory (or a folder holding it: the shell would be left in a
+/// deleted folder).
+pub(crate) fn check_dir_place(path: &Path, kind: &str, force: bool) -> Result<()> {
+    let m = match fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(Error::io(path, "look at", e)),
+        Ok(m) => m,
+    };
+    if !m.is_dir() {
+        return Err(refused(path, format!("is {}: expected a folder (or a new name) for this output", what_is(&m))));
+    }
+    if std::env::current_dir().and_then(fs::canonicalize).is_ok_and(|cwd| cwd.starts_with(path)) {
+        return Err(refused(
+            path,
+            "is the current folder (or holds it): surfcap builds a folder output beside it and swaps it in whole, which would leave your shell in a deleted folder; run from the parent folder (cd ..) or choose another folder".into(),
+        ));
+    }
+    let empty = fs::read_dir(path).map_err(|e| Error::io(path, "list", e))?.next().is_none();
+    let found = marker_kind(path);
+    if force || empty || found.as_deref() == Some(kind) {
+        return Ok(());
+    }
+    let what = match found {
+        Some(other) => {
+            format!("this folder holds another kind of surfcap output ({other}; this command writes {kind})")
+        }
+        None => format!("this folder holds files surfcap did not write (it has no {MARKER})"),
+    };
+    Err(refused(
+        path,
+        format!(
+            "{what}, and surfcap would replace it whole; choose a new or empty folder, or pass --force to replace it"
+        ),
+    ))
+}
+
+/// Makes `path` a folder output of `kind` that is filled file by file in place (each file written
+/// atomically), rather than built aside and swapped in whole: checks the place as a folder
+/// output, creates the folder and writes the marker. Earlier files of the same kind stay until
+/// overwritten; with `force` a foreign folder's files are kept beside the new ones (nothing is
+/// removed). Returns the resolved folder.
+pub fn claim_dir(path: &Path, kind: &str, force: bool) -> Result<PathBuf> {
+    let path = resolve(path)?;
+    check_dir_place(&path, kind, force)?;
+    fs::create_dir_all(&path).map_err(|e| Error::io(&path, "create directory", e))?;
+    write_marker(&path, kind)?;
+    Ok(path)
+}
+
+/// Refuses an output that is, contains or lies inside one of `inputs` (inputs that do not exist
+/// are left to the readers to report).
+pub fn check_not_input(output: &Path, inputs: &[&Path]) -> Result<()> {
+    let out = resolve(output)?;
+    for input in inputs {
+        let Ok(inp) = fs::canonicalize(input) else { continue };
+        let how = if out == inp {
+            "is"
+        } else if out.starts_with(&inp) {
+            "lies inside"
+        } else if inp.starts_with(&out) {
+            "contains"
+        } else {
+            continue;
+        };
+        return Err(err!(
+            Refused,
+            "the output {how} the input {}: writing it would destroy the input; choose an output outside the inputs",
+            input.display()
+        )
+        .in_file(output));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolve_follows_symlinks_and_dots_and_keeps_missing_parts() {
+        let d = tempfile::tempdir().unwrap();
+        let root = fs::canonicalize(d.path()).unwrap();
+        fs::create_dir(root.join("a")).unwrap();
+        assert_eq!(resolve(&root.join("a/./../a/new/x.glb")).unwrap(), root.join("a/new/x.glb"));
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink("a", root.join("link")).unwrap();
+            assert_eq!(resolve(&root.join("link/f")).unwrap(), root.join("a/f"));
+            std::os::unix::fs::symlink("a/missing.glb", root.join("dangling")).unwrap();
+            assert_eq!(resolve(&root.join("dangling")).unwrap(), root.join("a/missing.glb"));
+            std::os::unix::fs::symlink("loop", root.join("loop")).unwrap();
+            assert_eq!(resolve(&root.join("loop")).unwrap_err().kind, ErrorKind::Refused);
+        }
+        assert!(resolve(Path::new("/")).is_err());
+    }
+
+    #[test]
+    fn folder_outputs_replace_only_empty_or_own_folders() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = fs::canonicalize(d.path()).unwrap().join("o");
+        check_dir_place(&dir, "graph", false).unwrap();
+        fs::create_dir(&dir).unwrap();
+        check_dir_place(&dir, "graph", false).unwrap();
+        fs::write(dir.join("notes.txt"), b"mine").unwrap();
+        let e = check_dir_place(&dir, "graph", false).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Refused);
+        assert!(e.to_string().contains("--force"), "{e}");
+        check_dir_place(&dir, "graph", true).unwrap();
+        write_marker(&dir, "report").unwrap();
+        assert!(check_dir_place(&dir, "graph", false).is_err(), "another kind's marker");
+        write_marker(&dir, "graph").unwrap();
+        check_dir_place(&dir, "graph", false).unwrap();
+        let f = dir.join("notes.txt");
+        assert!(check_dir_place(&f, "graph", true).is_err(), "a file is not a folder, even with force");
+    }
+
+    #[test]
+    fn claim_dir_creates_the_folder_with_its_marker() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = claim_dir(&d.path().join("g"), "graph", false).unwrap();
+        assert_eq!(marker_kind(&dir).as_deref(), Some("graph"));
+        claim_dir(&dir, "graph", false).unwrap();
+    }
+
+    #[test]
+    fn file_outputs_replace_only_regular_files() {
+        let d = tempfile::tempdir().unwrap();
+        check_file_place(&d.path().join("new")).unwrap();
+        fs::write(d.path().join("f"), b"1").unwrap();
+        check_file_place(&d.path().join("f")).unwrap();
+        assert!(check_file_place(d.path()).unwrap_err().to_string().contains("a folder"));
+        #[cfg(unix)]
+        {
+            let e = check_file_place(Path::new("/dev/null")).unwrap_err();
+            assert!(e.to_string().contains("a device"), "{e}");
+        }
+    }
+
+    #[test]
+    fn outputs_overlapping_inputs_are_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let src = d.path().join("src");
+        fs::create_dir(&src).unwrap();
+        fs::write(src.join("template.obj"), b"").unwrap();
+        for (out, how) in
+            [(src.clone(), "is"), (src.join("x.subject"), "lies inside"), (d.path().to_path_buf(), "contains")]
+        {
+            let e = check_not_input(&out, &[&src]).unwrap_err();
+            assert!(e.to_string().contains(how), "{e}");
+        }
+        check_not_input(&d.path().join("src2"), &[&src]).unwrap();
+        check_not_input(&d.path().join("o"), &[Path::new("/no/such/input")]).unwrap();
+    }
+}
