@@ -12,6 +12,7 @@ mod output;
 mod progress;
 mod subject_summary;
 mod synthesis;
+mod travel;
 
 pub use output::Ctx;
 

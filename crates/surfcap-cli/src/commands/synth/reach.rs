@@ -44,6 +44,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.distance.is_finite() && a.distance >= 0.0, "--distance {}: expected a distance >= 0", a.distance);
     anyhow::ensure!(a.time.is_finite() && a.time > 0.0, "--time {}: expected a positive number of seconds", a.time);
     let s = open(ctx, &a.subject, &a.graph.source)?;
+    if a.distance > 0.0 {
+        crate::travel::require_travel(&s, &format!("--distance {}", a.distance), None)?;
+    }
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
     let frames = (a.time * s.fps).round().max(1.0) as usize;
@@ -59,7 +62,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "target_frames": frames, "obtained_frames": w.frames, "time_error_frames": (w.frames as i64 - frames as i64).abs(),
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
-    let played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
+    let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
+    let (net, path) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, prep.up());
+    played.report["net_displacement"] = json!(net);
+    played.report["path_length"] = json!(path);
     played.save_report()?;
     ctx.result(&played.report, || {
         println!(
