@@ -4,20 +4,23 @@
 use surfcap_eval::{RootMotionOptions, root_motion_eval};
 use surfcap_geometry::root_motion_from_contacts::ContactParams;
 
+/// The walks (straight, 90-degree left and right turns, from standstill) end within 5% of the
+/// distance walked from their real final position, heading within 5 degrees; the trajectory
+/// stays within 0.2 m of the real one throughout.
 #[test]
 fn cmu_walks_recover_their_travel_within_5_percent_and_their_heading_within_5_degrees() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let dir = data.join("cmu_bvh");
-    let bvh = ["16_15", "16_17", "16_19", "16_31", "16_36", "16_07", "16_57", "05_18"]
-        .iter()
-        .map(|c| dir.join(format!("{c}.bvh")))
-        .collect();
+    let bvh = ["16_15", "16_17", "16_19", "16_31"].iter().map(|c| dir.join(format!("{c}.bvh"))).collect();
     let r = root_motion_eval(&RootMotionOptions { bvh, vertices: 2000, contacts: ContactParams::default() }).unwrap();
+    assert_eq!(r.clips.len(), 4);
     for c in &r.clips {
-        eprintln!(
-            "{:<6} {:<20} walked {:6.2} m  net {:6.2} -> {:6.2}  mean {:.3} max {:.3}  final {:.3} ({:.1}%)  heading {:?}  contact {}/{}",
-            c.clip, c.tags.join(","), c.distance_walked, c.true_displacement, c.recovered_displacement,
-            c.mean_error, c.max_error, c.final_error, c.final_error_percent, c.heading_error_degrees, c.contact_steps, c.frames - 1
-        );
+        assert!(c.tags.contains(&"walk".to_string()), "{}: {:?}", c.clip, c.tags);
+        assert!(c.distance_walked > 3.0, "{}: walked {}", c.clip, c.distance_walked);
+        assert!(c.final_error_percent < 5.0, "{}: final error {:.1}%", c.clip, c.final_error_percent);
+        let heading = c.heading_error_degrees.expect("a walk ends away from its start");
+        assert!(heading < 5.0, "{}: heading error {heading:.1} degrees", c.clip);
+        assert!(c.max_error < 0.2, "{}: largest trajectory error {:.3} m", c.clip, c.max_error);
+        assert!(c.contact_steps + 2 >= c.frames - 1, "{}: walking has ground contact at every step", c.clip);
     }
 }
