@@ -10,7 +10,8 @@ use surfcap_motion::clip_travel::{IN_PLACE_HEIGHTS_PER_SECOND, subject_height, s
 /// tag restriction selects them) travels. `what` names the constraint in the message.
 pub fn require_travel(s: &Subject, what: &str, allowed: Option<&[bool]>) -> anyhow::Result<()> {
     let travel = subject_travel(s);
-    let chosen: Vec<_> = travel.iter().enumerate().filter(|(q, _)| allowed.is_none_or(|a| a[*q])).map(|x| x.1).collect();
+    let chosen: Vec<_> =
+        travel.iter().enumerate().filter(|(q, _)| allowed.is_none_or(|a| a[*q])).map(|x| x.1).collect();
     if chosen.is_empty() || chosen.iter().any(|t| !t.in_place) {
         return Ok(());
     }

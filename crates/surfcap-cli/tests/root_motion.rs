@@ -19,19 +19,44 @@ fn json(path: &Path) -> serde_json::Value {
 fn path_and_distance_are_refused_on_in_place_clips_naming_them_and_the_way_out() {
     let tmp = tempfile::tempdir().unwrap();
     let subject = tmp.path().join("idle.subject");
-    let o = surfcap!(&["synth", "--procedural", "idle", "--duration", "2", "--vertices", "1000", "-o", p(&subject), "--quiet"]);
+    let o = surfcap!(&[
+        "synth",
+        "--procedural",
+        "idle",
+        "--duration",
+        "2",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&subject),
+        "--quiet"
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let curve = tmp.path().join("line.csv");
     write_line(&curve, 3.0);
     let out = tmp.path().join("out.glb");
-    let o = surfcap!(&["synth", "path", p(&subject), "--curve", p(&curve), "-o", p(&out), "--cache-dir", p(tmp.path())]);
+    let o =
+        surfcap!(&["synth", "path", p(&subject), "--curve", p(&curve), "-o", p(&out), "--cache-dir", p(tmp.path())]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let e = stderr(&o);
     assert!(e.contains("every clip of the subject is in place: idle (") && e.contains("--root-motion contacts"), "{e}");
     assert!(!out.exists(), "nothing written for an impossible request");
     let o = surfcap!(&[
-        "synth", "reach", p(&subject), "--from", "idle:0", "--to", "idle:30", "--distance", "2", "--time", "2", "-o",
-        p(&out), "--cache-dir", p(tmp.path())
+        "synth",
+        "reach",
+        p(&subject),
+        "--from",
+        "idle:0",
+        "--to",
+        "idle:30",
+        "--distance",
+        "2",
+        "--time",
+        "2",
+        "-o",
+        p(&out),
+        "--cache-dir",
+        p(tmp.path())
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("--distance 2 needs clips that travel"), "{}", stderr(&o));
@@ -56,7 +81,17 @@ fn kaykit_knight_in_place_clips_travel_after_import_with_root_motion_from_contac
     args.extend(sources.iter().map(String::as_str));
     args.extend(["--name", "knight", "-o", p(&plain)]);
     assert!(surfcap!(&args).status.success());
-    let o = surfcap!(&["synth", "path", p(&plain), "--curve", p(&curve), "-o", p(&tmp.path().join("x.glb")), "--cache-dir", p(&cache)]);
+    let o = surfcap!(&[
+        "synth",
+        "path",
+        p(&plain),
+        "--curve",
+        p(&curve),
+        "-o",
+        p(&tmp.path().join("x.glb")),
+        "--cache-dir",
+        p(&cache)
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("knight_Walking_A (0.00 meters"), "{}", stderr(&o));
     // With root motion from contacts: the walks and runs travel, the idle does not.
@@ -87,7 +122,18 @@ fn kaykit_knight_in_place_clips_travel_after_import_with_root_motion_from_contac
     std::fs::write(&arc, rows).unwrap();
     for (curve, tolerance) in [(&curve, 0.15), (&arc, 0.5)] {
         let out = tmp.path().join("path.glb");
-        let o = surfcap!(&["synth", "path", p(&moved), "--curve", p(curve), "-o", p(&out), "--cache-dir", p(&cache), "--quiet"]);
+        let o = surfcap!(&[
+            "synth",
+            "path",
+            p(&moved),
+            "--curve",
+            p(curve),
+            "-o",
+            p(&out),
+            "--cache-dir",
+            p(&cache),
+            "--quiet"
+        ]);
         assert!(o.status.success(), "{}", stderr(&o));
         let r = json(&tmp.path().join("path.report.json"));
         let mean = r["mean_error"].as_f64().unwrap();
@@ -101,7 +147,14 @@ fn eval_root_motion_recovers_a_cmu_walk_within_5_percent() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let o = surfcap!(&[
-        "eval", "root-motion", "--bvh", p(&data.join("cmu_bvh/16_15.bvh")), "--vertices", "1000", "-o", p(tmp.path()),
+        "eval",
+        "root-motion",
+        "--bvh",
+        p(&data.join("cmu_bvh/16_15.bvh")),
+        "--vertices",
+        "1000",
+        "-o",
+        p(tmp.path()),
         "--quiet"
     ]);
     assert!(o.status.success(), "{}", stderr(&o));

@@ -14,8 +14,8 @@ use surfcap_geometry::root_motion_from_contacts::{ContactParams, root_motion_fro
 use surfcap_mesh::UpAxis;
 use surfcap_synth::bvh::{Bvh, read_bvh};
 use surfcap_synth::mannequin::{BodyShape, mannequin, skeleton};
-use surfcap_synth::retarget::joint_map;
 use surfcap_synth::mannequin_subject::Clip;
+use surfcap_synth::retarget::joint_map;
 
 use crate::error::{Error, Result};
 
@@ -132,7 +132,7 @@ fn compare(clip: &Clip, truth: &[[f64; 2]], recovered: &[[f64; 2]], contact_step
     let n = truth.len();
     let stride = ((clip.fps / 2.0).round() as usize).max(1);
     let mut samples: Vec<[f64; 2]> = truth.iter().step_by(stride).copied().collect();
-    if (n - 1) % stride != 0 {
+    if !(n - 1).is_multiple_of(stride) {
         samples.push(truth[n - 1]);
     }
     let distance_walked: f64 = samples.windows(2).map(|p| dist(p[0], p[1])).sum();
@@ -159,4 +159,3 @@ fn compare(clip: &Clip, truth: &[[f64; 2]], recovered: &[[f64; 2]], contact_step
         contact_steps,
     }
 }
-

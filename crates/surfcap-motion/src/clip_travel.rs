@@ -37,9 +37,8 @@ pub struct ClipTravel {
 /// Net displacement and path length of the horizontal track of some points (subject units).
 pub fn horizontal_travel(points: &[[f64; 3]], up: UpAxis) -> (f64, f64) {
     let w = up.axis_and_sign().0;
-    let flat = |a: &[f64; 3], b: &[f64; 3]| {
-        (0..3).filter(|&k| k != w).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-    };
+    let flat =
+        |a: &[f64; 3], b: &[f64; 3]| (0..3).filter(|&k| k != w).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
     let net = match (points.first(), points.last()) {
         (Some(a), Some(b)) => flat(a, b),
         _ => 0.0,
@@ -62,7 +61,8 @@ pub fn subject_height(s: &Subject) -> f64 {
 
 /// The travel of one sequence of a subject of height `height` (see [`subject_height`]).
 pub fn clip_travel(q: &Sequence, fps: f64, up: UpAxis, height: f64) -> ClipTravel {
-    let centres: Vec<[f64; 3]> = q.positions().chunks_exact(3 * q.n_vertices()).map(|f| tracked_centre(f, None)).collect();
+    let centres: Vec<[f64; 3]> =
+        q.positions().chunks_exact(3 * q.n_vertices()).map(|f| tracked_centre(f, None)).collect();
     let (net_displacement, path_length) = horizontal_travel(&centres, up);
     let duration_seconds = (q.n_frames().saturating_sub(1)) as f64 / fps;
     let in_place = net_displacement < IN_PLACE_HEIGHTS_PER_SECOND * height * duration_seconds.max(1.0);

@@ -6,8 +6,8 @@ use surfcap_eval::{
     GpdmEvalOptions, GraphComparisonOptions, InterpolationOptions, PoseMetricOptions, RootMotionOptions,
     TransitionCostsOptions,
 };
-use surfcap_geometry::root_motion_from_contacts::ContactParams;
 use surfcap_geometry::pose_interpolation::StretchInterpolation;
+use surfcap_geometry::root_motion_from_contacts::ContactParams;
 
 use crate::options::{CacheOpts, Positive, SourceOpts, TableOpts, open};
 use crate::output::write_json;
@@ -209,7 +209,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         What::RootMotion { bvh, vertices, contact_height, contact_speed, output } => {
             for (name, x) in [("--contact-height", contact_height), ("--contact-speed", contact_speed)] {
-                anyhow::ensure!(x.is_finite() && x > 0.0, "{name} {x}: expected a positive fraction of the subject's height");
+                anyhow::ensure!(
+                    x.is_finite() && x > 0.0,
+                    "{name} {x}: expected a positive fraction of the subject's height"
+                );
             }
             let opts = RootMotionOptions {
                 bvh,
