@@ -65,6 +65,7 @@ pub struct RootMotionEval {
     pub vertices: usize,
     pub contact_height: f64,
     pub contact_speed: f64,
+    pub contact_vertical_speed: f64,
     pub clips: Vec<ClipRootMotion>,
     pub seconds: f64,
 }
@@ -104,6 +105,7 @@ pub fn root_motion_eval(opts: &RootMotionOptions) -> Result<RootMotionEval> {
         vertices: nv,
         contact_height: opts.contacts.height,
         contact_speed: opts.contacts.speed,
+        contact_vertical_speed: opts.contacts.vertical_speed,
         clips,
         seconds: t0.elapsed().as_secs_f64(),
     })

@@ -162,9 +162,14 @@ pub enum What {
         /// Contact height, as a fraction of the subject's height above the ground.
         #[arg(long, default_value_t = ContactParams::default().height)]
         contact_height: f64,
-        /// Contact stillness, as a fraction of the subject's height per second.
+        /// Contact stillness, as a fraction of the subject's height per second: how closely the
+        /// planted vertices move together.
         #[arg(long, default_value_t = ContactParams::default().speed)]
         contact_speed: f64,
+        /// Largest vertical speed of a contact vertex, as a fraction of the subject's height per
+        /// second.
+        #[arg(long, default_value_t = ContactParams::default().vertical_speed)]
+        contact_vertical_speed: f64,
         /// Folder for the report (root-motion.json).
         #[arg(short, long, default_value = "root-motion-eval")]
         output: PathBuf,
@@ -207,8 +212,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let opts = PoseMetricOptions { max_frames, permutations, classes, seed };
             pose_metric::run(ctx, &open(ctx, &subject, &source)?, &cache, &opts, &output)
         }
-        What::RootMotion { bvh, vertices, contact_height, contact_speed, output } => {
-            for (name, x) in [("--contact-height", contact_height), ("--contact-speed", contact_speed)] {
+        What::RootMotion { bvh, vertices, contact_height, contact_speed, contact_vertical_speed, output } => {
+            for (name, x) in [
+                ("--contact-height", contact_height),
+                ("--contact-speed", contact_speed),
+                ("--contact-vertical-speed", contact_vertical_speed),
+            ] {
                 anyhow::ensure!(
                     x.is_finite() && x > 0.0,
                     "{name} {x}: expected a positive fraction of the subject's height"
@@ -217,7 +226,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let opts = RootMotionOptions {
                 bvh,
                 vertices,
-                contacts: ContactParams { height: contact_height, speed: contact_speed },
+                contacts: ContactParams {
+                    height: contact_height,
+                    speed: contact_speed,
+                    vertical_speed: contact_vertical_speed,
+                },
             };
             root_motion::run(ctx, &opts, &output)
         }
