@@ -63,8 +63,9 @@ fn path_and_distance_are_refused_on_in_place_clips_naming_them_and_the_way_out()
 }
 
 /// The knight's in-place walks and runs, with an idle and a jump, imported with root motion
-/// from contacts, follow a straight 6 m line with a mean centre error under 0.15 m and a
-/// 6 m arc of radius 12 m (a 29 degree turn, with clips that only walk straight) under 0.5 m.
+/// from contacts, follow a straight 6 m line with a mean centre error under 0.1 m and a 6 m
+/// arc of radius 12 m (a 29 degree turn, with clips that only walk straight) under 0.2 m (a
+/// tenth of the knight's height; 0.012 m and 0.069 m measured).
 #[test]
 fn kaykit_knight_in_place_clips_travel_after_import_with_root_motion_from_contacts() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
@@ -120,7 +121,7 @@ fn kaykit_knight_in_place_clips_travel_after_import_with_root_motion_from_contac
         })
         .collect();
     std::fs::write(&arc, rows).unwrap();
-    for (curve, tolerance) in [(&curve, 0.15), (&arc, 0.5)] {
+    for (curve, tolerance) in [(&curve, 0.1), (&arc, 0.2)] {
         let out = tmp.path().join("path.glb");
         let o = surfcap!(&[
             "synth",
