@@ -13,6 +13,7 @@ mod progress;
 mod signals;
 mod subject_summary;
 mod synthesis;
+mod travel;
 
 pub use output::Ctx;
 

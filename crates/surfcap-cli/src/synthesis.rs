@@ -162,7 +162,11 @@ pub fn run_path(
     let o = played.report.as_object_mut().expect("object");
     o.insert("mean_error".into(), json!(mean));
     o.insert("max_error".into(), json!(max));
+    // Path length adds up the centre's sway; the net displacement says whether it went anywhere.
+    let (net, _) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, prep.up());
     o.insert("travelled".into(), json!(travelled));
+    o.insert("path_length".into(), json!(travelled));
+    o.insert("net_displacement".into(), json!(net));
     o.insert("per_frame".into(), json!({ "error": errors, "centre": played.centres }));
     o.insert("curve".into(), json!((0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect::<Vec<_>>()));
     played.save_report()?;

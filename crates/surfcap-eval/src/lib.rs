@@ -21,6 +21,7 @@ pub mod graph_comparison_eval;
 pub mod interpolation_eval;
 pub mod mantel_test;
 pub mod pose_metric_eval;
+pub mod root_motion_eval;
 pub mod skeleton_distance;
 pub mod transition_costs_eval;
 
@@ -29,6 +30,7 @@ pub use gpdm_eval::{GpdmEval, GpdmEvalOptions, gpdm_eval};
 pub use graph_comparison_eval::{GraphComparisonEval, GraphComparisonOptions, graph_comparison_eval};
 pub use interpolation_eval::{InterpolationEval, InterpolationOptions, interpolation_eval};
 pub use pose_metric_eval::{PoseMetricEval, PoseMetricOptions, pose_metric_eval};
+pub use root_motion_eval::{RootMotionEval, RootMotionOptions, root_motion_eval};
 pub use transition_costs_eval::{TransitionCostsEval, TransitionCostsOptions, transition_costs_eval};
 
 /// The condensed upper triangle (i < j, row-major) of a row-major N x N matrix.

@@ -15,6 +15,7 @@ pub mod poisson_reconstruction;
 pub mod polar_decomposition;
 pub mod pose_distance;
 pub mod pose_interpolation;
+pub mod root_motion_from_contacts;
 pub mod rotation_log_exp;
 pub mod shape_distortion;
 

@@ -5,11 +5,13 @@
 //! matrix (surfcap-geometry's distance matrix).
 
 pub mod blend;
+pub mod clip_travel;
 pub mod dtw;
 pub mod edge_weights;
 pub mod error;
 pub mod essential_graph;
 pub mod graph;
+pub mod in_place_root_motion;
 pub mod motion_graph;
 pub mod path_following;
 pub mod timed_walk;

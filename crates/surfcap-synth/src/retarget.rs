@@ -13,7 +13,7 @@ use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaterni
 use surfcap_mesh::{Error, ErrorKind, Result};
 
 use crate::bvh::Bvh;
-use crate::mannequin::Mannequin;
+use crate::mannequin::{Mannequin, Skeleton};
 
 /// BVH names that may stand for each mannequin joint.
 fn candidates(mannequin_joint: &str) -> &'static [&'static str] {
@@ -37,9 +37,9 @@ fn candidates(mannequin_joint: &str) -> &'static [&'static str] {
     }
 }
 
-/// Index of the BVH joint for every mannequin joint.
-pub fn joint_map(bvh: &Bvh, m: &Mannequin) -> Result<Vec<usize>> {
-    m.skeleton
+/// Index of the BVH joint for every joint of the mannequin's skeleton.
+pub fn joint_map(bvh: &Bvh, skeleton: &Skeleton) -> Result<Vec<usize>> {
+    skeleton
         .names
         .iter()
         .map(|&name| {
@@ -71,7 +71,7 @@ fn swing(from: Vector3<f64>, to: Vector3<f64>) -> UnitQuaternion<f64> {
 
 /// World transforms of the mannequin's joints for every BVH frame (for `Mannequin::pose`).
 pub fn retarget(bvh: &Bvh, m: &Mannequin, metres_per_unit: f64) -> Result<Vec<Vec<Isometry3<f64>>>> {
-    let map = joint_map(bvh, m)?;
+    let map = joint_map(bvh, &m.skeleton)?;
     let sk = &m.skeleton;
     let idx = |n: &str| sk.names.iter().position(|&x| x == n).expect("mannequin joint");
     let (pelvis, lf, rf, thorax, head, lh, rh) =

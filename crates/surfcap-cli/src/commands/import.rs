@@ -19,8 +19,23 @@ pub struct Args {
     /// Subject name (default: from the manifest or the first source).
     #[arg(long)]
     pub name: Option<String>,
+    /// Give in-place clips (centre of mass not travelling, as game clips are authored) the
+    /// travel their feet imply: `contacts` recovers it from the vertices' ground contacts
+    /// (low, vertically still vertices; the step that keeps the planted foot still). Clips
+    /// that travel are left as they are; changed ones get the tag root_motion_from_contacts.
+    #[arg(long, value_enum, default_value = "none")]
+    pub root_motion: RootMotion,
     #[command(flatten)]
     pub source: SourceOpts,
+}
+
+/// Where in-place clips get root motion from.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RootMotion {
+    /// Keep the clips as they are.
+    None,
+    /// Recover it from ground contacts.
+    Contacts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -32,7 +47,27 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     for n in &imported.notes {
         ctx.note(n);
     }
-    let s = &imported.subject;
+    let mut s = imported.subject;
+    let mut recovered = Vec::new();
+    if a.root_motion == RootMotion::Contacts {
+        let params = surfcap_geometry::root_motion_from_contacts::ContactParams::default();
+        (s, recovered) = surfcap_motion::in_place_root_motion::recover_in_place_root_motion(s, &params)?;
+        if recovered.is_empty() {
+            ctx.note("--root-motion contacts: no clip is in place; nothing changed");
+        }
+        for r in &recovered {
+            ctx.note(&format!(
+                "{}: root motion recovered from ground contacts ({} of {} frame steps with contact): net displacement {:.2} -> {:.2} {}",
+                r.sequence,
+                r.contact_steps,
+                r.frames.saturating_sub(1),
+                r.before,
+                r.after,
+                s.units.name
+            ));
+        }
+    }
+    let s = &s;
     surfcap_mesh::cache::write_cache(&a.output, s, ctx.force, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
     ctx.result(
@@ -44,6 +79,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "vertices": s.topology().n_vertices(),
             "triangles": s.topology().n_triangles(),
             "notes": imported.notes,
+            "root_motion_from_contacts": recovered.iter().map(|r| json!({ "sequence": r.sequence,
+                "net_displacement_before": r.before, "net_displacement_after": r.after,
+                "contact_steps": r.contact_steps, "frames": r.frames })).collect::<Vec<_>>(),
             "seconds": secs,
         }),
         || {

@@ -3,9 +3,11 @@
 use std::path::{Path, PathBuf};
 
 use surfcap_eval::{
-    GpdmEvalOptions, GraphComparisonOptions, InterpolationOptions, PoseMetricOptions, TransitionCostsOptions,
+    GpdmEvalOptions, GraphComparisonOptions, InterpolationOptions, PoseMetricOptions, RootMotionOptions,
+    TransitionCostsOptions,
 };
 use surfcap_geometry::pose_interpolation::StretchInterpolation;
+use surfcap_geometry::root_motion_from_contacts::ContactParams;
 
 use crate::options::{CacheOpts, Positive, SourceOpts, TableOpts, open};
 use crate::output::write_json;
@@ -14,6 +16,7 @@ mod gpdm;
 mod graphs;
 mod interpolation;
 mod pose_metric;
+mod root_motion;
 mod transitions;
 
 #[derive(clap::Args, Debug)]
@@ -145,6 +148,32 @@ pub enum What {
         #[command(flatten)]
         source: SourceOpts,
     },
+    /// Root motion recovered from ground contacts against ground truth (issue 16): BVH clips
+    /// with real root travel drive the mannequin, the horizontal travel is stripped (pelvis
+    /// height and heading kept) and recovered; error of the trajectory, of the final position
+    /// (% of the distance walked) and of the heading, per clip.
+    RootMotion {
+        /// BVH files with real root travel (CMU joint names), e.g. ../shared/data/cmu_bvh/16_*.bvh.
+        #[arg(long, num_args = 1.., required = true)]
+        bvh: Vec<PathBuf>,
+        /// Target vertex count of the mannequin.
+        #[arg(long, default_value_t = 2000)]
+        vertices: usize,
+        /// Contact height, as a fraction of the subject's height above the ground.
+        #[arg(long, default_value_t = ContactParams::default().height)]
+        contact_height: f64,
+        /// Contact stillness, as a fraction of the subject's height per second: how closely the
+        /// planted vertices move together.
+        #[arg(long, default_value_t = ContactParams::default().speed)]
+        contact_speed: f64,
+        /// Largest vertical speed of a contact vertex, as a fraction of the subject's height per
+        /// second.
+        #[arg(long, default_value_t = ContactParams::default().vertical_speed)]
+        contact_vertical_speed: f64,
+        /// Folder for the report (root-motion.json).
+        #[arg(short, long, default_value = "root-motion-eval")]
+        output: PathBuf,
+    },
 }
 
 /// Refuses an output that overlaps the subject, then makes it an evaluation folder of `kind`.
@@ -162,6 +191,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Graphs { subject, output, .. } => claim(ctx, output, subject, "eval-graphs")?,
         What::Gpdm { subject, output, .. } => claim(ctx, output, subject, "eval-gpdm")?,
         What::PoseMetric { subject, output, .. } => claim(ctx, output, subject, "eval-pose-metric")?,
+        What::RootMotion { bvh, output, .. } => {
+            let inputs: Vec<&Path> = bvh.iter().map(PathBuf::as_path).collect();
+            surfcap_mesh::output_path::check_not_input(output, &inputs)?;
+            ctx.claim_dir(output, "eval-root-motion")?;
+        }
     }
     match a.what {
         What::Interpolation { subject, pairs, lambda, stretch, output, source } => {
@@ -197,6 +231,28 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::PoseMetric { subject, max_frames, permutations, classes, seed, output, cache, source } => {
             let opts = PoseMetricOptions { max_frames, permutations, classes, seed };
             pose_metric::run(ctx, &open(ctx, &subject, &source)?, &cache, &opts, &output)
+        }
+        What::RootMotion { bvh, vertices, contact_height, contact_speed, contact_vertical_speed, output } => {
+            for (name, x) in [
+                ("--contact-height", contact_height),
+                ("--contact-speed", contact_speed),
+                ("--contact-vertical-speed", contact_vertical_speed),
+            ] {
+                anyhow::ensure!(
+                    x.is_finite() && x > 0.0,
+                    "{name} {x}: expected a positive fraction of the subject's height"
+                );
+            }
+            let opts = RootMotionOptions {
+                bvh,
+                vertices,
+                contacts: ContactParams {
+                    height: contact_height,
+                    speed: contact_speed,
+                    vertical_speed: contact_vertical_speed,
+                },
+            };
+            root_motion::run(ctx, &opts, &output)
         }
     }
 }

@@ -45,6 +45,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.time.is_finite() && a.time > 0.0, "--time {}: expected a positive number of seconds", a.time);
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
+    if a.distance > 0.0 {
+        crate::travel::require_travel(&s, &format!("--distance {}", a.distance), None)?;
+    }
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
     let frames = (a.time * s.fps).round().max(1.0) as usize;
@@ -60,7 +63,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "target_frames": frames, "obtained_frames": w.frames, "time_error_frames": (w.frames as i64 - frames as i64).abs(),
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
-    let played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
+    let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
+    let (net, path) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, prep.up());
+    played.report["net_displacement"] = json!(net);
+    played.report["path_length"] = json!(path);
     played.save_report()?;
     ctx.result(&played.report, || {
         println!(
