@@ -576,3 +576,83 @@ fn report_replaces_its_own_folder_only() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("nope"), "{}", stderr(&o));
 }
+
+/// The file names of `dir` that start with `prefix`.
+fn files_starting(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| f.file_name().unwrap().to_string_lossy().starts_with(prefix))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn misfitting_or_nan_cache_entries_are_recomputed_with_a_note() {
+    let Some(data) = surfcap_testkit::shared_data() else {
+        return;
+    };
+    use surfcap_mesh::atomic::write_file;
+    use surfcap_mesh::io::npy::{read_npy, write_npy};
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let cat = data.join("walking_cat_depraz/walk");
+    let run = |args: &[&str]| {
+        let mut all = args.to_vec();
+        all.extend([p(&cat), "--fps", "25", "--cache-dir", p(&cache)]);
+        let o = surfcap!(&all);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        o
+    };
+    let d_out = tmp.path().join("d.npy");
+    run(&["distance", "-o", p(&d_out)]);
+    run(&["graph", "build", "-o", p(&tmp.path().join("g"))]);
+    let distance_file = files_starting(&cache, "distance-").pop().unwrap();
+    let table_file = files_starting(&cache, "transitions-").pop().unwrap();
+    let graph_file = files_starting(&cache, "graph-").pop().unwrap();
+    let originals: std::collections::HashMap<&Path, _> =
+        [&distance_file, &table_file, &graph_file].map(|f| (f.as_path(), read_npy::<f64>(f).unwrap())).into();
+    let good = read_npy::<f64>(&distance_file).unwrap();
+    let n = 35;
+    assert_eq!(good.shape, [n, n]);
+    let mut nan = good.data.clone();
+    nan[n + 2] = f64::NAN;
+    let zeros = vec![0.0f64; 4 * n * n];
+    // Each damaged entry (another subject's 16 x 16 matrix, NaN inside the right shape, a
+    // table whose lengths do not fit the frames, a graph edge of NaN weight) is read by every
+    // command that needs it: a new segment length or alpha makes the product above it new.
+    let (t_out, g_out) = (tmp.path().join("t"), tmp.path().join("g"));
+    let cases: [(&Path, Vec<usize>, &[f64], &str); 5] = [
+        (&distance_file, vec![16, 16], &[0.0; 256], "shape [16, 16], expected [35, 35]"),
+        (&distance_file, vec![n, n], &nan, "entry (1, 2) is NaN"),
+        (&table_file, vec![4, 16, 16], &zeros[..4 * 256], "shape [4, 16, 16]"),
+        (&table_file, vec![4, n, n], &zeros, "source lengths"),
+        (&graph_file, vec![2, 3], &[0.0, 1.0, f64::NAN, 1.0, 2.0, 0.5], "weight NaN"),
+    ];
+    let mut fresh = 5;
+    for (file, shape, values, problem) in cases {
+        fresh += 1;
+        let (l_min, alpha) = (fresh.to_string(), format!("0.0{fresh}"));
+        let commands: Vec<Vec<&str>> = if file == distance_file.as_path() {
+            vec![
+                vec!["distance", "-o", p(&d_out)],
+                vec!["transitions", "-o", p(&t_out), "--l-min", &l_min],
+                vec!["graph", "build", "-o", p(&g_out), "--l-min", &l_min, "--l-max", "20"],
+            ]
+        } else if file == table_file.as_path() {
+            vec![vec!["transitions", "-o", p(&t_out)], vec!["graph", "build", "-o", p(&g_out), "--alpha", &alpha]]
+        } else {
+            vec![vec!["graph", "build", "-o", p(&g_out)]]
+        };
+        for command in commands {
+            write_file(file, |w| write_npy(w, &shape, values)).unwrap();
+            let e = stderr(&run(&command));
+            assert!(e.contains(&file.display().to_string()) && e.contains(problem), "{command:?}: {e}");
+            assert!(e.contains("recomputing"), "{command:?}: {e}");
+            assert_eq!(read_npy::<f64>(file).unwrap(), originals[file], "{command:?} replaced {}", file.display());
+        }
+    }
+    let d = read_npy::<f64>(&d_out).unwrap();
+    assert_eq!(d.data, good.data, "the recomputed matrix is the first one");
+}

@@ -66,6 +66,17 @@ pub enum Error {
     )]
     PathStalls { frames: usize, travelled: f64, length: f64 },
 
+    /// A matrix whose size does not match the frames it is for: `what` holds `len` numbers
+    /// where `expected` were expected.
+    #[error("{what}: {len} numbers, expected {expected} for {frames} frames")]
+    MatrixSize { what: &'static str, len: usize, expected: usize, frames: usize },
+    /// A matrix entry that is not a number the algorithm can use (NaN, negative...).
+    #[error("{what}: entry ({row}, {col}) is {value}, expected {expected}")]
+    MatrixEntry { what: &'static str, row: usize, col: usize, value: f64, expected: &'static str },
+    /// A parameter outside its domain (NaN included).
+    #[error("{name} {value}: expected {expected}")]
+    Parameter { name: &'static str, value: f64, expected: &'static str },
+
     /// A timed-walk endpoint outside the graph's frames (0..`frames`).
     #[error("frame {frame} is not in the graph (0..{frames})")]
     FrameNotInGraph { frame: u32, frames: usize },
