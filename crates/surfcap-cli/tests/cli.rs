@@ -656,3 +656,95 @@ fn misfitting_or_nan_cache_entries_are_recomputed_with_a_note() {
     let d = read_npy::<f64>(&d_out).unwrap();
     assert_eq!(d.data, good.data, "the recomputed matrix is the first one");
 }
+
+#[test]
+fn numeric_options_are_checked_when_parsed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let (subject, output) = (tmp.path().join("missing.subject"), tmp.path().join("out"));
+    let (s, out) = (p(&subject), p(&output));
+    for (args, option, range) in [
+        (vec!["distance", s, "-o", out, "--w", "nan"], "'nan' for '--w <W>'", "a finite number >= 0"),
+        (vec!["distance", s, "-o", out, "--w=-1"], "'-1' for '--w <W>'", "a finite number >= 0"),
+        (vec!["info", s, "--fps", "0"], "'0' for '--fps <FPS>'", "a finite number > 0"),
+        (vec!["synth", "path", s, "--curve", "c.csv", "-o", out, "--branching", "0"], "'0' for '--branching", ">= 1"),
+        (vec!["synth", "path", s, "--curve", "c.csv", "-o", out, "--window", "inf"], "'inf' for '--window", "> 0"),
+        (
+            vec!["synth", "reach", s, "--from", "0", "--to", "1", "--distance", "nan", "--time", "4", "-o", out],
+            "--distance",
+            ">= 0",
+        ),
+        (
+            vec!["synth", "reach", s, "--from", "0", "--to", "1", "--distance", "1", "--time", "0", "-o", out],
+            "--time",
+            "> 0",
+        ),
+        (vec!["interpolate", s, "--from", "0", "--to", "1", "--steps", "1", "-o", out], "'1' for '--steps", ">= 2"),
+        (vec!["eval", "interpolation", s, "--pair", "0,1", "--lambda", "1.5"], "--lambda", "in [0, 1]"),
+        (vec!["eval", "transitions", s, "--slopes", "2,0"], "'0' for '--slopes", ">= 1"),
+        (vec!["transitions", s, "-o", out, "--l-min", "0"], "--l-min", ">= 1"),
+        (vec!["graph", "build", s, "--alpha=-0.1"], "--alpha", "> 0"),
+        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", out], "--vertices", "from 1000 to 20000"),
+        (vec!["bench", "graph", "--frames", "0"], "--frames", ">= 1"),
+    ] {
+        let o = surfcap!(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains(option) && e.contains(range), "{args:?}: {e}");
+    }
+    let o = surfcap!(&["distance", s, "-o", out, "--w", "nan", "--cache-dir", p(&cache)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!cache.exists(), "nothing computed or cached");
+}
+
+#[test]
+fn every_failure_under_json_is_one_json_object() {
+    let tmp = tempfile::tempdir().unwrap();
+    let missing = tmp.path().join("missing");
+    for (args, says) in [
+        (vec!["--json", "distance", p(&missing), "-o", "d.npy", "--w", "nan"], "'--w <W>'"),
+        (vec!["info", p(&missing), "--bogus", "--json"], "'--bogus'"),
+        (vec!["--json", "frobnicate"], "'frobnicate'"),
+        (vec!["info", p(&missing), "--json"], "missing"),
+        (vec!["export", p(&missing), "-o", "x", "--json"], "required arguments were not provided: --format"),
+        (vec!["export", p(&missing), "--format", "glb", "-o", "x", "--json"], "missing"),
+    ] {
+        let o = surfcap!(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(o.stdout.is_empty(), "{args:?}: stdout {}", String::from_utf8_lossy(&o.stdout));
+        let e = stderr(&o);
+        let v: serde_json::Value =
+            serde_json::from_str(e.trim()).unwrap_or_else(|_| panic!("{args:?}: not one JSON object: {e}"));
+        assert!(v["error"].as_str().unwrap().contains(says), "{args:?}: {v}");
+        assert_eq!(v["exit_code"], 1);
+    }
+    // Without --json, the same argument error is text.
+    let o = surfcap!(&["frobnicate"]);
+    assert!(stderr(&o).starts_with("error: unrecognized subcommand"), "{}", stderr(&o));
+}
+
+#[test]
+fn messages_pluralise_and_never_print_negative_zero() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = tmp.path().join("one.obj");
+    std::fs::write(&seq, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = surfcap!(&["info", p(&seq), "--fps", "30"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("1 in 1 sequence at"), "{text}");
+    let d = tmp.path().join("d.npy");
+    let o = surfcap!(&[
+        "distance",
+        p(&seq),
+        "--fps",
+        "30",
+        "-o",
+        p(&d),
+        "--no-cache",
+        "--cache-dir",
+        p(&tmp.path().join("c"))
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("mean 0.0000") && !text.contains("-0.0"), "{text}");
+}

@@ -15,8 +15,9 @@ pub enum Error {
         "step {at} of the walk, frame {from} -> {to}, is neither a successive-frame step nor a transition of the graph"
     )]
     NotAnEdge { at: usize, from: u32, to: u32 },
-    /// The Blend of a transition failed (its Poisson system).
-    #[error("blending a transition: {0}")]
+    /// The Blend of a transition failed (its Poisson system, the source: not repeated here, as
+    /// error printers show the chain).
+    #[error("blending a transition")]
     Poisson(#[from] surfcap_geometry::Error),
 
     /// Walk-model rows: a count of numbers that is not a multiple of 3.

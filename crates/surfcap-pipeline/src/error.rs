@@ -26,9 +26,6 @@ pub enum Error {
     /// A frame, tag or vertex the subject does not have, or a request it cannot satisfy.
     #[error("{0}")]
     Request(String),
-    /// Blending a transition (Poisson reconstruction of its interpolated poses).
-    #[error("blending a transition: {0}")]
-    Blend(String),
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -182,6 +182,13 @@ impl Pipeline {
 
     /// The all-pairs pose distance matrix (thesis eq. 2.2, 2.13, 2.14) with `p`.
     pub fn distances(&self, p: &DistanceParams) -> Result<Fetched<PoseDistances>> {
+        if !(p.w.is_finite() && p.w >= 0.0) {
+            return Err(Error::Parameter {
+                name: "w",
+                value: p.w.to_string(),
+                expected: "expected a finite number >= 0",
+            });
+        }
         let key = DistanceKey::new(p);
         let n = self.subject.n_frames();
         self.distances.get_or_try(&key, || {

@@ -36,7 +36,7 @@ pub struct Args {
     #[arg(long, num_args = 1..)]
     pub bvh: Vec<PathBuf>,
     /// Target vertex count of the mannequin.
-    #[arg(long, default_value_t = 2500)]
+    #[arg(long, default_value_t = 2500, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
 }
 
@@ -62,10 +62,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let built = build(ctx, &spec)?;
     say(&format!(
-        "1. built the mannequin ({} vertices) {}: {} sequences ({}), {} frames at {} fps",
+        "1. built the mannequin ({} vertices) {}: {} ({}), {} frames at {} fps",
         built.topology().n_vertices(),
         if a.bvh.is_empty() { "with procedural motions" } else { "driven by the BVH files" },
-        built.sequences().len(),
+        crate::output::count_of(built.sequences().len(), "sequence"),
         built.sequences().iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", "),
         built.n_frames(),
         built.fps
@@ -160,7 +160,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     // Twice the default branching: this graph is small and the S tight (radius ~1.3 m), and the
     // wider search halves the error (0.32 -> 0.17 m) for ~1 s more.
     let search = PathSearch { branching: 16, ..PathSearch::for_fps(subject.fps) };
-    let path = run_path(ctx, &prep, &curve, &[], None, &search, &out)?;
+    let path = run_path(ctx, &prep, &curve, &[], None, &search, &out, &Default::default())?;
     say(&format!(
         "8. followed the S-shaped path {} ({:.1} long): {} frames, {} transitions, centre-of-mass error mean {:.3}, max {:.3} -> {} and {}",
         curve_path.display(),

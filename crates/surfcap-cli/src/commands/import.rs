@@ -46,9 +46,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }),
         || {
             println!(
-                "imported {:?}: {} sequences, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
+                "imported {:?}: {}, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
                 s.name,
-                s.sequences().len(),
+                crate::output::count_of(s.sequences().len(), "sequence"),
                 s.n_frames(),
                 s.topology().n_vertices(),
                 s.topology().n_triangles(),

@@ -8,7 +8,7 @@ use surfcap_motion::path_following::PathSearch;
 use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
 
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis::{Prepared, run_path};
+use crate::synthesis::{ConstraintOpts, Prepared, check_constraints, run_path};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -32,19 +32,21 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub track: Vec<usize>,
     /// Arc length covered by each branch-and-bound window (subject units).
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = crate::options::positive)]
     pub window: f64,
     /// Transitions allowed within one window.
     #[arg(long, default_value_t = 2)]
     pub max_transitions: usize,
     /// Transitions tried at each frame (its cheapest ones, round robin over destination
     /// sequences); the search's speed knob.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = crate::options::count)]
     pub branching: usize,
     #[command(flatten)]
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
+    #[command(flatten)]
+    pub constraints: ConstraintOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -65,7 +67,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let tracked = (!a.track.is_empty()).then_some(a.track.as_slice());
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?;
-    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
+    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out, &a.constraints)?;
     ctx.result(&o.played.report, || {
         println!(
             "followed a {:.2}-long curve: {} frames, {} transitions; centre error mean {:.3}, max {:.3}; search {:.2} s",
@@ -78,5 +80,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
-    Ok(())
+    check_constraints(ctx, &a.constraints, &o.constraints)
 }

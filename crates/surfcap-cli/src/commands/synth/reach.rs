@@ -10,7 +10,7 @@ use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_motion::timed_walk::TimedGraph;
 
 use crate::options::{GraphOpts, OutOpts, Positive, open};
-use crate::synthesis::{Prepared, write_walk};
+use crate::synthesis::{Constraint, ConstraintOpts, Prepared, add_constraints, check_constraints, write_walk};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -23,10 +23,10 @@ pub struct Args {
     #[arg(long)]
     pub to: String,
     /// Ground-plane distance the centre of mass must travel (subject units).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::non_negative)]
     pub distance: f64,
     /// Duration in seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::positive)]
     pub time: f64,
     /// Distance error worth one unit of realism cost (Huang et al.: 0.3 m).
     #[arg(long, default_value = "0.3")]
@@ -38,11 +38,11 @@ pub struct Args {
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
+    #[command(flatten)]
+    pub constraints: ConstraintOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(a.distance.is_finite() && a.distance >= 0.0, "--distance {}: expected a distance >= 0", a.distance);
-    anyhow::ensure!(a.time.is_finite() && a.time > 0.0, "--time {}: expected a positive number of seconds", a.time);
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
@@ -59,7 +59,27 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "target_frames": frames, "obtained_frames": w.frames, "time_error_frames": (w.frames as i64 - frames as i64).abs(),
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
-    let played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
+    let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
+    let tol = &a.constraints;
+    let constraints = [
+        Constraint::new(
+            "distance",
+            "units",
+            a.distance,
+            w.distance,
+            (w.distance - a.distance).abs(),
+            tol.distance(a.distance),
+        ),
+        Constraint::new(
+            "time",
+            "frames",
+            frames as f64,
+            w.frames as f64,
+            (w.frames as f64 - frames as f64).abs(),
+            tol.frames(),
+        ),
+    ];
+    add_constraints(&mut played.report, &constraints);
     played.save_report()?;
     ctx.result(&played.report, || {
         println!(
@@ -68,5 +88,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     });
     ctx.wrote(played.written.iter().chain([&played.report_path]));
-    Ok(())
+    check_constraints(ctx, &a.constraints, &constraints)
 }
