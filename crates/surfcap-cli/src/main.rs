@@ -137,7 +137,7 @@ fn main() -> ExitCode {
                 .or_else(|| info.payload().downcast_ref::<String>().cloned())
                 .unwrap_or_default();
             let at = info.location().map(|l| format!("{}:{}", l.file(), l.line())).unwrap_or_default();
-            report_failure(true, &format!("surfcap: {bug}"), &[format!("panicked at {at}: {what}")], 2);
+            report_failure(true, bug, &[format!("panicked at {at}: {what}")], 2);
         } else {
             default_hook(info);
             eprintln!("surfcap: {bug}");

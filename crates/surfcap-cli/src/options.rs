@@ -1,6 +1,7 @@
 //! The options several commands share, in one place: what the sources do not say
 //! ([`SourceOpts`]), where derived products are cached ([`CacheOpts`]), the transition table
-//! ([`TableOpts`]), the graph ([`GraphOpts`]) and where an animation goes ([`OutOpts`]).
+//! ([`TableOpts`]), the graph ([`GraphOpts`]), where an animation goes ([`OutOpts`]) and when
+//! its constraints count as missed ([`ConstraintOpts`]).
 //!
 //! Option values are parsed by `FromStr` (clap calls it): library types implement it
 //! (`UpAxis`, `ExportFormat`, `PoseMetric`, `StretchInterpolation`, `GraphKind`), and the few
@@ -207,6 +208,39 @@ pub struct OutOpts {
     /// glb, obj, ply, pc2 or npy (default: from the output's extension, else glb).
     #[arg(long)]
     pub format: Option<ExportFormat>,
+    /// What the report calls a missed constraint.
+    #[command(flatten)]
+    pub constraints: ConstraintOpts,
+}
+
+/// How closely the soft constraints of a synthesis (path, key-pose times, reach distance and
+/// time) must be met before they are reported as missed.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ConstraintOpts {
+    /// A distance constraint (reach's distance, the path's largest centre-of-mass error) missed
+    /// by more than this, in the subject's units, is reported as missed (default: 10% of the
+    /// asked distance or of the curve's length).
+    #[arg(long, value_parser = non_negative)]
+    pub tolerance: Option<f64>,
+    /// A timing constraint (a key pose's time, reach's duration) missed by more than this many
+    /// frames is reported as missed (default: 10, Huang et al.'s timing scale).
+    #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 0))]
+    pub frame_tolerance: Option<usize>,
+    /// Exit with code 3 when a constraint is missed (the animation and its report are written
+    /// first).
+    #[arg(long)]
+    pub strict: bool,
+}
+
+impl ConstraintOpts {
+    /// The distance tolerance for a constraint of size `asked`.
+    pub fn distance(&self, asked: f64) -> f64 {
+        self.tolerance.unwrap_or(0.1 * asked.abs())
+    }
+
+    pub fn frames(&self) -> f64 {
+        self.frame_tolerance.unwrap_or(10) as f64
+    }
 }
 
 impl OutOpts {

@@ -19,38 +19,8 @@ use surfcap_pipeline::constraint_files::KeyPose;
 use surfcap_pipeline::walk_playback::play_walk;
 use surfcap_pipeline::{GraphParams, Pipeline};
 
-use crate::options::{OutOpts, non_negative};
+use crate::options::{ConstraintOpts, OutOpts};
 use crate::output::{count_of, mean, write_json};
-
-/// How closely the soft constraints of a synthesis (path, key-pose times, reach distance and
-/// time) must be met before they are reported as missed.
-#[derive(clap::Args, Debug, Clone, Default)]
-pub struct ConstraintOpts {
-    /// A distance constraint (reach's distance, the path's largest centre-of-mass error) missed
-    /// by more than this, in the subject's units, is reported as missed (default: 10% of the
-    /// asked distance or of the curve's length).
-    #[arg(long, value_parser = non_negative)]
-    pub tolerance: Option<f64>,
-    /// A timing constraint (a key pose's time, reach's duration) missed by more than this many
-    /// frames is reported as missed (default: 10, Huang et al.'s timing scale).
-    #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 0))]
-    pub frame_tolerance: Option<usize>,
-    /// Exit with code 3 when a constraint is missed (the animation and its report are written
-    /// first).
-    #[arg(long)]
-    pub strict: bool,
-}
-
-impl ConstraintOpts {
-    /// The distance tolerance for a constraint of size `asked`.
-    pub fn distance(&self, asked: f64) -> f64 {
-        self.tolerance.unwrap_or(0.1 * asked.abs())
-    }
-
-    pub fn frames(&self) -> f64 {
-        self.frame_tolerance.unwrap_or(10) as f64
-    }
-}
 
 /// A soft constraint and how closely the walk met it (the report's `constraints`).
 #[derive(Debug, Clone, serde::Serialize)]
@@ -253,8 +223,8 @@ pub fn run_path(
     start: Option<u32>,
     search: &PathSearch,
     out: &OutOpts,
-    tolerance: &ConstraintOpts,
 ) -> anyhow::Result<PathOutcome> {
+    let tolerance = &out.constraints;
     let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search)?;
     let (pred_mean, pred_max) = mean_max(&r.errors);
     let report = json!({
@@ -305,8 +275,8 @@ pub fn run_keyposes(
     prep: &Prepared,
     keys: &[KeyPose],
     out: &OutOpts,
-    tolerance: &ConstraintOpts,
 ) -> anyhow::Result<KeyposesOutcome> {
+    let tolerance = &out.constraints;
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
     let longest = tg.longest_edge();

@@ -46,10 +46,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }),
         || {
             println!(
-                "imported {:?}: {}, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
+                "imported {:?}: {}, {}, {} vertices, {} triangles -> {} ({secs:.2} s)",
                 s.name,
                 crate::output::count_of(s.sequences().len(), "sequence"),
-                s.n_frames(),
+                crate::output::count_of(s.n_frames(), "frame"),
                 s.topology().n_vertices(),
                 s.topology().n_triangles(),
                 a.output.display()

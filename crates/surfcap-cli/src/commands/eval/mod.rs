@@ -101,7 +101,7 @@ pub enum What {
         #[arg(long, default_value_t = 300, value_parser = crate::options::count)]
         vertices: usize,
         /// Frames at most (longer subjects are subsampled in time by one stride).
-        #[arg(long, default_value_t = 400, value_parser = |s: &str| crate::options::at_least(s, 2))]
+        #[arg(long, default_value_t = 400, value_parser = |s: &str| crate::options::at_least(s, 4))]
         max_frames: usize,
         /// Latent dimension d.
         #[arg(long, default_value_t = 3, value_parser = crate::options::count)]

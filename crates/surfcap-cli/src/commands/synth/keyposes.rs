@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use surfcap_pipeline::constraint_files::read_key_poses;
 
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis::{ConstraintOpts, Prepared, check_constraints, run_keyposes};
+use crate::synthesis::{Prepared, check_constraints, run_keyposes};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -20,8 +20,6 @@ pub struct Args {
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
-    #[command(flatten)]
-    pub constraints: ConstraintOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -29,7 +27,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let params = a.graph.params(s.fps)?;
     let keys = read_key_poses(&a.keys, &s)?;
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
-    let o = run_keyposes(ctx, &prep, &keys, &a.out, &a.constraints)?;
+    let o = run_keyposes(ctx, &prep, &keys, &a.out)?;
     ctx.result(&o.played.report, || {
         // Thesis Fig. 3.18: input, requested and obtained times.
         let row = |label: &str, v: Vec<String>| {
@@ -41,5 +39,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
-    check_constraints(ctx, &a.constraints, &o.constraints)
+    check_constraints(ctx, &a.out.constraints, &o.constraints)
 }

@@ -8,7 +8,7 @@ use surfcap_motion::path_following::PathSearch;
 use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
 
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis::{ConstraintOpts, Prepared, check_constraints, run_path};
+use crate::synthesis::{Prepared, check_constraints, run_path};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -45,8 +45,6 @@ pub struct Args {
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
-    #[command(flatten)]
-    pub constraints: ConstraintOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -67,18 +65,18 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let tracked = (!a.track.is_empty()).then_some(a.track.as_slice());
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?;
-    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out, &a.constraints)?;
+    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     ctx.result(&o.played.report, || {
         println!(
-            "followed a {:.2}-long curve: {} frames, {} transitions; centre error mean {:.3}, max {:.3}; search {:.2} s",
+            "followed a {:.2}-long curve: {}, {}; centre error mean {:.3}, max {:.3}; search {:.2} s",
             curve.length(),
-            o.frames,
-            o.played.transitions,
+            crate::output::count_of(o.frames, "frame"),
+            crate::output::count_of(o.played.transitions, "transition"),
             o.mean_error,
             o.max_error,
             o.search_seconds
         );
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
-    check_constraints(ctx, &a.constraints, &o.constraints)
+    check_constraints(ctx, &a.out.constraints, &o.constraints)
 }

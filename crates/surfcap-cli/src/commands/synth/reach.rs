@@ -10,7 +10,7 @@ use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_motion::timed_walk::TimedGraph;
 
 use crate::options::{GraphOpts, OutOpts, Positive, open};
-use crate::synthesis::{Constraint, ConstraintOpts, Prepared, add_constraints, check_constraints, write_walk};
+use crate::synthesis::{Constraint, Prepared, add_constraints, check_constraints, write_walk};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -38,8 +38,6 @@ pub struct Args {
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
-    #[command(flatten)]
-    pub constraints: ConstraintOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -60,7 +58,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
     let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
-    let tol = &a.constraints;
+    let tol = &a.out.constraints;
     let constraints = [
         Constraint::new(
             "distance",
@@ -88,5 +86,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     });
     ctx.wrote(played.written.iter().chain([&played.report_path]));
-    check_constraints(ctx, &a.constraints, &constraints)
+    check_constraints(ctx, &a.out.constraints, &constraints)
 }
