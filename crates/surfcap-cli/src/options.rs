@@ -224,7 +224,7 @@ pub struct ConstraintOpts {
     pub tolerance: Option<f64>,
     /// A timing constraint (a key pose's time, reach's duration) missed by more than this many
     /// frames is reported as missed (default: 10, Huang et al.'s timing scale).
-    #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 0))]
+    #[arg(long, value_parser = |s: &str| at_least(s, 0))]
     pub frame_tolerance: Option<usize>,
     /// Exit with code 3 when a constraint is missed (the animation and its report are written
     /// first).
@@ -238,6 +238,7 @@ impl ConstraintOpts {
         self.tolerance.unwrap_or(0.1 * asked.abs())
     }
 
+    /// The timing tolerance, frames.
     pub fn frames(&self) -> f64 {
         self.frame_tolerance.unwrap_or(10) as f64
     }

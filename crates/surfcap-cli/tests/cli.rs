@@ -426,7 +426,7 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
         (vec!["synth", "--procedural", "walk,moonwalk", "-o", p(&bad)], "turn_left"),
         (vec!["synth", "--procedural", "walk", "--shape", "tall", "-o", p(&bad)], "tall"),
         (vec!["synth", "--bvh", "missing.bvh", "-o", p(&bad)], "missing.bvh"),
-        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "1,000 to 20,000"),
+        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "from 1000 to 20000"),
     ] {
         let o = surfcap!(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
