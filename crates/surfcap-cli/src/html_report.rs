@@ -187,7 +187,10 @@ pub fn write_report(
     body += "<h2>Pose distances (thesis eq. 2.13)</h2>\n";
     let dpath = pipe.cache_file(&DistanceKey::new(&DistanceParams::default())).unwrap_or_default();
     match surfcap_mesh::io::npy::read_npy::<f64>(&dpath) {
-        Ok(d) if d.shape.len() == 2 && d.shape[0] == s.n_frames() && d.shape[1] == s.n_frames() => {
+        Ok(d)
+            if d.shape == [s.n_frames(), s.n_frames()]
+                && surfcap_motion::transition_table::check_distances(&d.data, s.frame_index()).is_ok() =>
+        {
             let n = s.n_frames();
             let heat = surfcap_plot::HeatMap {
                 title: format!("{}: deformation distance between every pair of frames", s.name),

@@ -1,7 +1,12 @@
 //! `surfcap`: the command-line front of the surfcap toolkit.
 //!
 //! Exit codes: 0 success, 1 user error (bad input, bad arguments; the message says what and
-//! where), 2 internal error (a bug: please report it).
+//! where), 2 internal error (a bug: please report it), 3 a soft constraint missed with
+//! `--strict` (`synth path | keyposes | reach`: the animation and its report are written).
+//!
+//! With `--json` (found in the raw arguments, so it holds for argument errors too) every
+//! failure prints exactly one JSON object on stderr, `{"error", "causes", "exit_code"}`, and
+//! nothing else there; results stay on stdout.
 
 mod commands;
 mod files;
@@ -87,26 +92,86 @@ fn restore_default_sigpipe() {
     }
 }
 
+/// Whether `--json` was given, read from the raw arguments so that errors clap raises before
+/// anything is parsed (an unknown subcommand, a bad value) are reported as JSON too.
+fn json_requested() -> bool {
+    std::env::args_os().skip(1).take_while(|a| a != "--").any(|a| a == "--json")
+}
+
+/// The messages of an error and its causes, each cause once: a cause whose text its parent
+/// already includes (an error that formats its source and also returns it) is left out.
+fn messages(e: &anyhow::Error) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for m in e.chain().map(|c| c.to_string()) {
+        if out.last().is_none_or(|prev| !prev.contains(&m)) {
+            out.push(m);
+        }
+    }
+    out
+}
+
+/// Prints a failure: under `--json` one JSON object on stderr (`error`, `causes`, `exit_code`,
+/// and `help` for argument errors; stdout stays for results), else `surfcap: error: ...` and
+/// one `caused by` line per cause.
+fn report_failure(json: bool, error: &str, causes: &[String], code: u8) {
+    if json {
+        eprintln!("{}", serde_json::json!({ "error": error, "causes": causes, "exit_code": code }));
+    } else {
+        eprintln!("surfcap: error: {error}");
+        for c in causes {
+            eprintln!("  caused by: {c}");
+        }
+    }
+}
+
 fn main() -> ExitCode {
     restore_default_sigpipe();
+    let json = json_requested();
+    let default_hook = std::panic::take_hook();
+    let reported = std::sync::atomic::AtomicBool::new(false);
+    std::panic::set_hook(Box::new(move |info| {
+        // One report, even when several threads panic.
+        if reported.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            return;
+        }
+        let bug = "internal error (this is a bug; please report it with the command you ran)";
+        if json {
+            let what = info
+                .payload()
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| info.payload().downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            let at = info.location().map(|l| format!("{}:{}", l.file(), l.line())).unwrap_or_default();
+            report_failure(true, bug, &[format!("panicked at {at}: {what}")], 2);
+        } else {
+            default_hook(info);
+            eprintln!("surfcap: {bug}");
+        }
+    }));
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
-            let _ = e.print();
-            return match e.kind() {
-                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => ExitCode::SUCCESS,
-                _ => ExitCode::from(1),
-            };
+            let done = matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion);
+            if done {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            if json {
+                // clap's text: the error's paragraph, then tips and usage.
+                let text = e.render().to_string();
+                let (first, help) = text.trim().split_once("\n\n").unwrap_or((text.trim(), ""));
+                let first = first.split_whitespace().collect::<Vec<_>>().join(" ");
+                let error = first.strip_prefix("error: ").unwrap_or(&first);
+                eprintln!("{}", serde_json::json!({ "error": error, "causes": [], "help": help, "exit_code": 1 }));
+            } else {
+                let _ = e.print();
+            }
+            return ExitCode::from(1);
         }
     };
     let ctx = Ctx { quiet: cli.quiet, json: cli.json, force: cli.force };
     signals::remove_temporaries_on_signals();
-    let json = cli.json;
-    let default_hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        default_hook(info);
-        eprintln!("surfcap: internal error (this is a bug; please report it with the command you ran)");
-    }));
     let result = std::panic::catch_unwind(|| match cli.command {
         Command::Import(a) => commands::import::run(&ctx, a),
         Command::Info(a) => commands::info::run(&ctx, a),
@@ -126,16 +191,10 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
-            if json {
-                let chain: Vec<String> = e.chain().skip(1).map(|c| c.to_string()).collect();
-                eprintln!("{}", serde_json::json!({ "error": e.to_string(), "causes": chain }));
-            } else {
-                eprintln!("surfcap: error: {e}");
-                for c in e.chain().skip(1) {
-                    eprintln!("  caused by: {c}");
-                }
-            }
-            ExitCode::from(1)
+            let code = if e.is::<synthesis::ConstraintsMissed>() { 3 } else { 1 };
+            let m = messages(&e);
+            report_failure(json, &m[0], &m[1..], code);
+            ExitCode::from(code)
         }
         Err(_) => ExitCode::from(2),
     }

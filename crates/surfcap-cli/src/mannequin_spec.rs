@@ -22,19 +22,19 @@ pub struct MannequinArgs {
     #[arg(long, default_value = "average")]
     pub shape: String,
     /// Target vertex count of the mannequin (1,000 to 20,000).
-    #[arg(long, default_value_t = 3000)]
+    #[arg(long, default_value_t = 3000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
     /// Seed of the procedural motions (same seed, same motion).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Frame rate of the subject (default: 30, or the first BVH file's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::positive)]
     pub fps: Option<f64>,
     /// Duration of each procedural motion in seconds (default: 3, the jump 2).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::positive)]
     pub duration: Option<f64>,
     /// Metres per BVH unit (default: guessed from each file's rest-pose height and printed).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::positive)]
     pub bvh_units: Option<f64>,
     /// Subject name (default: mannequin-<shape>).
     #[arg(long)]
@@ -48,12 +48,6 @@ pub struct MannequinArgs {
 pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     if a.bvh.is_empty() && a.procedural.is_empty() {
         anyhow::bail!("nothing to synthesise: give --bvh <files...> and/or --procedural walk,jog,...");
-    }
-    if let Some(f) = a.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
-        anyhow::bail!("--fps {f}: expected a positive number of frames per second");
-    }
-    if let Some(u) = a.bvh_units.filter(|u| !(u.is_finite() && *u > 0.0)) {
-        anyhow::bail!("--bvh-units {u}: expected a positive number of metres per unit");
     }
     let gaits: Vec<Gait> = a.procedural.iter().map(|g| Gait::parse(g)).collect::<Result<_, _>>()?;
     let shape = BodyShape::parse(&a.shape)?;

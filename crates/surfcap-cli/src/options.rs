@@ -1,10 +1,16 @@
 //! The options several commands share, in one place: what the sources do not say
 //! ([`SourceOpts`]), where derived products are cached ([`CacheOpts`]), the transition table
-//! ([`TableOpts`]), the graph ([`GraphOpts`]) and where an animation goes ([`OutOpts`]).
+//! ([`TableOpts`]), the graph ([`GraphOpts`]), where an animation goes ([`OutOpts`]) and when
+//! its constraints count as missed ([`ConstraintOpts`]).
 //!
 //! Option values are parsed by `FromStr` (clap calls it): library types implement it
 //! (`UpAxis`, `ExportFormat`, `PoseMetric`, `StretchInterpolation`, `GraphKind`), and the few
 //! values that are only the command line's ([`SlopeArg`], [`Positive`]) are newtypes here.
+//! Every numeric option is checked when it is parsed, by [`Positive`] or one of the value
+//! parsers [`positive`], [`non_negative`], [`fraction`], [`count`], [`at_least`] and
+//! [`whole_in`]: clap's
+//! message names the option and the value, ours the allowed range, and nothing runs (or is
+//! cached) with NaN, a negative weight or a count of 0.
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -21,7 +27,7 @@ use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct SourceOpts {
     /// Frame rate, when the sources do not give it (or to override them).
-    #[arg(long)]
+    #[arg(long, value_parser = positive)]
     pub fps: Option<f64>,
     /// Up axis: +x, +y, +z, -x, -y or -z.
     #[arg(long)]
@@ -33,9 +39,6 @@ pub struct SourceOpts {
 
 impl SourceOpts {
     pub fn to_import(&self, name: Option<String>) -> anyhow::Result<ImportOptions> {
-        if let Some(f) = self.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
-            anyhow::bail!("--fps {f}: expected a positive number of frames per second");
-        }
         Ok(ImportOptions { name, fps: self.fps, up_axis: self.up_axis, units: self.units.as_deref().map(Units::parse) })
     }
 }
@@ -97,11 +100,50 @@ pub struct Positive(pub f64);
 impl FromStr for Positive {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s.trim().parse::<f64>() {
-            Ok(x) if x.is_finite() && x > 0.0 => Ok(Positive(x)),
-            _ => Err(format!("{s:?}: expected a positive number")),
-        }
+        positive(s).map(Positive)
     }
+}
+
+/// A number in `ok`, else the message `expected {range}`.
+fn number_in(s: &str, ok: impl Fn(f64) -> bool, range: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && ok(x) => Ok(x),
+        _ => Err(format!("expected {range}")),
+    }
+}
+
+/// Value parser: a finite number > 0.
+pub fn positive(s: &str) -> Result<f64, String> {
+    number_in(s, |x| x > 0.0, "a finite number > 0")
+}
+
+/// Value parser: a finite number >= 0.
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    number_in(s, |x| x >= 0.0, "a finite number >= 0")
+}
+
+/// Value parser: a number in [0, 1].
+pub fn fraction(s: &str) -> Result<f64, String> {
+    number_in(s, |x| (0.0..=1.0).contains(&x), "a number in [0, 1]")
+}
+
+/// Value parser: a whole number >= `min`.
+pub fn at_least(s: &str, min: usize) -> Result<usize, String> {
+    whole_in(s, min, usize::MAX)
+}
+
+/// Value parser: a whole number from `min` to `max`.
+pub fn whole_in(s: &str, min: usize, max: usize) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (min..=max).contains(&n) => Ok(n),
+        _ if max == usize::MAX => Err(format!("expected a whole number >= {min}")),
+        _ => Err(format!("expected a whole number from {min} to {max}")),
+    }
+}
+
+/// Value parser: a whole number >= 1.
+pub fn count(s: &str) -> Result<usize, String> {
+    at_least(s, 1)
 }
 
 /// Options of a transition table.
@@ -111,10 +153,10 @@ pub struct TableOpts {
     #[arg(long, default_value = "3")]
     pub slope: SlopeArg,
     /// Shortest segment, frames (default: a third of a second at the subject's fps).
-    #[arg(long)]
+    #[arg(long, value_parser = count)]
     pub l_min: Option<usize>,
     /// Longest segment, frames (default: two seconds).
-    #[arg(long)]
+    #[arg(long, value_parser = count)]
     pub l_max: Option<usize>,
 }
 
@@ -166,6 +208,40 @@ pub struct OutOpts {
     /// glb, obj, ply, pc2 or npy (default: from the output's extension, else glb).
     #[arg(long)]
     pub format: Option<ExportFormat>,
+    /// What the report calls a missed constraint.
+    #[command(flatten)]
+    pub constraints: ConstraintOpts,
+}
+
+/// How closely the soft constraints of a synthesis (path, key-pose times, reach distance and
+/// time) must be met before they are reported as missed.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ConstraintOpts {
+    /// A distance constraint (reach's distance, the path's largest centre-of-mass error) missed
+    /// by more than this, in the subject's units, is reported as missed (default: 10% of the
+    /// asked distance or of the curve's length).
+    #[arg(long, value_parser = non_negative)]
+    pub tolerance: Option<f64>,
+    /// A timing constraint (a key pose's time, reach's duration) missed by more than this many
+    /// frames is reported as missed (default: 10, Huang et al.'s timing scale).
+    #[arg(long, value_parser = |s: &str| at_least(s, 0))]
+    pub frame_tolerance: Option<usize>,
+    /// Exit with code 3 when a constraint is missed (the animation and its report are written
+    /// first).
+    #[arg(long)]
+    pub strict: bool,
+}
+
+impl ConstraintOpts {
+    /// The distance tolerance for a constraint of size `asked`.
+    pub fn distance(&self, asked: f64) -> f64 {
+        self.tolerance.unwrap_or(0.1 * asked.abs())
+    }
+
+    /// The timing tolerance, frames.
+    pub fn frames(&self) -> f64 {
+        self.frame_tolerance.unwrap_or(10) as f64
+    }
 }
 
 impl OutOpts {

@@ -64,6 +64,18 @@ impl Ctx {
     }
 }
 
+/// `n` and `word`, with an "s" unless `n` is 1 ("1 sequence", "2 sequences").
+pub fn count_of(n: usize, word: &str) -> String {
+    format!("{n} {word}{}", if n == 1 { "" } else { "s" })
+}
+
+/// The mean of `values`, 0 for none. (Rust's float sum of nothing is -0.0, which printed as
+/// "mean -0.0000".)
+pub fn mean(values: impl IntoIterator<Item = f64>) -> f64 {
+    let (sum, n) = values.into_iter().fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 { 0.0 } else { sum / n as f64 }
+}
+
 /// Prints a serialisable value as pretty JSON on stdout.
 pub fn print_json<T: Serialize + ?Sized>(v: &T) {
     println!("{}", serde_json::to_string_pretty(v).expect("results always serialise"));

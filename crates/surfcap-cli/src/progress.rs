@@ -6,6 +6,8 @@ use surfcap_mesh::Progress;
 
 pub struct Bar {
     bar: ProgressBar,
+    /// Whether the library's notes are shown (as `Ctx::note` shows them).
+    notes: bool,
 }
 
 impl Bar {
@@ -16,7 +18,7 @@ impl Bar {
             ProgressStyle::with_template("{msg:28} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})")
                 .expect("static template is valid"),
         );
-        Bar { bar }
+        Bar { bar, notes: !ctx.quiet && !ctx.json }
     }
 }
 
@@ -31,6 +33,11 @@ impl Progress for Bar {
     }
     fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+    fn note(&self, text: &str) {
+        if self.notes {
+            self.bar.suspend(|| eprintln!("note: {text}"));
+        }
     }
 }
 

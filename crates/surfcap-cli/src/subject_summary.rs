@@ -60,7 +60,12 @@ pub fn describe(s: &Subject) -> serde_json::Value {
 pub fn print_summary(s: &Subject, d: &serde_json::Value) {
     let units = &s.units;
     println!("subject     {}", s.name);
-    println!("frames      {} in {} sequences at {} fps", s.n_frames(), s.sequences().len(), s.fps);
+    println!(
+        "frames      {} in {} at {} fps",
+        s.n_frames(),
+        crate::output::count_of(s.sequences().len(), "sequence"),
+        s.fps
+    );
     println!("vertices    {}", d["vertices"]);
     println!("triangles   {}", d["triangles"]);
     let comps_count = d["connected_components"].as_u64().unwrap_or(0);

@@ -19,8 +19,85 @@ use surfcap_pipeline::constraint_files::KeyPose;
 use surfcap_pipeline::walk_playback::play_walk;
 use surfcap_pipeline::{GraphParams, Pipeline};
 
-use crate::options::OutOpts;
-use crate::output::write_json;
+use crate::options::{ConstraintOpts, OutOpts};
+use crate::output::{count_of, mean, write_json};
+
+/// A soft constraint and how closely the walk met it (the report's `constraints`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Constraint {
+    pub name: String,
+    /// `frames` or `units` (the subject's).
+    pub unit: &'static str,
+    pub asked: f64,
+    pub achieved: f64,
+    /// How far from the request: |achieved - asked|, or for a path its largest centre error.
+    pub error: f64,
+    pub tolerance: f64,
+    pub missed: bool,
+}
+
+impl Constraint {
+    pub fn new(
+        name: impl Into<String>,
+        unit: &'static str,
+        asked: f64,
+        achieved: f64,
+        error: f64,
+        tolerance: f64,
+    ) -> Self {
+        Constraint { name: name.into(), unit, asked, achieved, error, tolerance, missed: error > tolerance }
+    }
+}
+
+/// The error of `--strict` when constraints were missed: `main` exits with code 3 for it.
+#[derive(Debug)]
+pub struct ConstraintsMissed(pub usize);
+
+impl std::fmt::Display for ConstraintsMissed {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let n = self.0;
+        write!(f, "{} missed (--strict; the animation and its report were written)", count_of(n, "constraint"))
+    }
+}
+
+impl std::error::Error for ConstraintsMissed {}
+
+/// Adds the constraints to `report` (as `constraints`).
+pub fn add_constraints(report: &mut serde_json::Value, constraints: &[Constraint]) {
+    let o = report.as_object_mut().expect("reports are JSON objects");
+    o.insert("constraints".into(), json!(constraints));
+}
+
+/// Warns about every missed constraint on stderr (also under --quiet: it is part of the
+/// result; under --json the report's `constraints` says it), then fails with
+/// [`ConstraintsMissed`] under `--strict`.
+pub fn check_constraints(ctx: &crate::Ctx, opts: &ConstraintOpts, constraints: &[Constraint]) -> anyhow::Result<()> {
+    let missed: Vec<&Constraint> = constraints.iter().filter(|c| c.missed).collect();
+    if !ctx.json {
+        for c in &missed {
+            eprintln!(
+                "warning: constraint {} missed: asked {}, achieved {} (error {} {}, tolerance {}; --tolerance/--frame-tolerance set it)",
+                c.name,
+                fmt_number(c.asked),
+                fmt_number(c.achieved),
+                fmt_number(c.error),
+                c.unit,
+                fmt_number(c.tolerance)
+            );
+        }
+    }
+    if opts.strict && !missed.is_empty() {
+        return Err(ConstraintsMissed(missed.len()).into());
+    }
+    Ok(())
+}
+
+/// A number with at most 3 decimals, no trailing zeros and never "-0".
+fn fmt_number(x: f64) -> String {
+    let s = format!("{:.3}", x + 0.0);
+    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
+    if s == "-0" { "0".into() } else { s }
+}
 
 /// A subject with its graph and walk model.
 pub struct Prepared {
@@ -123,7 +200,7 @@ pub fn report_path(output: &Path) -> PathBuf {
 }
 
 fn mean_max(x: &[f64]) -> (f64, f64) {
-    (x.iter().sum::<f64>() / x.len().max(1) as f64, x.iter().copied().fold(0.0, f64::max))
+    (mean(x.iter().copied()), x.iter().copied().fold(0.0, f64::max))
 }
 
 /// Summary of a path-following run.
@@ -133,6 +210,7 @@ pub struct PathOutcome {
     pub max_error: f64,
     pub frames: usize,
     pub search_seconds: f64,
+    pub constraints: Vec<Constraint>,
 }
 
 /// Follows `curve` (thesis 3.5.1) on a prepared subject and writes the animation and report;
@@ -146,6 +224,7 @@ pub fn run_path(
     search: &PathSearch,
     out: &OutOpts,
 ) -> anyhow::Result<PathOutcome> {
+    let tolerance = &out.constraints;
     let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search)?;
     let (pred_mean, pred_max) = mean_max(&r.errors);
     let report = json!({
@@ -169,8 +248,18 @@ pub fn run_path(
     o.insert("net_displacement".into(), json!(net));
     o.insert("per_frame".into(), json!({ "error": errors, "centre": played.centres }));
     o.insert("curve".into(), json!((0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect::<Vec<_>>()));
+    let constraints =
+        vec![Constraint::new("path", "units", curve.length(), travelled, max, tolerance.distance(curve.length()))];
+    add_constraints(&mut played.report, &constraints);
     played.save_report()?;
-    Ok(PathOutcome { frames: errors.len(), played, mean_error: mean, max_error: max, search_seconds: r.seconds })
+    Ok(PathOutcome {
+        frames: errors.len(),
+        played,
+        mean_error: mean,
+        max_error: max,
+        search_seconds: r.seconds,
+        constraints,
+    })
 }
 
 /// Summary of a key-pose timing run.
@@ -180,6 +269,7 @@ pub struct KeyposesOutcome {
     pub obtained: Vec<i64>,
     pub mean_abs_error: f64,
     pub search_seconds: f64,
+    pub constraints: Vec<Constraint>,
 }
 
 /// Key-pose timing (thesis 3.5.2): the walk through `keys` meeting their requested times as
@@ -190,6 +280,7 @@ pub fn run_keyposes(
     keys: &[KeyPose],
     out: &OutOpts,
 ) -> anyhow::Result<KeyposesOutcome> {
+    let tolerance = &out.constraints;
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
     let longest = tg.longest_edge();
@@ -214,7 +305,23 @@ pub fn run_keyposes(
         "mean_abs_error_frames": mean_abs_error,
         "search_seconds": search_seconds,
     });
-    let played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.up()), "keyposes", out, report)?;
+    let mut played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.up()), "keyposes", out, report)?;
+    let constraints: Vec<Constraint> = keys
+        .iter()
+        .zip(&obtained)
+        .map(|(k, &o)| {
+            let error = (o - k.requested).abs() as f64;
+            Constraint::new(
+                format!("key {}", k.spec),
+                "frames",
+                k.requested as f64,
+                o as f64,
+                error,
+                tolerance.frames(),
+            )
+        })
+        .collect();
+    add_constraints(&mut played.report, &constraints);
     played.save_report()?;
-    Ok(KeyposesOutcome { played, obtained, mean_abs_error, search_seconds })
+    Ok(KeyposesOutcome { played, obtained, mean_abs_error, search_seconds, constraints })
 }

@@ -426,7 +426,7 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
         (vec!["synth", "--procedural", "walk,moonwalk", "-o", p(&bad)], "turn_left"),
         (vec!["synth", "--procedural", "walk", "--shape", "tall", "-o", p(&bad)], "tall"),
         (vec!["synth", "--bvh", "missing.bvh", "-o", p(&bad)], "missing.bvh"),
-        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "1,000 to 20,000"),
+        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "from 1000 to 20000"),
     ] {
         let o = surfcap!(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
@@ -595,6 +595,17 @@ fn small_source() -> Option<std::path::PathBuf> {
 fn names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> =
         std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+/// The file names of `dir` that start with `prefix`.
+fn files_starting(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| f.file_name().unwrap().to_string_lossy().starts_with(prefix))
+        .collect();
     v.sort();
     v
 }
@@ -841,4 +852,165 @@ fn import_into_the_current_folder_is_a_clear_error() {
     let o = run(&work, &["import", "horse", "--fps", "30", "-o", "../missing/../h.subject", "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(names(tmp.path()), ["h.subject", "work"]);
+}
+
+#[test]
+fn misfitting_or_nan_cache_entries_are_recomputed_with_a_note() {
+    let Some(data) = surfcap_testkit::shared_data() else {
+        return;
+    };
+    use surfcap_mesh::atomic::write_file;
+    use surfcap_mesh::io::npy::{read_npy, write_npy};
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let cat = data.join("walking_cat_depraz/walk");
+    let run = |args: &[&str]| {
+        let mut all = args.to_vec();
+        all.extend([p(&cat), "--fps", "25", "--cache-dir", p(&cache)]);
+        let o = surfcap!(&all);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        o
+    };
+    let d_out = tmp.path().join("d.npy");
+    run(&["distance", "-o", p(&d_out)]);
+    run(&["graph", "build", "-o", p(&tmp.path().join("g"))]);
+    let distance_file = files_starting(&cache, "distance-").pop().unwrap();
+    let table_file = files_starting(&cache, "transitions-").pop().unwrap();
+    let graph_file = files_starting(&cache, "graph-").pop().unwrap();
+    let originals: std::collections::HashMap<&Path, _> =
+        [&distance_file, &table_file, &graph_file].map(|f| (f.as_path(), read_npy::<f64>(f).unwrap())).into();
+    let good = read_npy::<f64>(&distance_file).unwrap();
+    let n = 35;
+    assert_eq!(good.shape, [n, n]);
+    let mut nan = good.data.clone();
+    nan[n + 2] = f64::NAN;
+    let zeros = vec![0.0f64; 4 * n * n];
+    // Each damaged entry (another subject's 16 x 16 matrix, NaN inside the right shape, a
+    // table whose lengths do not fit the frames, a graph edge of NaN weight) is read by every
+    // command that needs it: a new segment length or alpha makes the product above it new.
+    let (t_out, g_out) = (tmp.path().join("t"), tmp.path().join("g"));
+    let cases: [(&Path, Vec<usize>, &[f64], &str); 5] = [
+        (&distance_file, vec![16, 16], &[0.0; 256], "shape [16, 16], expected [35, 35]"),
+        (&distance_file, vec![n, n], &nan, "entry (1, 2) is NaN"),
+        (&table_file, vec![4, 16, 16], &zeros[..4 * 256], "shape [4, 16, 16]"),
+        (&table_file, vec![4, n, n], &zeros, "source lengths"),
+        (&graph_file, vec![2, 3], &[0.0, 1.0, f64::NAN, 1.0, 2.0, 0.5], "weight NaN"),
+    ];
+    let mut fresh = 5;
+    for (file, shape, values, problem) in cases {
+        fresh += 1;
+        let (l_min, alpha) = (fresh.to_string(), format!("0.0{fresh}"));
+        let commands: Vec<Vec<&str>> = if file == distance_file.as_path() {
+            vec![
+                vec!["distance", "-o", p(&d_out)],
+                vec!["transitions", "-o", p(&t_out), "--l-min", &l_min],
+                vec!["graph", "build", "-o", p(&g_out), "--l-min", &l_min, "--l-max", "20"],
+            ]
+        } else if file == table_file.as_path() {
+            vec![vec!["transitions", "-o", p(&t_out)], vec!["graph", "build", "-o", p(&g_out), "--alpha", &alpha]]
+        } else {
+            vec![vec!["graph", "build", "-o", p(&g_out)]]
+        };
+        for command in commands {
+            write_file(file, |w| write_npy(w, &shape, values)).unwrap();
+            let e = stderr(&run(&command));
+            assert!(e.contains(&file.display().to_string()) && e.contains(problem), "{command:?}: {e}");
+            assert!(e.contains("recomputing"), "{command:?}: {e}");
+            assert_eq!(read_npy::<f64>(file).unwrap(), originals[file], "{command:?} replaced {}", file.display());
+        }
+    }
+    let d = read_npy::<f64>(&d_out).unwrap();
+    assert_eq!(d.data, good.data, "the recomputed matrix is the first one");
+}
+
+#[test]
+fn numeric_options_are_checked_when_parsed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let (subject, output) = (tmp.path().join("missing.subject"), tmp.path().join("out"));
+    let (s, out) = (p(&subject), p(&output));
+    for (args, option, range) in [
+        (vec!["distance", s, "-o", out, "--w", "nan"], "'nan' for '--w <W>'", "a finite number >= 0"),
+        (vec!["distance", s, "-o", out, "--w=-1"], "'-1' for '--w <W>'", "a finite number >= 0"),
+        (vec!["info", s, "--fps", "0"], "'0' for '--fps <FPS>'", "a finite number > 0"),
+        (vec!["synth", "path", s, "--curve", "c.csv", "-o", out, "--branching", "0"], "'0' for '--branching", ">= 1"),
+        (vec!["synth", "path", s, "--curve", "c.csv", "-o", out, "--window", "inf"], "'inf' for '--window", "> 0"),
+        (
+            vec!["synth", "reach", s, "--from", "0", "--to", "1", "--distance", "nan", "--time", "4", "-o", out],
+            "--distance",
+            ">= 0",
+        ),
+        (
+            vec!["synth", "reach", s, "--from", "0", "--to", "1", "--distance", "1", "--time", "0", "-o", out],
+            "--time",
+            "> 0",
+        ),
+        (vec!["interpolate", s, "--from", "0", "--to", "1", "--steps", "1", "-o", out], "'1' for '--steps", ">= 2"),
+        (vec!["eval", "interpolation", s, "--pair", "0,1", "--lambda", "1.5"], "--lambda", "in [0, 1]"),
+        (vec!["eval", "transitions", s, "--slopes", "2,0"], "'0' for '--slopes", ">= 1"),
+        (vec!["transitions", s, "-o", out, "--l-min", "0"], "--l-min", ">= 1"),
+        (vec!["graph", "build", s, "--alpha=-0.1"], "--alpha", "> 0"),
+        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", out], "--vertices", "from 1000 to 20000"),
+        (vec!["bench", "graph", "--frames", "0"], "--frames", ">= 1"),
+    ] {
+        let o = surfcap!(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains(option) && e.contains(range), "{args:?}: {e}");
+    }
+    let o = surfcap!(&["distance", s, "-o", out, "--w", "nan", "--cache-dir", p(&cache)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!cache.exists(), "nothing computed or cached");
+}
+
+#[test]
+fn every_failure_under_json_is_one_json_object() {
+    let tmp = tempfile::tempdir().unwrap();
+    let missing = tmp.path().join("missing");
+    for (args, says) in [
+        (vec!["--json", "distance", p(&missing), "-o", "d.npy", "--w", "nan"], "'--w <W>'"),
+        (vec!["info", p(&missing), "--bogus", "--json"], "'--bogus'"),
+        (vec!["--json", "frobnicate"], "'frobnicate'"),
+        (vec!["info", p(&missing), "--json"], "missing"),
+        (vec!["export", p(&missing), "-o", "x", "--json"], "required arguments were not provided: --format"),
+        (vec!["export", p(&missing), "--format", "glb", "-o", "x", "--json"], "missing"),
+    ] {
+        let o = surfcap!(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(o.stdout.is_empty(), "{args:?}: stdout {}", String::from_utf8_lossy(&o.stdout));
+        let e = stderr(&o);
+        let v: serde_json::Value =
+            serde_json::from_str(e.trim()).unwrap_or_else(|_| panic!("{args:?}: not one JSON object: {e}"));
+        assert!(v["error"].as_str().unwrap().contains(says), "{args:?}: {v}");
+        assert_eq!(v["exit_code"], 1);
+    }
+    // Without --json, the same argument error is text.
+    let o = surfcap!(&["frobnicate"]);
+    assert!(stderr(&o).starts_with("error: unrecognized subcommand"), "{}", stderr(&o));
+}
+
+#[test]
+fn messages_pluralise_and_never_print_negative_zero() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = tmp.path().join("one.obj");
+    std::fs::write(&seq, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = surfcap!(&["info", p(&seq), "--fps", "30"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("1 in 1 sequence at"), "{text}");
+    let d = tmp.path().join("d.npy");
+    let o = surfcap!(&[
+        "distance",
+        p(&seq),
+        "--fps",
+        "30",
+        "-o",
+        p(&d),
+        "--no-cache",
+        "--cache-dir",
+        p(&tmp.path().join("c"))
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("mean 0.0000") && !text.contains("-0.0"), "{text}");
 }

@@ -143,6 +143,59 @@ fn path_and_reach_on_cmu_locomotion() {
     );
     assert!(r["distance_error"].as_f64().unwrap() < 0.3, "{}", r["distance_error"]);
     assert!(r["time_error_frames"].as_u64().unwrap() <= 10, "{}", r["time_error_frames"]);
+    let met = r["constraints"].as_array().unwrap();
+    assert_eq!(met.len(), 2, "distance and time: {met:?}");
+    assert!(met.iter().all(|c| c["missed"] == false), "{met:?}");
+
+    // A distance the clips cannot cover in 4 s: written, but reported as missed (a warning even
+    // with --quiet, the report's constraints), and exit code 3 with --strict.
+    let far = tmp.path().join("far.glb");
+    let reach_far = |extra: &[&str]| {
+        let args = [
+            "synth",
+            "reach",
+            p(&subject),
+            "--from",
+            "16_15:10",
+            "--to",
+            "16_31:80",
+            "--distance",
+            "1e9",
+            "--time",
+            "4",
+            "-o",
+            p(&far),
+            "--cache-dir",
+            p(&cache),
+        ];
+        surfcap!(&[&args[..], extra].concat())
+    };
+    let o = reach_far(&["--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("warning: constraint distance missed: asked 1000000000"), "{e}");
+    assert!(!e.contains("constraint time missed"), "{e}");
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("far.report.json")).unwrap()).unwrap();
+    let distance = &r["constraints"][0];
+    assert_eq!((distance["name"].as_str(), distance["missed"].as_bool()), (Some("distance"), Some(true)), "{r}");
+    assert_eq!(distance["asked"], 1e9);
+    assert_eq!(r["constraints"][1]["missed"], false);
+    std::fs::remove_file(&far).unwrap();
+    let o = reach_far(&["--strict", "--quiet"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("1 constraint missed (--strict"), "{}", stderr(&o));
+    assert!(far.is_file(), "the animation is written before --strict fails");
+    let o = reach_far(&["--strict", "--json"]);
+    assert_eq!(o.status.code(), Some(3));
+    let v: serde_json::Value = serde_json::from_str(stderr(&o).trim()).expect("one JSON object");
+    assert_eq!(v["exit_code"], 3);
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).expect("the report on stdout");
+    assert_eq!(r["constraints"][0]["missed"], true);
+    // A tolerance the user sets: 1e9 units of slack meets it.
+    let o = reach_far(&["--strict", "--quiet", "--tolerance", "1e9"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 
     // Bad input names the file and line, or what is known.
     let bad_curve = tmp.path().join("bad.csv");

@@ -96,6 +96,9 @@ pub struct InterpolationEval {
 /// edge-length distortion and volume change of the linear blend and of the non-linear
 /// interpolation, relative to the linear blend of the inputs' own measures.
 pub fn interpolation_eval(s: &Subject, o: &InterpolationOptions) -> Result<InterpolationEval> {
+    if !(0.0..=1.0).contains(&o.lambda) {
+        return Err(Error::parameter("--lambda", Some(o.lambda.to_string()), "expected a number in [0, 1]"));
+    }
     let topo = s.topology();
     let mut rows = Vec::new();
     let mut sweeps = Vec::new();

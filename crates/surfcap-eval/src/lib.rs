@@ -62,7 +62,11 @@ impl MeanStd {
 
 /// Mean and (population) standard deviation; (0, 0) for no values.
 pub fn mean_std(v: &[f64]) -> (f64, f64) {
-    let n = v.len().max(1) as f64;
+    if v.is_empty() {
+        // Not the -0.0 that a float sum of nothing gives.
+        return (0.0, 0.0);
+    }
+    let n = v.len() as f64;
     let m = v.iter().sum::<f64>() / n;
     (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt())
 }

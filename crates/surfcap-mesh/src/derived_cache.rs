@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use crate::atomic::write_file;
 use crate::error::Result;
 use crate::io::npy::{NpyArray, NpyElement, read_npy, write_npy};
+use crate::progress::Progress;
 use crate::subject::Subject;
 
 /// Hash of the subject's geometry: topology, positions of every sequence (in order), up axis.
@@ -63,23 +64,32 @@ impl DerivedCache {
     /// older layout, another subject's) is recomputed and replaced; `refresh` recomputes and
     /// replaces even a good one. A freshly computed array is decoded too, so a cached and an
     /// uncached run see the same numbers (e.g. after rounding to f32).
+    ///
+    /// `decode` is where an entry is checked against what it is for (shape, values): a file
+    /// under the right name can still hold another subject's matrix or NaN, and a rejected
+    /// entry is named with its problem through `progress.note`, so the user learns why the
+    /// run recomputes.
     pub fn fetch<T, V, E>(
         &self,
         path: &Path,
         refresh: bool,
+        progress: &dyn Progress,
         compute: impl Fn() -> Result<NpyArray<T>, E>,
         decode: impl Fn(NpyArray<T>) -> Result<V, E>,
     ) -> Result<(V, bool), E>
     where
         T: NpyElement + npyz::AutoSerialize,
-        E: From<crate::Error>,
+        E: From<crate::Error> + std::fmt::Display,
     {
-        if !refresh
-            && path.is_file()
-            && let Ok(a) = read_npy::<T>(path)
-            && let Ok(v) = decode(a)
-        {
-            return Ok((v, true));
+        if !refresh && path.is_file() {
+            let problem = match read_npy::<T>(path) {
+                Ok(a) => match decode(a) {
+                    Ok(v) => return Ok((v, true)),
+                    Err(e) => e.to_string(),
+                },
+                Err(e) => e.to_string(),
+            };
+            progress.note(&format!("cache entry {}: {problem}; recomputing it", path.display()));
         }
         let a = compute()?;
         write_file(path, |w| write_npy(w, &a.shape, &a.data))?;
@@ -104,7 +114,7 @@ mod tests {
                 calls.set(calls.get() + 1);
                 Ok::<_, crate::Error>(NpyArray { shape: vec![2, 2], data: vec![0.0, 1.5, 1.5, 0.0] })
             };
-            let (a, cached) = c.fetch(&p, false, compute, Ok).unwrap();
+            let (a, cached) = c.fetch(&p, false, &crate::NoProgress, compute, Ok).unwrap();
             assert_eq!(cached, expect_cached);
             assert_eq!(a.data[1], 1.5);
         }
@@ -116,6 +126,7 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let c = DerivedCache::new(d.path());
         let p = c.path("test", &blake3::hash(b"x"), "");
+        let notes = Notes::default();
         let calls = std::cell::Cell::new(0);
         let compute = || {
             calls.set(calls.get() + 1);
@@ -124,14 +135,27 @@ mod tests {
         let decode = |a: NpyArray<f64>| {
             if a.shape == [2] { Ok(a.data) } else { Err(crate::Error::new(crate::ErrorKind::Shape, "expected [2]")) }
         };
-        assert_eq!(c.fetch(&p, false, compute, decode).unwrap(), (vec![1.0, 2.0], false));
-        assert_eq!(c.fetch(&p, false, compute, decode).unwrap(), (vec![1.0, 2.0], true));
+        assert_eq!(c.fetch(&p, false, &notes, compute, decode).unwrap(), (vec![1.0, 2.0], false));
+        assert_eq!(c.fetch(&p, false, &notes, compute, decode).unwrap(), (vec![1.0, 2.0], true));
         assert_eq!(calls.get(), 1);
-        assert!(!c.fetch(&p, true, compute, decode).unwrap().1);
+        assert!(!c.fetch(&p, true, &notes, compute, decode).unwrap().1);
         assert_eq!(calls.get(), 2);
         // A readable entry of the wrong shape is recomputed and replaced.
         write_file(&p, |w| write_npy(w, &[3], &[1.0f64, 2.0, 3.0])).unwrap();
-        assert_eq!(c.fetch(&p, false, compute, decode).unwrap(), (vec![1.0, 2.0], false));
+        assert_eq!(c.fetch(&p, false, &notes, compute, decode).unwrap(), (vec![1.0, 2.0], false));
         assert_eq!(read_npy::<f64>(&p).unwrap().shape, vec![2]);
+        let said = notes.0.lock().unwrap();
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(said[0].contains(&p.display().to_string()) && said[0].contains("expected [2]"), "{said:?}");
+    }
+
+    /// Collects notes.
+    #[derive(Default)]
+    struct Notes(std::sync::Mutex<Vec<String>>);
+
+    impl Progress for Notes {
+        fn note(&self, text: &str) {
+            self.0.lock().unwrap().push(text.to_string());
+        }
     }
 }

@@ -8,6 +8,9 @@ pub trait Progress: Sync {
     fn advance(&self, _n: u64) {}
     /// The current stage is done.
     fn finish(&self) {}
+    /// Something the user should know that is not an error (e.g. a cache entry that was
+    /// rejected and recomputed): libraries do not print, so they say it here.
+    fn note(&self, _text: &str) {}
 }
 
 /// Reports nothing.

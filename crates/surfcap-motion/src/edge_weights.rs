@@ -20,6 +20,7 @@
 
 use surfcap_mesh::FrameIndex;
 
+use crate::error::{Error, Result};
 use crate::transition_table::TransitionTable;
 
 /// Dense N x N edge weights (row-major, `f64::INFINITY` where there is no edge; the diagonal
@@ -44,10 +45,23 @@ impl EdgeWeights {
     }
 }
 
-/// Algorithm 1 over a transition table. `alpha` must be positive and finite.
-pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> EdgeWeights {
-    assert!(alpha.is_finite() && alpha > 0.0, "alpha must be positive");
-    let n = table.n;
+/// Algorithm 1 over a transition table. `alpha` must be positive and finite, and the table
+/// one of `index`'s frames with costs >= 0 or infinity and durations (an inconsistent table is
+/// an error, not a panic or NaN weights).
+pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> Result<EdgeWeights> {
+    if !(alpha.is_finite() && alpha > 0.0) {
+        return Err(Error::Parameter { name: "alpha", value: alpha, expected: "a positive number" });
+    }
+    let n = index.len();
+    for (what, len) in [("transition costs", table.cost.len()), ("transition durations", table.len.len())] {
+        if table.n != n || len != n * n {
+            return Err(Error::MatrixSize { what, len, expected: n * n, frames: n });
+        }
+    }
+    if let Some(k) = table.cost.iter().position(|c| c.is_nan() || *c < 0.0) {
+        let (row, col, value) = (k / n, k % n, table.cost[k]);
+        return Err(Error::MatrixEntry { what: "transition costs", row, col, value, expected: "a cost >= 0 or inf" });
+    }
     let seq: Vec<usize> = (0..n).map(|g| index.locate(g).expect("frame in range").0).collect();
     let mut finite: Vec<f64> = table.cost.iter().copied().filter(|c| c.is_finite()).collect();
     let d_scale = if finite.is_empty() {
@@ -75,7 +89,7 @@ pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> 
             };
         }
     }
-    EdgeWeights { n, alpha, d_scale, weight }
+    Ok(EdgeWeights { n, alpha, d_scale, weight })
 }
 
 #[cfg(test)]
@@ -91,14 +105,14 @@ mod tests {
         let mut cost = vec![0.5; n * n];
         cost[4] = 0.25;
         let t = TransitionTable { n, cost, len: vec![2; n * n], li: vec![1; n * n], lj: vec![1; n * n] };
-        let e = edge_weights(&t, &index, 0.1);
+        let e = edge_weights(&t, &index, 0.1).unwrap();
         assert_eq!(e.at(0, 1), 0.1, "successive frames");
         assert_eq!(e.d_scale, 0.5);
         assert!(e.at(0, 2).is_infinite(), "1.2 > 0.2: the original chain is cheaper");
         assert!((e.at(2, 0) - 1.2).abs() < 1e-12, "backwards in a sequence: a transition");
         assert!((e.at(0, 4) - 0.7).abs() < 1e-12, "across sequences");
         assert!(e.at(3, 3).is_infinite());
-        let e = edge_weights(&t, &index, 1.0);
+        let e = edge_weights(&t, &index, 1.0).unwrap();
         assert!(e.at(0, 2).is_infinite(), "3 > 2");
         assert!(EdgeWeights::is_original(&index, 1, 2) && !EdgeWeights::is_original(&index, 2, 3));
     }

@@ -15,8 +15,9 @@ pub enum Error {
         "step {at} of the walk, frame {from} -> {to}, is neither a successive-frame step nor a transition of the graph"
     )]
     NotAnEdge { at: usize, from: u32, to: u32 },
-    /// The Blend of a transition failed (its Poisson system).
-    #[error("blending a transition: {0}")]
+    /// The Blend of a transition failed (its Poisson system, the source: not repeated here, as
+    /// error printers show the chain).
+    #[error("blending a transition")]
     Poisson(#[from] surfcap_geometry::Error),
 
     /// Walk-model rows: a count of numbers that is not a multiple of 3.
@@ -65,6 +66,17 @@ pub enum Error {
         "the walk stalls: {frames} frames cover only {travelled:.2} of {length:.2} along the curve (do the allowed motions travel?)"
     )]
     PathStalls { frames: usize, travelled: f64, length: f64 },
+
+    /// A matrix whose size does not match the frames it is for: `what` holds `len` numbers
+    /// where `expected` were expected.
+    #[error("{what}: {len} numbers, expected {expected} for {frames} frames")]
+    MatrixSize { what: &'static str, len: usize, expected: usize, frames: usize },
+    /// A matrix entry that is not a number the algorithm can use (NaN, negative...).
+    #[error("{what}: entry ({row}, {col}) is {value}, expected {expected}")]
+    MatrixEntry { what: &'static str, row: usize, col: usize, value: f64, expected: &'static str },
+    /// A parameter outside its domain (NaN included).
+    #[error("{name} {value}: expected {expected}")]
+    Parameter { name: &'static str, value: f64, expected: &'static str },
 
     /// A timed-walk endpoint outside the graph's frames (0..`frames`).
     #[error("frame {frame} is not in the graph (0..{frames})")]

@@ -393,6 +393,9 @@ pub fn follow_path(
     if !(p.window > 0.0 && p.window.is_finite()) || p.max_frames == 0 {
         return Err(Error::PathSearchParameters { window: p.window, max_frames: p.max_frames });
     }
+    if p.branching == 0 {
+        return Err(Error::Parameter { name: "branching", value: 0.0, expected: "a whole number >= 1" });
+    }
     let q = Query::new(model, graph, curve, restrictions);
     let initial = |u: u32| -> State {
         let g = start_placement(model, curve, u);

@@ -429,6 +429,14 @@ impl TimedGraph {
         longest_edge: usize,
     ) -> Result<(TimedWalk, f64)> {
         self.check(a, b)?;
+        if !(distance.is_finite() && distance >= 0.0) {
+            return Err(Error::Parameter { name: "distance", value: distance, expected: "a finite distance >= 0" });
+        }
+        for (name, value) in [("distance scale", scales.0), ("time scale", scales.1)] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(Error::Parameter { name, value, expected: "a finite number > 0" });
+            }
+        }
         let (wd, wt) = (1.0 / scales.0, 1.0 / scales.1);
         let total =
             |w: &TimedWalk| w.cost + wd * (w.distance - distance).abs() + wt * (w.frames as f64 - frames as f64).abs();

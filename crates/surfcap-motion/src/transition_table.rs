@@ -19,6 +19,7 @@ use rayon::prelude::*;
 use surfcap_mesh::{FrameIndex, Progress};
 
 use crate::dtw::{DtwTables, Slope, dtw_fill};
+use crate::error::{Error, Result};
 
 /// Parameters of a transition table.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,6 +39,76 @@ pub struct TransitionTable {
     pub len: Vec<u32>,
     pub li: Vec<u32>,
     pub lj: Vec<u32>,
+}
+
+impl TransitionTable {
+    /// Checks that the table fits the frames of `index` and its own rules, so that code
+    /// indexing frames with it cannot go out of bounds: N x N entries, every cost >= 0 or
+    /// +infinity (no NaN), and every finite entry with segment lengths in `lengths`, windows
+    /// inside their sequences (source [i, i + l^i - 1], destination [j - l^j + 1, j]) and a
+    /// warp length between max(l^i, l^j) and l^i + l^j - 1. A table read from a cache is
+    /// checked before use.
+    pub fn check(&self, index: &FrameIndex, lengths: std::ops::RangeInclusive<usize>) -> Result<()> {
+        let n = index.len();
+        for (what, len) in [
+            ("transition costs", self.cost.len()),
+            ("transition durations", self.len.len()),
+            ("source lengths", self.li.len()),
+            ("destination lengths", self.lj.len()),
+        ] {
+            if self.n != n || len != n * n {
+                return Err(Error::MatrixSize { what, len, expected: n * n, frames: n });
+            }
+        }
+        let room = SegmentRoom::new(index);
+        for (k, &c) in self.cost.iter().enumerate() {
+            let (i, j) = (k / n, k % n);
+            let entry = |what, value: f64, expected| Error::MatrixEntry { what, row: i, col: j, value, expected };
+            if c.is_nan() || c < 0.0 {
+                return Err(entry("transition costs", c, "a cost >= 0 or inf"));
+            }
+            if c.is_infinite() {
+                continue;
+            }
+            let (li, lj, len) = (self.li[k] as usize, self.lj[k] as usize, self.len[k] as usize);
+            if !lengths.contains(&li) || li > room.after[i] {
+                return Err(entry("source lengths", li as f64, "a segment length that fits the source's sequence"));
+            }
+            if !lengths.contains(&lj) || lj > room.before[j] {
+                return Err(entry(
+                    "destination lengths",
+                    lj as f64,
+                    "a segment length that fits the destination's sequence",
+                ));
+            }
+            if len < li.max(lj) || len > li + lj - 1 {
+                return Err(entry(
+                    "transition durations",
+                    len as f64,
+                    "a warp length between max(l^i, l^j) and l^i + l^j - 1",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks that `d` is an N x N matrix of finite distances >= 0 over the frames of `index`.
+pub fn check_distances(d: &[f64], index: &FrameIndex) -> Result<()> {
+    let n = index.len();
+    if d.len() != n * n {
+        return Err(Error::MatrixSize { what: "distance matrix", len: d.len(), expected: n * n, frames: n });
+    }
+    match d.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+        None => Ok(()),
+        Some(k) => Err(Error::MatrixEntry {
+            what: "distance matrix",
+            row: k / n,
+            col: k % n,
+            value: d[k],
+            expected: "a finite distance >= 0",
+        }),
+    }
 }
 
 /// Frames available around each global frame inside its own sequence: `after[g]` from g to the
@@ -82,8 +153,18 @@ struct RowBest<'a> {
     lj: &'a mut [u32],
 }
 
-/// The table with shared dynamic programming.
-pub fn transition_table(d: &[f64], index: &FrameIndex, p: &TableParams, progress: &dyn Progress) -> TransitionTable {
+/// The table with shared dynamic programming over the distance matrix `d` (checked first: a
+/// matrix of another size or with NaN is an error, not a panic or a table of NaN).
+pub fn transition_table(
+    d: &[f64],
+    index: &FrameIndex,
+    p: &TableParams,
+    progress: &dyn Progress,
+) -> Result<TransitionTable> {
+    check_distances(d, index)?;
+    if p.l_min < 1 || p.l_min > p.l_max {
+        return Err(Error::Parameter { name: "l-min", value: p.l_min as f64, expected: "1 <= l-min <= l-max" });
+    }
     let n = index.len();
     let after = SegmentRoom::new(index).after;
     let mut cost = vec![f64::INFINITY; n * n];
@@ -101,7 +182,7 @@ pub fn transition_table(d: &[f64], index: &FrameIndex, p: &TableParams, progress
             progress.advance(1);
         });
     progress.finish();
-    TransitionTable { n, cost, len, li, lj }
+    Ok(TransitionTable { n, cost, len, li, lj })
 }
 
 fn source_row(d: &[f64], n: usize, i: usize, after: &[usize], p: &TableParams, t: &mut DtwTables, row: &mut RowBest) {
@@ -212,7 +293,7 @@ mod tests {
         let d = toy(n);
         for slope in [Some(1), Some(2), Some(3), None] {
             let p = TableParams { l_min: 3, l_max: 6, slope };
-            let t = transition_table(&d, &index, &p, &NoProgress);
+            let t = transition_table(&d, &index, &p, &NoProgress).unwrap();
             for i in 0..n {
                 for j in 0..n {
                     let naive = naive_transition(&d, &SegmentRoom::new(&index), i, j, &p);
@@ -230,11 +311,39 @@ mod tests {
     }
 
     #[test]
+    fn inconsistent_matrices_are_errors_not_panics() {
+        let index = FrameIndex::new([10, 10]);
+        let p = TableParams { l_min: 4, l_max: 7, slope: Some(3) };
+        // Another subject's 16 x 16 matrix for 20 frames.
+        let e = transition_table(&toy(16), &index, &p, &NoProgress).unwrap_err();
+        assert!(matches!(e, Error::MatrixSize { len: 256, expected: 400, .. }), "{e}");
+        let mut d = toy(20);
+        d[21] = f64::NAN;
+        let e = transition_table(&d, &index, &p, &NoProgress).unwrap_err().to_string();
+        assert!(e.contains("(1, 1) is NaN"), "{e}");
+        let good = transition_table(&toy(20), &index, &p, &NoProgress).unwrap();
+        good.check(&index, 4..=7).unwrap();
+        assert!(good.check(&FrameIndex::new([16]), 4..=7).is_err(), "another frame count");
+        assert!(good.check(&index, 5..=7).is_err(), "other segment lengths");
+        let mut bad = good.clone();
+        let k = bad.cost.iter().position(|c| c.is_finite()).unwrap();
+        bad.li[k] = 11;
+        assert!(matches!(bad.check(&index, 4..=11), Err(Error::MatrixEntry { what: "source lengths", .. })));
+        bad = good.clone();
+        bad.cost[k] = -1.0;
+        assert!(bad.check(&index, 4..=7).is_err());
+        let edges = crate::edge_weights::edge_weights(&bad, &index, 0.1).unwrap_err().to_string();
+        assert!(edges.contains("is -1, expected a cost >= 0 or inf"), "{edges}");
+        assert!(crate::edge_weights::edge_weights(&good, &FrameIndex::new([16]), 0.1).is_err());
+        assert!(crate::edge_weights::edge_weights(&good, &index, f64::NAN).is_err());
+    }
+
+    #[test]
     fn windows_stay_inside_sequences_and_lengths_in_bounds() {
         let index = FrameIndex::new([10, 10]);
         let d = toy(20);
         let p = TableParams { l_min: 4, l_max: 7, slope: Some(3) };
-        let t = transition_table(&d, &index, &p, &NoProgress);
+        let t = transition_table(&d, &index, &p, &NoProgress).unwrap();
         // Source frame 8 of sequence 0 has only 2 frames left: no transition starts there.
         assert!((0..20).all(|j| t.cost[8 * 20 + j].is_infinite()));
         // Destination frame 12 (third of sequence 1) has only 3 frames before it.

@@ -383,8 +383,8 @@ pub(crate) mod tests {
         let s = worm_subject(&WormParams { rings: 10, segments: 8, frames: 30, ..Default::default() }).unwrap();
         let d = distance_matrix(&s, &DistanceParams::default(), &NoProgress);
         let p = TableParams { l_min: 4, l_max: 8, slope: Some(3) };
-        let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress);
-        let w = edge_weights(&table, s.frame_index(), 0.05);
+        let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress).unwrap();
+        let w = edge_weights(&table, s.frame_index(), 0.05).unwrap();
         let g = essential_graph(&w, &NoProgress).graph;
         let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
         (s, g, model, d.values)

@@ -12,9 +12,13 @@ pub enum Error {
     /// A parameter outside its domain (the message says which and what was expected).
     #[error("{name} {value}: {expected}")]
     Parameter { name: &'static str, value: String, expected: &'static str },
-    /// A product that was just computed (not read from a cache) could not be used: a bug.
-    #[error("the {kind} just computed: {reason}")]
-    Computed { kind: &'static str, reason: String },
+    /// A product that does not fit the subject or its parameters (the shape, a value): a cache
+    /// entry that is then recomputed, or, for one just computed, a bug.
+    #[error("{kind}: {reason}")]
+    Product { kind: &'static str, reason: String },
+    /// The motion layer refused its input (an inconsistent matrix, a parameter).
+    #[error(transparent)]
+    Motion(#[from] surfcap_motion::Error),
     /// A constraint file (curve, key poses) that cannot be used: the file, its line when there
     /// is one, and what was expected.
     #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
@@ -22,9 +26,6 @@ pub enum Error {
     /// A frame, tag or vertex the subject does not have, or a request it cannot satisfy.
     #[error("{0}")]
     Request(String),
-    /// Blending a transition (Poisson reconstruction of its interpolated poses).
-    #[error("blending a transition: {0}")]
-    Blend(String),
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

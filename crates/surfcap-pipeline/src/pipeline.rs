@@ -13,7 +13,7 @@ use surfcap_motion::edge_weights::{EdgeWeights, edge_weights};
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::motion_graph::motion_graph;
-use surfcap_motion::transition_table::{TableParams, TransitionTable, transition_table};
+use surfcap_motion::transition_table::{TableParams, TransitionTable, check_distances, transition_table};
 use surfcap_motion::walk_sequence::WalkModel;
 
 use crate::error::{Error, Result};
@@ -173,7 +173,7 @@ impl Pipeline {
     {
         match (&self.store.cache, self.cache_file(key)) {
             (Some(cache), Some(file)) => {
-                let (v, from_cache) = cache.fetch(&file, self.store.refresh, compute, decode)?;
+                let (v, from_cache) = cache.fetch(&file, self.store.refresh, &*self.progress, compute, decode)?;
                 Ok(Fetched { value: Arc::new(v), from_cache, file: Some(file) })
             }
             _ => Ok(Fetched { value: Arc::new(decode(compute()?)?), from_cache: false, file: None }),
@@ -182,6 +182,13 @@ impl Pipeline {
 
     /// The all-pairs pose distance matrix (thesis eq. 2.2, 2.13, 2.14) with `p`.
     pub fn distances(&self, p: &DistanceParams) -> Result<Fetched<PoseDistances>> {
+        if !(p.w.is_finite() && p.w >= 0.0) {
+            return Err(Error::Parameter {
+                name: "w",
+                value: p.w.to_string(),
+                expected: "expected a finite number >= 0",
+            });
+        }
         let key = DistanceKey::new(p);
         let n = self.subject.n_frames();
         self.distances.get_or_try(&key, || {
@@ -193,6 +200,7 @@ impl Pipeline {
                 },
                 |a: NpyArray<f64>| {
                     check_shape(&a.shape, &[n, n], "distance matrix")?;
+                    check_distances(&a.data, self.subject.frame_index())?;
                     Ok(PoseDistances { n, values: a.data })
                 },
             )
@@ -217,7 +225,7 @@ impl Pipeline {
                 &key,
                 || {
                     let d = self.chain_distances()?;
-                    let t = transition_table(&d.value.values, self.subject.frame_index(), p, &*self.progress);
+                    let t = transition_table(&d.value.values, self.subject.frame_index(), p, &*self.progress)?;
                     let mut data = t.cost;
                     data.extend(t.len.iter().map(|&x| x as f64));
                     data.extend(t.li.iter().map(|&x| x as f64));
@@ -227,8 +235,19 @@ impl Pipeline {
                 |a: NpyArray<f64>| {
                     check_shape(&a.shape, &[4, n, n], "transition table")?;
                     let part = |k: usize| &a.data[k * n * n..(k + 1) * n * n];
-                    let whole = |k: usize| part(k).iter().map(|&x| x as u32).collect();
-                    Ok(TransitionTable { n, cost: part(0).to_vec(), len: whole(1), li: whole(2), lj: whole(3) })
+                    // Counts stored as f64: whole numbers that fit a u32, or the table is refused
+                    // (rather than NaN or -1 silently becoming 0).
+                    let whole = |k: usize| -> Result<Vec<u32>> {
+                        let count = |x: f64| (x >= 0.0 && x <= u32::MAX as f64 && x.fract() == 0.0).then_some(x as u32);
+                        let bad = |x: f64| Error::Product {
+                            kind: "transition table",
+                            reason: format!("length {x} in layer {k}, expected a whole number >= 0"),
+                        };
+                        part(k).iter().map(|&x| count(x).ok_or_else(|| bad(x))).collect()
+                    };
+                    let t = TransitionTable { n, cost: part(0).to_vec(), len: whole(1)?, li: whole(2)?, lj: whole(3)? };
+                    t.check(self.subject.frame_index(), p.l_min..=p.l_max)?;
+                    Ok(t)
                 },
             )
         })
@@ -244,7 +263,7 @@ impl Pipeline {
         {
             return Ok(w.clone());
         }
-        let w = Arc::new(edge_weights(&self.table(p)?.value, self.subject.frame_index(), alpha));
+        let w = Arc::new(edge_weights(&self.table(p)?.value, self.subject.frame_index(), alpha)?);
         *self.weights.lock().expect("weights lock") = Some((key, alpha, w.clone()));
         Ok(w)
     }
@@ -278,11 +297,15 @@ impl Pipeline {
                         return Err(shape_error(&a.shape, "[E, 3]", "graph"));
                     }
                     let mut edges = Vec::with_capacity(a.shape[0]);
-                    for e in a.data.chunks_exact(3) {
+                    for (k, e) in a.data.chunks_exact(3).enumerate() {
                         let node = |x: f64| (x >= 0.0 && x < n as f64 && x.fract() == 0.0).then_some(x as u32);
                         let (Some(from), Some(to)) = (node(e[0]), node(e[1])) else {
                             return Err(shape_error(&a.shape, "edges between this subject's frames", "graph"));
                         };
+                        if !(e[2].is_finite() && e[2] >= 0.0) {
+                            let reason = format!("edge {k} has weight {}, expected a finite weight >= 0", e[2]);
+                            return Err(Error::Product { kind: "graph", reason });
+                        }
                         edges.push(Edge { from, to, weight: e[2] });
                     }
                     Ok(Graph::new(n, edges))
@@ -333,7 +356,7 @@ impl Pipeline {
                     }
                     let rows: Vec<f64> = a.data.iter().map(|&x| x as f64).collect();
                     WalkModel::from_rows(s, &rows, tracked, slope)
-                        .map_err(|e| Error::Computed { kind: "walk model", reason: e.to_string() })
+                        .map_err(|e| Error::Product { kind: "walk model", reason: e.to_string() })
                 },
             )
         })
@@ -341,7 +364,7 @@ impl Pipeline {
 }
 
 fn shape_error(shape: &[usize], expected: &str, what: &'static str) -> Error {
-    Error::Computed { kind: what, reason: format!("shape {shape:?}, expected {expected}") }
+    Error::Product { kind: what, reason: format!("shape {shape:?}, expected {expected}") }
 }
 
 fn check_shape(shape: &[usize], expected: &[usize], what: &'static str) -> Result<()> {

@@ -58,7 +58,7 @@ pub fn play_walk(
     let model = pipe.walk_model(p, tracked)?;
     let d = pipe.chain_distances()?;
     let t0 = Instant::now();
-    let ws = walk_sequence(s, &model.value, &d.value.values, walk, start).map_err(|e| Error::Blend(e.to_string()))?;
+    let ws = walk_sequence(s, &model.value, &d.value.values, walk, start)?;
     let blend_seconds = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
     let centres = ws.positions.chunks_exact(3 * nv).map(|f| tracked_centre(f, tracked)).collect();

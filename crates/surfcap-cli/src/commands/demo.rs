@@ -36,7 +36,7 @@ pub struct Args {
     #[arg(long, num_args = 1..)]
     pub bvh: Vec<PathBuf>,
     /// Target vertex count of the mannequin.
-    #[arg(long, default_value_t = 2500)]
+    #[arg(long, default_value_t = 2500, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
 }
 
@@ -65,10 +65,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let built = build(ctx, &spec)?;
     say(&format!(
-        "1. built the mannequin ({} vertices) {}: {} sequences ({}), {} frames at {} fps",
+        "1. built the mannequin ({} vertices) {}: {} ({}), {} frames at {} fps",
         built.topology().n_vertices(),
         if a.bvh.is_empty() { "with procedural motions" } else { "driven by the BVH files" },
-        built.sequences().len(),
+        crate::output::count_of(built.sequences().len(), "sequence"),
         built.sequences().iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", "),
         built.n_frames(),
         built.fps
@@ -159,7 +159,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     surfcap_mesh::atomic::write_file(&curve_path, |w| w.write_all(csv.as_bytes()))?;
     let curve = read_curve(&curve_path, subject.up_axis, true)?;
-    let out = OutOpts { output: a.output.join("export/path.glb"), format: None };
+    let out = OutOpts { output: a.output.join("export/path.glb"), format: None, constraints: Default::default() };
     // Twice the default branching: this graph is small and the S tight (radius ~1.3 m), and the
     // wider search halves the error (0.32 -> 0.17 m) for ~1 s more.
     let search = PathSearch { branching: 16, ..PathSearch::for_fps(subject.fps) };

@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long, default_value = "deformation")]
     pub metric: PoseMetric,
     /// Weight of the stretch term (eq. 2.13).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, value_parser = crate::options::non_negative)]
     pub w: f64,
     /// The .npy file to write (F x F float64, global frame order; see `surfcap info`).
     #[arg(short, long)]
@@ -43,7 +43,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::atomic::write_file(&a.output, |w| write_npy(w, &[n, n], values))
         .with_context(|| format!("writing {}", a.output.display()))?;
     let off = (0..n).flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| values[i * n + j]));
-    let mean = off.clone().sum::<f64>() / (n * n.saturating_sub(1)).max(1) as f64;
+    let mean = crate::output::mean(off.clone());
     let max = off.fold(0.0, f64::max);
     let result = json!({
         "output": a.output, "frames": n, "metric": params.metric.name(), "w": params.w,

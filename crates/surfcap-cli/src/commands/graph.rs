@@ -11,7 +11,7 @@ use surfcap_motion::edge_weights::EdgeWeights;
 use surfcap_motion::graph::Graph;
 
 use crate::options::{GraphOpts, open};
-use crate::output::write_json;
+use crate::output::{count_of, write_json};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -68,11 +68,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     write_json(&output.join("graph.json"), &report)?;
     ctx.result(&report, || {
         println!(
-            "{} graph of {:?}, alpha {alpha}: {} frames ({frames_in_graph} with edges), {} edges ({original} original, {transitions} transitions), density {:.5} -> {} ({}, {secs:.2} s)",
+            "{} graph of {:?}, alpha {alpha}: {} ({frames_in_graph} with edges), {} ({original} original, {}), density {:.5} -> {} ({}, {secs:.2} s)",
             p.kind,
             s.name,
-            g.n,
-            g.edges().len(),
+            count_of(g.n, "frame"),
+            count_of(g.edges().len(), "edge"),
+            count_of(transitions, "transition"),
             g.density(),
             output.display(),
             if fetched.from_cache { "from cache" } else { "computed" }

@@ -86,10 +86,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }),
         || {
             println!(
-                "imported {:?}: {} sequences, {} frames, {} vertices, {} triangles -> {} ({secs:.2} s)",
+                "imported {:?}: {}, {}, {} vertices, {} triangles -> {} ({secs:.2} s)",
                 s.name,
-                s.sequences().len(),
-                s.n_frames(),
+                crate::output::count_of(s.sequences().len(), "sequence"),
+                crate::output::count_of(s.n_frames(), "frame"),
                 s.topology().n_vertices(),
                 s.topology().n_triangles(),
                 a.output.display()

@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long)]
     pub to: String,
     /// Number of poses written, both ends included (>= 2).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::options::at_least(s, 2))]
     pub steps: usize,
     /// nonlinear (thesis eq. 2.45-2.49) or linear (eq. 2.23).
     #[arg(long, default_value = "nonlinear")]
@@ -57,7 +57,6 @@ impl std::str::FromStr for Method {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(a.steps >= 2, "--steps {}: expected at least 2 (both ends are included)", a.steps);
     let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == Method::Nonlinear);
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?;

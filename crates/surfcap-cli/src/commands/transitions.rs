@@ -42,7 +42,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     w("li.npy", &|o| write_npy(o, &[n, n], &t.li))?;
     w("lj.npy", &|o| write_npy(o, &[n, n], &t.lj))?;
     let finite: Vec<f64> = t.cost.iter().copied().filter(|c| c.is_finite()).collect();
-    let mean = finite.iter().sum::<f64>() / finite.len().max(1) as f64;
+    let mean = crate::output::mean(finite.iter().copied());
     let result = json!({
         "frames": n, "pairs_with_transitions": finite.len(), "mean_cost": mean,
         "l_min": p.l_min, "l_max": p.l_max, "slope": p.slope, "seconds": secs, "cached": fetched.from_cache,

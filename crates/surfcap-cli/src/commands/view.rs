@@ -93,7 +93,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             print_json(&serde_json::json!({ "url": url, "sequences": n }));
         } else {
             println!("{url}");
-            eprintln!("surfcap view: playing {n} sequence(s) at {url} (Ctrl-C to stop)");
+            eprintln!("surfcap view: playing {} at {url} (Ctrl-C to stop)", crate::output::count_of(n, "sequence"));
         }
         let _ = std::io::stdout().flush();
     })?;

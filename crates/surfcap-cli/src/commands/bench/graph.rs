@@ -23,7 +23,7 @@ pub(super) fn run(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64,
     let len: Vec<u32> = (0..n * n).map(|_| rng.random_range(10..60)).collect();
     let table = TransitionTable { n, cost, len, li: vec![10; n * n], lj: vec![10; n * n] };
     let t0 = Instant::now();
-    let w = edge_weights(&table, &index, alpha);
+    let w = edge_weights(&table, &index, alpha)?;
     let t_weights = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let eg = essential_graph(&w, &crate::progress::Bar::new(ctx));

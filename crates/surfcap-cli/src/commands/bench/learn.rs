@@ -19,26 +19,26 @@ use surfcap_learn::pca::{Pca, PcaMethod};
 #[derive(clap::Args, Debug)]
 pub struct LearnArgs {
     /// GP training points.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
     pub gp_points: usize,
     /// GP input dimensions.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::options::count)]
     pub gp_dims: usize,
     /// Random restarts of the GP hyper-parameter fit (besides the first start), screened on 500
     /// points before the best is refined on all of them.
     #[arg(long, default_value_t = 2)]
     pub gp_restarts: usize,
     /// GPDM frames (two sequences: walk and jog).
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, value_parser = crate::options::count)]
     pub frames: usize,
     /// Mannequin vertices (3 coordinates each).
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = crate::options::count)]
     pub vertices: usize,
     /// HMC trajectory samples.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::options::count)]
     pub hmc_samples: usize,
     /// Frames per sampled trajectory.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
     pub hmc_frames: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,

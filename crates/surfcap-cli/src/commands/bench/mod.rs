@@ -28,18 +28,18 @@ pub enum What {
         /// A subject cache or source to load; default: a generated subject of the given size.
         #[arg(long)]
         subject: Option<PathBuf>,
-        #[arg(long, default_value_t = 2000)]
+        #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
         frames: usize,
-        #[arg(long, default_value_t = 10000)]
+        #[arg(long, default_value_t = 10000, value_parser = crate::options::count)]
         vertices: usize,
         /// Repetitions (the best and the median are reported).
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, default_value_t = 3, value_parser = crate::options::count)]
         repeat: usize,
         /// Measure in this process (used by the parent run).
         #[arg(long, hide = true)]
         in_process: bool,
         /// Frame rate for sources that do not give one.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::options::positive)]
         fps: Option<f64>,
     },
     /// All-pairs deformation distance matrix: triangle pairs per second, against the machine's
@@ -48,12 +48,12 @@ pub enum What {
         /// A subject; default: the built-in tube with --frames frames of about --triangles triangles.
         #[arg(long)]
         subject: Option<PathBuf>,
-        #[arg(long, default_value_t = 175)]
+        #[arg(long, default_value_t = 175, value_parser = crate::options::count)]
         frames: usize,
-        #[arg(long, default_value_t = 20000)]
+        #[arg(long, default_value_t = 20000, value_parser = crate::options::count)]
         triangles: usize,
         /// Frame rate for sources that do not give one.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::options::positive)]
         fps: Option<f64>,
     },
     /// All-pairs transition table (thesis 2.5.3-2.5.4) and its speed-up over one DTW per segment
@@ -62,25 +62,25 @@ pub enum What {
         /// A subject; default: the built-in tube, two sequences, --frames frames in all.
         #[arg(long)]
         subject: Option<PathBuf>,
-        #[arg(long, default_value_t = 350)]
+        #[arg(long, default_value_t = 350, value_parser = crate::options::count)]
         frames: usize,
         /// Frame pairs timed with the naive loop.
-        #[arg(long, default_value_t = 12)]
+        #[arg(long, default_value_t = 12, value_parser = crate::options::count)]
         sample: usize,
         #[command(flatten)]
         table: TableOpts,
         /// Frame rate for sources that do not give one.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::options::positive)]
         fps: Option<f64>,
     },
     /// Essential and motion graph build time for --frames nodes (thesis 3.3; target: 2,000
     /// nodes in under 60 s on 2 cores, after the transition table). The table is seeded random
     /// (costs and durations): the build's work does not depend on the values.
     Graph {
-        #[arg(long, default_value_t = 2000)]
+        #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
         frames: usize,
         /// Sequences the frames are split into.
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, default_value_t = 20, value_parser = crate::options::count)]
         sequences: usize,
         #[arg(long, default_value = "0.05")]
         alpha: Positive,
@@ -104,10 +104,10 @@ pub enum What {
         from: String,
         #[arg(long)]
         to: String,
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = crate::options::count)]
         repeat: usize,
         /// Frame rate for sources that do not give one.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::options::positive)]
         fps: Option<f64>,
     },
 }

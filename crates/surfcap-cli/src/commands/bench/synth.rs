@@ -11,11 +11,11 @@ use crate::options::{CacheOpts, TableOpts};
 /// `bench synth`: graph build and query latency on a procedural subject.
 #[derive(clap::Args, Debug)]
 pub struct SynthBench {
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
     frames: usize,
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = crate::options::count)]
     vertices: usize,
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = crate::options::positive)]
     alpha: f64,
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -24,7 +24,7 @@ pub struct SynthBench {
     #[arg(long)]
     cache_dir: Option<PathBuf>,
     /// Transitions the path search tries per frame (default: `surfcap synth path`'s).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::count)]
     branching: Option<usize>,
 }
 

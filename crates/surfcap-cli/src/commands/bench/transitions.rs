@@ -29,7 +29,7 @@ pub(super) fn run(
     let d = distance_matrix(&s, &DistanceParams::default(), &bar);
     let dist_secs = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let t = transition_table(&d.values, s.frame_index(), &p, &bar);
+    let t = transition_table(&d.values, s.frame_index(), &p, &bar)?;
     let table_secs = t1.elapsed().as_secs_f64();
     let n = t.n;
     let candidates: Vec<usize> = (0..n * n).filter(|&k| t.cost[k].is_finite()).collect();

@@ -36,7 +36,7 @@ pub enum What {
         #[arg(long = "pair", required = true)]
         pairs: Vec<String>,
         /// Interpolation parameter.
-        #[arg(long, default_value_t = 0.5)]
+        #[arg(long, default_value_t = 0.5, value_parser = crate::options::fraction)]
         lambda: f64,
         /// Stretch interpolation: linear (eq. 2.45) or log (eq. 2.46).
         #[arg(long, default_value = "linear")]
@@ -55,13 +55,13 @@ pub enum What {
         /// A subject cache, or any source `surfcap import` reads.
         subject: PathBuf,
         /// Slope constraints to compare.
-        #[arg(long, value_delimiter = ',', default_value = "2,3,4,5")]
+        #[arg(long, value_delimiter = ',', default_value = "2,3,4,5", value_parser = crate::options::count)]
         slopes: Vec<usize>,
         /// Fixed segment length of the standard and DTW-only transitions (default: one second).
-        #[arg(long)]
+        #[arg(long, value_parser = crate::options::count)]
         fixed: Option<usize>,
         /// Frame pairs in the plots.
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
         plot_pairs: usize,
         /// Folder for the report and the plots.
         #[arg(short, long, default_value = "transitions-eval")]
@@ -80,7 +80,7 @@ pub enum What {
         #[arg(long = "alpha", value_delimiter = ',', default_value = "0.01,0.02,0.03,0.05,0.1,0.2")]
         alphas: Vec<Positive>,
         /// Frame pairs in the shortest-path plots.
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, value_parser = crate::options::count)]
         plot_pairs: usize,
         /// Folder for the report (graphs.json) and the plots.
         #[arg(short, long, default_value = "graphs-eval")]
@@ -101,19 +101,19 @@ pub enum What {
         #[arg(long, value_delimiter = ',')]
         sequences: Vec<String>,
         /// Vertices describing a frame (evenly spaced over the mesh).
-        #[arg(long, default_value_t = 300)]
+        #[arg(long, default_value_t = 300, value_parser = crate::options::count)]
         vertices: usize,
         /// Frames at most (longer subjects are subsampled in time by one stride).
-        #[arg(long, default_value_t = 400)]
+        #[arg(long, default_value_t = 400, value_parser = |s: &str| crate::options::at_least(s, 4))]
         max_frames: usize,
         /// Latent dimension d.
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, default_value_t = 3, value_parser = crate::options::count)]
         latent_dim: usize,
         /// HMC latent trajectories to sample (0: none).
         #[arg(long, default_value_t = 3)]
         samples: usize,
         /// L-BFGS iterations at most (default 400).
-        #[arg(long)]
+        #[arg(long, value_parser = crate::options::count)]
         iterations: Option<usize>,
         #[arg(long, default_value_t = 0)]
         seed: u64,
@@ -129,13 +129,13 @@ pub enum What {
         /// A subject whose sequences carry ground-truth joint matrices.
         subject: PathBuf,
         /// Frames used (evenly spaced over the global index when the subject has more).
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, value_parser = |s: &str| crate::options::at_least(s, 2))]
         max_frames: usize,
         /// Permutations of the Mantel test.
-        #[arg(long, default_value_t = 10000)]
+        #[arg(long, default_value_t = 10000, value_parser = crate::options::count)]
         permutations: usize,
         /// Distance classes of the correlogram.
-        #[arg(long, default_value_t = 10)]
+        #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
         classes: usize,
         /// Seed of the permutations.
         #[arg(long, default_value_t = 0)]

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use surfcap_pipeline::constraint_files::read_key_poses;
 
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis::{Prepared, run_keyposes};
+use crate::synthesis::{Prepared, check_constraints, run_keyposes};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -40,5 +40,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
-    Ok(())
+    check_constraints(ctx, &a.out.constraints, &o.constraints)
 }

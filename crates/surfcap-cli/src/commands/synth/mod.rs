@@ -73,7 +73,12 @@ fn build_and_write(ctx: &crate::Ctx, a: MannequinArgs) -> anyhow::Result<()> {
             output.display()
         );
         for q in s.sequences() {
-            println!("  {:<12} {:>5} frames  tags {}", q.name, q.n_frames(), q.tags.join(", "));
+            println!(
+                "  {:<12} {:>12}  tags {}",
+                q.name,
+                crate::output::count_of(q.n_frames(), "frame"),
+                q.tags.join(", ")
+            );
         }
     });
     Ok(())

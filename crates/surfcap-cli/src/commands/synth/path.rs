@@ -8,7 +8,7 @@ use surfcap_motion::path_following::PathSearch;
 use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
 
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis::{Prepared, run_path};
+use crate::synthesis::{Prepared, check_constraints, run_path};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -32,14 +32,14 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub track: Vec<usize>,
     /// Arc length covered by each branch-and-bound window (subject units).
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = crate::options::positive)]
     pub window: f64,
     /// Transitions allowed within one window.
     #[arg(long, default_value_t = 2)]
     pub max_transitions: usize,
     /// Transitions tried at each frame (its cheapest ones, round robin over destination
     /// sequences); the search's speed knob.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = crate::options::count)]
     pub branching: usize,
     #[command(flatten)]
     pub graph: GraphOpts,
@@ -73,15 +73,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     ctx.result(&o.played.report, || {
         println!(
-            "followed a {:.2}-long curve: {} frames, {} transitions; centre error mean {:.3}, max {:.3}; search {:.2} s",
+            "followed a {:.2}-long curve: {}, {}; centre error mean {:.3}, max {:.3}; search {:.2} s",
             curve.length(),
-            o.frames,
-            o.played.transitions,
+            crate::output::count_of(o.frames, "frame"),
+            crate::output::count_of(o.played.transitions, "transition"),
             o.mean_error,
             o.max_error,
             o.search_seconds
         );
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
-    Ok(())
+    check_constraints(ctx, &a.out.constraints, &o.constraints)
 }

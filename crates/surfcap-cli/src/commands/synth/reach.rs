@@ -10,7 +10,7 @@ use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_motion::timed_walk::TimedGraph;
 
 use crate::options::{GraphOpts, OutOpts, Positive, open};
-use crate::synthesis::{Prepared, write_walk};
+use crate::synthesis::{Constraint, Prepared, add_constraints, check_constraints, write_walk};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -23,10 +23,10 @@ pub struct Args {
     #[arg(long)]
     pub to: String,
     /// Ground-plane distance the centre of mass must travel (subject units).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::non_negative)]
     pub distance: f64,
     /// Duration in seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::positive)]
     pub time: f64,
     /// Distance error worth one unit of realism cost (Huang et al.: 0.3 m).
     #[arg(long, default_value = "0.3")]
@@ -41,8 +41,6 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(a.distance.is_finite() && a.distance >= 0.0, "--distance {}: expected a distance >= 0", a.distance);
-    anyhow::ensure!(a.time.is_finite() && a.time > 0.0, "--time {}: expected a positive number of seconds", a.time);
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     if a.distance > 0.0 {
@@ -67,6 +65,26 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (net, path) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, prep.up());
     played.report["net_displacement"] = json!(net);
     played.report["path_length"] = json!(path);
+    let tol = &a.out.constraints;
+    let constraints = [
+        Constraint::new(
+            "distance",
+            "units",
+            a.distance,
+            w.distance,
+            (w.distance - a.distance).abs(),
+            tol.distance(a.distance),
+        ),
+        Constraint::new(
+            "time",
+            "frames",
+            frames as f64,
+            w.frames as f64,
+            (w.frames as f64 - frames as f64).abs(),
+            tol.frames(),
+        ),
+    ];
+    add_constraints(&mut played.report, &constraints);
     played.save_report()?;
     ctx.result(&played.report, || {
         println!(
@@ -75,5 +93,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     });
     ctx.wrote(played.written.iter().chain([&played.report_path]));
-    Ok(())
+    check_constraints(ctx, &a.out.constraints, &constraints)
 }
