@@ -62,14 +62,25 @@ enum Part {
     Indices,
     Base,
     /// Displacement of `frame` of sequence `seq` from the base (a morph target).
-    Delta { seq: usize, frame: usize },
+    Delta {
+        seq: usize,
+        frame: usize,
+    },
     /// Key times of sequence `seq`, one per frame.
-    Times { seq: usize },
+    Times {
+        seq: usize,
+    },
     /// Sparse weight indices of sequence `seq`: key f sets target `first + f` (element
     /// `f * targets + first + f` of the keys x targets weights).
-    KeyTargets { seq: usize, first: usize, targets: usize },
+    KeyTargets {
+        seq: usize,
+        first: usize,
+        targets: usize,
+    },
     /// Sparse weight values: 1.0 for each of `n` keys.
-    Ones { n: usize },
+    Ones {
+        n: usize,
+    },
 }
 
 /// A `.glb` laid out from the subject's sizes alone: its JSON, and the parts of its binary chunk
@@ -103,8 +114,9 @@ impl Part {
                 p.iter().zip(base(s)).for_each(|(p, b)| put((p - b).to_le_bytes()))
             }
             Part::Times { seq } => (0..s.sequences()[seq].n_frames()).for_each(|f| put(key_time(s, f).to_le_bytes())),
-            Part::KeyTargets { seq, first, targets } => (0..s.sequences()[seq].n_frames())
-                .for_each(|f| put(((f * targets + first + f) as u32).to_le_bytes())),
+            Part::KeyTargets { seq, first, targets } => {
+                (0..s.sequences()[seq].n_frames()).for_each(|f| put(((f * targets + first + f) as u32).to_le_bytes()))
+            }
             Part::Ones { n } => (0..n).for_each(|_| put(1f32.to_le_bytes())),
         }
     }
@@ -168,7 +180,13 @@ struct Layout {
 impl Layout {
     /// Reserves `len` bytes for `part` as a new buffer view. Every array here has 4-byte
     /// elements, so views stay 4-byte aligned without padding.
-    fn view(&mut self, root: &mut json::Root, part: Part, len: usize, target: Option<json::buffer::Target>) -> json::Index<json::buffer::View> {
+    fn view(
+        &mut self,
+        root: &mut json::Root,
+        part: Part,
+        len: usize,
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
         let offset = self.len;
         self.len += len as u64;
         self.parts.push((part, len as u64));
@@ -259,16 +277,10 @@ impl<'a> GlbPlan<'a> {
         let bv = bin.view(&mut root, Part::Base, 12 * nv, Some(ArrayBuffer));
         let base_acc = root.push(accessor(bv, nv, ComponentType::F32, Type::Vec3, Some(vec3_bounds(base(subject)))));
 
-        let frames: Vec<(usize, usize)> = subject
-            .sequences()
-            .iter()
-            .enumerate()
-            .flat_map(|(k, s)| (0..s.n_frames()).map(move |f| (k, f)))
-            .collect();
-        let bounds: Vec<(Value, Value)> = frames
-            .par_iter()
-            .map(|&(k, f)| delta_bounds(subject.sequences()[k].frame(f), base(subject)))
-            .collect();
+        let frames: Vec<(usize, usize)> =
+            subject.sequences().iter().enumerate().flat_map(|(k, s)| (0..s.n_frames()).map(move |f| (k, f))).collect();
+        let bounds: Vec<(Value, Value)> =
+            frames.par_iter().map(|&(k, f)| delta_bounds(subject.sequences()[k].frame(f), base(subject))).collect();
         let mut targets = Vec::with_capacity(n_targets);
         let mut names = Vec::with_capacity(n_targets);
         for (&(seq, frame), b) in frames.iter().zip(bounds) {
@@ -355,7 +367,13 @@ impl<'a> GlbPlan<'a> {
             "units": subject.units,
             "sequences": seq_meta.iter().map(|m| json!({"name": m["sequence"], "frames": m["frames"], "tags": m["tags"]})).collect::<Vec<_>>(),
         }}));
-        root.push(json::Buffer { byte_length: USize64(bin.len), name: None, uri: None, extensions: None, extras: None });
+        root.push(json::Buffer {
+            byte_length: USize64(bin.len),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
         let mut json = root.to_vec().map_err(|e| err!(Syntax, "cannot serialise the glTF JSON: {e}"))?;
         while !json.len().is_multiple_of(4) {
             json.push(b' ');
@@ -498,8 +516,20 @@ fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
         }
         let isz = ix_size(&sp.indices());
         let (ix, vals) = (sp.indices(), sp.values());
-        check_span(&ix.view(), ix.offset(), sp.count().checked_mul(isz), blob_len, &format!("{what}'s sparse indices"))?;
-        check_span(&vals.view(), vals.offset(), sp.count().checked_mul(elem), blob_len, &format!("{what}'s sparse values"))?;
+        check_span(
+            &ix.view(),
+            ix.offset(),
+            sp.count().checked_mul(isz),
+            blob_len,
+            &format!("{what}'s sparse indices"),
+        )?;
+        check_span(
+            &vals.view(),
+            vals.offset(),
+            sp.count().checked_mul(elem),
+            blob_len,
+            &format!("{what}'s sparse values"),
+        )?;
     }
     Ok(())
 }
@@ -508,12 +538,12 @@ fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
 /// `keys` x `targets` numbers, without expanding them all: a sparse float accessor with no base
 /// view (as [`GlbPlan`] writes: one weight per key) is read from its indices and values; any other
 /// through the gltf reader, one number at a time.
-fn key_weights(
+fn key_weights<'b>(
     a: &gltf::Accessor,
     blob: &[u8],
     keys: usize,
     targets: usize,
-    dense: impl FnOnce() -> Option<Vec<f32>>,
+    dense: impl FnOnce() -> Option<Box<dyn Iterator<Item = f32> + 'b>>,
 ) -> Result<Vec<Vec<(usize, f32)>>> {
     let what = format!("accessor {}", a.index());
     if targets == 0 || Some(a.count()) != keys.checked_mul(targets) {
@@ -535,7 +565,11 @@ fn key_weights(
                 _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
             };
             if i >= a.count() {
-                return Err(err!(IndexOutOfRange, "{what}: sparse index {i} (entry {k}): expected below {}", a.count()));
+                return Err(err!(
+                    IndexOutOfRange,
+                    "{what}: sparse index {i} (entry {k}): expected below {}",
+                    a.count()
+                ));
             }
             let w = f32::from_le_bytes(at(vals.view(), vals.offset(), k, 4).try_into().expect("4 bytes"));
             if w != 0.0 {
@@ -545,7 +579,7 @@ fn key_weights(
         return Ok(out);
     }
     let all = dense().ok_or_else(|| err!(Syntax, "{what}: morph weights that cannot be read"))?;
-    for (i, &w) in all.iter().enumerate() {
+    for (i, w) in all.take(keys * targets).enumerate() {
         if w != 0.0 {
             out[i / targets].push((i % targets, w));
         }
@@ -623,7 +657,9 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
             cr.read_inputs().ok_or_else(|| err!(Syntax, "animation {ai} has no input times"))?.collect();
         let nt = targets.len();
         let dense = || match cr.read_outputs() {
-            Some(gltf::animation::util::ReadOutputs::MorphTargetWeights(w)) => Some(w.into_f32().collect()),
+            Some(gltf::animation::util::ReadOutputs::MorphTargetWeights(w)) => {
+                Some(Box::new(w.into_f32()) as Box<dyn Iterator<Item = f32>>)
+            }
             _ => None,
         };
         let weights = key_weights(&ch.sampler().output(), blob.unwrap_or(&[]), times.len(), nt, dense)
