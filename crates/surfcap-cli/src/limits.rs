@@ -95,7 +95,8 @@ impl LimitOpts {
     /// the frame limit, the memory limit, or (as glb) the format's 4 GiB.
     pub fn check(&self, r: &Request) -> anyhow::Result<()> {
         let what = &r.what;
-        if !(r.frames <= self.max_frames as f64) {
+        // NaN frames (never from the callers' finite estimates) are refused too.
+        if r.frames.is_nan() || r.frames > self.max_frames as f64 {
             bail!(
                 "{what} asks for about {:.0} frames, above the limit of {} (--max-frames; raise it for longer animations)",
                 r.frames,

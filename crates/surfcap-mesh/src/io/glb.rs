@@ -2,7 +2,8 @@
 //!
 //! Layout: one mesh whose base positions are the first frame; one morph target per frame holding
 //! that frame's displacement from the base; one animation per sequence that drives the mesh
-//! weights (weight 1 on the frame's target at time `frame / fps`, LINEAR between frames).
+//! weights (weight 1 on the frame's target at time `frame / fps`, LINEAR between frames; stored
+//! as a sparse accessor, see [`GlbPlan`]).
 //! Per-frame labels (original / synthetic), tags and fps are kept in the animation's `extras`
 //! (`extras.surfcap`), and the subject's metadata in the root `extras.surfcap`. The mesh keeps the
 //! subject's own coordinates; the node carries the rotation that brings the subject's up axis
