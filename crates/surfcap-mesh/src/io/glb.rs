@@ -873,7 +873,7 @@ mod tests {
         }
         doc["buffers"][0]["byteLength"] = json!(bin.len());
         let mut text = serde_json::to_vec(&doc).unwrap();
-        while text.len() % 4 != 0 {
+        while !text.len().is_multiple_of(4) {
             text.push(b' ');
         }
         let total = 12 + 8 + text.len() + 8 + bin.len();
