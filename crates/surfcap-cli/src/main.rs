@@ -11,6 +11,7 @@
 mod commands;
 mod files;
 mod html_report;
+mod limits;
 mod mannequin_spec;
 mod options;
 mod output;

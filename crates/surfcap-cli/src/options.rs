@@ -208,6 +208,8 @@ pub struct OutOpts {
     /// glb, obj, ply, pc2 or npy (default: from the output's extension, else glb).
     #[arg(long)]
     pub format: Option<ExportFormat>,
+    #[command(flatten)]
+    pub limits: crate::limits::LimitOpts,
     /// What the report calls a missed constraint.
     #[command(flatten)]
     pub constraints: ConstraintOpts,

@@ -1014,3 +1014,30 @@ fn messages_pluralise_and_never_print_negative_zero() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("mean 0.0000") && !text.contains("-0.0"), "{text}");
 }
+
+/// Issue 15 case 7: a glb grows linearly with its frame count (its morph weights are sparse, one
+/// per key; they were keys x targets floats, 40 GB for 100,000 frames), stays valid for the
+/// Khronos validator, and three.js's GLTFLoader reads the sparse weights: every key shows its own
+/// frame.
+#[test]
+fn glb_size_is_linear_in_frames_and_three_js_reads_its_sparse_weights() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let flamingo = data.join("threejs_morph_animals/flamingo_fly");
+    let size = |steps: usize| {
+        let out = tmp.path().join(format!("i{steps}.glb"));
+        let n = steps.to_string();
+        let args = ["interpolate", p(&flamingo), "--from", "0", "--to", "7", "--method", "linear", "--steps", &n];
+        let o = surfcap!(&[&args[..], &["-o", p(&out), "--quiet"]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        (std::fs::metadata(&out).unwrap().len() as f64, out)
+    };
+    let ((s1, _), (s2, glb), (s4, _)) = (size(1000), size(2000), size(4000));
+    let (per_frame_low, per_frame_high) = ((s2 - s1) / 1000.0, (s4 - s2) / 2000.0);
+    // 273 vertices x 12 bytes of morph target, plus its JSON; dense weights added 4 x frames.
+    assert!(per_frame_low > 273.0 * 12.0 && per_frame_low < 273.0 * 12.0 + 600.0, "{per_frame_low} bytes per frame");
+    assert!((per_frame_high - per_frame_low).abs() < 0.02 * per_frame_low, "{per_frame_low} then {per_frame_high}");
+    surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
+    let three = surfcap_testkit::three_load_glb(std::slice::from_ref(&glb));
+    assert_eq!(three[0]["targets"], 2000);
+}

@@ -269,3 +269,78 @@ fn key_pose_timing_on_samba_and_dance() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("bad_keys.csv:4"), "{}", stderr(&o));
 }
+
+/// Issue 15 case 7: a few characters of arguments that asked for tens of gigabytes to terabytes
+/// (`interpolate --steps 100000`, a key at output frame 100000, `reach --time 1e9`, a 2 km
+/// curve) are refused with the size, the limit and the option that raises it, before any work:
+/// no graph is built (the cache folder stays absent) and nothing is written.
+#[test]
+fn requests_beyond_the_limits_are_refused_before_any_work() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let out = tmp.path().join("never.glb");
+    let samba = data.join("vlasic2008/samba");
+    let keys = tmp.path().join("far_keys.csv");
+    std::fs::write(&keys, "frame,time\nsamba:10,0\nsamba:20,100000\n").unwrap();
+    let walker = tmp.path().join("walker.subject");
+    let o = surfcap!(&[
+        "synth",
+        "--procedural",
+        "walk,jog",
+        "--seed",
+        "1",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&walker),
+        "--quiet"
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let km2 = tmp.path().join("line_2km.csv");
+    std::fs::write(&km2, "0,0\n2000,0\n").unwrap();
+    let limits = |extra: &[&'static str], want: &[&str], args: &[&str]| {
+        let cached: &[&str] = if args[0] == "synth" { &["--cache-dir", p(&cache)] } else { &[] };
+        let o = surfcap!(&[args, &["-o", p(&out)], cached, extra].concat());
+        assert_eq!(o.status.code(), Some(1), "{args:?} {extra:?}: {}", stderr(&o));
+        for w in want {
+            assert!(stderr(&o).contains(w), "{args:?} {extra:?}: expected {w:?} in: {}", stderr(&o));
+        }
+        assert!(!cache.exists() && !out.exists(), "{args:?}: work was done before the refusal");
+    };
+    let interp = ["interpolate", p(&samba), "--from", "samba:0", "--to", "samba:100"];
+    let steps = [&interp[..], &["--steps", "100000"]].concat();
+    limits(&[], &["--steps 100000 asks for about 100000 frames, above the limit of 18000 (--max-frames"], &steps);
+    limits(
+        &["--max-frames", "1000000", "--max-memory", "2G"],
+        &[
+            "--steps 100000 needs about 11.1 GiB of memory (100000 frames x 9971 vertices)",
+            "limit of 2.0 GiB (--max-memory)",
+        ],
+        &steps,
+    );
+    limits(
+        &["--max-frames", "1000000", "--max-memory", "1T"],
+        &["would write a glb of about 4.5 GiB", "above the format's limit of 4294967295 bytes", "--format npy"],
+        &[&interp[..], &["--steps", "40000"]].concat(),
+    );
+    let keyposes = ["synth", "keyposes", p(&samba), "--keys", p(&keys)];
+    limits(
+        &[],
+        &["far_keys.csv: keys from output frame 0 to 100000 asks for about 100001 frames", "--max-frames"],
+        &keyposes,
+    );
+    let reach =
+        ["synth", "reach", p(&samba), "--from", "samba:0", "--to", "samba:50", "--distance", "1", "--time", "1e9"];
+    limits(&[], &["--time 1000000000 at 30 fps asks for about 30000000000 frames, above the limit of 18000"], &reach);
+    limits(
+        &["--max-frames", "100000000000", "--max-memory", "64G"],
+        &[
+            "PiB of memory (30000000000 frames x 9971 vertices and 152.8 TiB of search tables)",
+            "above the limit of 64.0 GiB (--max-memory)",
+        ],
+        &reach,
+    );
+    let path = ["synth", "path", p(&walker), "--curve", p(&km2)];
+    limits(&[], &["line_2km.csv (2000.0 long, the subject's fastest motion covers", "above the limit of 18000"], &path);
+}

@@ -44,6 +44,18 @@ fn the_viewer_plays_a_real_capture_in_chromium() {
         }
     }
     assert_eq!(http_request_as(&url, "GET", "/api/items", &format!("localhost:{port}")).0, 200);
+    // The same capture written as glb (sparse morph weights) serves the same positions.
+    let glb_dir = tempfile::tempdir().unwrap();
+    let glb = glb_dir.path().join("crane.glb");
+    let o = surfcap!(&["export", crane.to_str().unwrap(), "--format", "glb", "-o", p(&glb), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let from_glb = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&glb)]);
+    let (status, glb_body) = request(&from_glb.url, "GET", "/api/items/0/positions");
+    assert_eq!((status, glb_body.len()), (200, body.len()));
+    let f32s = |b: &[u8]| b.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect::<Vec<_>>();
+    for (x, y) in f32s(&glb_body).iter().zip(f32s(&body)) {
+        assert!((x - y).abs() <= 1e-5 * (1.0 + y.abs()), "{x} vs {y}");
+    }
     // The page in headless Chromium.
     let tools = surfcap_testkit::workspace_root().join("tools");
     assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");

@@ -199,6 +199,14 @@ fn relax(row: &mut [f64], drow: &mut [f64], src: &[f64], dsrc: &[f64], c: f64, l
     }
 }
 
+/// Bytes of the layer tables of a timed search for a walk of about `frames` frames over a graph
+/// of `nodes` nodes: cost and distance (f64) for every (node, time layer) state, forward and
+/// backward, the layers together spanning the widest durations searched (twice the request).
+/// Callers refuse a request whose tables would not fit in memory before searching.
+pub fn search_table_bytes(nodes: usize, frames: usize) -> u64 {
+    16 * nodes as u64 * 2 * frames as u64
+}
+
 /// Layered dynamic programme from `origin` at time 0: the cheapest cost of every (node, time)
 /// state for times `0..times`, taking edges only from states at times `< from_times`. In the
 /// forward direction a state's cost is that of the cheapest walk from the origin reaching it; in

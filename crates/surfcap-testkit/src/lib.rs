@@ -158,6 +158,35 @@ pub fn validate_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
     reports
 }
 
+/// Loads `.glb` files with three.js's GLTFLoader (the viewer's three.js) and evaluates their
+/// weights tracks (`tools/three-gltf-check.mjs`); returns its per-file JSON reports.
+///
+/// # Panics
+/// When node or the viewer's `node_modules/three` is missing (building `surfcap-view` installs
+/// it), or when a file does not load or a key's weights are not 1 on its own target.
+pub fn three_load_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
+    let root = workspace_root();
+    let three = root.join("crates/surfcap-view/web/node_modules/three");
+    assert!(three.is_dir(), "three.js is not installed in {}: build surfcap-view (it runs npm ci)", three.display());
+    let out = std::process::Command::new("node")
+        .arg(root.join("tools/three-gltf-check.mjs"))
+        .args(files)
+        .output()
+        .expect("node runs (install Node.js)");
+    assert!(
+        out.status.success(),
+        "three.js GLTFLoader check failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reports: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("the check prints JSON lines"))
+        .collect();
+    assert_eq!(reports.len(), files.len());
+    reports
+}
+
 /// A raw HTTP/1.1 request to `url` (`http://host:port/`), the target sent exactly as written
 /// (no normalisation, so path-traversal attempts reach the server): status and body.
 ///

@@ -159,7 +159,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     surfcap_mesh::atomic::write_file(&curve_path, |w| w.write_all(csv.as_bytes()))?;
     let curve = read_curve(&curve_path, subject.up_axis, true)?;
-    let out = OutOpts { output: a.output.join("export/path.glb"), format: None, constraints: Default::default() };
+    let out = OutOpts {
+        output: a.output.join("export/path.glb"),
+        format: None,
+        constraints: Default::default(),
+        limits: Default::default(),
+    };
     // Twice the default branching: this graph is small and the S tight (radius ~1.3 m), and the
     // wider search halves the error (0.32 -> 0.17 m) for ~1 s more.
     let search = PathSearch { branching: 16, ..PathSearch::for_fps(subject.fps) };

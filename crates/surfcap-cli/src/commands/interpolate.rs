@@ -7,6 +7,7 @@ use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpo
 use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 
+use crate::limits::{LimitOpts, Request};
 use crate::options::{SourceOpts, open};
 
 #[derive(clap::Args, Debug)]
@@ -36,6 +37,8 @@ pub struct Args {
     pub format: ExportFormat,
     #[command(flatten)]
     pub source: SourceOpts,
+    #[command(flatten)]
+    pub limits: LimitOpts,
 }
 
 /// How the poses in between are made.
@@ -60,6 +63,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == Method::Nonlinear);
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?;
+    let what = format!("--steps {}", a.steps);
+    a.limits.check(&Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let t0 = std::time::Instant::now();

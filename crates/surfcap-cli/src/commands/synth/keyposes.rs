@@ -3,8 +3,10 @@
 
 use std::path::PathBuf;
 
+use surfcap_motion::timed_walk::search_table_bytes;
 use surfcap_pipeline::constraint_files::read_key_poses;
 
+use crate::limits::Request;
 use crate::options::{GraphOpts, OutOpts, open};
 use crate::synthesis::{Prepared, check_constraints, run_keyposes};
 
@@ -27,6 +29,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let keys = read_key_poses(&a.keys, &s)?;
+    let (first, last) = (keys[0].requested, keys[keys.len() - 1].requested);
+    let longest = keys.windows(2).map(|p| (p[1].requested - p[0].requested) as usize).max().unwrap_or(0);
+    let what = format!("{}: keys from output frame {first} to {last}", a.keys.display());
+    let frames = (last - first + 1) as f64;
+    let search_bytes = search_table_bytes(s.n_frames(), longest);
+    a.out.limits.check(&Request { what, frames, subject: &s, search_bytes, format: a.out.format() })?;
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
     let o = run_keyposes(ctx, &prep, &keys, &a.out)?;
     ctx.result(&o.played.report, || {

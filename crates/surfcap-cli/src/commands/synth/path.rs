@@ -7,6 +7,7 @@ use anyhow::Context;
 use surfcap_motion::path_following::PathSearch;
 use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
 
+use crate::limits::{Request, fastest_speed};
 use crate::options::{GraphOpts, OutOpts, open};
 use crate::synthesis::{Prepared, check_constraints, run_path};
 
@@ -52,6 +53,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let curve = read_curve(&a.curve, s.up_axis, a.planar)?;
+    if let Some(speed) = fastest_speed(&s, curve.axes()) {
+        let what = format!(
+            "--curve {} ({:.1} long, the subject's fastest motion covers {speed:.2} a second)",
+            a.curve.display(),
+            curve.length()
+        );
+        let frames = curve.length() / speed * s.fps;
+        a.out.limits.check(&Request { what, frames, subject: &s, search_bytes: 0, format: a.out.format() })?;
+    }
     let restrictions = a
         .tags
         .iter()

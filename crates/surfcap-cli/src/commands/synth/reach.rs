@@ -7,8 +7,9 @@ use std::time::Instant;
 
 use serde_json::json;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
-use surfcap_motion::timed_walk::TimedGraph;
+use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
 
+use crate::limits::Request;
 use crate::options::{GraphOpts, OutOpts, Positive, open};
 use crate::synthesis::{Constraint, Prepared, add_constraints, check_constraints, write_walk};
 
@@ -49,6 +50,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
     let frames = (a.time * s.fps).round().max(1.0) as usize;
+    let search_bytes = search_table_bytes(s.n_frames(), frames);
+    let what = format!("--time {} at {} fps", a.time, s.fps);
+    a.out.limits.check(&Request { what, frames: frames as f64, subject: &s, search_bytes, format: a.out.format() })?;
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
