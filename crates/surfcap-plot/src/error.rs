@@ -14,13 +14,6 @@ pub type PngDrawingError = DrawingAreaErrorKind<<BitMapBackend<'static> as Drawi
 /// written (the I/O error kept as the source). Every message starts with the path concerned.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The folder of the figure could not be created.
-    #[error("{}: cannot create: {source}", dir.display())]
-    CreateDir {
-        dir: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
     /// Drawing the SVG figure `path` failed.
     #[error("{}: {source}", path.display())]
     DrawSvg {
@@ -35,12 +28,13 @@ pub enum Error {
         #[source]
         source: PngDrawingError,
     },
-    /// Writing `path` (or renaming its temporary file into place) failed.
-    #[error("{}: cannot write: {source}", path.display())]
+    /// Writing `path` failed, or surfcap-mesh's writer refused the place (its message names
+    /// the file and why).
+    #[error("{}: cannot write the figure", path.display())]
     Write {
         path: PathBuf,
         #[source]
-        source: std::io::Error,
+        source: Box<surfcap_mesh::Error>,
     },
     /// A heat map whose `values` do not fill its `rows` x `cols` (or that has no cell).
     #[error("{}: {values} values for a {rows} x {cols} heat map", stem.display())]

@@ -105,19 +105,15 @@ where
     root.present()
 }
 
-fn temp_sibling(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    // Keep the extension last: plotters picks the image format from it.
-    path.with_file_name(format!(".tmp-{}-{name}", std::process::id()))
-}
-
 /// Writes `<stem>.svg` and `<stem>.png` (800 x 500) and returns their paths.
 pub fn write_line_chart(stem: &Path, chart: &LineChart) -> Result<Vec<PathBuf>> {
     write_svg_and_png(stem, (800, 500), |root| draw(root, chart), |root| draw(root, chart))
 }
 
-/// Draws a figure twice (SVG, PNG) into `<stem>.svg` and `<stem>.png`, each written under a
-/// temporary name and renamed into place.
+/// Draws a figure twice (SVG, PNG) into `<stem>.svg` and `<stem>.png`. Both are drawn in memory
+/// and written through surfcap-mesh's atomic writer, so a plot, like every surfcap output, replaces
+/// only a regular file (never a device, FIFO or folder of that name), and its temporary is
+/// removed on SIGINT/SIGTERM and swept when stale.
 pub(crate) fn write_svg_and_png(
     stem: &Path,
     size: (u32, u32),
@@ -125,22 +121,25 @@ pub(crate) fn write_svg_and_png(
     png_draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), PngDrawingError>,
 ) -> Result<Vec<PathBuf>> {
     ensure_font();
-    if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| Error::CreateDir { dir: dir.to_path_buf(), source })?;
-    }
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
     let mut text = String::new();
     svg_draw(SVGBackend::with_string(&mut text, size).into_drawing_area())
         .map_err(|source| Error::DrawSvg { path: svg.clone(), source })?;
-    let tmp = temp_sibling(&svg);
-    std::fs::write(&tmp, text)
-        .and_then(|_| std::fs::rename(&tmp, &svg))
-        .map_err(|source| Error::Write { path: svg.clone(), source })?;
-    let tmp = temp_sibling(&png);
-    png_draw(BitMapBackend::new(&tmp, size).into_drawing_area())
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    png_draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area())
         .map_err(|source| Error::DrawPng { path: png.clone(), source })?;
-    std::fs::rename(&tmp, &png).map_err(|source| Error::Write { path: png.clone(), source })?;
+    let save = |path: &Path, write: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
+        surfcap_mesh::atomic::write_file(path, |w| write(w))
+            .map_err(|source| Error::Write { path: path.to_path_buf(), source: Box::new(source) })
+    };
+    save(&svg, &|w| w.write_all(text.as_bytes()))?;
+    save(&png, &|w| {
+        use image::ImageEncoder;
+        image::codecs::png::PngEncoder::new(w)
+            .write_image(&rgb, size.0, size.1, image::ColorType::Rgb8)
+            .map_err(std::io::Error::other)
+    })?;
     Ok(vec![svg, png])
 }
 
@@ -148,10 +147,8 @@ pub(crate) fn write_svg_and_png(
 mod tests {
     use super::*;
 
-    #[test]
-    fn writes_svg_with_text_and_a_png() {
-        let d = tempfile::tempdir().unwrap();
-        let chart = LineChart {
+    fn chart() -> LineChart {
+        LineChart {
             title: "Correlogram".into(),
             x_label: "distance class".into(),
             y_label: "r".into(),
@@ -162,12 +159,37 @@ mod tests {
                 dashed: false,
                 markers: true,
             }],
-        };
-        let files = write_line_chart(&d.path().join("c"), &chart).unwrap();
+        }
+    }
+
+    #[test]
+    fn writes_svg_with_text_and_a_png() {
+        let d = tempfile::tempdir().unwrap();
+        let files = write_line_chart(&d.path().join("c"), &chart()).unwrap();
         let svg = std::fs::read_to_string(&files[0]).unwrap();
         assert!(svg.contains("Correlogram") && svg.contains("ours"));
         let png = std::fs::read(&files[1]).unwrap();
         assert_eq!(&png[1..4], b"PNG");
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 2, "no temporaries left");
+    }
+
+    /// Issue 15 case 4 for plots: a FIFO (or a folder) where a figure goes is refused, not
+    /// replaced by a regular file.
+    #[test]
+    fn a_fifo_or_folder_in_the_way_is_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let fifo = d.path().join("c.svg");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        std::fs::create_dir(d.path().join("c.png")).unwrap();
+        let e = write_line_chart(&d.path().join("c"), &chart()).unwrap_err();
+        let chain = format!("{e}: {}", std::error::Error::source(&e).unwrap());
+        assert!(chain.contains("c.svg") && chain.contains("FIFO"), "{chain}");
+        use std::os::unix::fs::FileTypeExt;
+        assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        std::fs::remove_file(&fifo).unwrap();
+        let e = write_line_chart(&d.path().join("c"), &chart()).unwrap_err();
+        let chain = format!("{e}: {}", std::error::Error::source(&e).unwrap());
+        assert!(chain.contains("c.png"), "{chain}");
+        assert!(d.path().join("c.png").is_dir());
     }
 }
