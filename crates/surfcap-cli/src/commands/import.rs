@@ -30,6 +30,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     for n in &imported.notes {
         ctx.note(n);
     }
+    // What each source was read as, so a folder read in an unexpected way is seen.
+    for src in &imported.sources {
+        ctx.say(&format!(
+            "read {}: {} -> sequence {:?}, {} frame{}",
+            src.origin.display(),
+            src.layout,
+            src.sequence,
+            src.frames,
+            if src.frames == 1 { "" } else { "s" }
+        ));
+    }
     let s = &imported.subject;
     surfcap_mesh::cache::write_cache(&a.output, s, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
@@ -42,6 +53,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "vertices": s.topology().n_vertices(),
             "triangles": s.topology().n_triangles(),
             "notes": imported.notes,
+            "sources": imported.sources.iter().map(|src| json!({
+                "sequence": src.sequence,
+                "origin": src.origin,
+                "layout": src.layout.to_string(),
+                "frames": src.frames,
+            })).collect::<Vec<_>>(),
             "seconds": secs,
         }),
         || {

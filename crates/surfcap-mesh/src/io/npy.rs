@@ -212,7 +212,7 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
 
 /// Reads a `.npy` file; errors name the file.
 pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
-    let f = std::fs::File::open(path).map_err(|e| Error::io(path, "open .npy file", e))?;
+    let f = crate::io::regular_file::open_regular_file(path)?;
     let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
     parse_npy(std::io::BufReader::with_capacity(1 << 16, f), len).map_err(|e| e.in_file(path))
 }
