@@ -263,6 +263,35 @@ property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_he
     assert!(stderr(&o).contains(&want), "{}", stderr(&o));
 }
 
+/// Issue 15 case 5: `Frames: 0` panicked (exit 101); case 8: 100,000 nested joints overflowed
+/// the stack (abort). Both are now errors naming the file (and the line of `Frames:`).
+#[test]
+fn bvh_without_frames_or_nested_deeply_is_an_error_not_a_crash() {
+    let tmp = tempfile::tempdir().unwrap();
+    let empty = tmp.path().join("empty.bvh");
+    std::fs::write(
+        &empty,
+        "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition Zposition\n}\nMOTION\nFrames: 0\nFrame Time: 0.04\n",
+    )
+    .unwrap();
+    let mut deep = String::from("HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n");
+    for k in 1..100_000 {
+        deep.push_str(&format!("JOINT j{k}\n{{\nOFFSET 0 1 0\n"));
+    }
+    deep.push_str(&"}\n".repeat(100_000));
+    deep.push_str("MOTION\nFrames: 1\nFrame Time: 0.04\n1 2 3\n");
+    let deep_path = tmp.path().join("deep.bvh");
+    std::fs::write(&deep_path, deep).unwrap();
+    for (bvh, want) in [
+        (&empty, format!("{}: line 8: Frames: 0: expected at least one frame of motion", empty.display())),
+        (&deep_path, "no BVH joint for the mannequin's \"pelvis\"".to_string()),
+    ] {
+        let o = surfcap!(&["synth", "--bvh", p(bvh), "--vertices", "1000", "-o", p(&tmp.path().join("x.subject"))]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(&want), "{}", stderr(&o));
+    }
+}
+
 #[test]
 fn manifest_with_tags_and_a_point_cache() {
     let tmp = tempfile::tempdir().unwrap();

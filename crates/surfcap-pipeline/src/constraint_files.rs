@@ -87,7 +87,12 @@ pub fn parse_curve(text: &str, path: &Path, up: UpAxis, planar: bool) -> Result<
         });
     }
     let axes = if planar || cols == 2 { vec![iu, iv] } else { vec![0, 1, 2] };
-    Curve::new(points, axes).map_err(|e| Error::file(path, None, e.to_string()))
+    let curve = Curve::new(points, axes).map_err(|e| Error::file(path, None, e.to_string()))?;
+    if !curve.length().is_finite() {
+        // Finite coordinates can still be too far apart for their distance to be one.
+        return Err(Error::file(path, None, "the curve's length overflows: expected coordinates below about 1e150"));
+    }
+    Ok(curve)
 }
 
 /// One key pose (thesis 3.5.2): a frame of the subject and the output frame number at which it
@@ -203,6 +208,7 @@ mod tests {
             ("0,0\n1,1,1\n", "c.csv:2: 3 columns, expected 2"),
             ("0\n1\n", "c.csv:1: 1 columns"),
             ("# nothing\n", "c.csv: no curve points"),
+            ("0,0\n1e300,0\n", "c.csv: the curve's length overflows"),
         ] {
             let (_d, p) = file(text);
             let e = read_curve(&p, UpAxis::PosY, false).unwrap_err().to_string();
@@ -210,6 +216,18 @@ mod tests {
         }
         let e = read_curve(Path::new("/nonexistent/c.csv"), UpAxis::PosY, false).unwrap_err().to_string();
         assert!(e.contains("/nonexistent/c.csv: cannot read"), "{e}");
+        // A FIFO is refused, not opened (opening it would block until a writer came).
+        let d = tempfile::tempdir().unwrap();
+        let fifo = d.path().join("keys.csv");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let e = read_curve(&fifo, UpAxis::PosY, false).unwrap_err().to_string();
+        assert_eq!(e, format!("{}: is a FIFO (named pipe): expected a regular file", fifo.display()));
+        let (_d, p) = file("0,0\n");
+        std::fs::write(&p, b"0,0\n1,\xff\n").unwrap();
+        assert_eq!(
+            read_curve(&p, UpAxis::PosY, false).unwrap_err().to_string(),
+            format!("{}:2: not UTF-8 text: expected a CSV file", p.display())
+        );
     }
 
     fn worm() -> Subject {
