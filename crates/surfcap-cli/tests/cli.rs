@@ -249,12 +249,9 @@ property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_he
     for x in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
         ply.extend_from_slice(&x.to_le_bytes());
     }
-    for _ in 0..3 {
-        ply.push(3);
-        for i in [0i32, 1, 2] {
-            ply.extend_from_slice(&i.to_le_bytes());
-        }
-    }
+    // Three faces where the header declares one: a count byte, then indices 0, 1, 2 as int32.
+    let face: Vec<u8> = std::iter::once(3).chain([0i32, 1, 2].iter().flat_map(|i| i.to_le_bytes())).collect();
+    ply.extend(face.repeat(3));
     let path = tmp.path().join("extra.ply");
     std::fs::write(&path, &ply).unwrap();
     let o = surfcap!(&["info", p(&path), "--fps", "30"]);

@@ -421,7 +421,8 @@ mod tests {
             "folder of 1 OBJ frame file (template.obj with no positions.npy beside it: read as one frame)"
         );
         let imported =
-            import(&[seq.clone()], &ImportOptions { fps: Some(30.0), ..Default::default() }, &NoProgress).unwrap();
+            import(std::slice::from_ref(&seq), &ImportOptions { fps: Some(30.0), ..Default::default() }, &NoProgress)
+                .unwrap();
         assert_eq!(imported.sources.len(), 1);
         assert_eq!((imported.sources[0].layout.clone(), imported.sources[0].frames), (lone, 1));
 
