@@ -51,3 +51,12 @@ fn npy_header_with_deeply_nested_brackets_is_refused_before_parsing() {
         "{e}"
     );
 }
+
+/// A format-1 header declaring a length below 2: the first 12 bytes read to check the header
+/// already hold data, and the bracket check added the same day sliced past them (a panic the
+/// npy target found in its 60 s run after that fix, 2026-11-23).
+#[test]
+fn npy_header_shorter_than_the_prefix_is_an_error_not_a_panic() {
+    let e = read_npy::<f32>(&case("npy_header_shorter_than_prefix.npy")).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Syntax, "{e}");
+}

@@ -162,8 +162,9 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
             err!(Unsupported, "header of {header_len} bytes: expected at most {MAX_HEADER}").at(Location::Byte(8))
         );
     }
+    // The prefix may already hold more than a (tiny) header: those bytes are data, kept in order.
     let mut head = prefix[..got].to_vec();
-    head.resize((8 + len_bytes + header_len) as usize, 0);
+    head.resize(((8 + len_bytes + header_len) as usize).max(got), 0);
     read_up_to(&mut reader, &mut head[got..]).map_err(|e| err!(Io, "cannot read: {e}")).and_then(|n| {
         if got + n < head.len() { Err(err!(Truncated, "file ends inside the .npy header")) } else { Ok(()) }
     })?;
