@@ -118,7 +118,7 @@ impl Prepared {
         if let Some(ids) = tracked {
             let nv = pipe.subject().topology().n_vertices();
             if let Some(v) = ids.iter().find(|&&v| v >= nv) {
-                anyhow::bail!("--track {v}: the subject has vertices 0..{}", nv - 1);
+                anyhow::bail!("--track {v}: the subject has vertices 0 to {}", nv - 1);
             }
         }
         let graph = pipe.graph(&params)?.value;

@@ -201,6 +201,94 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
     assert!(stderr(&o).contains("x.ply") && stderr(&o).contains("file ends"), "{}", stderr(&o));
 }
 
+/// Issue 15 case 11: import narrates what each source was read as; a lone template.obj is one
+/// OBJ frame and says why; a positions.npy that is a FIFO is refused by name, without blocking.
+/// Case 12: a binary PLY holding more faces than its header declares is an error at a byte.
+#[test]
+fn import_says_what_it_detected_and_refuses_a_fifo_or_trailing_data() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = tmp.path().join("seq");
+    std::fs::create_dir(&seq).unwrap();
+    std::fs::write(
+        seq.join("template.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("s.subject");
+    let o = surfcap!(&["import", p(&seq), "-o", p(&out), "--fps", "30"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(&format!(
+            "read {}: folder of 1 OBJ frame file (template.obj with no positions.npy beside it: read as one frame) \
+             -> sequence \"seq\", 1 frame",
+            seq.display()
+        )),
+        "{text}"
+    );
+    let o = surfcap!(&["import", p(&seq), "-o", p(&out), "--fps", "30", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["sources"][0]["frames"], 1);
+    assert!(v["sources"][0]["layout"].as_str().unwrap().starts_with("folder of 1 OBJ frame file"));
+
+    let fifo = seq.join("positions.npy");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let o = surfcap!(&["import", p(&seq), "-o", p(&tmp.path().join("t.subject")), "--fps", "30"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains(&format!("{}: is a FIFO (named pipe): expected a regular file", fifo.display())),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!tmp.path().join("t.subject").exists());
+
+    let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        .to_vec();
+    let header = ply.len();
+    for x in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+        ply.extend_from_slice(&x.to_le_bytes());
+    }
+    // Three faces where the header declares one: a count byte, then indices 0, 1, 2 as int32.
+    let face: Vec<u8> = std::iter::once(3).chain([0i32, 1, 2].iter().flat_map(|i| i.to_le_bytes())).collect();
+    ply.extend(face.repeat(3));
+    let path = tmp.path().join("extra.ply");
+    std::fs::write(&path, &ply).unwrap();
+    let o = surfcap!(&["info", p(&path), "--fps", "30"]);
+    assert_eq!(o.status.code(), Some(1));
+    let want = format!("extra.ply: byte {}: 26 bytes of data after the last element", header + 36 + 13);
+    assert!(stderr(&o).contains(&want), "{}", stderr(&o));
+}
+
+/// Issue 15 case 5: `Frames: 0` panicked (exit 101); case 8: 100,000 nested joints overflowed
+/// the stack (abort). Both are now errors naming the file (and the line of `Frames:`).
+#[test]
+fn bvh_without_frames_or_nested_deeply_is_an_error_not_a_crash() {
+    let tmp = tempfile::tempdir().unwrap();
+    let empty = tmp.path().join("empty.bvh");
+    std::fs::write(
+        &empty,
+        "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition Zposition\n}\nMOTION\nFrames: 0\nFrame Time: 0.04\n",
+    )
+    .unwrap();
+    let mut deep = String::from("HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n");
+    for k in 1..100_000 {
+        deep.push_str(&format!("JOINT j{k}\n{{\nOFFSET 0 1 0\n"));
+    }
+    deep.push_str(&"}\n".repeat(100_000));
+    deep.push_str("MOTION\nFrames: 1\nFrame Time: 0.04\n1 2 3\n");
+    let deep_path = tmp.path().join("deep.bvh");
+    std::fs::write(&deep_path, deep).unwrap();
+    for (bvh, want) in [
+        (&empty, format!("{}: line 8: Frames: 0: expected at least one frame of motion", empty.display())),
+        (&deep_path, "no BVH joint for the mannequin's \"pelvis\"".to_string()),
+    ] {
+        let o = surfcap!(&["synth", "--bvh", p(bvh), "--vertices", "1000", "-o", p(&tmp.path().join("x.subject"))]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(&want), "{}", stderr(&o));
+    }
+}
+
 #[test]
 fn manifest_with_tags_and_a_point_cache() {
     let tmp = tempfile::tempdir().unwrap();

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::cache;
-use crate::error::{Error, Result, err};
+use crate::error::{Result, err};
 use crate::io::frame_folder::{FrameFormat, list_frames, read_frame_folder};
 use crate::io::shared_layout::{dataset_sequences, is_layout_sequence, read_layout_sequence};
 use crate::manifest;
@@ -26,6 +26,57 @@ pub struct SourceSequence {
     pub units: Option<Units>,
     /// The file or folder it came from, for error messages.
     pub origin: PathBuf,
+    /// How it was stored, as detected.
+    pub layout: SourceLayout,
+}
+
+/// How a source stored a sequence, as detected from what is on disk. `import` narrates it, so a
+/// folder read in a way the user did not mean (a lone `template.obj` as one OBJ frame) is seen.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SourceLayout {
+    /// `template.obj` + `positions.npy` (the shared-data layout).
+    TemplatePositions,
+    /// A folder of per-frame mesh files; `lone_template` when it is a `template.obj` with no
+    /// `positions.npy` beside it.
+    FrameFolder { format: FrameFormat, files: usize, lone_template: bool },
+    /// One `.obj` or `.ply` file: one frame.
+    MeshFile(FrameFormat),
+    /// A `.glb` file.
+    Glb,
+    /// A `.pc2` or `.npy` with the template a manifest names.
+    WithTemplate,
+    /// A subject cache written by `surfcap import`.
+    Cache,
+}
+
+impl std::fmt::Display for SourceLayout {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let upper = |format: &FrameFormat| format.extension().to_ascii_uppercase();
+        match self {
+            SourceLayout::TemplatePositions => write!(f, "sequence folder (template.obj + positions.npy)"),
+            SourceLayout::FrameFolder { format, files, lone_template } => {
+                let s = if *files == 1 { "" } else { "s" };
+                write!(f, "folder of {files} {} frame file{s}", upper(format))?;
+                if *lone_template {
+                    write!(f, " (template.obj with no positions.npy beside it: read as one frame)")?;
+                }
+                Ok(())
+            }
+            SourceLayout::MeshFile(format) => write!(f, "{} file (one frame)", upper(format)),
+            SourceLayout::Glb => write!(f, "glb file"),
+            SourceLayout::WithTemplate => write!(f, "positions file with the manifest's template"),
+            SourceLayout::Cache => write!(f, "subject cache"),
+        }
+    }
+}
+
+/// One sequence of an import, for narration: its name, where it came from and how it was stored.
+#[derive(Debug, Clone)]
+pub struct ImportedSource {
+    pub sequence: String,
+    pub origin: PathBuf,
+    pub layout: SourceLayout,
+    pub frames: usize,
 }
 
 /// Values given by the user that override (or fill in) what the sources say.
@@ -42,6 +93,8 @@ pub struct ImportOptions {
 pub struct Imported {
     pub subject: Subject,
     pub notes: Vec<String>,
+    /// Every sequence read, in subject order, with the layout detected.
+    pub sources: Vec<ImportedSource>,
 }
 
 fn file_stem(p: &Path) -> String {
@@ -51,7 +104,13 @@ fn file_stem(p: &Path) -> String {
 }
 
 /// A sequence with nothing known but its geometry (no joints, tags, labels or metadata).
-pub(crate) fn simple(name: String, topology: Topology, positions: Vec<f32>, origin: &Path) -> SourceSequence {
+pub(crate) fn simple(
+    name: String,
+    topology: Topology,
+    positions: Vec<f32>,
+    origin: &Path,
+    layout: SourceLayout,
+) -> SourceSequence {
     SourceSequence {
         name,
         topology,
@@ -63,6 +122,7 @@ pub(crate) fn simple(name: String, topology: Topology, positions: Vec<f32>, orig
         up_axis: None,
         units: None,
         origin: origin.to_path_buf(),
+        layout,
     }
 }
 
@@ -74,7 +134,7 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
         return Err(err!(Io, "no such file or folder").in_file(path));
     }
     if path.is_dir() {
-        if is_layout_sequence(path) {
+        if is_layout_sequence(path)? {
             let s = read_layout_sequence(path)?;
             let origin = path.join("positions.npy");
             if let Some(f) = s.meta.frames.filter(|&f| f * s.topology.n_vertices() * 3 != s.positions.len()) {
@@ -96,6 +156,7 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
                 up_axis: s.meta.up_axis,
                 units: s.meta.units,
                 origin,
+                layout: SourceLayout::TemplatePositions,
             }]);
         }
         let seqs = dataset_sequences(path)?;
@@ -110,9 +171,12 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
             return Ok(out);
         }
         for format in [FrameFormat::Obj, FrameFormat::Ply] {
-            if !list_frames(path, format)?.is_empty() {
+            let files = list_frames(path, format)?;
+            if !files.is_empty() {
+                let lone_template = files.len() == 1 && files[0].file_name().is_some_and(|n| n == "template.obj");
                 let (topology, positions) = read_frame_folder(path, format, progress)?;
-                return Ok(vec![simple(file_stem(path), topology, positions, path)]);
+                let layout = SourceLayout::FrameFolder { format, files: files.len(), lone_template };
+                return Ok(vec![simple(file_stem(path), topology, positions, path, layout)]);
             }
         }
         return Err(err!(
@@ -127,15 +191,15 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
         "obj" => {
             let m = crate::io::obj::read_obj(path)?;
             let t = m.topology().map_err(|e| e.in_file(path))?;
-            Ok(vec![simple(file_stem(path), t, m.positions, path)])
+            Ok(vec![simple(file_stem(path), t, m.positions, path, SourceLayout::MeshFile(FrameFormat::Obj))])
         }
         "ply" => {
             let m = crate::io::ply::read_ply(path)?;
             let t = m.topology().map_err(|e| e.in_file(path))?;
-            Ok(vec![simple(file_stem(path), t, m.positions, path)])
+            Ok(vec![simple(file_stem(path), t, m.positions, path, SourceLayout::MeshFile(FrameFormat::Ply))])
         }
         "glb" => {
-            let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
+            let bytes = crate::io::regular_file::read_regular_file(path)?;
             let g = crate::io::glb::parse_glb(&bytes).map_err(|e| e.in_file(path))?;
             Ok(g.sequences
                 .into_iter()
@@ -150,6 +214,7 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
                     up_axis: g.up_axis,
                     units: g.units.clone(),
                     origin: path.to_path_buf(),
+                    layout: SourceLayout::Glb,
                 })
                 .collect())
         }
@@ -228,6 +293,15 @@ pub fn assemble(default_name: &str, seqs: Vec<SourceSequence>, opts: &ImportOpti
         }
     };
     let nv = topology.n_vertices();
+    let sources = seqs
+        .iter()
+        .map(|s| ImportedSource {
+            sequence: s.name.clone(),
+            origin: s.origin.clone(),
+            layout: s.layout.clone(),
+            frames: s.positions.len() / (3 * nv).max(1),
+        })
+        .collect();
     let mut sequences = Vec::with_capacity(seqs.len());
     for s in seqs {
         let origin = s.origin.clone();
@@ -242,7 +316,7 @@ pub fn assemble(default_name: &str, seqs: Vec<SourceSequence>, opts: &ImportOpti
     }
     let name = opts.name.clone().unwrap_or_else(|| default_name.to_string());
     let subject = Subject::new(name, topology, sequences, fps, up_axis, units)?;
-    Ok(Imported { subject, notes })
+    Ok(Imported { subject, notes, sources })
 }
 
 /// Imports any mix of sources (manifests included) into one subject.
@@ -287,6 +361,7 @@ fn sequences_of(s: &Subject, origin: &Path) -> Vec<SourceSequence> {
             up_axis: Some(s.up_axis),
             units: Some(s.units.clone()),
             origin: origin.to_path_buf(),
+            layout: SourceLayout::Cache,
         })
         .collect()
 }
@@ -304,7 +379,84 @@ pub fn open_subject(path: &Path, opts: &ImportOptions, progress: &dyn Progress) 
         if let Some(u) = &opts.units {
             subject.units = u.clone();
         }
-        return Ok(Imported { subject, notes: Vec::new() });
+        let sources = sequences_of(&subject, path)
+            .into_iter()
+            .map(|s| ImportedSource {
+                frames: s.positions.len() / (3 * subject.topology().n_vertices()).max(1),
+                sequence: s.name,
+                origin: s.origin,
+                layout: s.layout,
+            })
+            .collect();
+        return Ok(Imported { subject, notes: Vec::new(), sources });
     }
     import(&[path.to_path_buf()], opts, progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    const TETRA: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+
+    fn mkfifo(p: &Path) {
+        assert!(std::process::Command::new("mkfifo").arg(p).status().unwrap().success());
+    }
+
+    /// Issue 15 case 11: a lone template.obj is read as one OBJ frame and says so; a
+    /// positions.npy that is a FIFO, folder or socket is refused by name (and never opened, so
+    /// nothing blocks).
+    #[test]
+    fn the_detected_layout_is_reported_and_non_regular_positions_are_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let seq = d.path().join("walk");
+        std::fs::create_dir(&seq).unwrap();
+        std::fs::write(seq.join("template.obj"), TETRA).unwrap();
+        let s = read_source(&seq, &NoProgress).unwrap();
+        let lone = SourceLayout::FrameFolder { format: FrameFormat::Obj, files: 1, lone_template: true };
+        assert_eq!(s[0].layout, lone);
+        assert_eq!(
+            lone.to_string(),
+            "folder of 1 OBJ frame file (template.obj with no positions.npy beside it: read as one frame)"
+        );
+        let imported =
+            import(std::slice::from_ref(&seq), &ImportOptions { fps: Some(30.0), ..Default::default() }, &NoProgress)
+                .unwrap();
+        assert_eq!(imported.sources.len(), 1);
+        assert_eq!((imported.sources[0].layout.clone(), imported.sources[0].frames), (lone, 1));
+
+        let positions = seq.join("positions.npy");
+        mkfifo(&positions);
+        for dir in [seq.clone(), d.path().to_path_buf()] {
+            let e = read_source(&dir, &NoProgress).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                format!("{}: is a FIFO (named pipe): expected a regular file", positions.display())
+            );
+        }
+        std::fs::remove_file(&positions).unwrap();
+        std::fs::create_dir(&positions).unwrap();
+        let e = read_source(&seq, &NoProgress).unwrap_err().to_string();
+        assert_eq!(e, format!("{}: is a directory: expected a regular file", positions.display()));
+        std::fs::remove_dir(&positions).unwrap();
+
+        let mut npy = Vec::new();
+        crate::io::npy::write_npy(&mut npy, &[2, 4, 3], &[0.0f32; 24]).unwrap();
+        std::fs::write(&positions, npy).unwrap();
+        let s = read_source(&seq, &NoProgress).unwrap();
+        assert_eq!(s[0].layout, SourceLayout::TemplatePositions);
+        assert_eq!(s[0].layout.to_string(), "sequence folder (template.obj + positions.npy)");
+    }
+
+    /// A FIFO named like a frame is an error when the folder is read, not a hang or a frame
+    /// silently left out.
+    #[test]
+    fn a_fifo_among_frame_files_is_refused() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("f_0.obj"), TETRA).unwrap();
+        mkfifo(&d.path().join("f_1.obj"));
+        let e = read_source(d.path(), &NoProgress).unwrap_err().to_string();
+        assert!(e.ends_with("f_1.obj: frame 1: is a FIFO (named pipe): expected a regular file"), "{e}");
+    }
 }

@@ -27,6 +27,7 @@ pub mod topology;
 pub use connected_components::{Components, connected_components};
 pub use error::{Error, ErrorKind, Location, Result};
 pub use frame_index::FrameIndex;
+pub use io::regular_file::read_regular_file;
 pub use progress::{NoProgress, Progress};
 pub use subject::{FrameLabel, JointTrack, Sequence, Subject, Units, UpAxis};
 pub use topology::{Topology, UvAtlas};

@@ -71,12 +71,16 @@ pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOpti
         er
     })?;
     let line_with = |needle: &str| text.lines().position(|l| l.contains(needle)).map(|i| i + 1);
-    let at = |e: Error, needle: &str| {
-        let e = e.in_file(path);
-        match line_with(needle) {
-            Some(l) => e.at_line(l),
-            None => e,
+    // An error in the manifest gets its line; an error in a file it lists keeps that file's own
+    // place (a binary PC2 has bytes, not lines) and says which manifest line listed it.
+    let at = |mut e: Error, needle: &str| match (e.path.as_deref().is_some_and(|p| p != path), line_with(needle)) {
+        (true, Some(l)) => {
+            e.message = format!("{} (listed in {} at line {l})", e.message, path.display());
+            e
         }
+        (true, None) => e,
+        (false, Some(l)) => e.in_file(path).at_line(l),
+        (false, None) => e.in_file(path),
     };
     if m.sequence.is_empty() {
         return Err(err!(Empty, "no [[sequence]] entries: expected at least one").in_file(path));
@@ -143,16 +147,17 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
     let ext = src.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     let positions = match ext.as_str() {
         "pc2" => {
-            let b = std::fs::read(src).map_err(|e| Error::io(src, "read", e))?;
+            let b = crate::io::regular_file::read_regular_file(src)?;
             let c = crate::io::pc2::parse_pc2(&b).map_err(|e| e.in_file(src))?;
             if c.n_points != nv {
                 return Err(err!(
                     TopologyMismatch,
-                    "{} points, expected {nv} as in {}",
+                    "point count {}: expected {nv}, the vertex count of {}",
                     c.n_points,
                     template.display()
                 )
-                .in_file(src));
+                .in_file(src)
+                .at(crate::error::Location::Byte(16)));
             }
             c.positions
         }
@@ -171,5 +176,38 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
         }
     };
     let name = src.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(crate::import::simple(name, topology, positions, src))
+    Ok(crate::import::simple(name, topology, positions, src, crate::import::SourceLayout::WithTemplate))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    /// Issue 15: a PC2 whose point count differs from its template was reported at "line 3" of
+    /// the binary PC2 (the manifest's line). Now: the PC2 and its byte, then the manifest line.
+    #[test]
+    fn a_point_count_mismatch_names_the_pc2_byte_and_the_manifest_line() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(
+            d.path().join("t.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n",
+        )
+        .unwrap();
+        let mut pc2 = Vec::new();
+        crate::io::pc2::write_pc2(&mut pc2, 3, &[0.0; 18]).unwrap();
+        std::fs::write(d.path().join("c.pc2"), pc2).unwrap();
+        let m = d.path().join("surfcap.toml");
+        std::fs::write(&m, "fps = 30\n[[sequence]]\nsource = \"c.pc2\"\ntemplate = \"t.obj\"\n").unwrap();
+        let e = read_manifest(&m, &NoProgress).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{}: byte 16: point count 3: expected 4, the vertex count of {} (listed in {} at line 3)",
+                d.path().join("c.pc2").display(),
+                d.path().join("t.obj").display(),
+                m.display()
+            )
+        );
+    }
 }

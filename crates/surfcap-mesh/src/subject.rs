@@ -345,7 +345,7 @@ impl Subject {
                 })?;
                 let f: usize = f.parse().map_err(|_| bad(format!("{f:?} is not a frame number")))?;
                 if f >= seq.n_frames() {
-                    return Err(bad(format!("sequence {name:?} has frames 0..{}", seq.n_frames() - 1)));
+                    return Err(bad(format!("sequence {name:?} has frames 0 to {}", seq.n_frames() - 1)));
                 }
                 Ok(self.index.global(k, f).expect("checked above"))
             }
@@ -353,7 +353,7 @@ impl Subject {
                 let g: usize =
                     spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
                 if g >= self.n_frames() {
-                    return Err(bad(format!("the subject has global frames 0..{}", self.n_frames() - 1)));
+                    return Err(bad(format!("the subject has global frames 0 to {}", self.n_frames() - 1)));
                 }
                 Ok(g)
             }

@@ -33,3 +33,30 @@ fn pc2_whose_point_and_sample_counts_overflow_is_an_error() {
     let e = surfcap_mesh::io::pc2::parse_pc2(&bytes).unwrap_err();
     assert_eq!(e.kind, ErrorKind::Truncated, "{e}");
 }
+
+/// Headers nesting dozens of brackets: npyz's backtracking grammar ran for minutes on them
+/// (the npy target's 254-byte timeout input of 2026-11-23, and a 196-byte shape nesting 40
+/// brackets). Now refused before npyz sees them.
+#[test]
+fn npy_header_with_deeply_nested_brackets_is_refused_before_parsing() {
+    let e = read_npy::<f32>(&case("npy_nested_braces_timeout.npy")).unwrap_err();
+    assert!(
+        e.to_string().ends_with("byte 22: header nests brackets deeper than 4: expected a NumPy header dict"),
+        "{e}"
+    );
+    let e = read_npy::<f32>(&case("npy_nested_header.npy")).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Syntax, "{e}");
+    assert!(
+        e.to_string().ends_with("byte 63: header nests brackets deeper than 4: expected a NumPy header dict"),
+        "{e}"
+    );
+}
+
+/// A format-1 header declaring a length below 2: the first 12 bytes read to check the header
+/// already hold data, and the bracket check added the same day sliced past them (a panic the
+/// npy target found in its 60 s run after that fix, 2026-11-23).
+#[test]
+fn npy_header_shorter_than_the_prefix_is_an_error_not_a_panic() {
+    let e = read_npy::<f32>(&case("npy_header_shorter_than_prefix.npy")).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Syntax, "{e}");
+}

@@ -10,10 +10,18 @@ use surfcap_motion::path_following::{Curve, Restriction};
 
 use crate::error::{Error, Result};
 
-/// Rows of a CSV file: blank lines and '#' comments skipped, cells split at ',', ';' or tab.
+/// The text of a constraint file.
+fn read_text(path: &Path) -> Result<String> {
+    let bytes = surfcap_mesh::read_regular_file(path).map_err(|e| Error::file(path, None, e.message))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let line = 1 + e.as_bytes()[..e.utf8_error().valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+        Error::file(path, Some(line), "not UTF-8 text: expected a CSV file")
+    })
+}
+
+/// Rows of a CSV text: blank lines and '#' comments skipped, cells split at ',', ';' or tab.
 /// Each row comes with its 1-based line number.
-fn csv_rows(path: &Path) -> Result<Vec<(usize, Vec<String>)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, None, format!("cannot read: {e}")))?;
+fn csv_rows(text: &str) -> Vec<(usize, Vec<String>)> {
     let mut rows = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
@@ -22,7 +30,7 @@ fn csv_rows(path: &Path) -> Result<Vec<(usize, Vec<String>)>> {
         }
         rows.push((k + 1, line.split([',', ';', '\t']).map(|c| c.trim().to_string()).collect()));
     }
-    Ok(rows)
+    rows
 }
 
 /// Reads a curve: rows of x,y,z in the subject's axes and units, or two columns for a path on
@@ -30,7 +38,12 @@ fn csv_rows(path: &Path) -> Result<Vec<(usize, Vec<String>)>> {
 /// not numeric is a header. `planar` follows only the ground-plane projection (implied by two
 /// columns).
 pub fn read_curve(path: &Path, up: UpAxis, planar: bool) -> Result<Curve> {
-    let mut rows = csv_rows(path)?;
+    parse_curve(&read_text(path)?, path, up, planar)
+}
+
+/// [`read_curve`] on text already read; `path` names it in errors.
+pub fn parse_curve(text: &str, path: &Path, up: UpAxis, planar: bool) -> Result<Curve> {
+    let mut rows = csv_rows(text);
     if rows.first().is_some_and(|(_, c)| c.iter().any(|x| x.parse::<f64>().is_err())) {
         rows.remove(0); // header
     }
@@ -74,7 +87,12 @@ pub fn read_curve(path: &Path, up: UpAxis, planar: bool) -> Result<Curve> {
         });
     }
     let axes = if planar || cols == 2 { vec![iu, iv] } else { vec![0, 1, 2] };
-    Curve::new(points, axes).map_err(|e| Error::file(path, None, e.to_string()))
+    let curve = Curve::new(points, axes).map_err(|e| Error::file(path, None, e.to_string()))?;
+    if !curve.length().is_finite() {
+        // Finite coordinates can still be too far apart for their distance to be one.
+        return Err(Error::file(path, None, "the curve's length overflows: expected coordinates below about 1e150"));
+    }
+    Ok(curve)
 }
 
 /// One key pose (thesis 3.5.2): a frame of the subject and the output frame number at which it
@@ -94,7 +112,12 @@ pub struct KeyPose {
 /// Reads key poses: `frame,time` rows (an optional header), times whole, >= 0 and increasing;
 /// at least two keys.
 pub fn read_key_poses(path: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
-    let mut rows = csv_rows(path)?;
+    parse_key_poses(&read_text(path)?, path, s)
+}
+
+/// [`read_key_poses`] on text already read; `path` names it in errors.
+pub fn parse_key_poses(text: &str, path: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
+    let mut rows = csv_rows(text);
     if rows.first().is_some_and(|(_, c)| c.len() == 2 && c[1].parse::<i64>().is_err()) {
         rows.remove(0);
     }
@@ -185,6 +208,7 @@ mod tests {
             ("0,0\n1,1,1\n", "c.csv:2: 3 columns, expected 2"),
             ("0\n1\n", "c.csv:1: 1 columns"),
             ("# nothing\n", "c.csv: no curve points"),
+            ("0,0\n1e300,0\n", "c.csv: the curve's length overflows"),
         ] {
             let (_d, p) = file(text);
             let e = read_curve(&p, UpAxis::PosY, false).unwrap_err().to_string();
@@ -192,6 +216,18 @@ mod tests {
         }
         let e = read_curve(Path::new("/nonexistent/c.csv"), UpAxis::PosY, false).unwrap_err().to_string();
         assert!(e.contains("/nonexistent/c.csv: cannot read"), "{e}");
+        // A FIFO is refused, not opened (opening it would block until a writer came).
+        let d = tempfile::tempdir().unwrap();
+        let fifo = d.path().join("keys.csv");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let e = read_curve(&fifo, UpAxis::PosY, false).unwrap_err().to_string();
+        assert_eq!(e, format!("{}: is a FIFO (named pipe): expected a regular file", fifo.display()));
+        let (_d, p) = file("0,0\n");
+        std::fs::write(&p, b"0,0\n1,\xff\n").unwrap();
+        assert_eq!(
+            read_curve(&p, UpAxis::PosY, false).unwrap_err().to_string(),
+            format!("{}:2: not UTF-8 text: expected a CSV file", p.display())
+        );
     }
 
     fn worm() -> Subject {

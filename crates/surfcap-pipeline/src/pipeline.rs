@@ -331,7 +331,7 @@ impl Pipeline {
         if let Some(ids) = tracked {
             let nv = s.topology().n_vertices();
             if let Some(v) = ids.iter().find(|&&v| v >= nv) {
-                return Err(Error::Request(format!("tracked vertex {v}: the subject has vertices 0..{}", nv - 1)));
+                return Err(Error::Request(format!("tracked vertex {v}: the subject has vertices 0 to {}", nv - 1)));
             }
         }
         let key = WalkModelKey { graph: self.graph_key(p), tracked: tracked.map(<[usize]>::to_vec) };

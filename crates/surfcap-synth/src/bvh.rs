@@ -7,8 +7,9 @@
 //! (`Zrotation Xrotation Yrotation` means R = Rz Rx Ry). World transforms compose parent first.
 //!
 //! Errors name the line and what was expected: several roots, unknown channels, a CHANNELS count
-//! that differs from the names listed, non-numbers, a motion line with the wrong number of
-//! values, fewer motion lines than `Frames:` announces.
+//! that differs from the names listed, a second OFFSET or CHANNELS in one joint, no channels at
+//! all, non-numbers, `Frames: 0`, a motion line with the wrong number of values, fewer or more
+//! motion lines than `Frames:` announces. Any nesting depth parses (no recursion).
 
 use std::path::Path;
 
@@ -102,26 +103,45 @@ impl<'a> Tokens<'a> {
     }
 }
 
-fn parse_joint(tk: &mut Tokens, joints: &mut Vec<Joint>, parent: Option<usize>, n_channels: &mut usize) -> Result<()> {
+/// A new joint named by the next token, its `{` read.
+fn open_joint(tk: &mut Tokens, joints: &mut Vec<Joint>, parent: Option<usize>) -> Result<()> {
     let (_, name) = tk.next("a joint name")?;
-    let idx = joints.len();
     joints.push(Joint {
         name: name.to_string(),
         parent,
         offset: [0.0; 3],
         channels: Vec::new(),
-        first_channel: *n_channels,
+        first_channel: 0,
         end_sites: Vec::new(),
     });
     tk.expect("{")?;
-    loop {
+    Ok(())
+}
+
+/// The hierarchy from `ROOT`'s name to its closing `}`. A loop over an explicit stack of open
+/// joints rather than recursion: a file nesting 100,000 joints must not overflow the stack.
+/// Each joint's values in a motion line start where its CHANNELS appear in the file.
+fn parse_hierarchy(tk: &mut Tokens) -> Result<(Vec<Joint>, usize)> {
+    let mut joints = Vec::new();
+    let mut n_channels = 0;
+    open_joint(tk, &mut joints, None)?;
+    let mut open = vec![0];
+    let (mut has_offset, mut has_channels) = (vec![false], vec![false]);
+    while let Some(&idx) = open.last() {
         let (line, t) = tk.next("'}'")?;
+        let twice =
+            |what: &str| syntax(line, format!("a second {what} for joint {:?}: expected one", joints[idx].name));
         match t.to_ascii_uppercase().as_str() {
             "OFFSET" => {
-                let o = [tk.number("an OFFSET x")?, tk.number("an OFFSET y")?, tk.number("an OFFSET z")?];
-                joints[idx].offset = o;
+                if std::mem::replace(&mut has_offset[idx], true) {
+                    return Err(twice("OFFSET"));
+                }
+                joints[idx].offset = [tk.number("an OFFSET x")?, tk.number("an OFFSET y")?, tk.number("an OFFSET z")?];
             }
             "CHANNELS" => {
+                if std::mem::replace(&mut has_channels[idx], true) {
+                    return Err(twice("CHANNELS"));
+                }
                 let (cl, c) = tk.next("a channel count")?;
                 let count: usize = c.parse().map_err(|_| syntax(cl, format!("{c:?}: expected a channel count")))?;
                 let mut channels = Vec::with_capacity(count.min(6));
@@ -138,10 +158,16 @@ fn parse_joint(tk: &mut Tokens, joints: &mut Vec<Joint>, parent: Option<usize>, 
                     })?;
                     channels.push(ch);
                 }
-                *n_channels += channels.len();
+                joints[idx].first_channel = n_channels;
+                n_channels += channels.len();
                 joints[idx].channels = channels;
             }
-            "JOINT" => parse_joint(tk, joints, Some(idx), n_channels)?,
+            "JOINT" => {
+                open_joint(tk, &mut joints, Some(idx))?;
+                open.push(joints.len() - 1);
+                has_offset.push(false);
+                has_channels.push(false);
+            }
             "END" => {
                 tk.expect("Site")?;
                 tk.expect("{")?;
@@ -150,16 +176,29 @@ fn parse_joint(tk: &mut Tokens, joints: &mut Vec<Joint>, parent: Option<usize>, 
                 tk.expect("}")?;
                 joints[idx].end_sites.push(o);
             }
-            "}" => return Ok(()),
+            "}" => {
+                open.pop();
+            }
             "ROOT" => return Err(syntax(line, "a second ROOT: surfcap reads BVH files with one skeleton".into())),
             _ => return Err(syntax(line, format!("{t:?}: expected OFFSET, CHANNELS, JOINT, End Site or '}}'"))),
         }
     }
+    Ok((joints, n_channels))
 }
 
 /// Parses BVH text.
 pub fn parse_bvh(text: &str) -> Result<Bvh> {
-    let motion_at = text.find("MOTION");
+    // The motion section starts at the first line that is the word MOTION (a joint name may
+    // contain it).
+    let motion_at = text
+        .split_inclusive('\n')
+        .scan(0, |at, l| {
+            let start = *at;
+            *at += l.len();
+            Some((start, l))
+        })
+        .find(|(_, l)| l.trim().eq_ignore_ascii_case("MOTION"))
+        .map(|(start, _)| start);
     let head = &text[..motion_at.unwrap_or(text.len())];
     let items: Vec<(usize, &str)> =
         head.lines().enumerate().flat_map(|(i, l)| l.split_whitespace().map(move |t| (i + 1, t))).collect();
@@ -168,16 +207,19 @@ pub fn parse_bvh(text: &str) -> Result<Bvh> {
     }
     let mut tk = Tokens { items, pos: 0 };
     tk.expect("HIERARCHY")?;
-    tk.expect("ROOT")?;
-    let mut joints = Vec::new();
-    let mut n_channels = 0;
-    parse_joint(&mut tk, &mut joints, None, &mut n_channels)?;
+    let root_line = tk.expect("ROOT")?;
+    let (joints, n_channels) = parse_hierarchy(&mut tk)?;
     if let Some(&(line, t)) = tk.items.get(tk.pos) {
         return Err(if t.eq_ignore_ascii_case("ROOT") {
             syntax(line, "a second ROOT: surfcap reads BVH files with one skeleton".into())
         } else {
             syntax(line, format!("{t:?} after the hierarchy: expected MOTION"))
         });
+    }
+    if n_channels == 0 {
+        return Err(
+            Error::new(ErrorKind::Shape, "no joint has CHANNELS: expected at least the root's").at_line(root_line)
+        );
     }
     let Some(m) = motion_at else {
         let line = head.lines().count();
@@ -196,18 +238,23 @@ pub fn parse_bvh(text: &str) -> Result<Bvh> {
     };
     let (fl, frames) = field("Frames:")?;
     let frames: usize = frames.parse().map_err(|_| syntax(fl, format!("{frames:?}: expected a frame count")))?;
+    if frames == 0 {
+        return Err(Error::new(ErrorKind::Empty, "Frames: 0: expected at least one frame of motion").at_line(fl));
+    }
     let (tl, ft) = field("Frame Time:")?;
     let frame_time: f64 = ft.parse().map_err(|_| syntax(tl, format!("{ft:?}: expected seconds per frame")))?;
     if !(frame_time.is_finite() && frame_time > 0.0) {
         return Err(syntax(tl, format!("frame time {frame_time}: expected a positive number of seconds")));
     }
-    let mut motion = Vec::with_capacity(frames.min(1 << 20) * n_channels);
+    // Reserve no more than the text can hold (a value takes at least two bytes), so a huge
+    // 'Frames:' in a small file costs nothing before its error.
+    let mut motion = Vec::with_capacity(frames.saturating_mul(n_channels).min((text.len() - m) / 2 + 1));
     let mut last = tl;
     for f in 0..frames {
         let Some((line, l)) = lines.next() else {
             return Err(Error::new(
                 ErrorKind::Truncated,
-                format!("motion ends after {f} frames: 'Frames:' announces {frames}"),
+                format!("motion ends after {f} of the {frames} frames 'Frames:' announces (line {fl})"),
             )
             .at_line(last + 1));
         };
@@ -228,16 +275,18 @@ pub fn parse_bvh(text: &str) -> Result<Bvh> {
         }
     }
     if let Some((line, _)) = lines.next() {
-        return Err(
-            Error::new(ErrorKind::Shape, format!("more motion lines than the {frames} frames announced")).at_line(line)
-        );
+        return Err(Error::new(
+            ErrorKind::Shape,
+            format!("more motion lines than the {frames} frames 'Frames:' announces (line {fl})"),
+        )
+        .at_line(line));
     }
     Ok(Bvh { joints, frame_time, motion, n_channels })
 }
 
 /// Reads a BVH file; errors name it.
 pub fn read_bvh(path: &Path) -> Result<Bvh> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read BVH file", e))?;
+    let bytes = surfcap_mesh::read_regular_file(path)?;
     let text = String::from_utf8(bytes)
         .map_err(|_| Error::new(ErrorKind::Syntax, "not UTF-8 text: expected a BVH file").in_file(path))?;
     parse_bvh(&text).map_err(|e| e.in_file(path))
@@ -372,6 +421,67 @@ mod tests {
             assert_eq!((e.kind, e.location.clone()), (kind, Some(surfcap_mesh::Location::Line(line))), "{e}");
         }
         assert_eq!(parse_bvh("").unwrap_err().kind, ErrorKind::Empty);
+        let e = parse_bvh(&SMALL.replace("Frames: 2", "Frames: 0")).unwrap_err();
+        assert_eq!(e.to_string(), "line 17: Frames: 0: expected at least one frame of motion");
+        let e = parse_bvh(&SMALL.replace("1 2 3 90 0 0 0 0 0\r\n", "1 2 3 90 0 0 0 0 0\r\n1 2 3 0 0 0 0 0 0\r\n"));
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "line 21: more motion lines than the 2 frames 'Frames:' announces (line 17)"
+        );
+        let e = parse_bvh(&SMALL.replace("Frames: 2", "Frames: 99999999999999")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 21: motion ends after 2 of the 99999999999999 frames 'Frames:' announces (line 17)"
+        );
+        let e = parse_bvh(
+            &SMALL
+                .replace("  CHANNELS 3 Xrotation Yrotation Zrotation\r\n", "")
+                .replace(" CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\r\n", ""),
+        )
+        .unwrap_err();
+        assert_eq!(e.to_string(), "line 2: no joint has CHANNELS: expected at least the root's");
+        let e =
+            parse_bvh(&SMALL.replace("  OFFSET 0 -10 0\r\n", "  OFFSET 0 -10 0\r\n  OFFSET 0 -10 0\r\n")).unwrap_err();
+        assert_eq!(e.to_string(), "line 9: a second OFFSET for joint \"knee\": expected one");
+        let twice = SMALL.replace(
+            "CHANNELS 3 Xrotation Yrotation Zrotation",
+            "CHANNELS 3 Xrotation Yrotation Zrotation CHANNELS 1 Xrotation",
+        );
+        assert_eq!(
+            parse_bvh(&twice).unwrap_err().to_string(),
+            "line 9: a second CHANNELS for joint \"knee\": expected one"
+        );
         assert_eq!(parse_bvh(&SMALL[..SMALL.find("JOINT").unwrap()]).unwrap_err().kind, ErrorKind::Truncated);
+    }
+
+    /// Issue 15 case 8: 100,000 nested joints parse without recursion (this overflowed the stack),
+    /// and forward kinematics and the unit guess walk them in order.
+    #[test]
+    fn deep_nesting_parses_without_recursion() {
+        let depth = 100_000;
+        let mut t = String::from("HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n");
+        for k in 1..depth {
+            t.push_str(&format!("JOINT j{k}\n{{\nOFFSET 0 1 0\n"));
+        }
+        t.push_str(&"}\n".repeat(depth));
+        t.push_str("MOTION\nFrames: 1\nFrame Time: 0.04\n1 2 3\n");
+        let b = parse_bvh(&t).unwrap();
+        assert_eq!((b.joints.len(), b.joints[depth - 1].parent, b.n_frames()), (depth, Some(depth - 2), 1));
+        assert_eq!(b.world(0)[depth - 1].translation.vector, Vector3::new(1.0, 2.0 + (depth - 1) as f64, 3.0));
+        assert_eq!(b.rest_height(), (depth - 1) as f64);
+        // One brace short: an error at the end of the hierarchy, not a crash.
+        let short = t.replacen("}\n", "", 1);
+        assert_eq!(parse_bvh(&short).unwrap_err().kind, ErrorKind::Truncated);
+    }
+
+    /// Values come in the order CHANNELS appear in the file, even when a joint lists its channels
+    /// after its children; a joint named with MOTION in it does not end the hierarchy.
+    #[test]
+    fn channels_after_children_and_motion_in_names() {
+        let t = "HIERARCHY\nROOT MOTIONhips\n{\nOFFSET 0 0 0\nJOINT knee\n{\nOFFSET 0 -1 0\nCHANNELS 1 Xposition\n}\n\
+                 CHANNELS 1 Yposition\n}\nMOTION\nFrames: 1\nFrame Time: 0.5\n7 9\n";
+        let b = parse_bvh(t).unwrap();
+        assert_eq!((b.joints[0].first_channel, b.joints[1].first_channel), (1, 0));
+        assert_eq!(b.world(0)[1].translation.vector, Vector3::new(7.0, 8.0, 0.0));
     }
 }

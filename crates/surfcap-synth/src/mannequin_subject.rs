@@ -28,9 +28,11 @@ impl Clip {
     pub fn from_bvh(path: &Path, bvh: &Bvh, m: &Mannequin, metres_per_unit: f64) -> Result<Clip> {
         let poses = retarget(bvh, m, metres_per_unit).map_err(|e| e.in_file(path))?;
         if poses.len() < 2 {
-            return Err(
-                Error::new(ErrorKind::Empty, format!("{} frames: expected at least 2", poses.len())).in_file(path)
-            );
+            return Err(Error::new(
+                ErrorKind::Empty,
+                format!("{} frame{}: expected at least 2", poses.len(), if poses.len() == 1 { "" } else { "s" }),
+            )
+            .in_file(path));
         }
         let name = path.file_stem().map_or_else(|| "bvh".into(), |s| s.to_string_lossy().into_owned());
         let tags = motion_tags(&poses, bvh.fps());

@@ -72,6 +72,9 @@ fn swing(from: Vector3<f64>, to: Vector3<f64>) -> UnitQuaternion<f64> {
 /// World transforms of the mannequin's joints for every BVH frame (for `Mannequin::pose`).
 pub fn retarget(bvh: &Bvh, m: &Mannequin, metres_per_unit: f64) -> Result<Vec<Vec<Isometry3<f64>>>> {
     let map = joint_map(bvh, &m.skeleton)?;
+    if bvh.n_frames() == 0 {
+        return Err(Error::new(ErrorKind::Empty, "the BVH clip has no frames: expected at least one"));
+    }
     let sk = &m.skeleton;
     let idx = |n: &str| sk.names.iter().position(|&x| x == n).expect("mannequin joint");
     let (pelvis, lf, rf, thorax, head, lh, rh) =

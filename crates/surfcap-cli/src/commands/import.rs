@@ -47,6 +47,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     for n in &imported.notes {
         ctx.note(n);
     }
+    // What each source was read as, so a folder read in an unexpected way is seen.
+    for src in &imported.sources {
+        ctx.say(&format!(
+            "read {}: {} -> sequence {:?}, {} frame{}",
+            src.origin.display(),
+            src.layout,
+            src.sequence,
+            src.frames,
+            if src.frames == 1 { "" } else { "s" }
+        ));
+    }
     let mut s = imported.subject;
     let mut recovered = Vec::new();
     if a.root_motion == RootMotion::Contacts {
@@ -82,6 +93,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "root_motion_from_contacts": recovered.iter().map(|r| json!({ "sequence": r.sequence,
                 "net_displacement_before": r.before, "net_displacement_after": r.after,
                 "contact_steps": r.contact_steps, "frames": r.frames })).collect::<Vec<_>>(),
+            "sources": imported.sources.iter().map(|src| json!({
+                "sequence": src.sequence,
+                "origin": src.origin,
+                "layout": src.layout.to_string(),
+                "frames": src.frames,
+            })).collect::<Vec<_>>(),
             "seconds": secs,
         }),
         || {

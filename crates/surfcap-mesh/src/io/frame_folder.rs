@@ -39,7 +39,9 @@ pub fn list_frames(dir: &Path, format: FrameFormat) -> Result<Vec<PathBuf>> {
     for e in entries {
         let p = e.map_err(|e| Error::io(dir, "list directory", e))?.path();
         let ext_ok = p.extension().is_some_and(|x| x.eq_ignore_ascii_case(format.extension()));
-        if ext_ok && p.is_file() {
+        // Anything but a folder: a FIFO or socket named like a frame is an error when read, not
+        // a frame silently left out.
+        if ext_ok && !p.is_dir() {
             files.push(p);
         }
     }

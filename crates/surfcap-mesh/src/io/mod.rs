@@ -6,4 +6,5 @@ pub mod npy;
 pub mod obj;
 pub mod pc2;
 pub mod ply;
+pub mod regular_file;
 pub mod shared_layout;

@@ -115,6 +115,11 @@ fn read_up_to(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
     Ok(n)
 }
 
+/// Largest header accepted: a format-1 header's limit, six times what NumPy reads by default.
+const MAX_HEADER: u64 = 65_535;
+/// Deepest bracket nesting accepted in a header.
+const MAX_NESTING: usize = 4;
+
 /// Reads an array from `reader`, whose total length is `total_len` bytes.
 pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<NpyArray<T>> {
     if total_len == 0 {
@@ -148,7 +153,34 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
             "header declares {header_len} bytes of header but the file has only {total_len} bytes"
         ));
     }
-    let mut r = Counting { inner: std::io::Cursor::new(&prefix[..got]).chain(reader), count: 0 };
+    // The header is a Python dict literal that npyz parses with a backtracking grammar: each
+    // level of nested brackets can double its work (a 200-byte header ran for minutes; found by
+    // the fuzzer, see fuzz/FINDINGS.md). NumPy writes at most four levels (a structured dtype's
+    // subarray shape) and, by default, reads headers of at most 10,000 bytes.
+    if header_len > MAX_HEADER {
+        return Err(
+            err!(Unsupported, "header of {header_len} bytes: expected at most {MAX_HEADER}").at(Location::Byte(8))
+        );
+    }
+    // The prefix may already hold more than a (tiny) header: those bytes are data, kept in order.
+    let mut head = prefix[..got].to_vec();
+    head.resize(((8 + len_bytes + header_len) as usize).max(got), 0);
+    read_up_to(&mut reader, &mut head[got..]).map_err(|e| err!(Io, "cannot read: {e}")).and_then(|n| {
+        if got + n < head.len() { Err(err!(Truncated, "file ends inside the .npy header")) } else { Ok(()) }
+    })?;
+    let mut depth = 0usize;
+    for (k, &b) in head.iter().enumerate().skip((8 + len_bytes) as usize) {
+        match b {
+            b'{' | b'[' | b'(' => depth += 1,
+            b'}' | b']' | b')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        if depth > MAX_NESTING {
+            return Err(err!(Syntax, "header nests brackets deeper than {MAX_NESTING}: expected a NumPy header dict")
+                .at(Location::Byte(k as u64)));
+        }
+    }
+    let mut r = Counting { inner: std::io::Cursor::new(head).chain(reader), count: 0 };
     let header = npyz::NpyHeader::from_reader(&mut r).map_err(|e| match e.kind() {
         std::io::ErrorKind::UnexpectedEof => err!(Truncated, "file ends inside the .npy header"),
         _ => err!(Syntax, "not a valid .npy header: {e}"),
@@ -212,7 +244,7 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
 
 /// Reads a `.npy` file; errors name the file.
 pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
-    let f = std::fs::File::open(path).map_err(|e| Error::io(path, "open .npy file", e))?;
+    let f = crate::io::regular_file::open_regular_file(path)?;
     let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
     parse_npy(std::io::BufReader::with_capacity(1 << 16, f), len).map_err(|e| e.in_file(path))
 }

@@ -11,7 +11,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use crate::error::{Error, Result, err};
+use crate::error::{Result, err};
 use crate::topology::{Topology, UvAtlas, check_triangle};
 
 /// The content of one OBJ file.
@@ -151,10 +151,12 @@ fn resolve_index(tok: &str, count: usize, what: &str) -> Result<u32> {
         return Err(err!(IndexOutOfRange, "{what} index 0: OBJ indices start at 1 (or are negative)"));
     };
     if resolved < 0 || resolved >= count as i64 {
-        return Err(err!(
-            IndexOutOfRange,
-            "{what} index {i} out of range: {count} {what}s are defined before this line"
-        ));
+        let defined = match (count, what) {
+            (1, _) => format!("1 {what} is"),
+            (_, "vertex") => format!("{count} vertices are"),
+            _ => format!("{count} {what}s are"),
+        };
+        return Err(err!(IndexOutOfRange, "{what} index {i} out of range: {defined} defined before this line"));
     }
     Ok(resolved as u32)
 }
@@ -177,7 +179,7 @@ fn parse_corner(tok: &str, nv: usize, nvt: usize, nvn: usize) -> Result<(u32, Op
 
 /// Reads and parses an OBJ file; errors name the file.
 pub fn read_obj(path: &Path) -> Result<ObjMesh> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read OBJ file", e))?;
+    let bytes = crate::io::regular_file::read_regular_file(path)?;
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(err!(Empty, "empty file: expected an OBJ mesh").in_file(path));
     }
@@ -261,6 +263,24 @@ mod tests {
             let e = parse_obj(text.as_bytes()).unwrap_err();
             assert_eq!((e.kind, e.location.clone()), (*kind, Some(Location::Line(*line))), "{text:?}: {e}");
         }
+    }
+
+    /// Issue 15's "494 vertexs": counts name their items in the plural (or singular).
+    #[test]
+    fn out_of_range_indices_count_what_is_defined() {
+        let msg = |t: &[u8]| parse_obj(t).unwrap_err().to_string();
+        assert_eq!(
+            msg(b"v 0 0 0\nv 1 0 0\nf 1 2 3\n"),
+            "line 3: vertex index 3 out of range: 2 vertices are defined before this line"
+        );
+        assert_eq!(
+            msg(b"v 0 0 0\nf 1 2 3\n"),
+            "line 2: vertex index 2 out of range: 1 vertex is defined before this line"
+        );
+        assert_eq!(
+            msg(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nf 1/1 2/2 3/3\n"),
+            "line 6: texture coordinate index 3 out of range: 2 texture coordinates are defined before this line"
+        );
     }
 
     #[test]

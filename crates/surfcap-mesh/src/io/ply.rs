@@ -351,11 +351,11 @@ pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh> {
                 let corners = &inst.list;
                 let get = |v: f64| -> Result<u32> {
                     if v < 0.0 || v >= n_vertices as f64 {
-                        return Err(err!(
-                            IndexOutOfRange,
-                            "face {k} uses vertex {v}: expected 0..{} (0-based)",
-                            n_vertices
-                        ));
+                        return Err(match n_vertices {
+                            0 => err!(IndexOutOfRange, "face {k} uses vertex {v}: the file has no vertices"),
+                            1 => err!(IndexOutOfRange, "face {k} uses vertex {v}: expected 0 (the only vertex)"),
+                            n => err!(IndexOutOfRange, "face {k} uses vertex {v}: expected 0 to {} (0-based)", n - 1),
+                        });
                     }
                     Ok(v as u32)
                 };
@@ -370,6 +370,31 @@ pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh> {
     }
     if mesh.positions.len() != 3 * n_vertices {
         return Err(err!(Shape, "read {} vertices, header declares {n_vertices}", mesh.positions.len() / 3));
+    }
+    // Data after the last element the header declares means the header's counts are wrong (a
+    // face count of 5 in a file holding 984): refuse rather than read part of the mesh. Trailing
+    // whitespace (a final newline) is accepted.
+    let counts = || {
+        let c: Vec<String> = header.elements.iter().map(|e| format!("{} {}", e.count, e.name)).collect();
+        c.join(", ")
+    };
+    if header.format == Format::Ascii {
+        if let Some((i, _)) = ascii_lines.find(|(_, l)| !l.iter().all(|b| b.is_ascii_whitespace())) {
+            return Err(err!(
+                Shape,
+                "data after the last element: the header declares {}, and the file holds more",
+                counts()
+            )
+            .at_line(header.lines + i + 1));
+        }
+    } else if let Some(k) = bytes[cursor.pos..].iter().position(|b| !b.is_ascii_whitespace()) {
+        let extra = bytes.len() - cursor.pos;
+        return Err(err!(
+            Shape,
+            "{extra} bytes of data after the last element: the header declares {}, and the file holds more",
+            counts()
+        )
+        .at(Location::Byte((cursor.pos + k) as u64)));
     }
     Ok(mesh)
 }
@@ -435,7 +460,7 @@ fn read_binary_instance(el: &Element, k: u64, c: &mut Cursor, inst: &mut Instanc
 
 /// Reads and parses a PLY file; errors name the file.
 pub fn read_ply(path: &Path) -> Result<PlyMesh> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read PLY file", e))?;
+    let bytes = crate::io::regular_file::read_regular_file(path)?;
     parse_ply(&bytes).map_err(|e| e.in_file(path))
 }
 
@@ -519,6 +544,56 @@ element edge 1\r\nproperty int a\r\nend_header\r\n"
         let m = parse_ply(&b).unwrap();
         assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(m.positions[6..9], [1., 1., 0.]);
+    }
+
+    /// Issue 15 case 12: a header that declares fewer faces than the file holds is an error at
+    /// the first byte (binary) or line (ascii) past the declared data; a final newline is fine.
+    #[test]
+    fn data_after_the_declared_elements_is_an_error() {
+        let (t, p) = tetra();
+        let mut buf = Vec::new();
+        write_ply(&mut buf, &t, &p, false).unwrap();
+        let header_len = buf.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        let mut short = buf.clone();
+        let at = short.windows(14).position(|w| w == b"element face 4").unwrap();
+        short[at + 13] = b'1';
+        let end_of_first_face = header_len + 4 * 12 + 13;
+        let e = parse_ply(&short).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "byte {end_of_first_face}: 39 bytes of data after the last element: the header declares 4 vertex, 1 face, \
+                 and the file holds more"
+            )
+        );
+        buf.extend_from_slice(b"\n");
+        assert!(parse_ply(&buf).is_ok(), "a trailing newline is not data");
+
+        let mut ascii = Vec::new();
+        write_ply(&mut ascii, &t, &p, true).unwrap();
+        let text = String::from_utf8(ascii).unwrap().replacen("element face 4", "element face 3", 1) + "\n\n";
+        let e = parse_ply(text.as_bytes()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 18: data after the last element: the header declares 4 vertex, 3 face, and the file holds more"
+        );
+    }
+
+    /// Issue 15: "expected 0..494 (0-based)" for 494 vertices; the last valid index is 493.
+    #[test]
+    fn out_of_range_face_indices_name_the_last_valid_one() {
+        let ply = |nv: usize, face: &str| {
+            let mut t = format!(
+                "ply\nformat ascii 1.0\nelement vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n\
+                 element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            );
+            t.push_str(&"0 0 0\n".repeat(nv));
+            t.push_str(face);
+            parse_ply(t.as_bytes()).unwrap_err().to_string()
+        };
+        assert_eq!(ply(494, "3 0 1 494\n"), "line 504: face 0 uses vertex 494: expected 0 to 493 (0-based)");
+        assert_eq!(ply(1, "3 0 0 1\n"), "line 11: face 0 uses vertex 1: expected 0 (the only vertex)");
+        assert_eq!(ply(0, "3 0 1 2\n"), "line 10: face 0 uses vertex 0: the file has no vertices");
     }
 
     #[test]

@@ -10,6 +10,7 @@ use serde_json::Value;
 use crate::error::{Error, Result, err};
 use crate::io::npy::{expect_shape, read_npy};
 use crate::io::obj::read_obj;
+use crate::io::regular_file::{check_regular_file, exists_at, read_regular_file};
 use crate::subject::{FrameLabel, JointTrack, Units, UpAxis};
 use crate::topology::Topology;
 
@@ -41,9 +42,17 @@ pub struct LayoutSequence {
     pub meta: SequenceMeta,
 }
 
-/// Whether `dir` holds a sequence in this layout.
-pub fn is_layout_sequence(dir: &Path) -> bool {
-    dir.join("template.obj").is_file() && dir.join("positions.npy").is_file()
+/// Whether `dir` holds a sequence in this layout: `template.obj` and `positions.npy` both there
+/// and regular files. Both there but either one a FIFO, folder, socket or device is an error
+/// naming it (reading a FIFO would block; skipping it would silently read something else).
+pub fn is_layout_sequence(dir: &Path) -> Result<bool> {
+    let (template, positions) = (dir.join("template.obj"), dir.join("positions.npy"));
+    if !(exists_at(&template) && exists_at(&positions)) {
+        return Ok(false);
+    }
+    check_regular_file(&template)?;
+    check_regular_file(&positions)?;
+    Ok(true)
 }
 
 /// Sequence folders of a dataset folder (one with `meta.json` and sequence subfolders), sorted.
@@ -51,7 +60,7 @@ pub fn dataset_sequences(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut v = Vec::new();
     for e in std::fs::read_dir(dir).map_err(|e| Error::io(dir, "list directory", e))? {
         let p = e.map_err(|e| Error::io(dir, "list directory", e))?.path();
-        if p.is_dir() && is_layout_sequence(&p) {
+        if p.is_dir() && is_layout_sequence(&p)? {
             v.push(p);
         }
     }
@@ -66,10 +75,11 @@ fn number(v: &Value) -> Option<f64> {
 /// Reads `meta.json` next to the sequence folder (in its parent), if there is one.
 pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
     let name = seq_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let Some(meta_path) = seq_dir.parent().map(|p| p.join("meta.json")).filter(|p| p.is_file()) else {
+    let Some(meta_path) = seq_dir.parent().map(|p| p.join("meta.json")).filter(|p| exists_at(p)) else {
         return Ok(SequenceMeta::default());
     };
-    let text = std::fs::read_to_string(&meta_path).map_err(|e| Error::io(&meta_path, "read", e))?;
+    let text = String::from_utf8(read_regular_file(&meta_path)?)
+        .map_err(|_| err!(Syntax, "not UTF-8 text: expected JSON").in_file(&meta_path))?;
     let root: Value = serde_json::from_str(&text)
         .map_err(|e| err!(Syntax, "invalid JSON: {e}").in_file(&meta_path).at_line(e.line()))?;
     let seq = &root["sequences"][&name];
