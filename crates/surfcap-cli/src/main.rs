@@ -173,21 +173,28 @@ fn main() -> ExitCode {
     };
     let ctx = Ctx { quiet: cli.quiet, json: cli.json, force: cli.force };
     signals::remove_temporaries_on_signals();
-    let result = std::panic::catch_unwind(|| match cli.command {
-        Command::Import(a) => commands::import::run(&ctx, a),
-        Command::Info(a) => commands::info::run(&ctx, a),
-        Command::Export(a) => commands::export::run(&ctx, a),
-        Command::Distance(a) => commands::distance::run(&ctx, a),
-        Command::Interpolate(a) => commands::interpolate::run(&ctx, a),
-        Command::Eval(a) => commands::eval::run(&ctx, a),
-        Command::Transitions(a) => commands::transitions::run(&ctx, a),
-        Command::Transition(a) => commands::transition::run(&ctx, a),
-        Command::Synth(a) => commands::synth::run(&ctx, *a),
-        Command::Graph(a) => commands::graph::run(&ctx, a),
-        Command::Demo(a) => commands::demo::run(&ctx, a),
-        Command::Bench(a) => commands::bench::run(&ctx, a),
-        Command::View(a) => commands::view::run(&ctx, a),
-        Command::Report(a) => commands::report::run(&ctx, a),
+    let result = std::panic::catch_unwind(|| {
+        // The tests' way to reach the internal-error path (no input is known to panic): an
+        // environment variable no user sets by accident.
+        if std::env::var_os("SURFCAP_TEST_INTERNAL_ERROR").is_some() {
+            panic!("SURFCAP_TEST_INTERNAL_ERROR is set");
+        }
+        match cli.command {
+            Command::Import(a) => commands::import::run(&ctx, a),
+            Command::Info(a) => commands::info::run(&ctx, a),
+            Command::Export(a) => commands::export::run(&ctx, a),
+            Command::Distance(a) => commands::distance::run(&ctx, a),
+            Command::Interpolate(a) => commands::interpolate::run(&ctx, a),
+            Command::Eval(a) => commands::eval::run(&ctx, a),
+            Command::Transitions(a) => commands::transitions::run(&ctx, a),
+            Command::Transition(a) => commands::transition::run(&ctx, a),
+            Command::Synth(a) => commands::synth::run(&ctx, *a),
+            Command::Graph(a) => commands::graph::run(&ctx, a),
+            Command::Demo(a) => commands::demo::run(&ctx, a),
+            Command::Bench(a) => commands::bench::run(&ctx, a),
+            Command::View(a) => commands::view::run(&ctx, a),
+            Command::Report(a) => commands::report::run(&ctx, a),
+        }
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -1075,6 +1075,27 @@ fn every_failure_under_json_is_one_json_object() {
     // Without --json, the same argument error is text.
     let o = surfcap!(&["frobnicate"]);
     assert!(stderr(&o).starts_with("error: unrecognized subcommand"), "{}", stderr(&o));
+    // An internal error (a panic, reached through the tests' variable): one JSON object, exit 2.
+    let seq = tmp.path().join("one.obj");
+    std::fs::write(&seq, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .args(["info", p(&seq), "--fps", "30", "--json"])
+        .env("SURFCAP_TEST_INTERNAL_ERROR", "1")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(o.stdout.is_empty());
+    let v: serde_json::Value = serde_json::from_str(stderr(&o).trim())
+        .unwrap_or_else(|_| panic!("a panic under --json is not one JSON object: {}", stderr(&o)));
+    assert!(v["error"].as_str().unwrap().contains("internal error"), "{v}");
+    assert_eq!(v["exit_code"], 2);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .args(["info", p(&seq), "--fps", "30"])
+        .env("SURFCAP_TEST_INTERNAL_ERROR", "1")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("surfcap: internal error"), "{}", stderr(&o));
 }
 
 #[test]
