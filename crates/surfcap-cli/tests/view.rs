@@ -84,7 +84,10 @@ fn the_viewer_plays_a_real_capture_in_chromium() {
     let seen = browser_test(&url, &shot.path().join("viewer.png"));
     assert!(seen["painted"].as_f64().unwrap() > 0.001);
     assert_eq!(seen["legend"], serde_json::json!(["original frame", "grid: 1 square = 0.2 metres"]), "{seen}");
-    assert!(count(&seen, "colours/original", "green") > 1000 && count(&seen, "colours/original", "grey") > 100, "{seen}");
+    assert!(
+        count(&seen, "colours/original", "green") > 1000 && count(&seen, "colours/original", "grey") > 100,
+        "{seen}"
+    );
     assert_eq!(count(&seen, "timeline", "red"), 0, "{seen}");
 }
 
