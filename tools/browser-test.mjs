@@ -96,6 +96,13 @@ try {
   if (JSON.stringify(legend) !== JSON.stringify(expected) || !expected.every((e) => legendText.includes(e))) {
     fail(`legend ${JSON.stringify(legend)} ("${legendText}"), expected ${JSON.stringify(expected)}`);
   }
+  // One colour per sequence: the legend names the sequences instead of the frame kinds.
+  await page.check('#hues');
+  const hued = await viewer(() => window.surfcapViewer.legend);
+  if (JSON.stringify(hued.slice(0, meta.items.length)) !== JSON.stringify(meta.items.map((m) => m.name)) || hued.includes('original frame')) {
+    fail(`legend with one colour per sequence: ${JSON.stringify(hued)}`);
+  }
+  await page.uncheck('#hues');
   // Every frame: every vertex inside the view and clear of the info panel.
   const framing = await viewer(() => {
     const v = window.surfcapViewer, out = { worst: null, outside: [] };

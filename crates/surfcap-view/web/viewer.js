@@ -164,7 +164,9 @@ function buildGrid(box) {
   const text = `1 square = ${unitName(state.items[0].meta, step)}`;
   const height = Math.max(0.35 * step, extent / 30);
   const tag = label(text, height);
-  tag.position.set(box.min.x, y, box.max.z + 0.25 * step);  // just in front of the subject's footprint
+  // Just in front of the footprint's near left corner, as `frameCamera` looks at it.
+  if (size.z > size.x) tag.position.set(box.max.x + 0.25 * step, y, box.max.z);
+  else tag.position.set(box.min.x, y, box.max.z + 0.25 * step);
   ground.add(tag);
   state.grid = { step, units: state.items[0].meta.units, text, tag: tag.position.clone(), height };
 }
@@ -191,7 +193,9 @@ function frameCamera() {
     pts.push(new THREE.Vector3(k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y, k & 4 ? box.max.z : box.min.z));
   }
   if (state.grid) pts.push(state.grid.tag.clone().add(new THREE.Vector3(0, state.grid.height, 0)));
-  const c = box.getCenter(new THREE.Vector3()), dir = new THREE.Vector3(0.2, 0.5, 1.6).normalize();
+  // Looking across the longer side of the ground footprint (a walk along z is seen from the side).
+  const c = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3());
+  const dir = (size.z > size.x ? new THREE.Vector3(1.6, 0.5, -0.2) : new THREE.Vector3(0.2, 0.5, 1.6)).normalize();
   camera.clearViewOffset();
   camera.position.copy(c).add(dir);
   camera.up.set(0, 1, 0);
@@ -214,7 +218,7 @@ function frameCamera() {
   camera.aspect = FW / FH;
   camera.fov = THREE.MathUtils.radToDeg(2 * Math.atan(FH / (2 * f)));
   camera.setViewOffset(FW, FH, FW / 2 - cx, FH / 2 - cy, W, H);
-  const radius = box.getSize(new THREE.Vector3()).length() / 2 || 1e-3;
+  const radius = size.length() / 2 || 1e-3;
   camera.position.copy(c).addScaledVector(dir, d);
   camera.near = Math.max(radius / 1000, (d - radius) / 10);
   camera.far = d + 100 * radius;
