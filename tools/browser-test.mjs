@@ -79,6 +79,10 @@ try {
   await page.selectOption('#speed', '0.25');
   const speed = await viewer(() => window.surfcapViewer.speed);
   if (speed !== 0.25) fail(`speed 0.25 selected, viewer plays at ${speed}`);
+  const beforeKey = await viewer(() => window.surfcapViewer.frame);
+  await page.keyboard.press('ArrowRight');
+  const afterKey = await viewer(() => window.surfcapViewer.frame);
+  if (afterKey !== (beforeKey + 1) % frames) fail(`after choosing a speed, ArrowRight went from ${beforeKey} to ${afterKey}`);
   // The legend lists exactly what is drawn.
   const meta = await (await page.request.get(new URL('/api/items', url).href)).json();
   const legend = await viewer(() => window.surfcapViewer.legend);

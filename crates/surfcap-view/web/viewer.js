@@ -329,7 +329,8 @@ function seek(f) {
 }
 
 $('play').addEventListener('click', () => setPlaying(!state.playing));
-$('speed').addEventListener('change', () => { state.speed = Number($('speed').value); });
+// The select gives the keyboard back, so the arrow keys step frames again rather than the speed.
+$('speed').addEventListener('change', () => { state.speed = Number($('speed').value); $('speed').blur(); });
 $('side').addEventListener('change', arrange);
 $('hues').addEventListener('change', () => { buildLegend(); showFrame(state.frame); });
 const track = $('track');
