@@ -1,11 +1,40 @@
 // End-to-end check of `surfcap view` in headless Chromium (Debian's /usr/bin/chromium, driven
 // by playwright-core). Usage: node browser-test.mjs URL SCREENSHOT.png
-// Prints one JSON line of what it saw; exits 1 with a message when a check fails.
+// Checks what holds for any input: no console error, playback advances, the timeline and the
+// arrow keys seek, the speed control sets the speed, the legend lists exactly what is drawn
+// (from /api/items), and every vertex of every frame projects inside the view and clear of the
+// info panel. Prints one JSON line of what it saw, including the colours counted on the canvas
+// and the timeline at an original and a synthetic frame (the caller asserts on those, since
+// which must appear depends on the input); exits 1 with a message when a check fails.
 import { chromium } from 'playwright-core';
 
 const [url, shot] = process.argv.slice(2);
 const fail = (msg) => { console.error(`browser test: ${msg}`); process.exit(1); };
 if (!url || !shot) fail('usage: node browser-test.mjs URL SCREENSHOT.png');
+
+// Counts pixels by colour class on a canvas (WebGL canvases need preserveDrawingBuffer).
+function countColours(selector) {
+  const c = document.querySelector(selector);
+  const d = document.createElement('canvas');
+  d.width = c.width; d.height = c.height;
+  const g = d.getContext('2d');
+  g.drawImage(c, 0, 0);
+  const px = g.getImageData(0, 0, d.width, d.height).data;
+  const n = { painted: 0, green: 0, red: 0, blue: 0, orange: 0, grey: 0 };
+  for (let i = 0; i < px.length; i += 4) {
+    const [r, gr, b, a] = [px[i], px[i + 1], px[i + 2], px[i + 3]];
+    if (a < 128 || Math.abs(r - 0xf4) + Math.abs(gr - 0xf4) + Math.abs(b - 0xf2) <= 30) continue;
+    n.painted++;
+    const hi = Math.max(r, gr, b), lo = Math.min(r, gr, b), mean = (r + gr + b) / 3;
+    if (gr > r + 40 && gr > b + 30) n.green++;
+    else if (r > gr + 60 && Math.abs(gr - b) < 40) n.red++;
+    else if (r > gr + 30 && gr > b + 50) n.orange++;
+    else if (b > r + 50 && b > gr + 20) n.blue++;
+    else if (hi - lo < 12 && mean > 120 && mean < 225) n.grey++;
+  }
+  n.pixels = px.length / 4;
+  return n;
+}
 
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
@@ -19,40 +48,98 @@ try {
   page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()}`));
   await page.goto(url, { waitUntil: 'load' });
   await page.waitForFunction(() => window.surfcapViewer && window.surfcapViewer.ready, null, { timeout: 60000 });
+  const viewer = (expr, arg) => page.evaluate(expr, arg);
   const counter = () => page.textContent('#counter');
+  const rendered = () => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   // Playing: the frame counter advances.
-  const f0 = await page.evaluate(() => window.surfcapViewer.frame);
+  const f0 = await viewer(() => window.surfcapViewer.frame);
   await page.waitForFunction((f) => window.surfcapViewer.frame !== f, f0, { timeout: 20000 });
-  const f1 = await page.evaluate(() => window.surfcapViewer.frame);
+  const f1 = await viewer(() => window.surfcapViewer.frame);
   const text1 = await counter();
-  // Pause, then the scrubber jumps to a requested frame.
+  // Pause, then a click on the timeline jumps to the frame under the pointer.
   await page.click('#play');
-  const frames = await page.evaluate(() => window.surfcapViewer.frames);
+  const frames = await viewer(() => window.surfcapViewer.frames);
   const want = Math.floor(frames / 2);
-  await page.$eval('#scrub', (el, v) => { el.value = String(v); el.dispatchEvent(new Event('input')); }, want);
-  const got = await page.evaluate(() => window.surfcapViewer.frame);
+  const track = await page.locator('#track').boundingBox();
+  await page.mouse.click(track.x + (track.width * (want + 0.5)) / frames, track.y + track.height / 2);
+  const got = await viewer(() => window.surfcapViewer.frame);
   const text2 = await counter();
-  if (got !== want || !text2.startsWith(`frame ${want} `)) fail(`scrubbed to ${want}, page shows ${got} ("${text2}")`);
-  await page.waitForTimeout(300);
-  // Non-blank: the canvas has pixels other than the background.
-  const painted = await page.evaluate(() => {
-    const c = document.querySelector('#view canvas');
-    const d = document.createElement('canvas');
-    d.width = c.width; d.height = c.height;
-    const g = d.getContext('2d');
-    g.drawImage(c, 0, 0);
-    const px = g.getImageData(0, 0, d.width, d.height).data;
-    let other = 0;
-    for (let i = 0; i < px.length; i += 4) {
-      if (Math.abs(px[i] - 0xf4) + Math.abs(px[i + 1] - 0xf4) + Math.abs(px[i + 2] - 0xf2) > 30) other++;
+  if (got !== want || !text2.startsWith(`frame ${want} `)) fail(`clicked the timeline at ${want}, page shows ${got} ("${text2}")`);
+  // Arrow keys step one frame (ten with Shift), paused.
+  const keys = [];
+  for (const [key, delta] of [['ArrowRight', 1], ['ArrowLeft', -1], ['ArrowLeft', -1], ['Shift+ArrowRight', 10]]) {
+    const before = await viewer(() => window.surfcapViewer.frame);
+    await page.keyboard.press(key);
+    const after = await viewer(() => window.surfcapViewer.frame);
+    keys.push([key, before, after]);
+    if (after !== before + delta) fail(`${key} went from frame ${before} to ${after}, not ${before + delta}`);
+  }
+  if (await viewer(() => window.surfcapViewer.playing)) fail('stepping with the arrow keys left the animation playing');
+  // Speed.
+  await page.selectOption('#speed', '0.25');
+  const speed = await viewer(() => window.surfcapViewer.speed);
+  if (speed !== 0.25) fail(`speed 0.25 selected, viewer plays at ${speed}`);
+  const beforeKey = await viewer(() => window.surfcapViewer.frame);
+  await page.keyboard.press('ArrowRight');
+  const afterKey = await viewer(() => window.surfcapViewer.frame);
+  if (afterKey !== (beforeKey + 1) % frames) fail(`after choosing a speed, ArrowRight went from ${beforeKey} to ${afterKey}`);
+  // The legend lists exactly what is drawn.
+  const meta = await (await page.request.get(new URL('/api/items', url).href)).json();
+  const legend = await viewer(() => window.surfcapViewer.legend);
+  const labels = meta.items.flatMap((m) => m.synthetic);
+  const expected = [
+    labels.some((s) => !s) && 'original frame',
+    labels.some((s) => s) && 'synthetic frame',
+    meta.items.some((m) => m.overlay && m.overlay.curve) && 'requested path',
+    meta.items.some((m) => m.overlay) && 'achieved centre of mass',
+  ].filter(Boolean);
+  const grid = await viewer(() => window.surfcapViewer.grid);
+  if (!grid || !grid.text.includes(meta.items[0].units)) fail(`the grid is not labelled in ${meta.items[0].units}: ${JSON.stringify(grid)}`);
+  expected.push(`grid: ${grid.text}`);
+  const legendText = await page.textContent('#legend');
+  if (JSON.stringify(legend) !== JSON.stringify(expected) || !expected.every((e) => legendText.includes(e))) {
+    fail(`legend ${JSON.stringify(legend)} ("${legendText}"), expected ${JSON.stringify(expected)}`);
+  }
+  // One colour per sequence: the legend names the sequences instead of the frame kinds.
+  await page.check('#hues');
+  const hued = await viewer(() => window.surfcapViewer.legend);
+  if (JSON.stringify(hued.slice(0, meta.items.length)) !== JSON.stringify(meta.items.map((m) => m.name)) || hued.includes('original frame')) {
+    fail(`legend with one colour per sequence: ${JSON.stringify(hued)}`);
+  }
+  await page.uncheck('#hues');
+  // Every frame: every vertex inside the view and clear of the info panel.
+  const framing = await viewer(() => {
+    const v = window.surfcapViewer, out = { worst: null, outside: [] };
+    let margin = Infinity;
+    for (let f = 0; f < v.frames; f++) {
+      v.setFrame(f);
+      const { subject: s, view, panel } = v.screenBounds();
+      const m = Math.min(s.left, s.top, view.width - s.right, view.height - s.bottom);
+      const clear = s.left >= panel.right || s.top >= panel.bottom;
+      if (m < 0 || !clear) out.outside.push({ frame: f, subject: s, panel });
+      if (m < margin) { margin = m; out.worst = { frame: f, margin: m, subject: s, view, panel }; }
     }
-    return other / (px.length / 4);
+    return out;
   });
+  if (framing.outside.length) fail(`${framing.outside.length} frames leave the view or pass under the panel, first ${JSON.stringify(framing.outside[0])}`);
+  // Colours at an original and a synthetic frame (when the sequence has them): canvas and timeline.
+  const spans = await viewer(() => window.surfcapViewer.spans[0]);
+  const colours = {};
+  for (const kind of ['original', 'synthetic']) {
+    const span = spans.find((s) => s.synthetic === (kind === 'synthetic'));
+    if (!span) continue;
+    await viewer((f) => window.surfcapViewer.setFrame(f), Math.floor((span.from + span.to - 1) / 2));
+    await rendered();
+    colours[kind] = await page.evaluate(`(${countColours.toString()})("#view canvas")`);
+  }
+  const timeline = await page.evaluate(`(${countColours.toString()})("#track")`);
   await page.screenshot({ path: shot });
   if (errors.length) fail(`console errors: ${errors.join(' | ')}`);
   if (!(f1 !== f0)) fail(`the frame counter did not advance (${f0} -> ${f1})`);
+  const painted = (colours.original || colours.synthetic).painted / (colours.original || colours.synthetic).pixels;
   if (!(painted > 0.001)) fail(`the canvas is blank (${(100 * painted).toFixed(2)}% painted)`);
-  console.log(JSON.stringify({ advanced: [f0, f1], counter: text1, scrubbed: want, painted, frames }));
+  console.log(JSON.stringify({ advanced: [f0, f1], counter: text1, seeked: want, keys, speed, legend, grid,
+    framing: framing.worst, colours, timeline, painted, frames }));
 } finally {
   await browser.close();
 }

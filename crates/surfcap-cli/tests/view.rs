@@ -1,10 +1,33 @@
-//! `surfcap view` end to end: the server on a real capture (Vlasic crane), its routes, and the
-//! page driven by headless Chromium (tools/browser-test.mjs: loads with no console error, the
-//! frame counter advances, the scrubber jumps, the canvas is not blank).
+//! `surfcap view` end to end: the server on a real capture (Vlasic crane) and on synthesis
+//! outputs, its routes, and the page driven by headless Chromium (tools/browser-test.mjs: loads
+//! with no console error, the frame counter advances, the timeline and the arrow keys seek, the
+//! legend lists what is drawn, every frame stays in view and clear of the info panel, and the
+//! colours drawn are counted).
 
+use std::path::Path;
 use std::process::Command;
 
-use surfcap_testkit::{ViewServer, http_request as request, http_request_as, p, surfcap};
+use surfcap_testkit::{ViewServer, http_request as request, http_request_as, p, stderr, surfcap};
+
+/// Runs tools/browser-test.mjs on the page at `url` (failing the test when one of its checks
+/// fails) and returns what it saw; the screenshot is written to `png`.
+fn browser_test(url: &str, png: &Path) -> serde_json::Value {
+    let tools = surfcap_testkit::workspace_root().join("tools");
+    assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
+    let o = Command::new("node").arg(tools.join("browser-test.mjs")).args([url, p(png)]).output().expect("node runs");
+    assert!(
+        o.status.success(),
+        "browser test failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(std::fs::metadata(png).unwrap().len() > 1000);
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn count(seen: &serde_json::Value, at: &str, colour: &str) -> u64 {
+    seen.pointer(&format!("/{at}/{colour}")).and_then(|v| v.as_u64()).unwrap_or(0)
+}
 
 #[test]
 fn the_viewer_plays_a_real_capture_in_chromium() {
@@ -56,25 +79,92 @@ fn the_viewer_plays_a_real_capture_in_chromium() {
     for (x, y) in f32s(&glb_body).iter().zip(f32s(&body)) {
         assert!((x - y).abs() <= 1e-5 * (1.0 + y.abs()), "{x} vs {y}");
     }
-    // The page in headless Chromium.
-    let tools = surfcap_testkit::workspace_root().join("tools");
-    assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
+    // The page in headless Chromium: a capture has original frames only, no overlay, a grid in metres.
     let shot = tempfile::tempdir().unwrap();
-    let png = shot.path().join("viewer.png");
-    let o = Command::new("node")
-        .arg(tools.join("browser-test.mjs"))
-        .args([&url, png.to_str().unwrap()])
-        .output()
-        .expect("node runs");
-    assert!(
-        o.status.success(),
-        "browser test failed:\n{}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let seen: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let seen = browser_test(&url, &shot.path().join("viewer.png"));
     assert!(seen["painted"].as_f64().unwrap() > 0.001);
-    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    assert_eq!(seen["legend"], serde_json::json!(["original frame", "grid: 1 square = 0.2 metres"]), "{seen}");
+    assert!(
+        count(&seen, "colours/original", "green") > 1000 && count(&seen, "colours/original", "grey") > 100,
+        "{seen}"
+    );
+    assert_eq!(count(&seen, "timeline", "red"), 0, "{seen}");
+}
+
+/// Issue 16 item 5 on synthesis outputs (the CMU-driven mannequin): `reach` reports its centre
+/// track and the viewer overlays it (with no path entry); on a `path` output the page draws the
+/// grid, the requested path and the achieved centre, green original and red synthetic frames on
+/// the mesh and on the timeline, and keeps every frame of the walk in view.
+#[test]
+fn the_viewer_frames_and_explains_synthesis_outputs() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let subject = tmp.path().join("cmu.subject");
+    let bvh: Vec<String> =
+        ["16_15", "16_17", "16_19"].iter().map(|c| p(&data.join(format!("cmu_bvh/{c}.bvh"))).to_string()).collect();
+    let mut args = vec!["synth", "--bvh"];
+    args.extend(bvh.iter().map(String::as_str));
+    args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
+    let o = surfcap!(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cache = tmp.path().join("cache");
+    let curve = tmp.path().join("curve.csv");
+    std::fs::write(&curve, "0,0\n1,0\n2,0.3\n3,0.8\n4,1.5\n").unwrap();
+    let path = tmp.path().join("path.glb");
+    let o = surfcap!(&["synth", "path", p(&subject), "--curve", p(&curve), "-o", p(&path), "--cache-dir", p(&cache)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reach = tmp.path().join("reach.glb");
+    let o = surfcap!(&[
+        "synth",
+        "reach",
+        p(&subject),
+        "--from",
+        "16_15:0",
+        "--to",
+        "16_19:60",
+        "--distance",
+        "3",
+        "--time",
+        "4",
+        "-o",
+        p(&reach),
+        "--cache-dir",
+        p(&cache),
+        "--quiet"
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // reach: the report holds one centre per frame, and the viewer overlays them without a path.
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("reach.report.json")).unwrap()).unwrap();
+    let frames = report["frames"].as_u64().unwrap();
+    assert_eq!(report["per_frame"]["centre"].as_array().unwrap().len() as u64, frames);
+    let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&reach)]);
+    let (status, body) = server.get("/api/items");
+    assert_eq!(status, 200);
+    let item = &serde_json::from_slice::<serde_json::Value>(&body).unwrap()["items"][0];
+    assert_eq!(item["overlay"]["centres"].as_array().unwrap().len() as u64, frames);
+    assert!(item["overlay"]["curve"].is_null(), "reach asks for no path: {}", item["overlay"]["curve"]);
+    assert_eq!((item["units"].as_str(), item["up"].as_str()), (Some("m"), Some("+y")));
+    drop(server);
+    // path: everything in the legend is drawn, in both frame colours.
+    let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&path)]);
+    let png = tmp.path().join("path.png");
+    let seen = browser_test(&server.url, &png);
+    let legend = ["original frame", "synthetic frame", "requested path", "achieved centre of mass"];
+    assert_eq!(seen["legend"].as_array().unwrap()[..4], legend.map(serde_json::Value::from), "{seen}");
+    assert!(seen["grid"]["text"].as_str().unwrap().ends_with(" m"), "{seen}");
+    for (at, colour) in [
+        ("colours/original", "green"),
+        ("colours/synthetic", "red"),
+        ("colours/original", "grey"),
+        ("colours/original", "blue"),
+        ("colours/original", "orange"),
+        ("timeline", "green"),
+        ("timeline", "red"),
+    ] {
+        assert!(count(&seen, at, colour) > 50, "{colour} at {at}: {seen}");
+    }
+    assert_eq!(count(&seen, "colours/original", "red") + count(&seen, "colours/synthetic", "green"), 0, "{seen}");
 }
 
 #[test]

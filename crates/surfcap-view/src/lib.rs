@@ -20,6 +20,10 @@ pub struct ViewItem {
     pub fps: f64,
     /// Subject up axis as `+y`, `-z`...: the page turns it onto its own +Y.
     pub up: String,
+    /// Length unit of the positions (`m`, `cm`, or a free description): the grid is labelled in it.
+    pub units: String,
+    /// Metres per unit, `None` for arbitrary units.
+    pub metres_per_unit: Option<f64>,
     pub n_vertices: usize,
     pub n_frames: usize,
     /// One flag per frame: whether surfcap made it (red) rather than captured it (green).
@@ -29,13 +33,15 @@ pub struct ViewItem {
     /// `[frames][vertices][3]` positions.
     #[serde(skip)]
     pub positions: Vec<f32>,
-    /// A path the sequence was asked to follow and the centre trajectory it achieved.
+    /// The centre trajectory a synthesis achieved, with the path it was asked to follow if any.
     pub overlay: Option<Overlay>,
 }
 
+/// What a synthesis report adds to its animation: `centres` has one point per frame; `curve`
+/// is there only for path following (`reach` has a distance to cover, not a path).
 #[derive(Debug, Clone, Serialize)]
 pub struct Overlay {
-    pub curve: Vec<[f64; 3]>,
+    pub curve: Option<Vec<[f64; 3]>>,
     pub centres: Vec<[f64; 3]>,
 }
 

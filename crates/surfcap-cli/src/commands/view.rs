@@ -32,14 +32,15 @@ fn is_report(p: &Path) -> bool {
     p.is_dir() && p.join("index.html").is_file() && !surfcap_mesh::cache::is_cache(p)
 }
 
-/// The path and achieved centres a synthesis report (`x.report.json` next to `x.glb`) holds.
+/// The achieved centres (and the requested path, when there is one) a synthesis report
+/// (`x.report.json` next to `x.glb`) holds.
 fn overlay_of(glb: &Path, frames: usize) -> Option<Overlay> {
     let report = crate::synthesis::report_path(glb);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(report).ok()?).ok()?;
     let points = |x: &serde_json::Value| -> Option<Vec<[f64; 3]>> {
         x.as_array()?.iter().map(|p| Some([p[0].as_f64()?, p[1].as_f64()?, p[2].as_f64()?])).collect()
     };
-    let curve = points(&v["curve"])?;
+    let curve = points(&v["curve"]);
     let centres = points(&v["per_frame"]["centre"])?;
     (centres.len() == frames).then_some(Overlay { curve, centres })
 }
@@ -54,6 +55,8 @@ fn items_of(s: &Subject, only: &[String], glb: Option<&Path>) -> Vec<ViewItem> {
             name: q.name.clone(),
             fps: s.fps,
             up: s.up_axis.as_str().to_string(),
+            units: s.units.name.clone(),
+            metres_per_unit: s.units.metres_per_unit,
             n_vertices: q.n_vertices(),
             n_frames: q.n_frames(),
             synthetic: q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect(),

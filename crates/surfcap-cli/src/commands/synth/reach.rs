@@ -69,6 +69,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (net, path) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, prep.up());
     played.report["net_displacement"] = json!(net);
     played.report["path_length"] = json!(path);
+    // The viewer draws this track over the animation, as it does for `synth path`.
+    played.report["per_frame"] = json!({ "centre": played.centres });
     let tol = &a.out.constraints;
     let constraints = [
         Constraint::new(
