@@ -100,22 +100,42 @@ pub fn slab_triangles(n: usize, budget: usize) -> usize {
     (budget / per_triangle / TRIANGLE_CHUNK).max(1) * TRIANGLE_CHUNK
 }
 
-/// Adds to `acc` the distances d(i, j) over one slab's triangles for i in `i0..i0 + ROW_BLOCK`,
-/// j > i, chunk by chunk. Every pair's sum takes the chunks in mesh order whatever the slab size
-/// (slabs are whole chunks), so the sums depend neither on the slabs nor on the thread count.
-fn row_block(frames: &[Vec<f64>], rot: &[Vec<Matrix3<f64>>], i0: usize, w: f64, log_s: bool, acc: &mut [Vec<f64>]) {
-    let n = frames.len();
-    let i1 = (i0 + ROW_BLOCK).min(n);
-    let len = frames.first().map_or(0, Vec::len);
-    // Whole storage blocks per chunk (TRIANGLE_CHUNK is a multiple of BLOCK).
-    let step = TRIANGLE_CHUNK * FRAME_FLOATS;
-    for start in (0..len).step_by(step) {
-        let end = (start + step).min(len);
-        for j in i0 + 1..n {
-            let fj = &frames[j][start..end];
-            for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
-                let k = j - (i0 + r) - 1;
-                acc[r][k] += deformation_distance(&fi[start..end], fj, &rot[r][k], w, log_s);
+/// Rows `i0..i0 + ROW_BLOCK` of the matrix: the up-axis rotations of their pairs (j > i) and the
+/// running sums of their distances.
+struct RowBlock {
+    i0: usize,
+    rot: Vec<Vec<Matrix3<f64>>>,
+    acc: Vec<Vec<f64>>,
+}
+
+impl RowBlock {
+    fn new(subject: &Subject, gram: &AlignmentGram, i0: usize) -> Self {
+        let n = gram.n;
+        let rows = i0..(i0 + ROW_BLOCK).min(n);
+        let rot = rows
+            .clone()
+            .map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect())
+            .collect();
+        RowBlock { i0, rot, acc: rows.map(|i| vec![0.0; n - i - 1]).collect() }
+    }
+
+    /// Adds the distances over one slab's triangles, chunk by chunk. Every pair's sum takes the
+    /// chunks in mesh order whatever the slab size (slabs are whole chunks), so the sums depend
+    /// neither on the slabs nor on the thread count.
+    fn add_slab(&mut self, frames: &[Vec<f64>], w: f64, log_s: bool) {
+        let (n, i0) = (frames.len(), self.i0);
+        let i1 = (i0 + ROW_BLOCK).min(n);
+        let len = frames.first().map_or(0, Vec::len);
+        // Whole storage blocks per chunk (TRIANGLE_CHUNK is a multiple of BLOCK).
+        let step = TRIANGLE_CHUNK * FRAME_FLOATS;
+        for start in (0..len).step_by(step) {
+            let end = (start + step).min(len);
+            for j in i0 + 1..n {
+                let fj = &frames[j][start..end];
+                for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
+                    let k = j - (i0 + r) - 1;
+                    self.acc[r][k] += deformation_distance(&fi[start..end], fj, &self.rot[r][k], w, log_s);
+                }
             }
         }
     }
@@ -193,18 +213,7 @@ pub fn distance_matrix_in_slabs(
             let triangles = subject.topology().triangles();
             let slab = slab_triangles(n, slab_bytes);
             let blocks: Vec<usize> = (0..n).step_by(ROW_BLOCK).collect();
-            // Per row block: the up-axis rotations of its pairs and their running sums.
-            let mut work: Vec<(usize, Vec<Vec<Matrix3<f64>>>, Vec<Vec<f64>>)> = blocks
-                .par_iter()
-                .map(|&i0| {
-                    let rows = i0..(i0 + ROW_BLOCK).min(n);
-                    let rot = rows
-                        .clone()
-                        .map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect())
-                        .collect();
-                    (i0, rot, rows.map(|i| vec![0.0; n - i - 1]).collect())
-                })
-                .collect();
+            let mut work: Vec<RowBlock> = blocks.par_iter().map(|&i0| RowBlock::new(subject, &gram, i0)).collect();
             let mut degenerate: Vec<Vec<u32>> = vec![Vec::new(); n];
             let n_slabs = triangles.len().div_ceil(slab).max(1);
             progress.start("pose distances", (n_slabs * n * n.saturating_sub(1) / 2) as u64);
@@ -221,9 +230,9 @@ pub fn distance_matrix_in_slabs(
                 for (list, f) in degenerate.iter_mut().zip(&frames) {
                     list.extend(degenerate_triangles(f, part.len()).into_iter().map(|k| k + t0 as u32));
                 }
-                work.par_iter_mut().for_each(|(i0, rot, acc)| {
-                    row_block(&frames, rot, *i0, params.w, log_s, acc);
-                    progress.advance(acc.iter().map(Vec::len).sum::<usize>() as u64);
+                work.par_iter_mut().for_each(|block| {
+                    block.add_slab(&frames, params.w, log_s);
+                    progress.advance(block.acc.iter().map(Vec::len).sum::<usize>() as u64);
                 });
             }
             progress.finish();
@@ -234,9 +243,9 @@ pub fn distance_matrix_in_slabs(
                     }
                 }
             }
-            for (i0, _, acc) in work {
-                for (r, row) in acc.into_iter().enumerate() {
-                    let i = i0 + r;
+            for block in work {
+                for (r, row) in block.acc.into_iter().enumerate() {
+                    let i = block.i0 + r;
                     for (k, d) in row.into_iter().enumerate() {
                         let j = i + 1 + k;
                         values[i * n + j] = d;

@@ -23,8 +23,8 @@
 //! acos is computed inline (no libm call); on CPUs with AVX2 and FMA the block loop runs in AVX2
 //! intrinsics, four triangles at a time (module `avx2`), otherwise in the portable scalar loop.
 
-use nalgebra::Matrix3;
 use crate::deformation_gradient::vertex;
+use nalgebra::Matrix3;
 
 /// Which pose distance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -183,11 +183,9 @@ fn distance_matrix_in_slabs_equals_the_whole_mesh_computation_to_the_bit() {
     let nv = crane.topology().n_vertices();
     let first: Vec<f32> = (0..30).flat_map(|g| crane.frame(g).unwrap().to_vec()).collect();
     let crane = crane.derived("crane30", Sequence::new("s", nv, first).unwrap()).unwrap();
-    for (s, metric) in [
-        (&crane, PoseMetric::Deformation),
-        (&crane, PoseMetric::DeformationLog),
-        (&barbarian, PoseMetric::Deformation),
-    ] {
+    for (s, metric) in
+        [(&crane, PoseMetric::Deformation), (&crane, PoseMetric::DeformationLog), (&barbarian, PoseMetric::Deformation)]
+    {
         let params = DistanceParams { metric, ..Default::default() };
         let whole = distance_matrix_in_slabs(s, &params, &NoProgress, usize::MAX);
         assert!(whole.values.iter().any(|&d| d > 0.0));
