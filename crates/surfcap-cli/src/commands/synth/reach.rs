@@ -46,15 +46,15 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
-    if a.distance > 0.0 {
-        crate::travel::require_travel(&s, &format!("--distance {}", a.distance), None)?;
-    }
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
     let frames = (a.time * s.fps).round().max(1.0) as usize;
     let search_bytes = search_table_bytes(s.n_frames(), frames);
     let what = format!("--time {} at {} fps", a.time, s.fps);
     a.out.limits.check(&Request { what, frames: frames as f64, subject: &s, search_bytes, format: a.out.format() })?;
+    if a.distance > 0.0 {
+        crate::travel::require_travel(&s, &format!("--distance {}", a.distance), None)?;
+    }
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
