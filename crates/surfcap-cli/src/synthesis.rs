@@ -306,6 +306,11 @@ pub fn run_path(
     o.insert("net_displacement".into(), json!(net));
     o.insert("per_frame".into(), json!({ "error": errors, "centre": played.centres }));
     o.insert("curve".into(), json!((0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect::<Vec<_>>()));
+    if let Some(f) = start {
+        // The pose shown first against the asked start frame (--start).
+        let d = pose_distance_to_output(prep, &played.output, f, 0)?;
+        played.report["pose_distance_start"] = json!(d);
+    }
     let unit = length_unit(prep.subject());
     let constraints = vec![
         Constraint::new("path", unit, curve.length(), travelled, max, tolerance.distance(curve.length()))

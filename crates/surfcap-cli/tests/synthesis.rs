@@ -87,6 +87,8 @@ fn path_and_reach_on_cmu_locomotion() {
         p(&curve),
         "--tags",
         "run:4-8",
+        "--start",
+        "16_15:10",
         "-o",
         p(&tmp.path().join("run.glb")),
         "--cache-dir",
@@ -94,6 +96,8 @@ fn path_and_reach_on_cmu_locomotion() {
         "--json",
     ]);
     let r = report(&o);
+    // Issue 16 item 4: the asked start pose is shown first (f32 rounding only).
+    assert!(r["pose_distance_start"].as_f64().unwrap() < 1.0, "{}", r["pose_distance_start"]);
     let centres = r["per_frame"]["centre"].as_array().unwrap();
     let (mut s, mut prev) = (0.0, None::<(f64, f64)>);
     let mut arc = Vec::new();
