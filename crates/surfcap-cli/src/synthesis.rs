@@ -26,12 +26,15 @@ use crate::output::{count_of, mean, write_json};
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Constraint {
     pub name: String,
-    /// `frames` or `units` (the subject's).
-    pub unit: &'static str,
+    /// `frames`, or the subject's length unit (`m`, `cm`, ... or `arbitrary`).
+    pub unit: String,
     pub asked: f64,
     pub achieved: f64,
     /// How far from the request: |achieved - asked|, or for a path its largest centre error.
     pub error: f64,
+    /// `error` as a fraction of the asked length or duration (a path's: its curve length);
+    /// `None` for a key's time, which is a position in the output, not a length.
+    pub relative_error: Option<f64>,
     pub tolerance: f64,
     pub missed: bool,
 }
@@ -39,13 +42,29 @@ pub struct Constraint {
 impl Constraint {
     pub fn new(
         name: impl Into<String>,
-        unit: &'static str,
+        unit: impl Into<String>,
         asked: f64,
         achieved: f64,
         error: f64,
         tolerance: f64,
     ) -> Self {
-        Constraint { name: name.into(), unit, asked, achieved, error, tolerance, missed: error > tolerance }
+        Constraint {
+            name: name.into(),
+            unit: unit.into(),
+            asked,
+            achieved,
+            error,
+            relative_error: None,
+            tolerance,
+            missed: error > tolerance,
+        }
+    }
+
+    /// Sets `relative_error` to the error over `size` (the asked length or duration), when it
+    /// is positive.
+    pub fn relative_to(mut self, size: f64) -> Self {
+        self.relative_error = (size > 0.0).then(|| self.error / size);
+        self
     }
 }
 
@@ -75,8 +94,9 @@ pub fn check_constraints(ctx: &crate::Ctx, opts: &ConstraintOpts, constraints: &
     let missed: Vec<&Constraint> = constraints.iter().filter(|c| c.missed).collect();
     if !ctx.json {
         for c in &missed {
+            let relative = c.relative_error.map(|r| format!(", {} of the asked", fmt_percent(r))).unwrap_or_default();
             eprintln!(
-                "warning: constraint {} missed: asked {}, achieved {} (error {} {}, tolerance {}; --tolerance/--frame-tolerance set it)",
+                "warning: constraint {} missed: asked {}, achieved {} (error {} {}{relative}, tolerance {}; --tolerance/--frame-tolerance set it)",
                 c.name,
                 fmt_number(c.asked),
                 fmt_number(c.achieved),
@@ -97,6 +117,41 @@ fn fmt_number(x: f64) -> String {
     let s = format!("{:.3}", x + 0.0);
     let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
     if s == "-0" { "0".into() } else { s }
+}
+
+/// A fraction as a percentage with at most 3 significant decimals (`12.5%`, `1e+09%` stays
+/// readable as a number).
+fn fmt_percent(r: f64) -> String {
+    format!("{}%", fmt_number(100.0 * r))
+}
+
+/// The subject's length unit as reports name it.
+pub fn length_unit(s: &Subject) -> String {
+    s.units.name.clone()
+}
+
+/// Pose distance (thesis eq. 2.13, the graph's metric) between a frame of the subject and a
+/// frame of the written output: 0 when the output shows that very pose. The two frames are
+/// compared as a two-frame subject, so the motion-plane alignment is the matrix's.
+pub fn pose_distance_to_output(
+    prep: &Prepared,
+    output: &Subject,
+    source: u32,
+    out_frame: usize,
+) -> anyhow::Result<f64> {
+    let s = prep.subject();
+    let mut positions = s.frame(source as usize).expect("a resolved frame").to_vec();
+    let shown = output
+        .frame(out_frame)
+        .ok_or_else(|| anyhow::anyhow!("output frame {out_frame} is past the output's {} frames", output.n_frames()))?;
+    positions.extend_from_slice(shown);
+    let pair = s.derived("pair", surfcap_mesh::Sequence::new("pair", s.topology().n_vertices(), positions)?)?;
+    let d = surfcap_geometry::distance_matrix::distance_matrix(
+        &pair,
+        &surfcap_geometry::distance_matrix::DistanceParams::default(),
+        &surfcap_mesh::NoProgress,
+    );
+    Ok(d.get(0, 1))
 }
 
 /// A subject with its graph and walk model.
@@ -144,6 +199,8 @@ pub struct Played {
     pub report: serde_json::Value,
     /// Tracked centre of every output frame, from the written positions.
     pub centres: Vec<[f64; 3]>,
+    /// The animation as written (one sequence), for measures at its frames.
+    pub output: Subject,
     pub transitions: usize,
 }
 
@@ -189,6 +246,7 @@ pub fn write_walk(
         report_path: report_path(&out.output),
         report,
         centres: played.centres,
+        output: result,
         transitions: played.transitions,
     })
 }
@@ -248,8 +306,16 @@ pub fn run_path(
     o.insert("net_displacement".into(), json!(net));
     o.insert("per_frame".into(), json!({ "error": errors, "centre": played.centres }));
     o.insert("curve".into(), json!((0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect::<Vec<_>>()));
-    let constraints =
-        vec![Constraint::new("path", "units", curve.length(), travelled, max, tolerance.distance(curve.length()))];
+    if let Some(f) = start {
+        // The pose shown first against the asked start frame (--start).
+        let d = pose_distance_to_output(prep, &played.output, f, 0)?;
+        played.report["pose_distance_start"] = json!(d);
+    }
+    let unit = length_unit(prep.subject());
+    let constraints = vec![
+        Constraint::new("path", unit, curve.length(), travelled, max, tolerance.distance(curve.length()))
+            .relative_to(curve.length()),
+    ];
     add_constraints(&mut played.report, &constraints);
     played.save_report()?;
     Ok(PathOutcome {
@@ -306,6 +372,11 @@ pub fn run_keyposes(
         "search_seconds": search_seconds,
     });
     let mut played = write_walk(ctx, prep, &walk, &PlaneMotion::identity(prep.up()), "keyposes", out, report)?;
+    // The pose shown at each key's obtained time against the pose asked for there.
+    for (k, (key, &o)) in keys.iter().zip(&obtained).enumerate() {
+        let d = pose_distance_to_output(prep, &played.output, key.frame, (o - obtained[0]) as usize)?;
+        played.report["keys"][k]["pose_distance"] = json!(d);
+    }
     let constraints: Vec<Constraint> = keys
         .iter()
         .zip(&obtained)

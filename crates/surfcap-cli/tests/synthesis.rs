@@ -72,6 +72,11 @@ fn path_and_reach_on_cmu_locomotion() {
     assert!((predicted - mean).abs() < 0.01, "predicted {predicted} vs measured {mean}");
     check_labels(&glb, &r);
     surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
+    // Issue 16 item 4: the error in the subject's unit and relative to the curve's length.
+    let path = &r["constraints"][0];
+    assert_eq!(path["unit"], "m", "{path}");
+    assert_eq!(path["error"].as_f64(), Some(max));
+    assert_eq!(path["relative_error"].as_f64(), Some(max / r["curve_length"].as_f64().unwrap()), "{path}");
 
     // Only running between 4 and 8 m: every original frame shown there is from the run clip.
     let o = surfcap!(&[
@@ -82,6 +87,8 @@ fn path_and_reach_on_cmu_locomotion() {
         p(&curve),
         "--tags",
         "run:4-8",
+        "--start",
+        "16_15:10",
         "-o",
         p(&tmp.path().join("run.glb")),
         "--cache-dir",
@@ -89,6 +96,8 @@ fn path_and_reach_on_cmu_locomotion() {
         "--json",
     ]);
     let r = report(&o);
+    // Issue 16 item 4: the asked start pose is shown first (f32 rounding only).
+    assert!(r["pose_distance_start"].as_f64().unwrap() < 1.0, "{}", r["pose_distance_start"]);
     let centres = r["per_frame"]["centre"].as_array().unwrap();
     let (mut s, mut prev) = (0.0, None::<(f64, f64)>);
     let mut arc = Vec::new();
@@ -146,6 +155,20 @@ fn path_and_reach_on_cmu_locomotion() {
     let met = r["constraints"].as_array().unwrap();
     assert_eq!(met.len(), 2, "distance and time: {met:?}");
     assert!(met.iter().all(|c| c["missed"] == false), "{met:?}");
+    // Issue 16 item 4: one count of frames (frames written: 9 s at 30 fps is 270 steps, 271
+    // frames), errors in metres and relative to the request, and the poses at both ends.
+    assert_eq!(r["target_frames"], 271, "{r}");
+    assert_eq!(r["obtained_frames"], r["frames"], "{r}");
+    assert_eq!((met[1]["asked"].as_f64(), met[1]["achieved"].as_f64()), (Some(271.0), r["frames"].as_f64()), "{met:?}");
+    assert_eq!(r["seconds"].as_f64(), Some((r["frames"].as_f64().unwrap() - 1.0) / 30.0));
+    assert_eq!(met[0]["unit"], "m");
+    let distance_error = r["distance_error"].as_f64().unwrap();
+    assert_eq!(met[0]["relative_error"].as_f64(), Some(distance_error / 10.0), "{met:?}");
+    // The walk starts and ends on the asked frames: the distance is f32 rounding (neighbouring
+    // frames of these clips are hundreds apart).
+    for end in ["pose_distance_from", "pose_distance_to"] {
+        assert!(r[end].as_f64().unwrap() < 1.0, "{end}: {r}");
+    }
 
     // A distance the clips cannot cover in 4 s: written, but reported as missed (a warning even
     // with --quiet, the report's constraints), and exit code 3 with --strict.
@@ -174,6 +197,7 @@ fn path_and_reach_on_cmu_locomotion() {
     assert!(o.status.success(), "{}", stderr(&o));
     let e = stderr(&o);
     assert!(e.contains("warning: constraint distance missed: asked 1000000000"), "{e}");
+    assert!(e.contains(" m, 100% of the asked, tolerance"), "{e}");
     assert!(!e.contains("constraint time missed"), "{e}");
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(tmp.path().join("far.report.json")).unwrap()).unwrap();
@@ -181,6 +205,10 @@ fn path_and_reach_on_cmu_locomotion() {
     assert_eq!((distance["name"].as_str(), distance["missed"].as_bool()), (Some("distance"), Some(true)), "{r}");
     assert_eq!(distance["asked"], 1e9);
     assert_eq!(r["constraints"][1]["missed"], false);
+    // The printed line counts frames as the report does (4 s at 30 fps: 121 frames asked).
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(printed.contains(&format!("in {} frames", r["frames"])), "{printed} vs {r}");
+    assert!(printed.contains("(asked 4 s: 121 frames)"), "{printed}");
     std::fs::remove_file(&far).unwrap();
     let o = reach_far(&["--strict", "--quiet"]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
@@ -251,6 +279,15 @@ fn key_pose_timing_on_samba_and_dance() {
         assert!(err <= 3.0, "{keys}: {err}");
         // The output's length is the last key's obtained time plus one frame.
         assert_eq!(r["frames"].as_i64().unwrap(), rows[9]["obtained_time"].as_i64().unwrap() + 1);
+        // Issue 16 item 4: the pose shown at each key's time is the key's own pose (the
+        // distance is f32 rounding; neighbouring frames are hundreds apart); times are in
+        // frames, which are positions, so no relative error.
+        for k in rows {
+            let d = k["pose_distance"].as_f64().unwrap();
+            assert!((0.0..1.0).contains(&d), "{keys}: {k}");
+        }
+        let timing = r["constraints"].as_array().unwrap();
+        assert!(timing.iter().all(|c| c["unit"] == "frames" && c["relative_error"].is_null()), "{timing:?}");
         check_labels(&glb, &r);
     }
     let bad = tmp.path().join("bad_keys.csv");

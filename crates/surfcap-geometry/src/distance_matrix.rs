@@ -3,7 +3,12 @@
 //! The motion-plane alignment of every pair (eq. 2.3) needs only weighted inner products of the
 //! frames' centred horizontal coordinates, so they come from three dense matrix products (faer)
 //! instead of F^2 passes over the vertices. The deformation distances then cost one pass over
-//! the triangles per pair, with per-frame triangle frames precomputed once.
+//! the triangles per pair, with per-frame triangle frames precomputed once per triangle.
+//!
+//! Memory: those triangle frames are 120 bytes per triangle and frame (f64, needed for exact
+//! small angles), 1.8 GB for 547 frames of 28,000 triangles if held for the whole mesh. They are
+//! held one slab of triangles at a time instead (all frames, [`SLAB_BYTES`]); each pair's sum
+//! still takes the triangle chunks in mesh order, so the matrix is the same to the bit.
 //!
 //! The matrix is symmetric by construction: d(i, j) is computed for i < j (deforming i into j)
 //! and mirrored, as the thesis treats the distance as symmetric ("to deform pose i into j or
@@ -13,6 +18,7 @@
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat};
+use nalgebra::Matrix3;
 use rayon::prelude::*;
 use surfcap_mesh::{Progress, Subject};
 
@@ -83,36 +89,56 @@ impl AlignmentGram {
 const ROW_BLOCK: usize = 8;
 /// Triangles per chunk: a block of frames' chunks stays in the L2 cache.
 const TRIANGLE_CHUNK: usize = 4 * BLOCK;
+/// Memory for the triangle data of all frames over one slab of triangles. Holding every frame's
+/// whole data at once cost 120 bytes per triangle and frame (1.8 GB for 547 frames of 28,000
+/// triangles); a slab of this size keeps the peak near the subject's own size.
+pub const SLAB_BYTES: usize = 64 << 20;
 
-/// Distances d(i, j) for i in `i0..i0 + ROW_BLOCK`, j > i, accumulated chunk by chunk (a fixed
-/// order, so the sums do not depend on the thread count).
-fn row_block(
-    subject: &Subject,
-    gram: &AlignmentGram,
-    frames: &[Vec<f64>],
+/// Triangles per slab for `n` frames within `budget` bytes: whole chunks, at least one.
+pub fn slab_triangles(n: usize, budget: usize) -> usize {
+    let per_triangle = n.max(1) * FRAME_FLOATS * std::mem::size_of::<f64>();
+    (budget / per_triangle / TRIANGLE_CHUNK).max(1) * TRIANGLE_CHUNK
+}
+
+/// Rows `i0..i0 + ROW_BLOCK` of the matrix: the up-axis rotations of their pairs (j > i) and the
+/// running sums of their distances.
+struct RowBlock {
     i0: usize,
-    w: f64,
-    log_s: bool,
-) -> Vec<Vec<f64>> {
-    let n = frames.len();
-    let i1 = (i0 + ROW_BLOCK).min(n);
-    let mut acc: Vec<Vec<f64>> = (i0..i1).map(|i| vec![0.0; n - i - 1]).collect();
-    let rot: Vec<Vec<nalgebra::Matrix3<f64>>> =
-        (i0..i1).map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect()).collect();
-    let len = frames.first().map_or(0, Vec::len);
-    // Whole storage blocks per chunk (TRIANGLE_CHUNK is a multiple of BLOCK).
-    let step = TRIANGLE_CHUNK * FRAME_FLOATS;
-    for start in (0..len).step_by(step) {
-        let end = (start + step).min(len);
-        for j in i0 + 1..n {
-            let fj = &frames[j][start..end];
-            for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
-                let k = j - (i0 + r) - 1;
-                acc[r][k] += deformation_distance(&fi[start..end], fj, &rot[r][k], w, log_s);
+    rot: Vec<Vec<Matrix3<f64>>>,
+    acc: Vec<Vec<f64>>,
+}
+
+impl RowBlock {
+    fn new(subject: &Subject, gram: &AlignmentGram, i0: usize) -> Self {
+        let n = gram.n;
+        let rows = i0..(i0 + ROW_BLOCK).min(n);
+        let rot = rows
+            .clone()
+            .map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect())
+            .collect();
+        RowBlock { i0, rot, acc: rows.map(|i| vec![0.0; n - i - 1]).collect() }
+    }
+
+    /// Adds the distances over one slab's triangles, chunk by chunk. Every pair's sum takes the
+    /// chunks in mesh order whatever the slab size (slabs are whole chunks), so the sums depend
+    /// neither on the slabs nor on the thread count.
+    fn add_slab(&mut self, frames: &[Vec<f64>], w: f64, log_s: bool) {
+        let (n, i0) = (frames.len(), self.i0);
+        let i1 = (i0 + ROW_BLOCK).min(n);
+        let len = frames.first().map_or(0, Vec::len);
+        // Whole storage blocks per chunk (TRIANGLE_CHUNK is a multiple of BLOCK).
+        let step = TRIANGLE_CHUNK * FRAME_FLOATS;
+        for start in (0..len).step_by(step) {
+            let end = (start + step).min(len);
+            for j in i0 + 1..n {
+                let fj = &frames[j][start..end];
+                for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
+                    let k = j - (i0 + r) - 1;
+                    self.acc[r][k] += deformation_distance(&fi[start..end], fj, &self.rot[r][k], w, log_s);
+                }
             }
         }
     }
-    acc
 }
 
 /// Builds the alignment Gram matrices of all frames.
@@ -156,8 +182,20 @@ pub fn alignment_gram(subject: &Subject, weights: Option<&[f64]>) -> AlignmentGr
     AlignmentGram { n: f, cross, wedge, vert }
 }
 
-/// The all-pairs distance matrix of the subject's frames (global frame index order).
+/// The all-pairs distance matrix of the subject's frames (global frame index order), with the
+/// triangle data held one slab of [`SLAB_BYTES`] at a time.
 pub fn distance_matrix(subject: &Subject, params: &DistanceParams, progress: &dyn Progress) -> DistanceMatrix {
+    distance_matrix_in_slabs(subject, params, progress, SLAB_BYTES)
+}
+
+/// [`distance_matrix`] with the per-frame triangle data of at most about `slab_bytes` held at
+/// once (at least one chunk of triangles). The result is bit-identical for every budget.
+pub fn distance_matrix_in_slabs(
+    subject: &Subject,
+    params: &DistanceParams,
+    progress: &dyn Progress,
+    slab_bytes: usize,
+) -> DistanceMatrix {
     let n = subject.n_frames();
     let gram = alignment_gram(subject, params.vertex_weights.as_deref());
     let mut values = vec![0.0f64; n * n];
@@ -172,19 +210,32 @@ pub fn distance_matrix(subject: &Subject, params: &DistanceParams, progress: &dy
         }
         PoseMetric::Deformation | PoseMetric::DeformationLog => {
             let log_s = params.metric == PoseMetric::DeformationLog;
-            progress.start("triangle frames", n as u64);
-            let frames: Vec<Vec<f64>> = (0..n)
-                .into_par_iter()
-                .map(|g| {
-                    let mut out = Vec::new();
-                    triangle_frames(subject.topology(), subject.frame(g).expect("in range"), &mut out);
-                    progress.advance(1);
-                    out
-                })
-                .collect();
+            let triangles = subject.topology().triangles();
+            let slab = slab_triangles(n, slab_bytes);
+            let blocks: Vec<usize> = (0..n).step_by(ROW_BLOCK).collect();
+            let mut work: Vec<RowBlock> = blocks.par_iter().map(|&i0| RowBlock::new(subject, &gram, i0)).collect();
+            let mut degenerate: Vec<Vec<u32>> = vec![Vec::new(); n];
+            let n_slabs = triangles.len().div_ceil(slab).max(1);
+            progress.start("pose distances", (n_slabs * n * n.saturating_sub(1) / 2) as u64);
+            for t0 in (0..triangles.len()).step_by(slab) {
+                let part = &triangles[t0..(t0 + slab).min(triangles.len())];
+                let frames: Vec<Vec<f64>> = (0..n)
+                    .into_par_iter()
+                    .map(|g| {
+                        let mut out = Vec::new();
+                        triangle_frames(part, subject.frame(g).expect("in range"), &mut out);
+                        out
+                    })
+                    .collect();
+                for (list, f) in degenerate.iter_mut().zip(&frames) {
+                    list.extend(degenerate_triangles(f, part.len()).into_iter().map(|k| k + t0 as u32));
+                }
+                work.par_iter_mut().for_each(|block| {
+                    block.add_slab(&frames, params.w, log_s);
+                    progress.advance(block.acc.iter().map(Vec::len).sum::<usize>() as u64);
+                });
+            }
             progress.finish();
-            let m = subject.topology().n_triangles();
-            let degenerate: Vec<Vec<u32>> = frames.iter().map(|f| degenerate_triangles(f, m)).collect();
             if degenerate.iter().any(|d| !d.is_empty()) {
                 for i in 0..n {
                     for j in i + 1..n {
@@ -192,20 +243,9 @@ pub fn distance_matrix(subject: &Subject, params: &DistanceParams, progress: &dy
                     }
                 }
             }
-            progress.start("pose distances", (n * n.saturating_sub(1) / 2) as u64);
-            let blocks: Vec<usize> = (0..n).step_by(ROW_BLOCK).collect();
-            let results: Vec<(usize, Vec<Vec<f64>>)> = blocks
-                .into_par_iter()
-                .map(|i0| {
-                    let acc = row_block(subject, &gram, &frames, i0, params.w, log_s);
-                    progress.advance(acc.iter().map(Vec::len).sum::<usize>() as u64);
-                    (i0, acc)
-                })
-                .collect();
-            progress.finish();
-            for (i0, acc) in results {
-                for (r, row) in acc.into_iter().enumerate() {
-                    let i = i0 + r;
+            for block in work {
+                for (r, row) in block.acc.into_iter().enumerate() {
+                    let i = block.i0 + r;
                     for (k, d) in row.into_iter().enumerate() {
                         let j = i + 1 + k;
                         values[i * n + j] = d;

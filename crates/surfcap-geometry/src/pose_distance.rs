@@ -23,10 +23,8 @@
 //! acos is computed inline (no libm call); on CPUs with AVX2 and FMA the block loop runs in AVX2
 //! intrinsics, four triangles at a time (module `avx2`), otherwise in the portable scalar loop.
 
-use nalgebra::Matrix3;
-use surfcap_mesh::Topology;
-
 use crate::deformation_gradient::vertex;
+use nalgebra::Matrix3;
 
 /// Which pose distance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -98,12 +96,14 @@ pub const BLOCK_FLOATS: usize = BLOCK * FRAME_FLOATS;
 /// Per-frame precomputation for the deformation distances (the expensive part is per pair).
 /// Stored in f64: the rotation angle comes from acos of a trace near 3 for similar poses, and
 /// f32 frames would put a noise floor of ~5e-4 rad on every triangle. Layout: blocks of
-/// [`BLOCK`] triangles, each block `FRAME_FLOATS` arrays of `BLOCK` values.
-pub fn triangle_frames(topology: &Topology, p: &[f32], out: &mut Vec<f64>) {
-    let m = topology.n_triangles();
+/// [`BLOCK`] triangles, each block `FRAME_FLOATS` arrays of `BLOCK` values. `triangles` may be
+/// any run of a topology's triangles (the distance matrix takes them a slab at a time); a
+/// triangle's values do not depend on the others.
+pub fn triangle_frames(triangles: &[[u32; 3]], p: &[f32], out: &mut Vec<f64>) {
+    let m = triangles.len();
     out.clear();
     out.resize(m.div_ceil(BLOCK) * BLOCK_FLOATS, 0.0);
-    for (k, t) in topology.triangles().iter().enumerate() {
+    for (k, t) in triangles.iter().enumerate() {
         let (v1, v2, v3) = (vertex(p, t[0]), vertex(p, t[1]), vertex(p, t[2]));
         let (e1, e2) = (v1 - v3, v2 - v3);
         let c = e1.cross(&e2);
@@ -429,6 +429,7 @@ mod tests {
     use crate::polar_decomposition::polar_decomposition;
     use crate::rotation_log_exp::{exp_rotation, log_rotation, rotation_angle};
     use nalgebra::Vector3;
+    use surfcap_mesh::Topology;
 
     /// The SVD route, written as the thesis does, for reference.
     fn reference(topo: &Topology, pi: &[f32], pj: &[f32], g: &Matrix3<f64>, w: f64, log_s: bool) -> f64 {
@@ -470,7 +471,7 @@ mod tests {
         let topo = Topology::new(4, vec![[0, 1, 2], [0, 1, 3]], None).unwrap();
         let p = [0., 0., 0., 1., 0., 0., 0., 1., 0., 2., 0., 0.];
         let mut f = Vec::new();
-        triangle_frames(&topo, &p, &mut f);
+        triangle_frames(topo.triangles(), &p, &mut f);
         assert_eq!(f.len(), BLOCK_FLOATS);
         assert_eq!(degenerate_triangles(&f, 2), vec![1]);
         assert_eq!(union_count(&[1, 4, 9], &[2, 4]), 4);
@@ -493,8 +494,8 @@ mod tests {
             .collect();
         let g = exp_rotation(&Vector3::new(0.0, 0.7, 0.0));
         let (mut fi, mut fj) = (Vec::new(), Vec::new());
-        triangle_frames(&topo, &pi, &mut fi);
-        triangle_frames(&topo, &pj, &mut fj);
+        triangle_frames(topo.triangles(), &pi, &mut fi);
+        triangle_frames(topo.triangles(), &pj, &mut fj);
         for log_s in [false, true] {
             let fast = deformation_distance(&fi, &fj, &g, 0.01, log_s);
             let skipped = degenerate_triangles(&fi, topo.n_triangles()).len();

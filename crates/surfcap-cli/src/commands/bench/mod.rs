@@ -44,7 +44,7 @@ pub enum What {
         fps: Option<f64>,
     },
     /// All-pairs deformation distance matrix: triangle pairs per second, against the machine's
-    /// dense f64 matrix-multiply rate (thesis eq. 2.13).
+    /// dense f64 matrix-multiply rate (thesis eq. 2.13), and peak memory before and after it.
     Distance {
         /// A subject; default: the built-in tube with --frames frames of about --triangles triangles.
         #[arg(long)]

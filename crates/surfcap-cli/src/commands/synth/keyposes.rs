@@ -45,6 +45,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         row("Input", keys.iter().map(|k| k.input.to_string()).collect());
         row("Requested", keys.iter().map(|k| k.requested.to_string()).collect());
         row("Obtained", o.obtained.iter().map(|x| x.to_string()).collect());
+        // Pose distance (eq. 2.13) between each key's pose and the frame shown at its time.
+        let shown = o.played.report["keys"].as_array().map(Vec::as_slice).unwrap_or_default();
+        row(
+            "Distance",
+            shown.iter().map(|k| format!("{:.1}", k["pose_distance"].as_f64().unwrap_or(f64::NAN))).collect(),
+        );
         println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));

@@ -83,12 +83,13 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     ctx.result(&o.played.report, || {
         println!(
-            "followed a {:.2}-long curve: {}, {}; centre error mean {:.3}, max {:.3}; search {:.2} s",
+            "followed a {:.2}-long curve: {}, {}; centre error mean {:.3}, max {:.3} ({:.1}% of the curve); search {:.2} s",
             curve.length(),
             crate::output::count_of(o.frames, "frame"),
             crate::output::count_of(o.played.transitions, "transition"),
             o.mean_error,
             o.max_error,
+            100.0 * o.max_error / curve.length(),
             o.search_seconds
         );
     });

@@ -11,7 +11,9 @@ use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
 
 use crate::limits::Request;
 use crate::options::{GraphOpts, OutOpts, Positive, open};
-use crate::synthesis::{Constraint, Prepared, add_constraints, check_constraints, write_walk};
+use crate::synthesis::{
+    Constraint, Prepared, add_constraints, check_constraints, length_unit, pose_distance_to_output, write_walk,
+};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -59,10 +61,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let scales = (a.distance_scale.0, a.time_scale.0);
     let (w, cost) = tg.walk_with_distance_and_time(from, to, a.distance, frames, scales, tg.longest_edge())?;
     let search_seconds = t0.elapsed().as_secs_f64();
+    // The time asks for a duration: `frames` steps of 1/fps, so the animation that lasts it
+    // shows one frame more (both ends). Counts below are frames written, as `frames` is.
+    let (asked_frames, obtained_frames) = (frames + 1, w.frames + 1);
     let report = json!({
         "constraint": "reach", "from": a.from, "to": a.to,
         "target_distance": a.distance, "distance": w.distance, "distance_error": (w.distance - a.distance).abs(),
-        "target_frames": frames, "obtained_frames": w.frames, "time_error_frames": (w.frames as i64 - frames as i64).abs(),
+        "target_seconds": a.time, "seconds": w.frames as f64 / prep.subject().fps,
+        "target_frames": asked_frames, "obtained_frames": obtained_frames,
+        "time_error_frames": (w.frames as i64 - frames as i64).abs(),
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
     let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
@@ -71,31 +78,40 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     played.report["path_length"] = json!(path);
     // The viewer draws this track over the animation, as it does for `synth path`.
     played.report["per_frame"] = json!({ "centre": played.centres });
+    // The poses shown first and last against the frames asked for there.
+    let last = played.output.n_frames() - 1;
+    played.report["pose_distance_from"] = json!(pose_distance_to_output(&prep, &played.output, from, 0)?);
+    played.report["pose_distance_to"] = json!(pose_distance_to_output(&prep, &played.output, to, last)?);
     let tol = &a.out.constraints;
+    let distance_error = (w.distance - a.distance).abs();
+    let time_error = (w.frames as f64 - frames as f64).abs();
     let constraints = [
         Constraint::new(
             "distance",
-            "units",
+            length_unit(prep.subject()),
             a.distance,
             w.distance,
-            (w.distance - a.distance).abs(),
+            distance_error,
             tol.distance(a.distance),
-        ),
-        Constraint::new(
-            "time",
-            "frames",
-            frames as f64,
-            w.frames as f64,
-            (w.frames as f64 - frames as f64).abs(),
-            tol.frames(),
-        ),
+        )
+        .relative_to(a.distance),
+        Constraint::new("time", "frames", asked_frames as f64, obtained_frames as f64, time_error, tol.frames())
+            .relative_to(frames as f64),
     ];
     add_constraints(&mut played.report, &constraints);
     played.save_report()?;
+    let unit = length_unit(prep.subject());
     ctx.result(&played.report, || {
         println!(
-            "{} -> {}: {:.2} travelled (asked {:.2}) in {} frames (asked {frames}); realism cost {:.3}; search {search_seconds:.3} s",
-            a.from, a.to, w.distance, a.distance, w.frames, w.cost
+            "{} -> {}: {:.2} {unit} travelled (asked {:.2}) in {obtained_frames} frames, {:.2} s (asked {} s: \
+             {asked_frames} frames); realism cost {:.3}; search {search_seconds:.3} s",
+            a.from,
+            a.to,
+            w.distance,
+            a.distance,
+            w.frames as f64 / prep.subject().fps,
+            a.time,
+            w.cost
         );
     });
     ctx.wrote(played.written.iter().chain([&played.report_path]));
