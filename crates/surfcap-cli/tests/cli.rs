@@ -1041,3 +1041,32 @@ fn glb_size_is_linear_in_frames_and_three_js_reads_its_sparse_weights() {
     let three = surfcap_testkit::three_load_glb(std::slice::from_ref(&glb));
     assert_eq!(three[0]["targets"], 2000);
 }
+
+/// Issue 16 item 3: `distance` says what its values mean (per-triangle radians), and a motion
+/// restriction on a subject without tags says so and how to add them.
+#[test]
+fn distance_scale_is_explained_and_an_untagged_subject_says_how_to_tag() {
+    let Some(horse) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let d = tmp.path().join("d.npy");
+    let o = surfcap!(&["distance", p(&horse), "-o", p(&d), "--cache-dir", p(&cache)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("scale: a distance is the sum over the "), "{text}");
+    assert!(text.contains("rad (") && text.contains("degrees) per triangle"), "{text}");
+    let o =
+        surfcap!(&["distance", p(&horse), "-o", p(&d), "--cache-dir", p(&cache), "--json", "--metric", "euclidean"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["scale"].as_str().unwrap().contains("squared distance"), "{v}");
+
+    let curve = tmp.path().join("c.csv");
+    std::fs::write(&curve, "x,z\n0,0\n1,0\n").unwrap();
+    let out = tmp.path().join("never.glb");
+    let o = surfcap!(&["synth", "path", p(&horse), "--curve", p(&curve), "--tags", "run:0-1", "-o", p(&out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("the subject has no tags; tag its sequences in a surfcap.toml manifest"), "{e}");
+    assert!(!e.contains("tags are"), "{e}");
+    assert!(!out.exists());
+}
