@@ -394,7 +394,7 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
         &keyposes,
     );
     let reach =
-        ["synth", "reach", p(&samba), "--from", "samba:0", "--to", "samba:50", "--distance", "1", "--time", "1e9"];
+        ["synth", "reach", p(&samba), "--from", "samba:0", "--to", "samba:50", "--distance", "0", "--time", "1e9"];
     limits(&[], &["--time 1000000000s at 30 fps asks for about 30000000000 frames, above the limit of 18000"], &reach);
     limits(
         &["--max-frames", "100000000000", "--max-memory", "64G"],
