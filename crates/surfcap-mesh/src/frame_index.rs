@@ -92,7 +92,7 @@ mod tests {
         assert_eq!(ix.locate(10), None);
         assert_eq!(ix.global(1, 0), None);
         assert_eq!(ix.label(4), "sequence 2:1");
-        let named = ix.with_names(["a", "b", "c", "d"].map(String::from).to_vec());
+        let named = ix.clone().with_names(["a", "b", "c", "d"].map(String::from).to_vec());
         assert_eq!(
             (named.label(0), named.label(9), named.label(10)),
             ("a:0".into(), "d:4".into(), "frame 10 (out of range)".into())
