@@ -117,6 +117,14 @@ pub fn positive(s: &str) -> Result<f64, String> {
     number_in(s, |x| x > 0.0, "a finite number > 0")
 }
 
+/// Value parser: a duration > 0, in seconds (bare or `3s`) or frames (`90f`).
+pub fn positive_time(s: &str) -> Result<surfcap_pipeline::constraint_files::TimeSpec, String> {
+    match s.parse::<surfcap_pipeline::constraint_files::TimeSpec>() {
+        Ok(t) if t.value > 0.0 => Ok(t),
+        _ => Err(format!("expected a duration > 0 in seconds (3 or 3s) or frames (90f), got {s:?}")),
+    }
+}
+
 /// Value parser: a finite number >= 0.
 pub fn non_negative(s: &str) -> Result<f64, String> {
     number_in(s, |x| x >= 0.0, "a finite number >= 0")

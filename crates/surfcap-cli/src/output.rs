@@ -64,6 +64,17 @@ impl Ctx {
     }
 }
 
+/// A length in the subject's units, as "3.00 m" (or "3.00 units" when the subject's units are
+/// arbitrary), `decimals` after the point: a bare "3.00-long" left the user guessing the scale.
+pub fn length(x: f64, units: &surfcap_mesh::Units, decimals: usize) -> String {
+    format!("{:.decimals$} {}", x + 0.0, unit_name(units))
+}
+
+/// The name lengths are given in: the subject's unit, or "units" when it has no known size.
+pub fn unit_name(units: &surfcap_mesh::Units) -> &str {
+    if units.metres_per_unit.is_some() { units.name.as_str() } else { "units" }
+}
+
 /// `n` and `word`, with an "s" unless `n` is 1 ("1 sequence", "2 sequences").
 pub fn count_of(n: usize, word: &str) -> String {
     format!("{n} {word}{}", if n == 1 { "" } else { "s" })

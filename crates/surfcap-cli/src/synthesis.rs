@@ -127,7 +127,7 @@ fn fmt_percent(r: f64) -> String {
 
 /// The subject's length unit as reports name it.
 pub fn length_unit(s: &Subject) -> String {
-    s.units.name.clone()
+    crate::output::unit_name(&s.units).to_string()
 }
 
 /// Pose distance (thesis eq. 2.13, the graph's metric) between a frame of the subject and a
@@ -354,9 +354,10 @@ pub fn run_keyposes(
     let mut obtained = vec![keys[0].requested];
     for (k, pair) in keys.windows(2).enumerate() {
         let now = *obtained.last().expect("one key at least");
-        let w = tg
-            .walk_with_duration(pair[0].frame, pair[1].frame, pair[1].requested - now, longest)
-            .map_err(|e| anyhow::anyhow!("keys {} and {} ({} -> {}): {e}", k + 1, k + 2, pair[0].spec, pair[1].spec))?;
+        let w = tg.walk_with_duration(pair[0].frame, pair[1].frame, pair[1].requested - now, longest).map_err(|e| {
+            let label = |k: &KeyPose| prep.subject().frame_index().label(k.frame as usize);
+            anyhow::anyhow!("keys {} and {} ({} -> {}): {e}", k + 1, k + 2, label(&pair[0]), label(&pair[1]))
+        })?;
         walk.extend_from_slice(&w.walk[1..]);
         obtained.push(now + w.frames as i64);
     }

@@ -1166,3 +1166,32 @@ fn bench_distance_reports_peak_memory_and_streams_the_triangle_data() {
     assert!(before > 0 && before <= peak, "{v}");
     assert!(peak - before < 250 << 20, "the matrix took {} MB: {v}", (peak - before) >> 20);
 }
+
+/// Issue 16 item 3: `distance` says what its values mean (per-triangle radians), and a motion
+/// restriction on a subject without tags says so and how to add them.
+#[test]
+fn distance_scale_is_explained_and_an_untagged_subject_says_how_to_tag() {
+    let Some(horse) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cache = tmp.path().join("cache");
+    let d = tmp.path().join("d.npy");
+    let o = surfcap!(&["distance", p(&horse), "-o", p(&d), "--cache-dir", p(&cache)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("scale: a distance is the sum over the "), "{text}");
+    assert!(text.contains("rad (") && text.contains("degrees) per triangle"), "{text}");
+    let o =
+        surfcap!(&["distance", p(&horse), "-o", p(&d), "--cache-dir", p(&cache), "--json", "--metric", "euclidean"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["scale"].as_str().unwrap().contains("squared distance"), "{v}");
+
+    let curve = tmp.path().join("c.csv");
+    std::fs::write(&curve, "x,z\n0,0\n1,0\n").unwrap();
+    let out = tmp.path().join("never.glb");
+    let o = surfcap!(&["synth", "path", p(&horse), "--curve", p(&curve), "--tags", "run:0-1", "-o", p(&out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("the subject has no tags; tag its sequences in a surfcap.toml manifest"), "{e}");
+    assert!(!e.contains("tags are"), "{e}");
+    assert!(!out.exists());
+}

@@ -234,6 +234,8 @@ fn path_and_reach_on_cmu_locomotion() {
         (vec!["--curve", p(&curve), "--tags", "moonwalk:1-2"], "jump, run, turn_left"),
         (vec!["--curve", p(&curve), "--tags", "run:9-5"], "FROM < TO"),
         (vec!["--curve", p(&curve), "--start", "16_15:500"], "16_15"),
+        // Issue 16 item 2: the last frame of a clip leads nowhere; named, not walked into.
+        (vec!["--curve", p(&curve), "--start", "16_15:116"], "the start frame 16_15:116 is a dead end"),
     ] {
         let o = surfcap!(
             &[&["synth", "path", p(&subject), "-o", p(&out), "--cache-dir", p(&cache)][..], &extra[..]].concat(),
@@ -242,6 +244,67 @@ fn path_and_reach_on_cmu_locomotion() {
         assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
     }
     assert!(!out.exists());
+
+    // Issue 16 item 3: lengths in the subject's units, frames as sequence:frame, --time in
+    // seconds (bare, or 9s) or frames (270f at 30 fps), and an impossible request says why.
+    let line = tmp.path().join("line.csv");
+    std::fs::write(&line, "x,z\n0,0\n3,0\n").unwrap();
+    let o = surfcap!(&[
+        "synth",
+        "path",
+        p(&subject),
+        "--curve",
+        p(&line),
+        "-o",
+        p(&tmp.path().join("line.glb")),
+        "--cache-dir",
+        p(&cache),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("followed a 3.00 m curve") && text.contains(" m, max "), "{text}");
+    let r_glb = tmp.path().join("r.glb");
+    let reach = |from: &str, to: &str, time: &str, extra: &[&str]| {
+        let args = [
+            "synth",
+            "reach",
+            p(&subject),
+            "--from",
+            from,
+            "--to",
+            to,
+            "--distance",
+            "3",
+            "--time",
+            time,
+            "-o",
+            p(&r_glb),
+            "--cache-dir",
+            p(&cache),
+        ];
+        surfcap!(&[&args[..], extra].concat())
+    };
+    let info: serde_json::Value = serde_json::from_slice(&surfcap!(&["info", p(&subject), "--json"]).stdout).unwrap();
+    let fps = info["fps"].as_f64().unwrap();
+    let frames = (3.0 * fps).round() as u64;
+    let o = reach("16_15:10", "16_31:80", "3s", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.starts_with("16_15:10 -> 16_31:80: ") && text.contains(" m travelled (asked 3.00 m)"), "{text}");
+    assert!(text.contains(&format!("(asked {frames})")), "{text}");
+    for time in ["3".to_string(), format!("{frames}f")] {
+        let r = report(&reach("16_15:10", "16_31:80", &time, &["--json"]));
+        assert_eq!(r["target_frames"].as_u64(), Some(frames), "--time {time}");
+    }
+    let o = reach("16_15:10", "16_17:0", "3s", &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(
+            "no walk leads from 16_15:10 to 16_17:0 in the graph, whatever its duration: nothing enters 16_17:0"
+        ),
+        "{e}"
+    );
 }
 
 /// Issue acceptance: ten key poses moved to new times on the Vlasic samba and the Briceno dance,
@@ -368,8 +431,8 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
         &keyposes,
     );
     let reach =
-        ["synth", "reach", p(&samba), "--from", "samba:0", "--to", "samba:50", "--distance", "1", "--time", "1e9"];
-    limits(&[], &["--time 1000000000 at 30 fps asks for about 30000000000 frames, above the limit of 18000"], &reach);
+        ["synth", "reach", p(&samba), "--from", "samba:0", "--to", "samba:50", "--distance", "0", "--time", "1e9"];
+    limits(&[], &["--time 1000000000s at 30 fps asks for about 30000000000 frames, above the limit of 18000"], &reach);
     limits(
         &["--max-frames", "100000000000", "--max-memory", "64G"],
         &[
@@ -379,5 +442,9 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
         &reach,
     );
     let path = ["synth", "path", p(&walker), "--curve", p(&km2)];
-    limits(&[], &["line_2km.csv (2000.0 long, the subject's fastest motion covers", "above the limit of 18000"], &path);
+    limits(
+        &[],
+        &["line_2km.csv (2000.0 m long, the subject's fastest motion covers", "above the limit of 18000"],
+        &path,
+    );
 }

@@ -1,11 +1,14 @@
 //! Global frame index <-> (sequence, frame) mapping, used by every algorithm that treats the
 //! frames of all sequences as one set (distance matrices, transition tables, graphs).
 
-/// Prefix sums of the sequences' frame counts.
+/// Prefix sums of the sequences' frame counts, and the sequences' names when known (a
+/// subject's index has them), so that every layer can name a frame as the user does.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FrameIndex {
     /// `offsets[s]` is the global index of sequence `s`'s first frame; the last entry is the total.
     offsets: Vec<usize>,
+    /// One name per sequence, or empty when the index was built from counts only.
+    names: Vec<String>,
 }
 
 impl FrameIndex {
@@ -14,7 +17,27 @@ impl FrameIndex {
         for n in frame_counts {
             offsets.push(offsets.last().unwrap() + n);
         }
-        FrameIndex { offsets }
+        FrameIndex { offsets, names: Vec::new() }
+    }
+
+    /// This index with the sequences' names (one per sequence), used by [`FrameIndex::label`].
+    pub fn with_names(mut self, names: Vec<String>) -> Self {
+        assert_eq!(names.len(), self.n_sequences(), "one name per sequence");
+        self.names = names;
+        self
+    }
+
+    /// A global frame as users write it (`surfcap ... --start walk:12`): `sequence:frame` with
+    /// the sequence's name, or its number when the index has no names; the global number when
+    /// out of range.
+    pub fn label(&self, global: usize) -> String {
+        match self.locate(global) {
+            Some((s, f)) => match self.names.get(s) {
+                Some(name) => format!("{name}:{f}"),
+                None => format!("sequence {s}:{f}"),
+            },
+            None => format!("frame {global} (out of range)"),
+        }
     }
 
     /// Total number of frames.
@@ -68,6 +91,12 @@ mod tests {
         assert_eq!(ix.locate(3), Some((2, 0)));
         assert_eq!(ix.locate(10), None);
         assert_eq!(ix.global(1, 0), None);
+        assert_eq!(ix.label(4), "sequence 2:1");
+        let named = ix.clone().with_names(["a", "b", "c", "d"].map(String::from).to_vec());
+        assert_eq!(
+            (named.label(0), named.label(9), named.label(10)),
+            ("a:0".into(), "d:4".into(), "frame 10 (out of range)".into())
+        );
         assert_eq!(ix.global(0, 3), None);
         assert_eq!(ix.range(3), 5..10);
     }

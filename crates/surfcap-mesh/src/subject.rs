@@ -297,7 +297,8 @@ impl Subject {
                 return Err(err!(Metadata, "two sequences are named {:?}: names must be unique", s.name));
             }
         }
-        let index = FrameIndex::new(sequences.iter().map(|s| s.n_frames()));
+        let index = FrameIndex::new(sequences.iter().map(|s| s.n_frames()))
+            .with_names(sequences.iter().map(|s| s.name.clone()).collect());
         Ok(Subject { name, topology, sequences, fps, up_axis, units, index })
     }
 

@@ -50,16 +50,26 @@ pub enum Error {
     /// positive.
     #[error("window {window} / {max_frames} frames: expected a positive arc length and frame count")]
     PathSearchParameters { window: f64, max_frames: usize },
-    /// The given start frame is excluded by the restriction at the curve's start.
+    /// The given start frame (`sequence:frame`) is excluded by the restriction at the curve's
+    /// start.
     #[error("the start frame {frame} is not allowed by the restriction at the curve's start")]
-    StartNotAllowed { frame: u32 },
+    StartNotAllowed { frame: String },
+    /// The given start frame (`sequence:frame`) leads only to the end of a sequence: no walk
+    /// long enough for a curve leaves it.
+    #[error(
+        "the start frame {frame} is a dead end: every way on from it ends at the last frame of a sequence, with no transition onward; give an earlier --start or leave it out"
+    )]
+    StartIsDeadEnd { frame: String },
     /// No frame may start the path.
     #[error("no frame can start the path: the restrictions exclude every start frame")]
     NoStartFrame,
-    /// The path search found no edge leading on from `frame`, `travelled` of `length` along
-    /// the curve.
-    #[error("the walk is stuck at frame {frame} after {travelled:.2} of {length:.2} along the curve: no edge leads on")]
-    PathStuck { frame: u32, travelled: f64, length: f64 },
+    /// The restrictions leave no way on from `frame` (`sequence:frame`), `travelled` of
+    /// `length` along the curve (the search only uses frames that can go on, so nothing else
+    /// stops a walk).
+    #[error(
+        "the walk is stuck at {frame} after {travelled:.2} of {length:.2} along the curve: the motion types allowed there (--tags) have no transition from it"
+    )]
+    PathStuck { frame: String, travelled: f64, length: f64 },
     /// The walk used more than its frame budget (`frames`) and covered only `travelled` of
     /// `length` along the curve.
     #[error(
@@ -81,9 +91,17 @@ pub enum Error {
     /// A timed-walk endpoint outside the graph's frames (0..`frames`).
     #[error("frame {frame} is not in the graph (0..{frames})")]
     FrameNotInGraph { frame: u32, frames: usize },
-    /// No walk from `from` to `to` has a duration between 1 and `longest` frames.
-    #[error("no walk from frame {from} to frame {to} lasts between 1 and {longest} frames")]
-    NoWalkWithDuration { from: u32, to: u32, longest: usize },
+    /// No walk from `from` to `to` (both `sequence:frame`) has a duration between `shortest`
+    /// and `longest` frames, the widest range searched: twice the `asked` duration or the asked
+    /// duration plus two of the graph's longest transitions (`longest_edge` frames), whichever
+    /// is longer.
+    #[error(
+        "no walk from {from} to {to} lasts between {shortest} and {longest} frames (the search tries durations up to twice the {asked} asked, or {asked} plus two of the longest transition's {longest_edge} frames, whichever is longer)"
+    )]
+    NoWalkWithDuration { from: String, to: String, shortest: usize, longest: usize, asked: usize, longest_edge: usize },
+    /// `to` cannot be reached from `from` at all (both `sequence:frame`), whatever the duration.
+    #[error("no walk leads from {from} to {to} in the graph, whatever its duration{why}")]
+    Unreachable { from: String, to: String, why: String },
 }
 
 /// Result with the crate's [`Error`].
@@ -95,14 +113,24 @@ mod tests {
 
     #[test]
     fn messages_are_the_ones_callers_know() {
-        let stuck = Error::PathStuck { frame: 7, travelled: 1.234, length: 10.0 };
+        let stuck = Error::PathStuck { frame: "walk:7".into(), travelled: 1.234, length: 10.0 };
         assert_eq!(
             stuck.to_string(),
-            "the walk is stuck at frame 7 after 1.23 of 10.00 along the curve: no edge leads on"
+            "the walk is stuck at walk:7 after 1.23 of 10.00 along the curve: the motion types allowed there (--tags) have no transition from it"
         );
         let row = Error::RowNotAFrame { row: 3, value: 40.0, frames: 30 };
         assert_eq!(row.to_string(), "row 3: 40 is not a frame of the subject (0..30)");
-        let none = Error::NoWalkWithDuration { from: 1, to: 2, longest: 9 };
-        assert_eq!(none.to_string(), "no walk from frame 1 to frame 2 lasts between 1 and 9 frames");
+        let none = Error::NoWalkWithDuration {
+            from: "a:1".into(),
+            to: "b:2".into(),
+            shortest: 1,
+            longest: 414,
+            asked: 200,
+            longest_edge: 107,
+        };
+        assert_eq!(
+            none.to_string(),
+            "no walk from a:1 to b:2 lasts between 1 and 414 frames (the search tries durations up to twice the 200 asked, or 200 plus two of the longest transition's 107 frames, whichever is longer)"
+        );
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod blend;
 pub mod clip_travel;
+pub mod dead_ends;
 pub mod dtw;
 pub mod edge_weights;
 pub mod error;

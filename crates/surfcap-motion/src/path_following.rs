@@ -31,8 +31,9 @@ use rayon::prelude::*;
 
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 
+use crate::dead_ends::live_nodes;
 use crate::error::{Error, Result};
-use crate::graph::Graph;
+use crate::graph::{Edge, Graph};
 use crate::walk_sequence::{Step, TransitionTrack, WalkModel};
 
 /// A polyline parametrised by arc length. In planar mode only the ground-plane coordinates
@@ -181,9 +182,9 @@ struct Query<'a> {
     /// Transition edges leaving each node: the cheapest into each sequence, then the second
     /// cheapest into each, and so on.
     transitions: Vec<Vec<(u32, &'a TransitionTrack)>>,
-    /// Whether a node has no transition left ahead of it in its sequence: a walk that enters
-    /// it can only play to the sequence's end.
-    doomed: Vec<bool>,
+    /// Whether a walk can go on from a node for as long as needed (see [`crate::dead_ends`]):
+    /// the search only enters such nodes, so it never walks into the end of a sequence.
+    live: Vec<bool>,
 }
 
 impl<'a> Query<'a> {
@@ -218,15 +219,19 @@ impl<'a> Query<'a> {
                 keyed.into_iter().map(|(_, _, v, t)| (v, t)).collect()
             })
             .collect();
-        let mut doomed = vec![true; n];
-        for q in 0..model.index.n_sequences() {
-            let mut escape = false;
-            for u in model.index.range(q).rev() {
-                escape |= !transitions[u].is_empty();
-                doomed[u] = !escape;
-            }
-        }
-        Query { model, curve, restrictions, transitions, doomed }
+        // The edges the search can play: successive frames and the transitions with a track.
+        let playable: Vec<Edge> = (0..n as u32)
+            .flat_map(|u| {
+                let next = matches!(model.step(u, u + 1), Some(Step::Original)).then_some(u + 1);
+                next.into_iter().chain(transitions[u as usize].iter().map(|&(v, _)| v)).map(move |to| Edge {
+                    from: u,
+                    to,
+                    weight: 1.0,
+                })
+            })
+            .collect();
+        let live = live_nodes(&Graph::new(n, playable));
+        Query { model, curve, restrictions, transitions, live }
     }
 
     fn allowed(&self, node: u32, s: f64) -> bool {
@@ -311,8 +316,7 @@ impl Window<'_> {
             }
         }
         let (q, u) = (self.q, st.node);
-        let last_window = self.end >= q.curve.length();
-        let open = |v: u32| last_window || !q.doomed[v as usize];
+        let open = |v: u32| q.live[v as usize];
         // Children: the next original frame, then up to `branching` transitions; explored
         // cheapest first so that good complete walks tighten the bound early.
         let mut children: Vec<(State, usize)> = Vec::new();
@@ -427,17 +431,20 @@ pub fn follow_path(
             // Rank every frame by playing its own sequence over the first window, then search
             // the best few with transitions.
             let mut scored: Vec<(f64, u32)> = (0..model.centres.len() as u32)
-                .filter(|&u| !q.doomed[u as usize] && q.allowed(u, 0.0))
+                .filter(|&u| q.live[u as usize] && q.allowed(u, 0.0))
                 .map(|u| (window(initial(u), 0, &mut expanded).0, u))
                 .collect();
             scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             scored.into_iter().take(p.start_candidates.max(1)).map(|(_, u)| u).collect()
         }
     };
-    if let Some(&u) = starts.first()
-        && !q.allowed(u, 0.0)
-    {
-        return Err(Error::StartNotAllowed { frame: u });
+    if let Some(&u) = starts.first() {
+        if !q.allowed(u, 0.0) {
+            return Err(Error::StartNotAllowed { frame: model.index.label(u as usize) });
+        }
+        if !q.live[u as usize] {
+            return Err(Error::StartIsDeadEnd { frame: model.index.label(u as usize) });
+        }
     }
     // The candidates' first windows are independent: searched in parallel, the first of the
     // cheapest wins (the same choice whatever the number of threads).
@@ -467,7 +474,12 @@ pub fn follow_path(
         windows += 1;
         let (_, found) = window(st, p.max_transitions, &mut expanded);
         if found.is_empty() {
-            return Err(Error::PathStuck { frame: st.node, travelled: st.s, length: curve.length() });
+            // Every node searched can go on, so only a restriction can leave no way on.
+            return Err(Error::PathStuck {
+                frame: model.index.label(st.node as usize),
+                travelled: st.s,
+                length: curve.length(),
+            });
         }
         // Keep the first half of the window (at least one step).
         let keep_until = st.s + 0.5 * p.window;
@@ -547,6 +559,25 @@ mod tests {
             }
         }
         assert!(checked >= 3, "{checked}");
+    }
+
+    /// The search never enters a frame from which the walk cannot go on (issue 16: "the walk is
+    /// stuck at frame 463"), and a given start that is such a frame is refused by name.
+    #[test]
+    fn walks_avoid_dead_ends_and_a_dead_start_is_refused() {
+        let (s, g, model, _) = crate::walk_sequence::tests::setup();
+        let crawl = model.centres[29][0] - model.centres[0][0];
+        let curve = Curve::new(vec![[0.0, 0.0, 0.0], [3.0 * crawl, 0.0, 0.0]], vec![0, 2]).unwrap();
+        let p = PathSearch { window: crawl / 2.0, ..PathSearch::for_fps(s.fps) };
+        let q = Query::new(&model, &g, &curve, &[]);
+        let last = s.frame_index().range(0).end as u32 - 1;
+        assert!(!q.live[last as usize] && q.live.iter().any(|&l| l), "the last frame of a sequence is a dead end");
+        let r = follow_path(&model, &g, &curve, &[], None, &p).unwrap();
+        assert!(r.travelled >= curve.length());
+        assert!(r.walk.iter().all(|&v| q.live[v as usize]), "{:?}", r.walk);
+        let err = follow_path(&model, &g, &curve, &[], Some(last), &p).unwrap_err();
+        let name = s.sequences()[0].name.clone();
+        assert!(err.to_string().starts_with(&format!("the start frame {name}:{} is a dead end", last)), "{err}");
     }
 
     /// Same walk whatever the number of threads (the start candidates are searched in parallel).

@@ -31,6 +31,8 @@
 
 use rayon::prelude::*;
 
+use surfcap_mesh::FrameIndex;
+
 use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::walk_sequence::{Step, WalkModel};
@@ -109,6 +111,8 @@ pub struct TimedGraph {
     forward: Direction,
     /// Backward: edges grouped by their source.
     backward: Direction,
+    /// Names the frames of errors as `sequence:frame`.
+    index: FrameIndex,
 }
 
 impl TimedGraph {
@@ -134,10 +138,10 @@ impl TimedGraph {
             let weight = if matches!(step, Step::Original) { 0.0 } else { e.weight };
             edges.push(TimedEdge { from: e.from, to: e.to, frames, weight, length });
         }
-        Self::from_edges(graph.n, edges)
+        Self::from_edges(graph.n, edges, model.index.clone())
     }
 
-    fn from_edges(n: usize, edges: Vec<TimedEdge>) -> Self {
+    fn from_edges(n: usize, edges: Vec<TimedEdge>, index: FrameIndex) -> Self {
         let mut out = vec![Vec::new(); n];
         for (k, e) in edges.iter().enumerate() {
             out[e.from as usize].push(k);
@@ -149,7 +153,7 @@ impl TimedGraph {
         };
         let forward = direction(|e| e.to, |e| e.from);
         let backward = direction(|e| e.from, |e| e.to);
-        TimedGraph { n, edges, out, block, forward, backward }
+        TimedGraph { n, edges, out, block, forward, backward, index }
     }
 }
 
@@ -389,13 +393,49 @@ impl TimedGraph {
         TimedWalk { walk: walk.to_vec(), frames, cost, distance }
     }
 
+    /// Both ends are frames of the graph and some walk (of one edge at least) leads from `a`
+    /// to `b`; otherwise says why not, in terms of the sequences' ends when that is the cause.
     fn check(&self, a: u32, b: u32) -> Result<()> {
         for x in [a, b] {
             if x as usize >= self.n {
                 return Err(Error::FrameNotInGraph { frame: x, frames: self.n });
             }
         }
-        Ok(())
+        let mut seen = vec![false; self.n];
+        let mut stack = vec![a as usize];
+        while let Some(u) = stack.pop() {
+            for &k in &self.out[u] {
+                let v = self.edges[k].to as usize;
+                if v == b as usize {
+                    return Ok(());
+                }
+                if !seen[v] {
+                    seen[v] = true;
+                    stack.push(v);
+                }
+            }
+        }
+        let (from, to) = (self.index.label(a as usize), self.index.label(b as usize));
+        let why = if self.out[a as usize].is_empty() {
+            format!(": nothing leaves {from} (the last frame of a sequence, with no transition from it)")
+        } else if !self.edges.iter().any(|e| e.to == b) {
+            format!(": nothing enters {to} (the first frame of a sequence, with no transition into it)")
+        } else {
+            format!(": every way on from {from} ends at the last frame of a sequence before reaching {to}")
+        };
+        Err(Error::Unreachable { from, to, why })
+    }
+
+    /// The error for a search that found no walk of any duration in `lo..=hi`.
+    fn no_walk(&self, (a, b): (u32, u32), (lo, hi): (usize, usize), asked: usize, longest_edge: usize) -> Error {
+        Error::NoWalkWithDuration {
+            from: self.index.label(a as usize),
+            to: self.index.label(b as usize),
+            shortest: lo,
+            longest: hi,
+            asked,
+            longest_edge,
+        }
     }
 
     /// Thesis 3.5.2: the walk from `a` to `b` whose duration is closest to `frames`, then of
@@ -418,7 +458,7 @@ impl TimedGraph {
                 return Ok(self.measure(w));
             }
             if lo == 1 && hi == widest {
-                return Err(Error::NoWalkWithDuration { from: a, to: b, longest: widest });
+                return Err(self.no_walk((a, b), (lo, hi), target, longest_edge));
             }
             tol *= 4;
         }
@@ -472,14 +512,16 @@ impl TimedGraph {
         };
         // mu = 0 over durations near the target first (a time error of w_t^-1 frames costs as
         // much as one unit of realism), widened when no walk has them.
+        // The widest range is the one of `walk_with_duration`, so both explain it alike.
+        let widest = (2 * frames).max(frames + 2 * longest_edge);
         let mut tol = (frames / 20).max(3);
         let (lo, hi, d0) = loop {
-            let (lo, hi) = (frames.saturating_sub(tol).max(1), frames + tol);
+            let (lo, hi) = (frames.saturating_sub(tol).max(1), (frames + tol).min(widest));
             if let Some(d0) = consider(cheapest_by_duration(self, (a, b), (lo, hi), 0.0, score)) {
                 break (lo, hi, d0);
             }
-            if lo == 1 && tol > frames + longest_edge {
-                return Err(Error::NoWalkWithDuration { from: a, to: b, longest: hi });
+            if lo == 1 && hi == widest {
+                return Err(self.no_walk((a, b), (lo, hi), frames, longest_edge));
             }
             tol *= 3;
         };
@@ -527,7 +569,47 @@ mod tests {
             e(3, 0, 5, 2.0, 0.0),
             e(0, 3, 2, 5.0, 4.0),
         ];
-        TimedGraph::from_edges(4, edges)
+        TimedGraph::from_edges(4, edges, FrameIndex::new([4]))
+    }
+
+    /// Two sequences of 3 frames (0..3 and 3..6) and one transition 1 -> 4: nothing leaves 2
+    /// and 5 (last frames), nothing enters 3 (a first frame). Failures name frames as
+    /// `sequence:frame` and say why.
+    #[test]
+    fn unreachable_ends_and_impossible_durations_are_explained() {
+        let e = |from, to, frames| TimedEdge { from, to, frames, weight: 1.0, length: 1.0 };
+        let edges = vec![e(0, 1, 1), e(1, 2, 1), e(3, 4, 1), e(4, 5, 1), e(1, 4, 4)];
+        let index = FrameIndex::new([3, 3]).with_names(vec!["walk".into(), "run".into()]);
+        let g = TimedGraph::from_edges(6, edges, index);
+        let msg = |a, b| g.walk_with_duration(a, b, 10, g.longest_edge()).unwrap_err().to_string();
+        assert_eq!(
+            msg(2, 5),
+            "no walk leads from walk:2 to run:2 in the graph, whatever its duration: nothing leaves walk:2 (the last frame of a sequence, with no transition from it)"
+        );
+        assert_eq!(
+            msg(0, 3),
+            "no walk leads from walk:0 to run:0 in the graph, whatever its duration: nothing enters run:0 (the first frame of a sequence, with no transition into it)"
+        );
+        assert_eq!(
+            msg(4, 1),
+            "no walk leads from run:1 to walk:1 in the graph, whatever its duration: every way on from run:1 ends at the last frame of a sequence before reaching walk:1"
+        );
+        // 0 -> 5 lasts 6 frames (1 + 4 + 1): asking 1 frame still finds it, as the search goes up
+        // to 1 + 2 * 4 frames.
+        let far = g.walk_with_duration(0, 5, 1, g.longest_edge()).unwrap();
+        assert_eq!((far.walk, far.frames), (vec![0, 1, 4, 5], 6));
+        let e = |from, to, frames| TimedEdge { from, to, frames, weight: 1.0, length: 1.0 };
+        let long = TimedGraph::from_edges(3, vec![e(0, 1, 30), e(1, 2, 30)], FrameIndex::new([3]));
+        let err = long.walk_with_duration(0, 2, 5, 2).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "no walk from sequence 0:0 to sequence 0:2 lasts between 1 and 10 frames (the search tries durations up to twice the 5 asked, or 5 plus two of the longest transition's 2 frames, whichever is longer)"
+        );
+        let err = long.walk_with_distance_and_time(0, 2, 1.0, 5, (0.3, 10.0), 2).unwrap_err();
+        assert!(
+            err.to_string().starts_with("no walk from sequence 0:0 to sequence 0:2 lasts between 1 and 10 frames"),
+            "{err}"
+        );
     }
 
     /// Every walk from a to b of duration <= max by brute force: (duration, cost, length).
@@ -602,7 +684,7 @@ mod tests {
                     edges.push(e(from, to, frames, next(100) as f64 / 10.0, next(50) as f64 / 10.0));
                 }
             }
-            let g = TimedGraph::from_edges(n as usize, edges);
+            let g = TimedGraph::from_edges(n as usize, edges, FrameIndex::new([n as usize]));
             assert_eq!(g.block, 3);
             let hi = 16;
             for mu in [0.0, 0.7, -0.3] {

@@ -109,8 +109,54 @@ pub struct KeyPose {
     pub requested: i64,
 }
 
-/// Reads key poses: `frame,time` rows (an optional header), times whole, >= 0 and increasing;
-/// at least two keys.
+/// A duration or instant as users write it: `90f` (frames), `3s` or `1.5s` (seconds), or a bare
+/// number whose unit the command says (key files: output frames; `reach --time`: seconds), so
+/// that every command accepts both units and none changes the meaning of what worked before.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeSpec {
+    pub value: f64,
+    /// `None` for a bare number.
+    pub unit: Option<TimeUnit>,
+}
+
+/// The unit of a [`TimeSpec`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimeUnit {
+    Frames,
+    Seconds,
+}
+
+impl std::str::FromStr for TimeSpec {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        let t = text.trim();
+        let (number, unit) = match t.char_indices().last() {
+            Some((k, 'f')) => (&t[..k], Some(TimeUnit::Frames)),
+            Some((k, 's')) => (&t[..k], Some(TimeUnit::Seconds)),
+            _ => (t, None),
+        };
+        match number.trim().parse::<f64>() {
+            Ok(value) if value.is_finite() && value >= 0.0 => Ok(TimeSpec { value, unit }),
+            _ => Err(format!("{text:?}: expected a time >= 0 such as 90f (frames) or 3s (seconds)")),
+        }
+    }
+}
+
+impl TimeSpec {
+    /// The time in frames at `fps` (`bare` is the unit of a bare number); seconds are rounded
+    /// to the nearest frame. `None` when a frame count is not whole.
+    pub fn frames(&self, fps: f64, bare: TimeUnit) -> Option<i64> {
+        match self.unit.unwrap_or(bare) {
+            TimeUnit::Frames => (self.value.fract() == 0.0).then_some(self.value as i64),
+            TimeUnit::Seconds => Some((self.value * fps).round() as i64),
+        }
+    }
+}
+
+/// Reads key poses: `frame,time` rows (an optional header), times >= 0 and increasing in output
+/// frames (a bare whole number, or `90f`) or seconds (`3s`, rounded to the nearest output frame
+/// at the subject's rate); at least two keys.
 pub fn read_key_poses(path: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
     parse_key_poses(&read_text(path)?, path, s)
 }
@@ -118,7 +164,7 @@ pub fn read_key_poses(path: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
 /// [`read_key_poses`] on text already read; `path` names it in errors.
 pub fn parse_key_poses(text: &str, path: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
     let mut rows = csv_rows(text);
-    if rows.first().is_some_and(|(_, c)| c.len() == 2 && c[1].parse::<i64>().is_err()) {
+    if rows.first().is_some_and(|(_, c)| c.len() == 2 && c[1].parse::<TimeSpec>().is_err()) {
         rows.remove(0);
     }
     let mut keys: Vec<KeyPose> = Vec::new();
@@ -131,9 +177,17 @@ pub fn parse_key_poses(text: &str, path: &Path, s: &Subject) -> Result<Vec<KeyPo
             ));
         }
         let frame = s.resolve_frame(&cells[0]).map_err(|e| Error::file(path, Some(line), e.to_string()))?;
-        let requested: i64 = cells[1].parse().ok().filter(|t| *t >= 0).ok_or_else(|| {
-            Error::file(path, Some(line), format!("time {:?}: expected a whole number of frames >= 0", cells[1]))
-        })?;
+        let requested: i64 =
+            cells[1].parse::<TimeSpec>().ok().and_then(|t| t.frames(s.fps, TimeUnit::Frames)).ok_or_else(|| {
+                Error::file(
+                    path,
+                    Some(line),
+                    format!(
+                        "time {:?}: expected an output frame number >= 0 (a whole number such as 90 or 90f) or seconds (3s)",
+                        cells[1]
+                    ),
+                )
+            })?;
         if let Some(prev) = keys.last()
             && requested <= prev.requested
         {
@@ -164,6 +218,11 @@ pub fn parse_restriction(s: &Subject, text: &str) -> Result<Restriction> {
     }
     let allowed: Vec<bool> = s.sequences().iter().map(|q| q.tags.iter().any(|x| x == tag)).collect();
     if !allowed.iter().any(|&x| x) {
+        if s.sequences().iter().all(|q| q.tags.is_empty()) {
+            return Err(Error::Request(format!(
+                "{text:?}: no sequence is tagged {tag:?}: the subject has no tags; tag its sequences in a surfcap.toml manifest (tags = [\"{tag}\"] in a [[sequence]] entry, see the README's manifest section) and import it again"
+            )));
+        }
         let mut known: Vec<&str> = s.sequences().iter().flat_map(|q| q.tags.iter().map(|x| x.as_str())).collect();
         known.sort();
         known.dedup();
@@ -248,11 +307,53 @@ mod tests {
             (format!("{q}:2,0\n{q}:500,4\n"), "c.csv:2:"),
             (format!("{q}:2,0,1\n"), "c.csv:1: expected frame,time"),
             (format!("{q}:2,0\n"), "1 key pose(s)"),
+            (format!("{q}:2,0\n{q}:5,2.5f\n"), "c.csv:2: time \"2.5f\": expected an output frame number >= 0"),
+            (format!("{q}:2,0\n{q}:5,3x\n"), "or seconds (3s)"),
         ] {
             let (_d, p) = file(&text);
             let e = read_key_poses(&p, &s).unwrap_err().to_string();
             assert!(e.contains(want), "{text:?}: {e}");
         }
+    }
+
+    /// Key times in output frames (bare or `f`) or seconds (`s`, rounded at the subject's rate).
+    #[test]
+    fn key_times_take_frame_and_second_suffixes() {
+        let s = worm();
+        let q = s.sequences()[0].name.clone();
+        let (_d, p) = file(&format!("frame,time\n{q}:2,0s\n{q}:5,12f\n{q}:7,1.5s\n"));
+        let keys = read_key_poses(&p, &s).unwrap();
+        let want = (1.5 * s.fps).round() as i64;
+        assert!(want > 12, "fps {}", s.fps);
+        assert_eq!(keys.iter().map(|k| k.requested).collect::<Vec<_>>(), vec![0, 12, want]);
+        assert_eq!("90".parse::<TimeSpec>().unwrap().frames(30.0, TimeUnit::Seconds), Some(2700));
+        assert_eq!("90f".parse::<TimeSpec>().unwrap().frames(30.0, TimeUnit::Seconds), Some(90));
+        assert!("-3s".parse::<TimeSpec>().is_err() && "s".parse::<TimeSpec>().is_err());
+    }
+
+    /// A subject without tags says so and how to add them, instead of an empty list.
+    #[test]
+    fn restrictions_on_an_untagged_subject_say_how_to_tag() {
+        let s = worm();
+        let untagged = Subject::new(
+            s.name.clone(),
+            s.topology().clone(),
+            s.sequences()
+                .iter()
+                .cloned()
+                .map(|mut q| {
+                    q.tags.clear();
+                    q
+                })
+                .collect(),
+            s.fps,
+            s.up_axis,
+            s.units.clone(),
+        )
+        .unwrap();
+        let e = parse_restriction(&untagged, "run:1-2").unwrap_err().to_string();
+        assert!(e.contains("the subject has no tags; tag its sequences in a surfcap.toml manifest"), "{e}");
+        assert!(!e.contains("tags are"), "{e}");
     }
 
     #[test]

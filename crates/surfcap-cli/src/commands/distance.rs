@@ -45,9 +45,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let off = (0..n).flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| values[i * n + j]));
     let mean = crate::output::mean(off.clone());
     let max = off.fold(0.0, f64::max);
+    let s = pipe.subject();
+    let scale = scale(params.metric, params.w, s.topology().n_triangles(), &s.units, mean);
     let result = json!({
         "output": a.output, "frames": n, "metric": params.metric.name(), "w": params.w,
         "cached": d.from_cache, "cache_file": d.file, "seconds": secs, "mean": mean, "max": max,
+        "scale": scale,
     });
     ctx.result(&result, || {
         println!(
@@ -55,7 +58,31 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             params.metric.name(),
             a.output.display(),
             if d.from_cache { "from cache" } else { "computed" }
-        )
+        );
+        println!("scale: {scale}");
     });
     Ok(())
+}
+
+/// What a distance value means (thesis eq. 2.2, 2.13-2.14): the deformation distances add one
+/// term per triangle, so their size grows with the mesh; divided by the triangle count, the
+/// rotation term is the mean angle, in radians, by which a triangle turns between the poses.
+fn scale(metric: PoseMetric, w: f64, triangles: usize, units: &surfcap_mesh::Units, mean: f64) -> String {
+    match metric {
+        PoseMetric::Euclidean => {
+            let unit = if units.metres_per_unit.is_some() { units.name.as_str() } else { "units" };
+            format!(
+                "a distance is the sum over the vertices of the squared distance between the two poses after the best rotation about the up axis and ground-plane shift (eq. 2.2), in {unit} squared"
+            )
+        }
+        PoseMetric::Deformation | PoseMetric::DeformationLog => {
+            let stretch = if metric == PoseMetric::Deformation { "||S - I||" } else { "||log S||" };
+            let per = mean / triangles.max(1) as f64;
+            format!(
+                "a distance is the sum over the {triangles} triangles of the angle (radians) by which each turns between the two poses plus {w} x its stretch {stretch} (eq. {}); divided by {triangles}, the mean {mean:.1} is {per:.3} rad ({:.1} degrees) per triangle",
+                if metric == PoseMetric::Deformation { "2.13" } else { "2.14" },
+                per.to_degrees()
+            )
+        }
+    }
 }

@@ -14,8 +14,9 @@ use crate::synthesis::{Prepared, check_constraints, run_keyposes};
 pub struct Args {
     /// A subject cache, or any source `surfcap import` reads.
     pub subject: PathBuf,
-    /// CSV of key poses: frame,time: the frame (sequence:frame or global) and the output frame
-    /// number at which it must appear, in increasing time. '#' starts a comment.
+    /// CSV of key poses: frame,time: the frame (sequence:frame or global) and when it must
+    /// appear, in increasing time: an output frame number (a bare number, e.g. 90, or 90f) or
+    /// seconds (3s, rounded to the nearest frame at the subject's rate). '#' starts a comment.
     #[arg(long)]
     pub keys: PathBuf,
     #[command(flatten)]

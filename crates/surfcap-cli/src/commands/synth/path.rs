@@ -9,6 +9,7 @@ use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
 
 use crate::limits::{Request, fastest_speed};
 use crate::options::{GraphOpts, OutOpts, open};
+use crate::output::length;
 use crate::synthesis::{Prepared, check_constraints, run_path};
 
 #[derive(clap::Args, Debug)]
@@ -26,7 +27,8 @@ pub struct Args {
     /// sequences with that tag are used there. Comma-separated.
     #[arg(long, value_delimiter = ',')]
     pub tags: Vec<String>,
-    /// The first frame (sequence:frame or global); default: the best of all frames.
+    /// The first frame (sequence:frame or global); default: the best of all frames from which
+    /// the walk can go on (a frame whose every way on ends at a sequence's last frame is refused).
     #[arg(long)]
     pub start: Option<String>,
     /// Follow the centre of these vertices instead of the centre of mass (comma-separated ids).
@@ -55,9 +57,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let curve = read_curve(&a.curve, s.up_axis, a.planar)?;
     if let Some(speed) = fastest_speed(&s, curve.axes()) {
         let what = format!(
-            "--curve {} ({:.1} long, the subject's fastest motion covers {speed:.2} a second)",
+            "--curve {} ({} long, the subject's fastest motion covers {} a second)",
             a.curve.display(),
-            curve.length()
+            length(curve.length(), &s.units, 1),
+            length(speed, &s.units, 2)
         );
         let frames = curve.length() / speed * s.fps;
         a.out.limits.check(&Request { what, frames, subject: &s, search_bytes: 0, format: a.out.format() })?;
@@ -81,14 +84,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let tracked = (!a.track.is_empty()).then_some(a.track.as_slice());
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?;
     let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
+    let units = &prep.subject().units;
     ctx.result(&o.played.report, || {
         println!(
-            "followed a {:.2}-long curve: {}, {}; centre error mean {:.3}, max {:.3} ({:.1}% of the curve); search {:.2} s",
-            curve.length(),
+            "followed a {} curve: {}, {}; centre error mean {}, max {} ({:.1}% of the curve); search {:.2} s",
+            length(curve.length(), units, 2),
             crate::output::count_of(o.frames, "frame"),
             crate::output::count_of(o.played.transitions, "transition"),
-            o.mean_error,
-            o.max_error,
+            length(o.mean_error, units, 3),
+            length(o.max_error, units, 3),
             100.0 * o.max_error / curve.length(),
             o.search_seconds
         );

@@ -8,9 +8,11 @@ use std::time::Instant;
 use serde_json::json;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
+use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 
 use crate::limits::Request;
 use crate::options::{GraphOpts, OutOpts, Positive, open};
+use crate::output::length;
 use crate::synthesis::{
     Constraint, Prepared, add_constraints, check_constraints, length_unit, pose_distance_to_output, write_walk,
 };
@@ -28,9 +30,10 @@ pub struct Args {
     /// Ground-plane distance the centre of mass must travel (subject units).
     #[arg(long, value_parser = crate::options::non_negative)]
     pub distance: f64,
-    /// Duration in seconds.
-    #[arg(long, value_parser = crate::options::positive)]
-    pub time: f64,
+    /// Duration: seconds (a bare number, e.g. 3, or 3s) or output frames (90f; seconds are
+    /// rounded to the nearest frame at the subject's rate).
+    #[arg(long, value_parser = crate::options::positive_time)]
+    pub time: TimeSpec,
     /// Distance error worth one unit of realism cost (Huang et al.: 0.3 m).
     #[arg(long, default_value = "0.3")]
     pub distance_scale: Positive,
@@ -43,14 +46,32 @@ pub struct Args {
     pub out: OutOpts,
 }
 
+impl Args {
+    /// `--time` as given, with its unit.
+    fn time_text(&self) -> String {
+        match self.time.unit {
+            Some(TimeUnit::Frames) => format!("{}f", self.time.value),
+            Some(TimeUnit::Seconds) | None => format!("{}s", self.time.value),
+        }
+    }
+}
+
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
-    let frames = (a.time * s.fps).round().max(1.0) as usize;
+    let frames = match a.time.frames(s.fps, TimeUnit::Seconds) {
+        Some(f) if f >= 1 => f as usize,
+        _ => anyhow::bail!(
+            "--time {}: expected a duration of at least one whole frame (at {} fps), e.g. 90f or 3s",
+            a.time_text(),
+            s.fps
+        ),
+    };
     let search_bytes = search_table_bytes(s.n_frames(), frames);
-    let what = format!("--time {} at {} fps", a.time, s.fps);
+    let what = format!("--time {} at {} fps", a.time_text(), s.fps);
+    let (from_label, to_label) = (s.frame_index().label(from as usize), s.frame_index().label(to as usize));
     a.out.limits.check(&Request { what, frames: frames as f64, subject: &s, search_bytes, format: a.out.format() })?;
     if a.distance > 0.0 {
         crate::travel::require_travel(&s, &format!("--distance {}", a.distance), None)?;
@@ -67,7 +88,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let report = json!({
         "constraint": "reach", "from": a.from, "to": a.to,
         "target_distance": a.distance, "distance": w.distance, "distance_error": (w.distance - a.distance).abs(),
-        "target_seconds": a.time, "seconds": w.frames as f64 / prep.subject().fps,
+        "target_seconds": frames as f64 / prep.subject().fps, "seconds": w.frames as f64 / prep.subject().fps,
         "target_frames": asked_frames, "obtained_frames": obtained_frames,
         "time_error_frames": (w.frames as i64 - frames as i64).abs(),
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
@@ -100,17 +121,16 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ];
     add_constraints(&mut played.report, &constraints);
     played.save_report()?;
-    let unit = length_unit(prep.subject());
+    let units = &prep.subject().units;
+    let fps = prep.subject().fps;
     ctx.result(&played.report, || {
         println!(
-            "{} -> {}: {:.2} {unit} travelled (asked {:.2}) in {obtained_frames} frames, {:.2} s (asked {} s: \
+            "{from_label} -> {to_label}: {} travelled (asked {}) in {obtained_frames} frames, {:.2} s (asked {}: \
              {asked_frames} frames); realism cost {:.3}; search {search_seconds:.3} s",
-            a.from,
-            a.to,
-            w.distance,
-            a.distance,
-            w.frames as f64 / prep.subject().fps,
-            a.time,
+            length(w.distance, units, 2),
+            length(a.distance, units, 2),
+            w.frames as f64 / fps,
+            a.time_text(),
             w.cost
         );
     });
