@@ -208,7 +208,7 @@ fn path_and_reach_on_cmu_locomotion() {
     // The printed line counts frames as the report does (4 s at 30 fps: 121 frames asked).
     let printed = String::from_utf8_lossy(&o.stdout);
     assert!(printed.contains(&format!("in {} frames", r["frames"])), "{printed} vs {r}");
-    assert!(printed.contains("(asked 4 s: 121 frames)"), "{printed}");
+    assert!(printed.contains("(asked 4s: 121 frames)"), "{printed}");
     std::fs::remove_file(&far).unwrap();
     let o = reach_far(&["--strict", "--quiet"]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
@@ -287,14 +287,16 @@ fn path_and_reach_on_cmu_locomotion() {
     let info: serde_json::Value = serde_json::from_slice(&surfcap!(&["info", p(&subject), "--json"]).stdout).unwrap();
     let fps = info["fps"].as_f64().unwrap();
     let frames = (3.0 * fps).round() as u64;
+    // Frames written: 3 s of steps at fps, both ends shown.
+    let written = frames + 1;
     let o = reach("16_15:10", "16_31:80", "3s", &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.starts_with("16_15:10 -> 16_31:80: ") && text.contains(" m travelled (asked 3.00 m)"), "{text}");
-    assert!(text.contains(&format!("(asked {frames})")), "{text}");
+    assert!(text.contains(&format!("(asked 3s: {written} frames)")), "{text}");
     for time in ["3".to_string(), format!("{frames}f")] {
         let r = report(&reach("16_15:10", "16_31:80", &time, &["--json"]));
-        assert_eq!(r["target_frames"].as_u64(), Some(frames), "--time {time}");
+        assert_eq!(r["target_frames"].as_u64(), Some(written), "--time {time}");
     }
     let o = reach("16_15:10", "16_17:0", "3s", &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
