@@ -378,6 +378,8 @@ pub fn run_keyposes(
         let d = pose_distance_to_output(prep, &played.output, key.frame, (o - obtained[0]) as usize)?;
         played.report["keys"][k]["pose_distance"] = json!(d);
     }
+    // The viewer draws this track over the animation, as it does for `synth path` and `reach`.
+    played.report["per_frame"] = json!({ "centre": played.centres });
     let constraints: Vec<Constraint> = keys
         .iter()
         .zip(&obtained)

@@ -354,6 +354,8 @@ fn key_pose_timing_on_samba_and_dance() {
         let timing = r["constraints"].as_array().unwrap();
         assert!(timing.iter().all(|c| c["unit"] == "frames" && c["relative_error"].is_null()), "{timing:?}");
         check_labels(&glb, &r);
+        // The viewer's centre overlay: one centre per frame written.
+        assert_eq!(r["per_frame"]["centre"].as_array().map(Vec::len), r["frames"].as_u64().map(|n| n as usize));
     }
     let bad = tmp.path().join("bad_keys.csv");
     std::fs::write(&bad, "frame,time\nsamba:10,0\nsamba:20,40\nsamba:30,20\n").unwrap();
