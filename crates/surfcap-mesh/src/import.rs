@@ -449,6 +449,30 @@ mod tests {
         assert_eq!(s[0].layout.to_string(), "sequence folder (template.obj + positions.npy)");
     }
 
+    /// The optional files (`joints.npy`, a folder's `surfcap.toml`) are refused by name when
+    /// something that is not a regular file has their name, instead of being silently ignored.
+    #[test]
+    fn optional_files_that_are_not_regular_files_are_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let seq = d.path().join("walk");
+        std::fs::create_dir(&seq).unwrap();
+        std::fs::write(seq.join("template.obj"), TETRA).unwrap();
+        let mut npy = Vec::new();
+        crate::io::npy::write_npy(&mut npy, &[2, 4, 3], &[0.0f32; 24]).unwrap();
+        std::fs::write(seq.join("positions.npy"), npy).unwrap();
+        let joints = seq.join("joints.npy");
+        mkfifo(&joints);
+        let e = read_source(&seq, &NoProgress).unwrap_err().to_string();
+        assert_eq!(e, format!("{}: is a FIFO (named pipe): expected a regular file", joints.display()));
+        std::fs::remove_file(&joints).unwrap();
+        assert!(read_source(&seq, &NoProgress).is_ok());
+        let manifest = seq.join("surfcap.toml");
+        mkfifo(&manifest);
+        let opts = ImportOptions { fps: Some(30.0), ..Default::default() };
+        let e = import(std::slice::from_ref(&seq), &opts, &NoProgress).unwrap_err().to_string();
+        assert_eq!(e, format!("{}: is a FIFO (named pipe): expected a regular file", manifest.display()));
+    }
+
     /// A FIFO named like a frame is an error when the folder is read, not a hang or a frame
     /// silently left out.
     #[test]

@@ -52,8 +52,10 @@ pub fn find_manifest(path: &Path) -> Option<PathBuf> {
     if path.is_file() && path.extension().is_some_and(|e| e == "toml") {
         return Some(path.to_path_buf());
     }
+    // Anything named surfcap.toml counts (a FIFO or folder there is then refused by name when
+    // read, rather than silently ignored).
     let inside = path.join("surfcap.toml");
-    inside.is_file().then_some(inside)
+    crate::io::regular_file::exists_at(&inside).then_some(inside)
 }
 
 fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usize> {
@@ -62,6 +64,7 @@ fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usize> {
 
 /// Reads the manifest and every sequence it lists.
 pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOptions, Vec<SourceSequence>)> {
+    crate::io::regular_file::check_regular_file(path)?;
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read manifest", e))?;
     let m: Manifest = toml::from_str(&text).map_err(|e| {
         let mut er = err!(Syntax, "{}", e.message()).in_file(path);

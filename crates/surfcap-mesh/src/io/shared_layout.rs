@@ -141,7 +141,9 @@ pub fn read_layout_sequence(dir: &Path) -> Result<LayoutSequence> {
     }
     let meta = read_sequence_meta(dir)?;
     let joints_path = dir.join("joints.npy");
-    let joints = if joints_path.is_file() {
+    // Optional, but something of that name that is not a regular file is refused (by the
+    // reader), not silently ignored.
+    let joints = if crate::io::regular_file::exists_at(&joints_path) {
         let j = read_npy::<f32>(&joints_path)?;
         expect_shape(&j, &[Some(frames), None, Some(4), Some(4)], "joint world matrices [frames, joints, 4, 4]")
             .map_err(|e| e.in_file(&joints_path))?;
