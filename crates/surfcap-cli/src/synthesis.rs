@@ -283,7 +283,21 @@ pub fn run_path(
     out: &OutOpts,
 ) -> anyhow::Result<PathOutcome> {
     let tolerance = &out.constraints;
-    let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search)?;
+    let r = follow_path(&prep.model, &prep.graph, curve, restrictions, start, search).map_err(|e| {
+        // The search's own messages give lengths as bare numbers (the motion library does not
+        // know units): say which unit they are in.
+        use surfcap_motion::Error::{PathStalls, PathStuck};
+        let says_lengths = matches!(e, PathStuck { .. } | PathStalls { .. });
+        let e = anyhow::Error::new(e);
+        if says_lengths {
+            e.context(format!(
+                "the curve could not be followed (lengths in {})",
+                crate::output::unit_name(&prep.subject().units)
+            ))
+        } else {
+            e
+        }
+    })?;
     let (pred_mean, pred_max) = mean_max(&r.errors);
     let report = json!({
         "constraint": "path",
