@@ -24,7 +24,7 @@ pub enum Error {
     #[error("{numbers} numbers: expected rows of 3")]
     RowsNotTriples { numbers: usize },
     /// Walk-model rows: `value` at row `row` should be a frame of the subject (0..`frames`).
-    #[error("row {row}: {value} is not a frame of the subject (0..{frames})")]
+    #[error("row {row}: {value} is not a frame of the subject (expected 0 to {})", .frames.saturating_sub(1))]
     RowNotAFrame { row: usize, value: f64, frames: usize },
     /// Walk-model rows: `value` at row `row` should count rows that follow.
     #[error("row {row}: {value} is not a count of the rows that follow")]
@@ -89,7 +89,7 @@ pub enum Error {
     Parameter { name: &'static str, value: f64, expected: &'static str },
 
     /// A timed-walk endpoint outside the graph's frames (0..`frames`).
-    #[error("frame {frame} is not in the graph (0..{frames})")]
+    #[error("frame {frame} is not in the graph (expected 0 to {})", .frames.saturating_sub(1))]
     FrameNotInGraph { frame: u32, frames: usize },
     /// No walk from `from` to `to` (both `sequence:frame`) has a duration between `shortest`
     /// and `longest` frames, the widest range searched: twice the `asked` duration or the asked
@@ -119,7 +119,9 @@ mod tests {
             "the walk is stuck at walk:7 after 1.23 of 10.00 along the curve: the motion types allowed there (--tags) have no transition from it"
         );
         let row = Error::RowNotAFrame { row: 3, value: 40.0, frames: 30 };
-        assert_eq!(row.to_string(), "row 3: 40 is not a frame of the subject (0..30)");
+        assert_eq!(row.to_string(), "row 3: 40 is not a frame of the subject (expected 0 to 29)");
+        let outside = Error::FrameNotInGraph { frame: 30, frames: 30 };
+        assert_eq!(outside.to_string(), "frame 30 is not in the graph (expected 0 to 29)");
         let none = Error::NoWalkWithDuration {
             from: "a:1".into(),
             to: "b:2".into(),

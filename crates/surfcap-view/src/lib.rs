@@ -52,7 +52,7 @@ pub enum ViewError {
     Shape(String, usize, usize),
     #[error("{0}: {1} frame labels for {2} frames")]
     Labels(String, usize, usize),
-    #[error("{0}: face index {1} is not a vertex (0..{2})")]
+    #[error("{0}: face index {1} is not a vertex (expected 0 to {last})", last = .2.saturating_sub(1))]
     Face(String, u32, usize),
     #[error("{0}: the sequence has no frames")]
     Empty(String),
@@ -83,5 +83,16 @@ impl ViewItem {
             return Err(ViewError::Face(self.name.clone(), f, self.n_vertices));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod message_tests {
+    use super::ViewError;
+
+    #[test]
+    fn a_bad_face_index_names_the_last_valid_vertex() {
+        let e = ViewError::Face("crane".into(), 494, 494);
+        assert_eq!(e.to_string(), "crane: face index 494 is not a vertex (expected 0 to 493)");
     }
 }
