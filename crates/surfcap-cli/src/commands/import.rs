@@ -50,12 +50,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     // What each source was read as, so a folder read in an unexpected way is seen.
     for src in &imported.sources {
         ctx.say(&format!(
-            "read {}: {} -> sequence {:?}, {} frame{}",
+            "read {}: {} -> sequence {:?}, {}",
             src.origin.display(),
             src.layout,
             src.sequence,
-            src.frames,
-            if src.frames == 1 { "" } else { "s" }
+            crate::output::count_of(src.frames, "frame")
         ));
     }
     let mut s = imported.subject;

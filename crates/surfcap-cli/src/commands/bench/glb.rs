@@ -15,7 +15,6 @@ use surfcap_synth::{WormParams, worm_subject};
 use super::peak_rss;
 
 pub(super) fn run(ctx: &crate::Ctx, frames: usize, vertices: usize, output: Option<PathBuf>) -> anyhow::Result<()> {
-    anyhow::ensure!(frames >= 1, "--frames {frames}: expected at least 1");
     // One sequence, as a synthesised animation is: the tube's 500-frame motion repeated.
     let per = 500.min(frames);
     let rings = vertices.saturating_sub(2).div_ceil(25).max(2);

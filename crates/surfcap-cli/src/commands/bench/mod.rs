@@ -100,9 +100,9 @@ pub enum What {
     /// Write a long animation as .glb (default: 10 minutes at 30 fps of a 10,000-vertex tube,
     /// 18,000 frames): file size, bytes per frame, time and peak resident memory.
     Glb {
-        #[arg(long, default_value_t = 18_000)]
+        #[arg(long, default_value_t = 18_000, value_parser = crate::options::count)]
         frames: usize,
-        #[arg(long, default_value_t = 10_000)]
+        #[arg(long, default_value_t = 10_000, value_parser = crate::options::count)]
         vertices: usize,
         /// Keep the file here (default: a temporary folder, removed afterwards).
         #[arg(short, long)]

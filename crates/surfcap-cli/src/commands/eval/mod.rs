@@ -156,19 +156,19 @@ pub enum What {
         /// BVH files with real root travel (CMU joint names), e.g. ../shared/data/cmu_bvh/16_*.bvh.
         #[arg(long, num_args = 1.., required = true)]
         bvh: Vec<PathBuf>,
-        /// Target vertex count of the mannequin.
-        #[arg(long, default_value_t = 2000)]
+        /// Target vertex count of the mannequin (1000 to 20000).
+        #[arg(long, default_value_t = 2000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
         vertices: usize,
         /// Contact height, as a fraction of the subject's height above the ground.
-        #[arg(long, default_value_t = ContactParams::default().height)]
+        #[arg(long, default_value_t = ContactParams::default().height, value_parser = crate::options::positive)]
         contact_height: f64,
         /// Contact stillness, as a fraction of the subject's height per second: how closely the
         /// planted vertices move together.
-        #[arg(long, default_value_t = ContactParams::default().speed)]
+        #[arg(long, default_value_t = ContactParams::default().speed, value_parser = crate::options::positive)]
         contact_speed: f64,
         /// Largest vertical speed of a contact vertex, as a fraction of the subject's height per
         /// second.
-        #[arg(long, default_value_t = ContactParams::default().vertical_speed)]
+        #[arg(long, default_value_t = ContactParams::default().vertical_speed, value_parser = crate::options::positive)]
         contact_vertical_speed: f64,
         /// Folder for the report (root-motion.json).
         #[arg(short, long, default_value = "root-motion-eval")]
@@ -233,16 +233,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             pose_metric::run(ctx, &open(ctx, &subject, &source)?, &cache, &opts, &output)
         }
         What::RootMotion { bvh, vertices, contact_height, contact_speed, contact_vertical_speed, output } => {
-            for (name, x) in [
-                ("--contact-height", contact_height),
-                ("--contact-speed", contact_speed),
-                ("--contact-vertical-speed", contact_vertical_speed),
-            ] {
-                anyhow::ensure!(
-                    x.is_finite() && x > 0.0,
-                    "{name} {x}: expected a positive fraction of the subject's height"
-                );
-            }
             let opts = RootMotionOptions {
                 bvh,
                 vertices,

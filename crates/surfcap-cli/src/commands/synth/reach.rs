@@ -85,12 +85,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     // The time asks for a duration: `frames` steps of 1/fps, so the animation that lasts it
     // shows one frame more (both ends). Counts below are frames written, as `frames` is.
     let (asked_frames, obtained_frames) = (frames + 1, w.frames + 1);
+    let distance_error = (w.distance - a.distance).abs();
+    let time_error = w.frames.abs_diff(frames);
+    let fps = prep.subject().fps;
     let report = json!({
         "constraint": "reach", "from": a.from, "to": a.to,
-        "target_distance": a.distance, "distance": w.distance, "distance_error": (w.distance - a.distance).abs(),
-        "target_seconds": frames as f64 / prep.subject().fps, "seconds": w.frames as f64 / prep.subject().fps,
+        "target_distance": a.distance, "distance": w.distance, "distance_error": distance_error,
+        "target_seconds": frames as f64 / fps, "seconds": w.frames as f64 / fps,
         "target_frames": asked_frames, "obtained_frames": obtained_frames,
-        "time_error_frames": (w.frames as i64 - frames as i64).abs(),
+        "time_error_frames": time_error,
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
     let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
@@ -104,8 +107,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     played.report["pose_distance_from"] = json!(pose_distance_to_output(&prep, &played.output, from, 0)?);
     played.report["pose_distance_to"] = json!(pose_distance_to_output(&prep, &played.output, to, last)?);
     let tol = &a.out.constraints;
-    let distance_error = (w.distance - a.distance).abs();
-    let time_error = (w.frames as f64 - frames as f64).abs();
     let constraints = [
         Constraint::new(
             "distance",
@@ -116,13 +117,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             tol.distance(a.distance),
         )
         .relative_to(a.distance),
-        Constraint::new("time", "frames", asked_frames as f64, obtained_frames as f64, time_error, tol.frames())
+        Constraint::new("time", "frames", asked_frames as f64, obtained_frames as f64, time_error as f64, tol.frames())
             .relative_to(frames as f64),
     ];
     add_constraints(&mut played.report, &constraints);
     played.save_report()?;
     let units = &prep.subject().units;
-    let fps = prep.subject().fps;
     ctx.result(&played.report, || {
         println!(
             "{from_label} -> {to_label}: {} travelled (asked {}) in {obtained_frames} frames, {:.2} s (asked {}: \
