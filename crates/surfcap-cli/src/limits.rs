@@ -141,18 +141,8 @@ impl LimitOpts {
 /// followed in fewer than L / speed seconds, so frames estimated with it are a lower bound and a
 /// refusal is never spurious. `None` when nothing travels.
 pub fn fastest_speed(subject: &Subject, axes: &[usize]) -> Option<f64> {
-    let nv = subject.topology().n_vertices() as f64;
-    let centroid = |p: &[f32]| {
-        let mut c = [0f64; 3];
-        for v in p.chunks_exact(3) {
-            for k in 0..3 {
-                c[k] += v[k] as f64 / nv;
-            }
-        }
-        c
-    };
     let speed = |s: &surfcap_mesh::Sequence| {
-        let cs: Vec<[f64; 3]> = (0..s.n_frames()).map(|f| centroid(s.frame(f))).collect();
+        let cs: Vec<[f64; 3]> = (0..s.n_frames()).map(|f| surfcap_motion::blend::centre(s.frame(f))).collect();
         let travel: f64 =
             cs.windows(2).map(|w| axes.iter().map(|&k| (w[1][k] - w[0][k]).powi(2)).sum::<f64>().sqrt()).sum();
         travel / (s.n_frames().max(2) - 1) as f64 * subject.fps

@@ -4,18 +4,18 @@
 //! clips and how to give them travel (`import --root-motion contacts`).
 
 use surfcap_mesh::Subject;
-use surfcap_motion::clip_travel::{IN_PLACE_HEIGHTS_PER_SECOND, subject_height, subject_travel};
+use surfcap_motion::clip_travel::{ClipTravel, IN_PLACE_HEIGHTS_PER_SECOND, subject_height};
 
 /// Fails when none of the clips `allowed` (all when `None`; else one flag per sequence, as a
-/// tag restriction selects them) travels. `what` names the constraint in the message.
-pub fn require_travel(s: &Subject, what: &str, allowed: Option<&[bool]>) -> anyhow::Result<()> {
-    let travel = subject_travel(s);
+/// tag restriction selects them) travels. `travel` is `subject_travel(s)`, computed once by the
+/// caller however many constraints it checks. `what` names the constraint in the message.
+pub fn require_travel(s: &Subject, travel: &[ClipTravel], what: &str, allowed: Option<&[bool]>) -> anyhow::Result<()> {
     let chosen: Vec<_> =
         travel.iter().enumerate().filter(|(q, _)| allowed.is_none_or(|a| a[*q])).map(|x| x.1).collect();
     if chosen.is_empty() || chosen.iter().any(|t| !t.in_place) {
         return Ok(());
     }
-    let unit = s.units.name.as_str();
+    let unit = crate::output::unit_name(&s.units);
     let shown = 10;
     let mut names: Vec<String> = chosen
         .iter()

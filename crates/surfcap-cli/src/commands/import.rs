@@ -67,13 +67,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         for r in &recovered {
             ctx.note(&format!(
-                "{}: root motion recovered from ground contacts ({} of {} frame steps with contact): net displacement {:.2} -> {:.2} {}",
+                "{}: root motion recovered from ground contacts ({} of {} frame steps with contact): net displacement {} -> {}",
                 r.sequence,
                 r.contact_steps,
                 r.frames.saturating_sub(1),
-                r.before,
-                r.after,
-                s.units.name
+                crate::output::length(r.before, &s.units, 2),
+                crate::output::length(r.after, &s.units, 2)
             ));
         }
     }

@@ -70,9 +70,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .iter()
         .map(|t| parse_restriction(&s, t).with_context(|| format!("--tags {t:?}")))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    crate::travel::require_travel(&s, "a path constraint", None)?;
+    let travel = surfcap_motion::clip_travel::subject_travel(&s);
+    crate::travel::require_travel(&s, &travel, "a path constraint", None)?;
     for (t, r) in a.tags.iter().zip(&restrictions) {
-        crate::travel::require_travel(&s, &format!("--tags {t}"), Some(&r.allowed))?;
+        crate::travel::require_travel(&s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
     }
     let start = a.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
     let search = PathSearch {

@@ -74,7 +74,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (from_label, to_label) = (s.frame_index().label(from as usize), s.frame_index().label(to as usize));
     a.out.limits.check(&Request { what, frames: frames as f64, subject: &s, search_bytes, format: a.out.format() })?;
     if a.distance > 0.0 {
-        crate::travel::require_travel(&s, &format!("--distance {}", a.distance), None)?;
+        let travel = surfcap_motion::clip_travel::subject_travel(&s);
+        crate::travel::require_travel(&s, &travel, &format!("--distance {}", a.distance), None)?;
     }
     let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
     let t0 = Instant::now();
