@@ -15,6 +15,8 @@
 
 pub mod body_parts;
 pub mod error;
+pub mod pose_representation;
+pub mod transfer_model;
 
 pub use body_parts::BodyParts;
 pub use error::{Error, Result};
