@@ -15,6 +15,7 @@
 
 pub mod body_parts;
 pub mod error;
+pub mod motion_transfer;
 pub mod pose_representation;
 pub mod transfer_model;
 
