@@ -80,6 +80,10 @@ enum Command {
     /// One static HTML page of what exists for a subject: summary, cached distance matrix,
     /// included evaluations (tables, plots) and animations (with their path errors).
     Report(commands::report::Args),
+    /// Motion transfer between two subjects by GP regression on body parts (thesis ch. 5):
+    /// train a model from pairs of corresponding frames, apply it to new motions.
+    #[command(subcommand)]
+    Transfer(commands::transfer::Cmd),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -194,6 +198,7 @@ fn main() -> ExitCode {
             Command::Bench(a) => commands::bench::run(&ctx, a),
             Command::View(a) => commands::view::run(&ctx, a),
             Command::Report(a) => commands::report::run(&ctx, a),
+            Command::Transfer(c) => commands::transfer::run(&ctx, c),
         }
     });
     match result {

@@ -16,8 +16,10 @@
 pub mod body_parts;
 pub mod error;
 pub mod motion_transfer;
+pub mod pairs_file;
 pub mod pose_representation;
 pub mod transfer_model;
+pub mod transfer_model_file;
 
 pub use body_parts::BodyParts;
 pub use error::{Error, Result};

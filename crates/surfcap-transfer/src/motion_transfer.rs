@@ -227,10 +227,7 @@ impl MotionTransfer {
             problems.push((source_space.encode(sk, &src_poses)?, target_space.encode(k, &tgt_poses)?));
         }
         let n = pairs.len();
-        problems.push((
-            Mat::from_fn(n, 6, |i, j| src[i].1[j]),
-            Mat::from_fn(n, 6, |i, j| tgt[i].1[j]),
-        ));
+        problems.push((Mat::from_fn(n, 6, |i, j| src[i].1[j]), Mat::from_fn(n, 6, |i, j| tgt[i].1[j])));
         let mut fitted = fit_all(problems, &opts.mapping)?;
         let (displacement_map, displacement_fit) = fitted.pop().expect("the displacement problem was pushed last");
         let mut part_maps = Vec::new();
@@ -249,8 +246,16 @@ impl MotionTransfer {
             part_maps.push(map);
         }
         let model = MotionTransfer {
-            source: SubjectSpace { reference: source.reference.clone(), parts: source_parts.clone(), space: source_space },
-            target: SubjectSpace { reference: target.reference.clone(), parts: target_parts.clone(), space: target_space },
+            source: SubjectSpace {
+                reference: source.reference.clone(),
+                parts: source_parts.clone(),
+                space: source_space,
+            },
+            target: SubjectSpace {
+                reference: target.reference.clone(),
+                parts: target_parts.clone(),
+                space: target_space,
+            },
             source_part_of,
             part_maps,
             displacement_map,

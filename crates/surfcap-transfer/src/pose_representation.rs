@@ -204,7 +204,8 @@ mod tests {
     #[test]
     fn alignment_removes_a_rigid_motion_exactly() {
         let reference: Vec<f32> = vec![0., 0., 0., 1., 0., 0., 0., 2., 0., 0., 0., 3., 1., 1., 1.];
-        let p = Placement { rotation: rot(Vector3::new(1.0, 0.5, -0.3), 1.2), translation: Vector3::new(3.0, -1.0, 2.0) };
+        let p =
+            Placement { rotation: rot(Vector3::new(1.0, 0.5, -0.3), 1.2), translation: Vector3::new(3.0, -1.0, 2.0) };
         let moved = p.apply(&reference);
         let (aligned, back) = align_to_reference(&reference, &moved);
         for (a, r) in aligned.iter().zip(&reference) {

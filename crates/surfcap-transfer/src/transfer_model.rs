@@ -123,10 +123,8 @@ impl PoseMapping {
             return Err(Error::Invalid(format!("{} training pairs: expected at least 2", x.nrows())));
         }
         let n = x.nrows() as f64;
-        let scale2 = (0..x.nrows())
-            .map(|i| (0..x.ncols()).map(|j| x[(i, j)] * x[(i, j)]).sum::<f64>())
-            .sum::<f64>()
-            / n;
+        let scale2 =
+            (0..x.nrows()).map(|i| (0..x.ncols()).map(|j| x[(i, j)] * x[(i, j)]).sum::<f64>()).sum::<f64>() / n;
         let var_y = output_variance(&y);
         let kernel = opts.kernel.initial(scale2, var_y);
         let noise = (opts.relative_noise * var_y).max(1e-12);

@@ -55,10 +55,15 @@ fn knight_to_barbarian_walk_transfers_an_unseen_walk_within_a_few_percent_of_hei
     let out = model.transfer(&source, |p| assemble_by_average(&model.target.parts, p)).unwrap();
     assert_eq!(out.world.len(), kseq.n_frames());
     let h = height(bseq.frame(0));
-    let errs: Vec<f64> = (0..bseq.n_frames()).map(|f| rms_after_alignment(&out.aligned[f], bseq.frame(f)) / h).collect();
+    let errs: Vec<f64> =
+        (0..bseq.n_frames()).map(|f| rms_after_alignment(&out.aligned[f], bseq.frame(f)) / h).collect();
     let mean = errs.iter().sum::<f64>() / errs.len() as f64;
     let worst = errs.iter().cloned().fold(0.0, f64::max);
-    eprintln!("knight -> barbarian Walking_C: RMS per-vertex error {:.2}% of height (worst frame {:.2}%)", 100.0 * mean, 100.0 * worst);
+    eprintln!(
+        "knight -> barbarian Walking_C: RMS per-vertex error {:.2}% of height (worst frame {:.2}%)",
+        100.0 * mean,
+        100.0 * worst
+    );
     assert!(mean < 0.03, "mean {mean}");
     assert!(out.world.iter().flatten().all(|v| v.is_finite()));
 }

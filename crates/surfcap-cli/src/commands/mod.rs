@@ -12,6 +12,7 @@ pub mod info;
 pub mod interpolate;
 pub mod report;
 pub mod synth;
+pub mod transfer;
 pub mod transition;
 pub mod transitions;
 pub mod view;

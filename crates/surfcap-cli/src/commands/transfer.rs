@@ -1,0 +1,270 @@
+//! `surfcap transfer train | apply`: motion transfer between two subjects by GP regression on
+//! body parts (thesis chapter 5; `surfcap-transfer`).
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde_json::json;
+use surfcap_mesh::export::export;
+use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
+use surfcap_transfer::BodyParts;
+use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions, assemble_by_average};
+use surfcap_transfer::pairs_file::parse_pairs;
+use surfcap_transfer::transfer_model::TransferKernel;
+use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, read_model, write_model};
+
+use crate::limits::Request;
+use crate::options::{OutOpts, SourceOpts, open};
+
+#[derive(clap::Subcommand, Debug)]
+pub enum Cmd {
+    /// Learn the transfer from a source subject to a target subject from pairs of
+    /// corresponding frames (thesis 5.4-5.5), saved as a model folder.
+    Train(TrainArgs),
+    /// Transfer a motion of the source subject onto the target with a trained model (5.6).
+    Apply(ApplyArgs),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct TrainArgs {
+    /// The source subject (a subject cache or any source `surfcap import` reads).
+    #[arg(long)]
+    pub source: PathBuf,
+    /// The target subject.
+    #[arg(long)]
+    pub target: PathBuf,
+    /// CSV of corresponding frames, one `source sequence:frame, target sequence:frame` per line
+    /// (ranges `walk:0-29, walk:0-29` pair frames one to one; `#` comments).
+    #[arg(long)]
+    pub pairs: PathBuf,
+    /// Body parts of the source (a parts file, see README "Body parts"); default: one part,
+    /// the whole body.
+    #[arg(long)]
+    pub source_parts: Option<PathBuf>,
+    /// Body parts of the target, with the same part names as the source's.
+    #[arg(long)]
+    pub target_parts: Option<PathBuf>,
+    /// PCA components per part (thesis 5.4.3: 20).
+    #[arg(long, default_value_t = 20, value_parser = |s: &str| crate::options::at_least(s, 1))]
+    pub components: usize,
+    /// GP kernel: nn (thesis eq. 5.13), se or linear (eq. 5.14).
+    #[arg(long, default_value = "nn", value_parser = |s: &str| TransferKernel::parse(s).map_err(|e| e.to_string()))]
+    pub kernel: TransferKernel,
+    /// Seed of the hyper-parameter fits' restarts.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// The model folder to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub source_opts: SourceOpts,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ApplyArgs {
+    /// A model folder written by `surfcap transfer train`.
+    pub model: PathBuf,
+    /// The motion to transfer: `SUBJECT:SEQUENCE`, a source-subject path and one of its
+    /// sequences (any motion of the source, seen in training or not).
+    #[arg(long)]
+    pub motion: String,
+    #[command(flatten)]
+    pub out: OutOpts,
+    #[command(flatten)]
+    pub source_opts: SourceOpts,
+}
+
+pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
+    match cmd {
+        Cmd::Train(a) => train(ctx, a),
+        Cmd::Apply(a) => apply(ctx, a),
+    }
+}
+
+fn read_parts(path: Option<&Path>, s: &Subject, who: &str) -> anyhow::Result<BodyParts> {
+    let parts = match path {
+        None => BodyParts::whole_body(s.topology().n_vertices()),
+        Some(p) => {
+            let text = String::from_utf8(surfcap_mesh::read_regular_file(p)?)
+                .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a JSON parts file", p.display()))?;
+            BodyParts::from_json(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?
+        }
+    };
+    parts.check_fits(s.topology()).map_err(|e| {
+        let file = path.map_or("the whole-body part".to_string(), |p| p.display().to_string());
+        anyhow::anyhow!("{file} for the {who} subject {:?}: {e}", s.name)
+    })?;
+    Ok(parts)
+}
+
+fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
+    let mut inputs: Vec<&Path> = vec![&a.source, &a.target, &a.pairs];
+    inputs.extend(a.source_parts.as_deref());
+    inputs.extend(a.target_parts.as_deref());
+    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
+    ctx.claim_dir(&a.output, KIND)?;
+    let t0 = Instant::now();
+    let source = open(ctx, &a.source, &a.source_opts)?;
+    let target = open(ctx, &a.target, &a.source_opts)?;
+    let text = String::from_utf8(surfcap_mesh::read_regular_file(&a.pairs)?)
+        .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a CSV of frame pairs", a.pairs.display()))?;
+    let keys = parse_pairs(&text, &a.pairs.display().to_string(), &source, &target)?;
+    let source_parts = read_parts(a.source_parts.as_deref(), &source, "source")?;
+    let target_parts = read_parts(a.target_parts.as_deref(), &target, "target")?;
+
+    // The sequences the pairs use, in order of first use; every frame of them feeds the PCA.
+    let sequences_of = |s: &Subject, frames: &mut dyn Iterator<Item = usize>| -> Vec<usize> {
+        let mut seen = Vec::new();
+        for g in frames {
+            let (k, _) = s.frame_index().locate(g).expect("resolved frames are in range");
+            if !seen.contains(&k) {
+                seen.push(k);
+            }
+        }
+        seen
+    };
+    let src_seqs = sequences_of(&source, &mut keys.iter().map(|k| k.source));
+    let tgt_seqs = sequences_of(&target, &mut keys.iter().map(|k| k.target));
+    let src = PreparedSubject::new(&source, &src_seqs)?;
+    let tgt = PreparedSubject::new(&target, &tgt_seqs)?;
+    let pca_src: Vec<usize> = src_seqs.iter().flat_map(|&k| source.frame_index().range(k)).collect();
+    let pca_tgt: Vec<usize> = tgt_seqs.iter().flat_map(|&k| target.frame_index().range(k)).collect();
+    let pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
+
+    let mut opts = TrainOptions { components: a.components, ..TrainOptions::default() };
+    opts.mapping.kernel = a.kernel;
+    opts.mapping.fit.seed = a.seed;
+    ctx.say(&format!(
+        "training {} -> {} on {} pairs ({} source, {} target sequences), {} parts, {} components, kernel {}",
+        source.name,
+        target.name,
+        pairs.len(),
+        src_seqs.len(),
+        tgt_seqs.len(),
+        target_parts.len(),
+        a.components,
+        a.kernel.name()
+    ));
+    let t_fit = Instant::now();
+    let (model, report) =
+        MotionTransfer::train(&src, &source_parts, &pca_src, &tgt, &target_parts, &pca_tgt, &pairs, &opts)?;
+    let fit_seconds = t_fit.elapsed().as_secs_f64();
+    let distinct: BTreeSet<usize> = pairs.iter().map(|p| p.1).collect();
+    let training: Vec<Vec<f32>> =
+        distinct.iter().map(|&g| tgt.frame(g).map(|f| f.0.to_vec())).collect::<Result<_, _>>()?;
+    write_model(&a.output, &model, &SubjectsMeta::new(&source, &target), &training)?;
+    let result = json!({
+        "model": a.output, "source": source.name, "target": target.name,
+        "pairs": pairs.len(), "key_pairs": keys.len(),
+        "source_sequences": src_seqs.iter().map(|&k| source.sequences()[k].name.clone()).collect::<Vec<_>>(),
+        "target_sequences": tgt_seqs.iter().map(|&k| target.sequences()[k].name.clone()).collect::<Vec<_>>(),
+        "kernel": a.kernel.name(), "components": a.components,
+        "parts": report.parts, "displacement": report.displacement,
+        "fit_seconds": fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
+    });
+    crate::output::write_json(&a.output.join("report.json"), &result)?;
+    ctx.result(&result, || {
+        println!(
+            "{} -> {}: {} pairs, {} parts, fitted in {fit_seconds:.2} s -> {}",
+            source.name,
+            target.name,
+            pairs.len(),
+            report.parts.len(),
+            a.output.display()
+        );
+        for p in &report.parts {
+            println!(
+                "  {:<12} {:>6} -> {:>6} vertices, {:>2} -> {:>2} components ({:.1}% of the target part's variance)",
+                p.name,
+                p.source_vertices,
+                p.target_vertices,
+                p.source_components,
+                p.target_components,
+                100.0 * p.target_explained_variance
+            );
+        }
+    });
+    Ok(())
+}
+
+fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
+    let (subject_path, sequence) = a.motion.rsplit_once(':').ok_or_else(|| {
+        anyhow::anyhow!(
+            "--motion {:?}: expected SUBJECT:SEQUENCE (a source-subject path and a sequence name)",
+            a.motion
+        )
+    })?;
+    let subject_path = PathBuf::from(subject_path);
+    let format = a.out.format();
+    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.model, &subject_path])?;
+    let t0 = Instant::now();
+    let saved = read_model(&a.model)?;
+    let model = &saved.model;
+    let source = open(ctx, &subject_path, &a.source_opts)?;
+    let nv_source = model.source.reference.len() / 3;
+    if source.topology().n_vertices() != nv_source {
+        anyhow::bail!(
+            "{}: {} vertices, but the model {} was trained on a source of {nv_source} vertices ({}): expected a motion of that subject",
+            subject_path.display(),
+            source.topology().n_vertices(),
+            a.model.display(),
+            saved.subjects.source_name
+        );
+    }
+    let (_, seq) = source.sequence(sequence).ok_or_else(|| {
+        let known: Vec<&str> = source.sequences().iter().map(|q| q.name.as_str()).collect();
+        anyhow::anyhow!(
+            "--motion: {} has no sequence {sequence:?}; it has {}",
+            subject_path.display(),
+            known.join(", ")
+        )
+    })?;
+    let meta = &saved.subjects;
+    let nv = model.target.reference.len() / 3;
+    let topology = Topology::new(nv, meta.target_triangles.clone(), None)?;
+    let frames: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
+    let t_transfer = Instant::now();
+    let out = model.transfer(&frames, |p| assemble_by_average(&model.target.parts, p))?;
+    let transfer_seconds = t_transfer.elapsed().as_secs_f64();
+    let name = format!("{}-as-{}", seq.name, meta.target_name);
+    let positions: Vec<f32> = out.world.iter().flatten().copied().collect();
+    let out_seq = Sequence::new(name.clone(), nv, positions)?
+        .with_labels(vec![FrameLabel::Synthetic; seq.n_frames()])?
+        .with_tags(vec!["transfer".into()]);
+    let out_subject = Subject::new(
+        name.clone(),
+        topology,
+        vec![out_seq],
+        meta.target_fps,
+        meta.target_up_axis,
+        meta.target_units.clone(),
+    )?;
+    a.out.limits.check(&Request {
+        what: format!("--motion {}", a.motion),
+        frames: seq.n_frames() as f64,
+        subject: &out_subject,
+        search_bytes: 0,
+        format,
+    })?;
+    let bar = crate::progress::Bar::new(ctx);
+    let written = export(&out_subject, format, &a.out.output, ctx.export_options(), &bar)?;
+    let report = json!({
+        "model": a.model, "motion": a.motion, "source": meta.source_name, "target": meta.target_name,
+        "frames": seq.n_frames(), "reconstruction": "average of overlapping parts",
+        "transfer_seconds": transfer_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
+        "per_frame": { "displacement": out.displacements },
+        "written": written,
+    });
+    crate::output::write_json(&crate::synthesis::report_path(&a.out.output), &report)?;
+    ctx.result(&report, || {
+        println!(
+            "{} ({} frames) transferred onto {} in {transfer_seconds:.2} s -> {}",
+            a.motion,
+            seq.n_frames(),
+            meta.target_name,
+            a.out.output.display()
+        );
+    });
+    Ok(())
+}

@@ -1,0 +1,116 @@
+//! A trained transfer on disk, so it is trained once and applied many times (the issue's
+//! "the trained model is a derived product, cached and reloadable").
+//!
+//! A folder (surfcap's marked folder output of kind [`KIND`]) holding:
+//! - `model.json`: [`MotionTransfer`] (both subjects' references, parts and per-part PCA, the
+//!   GP inputs, outputs and fitted hyper-parameters; the GP factorisations are recomputed on
+//!   load, a few milliseconds for hundreds of pairs), with a `format`/`version` header;
+//! - `target_training.npy`: f32 `[N, V, 3]`, the target's aligned training poses, the examples
+//!   the part correction of 5.6.1 draws its nearest meshes from (numpy opens it).
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use surfcap_mesh::io::npy::{expect_shape, read_npy, write_npy};
+
+use crate::error::{Error, Result};
+use crate::motion_transfer::MotionTransfer;
+
+/// The folder kind of a saved model (its `.surfcap-output.json` marker).
+pub const KIND: &str = "transfer-model";
+const FORMAT: &str = "surfcap-transfer-model";
+const VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+struct Envelope<M, S> {
+    format: String,
+    version: u32,
+    subjects: S,
+    model: M,
+}
+
+/// What a saved model remembers of the two subjects besides their pose spaces: the target's
+/// mesh and time base (a transferred motion is written as the target), and names for reports.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SubjectsMeta {
+    pub source_name: String,
+    pub source_fps: f64,
+    pub target_name: String,
+    pub target_triangles: Vec<[u32; 3]>,
+    pub target_fps: f64,
+    pub target_up_axis: surfcap_mesh::UpAxis,
+    pub target_units: surfcap_mesh::Units,
+}
+
+impl SubjectsMeta {
+    pub fn new(source: &surfcap_mesh::Subject, target: &surfcap_mesh::Subject) -> SubjectsMeta {
+        SubjectsMeta {
+            source_name: source.name.clone(),
+            source_fps: source.fps,
+            target_name: target.name.clone(),
+            target_triangles: target.topology().triangles().to_vec(),
+            target_fps: target.fps,
+            target_up_axis: target.up_axis,
+            target_units: target.units.clone(),
+        }
+    }
+}
+
+/// A model read back.
+pub struct SavedModel {
+    pub model: MotionTransfer,
+    pub subjects: SubjectsMeta,
+    /// The target's aligned training poses.
+    pub target_training: Vec<Vec<f32>>,
+}
+
+/// Writes `model.json` and `target_training.npy` into `dir` (which the caller has claimed).
+pub fn write_model(
+    dir: &Path,
+    model: &MotionTransfer,
+    subjects: &SubjectsMeta,
+    target_training: &[Vec<f32>],
+) -> Result<()> {
+    let nv = model.target.reference.len() / 3;
+    if let Some(bad) = target_training.iter().position(|p| p.len() != 3 * nv) {
+        return Err(Error::Invalid(format!("target training pose {bad}: expected {nv} vertices")));
+    }
+    let env = Envelope { format: FORMAT.into(), version: VERSION, subjects, model };
+    surfcap_mesh::atomic::write_file(&dir.join("model.json"), |w| {
+        serde_json::to_writer(&mut *w, &env).map_err(std::io::Error::other)
+    })?;
+    let flat: Vec<f32> = target_training.iter().flatten().copied().collect();
+    surfcap_mesh::atomic::write_file(&dir.join("target_training.npy"), |w| {
+        write_npy(w, &[target_training.len(), nv, 3], &flat)
+    })?;
+    Ok(())
+}
+
+/// Reads a model written by [`write_model`]; errors name the file and what was expected.
+pub fn read_model(dir: &Path) -> Result<SavedModel> {
+    let path = dir.join("model.json");
+    let bytes = surfcap_mesh::read_regular_file(&path)?;
+    let bad = |why: String| Error::Invalid(format!("{}: {why}", path.display()));
+    let head: Envelope<serde::de::IgnoredAny, serde::de::IgnoredAny> = serde_json::from_slice(&bytes)
+        .map_err(|e| bad(format!("{e}: expected a model written by surfcap transfer train")))?;
+    if head.format != FORMAT || head.version != VERSION {
+        return Err(bad(format!(
+            "format {:?} version {}: expected {FORMAT:?} version {VERSION} (retrain with this surfcap)",
+            head.format, head.version
+        )));
+    }
+    let env: Envelope<MotionTransfer, SubjectsMeta> =
+        serde_json::from_slice(&bytes).map_err(|e| bad(format!("{e}")))?;
+    let model = env.model;
+    model.source.parts.validate().map_err(|e| bad(format!("source {e}")))?;
+    model.target.parts.validate().map_err(|e| bad(format!("target {e}")))?;
+    let nv = model.target.reference.len() / 3;
+    let npy_path = dir.join("target_training.npy");
+    let a = read_npy::<f32>(&npy_path)?;
+    expect_shape(&a, &[None, Some(nv), Some(3)], "the target's training poses").map_err(|e| e.in_file(&npy_path))?;
+    if env.subjects.target_triangles.iter().flatten().any(|&v| v as usize >= nv) {
+        return Err(bad(format!("the target's triangles name vertices beyond its {nv}")));
+    }
+    let target_training = a.data.chunks_exact(3 * nv).map(<[f32]>::to_vec).collect();
+    Ok(SavedModel { model, subjects: env.subjects, target_training })
+}
