@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use surfcap_eval::{
     GpdmEvalOptions, GraphComparisonOptions, InterpolationOptions, PoseMetricOptions, RootMotionOptions,
-    TransitionCostsOptions,
+    TransitionCostsOptions, transfer_eval::TransferEvalOptions,
 };
 use surfcap_geometry::pose_interpolation::StretchInterpolation;
 use surfcap_geometry::root_motion_from_contacts::ContactParams;
@@ -17,6 +17,7 @@ mod graphs;
 mod interpolation;
 mod pose_metric;
 mod root_motion;
+mod transfer;
 mod transitions;
 
 #[derive(clap::Args, Debug)]
@@ -174,6 +175,30 @@ pub enum What {
         #[arg(short, long, default_value = "root-motion-eval")]
         output: PathBuf,
     },
+    /// Motion transfer against ground truth (thesis 5.7, Fig. 5.8-5.10): learning curves of
+    /// GP-NN, GP-SE and linear regression (random and key-seeded training subsets, with and
+    /// without body parts) and motions absent from training, on the KayKit knight to the
+    /// barbarian, mage and rogue and on two mannequins driven by the same CMU clips.
+    Transfer {
+        /// The shared data folder (KayKit characters and CMU clips).
+        #[arg(long, default_value = "../shared/data")]
+        data: PathBuf,
+        /// Cases: barbarian, mage, rogue (the KayKit knight to each) and mannequins (an average
+        /// mannequin of 3,000 vertices to a heavy one of 5,000).
+        #[arg(long, value_delimiter = ',', default_value = "barbarian,mage,rogue,mannequins")]
+        cases: Vec<String>,
+        /// Training-set sizes of the learning curves (pairs).
+        #[arg(long, value_delimiter = ',', default_value = "10,25,50,100,200,350", value_parser = |s: &str| crate::options::at_least(s, 2))]
+        sizes: Vec<usize>,
+        /// PCA components per part.
+        #[arg(long, default_value_t = 20, value_parser = |s: &str| crate::options::at_least(s, 1))]
+        components: usize,
+        /// Seed of the 70/30 split and the fits' restarts.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        #[arg(short, long, default_value = "transfer-eval")]
+        output: PathBuf,
+    },
 }
 
 /// Refuses an output that overlaps the subject, then makes it an evaluation folder of `kind`.
@@ -195,6 +220,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let inputs: Vec<&Path> = bvh.iter().map(PathBuf::as_path).collect();
             surfcap_mesh::output_path::check_not_input(output, &inputs)?;
             ctx.claim_dir(output, "eval-root-motion")?;
+        }
+        What::Transfer { data, output, .. } => {
+            surfcap_mesh::output_path::check_not_input(output, &[data])?;
+            ctx.claim_dir(output, "eval-transfer")?;
         }
     }
     match a.what {
@@ -243,6 +272,25 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 },
             };
             root_motion::run(ctx, &opts, &output)
+        }
+        What::Transfer { data, cases, sizes, components, seed, output } => {
+            use surfcap_eval::transfer_eval::{kaykit_case, mannequin_case};
+            use surfcap_synth::mannequin::BodyShape;
+            let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
+            let mut built = Vec::new();
+            for c in &cases {
+                built.push(match c.as_str() {
+                    "barbarian" | "mage" | "rogue" => kaykit_case(&data, c, None)?,
+                    "mannequins" => mannequin_case(
+                        &data,
+                        ("mannequin-average-3k", &BodyShape::average(), 3000),
+                        ("mannequin-heavy-5k", &BodyShape::heavy(), 5000),
+                        None,
+                    )?,
+                    other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue or mannequins"),
+                });
+            }
+            transfer::run(ctx, built, &opts, &output)
         }
     }
 }

@@ -1,0 +1,118 @@
+//! `surfcap eval transfer`: motion transfer against ground truth (thesis 5.7, Fig. 5.8-5.10;
+//! `surfcap_eval::transfer_eval` computes it). Writes `transfer.json`, one learning-curve plot
+//! per case and variant, and prints the cross-validation errors per method and size.
+
+use std::path::{Path, PathBuf};
+
+use surfcap_eval::transfer_eval::{CaseEval, TransferCase, TransferEvalOptions, transfer_case_eval};
+use surfcap_plot::{LineChart, Series, write_line_chart};
+
+const PALETTE: [(u8, u8, u8); 6] =
+    [(31, 95, 191), (208, 48, 48), (46, 158, 68), (224, 138, 0), (120, 60, 170), (90, 90, 90)];
+
+/// Learning curves of one variant: solid cross-validation, dashed training error.
+fn curve_plot(dir: &Path, c: &CaseEval, variants: &[&str], stem: &str, title: &str) -> anyhow::Result<Vec<PathBuf>> {
+    let mut series = Vec::new();
+    for (k, curve) in c.curves.iter().filter(|x| variants.contains(&x.variant.as_str())).enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        let label =
+            if variants.len() > 1 { format!("{} ({})", curve.method, curve.variant) } else { curve.method.clone() };
+        series.push(Series {
+            name: format!("{label}, cross-validation"),
+            points: curve.points.iter().map(|p| (p.size as f64, p.cv_percent)).collect(),
+            color,
+            dashed: false,
+            markers: true,
+        });
+        series.push(Series {
+            name: format!("{label}, training"),
+            points: curve.points.iter().map(|p| (p.size as f64, p.train_percent)).collect(),
+            color,
+            dashed: true,
+            markers: true,
+        });
+    }
+    if series.is_empty() {
+        return Ok(Vec::new());
+    }
+    let chart = LineChart {
+        title: format!("{}: {title}", c.name),
+        x_label: "training pairs".into(),
+        y_label: "RMS per-vertex error (% of target height)".into(),
+        series,
+    };
+    let slug: String = c.name.chars().map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' }).collect();
+    Ok(write_line_chart(&dir.join(format!("{slug}_{stem}")), &chart)?)
+}
+
+pub fn run(
+    ctx: &crate::Ctx,
+    cases: Vec<TransferCase>,
+    opts: &TransferEvalOptions,
+    output: &Path,
+) -> anyhow::Result<()> {
+    let t0 = std::time::Instant::now();
+    let mut results = Vec::new();
+    let mut plots = Vec::new();
+    for case in &cases {
+        ctx.say(&format!(
+            "{}: {} -> {} vertices, {} parts ...",
+            case.name,
+            case.source.topology().n_vertices(),
+            case.target.topology().n_vertices(),
+            case.target_parts.len()
+        ));
+        let r = transfer_case_eval(case, opts)?;
+        plots.extend(curve_plot(output, &r, &["random"], "learning_curves", "learning curves (Fig. 5.8)")?);
+        plots.extend(curve_plot(
+            output,
+            &r,
+            &["key-seeded"],
+            "key_seeded",
+            "training subsets seeded with key poses (Fig. 5.9)",
+        )?);
+        if r.curves.iter().any(|c| c.variant == "whole-body") {
+            let parts: Vec<&str> = vec!["whole-body"];
+            let mut both = r.clone();
+            both.curves
+                .retain(|c| c.method == "GP-NN" && (c.variant == "random" || parts.contains(&c.variant.as_str())));
+            for c in &mut both.curves {
+                if c.variant == "random" {
+                    c.variant = "parts".into();
+                }
+            }
+            plots.extend(curve_plot(
+                output,
+                &both,
+                &["parts", "whole-body"],
+                "parts",
+                "GP-NN with and without body parts (Fig. 5.10)",
+            )?);
+        }
+        results.push(r);
+    }
+    let report = serde_json::json!({ "cases": results, "seconds": t0.elapsed().as_secs_f64() });
+    let (report, path) = super::save_report(output, "transfer.json", &report, "plots", &plots)?;
+    ctx.result(&report, || {
+        for r in &results {
+            println!(
+                "{}: {} pool pairs ({} held out), target height {:.3} {}; RMS per-vertex error, % of height (training / cross-validation)",
+                r.name, r.pool_pairs, r.test_pairs, r.target_height, r.units
+            );
+            for c in &r.curves {
+                let cells: Vec<String> = c
+                    .points
+                    .iter()
+                    .map(|p| format!("n={} {:.2}/{:.2}", p.size, p.train_percent, p.cv_percent))
+                    .collect();
+                println!("  {:<8} {:<11} {}", c.method, c.variant, cells.join("  "));
+            }
+            println!("  motions absent from training (trained on all {} pool pairs):", r.pool_pairs);
+            for u in &r.unseen {
+                println!("    {:<8} {:<28} {:>4} frames {:>6.2}%", u.method, u.motion, u.frames, u.rms_percent);
+            }
+        }
+        super::print_wrote(&path, &plots);
+    });
+    Ok(())
+}
