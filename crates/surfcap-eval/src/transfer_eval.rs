@@ -261,38 +261,47 @@ fn height(s: &Subject, pose: &[f32]) -> f64 {
     (hi[k] - lo[k]) as f64
 }
 
-/// Trains `method` on `pairs` (global frames) and predicts the target's aligned poses for the
-/// source frames `test` (global).
-fn fit_predict(
-    case: &TransferCase,
-    parts: (&BodyParts, &BodyParts),
-    src: &PreparedSubject,
-    tgt: &PreparedSubject,
-    method: Method,
-    components: usize,
+/// A case with both subjects prepared (aligned), what every fit of it shares.
+struct Bench<'a> {
+    case: &'a TransferCase,
+    src: PreparedSubject,
+    tgt: PreparedSubject,
     seed: u64,
-    pairs: &[(usize, usize)],
-    test: &[usize],
-) -> Result<Vec<Vec<f32>>> {
-    let _ = case;
-    let mut pca_s: Vec<usize> = pairs.iter().map(|p| p.0).collect();
-    let mut pca_t: Vec<usize> = pairs.iter().map(|p| p.1).collect();
-    pca_s.sort_unstable();
-    pca_s.dedup();
-    pca_t.sort_unstable();
-    pca_t.dedup();
-    let mut opts = TrainOptions { components, ..TrainOptions::default() };
-    opts.mapping.kernel = method.kernel();
-    opts.mapping.fit.seed = seed;
-    let (model, _) = MotionTransfer::train(src, parts.0, &pca_s, tgt, parts.1, &pca_t, pairs, &opts)
-        .map_err(|e| Error::Unsuitable(format!("{}: training {}: {e}", case.name, method.name())))?;
-    let poses: Vec<&[f32]> = test
-        .iter()
-        .map(|&g| src.frame(g).map(|f| f.0))
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|e| Error::Unsuitable(e.to_string()))?;
-    let predicted = model.predict_parts(&poses).map_err(|e| Error::Unsuitable(e.to_string()))?;
-    predicted.iter().map(|p| assemble_by_average(parts.1, p).map_err(|e| Error::Unsuitable(e.to_string()))).collect()
+}
+
+impl Bench<'_> {
+    /// Trains `method` on `pairs` (global frames) with `parts` and `components` per part, and
+    /// predicts the target's aligned poses for the source frames `test` (global).
+    fn fit_predict(
+        &self,
+        method: Method,
+        parts: (&BodyParts, &BodyParts),
+        components: usize,
+        pairs: &[(usize, usize)],
+        test: &[usize],
+    ) -> Result<Vec<Vec<f32>>> {
+        let unsuitable =
+            |e: surfcap_transfer::Error| Error::Unsuitable(format!("{}: {}: {e}", self.case.name, method.name()));
+        let distinct = |f: &dyn Fn(&(usize, usize)) -> usize| {
+            let mut v: Vec<usize> = pairs.iter().map(f).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let (pca_s, pca_t) = (distinct(&|p| p.0), distinct(&|p| p.1));
+        let mut opts = TrainOptions { components, ..TrainOptions::default() };
+        opts.mapping.kernel = method.kernel();
+        opts.mapping.fit.seed = self.seed;
+        let (model, _) = MotionTransfer::train(&self.src, parts.0, &pca_s, &self.tgt, parts.1, &pca_t, pairs, &opts)
+            .map_err(unsuitable)?;
+        let poses: Vec<&[f32]> = test
+            .iter()
+            .map(|&g| self.src.frame(g).map(|f| f.0))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(unsuitable)?;
+        let predicted = model.predict_parts(&poses).map_err(unsuitable)?;
+        predicted.iter().map(|p| assemble_by_average(parts.1, p).map_err(unsuitable)).collect()
+    }
 }
 
 /// RMS over frames and vertices (as `sqrt(mean of squared per-frame RMS)`).
@@ -319,6 +328,8 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
     let seqs_t: Vec<usize> = case.train.iter().chain(&case.unseen).map(|p| p.1).collect();
     let src = PreparedSubject::new(&case.source, &seqs_s).map_err(|e| Error::Unsuitable(e.to_string()))?;
     let tgt = PreparedSubject::new(&case.target, &seqs_t).map_err(|e| Error::Unsuitable(e.to_string()))?;
+    let bench = Bench { case, src, tgt, seed: opts.seed };
+    let tgt = &bench.tgt;
     let true_pairs = |(a, b): (usize, usize)| -> Result<Vec<(usize, usize)>> {
         let (ra, rb) = (case.source.frame_index().range(a), case.target.frame_index().range(b));
         if ra.len() != rb.len() {
@@ -368,12 +379,12 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         |method: Method, parts: (&BodyParts, &BodyParts), m: usize, subset: &[(usize, usize)]| -> Result<CurvePoint> {
             let s: Vec<usize> = subset.iter().map(|p| p.0).collect();
             let t: Vec<usize> = subset.iter().map(|p| p.1).collect();
-            let on_train = fit_predict(case, parts, &src, &tgt, method, m, opts.seed, subset, &s)?;
-            let on_test = fit_predict(case, parts, &src, &tgt, method, m, opts.seed, subset, &test_src)?;
+            let on_train = bench.fit_predict(method, parts, m, subset, &s)?;
+            let on_test = bench.fit_predict(method, parts, m, subset, &test_src)?;
             Ok(CurvePoint {
                 size: subset.len(),
-                train_percent: pct(rms_of(&tgt, &on_train, &t)?),
-                cv_percent: pct(rms_of(&tgt, &on_test, &test_tgt)?),
+                train_percent: pct(rms_of(tgt, &on_train, &t)?),
+                cv_percent: pct(rms_of(tgt, &on_test, &test_tgt)?),
             })
         };
     for method in Method::ALL {
@@ -409,8 +420,8 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
             let p = true_pairs((a, b))?;
             let s: Vec<usize> = p.iter().map(|x| x.0).collect();
             let t: Vec<usize> = p.iter().map(|x| x.1).collect();
-            let pred = fit_predict(case, parts, &src, &tgt, method, opts.components, opts.seed, &all_train, &s)?;
-            let rms = rms_of(&tgt, &pred, &t)?;
+            let pred = bench.fit_predict(method, parts, opts.components, &all_train, &s)?;
+            let rms = rms_of(tgt, &pred, &t)?;
             unseen.push(UnseenResult {
                 method: method.name().into(),
                 motion: case.target.sequences()[b].name.clone(),
