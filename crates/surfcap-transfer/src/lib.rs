@@ -14,6 +14,7 @@
 //! implements.
 
 pub mod body_parts;
+pub mod correspondence_densification;
 pub mod error;
 
 pub use body_parts::BodyParts;
