@@ -583,6 +583,10 @@ mod tests {
         tgt10[1] = &tgt10[1] * faer::Scale(1000.0);
         let c10 = association_costs(&src, &tgt10, &keys, 0.01).unwrap();
         assert!((&c - &c10).norm_max() < 1e-6 * c.norm_max());
+        // The same to the bit on one thread.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let c1 = pool.install(|| association_costs(&src, &tgt, &keys, 0.01)).unwrap();
+        assert!((0..12).all(|i| (0..10).all(|j| c1[(i, j)].to_bits() == c[(i, j)].to_bits())));
         // A key pair costs little; a wrong pairing a lot.
         assert!(c[(5, 4)] < 0.05 * c[(5, 9)], "{} vs {}", c[(5, 4)], c[(5, 9)]);
     }
@@ -609,6 +613,18 @@ mod tests {
         for &(i, j) in &d.pairs {
             assert!((i as f64 - 1.5 * j as f64).abs() <= 1.0, "pair ({i}, {j}) is off the warp");
         }
+    }
+
+    #[test]
+    fn a_target_that_is_a_stretch_of_the_source_is_placed_by_the_keys_span() {
+        // The target plays source times 10 to 30 only, so its mean pose is not the source's:
+        // the intercept absorbs the offset, and Span::Keys leaves the unmatched ends out.
+        let (src, tgt) = warped_pair(41, 21, |j| j + 10.0);
+        let keys = [(12, 2), (20, 10), (28, 18)];
+        let d = densify(&src, &tgt, &keys, &DensifyOptions { span: Span::Keys, ..Default::default() }).unwrap();
+        assert_eq!(d.pairs, (2..=18).map(|j| (j + 10, j)).collect::<Vec<_>>());
+        let map = d.target_of_source();
+        assert_eq!((map[11], map[12], map[28], map[29]), (None, Some(2.0), Some(18.0), None));
     }
 
     #[test]
