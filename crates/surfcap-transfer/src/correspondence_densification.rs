@@ -25,7 +25,11 @@
 //!   the PCA geometry isotropic, which the isotropic noise and predictive covariance of eq. 5.5
 //!   and 5.7 assume; whitening each coefficient would blow the near-zero trailing components up
 //!   to the size of the first. A part that does not move in a sequence (RMS below 1e-9 of its
-//!   coefficients' magnitude) is left at zero: it then costs the same for every pair.
+//!   coefficients' magnitude) is left at zero: it then costs the same for every pair. Measured
+//!   on the KayKit test (`tests/densify_real_data.rs`): the mean frame error moves by under 0.1
+//!   frame for `s^2` from 0.001 to 1; one scalar per side for all parts together (a still part
+//!   then votes less) was no better on the walks and worse on `Cheer` (0.50 and 0.61 against
+//!   0.48 and 0.52 frames).
 //! - **Intercept.** Eq. 5.4 has no intercept, which is right only when both sequences' poses are
 //!   centred on corresponding mean poses. PCA coefficients are centred over a whole training
 //!   set, not over one sequence, and with `Span::Keys` only part of the sequences correspond, so
