@@ -14,6 +14,7 @@
 //! implements.
 
 pub mod body_parts;
+pub mod correspondence_densification;
 pub mod error;
 pub mod motion_transfer;
 pub mod pairs_file;
