@@ -75,6 +75,16 @@ impl PreparedSubject {
         self.motions.values().flat_map(|m| m.aligned.iter().map(|p| p.as_slice())).collect()
     }
 
+    /// The (sequence, frame) of a global frame.
+    pub fn locate(&self, global: usize) -> Option<(usize, usize)> {
+        self.index.locate(global)
+    }
+
+    /// The global frames of sequence `k`.
+    pub fn range(&self, k: usize) -> std::ops::Range<usize> {
+        self.index.range(k)
+    }
+
     /// `sequence:frame` of a global frame.
     pub fn label(&self, global: usize) -> String {
         self.index.label(global)
@@ -165,7 +175,7 @@ fn poses_of<'a>(p: &'a PreparedSubject, frames: &[usize]) -> Result<Vec<&'a [f32
 }
 
 /// Matches target parts to source parts by name.
-fn match_parts(source: &BodyParts, target: &BodyParts) -> Result<Vec<usize>> {
+pub fn match_parts(source: &BodyParts, target: &BodyParts) -> Result<Vec<usize>> {
     let mut out = Vec::new();
     for p in &target.parts {
         match source.index(&p.name) {

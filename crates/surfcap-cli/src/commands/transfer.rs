@@ -10,7 +10,9 @@ use surfcap_mesh::export::export;
 use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions, assemble_by_average};
+use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::pairs_file::parse_pairs;
+use surfcap_transfer::training_pairs::densified_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, read_model, write_model};
 
@@ -54,6 +56,14 @@ pub struct TrainArgs {
     /// Seed of the hyper-parameter fits' restarts.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Train on the key pairs only, without densifying them (thesis 5.5.1) into one pair per
+    /// frame of each pair of sequences.
+    #[arg(long)]
+    pub no_densify: bool,
+    /// Densification: at most this many consecutive frames of one sequence matched to one
+    /// frame of the other (thesis: 3).
+    #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::options::at_least(s, 1))]
+    pub max_straight: usize,
     /// The model folder to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -130,7 +140,30 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let tgt = PreparedSubject::new(&target, &tgt_seqs)?;
     let pca_src: Vec<usize> = src_seqs.iter().flat_map(|&k| source.frame_index().range(k)).collect();
     let pca_tgt: Vec<usize> = tgt_seqs.iter().flat_map(|&k| target.frame_index().range(k)).collect();
-    let pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
+    let key_pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
+    let (pairs, groups) = if a.no_densify {
+        (key_pairs.clone(), Vec::new())
+    } else {
+        let opts = DensifyOptions { max_straight: a.max_straight, ..DensifyOptions::default() };
+        densified_pairs(&src, &source_parts, &tgt, &target_parts, &key_pairs, a.components, &opts)?
+    };
+    let groups: Vec<serde_json::Value> = groups
+        .iter()
+        .map(|g| {
+            json!({
+                "source_sequence": source.sequences()[g.source_sequence].name,
+                "target_sequence": target.sequences()[g.target_sequence].name,
+                "keys": g.keys, "pairs": g.pairs, "densified": g.densified, "mean_cost": g.mean_cost,
+            })
+        })
+        .collect();
+    for g in groups.iter().filter(|g| g["densified"] == false) {
+        ctx.note(&format!(
+            "{} -> {}: a single key pair, kept as it is (densification needs at least two per pair of sequences)",
+            g["source_sequence"].as_str().unwrap_or_default(),
+            g["target_sequence"].as_str().unwrap_or_default()
+        ));
+    }
 
     let mut opts = TrainOptions { components: a.components, ..TrainOptions::default() };
     opts.mapping.kernel = a.kernel;
@@ -156,7 +189,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     write_model(&a.output, &model, &SubjectsMeta::new(&source, &target), &training)?;
     let result = json!({
         "model": a.output, "source": source.name, "target": target.name,
-        "pairs": pairs.len(), "key_pairs": keys.len(),
+        "pairs": pairs.len(), "key_pairs": keys.len(), "densified": !a.no_densify, "sequence_pairs": groups,
         "source_sequences": src_seqs.iter().map(|&k| source.sequences()[k].name.clone()).collect::<Vec<_>>(),
         "target_sequences": tgt_seqs.iter().map(|&k| target.sequences()[k].name.clone()).collect::<Vec<_>>(),
         "kernel": a.kernel.name(), "components": a.components,
@@ -166,10 +199,12 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     crate::output::write_json(&a.output.join("report.json"), &result)?;
     ctx.result(&result, || {
         println!(
-            "{} -> {}: {} pairs, {} parts, fitted in {fit_seconds:.2} s -> {}",
+            "{} -> {}: {} pairs ({} key pairs{}), {} parts, fitted in {fit_seconds:.2} s -> {}",
             source.name,
             target.name,
             pairs.len(),
+            keys.len(),
+            if a.no_densify { "" } else { ", densified" },
             report.parts.len(),
             a.output.display()
         );
