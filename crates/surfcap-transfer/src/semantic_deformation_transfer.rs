@@ -969,6 +969,21 @@ mod tests {
     }
 
     #[test]
+    fn same_output_whatever_the_thread_count() {
+        let (ts, ps) = subject(&[(9, 14, 0.2, 2.0, [0.0; 3]), (5, 6, 0.1, 0.8, [0.5, 0.5, 0.0])]);
+        let (tt, pt) = subject(&[(12, 16, 0.3, 2.2, [0.0; 3])]);
+        let (sk, tk) = (poses(&ps, &ANGLES), poses(&pt, &ANGLES));
+        let run = || {
+            let opts = SdtOptions { triangles_per_patch: 15, ..SdtOptions::default() };
+            let sdt = SemanticDeformationTransfer::with_options(&ts, &sk, &tt, &tk, &opts).unwrap();
+            sdt.transfer(&bend(&ps, 0.0, 1.0, 0.3)).unwrap()
+        };
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(run);
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(run);
+        assert!(one.iter().zip(&three).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+
+    #[test]
     fn duplicate_keys_share_weight_and_bad_input_is_refused_by_name() {
         let (ts, ps) = subject(&[(6, 6, 0.2, 2.0, [0.0; 3])]);
         let (tt, pt) = subject(&[(7, 8, 0.3, 2.0, [0.0; 3])]);
