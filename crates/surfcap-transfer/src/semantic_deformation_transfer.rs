@@ -65,7 +65,8 @@
 //!   neighbours: its action on the triangle's edges is exact (S gets a near-zero singular
 //!   value), which is all the Poisson solve uses, so key poses still reproduce exactly.
 //! - The patch-rotation system is dense (3 (P - 1) unknowns); [`SdtOptions::max_patches`]
-//!   bounds it, and a mesh of too many separate pieces is refused by name.
+//!   bounds it: patches grow on large meshes, and a mesh of more separate pieces than that
+//!   (each needs a patch) is refused by name.
 //! - The paper's optional split into independent body parts with their own key poses is not
 //!   implemented: one transfer for the whole body.
 
@@ -87,7 +88,8 @@ const PER_TRIANGLE: usize = 9;
 /// Tuning of the shape space.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SdtOptions {
-    /// Target size of a patch, in triangles (default 150).
+    /// Target size of a patch, in triangles (default 150); larger when the mesh would need
+    /// more than half of `max_patches`.
     pub triangles_per_patch: usize,
     /// Most patches a subject may have (the patch-rotation solve is dense; default 400).
     pub max_patches: usize,
@@ -291,7 +293,9 @@ impl ShapeSpace {
         }
 
         // Patches grown inside each piece large enough to hold one.
-        let per_patch = opts.triangles_per_patch.max(1);
+        // Patches grow past the asked size when the mesh is large, so that the pieces' patches
+        // take at most half of `max_patches` (the rest is room for one per separate piece).
+        let per_patch = opts.triangles_per_patch.max(1).max((2 * n_valid).div_ceil(opts.max_patches.max(2)));
         let min_piece = (per_patch / 4).max(1);
         let big: Vec<bool> = {
             let any_big = pieces.iter().any(|p| p.len() >= min_piece);
@@ -986,6 +990,32 @@ mod tests {
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(run);
         let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(run);
         assert!(one.iter().zip(&three).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+
+    #[test]
+    fn patches_grow_to_fit_the_bound_and_isolated_vertices_keep_their_place() {
+        let (ts, ps) = subject(&[(8, 12, 0.2, 2.0, [0.0; 3])]);
+        let (tt, mut pt) = subject(&[(11, 17, 0.35, 2.4, [0.0; 3])]);
+        // One extra vertex in no triangle.
+        pt.push([0.9, 1.5, 0.2]);
+        let tt = Topology::new(pt.len(), tt.triangles().to_vec(), None).unwrap();
+        let (sk, tk) = (poses(&ps, &ANGLES), poses(&pt, &ANGLES));
+        let opts = SdtOptions { triangles_per_patch: 1, max_patches: 8 };
+        let sdt = SemanticDeformationTransfer::with_options(&ts, &sk, &tt, &tk, &opts).unwrap();
+        let (a, b) = sdt.n_patches();
+        assert!((2..=4).contains(&a) && (2..=4).contains(&b), "{a} {b}");
+        for k in 0..ANGLES.len() {
+            let e = rel_err(&sdt.transfer(&sk[k]).unwrap(), &tk[k]);
+            assert!(e < 1e-5, "key {k}: {e}");
+        }
+        // Too many separate pieces for the bound: refused by name.
+        let many: Vec<(usize, usize, f64, f64, [f64; 3])> =
+            (0..5).map(|k| (4, 3, 0.1, 0.5, [k as f64, 0.0, 0.0])).collect();
+        let (tm, pm) = subject(&many);
+        let keys = vec![pm.iter().flat_map(|v| v.map(|x| x as f32)).collect::<Vec<f32>>()];
+        let opts = SdtOptions { triangles_per_patch: 1, max_patches: 4 };
+        let e = SemanticDeformationTransfer::with_options(&tm, &keys, &tt, &tk[..1], &opts).err().unwrap().to_string();
+        assert!(e.contains("source mesh needs 5 patches (5 separate pieces): expected at most 4"), "{e}");
     }
 
     #[test]
