@@ -19,6 +19,7 @@ pub mod error;
 pub mod motion_transfer;
 pub mod pairs_file;
 pub mod pose_representation;
+pub mod semantic_deformation_transfer;
 pub mod training_pairs;
 pub mod transfer_model;
 pub mod transfer_model_file;
