@@ -22,7 +22,9 @@
 //!   dance for the mannequins), reported per motion.
 //!
 //! Methods: GP regression with the NN, SE and linear kernels (`surfcap_transfer::
-//! transfer_model`), all reconstructed by averaging the overlaps (the regression itself is
+//! transfer_model`) and Baran et al. 2009 with the training pairs as its key poses
+//! (`surfcap_transfer::semantic_deformation_transfer`); the GP methods reconstructed by
+//! averaging the overlaps (the regression itself is
 //! measured, as the thesis's Fig. 5.7 shows raw outputs "prior to the mesh enhancement").
 
 use std::path::{Path, PathBuf};
@@ -39,6 +41,7 @@ use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions, assemble_by_average};
 use surfcap_transfer::pose_representation::align_to_reference;
+use surfcap_transfer::semantic_deformation_transfer::SemanticDeformationTransfer;
 use surfcap_transfer::transfer_model::TransferKernel;
 
 use crate::error::{Error, Result};
@@ -63,24 +66,28 @@ pub enum Method {
     GpNn,
     GpSe,
     Linear,
+    /// Baran et al. 2009, with the training pairs as its key poses (whole body).
+    Baran,
 }
 
 impl Method {
-    pub const ALL: [Method; 3] = [Method::GpNn, Method::GpSe, Method::Linear];
+    pub const ALL: [Method; 4] = [Method::GpNn, Method::GpSe, Method::Linear, Method::Baran];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::GpNn => "GP-NN",
             Method::GpSe => "GP-SE",
             Method::Linear => "linear",
+            Method::Baran => "Baran",
         }
     }
 
-    fn kernel(self) -> TransferKernel {
+    fn kernel(self) -> Option<TransferKernel> {
         match self {
-            Method::GpNn => TransferKernel::NeuralNetwork,
-            Method::GpSe => TransferKernel::SquaredExponential,
-            Method::Linear => TransferKernel::Linear,
+            Method::GpNn => Some(TransferKernel::NeuralNetwork),
+            Method::GpSe => Some(TransferKernel::SquaredExponential),
+            Method::Linear => Some(TransferKernel::Linear),
+            Method::Baran => None,
         }
     }
 }
@@ -282,6 +289,26 @@ impl Bench<'_> {
     ) -> Result<Vec<Vec<f32>>> {
         let unsuitable =
             |e: surfcap_transfer::Error| Error::Unsuitable(format!("{}: {}: {e}", self.case.name, method.name()));
+        let Some(kernel) = method.kernel() else {
+            // Baran et al.: the training pairs are its key poses; no parts, no PCA.
+            let keys = |p: &PreparedSubject, f: &dyn Fn(&(usize, usize)) -> usize| -> Result<Vec<Vec<f32>>> {
+                pairs.iter().map(|x| p.frame(f(x)).map(|v| v.0.to_vec()).map_err(unsuitable)).collect()
+            };
+            let sdt = SemanticDeformationTransfer::new(
+                self.case.source.topology(),
+                &keys(&self.src, &|x| x.0)?,
+                self.case.target.topology(),
+                &keys(&self.tgt, &|x| x.1)?,
+            )
+            .map_err(unsuitable)?;
+            return test
+                .iter()
+                .map(|&g| {
+                    let (pose, _) = self.src.frame(g).map_err(unsuitable)?;
+                    sdt.transfer(pose).map_err(unsuitable)
+                })
+                .collect();
+        };
         let distinct = |f: &dyn Fn(&(usize, usize)) -> usize| {
             let mut v: Vec<usize> = pairs.iter().map(f).collect();
             v.sort_unstable();
@@ -290,7 +317,7 @@ impl Bench<'_> {
         };
         let (pca_s, pca_t) = (distinct(&|p| p.0), distinct(&|p| p.1));
         let mut opts = TrainOptions { components, ..TrainOptions::default() };
-        opts.mapping.kernel = method.kernel();
+        opts.mapping.kernel = kernel;
         opts.mapping.fit.seed = self.seed;
         let (model, _) = MotionTransfer::train(&self.src, parts.0, &pca_s, &self.tgt, parts.1, &pca_t, pairs, &opts)
             .map_err(unsuitable)?;
