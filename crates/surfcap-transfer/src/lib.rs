@@ -15,6 +15,7 @@
 
 pub mod body_parts;
 pub mod error;
+pub mod part_correction;
 
 pub use body_parts::BodyParts;
 pub use error::{Error, Result};
