@@ -16,6 +16,7 @@
 pub mod body_parts;
 pub mod error;
 pub mod part_correction;
+pub mod part_stitching;
 
 pub use body_parts::BodyParts;
 pub use error::{Error, Result};
