@@ -1208,4 +1208,127 @@ mod tests {
         assert!(*child_triangles > 0 && child_triangles < band_triangles, "{child_triangles} of {band_triangles}");
         assert!(max_diff(&out, &truth) < 1e-5);
     }
+
+    #[test]
+    fn a_chain_of_parts_moved_rigidly_is_put_back_top_down() {
+        let (t, rest) = tube();
+        let parts = BodyParts::new(
+            AROUND * RINGS,
+            vec![
+                part("top", Some("mid"), rings(12..=20)),
+                part("base", None, rings(0..=8)),
+                part("mid", Some("base"), rings(5..=15)),
+            ],
+        )
+        .unwrap();
+        let truth = bend(&rest, 1.2);
+        let mut ps = cut_out(&parts, &truth);
+        ps[0] = map(&ps[0], |v| exp_rotation(&Vector3::new(0.0, 0.5, 0.1)) * v + Vector3::new(1.0, 0.0, 0.0));
+        ps[2] = map(&ps[2], |v| exp_rotation(&Vector3::new(-0.3, 0.0, 0.2)) * v + Vector3::new(0.0, 2.0, 0.0));
+        let (out, report) = stitch(&t, &rest, &parts, &ps).unwrap();
+        assert!(max_diff(&out, &truth) < 2e-5, "{}", max_diff(&out, &truth));
+        assert!(matches!(report.parts[0].cut, Cut::Loop { .. }) && matches!(report.parts[2].cut, Cut::Loop { .. }));
+        assert_eq!(report.parts[1].cut, Cut::Root);
+        assert_eq!(report.parts[0].parent.as_deref(), Some("mid"));
+    }
+
+    #[test]
+    fn a_part_without_overlap_keeps_its_predicted_placement() {
+        // Two separate tubes (two components), the second a child sharing no vertex.
+        let (t1, rest1) = tube();
+        let n1 = t1.n_vertices() as u32;
+        let mut tris = t1.triangles().to_vec();
+        tris.extend(t1.triangles().iter().map(|t| t.map(|v| v + n1)));
+        let t = Topology::new(2 * n1 as usize, tris, None).unwrap();
+        let mut rest = rest1.clone();
+        rest.extend(map(&rest1, |v| v + Vector3::new(1.0, 0.0, 0.0)));
+        // Built without validation: a child without overlap is what KayKit's meshes give.
+        let parts = BodyParts {
+            format: crate::body_parts::FORMAT.into(),
+            version: crate::body_parts::VERSION,
+            n_vertices: 2 * n1 as usize,
+            parts: vec![part("body", None, (0..n1).collect()), part("head", Some("body"), (n1..2 * n1).collect())],
+        };
+        let truth = map(&rest, |v| v + Vector3::new(0.0, 0.0, 0.1 * v.x));
+        let mut ps = cut_out(&parts, &truth);
+        ps[1] = map(&ps[1], |v| v + Vector3::new(0.0, 3.0, 0.0));
+        let (out, report) = stitch(&t, &rest, &parts, &ps).unwrap();
+        assert_eq!(report.parts[1].cut, Cut::NoOverlap);
+        assert_eq!(report.parts[1].overlap_vertices, 0);
+        assert!(max_diff(&out[..3 * n1 as usize], &truth[..3 * n1 as usize]) < 1e-5);
+        assert!(max_diff(&out[3 * n1 as usize..], &ps[1]) < 1e-5);
+        let e = edge_distortion_by_region(&t, &parts, &out, &truth).unwrap();
+        assert_eq!(e.boundary_edges, 0);
+        assert!(e.inside_max < 1e-4, "{e:?}");
+    }
+
+    #[test]
+    fn degenerate_triangles_do_not_make_nan() {
+        let (t, rest) = tube();
+        let parts = two_parts();
+        let mut truth = bend(&rest, 0.5);
+        // Ring 10 (mid-band) collapsed onto one point, ring 16 (child only) too.
+        for r in [10, 16] {
+            for k in 0..AROUND {
+                for d in 0..3 {
+                    truth[3 * (r * AROUND + k) + d] = truth[3 * r * AROUND + d];
+                }
+            }
+        }
+        let (out, _) = stitch(&t, &rest, &parts, &cut_out(&parts, &truth)).unwrap();
+        assert!(out.iter().all(|x| x.is_finite()));
+        assert!(max_diff(&out, &truth) < 1e-4, "{}", max_diff(&out, &truth));
+        let mut flat_rest = rest.clone();
+        for k in 0..AROUND {
+            for d in 0..3 {
+                flat_rest[3 * (12 * AROUND + k) + d] = flat_rest[3 * 12 * AROUND + d];
+            }
+        }
+        let (out, _) = stitch(&t, &flat_rest, &parts, &cut_out(&parts, &truth)).unwrap();
+        assert!(out.iter().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn bad_input_is_refused_with_the_reason() {
+        let (t, rest) = tube();
+        let parts = two_parts();
+        let s = Stitcher::new(&t, &rest, &parts).unwrap();
+        let good = cut_out(&parts, &rest);
+        let e = s.stitch(&good[..1]).unwrap_err().to_string();
+        assert!(e.contains("1 part meshes: expected 2 (one per body part: lower, upper)"), "{e}");
+        let mut bad = good.clone();
+        bad[1].pop();
+        let e = s.stitch(&bad).unwrap_err().to_string();
+        assert!(e.contains("part \"upper\" has 623 values: expected 3 x 208 = 624"), "{e}");
+        let mut bad = good.clone();
+        bad[0][5] = f32::INFINITY;
+        let e = s.stitch(&bad).unwrap_err().to_string();
+        assert!(e.contains("part \"lower\" has a non-finite coordinate at vertex 1"), "{e}");
+        let small = BodyParts::whole_body(10);
+        let e = Stitcher::new(&t, &rest, &small).err().unwrap().to_string();
+        assert!(e.contains("made for a template of 10 vertices, but the topology has 336"), "{e}");
+        let e = Stitcher::new(&t, &rest[3..], &parts).err().unwrap().to_string();
+        assert!(e.contains("the template's rest pose has 1005 values: expected 3 x 336 = 1008"), "{e}");
+        let e = average_overlaps(&parts, &bad, true).unwrap_err().to_string();
+        assert!(e.contains("non-finite"), "{e}");
+        let e = edge_distortion_by_region(&t, &parts, &rest[3..], &rest).unwrap_err().to_string();
+        assert!(e.contains("the stitched mesh has 1005 values"), "{e}");
+    }
+
+    #[test]
+    fn same_answer_whatever_the_thread_count_and_shareable_across_threads() {
+        fn shareable<T: Send + Sync>(_: &T) {}
+        let (t, rest) = tube();
+        let parts = two_parts();
+        let s = Stitcher::new(&t, &rest, &parts).unwrap();
+        shareable(&s);
+        let mut ps = cut_out(&parts, &bend(&rest, 0.6));
+        ps[1] = map(&ps[1], |v| Vector3::new(1.1 * v.x, v.y + 0.05 * v.z * v.z, v.z));
+        let run =
+            |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(|| s.stitch(&ps).unwrap());
+        let (a, ra) = run(1);
+        let (b, rb) = run(2);
+        assert_eq!(a, b);
+        assert_eq!(ra, rb);
+    }
 }
