@@ -363,6 +363,8 @@ mod tests {
         let (t, rest) = tube(12, 9);
         let training: Vec<Vec<f32>> = (0..6).map(|k| bend(&rest, 0.2 * k as f64)).collect();
         let c = PartCorrector::new(&t, &rest, training, 3).unwrap();
+        fn shareable<T: Send + Sync>(_: &T) {}
+        shareable(&c);
         let pred = scale_about_centroid(&bend(&rest, 0.5), 0.93);
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| c.correct(&pred).unwrap());
         let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap().install(|| c.correct(&pred).unwrap());

@@ -12,6 +12,18 @@
 //!
 //! Choices where the thesis is vague:
 //!
+//! - **Merge.** The thesis uses the curve as the Dirichlet boundary of Yu et al. 2004's Poisson
+//!   merging, which pins the curve to one part and re-solves the other. We solve once over the
+//!   whole template instead, each triangle's target gradient taken from the part owning it
+//!   (least squares, one translation per connected component): the curve is where the target
+//!   field switches from parent to child, so the merge is seamless where the curve is cheap,
+//!   as in Yu et al.; the residual mismatch spreads over both sides rather than only the
+//!   child's; every child and every component is merged in the same solve; and the rest
+//!   pose's factorisation serves every frame. Parts cut from one true frame give back that
+//!   frame exactly (to f32 rounding), since their gradients are then consistent.
+//! - **Aligned to the parent.** The thesis aligns each child "to the root part"; with a deeper
+//!   tree we align each child to its parent once the parent is placed, which is the same for
+//!   the thesis's five parts (every child hangs from the torso).
 //! - **Cost of a curve.** A curve is a closed loop of template vertices; on each of its edges
 //!   (u, v) the two sides of the Poisson merge disagree by the change of the edge vector between
 //!   the instantiations, |(x_c(u) - x_c(v)) - (x_p(u) - x_p(v))|, which is what the gradient
@@ -139,7 +151,23 @@ fn check_positions(p: &[f32], n: usize, what: &str) -> Result<()> {
     Ok(())
 }
 
+/// Checks every part's vertices index the template (parts built without
+/// [`BodyParts::validate`], e.g. children without overlap, must not index out of it).
+fn check_vertex_range(parts: &BodyParts) -> Result<()> {
+    for p in &parts.parts {
+        if let Some(&v) = p.vertices.iter().find(|&&v| v as usize >= parts.n_vertices) {
+            return Err(Error::Parts(format!(
+                "part \"{}\" has vertex {v}: expected 0 to {}",
+                p.name,
+                parts.n_vertices.saturating_sub(1)
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn check_part_positions(parts: &BodyParts, part_positions: &[Vec<f32>]) -> Result<()> {
+    check_vertex_range(parts)?;
     if part_positions.len() != parts.len() {
         return Err(Error::Invalid(format!(
             "{} part meshes: expected {} (one per body part: {})",
@@ -409,6 +437,8 @@ pub struct Stitcher {
     vt_start: Vec<usize>,
     vt: Vec<u32>,
     bands: Vec<Band>,
+    /// Per part, the number of vertices it shares with its parent.
+    overlap_sizes: Vec<usize>,
 }
 
 impl Stitcher {
@@ -423,6 +453,7 @@ impl Stitcher {
             )));
         }
         check_positions(rest, n, "the template's rest pose")?;
+        check_vertex_range(parts)?;
         let solver = PoissonSolver::new(topology, rest)?;
         let order = parts.top_down();
         if order.len() != parts.len() {
@@ -457,6 +488,7 @@ impl Stitcher {
                 (!parts.overlap(k).is_empty()).then(|| ctx.build_band(k, p))
             })
             .collect();
+        let overlap_sizes = (0..parts.len()).map(|k| parts.overlap(k).len()).collect();
         Ok(Stitcher {
             topology: topology.clone(),
             parts: parts.clone(),
@@ -468,6 +500,7 @@ impl Stitcher {
             vt_start,
             vt,
             bands,
+            overlap_sizes,
         })
     }
 
@@ -551,7 +584,7 @@ impl Stitcher {
                 .map(|(k, p)| PartStitch {
                     name: p.name.clone(),
                     parent: p.parent.clone(),
-                    overlap_vertices: self.parts.overlap(k).len(),
+                    overlap_vertices: self.overlap_sizes[k],
                     overlap_rms: rms[k],
                     cut: cuts[k].clone(),
                 })
@@ -660,6 +693,7 @@ pub fn edge_distortion_by_region(
             parts.n_vertices
         )));
     }
+    check_vertex_range(parts)?;
     check_positions(positions, n, "the stitched mesh")?;
     check_positions(reference, n, "the reference mesh")?;
     let multiplicity = parts.multiplicity();
@@ -1307,6 +1341,12 @@ mod tests {
         let small = BodyParts::whole_body(10);
         let e = Stitcher::new(&t, &rest, &small).err().unwrap().to_string();
         assert!(e.contains("made for a template of 10 vertices, but the topology has 336"), "{e}");
+        let mut out_of_range = parts.clone();
+        out_of_range.parts[1].vertices.push(336);
+        let e = Stitcher::new(&t, &rest, &out_of_range).err().unwrap().to_string();
+        assert!(e.contains("part \"upper\" has vertex 336: expected 0 to 335"), "{e}");
+        let e = average_overlaps(&out_of_range, &good, true).unwrap_err().to_string();
+        assert!(e.contains("has vertex 336"), "{e}");
         let e = Stitcher::new(&t, &rest[3..], &parts).err().unwrap().to_string();
         assert!(e.contains("the template's rest pose has 1005 values: expected 3 x 336 = 1008"), "{e}");
         let e = average_overlaps(&parts, &bad, true).unwrap_err().to_string();

@@ -106,10 +106,14 @@ fn parts_of_true_frames_stitch_back_into_the_frames() {
     let t = s.topology();
     let rest = s.frame(0).unwrap();
     let parts = parts(t, rest, H1, H2);
+    let clock = std::time::Instant::now();
     let stitcher = Stitcher::new(t, rest, &parts).unwrap();
+    println!("Stitcher::new: {:.3} s", clock.elapsed().as_secs_f64());
     for f in [0, 40, 87, 130, 174] {
         let truth = s.frame(f).unwrap();
+        let clock = std::time::Instant::now();
         let (out, report) = stitcher.stitch(&cut_out(&parts, truth)).unwrap();
+        println!("frame {f} stitched in {:.3} s", clock.elapsed().as_secs_f64());
         let err = max_dist(&out, truth) / height(truth);
         println!("frame {f}: max error {err:.2e} of the height");
         assert!(err < 1e-5, "frame {f}: stitched off the truth by {err:.2e} of the height");
@@ -254,7 +258,9 @@ fn a_shrunk_part_is_corrected_back_towards_the_truth() {
             c + 0.9 * (v - c) + 0.005 * size * noise
         });
         let before = rms_dist(&predicted, &truth);
+        let clock = std::time::Instant::now();
         let out = corrector.correct_detailed(&predicted).unwrap();
+        println!("{} corrected in {:.3} s", parts.parts[k].name, clock.elapsed().as_secs_f64());
         let after = rms_dist(&out.positions, &truth);
         println!(
             "{}: {} vertices, size {size:.3}: RMS error before {before:.4}, after {after:.4}; neighbours {:?} weights {:?}",
