@@ -18,6 +18,8 @@ pub mod correspondence_densification;
 pub mod error;
 pub mod motion_transfer;
 pub mod pairs_file;
+pub mod part_correction;
+pub mod part_stitching;
 pub mod pose_representation;
 pub mod semantic_deformation_transfer;
 pub mod training_pairs;
