@@ -39,7 +39,8 @@ use surfcap_synth::bvh::read_bvh;
 use surfcap_synth::mannequin::{BodyShape, mannequin};
 use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_transfer::BodyParts;
-use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions, assemble_by_average};
+use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
+use surfcap_transfer::part_stitching::average_overlaps;
 use surfcap_transfer::pose_representation::align_to_reference;
 use surfcap_transfer::semantic_deformation_transfer::SemanticDeformationTransfer;
 use surfcap_transfer::transfer_model::TransferKernel;
@@ -327,7 +328,7 @@ impl Bench<'_> {
             .collect::<std::result::Result<_, _>>()
             .map_err(unsuitable)?;
         let predicted = model.predict_parts(&poses).map_err(unsuitable)?;
-        predicted.iter().map(|p| assemble_by_average(parts.1, p).map_err(unsuitable)).collect()
+        predicted.iter().map(|p| average_overlaps(parts.1, p, false).map_err(unsuitable)).collect()
     }
 }
 

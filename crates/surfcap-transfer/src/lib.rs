@@ -22,6 +22,7 @@ pub mod part_correction;
 pub mod part_stitching;
 pub mod pose_representation;
 pub mod semantic_deformation_transfer;
+pub mod shape_reconstruction;
 pub mod training_pairs;
 pub mod transfer_model;
 pub mod transfer_model_file;

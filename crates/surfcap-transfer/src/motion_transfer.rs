@@ -334,31 +334,3 @@ impl MotionTransfer {
         Ok(TransferredMotion { parts, aligned, displacements, world })
     }
 }
-
-/// The whole pose from parts by averaging every vertex over the parts that hold it: the
-/// reconstruction without correction or stitching (the baseline the stitching is judged
-/// against, and what the learning curves measure: the regression itself).
-pub fn assemble_by_average(parts: &BodyParts, part_positions: &[Vec<f32>]) -> Result<Vec<f32>> {
-    if part_positions.len() != parts.len() {
-        return Err(Error::Invalid(format!("{} part poses: expected {}", part_positions.len(), parts.len())));
-    }
-    let mut sum = vec![0.0f64; 3 * parts.n_vertices];
-    let mut count = vec![0u32; parts.n_vertices];
-    for (p, pos) in parts.parts.iter().zip(part_positions) {
-        if pos.len() != 3 * p.vertices.len() {
-            return Err(Error::Invalid(format!(
-                "part \"{}\" pose has {} vertices: expected {}",
-                p.name,
-                pos.len() / 3,
-                p.vertices.len()
-            )));
-        }
-        for (i, &v) in p.vertices.iter().enumerate() {
-            for c in 0..3 {
-                sum[3 * v as usize + c] += pos[3 * i + c] as f64;
-            }
-            count[v as usize] += 1;
-        }
-    }
-    Ok(sum.iter().enumerate().map(|(i, s)| (s / count[i / 3].max(1) as f64) as f32).collect())
-}

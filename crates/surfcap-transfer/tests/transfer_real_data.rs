@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use surfcap_mesh::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject};
 use surfcap_transfer::BodyParts;
-use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions, assemble_by_average};
+use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
+use surfcap_transfer::part_stitching::average_overlaps;
 use surfcap_transfer::pose_representation::align_to_reference;
 
 fn subject(character: &str, clips: &[&str]) -> Option<Subject> {
@@ -52,7 +53,7 @@ fn knight_to_barbarian_walk_transfers_an_unseen_walk_within_a_few_percent_of_hei
     let (_, bseq) = barbarian.sequence("barbarian_Walking_C").unwrap();
     assert_eq!(k, 2);
     let source: Vec<&[f32]> = (0..kseq.n_frames()).map(|f| kseq.frame(f)).collect();
-    let out = model.transfer(&source, |p| assemble_by_average(&model.target.parts, p)).unwrap();
+    let out = model.transfer(&source, |p| average_overlaps(&model.target.parts, p, false)).unwrap();
     assert_eq!(out.world.len(), kseq.n_frames());
     let h = height(bseq.frame(0));
     let errs: Vec<f64> =

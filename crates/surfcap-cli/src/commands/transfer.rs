@@ -9,9 +9,11 @@ use serde_json::json;
 use surfcap_mesh::export::export;
 use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
 use surfcap_transfer::BodyParts;
-use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions, assemble_by_average};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
+use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::pairs_file::parse_pairs;
+use surfcap_transfer::part_stitching::{average_overlaps, edge_distortion_by_region};
+use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 use surfcap_transfer::training_pairs::densified_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, read_model, write_model};
@@ -79,10 +81,39 @@ pub struct ApplyArgs {
     /// sequences (any motion of the source, seen in training or not).
     #[arg(long)]
     pub motion: String,
+    /// How the predicted parts become one mesh: stitch (thesis 5.6: each part corrected
+    /// against its nearest training meshes, then stitched along optimal cuts in the overlaps
+    /// with a Poisson merge) or average (every vertex the mean of its copies, no correction).
+    #[arg(long, default_value = "stitch")]
+    pub reconstruction: Reconstruction,
+    /// Stitch without the part correction of 5.6.1.
+    #[arg(long)]
+    pub no_correction: bool,
+    /// Training meshes each part correction blends (M of 5.6.1; 3 in the thesis).
+    #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::options::at_least(s, 1))]
+    pub nearest: usize,
     #[command(flatten)]
     pub out: OutOpts,
     #[command(flatten)]
     pub source_opts: SourceOpts,
+}
+
+/// See [`ApplyArgs::reconstruction`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reconstruction {
+    Stitch,
+    Average,
+}
+
+impl std::str::FromStr for Reconstruction {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "stitch" => Ok(Reconstruction::Stitch),
+            "average" => Ok(Reconstruction::Average),
+            _ => Err(format!("{s:?}: expected stitch or average")),
+        }
+    }
 }
 
 pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
@@ -259,9 +290,45 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
     let nv = model.target.reference.len() / 3;
     let topology = Topology::new(nv, meta.target_triangles.clone(), None)?;
     let frames: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
+    let t_setup = Instant::now();
+    let stitching = a.reconstruction == Reconstruction::Stitch;
+    let correction = stitching && !a.no_correction;
+    let reconstructor = if stitching {
+        let opts = ReconstructionOptions { correction, m_nearest: a.nearest };
+        Some(Reconstructor::new(model, &topology, &saved.target_training, &opts)?)
+    } else {
+        None
+    };
+    let setup_seconds = t_setup.elapsed().as_secs_f64();
     let t_transfer = Instant::now();
-    let out = model.transfer(&frames, |p| assemble_by_average(&model.target.parts, p))?;
+    let mut cuts = Vec::new();
+    let out = model.transfer(&frames, |p| match &reconstructor {
+        Some(r) => {
+            let (pose, report) = r.reconstruct(p)?;
+            cuts.push(report);
+            Ok(pose)
+        }
+        None => average_overlaps(&model.target.parts, p, false),
+    })?;
     let transfer_seconds = t_transfer.elapsed().as_secs_f64();
+    // Seams: edge-length change against the target's reference pose, on edges at part
+    // boundaries and inside parts (no ground truth here: the reference is the rest shape).
+    let mut seams = Vec::new();
+    for pose in &out.aligned {
+        seams.push(edge_distortion_by_region(&topology, &model.target.parts, pose, &model.target.reference)?);
+    }
+    let max_of = |f: &dyn Fn(&surfcap_transfer::part_stitching::EdgeDistortion) -> f64| {
+        seams.iter().map(f).fold(0.0f64, f64::max)
+    };
+    let has_boundary = seams.iter().any(|e| e.boundary_edges > 0);
+    let seam_summary = json!({
+        "boundary_edges": seams.first().map_or(0, |e| e.boundary_edges),
+        "inside_edges": seams.first().map_or(0, |e| e.inside_edges),
+        "boundary_max": has_boundary.then(|| max_of(&|e| e.boundary_max)), "inside_max": max_of(&|e| e.inside_max),
+        "boundary_mean": has_boundary.then(|| crate::output::mean(seams.iter().map(|e| e.boundary_mean))),
+        "inside_mean": crate::output::mean(seams.iter().map(|e| e.inside_mean)),
+        "against": "the target's reference pose",
+    });
     let name = format!("{}-as-{}", seq.name, meta.target_name);
     let positions: Vec<f32> = out.world.iter().flatten().copied().collect();
     let out_seq = Sequence::new(name.clone(), nv, positions)?
@@ -286,20 +353,39 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
     let written = export(&out_subject, format, &a.out.output, ctx.export_options(), &bar)?;
     let report = json!({
         "model": a.model, "motion": a.motion, "source": meta.source_name, "target": meta.target_name,
-        "frames": seq.n_frames(), "reconstruction": "average of overlapping parts",
-        "transfer_seconds": transfer_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
-        "per_frame": { "displacement": out.displacements },
+        "frames": seq.n_frames(),
+        "reconstruction": if stitching { "stitch" } else { "average" }, "correction": correction,
+        "nearest": a.nearest,
+        "parts": model.target.parts.names(),
+        "edge_length_distortion": seam_summary,
+        "setup_seconds": setup_seconds, "transfer_seconds": transfer_seconds,
+        "total_seconds": t0.elapsed().as_secs_f64(),
+        "per_frame": { "displacement": out.displacements, "cuts": cuts },
         "written": written,
     });
     crate::output::write_json(&crate::synthesis::report_path(&a.out.output), &report)?;
     ctx.result(&report, || {
         println!(
-            "{} ({} frames) transferred onto {} in {transfer_seconds:.2} s -> {}",
+            "{} ({} frames) transferred onto {} in {transfer_seconds:.2} s ({}; set-up {setup_seconds:.2} s) -> {}",
             a.motion,
             seq.n_frames(),
             meta.target_name,
+            if correction {
+                "parts corrected and stitched"
+            } else if stitching {
+                "parts stitched"
+            } else {
+                "overlaps averaged"
+            },
             a.out.output.display()
         );
+        if has_boundary {
+            println!(
+                "  edge-length change against the target's rest pose: at part boundaries max {:.1}%, inside parts max {:.1}%",
+                100.0 * max_of(&|e| e.boundary_max),
+                100.0 * max_of(&|e| e.inside_max)
+            );
+        }
     });
     Ok(())
 }
