@@ -478,6 +478,100 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
     })
 }
 
+/// One left-out pose of a leave-one-out run.
+#[derive(Debug, Clone, Serialize)]
+pub struct LeftOut {
+    pub pose: usize,
+    /// Per method: RMS per-vertex error, % of the target's height.
+    pub percent: Vec<(String, f64)>,
+}
+
+/// Leave-one-out over a handful of corresponding poses (Sumner's cat and lion: 9 pose pairs,
+/// each lion pose made from its cat pose by deformation transfer): each pose transferred by
+/// models trained on the others, against the true target pose. GP-NN and linear on the whole
+/// body (as many components as the training poses allow) and Baran et al.
+#[derive(Debug, Clone, Serialize)]
+pub struct LeaveOneOutEval {
+    pub name: String,
+    pub source_vertices: usize,
+    pub target_vertices: usize,
+    pub poses: Vec<LeftOut>,
+    /// Per method, the mean over the left-out poses.
+    pub mean_percent: Vec<(String, f64)>,
+    /// The error of the nearest target training pose (the floor a method that only picks a
+    /// training pose would reach).
+    pub nearest_training_percent: f64,
+}
+
+/// The cat and lion poses as two one-sequence subjects.
+pub fn catlion_subjects(data: &Path) -> Result<(Subject, Subject)> {
+    let one = |name: &str| -> Result<Subject> {
+        let path = data.join("sumner2004-catlion").join(name);
+        // Poses, not a motion: the rate only matters for the time base of written files.
+        let opts = ImportOptions { name: Some(name.into()), fps: Some(1.0), ..Default::default() };
+        Ok(import(&[path], &opts, &NoProgress)?.subject)
+    };
+    Ok((one("cat")?, one("lion")?))
+}
+
+/// Leave-one-out transfer between two subjects whose sequence 0 frames correspond one to one.
+pub fn leave_one_out_eval(name: &str, source: &Subject, target: &Subject, seed: u64) -> Result<LeaveOneOutEval> {
+    let n = source.sequences()[0].n_frames();
+    if n != target.sequences()[0].n_frames() || n < 3 {
+        return Err(Error::Unsuitable(format!(
+            "{name}: {} and {} poses: expected the same number, at least 3",
+            n,
+            target.sequences()[0].n_frames()
+        )));
+    }
+    let whole =
+        (BodyParts::whole_body(source.topology().n_vertices()), BodyParts::whole_body(target.topology().n_vertices()));
+    let case = TransferCase {
+        name: name.into(),
+        source: source.clone(),
+        target: target.clone(),
+        source_parts: whole.0.clone(),
+        target_parts: whole.1.clone(),
+        train: vec![(0, 0)],
+        unseen: vec![],
+    };
+    let src = PreparedSubject::new(source, &[0]).map_err(|e| Error::Unsuitable(e.to_string()))?;
+    let tgt = PreparedSubject::new(target, &[0]).map_err(|e| Error::Unsuitable(e.to_string()))?;
+    let bench = Bench { case: &case, src, tgt, seed };
+    let h = height(target, &bench.tgt.reference);
+    let methods = [Method::GpNn, Method::Linear, Method::Baran];
+    let mut poses = Vec::new();
+    let mut nearest = 0.0;
+    for i in 0..n {
+        let train: Vec<(usize, usize)> = (0..n).filter(|&j| j != i).map(|j| (j, j)).collect();
+        let mut percent = Vec::new();
+        for m in methods {
+            let pred = bench.fit_predict(m, (&whole.0, &whole.1), n, &train, &[i])?;
+            percent.push((m.name().to_string(), 100.0 * rms_of(&bench.tgt, &pred, &[i])? / h));
+        }
+        let truth = bench.tgt.frame(i).map_err(|e| Error::Unsuitable(e.to_string()))?.0;
+        let best = train
+            .iter()
+            .map(|&(_, j)| aligned_rms(bench.tgt.frame(j).expect("prepared").0, truth))
+            .fold(f64::INFINITY, f64::min);
+        nearest += 100.0 * best / h / n as f64;
+        poses.push(LeftOut { pose: i, percent });
+    }
+    let mean_percent = methods
+        .iter()
+        .enumerate()
+        .map(|(k, m)| (m.name().to_string(), poses.iter().map(|p| p.percent[k].1).sum::<f64>() / n as f64))
+        .collect();
+    Ok(LeaveOneOutEval {
+        name: name.into(),
+        source_vertices: source.topology().n_vertices(),
+        target_vertices: target.topology().n_vertices(),
+        poses,
+        mean_percent,
+        nearest_training_percent: nearest,
+    })
+}
+
 /// Evaluates every case.
 pub fn transfer_eval(cases: &[TransferCase], opts: &TransferEvalOptions) -> Result<TransferEval> {
     let t0 = Instant::now();

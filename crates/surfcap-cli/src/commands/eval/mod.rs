@@ -183,9 +183,10 @@ pub enum What {
         /// The shared data folder (KayKit characters and CMU clips).
         #[arg(long, default_value = "../shared/data")]
         data: PathBuf,
-        /// Cases: barbarian, mage, rogue (the KayKit knight to each) and mannequins (an average
-        /// mannequin of 3,000 vertices to a heavy one of 5,000).
-        #[arg(long, value_delimiter = ',', default_value = "barbarian,mage,rogue,mannequins")]
+        /// Cases: barbarian, mage, rogue (the KayKit knight to each), mannequins (an average
+        /// mannequin of 3,000 vertices to a heavy one of 5,000) and catlion (Sumner's 9 cat and
+        /// lion poses, leave-one-out).
+        #[arg(long, value_delimiter = ',', default_value = "barbarian,mage,rogue,mannequins,catlion")]
         cases: Vec<String>,
         /// Training-set sizes of the learning curves (pairs).
         #[arg(long, value_delimiter = ',', default_value = "10,25,50,100,200,350", value_parser = |s: &str| crate::options::at_least(s, 2))]
@@ -278,7 +279,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             use surfcap_synth::mannequin::BodyShape;
             let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
             let mut built = Vec::new();
+            let mut catlion = None;
             for c in &cases {
+                if c == "catlion" {
+                    catlion = Some(surfcap_eval::transfer_eval::catlion_subjects(&data)?);
+                    continue;
+                }
                 built.push(match c.as_str() {
                     "barbarian" | "mage" | "rogue" => kaykit_case(&data, c, None)?,
                     "mannequins" => mannequin_case(
@@ -287,10 +293,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                         ("mannequin-heavy-5k", &BodyShape::heavy(), 5000),
                         None,
                     )?,
-                    other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue or mannequins"),
+                    other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue, mannequins or catlion"),
                 });
             }
-            transfer::run(ctx, built, &opts, &output)
+            transfer::run(ctx, built, catlion, &opts, &output)
         }
     }
 }
@@ -313,9 +319,7 @@ fn save_report<T: serde::Serialize>(
 
 /// `wrote <report>, <plot>, <plot>...`
 fn print_wrote(report: &Path, plots: &[PathBuf]) {
-    println!(
-        "wrote {}, {}",
-        report.display(),
-        plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-    );
+    let files: Vec<String> =
+        std::iter::once(report).chain(plots.iter().map(PathBuf::as_path)).map(|p| p.display().to_string()).collect();
+    println!("wrote {}", files.join(", "));
 }

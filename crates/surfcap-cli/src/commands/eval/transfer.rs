@@ -4,7 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use surfcap_eval::transfer_eval::{CaseEval, TransferCase, TransferEvalOptions, transfer_case_eval};
+use surfcap_eval::transfer_eval::{
+    CaseEval, TransferCase, TransferEvalOptions, leave_one_out_eval, transfer_case_eval,
+};
+use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 const PALETTE: [(u8, u8, u8); 6] =
@@ -48,6 +51,7 @@ fn curve_plot(dir: &Path, c: &CaseEval, variants: &[&str], stem: &str, title: &s
 pub fn run(
     ctx: &crate::Ctx,
     cases: Vec<TransferCase>,
+    catlion: Option<(Subject, Subject)>,
     opts: &TransferEvalOptions,
     output: &Path,
 ) -> anyhow::Result<()> {
@@ -91,7 +95,14 @@ pub fn run(
         }
         results.push(r);
     }
-    let report = serde_json::json!({ "cases": results, "seconds": t0.elapsed().as_secs_f64() });
+    let loo = match &catlion {
+        Some((cat, lion)) => {
+            ctx.say("cat -> lion: leave-one-out over 9 poses ...");
+            Some(leave_one_out_eval("cat -> lion", cat, lion, opts.seed)?)
+        }
+        None => None,
+    };
+    let report = serde_json::json!({ "cases": results, "leave_one_out": loo, "seconds": t0.elapsed().as_secs_f64() });
     let (report, path) = super::save_report(output, "transfer.json", &report, "plots", &plots)?;
     ctx.result(&report, || {
         for r in &results {
@@ -110,6 +121,15 @@ pub fn run(
             println!("  motions absent from training (trained on all {} pool pairs):", r.pool_pairs);
             for u in &r.unseen {
                 println!("    {:<8} {:<28} {:>4} frames {:>6.2}%", u.method, u.motion, u.frames, u.rms_percent);
+            }
+        }
+        if let Some(l) = &loo {
+            println!(
+                "{} ({} -> {} vertices), leave-one-out, RMS per-vertex error % of height; nearest training pose {:.2}%",
+                l.name, l.source_vertices, l.target_vertices, l.nearest_training_percent
+            );
+            for (m, e) in &l.mean_percent {
+                println!("  {m:<8} mean {e:>6.2}%");
             }
         }
         super::print_wrote(&path, &plots);
