@@ -14,6 +14,7 @@ mod interpolate;
 mod learn;
 mod load;
 mod synth;
+mod transfer;
 mod transitions;
 
 #[derive(clap::Args, Debug)]
@@ -97,6 +98,10 @@ pub enum What {
     /// 2,000 x 20 points (< 5 s), a GPDM fit on 400 frames x ~3,000 coordinates (< 60 s), 20 HMC
     /// trajectory samples of 100 frames (< 30 s).
     Learn(learn::LearnArgs),
+    /// Motion transfer's speed targets (issue 18): training on 350 pairs with 5 parts and 20
+    /// components, hyper-parameters fitted (< 10 s), and a 100-frame transfer onto a
+    /// 10,000-vertex mannequin with part correction and stitching (< 10 s).
+    Transfer(transfer::TransferArgs),
     /// Write a long animation as .glb (default: 10 minutes at 30 fps of a 10,000-vertex tube,
     /// 18,000 frames): file size, bytes per frame, time and peak resident memory.
     Glb {
@@ -151,6 +156,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Graph { frames, sequences, alpha, seed } => graph::run(ctx, frames, sequences, alpha.0, seed),
         What::Glb { frames, vertices, output } => glb::run(ctx, frames, vertices, output),
         What::Learn(l) => learn::run(ctx, &l),
+        What::Transfer(t) => transfer::run(ctx, &t),
         What::Synth(b) => synth::run(ctx, b),
     }
 }
