@@ -14,6 +14,9 @@
 //! implements.
 
 pub mod body_parts;
+pub mod body_parts_file;
+pub mod body_parts_from_labels;
+pub mod body_parts_proposal;
 pub mod error;
 
 pub use body_parts::BodyParts;
