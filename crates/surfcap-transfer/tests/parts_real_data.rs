@@ -163,3 +163,14 @@ fn crane_by_rigidity_gives_five_parts_arms_above_legs() {
     let legs: f64 = (0..3).map(|k| (c[3][k] - c[4][k]) * side[k]).sum();
     assert!(legs > 0.0, "left leg on the left arm's side: {c:?}");
 }
+
+#[test]
+fn knight_idle_alone_joints_agree_with_its_separate_meshes() {
+    let Some(s) = subject(&["kaykit_adventurers/knight_Idle"]) else { return };
+    let (bc, _) = propose(&s, Method::Components, 5, 2).unwrap();
+    let (bj, rj) = propose(&s, Method::Joints, 5, 2).unwrap();
+    let a = agreement(&bc, &bj);
+    eprintln!("knight_Idle: joints vs components agreement {a:.4} over {} frames", rj.frames_used);
+    check_sides(&s, &bj, ["hand.l", "hand.r"], ["foot.l", "foot.r"]);
+    assert!(a > 0.93, "knight_Idle: joints vs components agree on {a}");
+}
