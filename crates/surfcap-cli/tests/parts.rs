@@ -105,3 +105,41 @@ fn propose_check_and_show_parts_of_the_knight() {
         colours.chunks(3).map(|c| [c[0].to_bits(), c[1].to_bits(), c[2].to_bits()]).collect();
     assert_eq!(distinct.len(), 5, "one colour per part (no overlaps between separate meshes)");
 }
+
+/// Runs tools/browser-test.mjs on the page at `url` and returns what it saw.
+fn browser_test(url: &str, png: &std::path::Path) -> serde_json::Value {
+    let tools = surfcap_testkit::workspace_root().join("tools");
+    assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
+    let o = std::process::Command::new("node")
+        .arg(tools.join("browser-test.mjs"))
+        .args([url, p(png)])
+        .output()
+        .expect("node runs");
+    assert!(
+        o.status.success(),
+        "browser test failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn parts_show_draws_one_colour_per_part_in_chromium() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let knight = data.join("kaykit_adventurers/knight_Idle");
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("knight.parts.json");
+    let o = surfcap!(&["parts", "propose", p(&knight), "--method", "components", "-o", p(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let show = Show::start(&[p(&knight), "--parts", p(&out)]);
+    let seen = browser_test(&show.url, &d.path().join("parts.png"));
+    let legend: Vec<&str> = seen["legend"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
+    assert_eq!(&legend[..6], ["torso", "arm_left", "arm_right", "leg_left", "leg_right", "overlap (darker)"]);
+    assert!(!legend.contains(&"original frame"), "{legend:?}");
+    // The arms are drawn orange and blue, the torso grey; no frame green.
+    let count =
+        |colour: &str| seen.pointer(&format!("/colours/original/{colour}")).and_then(|v| v.as_u64()).unwrap_or(0);
+    assert!(count("orange") > 50 && count("blue") > 50, "{seen}");
+    assert_eq!(count("red"), 0, "{seen}");
+}

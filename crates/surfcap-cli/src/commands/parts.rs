@@ -195,7 +195,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 /// Part colours (sRGB), repeated for more parts.
 const PALETTE: [u32; 8] = [0x9aa5b1, 0xd9822b, 0x2b8ad9, 0x3fae5a, 0xc94fb0, 0xd1c22e, 0x6c4fc9, 0x2ec1c1];
 /// Overlap vertices are drawn at this fraction of their part's colour.
-const OVERLAP_SHADE: f32 = 0.5;
+const OVERLAP_SHADE: f32 = 0.3;
 
 fn linear(c: u32) -> [f32; 3] {
     [(c >> 16) & 255, (c >> 8) & 255, c & 255].map(|x| {
