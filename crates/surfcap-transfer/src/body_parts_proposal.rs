@@ -158,6 +158,15 @@ pub fn propose(
         m => m,
     };
     let p0: Vec<f64> = subject.frame(0).unwrap_or_default().iter().map(|&x| x as f64).collect();
+    if p0.len() != 3 * n {
+        return Err(Error::Invalid(format!("subject \"{}\" has no frame: expected at least one", subject.name)));
+    }
+    if let Some(i) = p0.iter().position(|x| !x.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "the template's vertex {} has a NaN or infinite coordinate: expected finite numbers",
+            i / 3
+        )));
+    }
     let (up_axis, up_sign) = subject.up_axis.axis_and_sign();
     let mut up = [0.0; 3];
     up[up_axis] = up_sign;
@@ -755,6 +764,7 @@ fn norm(a: [f64; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use surfcap_mesh::Topology;
 
     #[test]
     fn chains_are_the_limbs_of_the_skeleton() {
@@ -765,6 +775,50 @@ mod tests {
         let (regions, torso) = chains(&best, &parents, best.len());
         assert_eq!(torso, vec![0, 1, 5]);
         assert_eq!(regions, vec![vec![2, 3], vec![4], vec![6], vec![7], vec![8, 9]]);
+    }
+
+    /// Five separate quads: a torso, arms at x = +-0.5, legs at x = +-0.15 whose lowest vertex
+    /// (the toe) points to +z; one frame. Facing +z with y up, the subject's left is +x.
+    fn five_pieces() -> Subject {
+        let mut p: Vec<f32> = Vec::new();
+        let mut quad = |x: f32, y: f32, w: f32, h: f32, toe: f32| {
+            p.extend([x - w, y + h, 0.0, x + w, y + h, 0.0, x + w, y, 0.0, x - w, y - 0.05, toe]);
+        };
+        quad(0.0, 1.0, 0.2, 0.5, 0.0);
+        quad(0.5, 1.2, 0.05, 0.3, 0.0);
+        quad(-0.5, 1.2, 0.05, 0.3, 0.0);
+        quad(0.15, 0.05, 0.05, 0.6, 0.1);
+        quad(-0.15, 0.05, 0.05, 0.6, 0.1);
+        let t: Vec<[u32; 3]> =
+            (0..5u32).flat_map(|k| [[4 * k, 4 * k + 1, 4 * k + 2], [4 * k, 4 * k + 2, 4 * k + 3]]).collect();
+        let topo = Topology::new(20, t, None).unwrap();
+        let seq = surfcap_mesh::Sequence::new("still", 20, p).unwrap();
+        Subject::new("pieces", topo, vec![seq], 30.0, surfcap_mesh::UpAxis::PosY, surfcap_mesh::Units::metres())
+            .unwrap()
+    }
+
+    #[test]
+    fn separate_pieces_become_torso_arms_and_legs_on_their_sides() {
+        let s = five_pieces();
+        let (b, r) = propose(&s, Method::Auto, 5, 2).unwrap();
+        assert_eq!(r.method, Method::Components);
+        assert_eq!(b.names(), HUMANOID_NAMES.to_vec());
+        let verts: Vec<Vec<u32>> = b.parts.iter().map(|p| p.vertices.clone()).collect();
+        assert_eq!(
+            verts,
+            vec![vec![0, 1, 2, 3], vec![4, 5, 6, 7], vec![8, 9, 10, 11], vec![12, 13, 14, 15], vec![16, 17, 18, 19]]
+        );
+        let f = r.forward.unwrap();
+        assert!(f[2] > 0.99, "{f:?}");
+        // Two limbs only: the two with most vertices x offset (the arms), named limb_k.
+        let (b3, _) = propose(&s, Method::Components, 3, 2).unwrap();
+        assert_eq!(b3.names(), vec!["torso", "limb_1", "limb_2"]);
+        let e = propose(&s, Method::Components, 7, 2).unwrap_err().to_string();
+        assert!(e.contains("5 connected components: expected at least 7"), "{e}");
+        let e = propose(&s, Method::Joints, 5, 2).unwrap_err().to_string();
+        assert!(e.contains("has no joints"), "{e}");
+        // Same input, same output.
+        assert_eq!(propose(&s, Method::Components, 5, 2).unwrap().0, b);
     }
 
     #[test]
