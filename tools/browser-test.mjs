@@ -86,8 +86,12 @@ try {
   // The legend lists exactly what is drawn.
   const meta = await (await page.request.get(new URL('/api/items', url).href)).json();
   const legend = await viewer(() => window.surfcapViewer.legend);
-  const labels = meta.items.flatMap((m) => m.synthetic);
+  // Items with per-vertex colours (body parts) show their own legend rows instead of frame kinds.
+  const colourRows = meta.items.flatMap((m) => (m.colour_legend || []).map((r) => r[1]));
+  const plain = meta.items.filter((m) => !m.has_colours);
+  const labels = plain.flatMap((m) => m.synthetic);
   const expected = [
+    ...colourRows,
     labels.some((s) => !s) && 'original frame',
     labels.some((s) => s) && 'synthetic frame',
     meta.items.some((m) => m.overlay && m.overlay.curve) && 'requested path',
@@ -103,7 +107,8 @@ try {
   // One colour per sequence: the legend names the sequences instead of the frame kinds.
   await page.check('#hues');
   const hued = await viewer(() => window.surfcapViewer.legend);
-  if (JSON.stringify(hued.slice(0, meta.items.length)) !== JSON.stringify(meta.items.map((m) => m.name)) || hued.includes('original frame')) {
+  const huedWant = [...colourRows, ...plain.map((m) => m.name)];
+  if (JSON.stringify(hued.slice(0, huedWant.length)) !== JSON.stringify(huedWant) || hued.includes('original frame')) {
     fail(`legend with one colour per sequence: ${JSON.stringify(hued)}`);
   }
   await page.uncheck('#hues');

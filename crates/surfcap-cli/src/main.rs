@@ -77,6 +77,9 @@ enum Command {
     /// Play sequences in the browser: a local server (127.0.0.1) with a three.js page; original
     /// frames green, synthetic red, paths and centre trajectories overlaid, side by side.
     View(commands::view::Args),
+    /// Body parts for motion transfer (thesis 5.4.2): propose them (joints, components or the
+    /// rigidity of the motion), check a user's file, or show them in the browser.
+    Parts(commands::parts::Args),
     /// One static HTML page of what exists for a subject: summary, cached distance matrix,
     /// included evaluations (tables, plots) and animations (with their path errors).
     Report(commands::report::Args),
@@ -199,6 +202,7 @@ fn main() -> ExitCode {
             Command::View(a) => commands::view::run(&ctx, a),
             Command::Report(a) => commands::report::run(&ctx, a),
             Command::Transfer(c) => commands::transfer::run(&ctx, c),
+            Command::Parts(a) => commands::parts::run(&ctx, a),
         }
     });
     match result {

@@ -68,7 +68,8 @@ impl Submesh {
 impl BodyParts {
     /// Checks the parts and builds them: names unique and non-empty, vertices in range,
     /// sorted and unique within a part, every template vertex in some part, one root, parents
-    /// named and acyclic, and every child sharing at least one vertex with its parent.
+    /// named and acyclic. Whether a child that shares no vertex with its parent is allowed
+    /// depends on the template's edges, so [`BodyParts::check_fits`] checks it.
     pub fn new(n_vertices: usize, mut parts: Vec<Part>) -> Result<BodyParts> {
         if parts.is_empty() {
             return Err(Error::Parts("no parts: expected at least one".into()));
@@ -144,12 +145,6 @@ impl BodyParts {
             if pi == k {
                 return Err(Error::Parts(format!("part \"{}\" is its own parent", p.name)));
             }
-            if self.overlap(k).is_empty() {
-                return Err(Error::Parts(format!(
-                    "part \"{}\" shares no vertex with its parent \"{parent}\": contiguous parts must overlap (thesis 5.4.2)",
-                    p.name
-                )));
-            }
         }
         // Acyclic: walking up from any part reaches the root within n steps.
         for k in 0..self.parts.len() {
@@ -176,9 +171,48 @@ impl BodyParts {
                 topology.n_vertices()
             )));
         }
-        for (k, p) in self.parts.iter().enumerate() {
-            if self.submesh(topology, k).topology.n_triangles() == 0 {
+        for p in &self.parts {
+            let whole = topology.triangles().iter().any(|t| t.iter().all(|v| p.vertices.binary_search(v).is_ok()));
+            if !whole {
                 return Err(Error::Parts(format!("part \"{}\" contains no whole triangle of the template", p.name)));
+            }
+        }
+        // A child must overlap its parent where the template joins them (that is where they are
+        // stitched, thesis 5.6.2). Parts on separate pieces of the template (KayKit's arms and
+        // body are separate meshes) cannot share a vertex and are never stitched: no overlap is
+        // then allowed.
+        let mut member = vec![false; self.n_vertices];
+        for k in 0..self.parts.len() {
+            let Some(pi) = self.parent(k) else { continue };
+            if !self.overlap(k).is_empty() {
+                continue;
+            }
+            for &v in &self.parts[pi].vertices {
+                member[v as usize] = true;
+            }
+            let child = &self.parts[k].vertices;
+            let joined = topology.triangles().iter().find_map(|t| {
+                (0..3).find_map(|e| {
+                    let (a, b) = (t[e], t[(e + 1) % 3]);
+                    let (ia, ib) = (child.binary_search(&a).is_ok(), child.binary_search(&b).is_ok());
+                    if ia && member[b as usize] {
+                        Some((a, b))
+                    } else if ib && member[a as usize] {
+                        Some((b, a))
+                    } else {
+                        None
+                    }
+                })
+            });
+            for &v in &self.parts[pi].vertices {
+                member[v as usize] = false;
+            }
+            if let Some((a, b)) = joined {
+                return Err(Error::Parts(format!(
+                    "part \"{}\" shares no vertex with its parent \"{}\", but the template's edge {a}-{b} joins them: \
+                     contiguous parts must overlap (thesis 5.4.2)",
+                    self.parts[k].name, self.parts[pi].name
+                )));
             }
         }
         Ok(())
@@ -341,10 +375,17 @@ mod tests {
     fn bad_parts_are_refused_with_the_reason() {
         let e = BodyParts::new(6, vec![part("torso", None, &[0, 1, 3, 4])]).unwrap_err().to_string();
         assert!(e.contains("2 template vertices are in no part (the first is vertex 2)"), "{e}");
-        let e = BodyParts::new(6, vec![part("torso", None, &[0, 1, 3, 4]), part("arm", Some("torso"), &[2, 5])])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("shares no vertex with its parent"), "{e}");
+        let b =
+            BodyParts::new(6, vec![part("torso", None, &[0, 1, 3]), part("arm", Some("torso"), &[2, 4, 5])]).unwrap();
+        let e = b.check_fits(&strip()).unwrap_err().to_string();
+        assert!(
+            e.contains("shares no vertex with its parent \"torso\", but the template's edge 4-1 joins them"),
+            "{e}"
+        );
+        let b =
+            BodyParts::new(6, vec![part("torso", None, &[0, 1, 3, 4]), part("arm", Some("torso"), &[2, 5])]).unwrap();
+        let e = b.check_fits(&strip()).unwrap_err().to_string();
+        assert!(e.contains("part \"arm\" contains no whole triangle of the template"), "{e}");
         let e = BodyParts::new(6, vec![part("a", None, &[0, 1, 2, 3, 4, 5, 9])]).unwrap_err().to_string();
         assert!(e.contains("vertex 9: expected 0 to 5"), "{e}");
         let e = BodyParts::new(
@@ -358,5 +399,18 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("2 root parts"), "{e}");
+    }
+
+    #[test]
+    fn separate_pieces_need_no_overlap_but_joined_ones_do() {
+        // Two separate triangles: 0-1-2 and 3-4-5 (as KayKit's separate body-part meshes).
+        let two = Topology::new(6, vec![[0, 1, 2], [3, 4, 5]], None).unwrap();
+        let b = BodyParts::new(6, vec![part("body", None, &[0, 1, 2]), part("arm", Some("body"), &[3, 4, 5])]).unwrap();
+        assert!(b.overlap(1).is_empty());
+        b.check_fits(&two).unwrap();
+        // The same parts on a strip whose edges join them are refused.
+        let strip = Topology::new(6, vec![[0, 1, 2], [1, 3, 2], [3, 4, 5]], None).unwrap();
+        let e = b.check_fits(&strip).unwrap_err().to_string();
+        assert!(e.contains("part \"arm\" shares no vertex with its parent \"body\""), "{e}");
     }
 }

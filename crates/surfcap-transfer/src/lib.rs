@@ -14,6 +14,9 @@
 //! implements.
 
 pub mod body_parts;
+pub mod body_parts_file;
+pub mod body_parts_from_labels;
+pub mod body_parts_proposal;
 pub mod correspondence_densification;
 pub mod error;
 pub mod motion_transfer;

@@ -35,6 +35,19 @@ pub struct ViewItem {
     pub positions: Vec<f32>,
     /// The centre trajectory a synthesis achieved, with the path it was asked to follow if any.
     pub overlay: Option<Overlay>,
+    /// Optional `[vertices][3]` RGB colours in 0..1 (body parts, say), served little-endian like
+    /// the positions; when given, the page draws them instead of the green/red frame colour.
+    #[serde(skip)]
+    pub colours: Option<Vec<f32>>,
+    /// What the colours mean: `[css colour, text]` rows added to the legend.
+    pub colour_legend: Vec<[String; 2]>,
+}
+
+impl ViewItem {
+    /// Whether the item carries per-vertex colours (what the page reads to fetch them).
+    pub fn has_colours(&self) -> bool {
+        self.colours.is_some()
+    }
 }
 
 /// What a synthesis report adds to its animation: `centres` has one point per frame; `curve`
@@ -54,6 +67,8 @@ pub enum ViewError {
     Labels(String, usize, usize),
     #[error("{0}: face index {1} is not a vertex (expected 0 to {last})", last = .2.saturating_sub(1))]
     Face(String, u32, usize),
+    #[error("{0}: {1} colour values: expected 3 per vertex ({2})")]
+    Colours(String, usize, usize),
     #[error("{0}: the sequence has no frames")]
     Empty(String),
     #[error("nothing to show: no sequence was given")]
@@ -81,6 +96,11 @@ impl ViewItem {
         }
         if let Some(&f) = self.faces.iter().find(|&&f| f as usize >= self.n_vertices) {
             return Err(ViewError::Face(self.name.clone(), f, self.n_vertices));
+        }
+        if let Some(c) = &self.colours
+            && (c.len() != per_frame || c.iter().any(|x| !x.is_finite()))
+        {
+            return Err(ViewError::Colours(self.name.clone(), c.len(), per_frame));
         }
         Ok(())
     }

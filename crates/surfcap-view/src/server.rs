@@ -59,6 +59,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/items", get(items))
         .route("/api/items/{id}/positions", get(positions))
         .route("/api/items/{id}/faces", get(faces))
+        .route("/api/items/{id}/colours", get(colours))
         .route("/report/{*path}", get(report))
         .fallback(not_found)
         .layer(axum::middleware::from_fn_with_state(app.clone(), check_host))
@@ -116,7 +117,16 @@ async fn assets(UrlPath(path): UrlPath<String>) -> Response {
 }
 
 async fn items(State(app): State<Arc<App>>) -> Response {
-    let v = serde_json::json!({ "items": app.items, "report": app.report.as_ref().map(|_| "/report/index.html") });
+    let items: Vec<serde_json::Value> = app
+        .items
+        .iter()
+        .map(|it| {
+            let mut v = serde_json::to_value(it).expect("items serialise");
+            v["has_colours"] = it.has_colours().into();
+            v
+        })
+        .collect();
+    let v = serde_json::json!({ "items": items, "report": app.report.as_ref().map(|_| "/report/index.html") });
     respond("application/json", serde_json::to_vec(&v).expect("JSON values serialise"))
 }
 
@@ -133,6 +143,14 @@ async fn positions(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) ->
 async fn faces(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
     let Some(k) = item(&app, &id) else { return not_found().await };
     let bytes: Vec<u8> = app.items[k].faces.iter().flat_map(|x| x.to_le_bytes()).collect();
+    respond("application/octet-stream", bytes)
+}
+
+/// The item's per-vertex colours, when it has some (else 404).
+async fn colours(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
+    let Some(k) = item(&app, &id) else { return not_found().await };
+    let Some(c) = &app.items[k].colours else { return not_found().await };
+    let bytes: Vec<u8> = c.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 

@@ -63,7 +63,11 @@ async function load() {
   const list = [];
   for (let k = 0; k < meta.items.length; k++) {
     const m = meta.items[k];
-    const [pos, faces] = await Promise.all([fetchBytes(`/api/items/${k}/positions`), fetchBytes(`/api/items/${k}/faces`)]);
+    const [pos, faces, colours] = await Promise.all([
+      fetchBytes(`/api/items/${k}/positions`),
+      fetchBytes(`/api/items/${k}/faces`),
+      m.has_colours ? fetchBytes(`/api/items/${k}/colours`) : null,
+    ]);
     const positions = new Float32Array(pos);
     const geometry = new THREE.BufferGeometry();
     const attr = new THREE.BufferAttribute(positions.slice(0, 3 * m.n_vertices), 3);
@@ -71,7 +75,11 @@ async function load() {
     geometry.setAttribute('position', attr);
     geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(faces), 1));
     geometry.computeVertexNormals();
-    const material = new THREE.MeshStandardMaterial({ color: GREEN, roughness: 0.7, side: THREE.DoubleSide });
+    // Per-vertex colours (body parts...), linear RGB in 0..1, replace the frame colour.
+    if (colours) geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(colours), 3));
+    const material = new THREE.MeshStandardMaterial({
+      color: colours ? 0xffffff : GREEN, vertexColors: !!colours, roughness: 0.7, side: THREE.DoubleSide,
+    });
     const mesh = new THREE.Mesh(geometry, material);
     mesh.frustumCulled = false;  // its bounding sphere is frame 0's
     const group = new THREE.Group();   // the item, in its own coordinates
@@ -252,10 +260,12 @@ window.addEventListener('resize', resize);
 // that exist, the grid's square.
 function buildLegend() {
   const entries = [];
+  for (const it of state.items) for (const [colour, text] of it.meta.colour_legend || []) entries.push([colour, text]);
+  const plain = state.items.filter((it) => !it.meta.has_colours);
   if ($('hues').checked) {
-    for (const it of state.items) entries.push([hex(it.hue), it.meta.name]);
+    for (const it of plain) entries.push([hex(it.hue), it.meta.name]);
   } else {
-    const labels = state.items.flatMap((it) => it.meta.synthetic);
+    const labels = plain.flatMap((it) => it.meta.synthetic);
     if (labels.some((s) => !s)) entries.push([hex(GREEN), 'original frame']);
     if (labels.some((s) => s)) entries.push([hex(RED), 'synthetic frame']);
   }
@@ -307,7 +317,7 @@ function showFrame(f) {
     attr.array.set(it.positions.subarray(k * n, (k + 1) * n));
     attr.needsUpdate = true;
     it.geometry.computeVertexNormals();
-    it.material.color.copy($('hues').checked ? it.hue : (m.synthetic[k] ? RED : GREEN));
+    if (!m.has_colours) it.material.color.copy($('hues').checked ? it.hue : (m.synthetic[k] ? RED : GREEN));
   }
   const first = state.items[0].meta, k = f % first.n_frames;
   $('counter').textContent =
@@ -382,6 +392,7 @@ window.surfcapViewer = {
   get grid() { return state.grid && { step: state.grid.step, units: state.grid.units, text: state.grid.text }; },
   get overlays() { return state.items.map((it) => ({ curve: !!(it.meta.overlay && it.meta.overlay.curve), centres: !!it.meta.overlay })); },
   get spans() { return state.items.map((it) => spans(it.meta)); },
+  get colours() { return state.items.map((it) => !!it.meta.has_colours); },
   setFrame(f) { state.time = (f + 0.5) / state.fps; showFrame(Math.max(0, Math.min(state.frames - 1, f))); },
   screenBounds,
   ready: false,

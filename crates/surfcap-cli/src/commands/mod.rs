@@ -10,6 +10,7 @@ pub mod graph;
 pub mod import;
 pub mod info;
 pub mod interpolate;
+pub mod parts;
 pub mod report;
 pub mod synth;
 pub mod transfer;

@@ -63,6 +63,8 @@ fn items_of(s: &Subject, only: &[String], glb: Option<&Path>) -> Vec<ViewItem> {
             faces: faces.clone(),
             positions: q.positions().to_vec(),
             overlay: glb.filter(|_| n_sequences == 1).and_then(|g| overlay_of(g, q.n_frames())),
+            colours: None,
+            colour_legend: Vec::new(),
         })
         .collect()
 }

@@ -1,0 +1,247 @@
+//! `surfcap parts propose|check|show`: a subject's body parts for motion transfer (thesis 5.4.2,
+//! Fig. 5.2: a torso and four limbs that overlap their parent). `propose` writes the canonical
+//! parts file from the subject's joints, connected components or the rigidity of its motion;
+//! `check` reads a user's file (canonical, labels, cutting planes or vertex loops: see the README's
+//! "Body parts") against the subject; `show` plays the subject in the viewer with one colour per
+//! part and the overlaps shaded darker.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use serde::Serialize;
+use surfcap_mesh::{FrameLabel, Subject};
+use surfcap_transfer::BodyParts;
+use surfcap_transfer::body_parts_file::read_parts_file;
+use surfcap_transfer::body_parts_proposal::{Method, propose};
+use surfcap_view::ViewItem;
+use surfcap_view::server::{ServeOptions, serve};
+
+use crate::options::{SourceOpts, count, open};
+use crate::output::{count_of, print_json};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(subcommand)]
+    pub what: What,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum What {
+    /// Propose parts (torso, arm_left, arm_right, leg_left, leg_right for 5) and write them as
+    /// the canonical parts file.
+    Propose {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// auto (joints if the sequences have them, else components if there are enough, else
+        /// rigidity), joints, components or rigidity.
+        #[arg(long, default_value = "auto", value_parser = parse_method)]
+        method: Method,
+        /// Number of parts: the torso and N - 1 limbs.
+        #[arg(long, default_value_t = 5, value_parser = count)]
+        parts: usize,
+        /// Overlap: edge rings on each side of a child/parent boundary.
+        #[arg(long, default_value_t = 2)]
+        overlap_rings: usize,
+        /// The parts file to write (JSON).
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
+    /// Check a parts file against a subject and print each part's vertices and overlap.
+    Check {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// The parts file: canonical JSON, labels (JSON or one per line), planes or loops.
+        #[arg(long)]
+        parts: PathBuf,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
+    /// Play the subject in the browser with one colour per part, overlaps darker.
+    Show {
+        /// A subject cache, or any source `surfcap import` reads.
+        subject: PathBuf,
+        /// The parts file (any form `check` reads).
+        #[arg(long)]
+        parts: PathBuf,
+        /// Port on 127.0.0.1 (default: any free one; the URL is printed).
+        #[arg(long, default_value_t = 0)]
+        port: u16,
+        #[command(flatten)]
+        source: SourceOpts,
+    },
+}
+
+fn parse_method(s: &str) -> Result<Method, String> {
+    s.parse::<Method>().map_err(|_| "expected one of auto, joints, components, rigidity".into())
+}
+
+/// One part, as reported.
+#[derive(Debug, Serialize)]
+struct PartRow {
+    name: String,
+    parent: Option<String>,
+    vertices: usize,
+    triangles: usize,
+    overlap: usize,
+}
+
+fn rows(b: &BodyParts, s: &Subject) -> Vec<PartRow> {
+    (0..b.len())
+        .map(|k| PartRow {
+            name: b.parts[k].name.clone(),
+            parent: b.parts[k].parent.clone(),
+            vertices: b.parts[k].vertices.len(),
+            triangles: b.submesh(s.topology(), k).topology.n_triangles(),
+            overlap: b.overlap(k).len(),
+        })
+        .collect()
+}
+
+fn print_rows(rows: &[PartRow]) {
+    for r in rows {
+        let parent = match &r.parent {
+            Some(p) => format!(
+                "child of {p}, {} {} shared with it",
+                r.overlap,
+                if r.overlap == 1 { "vertex" } else { "vertices" }
+            ),
+            None => "root".into(),
+        };
+        println!("  {:<12} {:>7} vertices {:>7} triangles  ({parent})", r.name, r.vertices, r.triangles);
+    }
+}
+
+/// Reads a user's parts file against the subject's template (first frame).
+fn read(s: &Subject, path: &std::path::Path) -> anyhow::Result<BodyParts> {
+    let p0 = s.frame(0).unwrap_or_default();
+    Ok(read_parts_file(path, s.topology(), p0)?)
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    match a.what {
+        What::Propose { subject, method, parts, overlap_rings, output, source } => {
+            surfcap_mesh::output_path::check_not_input(&output, &[&subject])?;
+            let s = open(ctx, &subject, &source)?;
+            let (b, report) = propose(&s, method, parts, overlap_rings)
+                .with_context(|| format!("proposing {parts} parts for {}", subject.display()))?;
+            let text = b.to_json();
+            surfcap_mesh::atomic::write_file(&output, |w| {
+                w.write_all(text.as_bytes())?;
+                w.write_all(b"\n")
+            })
+            .with_context(|| format!("writing {}", output.display()))?;
+            let rows = rows(&b, &s);
+            let result = serde_json::json!({ "output": output, "subject": s.name, "report": report, "parts": rows });
+            ctx.result(&result, || {
+                println!(
+                    "{} by {} ({} considered, {} frames) -> {}",
+                    count_of(b.len(), "part"),
+                    report.method.as_str(),
+                    count_of(report.candidates, "candidate region"),
+                    report.frames_used,
+                    output.display()
+                );
+                print_rows(&rows);
+            });
+        }
+        What::Check { subject, parts, source } => {
+            let s = open(ctx, &subject, &source)?;
+            let b = read(&s, &parts)?;
+            let rows = rows(&b, &s);
+            let shared = b.multiplicity().iter().filter(|&&m| m > 1).count();
+            let result = serde_json::json!({
+                "parts_file": parts, "subject": s.name, "vertices": b.n_vertices,
+                "vertices_in_overlaps": shared, "parts": rows,
+            });
+            ctx.result(&result, || {
+                println!(
+                    "{}: {} fit {} ({} vertices, {shared} in overlaps)",
+                    parts.display(),
+                    count_of(b.len(), "part"),
+                    s.name,
+                    b.n_vertices
+                );
+                print_rows(&rows);
+            });
+        }
+        What::Show { subject, parts, port, source } => {
+            let s = open(ctx, &subject, &source)?;
+            let b = read(&s, &parts)?;
+            let items = items(&s, &b);
+            let n = items.len();
+            let json = ctx.json;
+            serve(items, ServeOptions { port, report: None }, |addr| {
+                let url = format!("http://{addr}/");
+                if json {
+                    print_json(&serde_json::json!({ "url": url, "sequences": n, "parts": b.len() }));
+                } else {
+                    println!("{url}");
+                    eprintln!(
+                        "surfcap parts show: {} of {} at {url} (Ctrl-C to stop)",
+                        count_of(b.len(), "part"),
+                        s.name
+                    );
+                }
+                let _ = std::io::stdout().flush();
+            })?;
+        }
+    }
+    Ok(())
+}
+
+/// Part colours (sRGB), repeated for more parts.
+const PALETTE: [u32; 8] = [0x9aa5b1, 0xd9822b, 0x2b8ad9, 0x3fae5a, 0xc94fb0, 0xd1c22e, 0x6c4fc9, 0x2ec1c1];
+/// Overlap vertices are drawn at this fraction of their part's colour.
+const OVERLAP_SHADE: f32 = 0.3;
+
+fn linear(c: u32) -> [f32; 3] {
+    [(c >> 16) & 255, (c >> 8) & 255, c & 255].map(|x| {
+        let x = x as f32 / 255.0;
+        if x <= 0.04045 { x / 12.92 } else { ((x + 0.055) / 1.055).powf(2.4) }
+    })
+}
+
+/// The per-vertex colours of the parts (each vertex its deepest part, overlaps darker) and the
+/// legend.
+pub fn part_colours(b: &BodyParts) -> (Vec<f32>, Vec<[String; 2]>) {
+    let (label, overlap) = b.display_labels();
+    let mut colours = Vec::with_capacity(3 * label.len());
+    for (l, o) in label.iter().zip(&overlap) {
+        let c = linear(PALETTE[*l as usize % PALETTE.len()]);
+        colours.extend(c.map(|x| if *o { x * OVERLAP_SHADE } else { x }));
+    }
+    let mut legend: Vec<[String; 2]> = b
+        .parts
+        .iter()
+        .enumerate()
+        .map(|(k, p)| [format!("#{:06x}", PALETTE[k % PALETTE.len()]), p.name.clone()])
+        .collect();
+    legend.push(["#4d5258".into(), "overlap (darker)".into()]);
+    (colours, legend)
+}
+
+fn items(s: &Subject, b: &BodyParts) -> Vec<ViewItem> {
+    let faces: Vec<u32> = s.topology().triangles().iter().flatten().copied().collect();
+    let (colours, legend) = part_colours(b);
+    s.sequences()
+        .iter()
+        .map(|q| ViewItem {
+            name: q.name.clone(),
+            fps: s.fps,
+            up: s.up_axis.as_str().to_string(),
+            units: s.units.name.clone(),
+            metres_per_unit: s.units.metres_per_unit,
+            n_vertices: q.n_vertices(),
+            n_frames: q.n_frames(),
+            synthetic: q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect(),
+            faces: faces.clone(),
+            positions: q.positions().to_vec(),
+            overlay: None,
+            colours: Some(colours.clone()),
+            colour_legend: legend.clone(),
+        })
+        .collect()
+}
