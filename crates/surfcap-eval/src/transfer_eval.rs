@@ -39,12 +39,16 @@ use surfcap_synth::bvh::read_bvh;
 use surfcap_synth::mannequin::{BodyShape, mannequin};
 use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_transfer::BodyParts;
+use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
+use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::part_stitching::average_overlaps;
 use surfcap_transfer::pose_representation::align_to_reference;
 use surfcap_transfer::semantic_deformation_transfer::SemanticDeformationTransfer;
+use surfcap_transfer::training_pairs::densified_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
 
+use crate::MeanStd;
 use crate::error::{Error, Result};
 
 /// A pair of subjects with ground truth.
@@ -138,6 +142,9 @@ pub struct Curve {
 #[derive(Debug, Clone, Serialize)]
 pub struct UnseenResult {
     pub method: String,
+    /// "keys", "densified" or "all true pairs".
+    pub training: String,
+    pub training_pairs: usize,
     pub motion: String,
     pub frames: usize,
     pub rms_percent: f64,
@@ -162,6 +169,11 @@ pub struct CaseEval {
     pub test_pairs: usize,
     pub curves: Vec<Curve>,
     pub unseen: Vec<UnseenResult>,
+    /// Key pairs (5 per training motion) and the pairs their densification gave.
+    pub key_pairs: usize,
+    pub densified_pairs: usize,
+    /// |source frame - target frame| of the densified pairs, whose truth is equality (frames).
+    pub densify_frame_error: MeanStd,
     pub seconds: f64,
 }
 
@@ -169,6 +181,36 @@ pub struct CaseEval {
 pub struct TransferEval {
     pub cases: Vec<CaseEval>,
     pub seconds: f64,
+}
+
+/// The body parts a case uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CaseParts {
+    /// One part: the whole body.
+    WholeBody,
+    /// Five parts proposed for each subject (`surfcap_transfer::body_parts_proposal`, method
+    /// auto: the joints of the KayKit rigs and of the mannequins) with overlaps of this many
+    /// edge rings.
+    Proposed { overlap_rings: usize },
+}
+
+impl CaseParts {
+    fn make(self, source: &Subject, target: &Subject) -> Result<(BodyParts, BodyParts)> {
+        match self {
+            CaseParts::WholeBody => Ok((
+                BodyParts::whole_body(source.topology().n_vertices()),
+                BodyParts::whole_body(target.topology().n_vertices()),
+            )),
+            CaseParts::Proposed { overlap_rings } => {
+                let one = |s: &Subject| {
+                    propose(s, ProposalMethod::Auto, 5, overlap_rings)
+                        .map(|p| p.0)
+                        .map_err(|e| Error::Unsuitable(format!("{}: proposing body parts: {e}", s.name)))
+                };
+                Ok((one(source)?, one(target)?))
+            }
+        }
+    }
 }
 
 /// Imports KayKit clips `<character>_<clip>` as one subject.
@@ -194,13 +236,11 @@ pub const KAYKIT_TRAIN: [&str; 9] = [
 pub const KAYKIT_UNSEEN: [&str; 3] = ["Dodge_Left", "Cheer", "Idle"];
 
 /// The knight to `target` (barbarian, mage or rogue), with the given parts (or the whole body).
-pub fn kaykit_case(data: &Path, target: &str, parts: Option<(BodyParts, BodyParts)>) -> Result<TransferCase> {
+pub fn kaykit_case(data: &Path, target: &str, parts: CaseParts) -> Result<TransferCase> {
     let clips: Vec<&str> = KAYKIT_TRAIN.iter().chain(&KAYKIT_UNSEEN).copied().collect();
     let source = kaykit_subject(data, "knight", &clips)?;
     let target_s = kaykit_subject(data, target, &clips)?;
-    let (source_parts, target_parts) = parts.unwrap_or_else(|| {
-        (BodyParts::whole_body(source.topology().n_vertices()), BodyParts::whole_body(target_s.topology().n_vertices()))
-    });
+    let (source_parts, target_parts) = parts.make(&source, &target_s)?;
     let n_train = KAYKIT_TRAIN.len();
     Ok(TransferCase {
         name: format!("knight -> {target}"),
@@ -236,13 +276,11 @@ pub fn mannequin_case(
     data: &Path,
     source: (&str, &BodyShape, usize),
     target: (&str, &BodyShape, usize),
-    parts: Option<(BodyParts, BodyParts)>,
+    parts: CaseParts,
 ) -> Result<TransferCase> {
     let s = mannequin_cmu_subject(data, source.0, source.1, source.2)?;
     let t = mannequin_cmu_subject(data, target.0, target.1, target.2)?;
-    let (source_parts, target_parts) = parts.unwrap_or_else(|| {
-        (BodyParts::whole_body(s.topology().n_vertices()), BodyParts::whole_body(t.topology().n_vertices()))
-    });
+    let (source_parts, target_parts) = parts.make(&s, &t)?;
     let n_train = CMU_TRAIN.len();
     Ok(TransferCase {
         name: format!("{} -> {}", source.0, target.0),
@@ -436,27 +474,57 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         curves.push(Curve { method: Method::GpNn.name().into(), variant: "whole-body".into(), points });
     }
 
-    // Motions absent from training: trained on every pair of the training motions.
-    let mut unseen = Vec::new();
+    // Motions absent from training, for three training sets built from the training motions:
+    // the key pairs only (5 per motion, what Baran et al. use), the key pairs densified by the
+    // constrained DTW of 5.5.1 (no ground truth used), and every true pair.
     let all_train: Vec<(usize, usize)> = {
         let mut v = pool.clone();
         v.sort_unstable();
         v
     };
+    let densified = {
+        let d = DensifyOptions::default();
+        densified_pairs(&bench.src, parts.0, &bench.tgt, parts.1, &keys, opts.components, &d)
+            .map_err(|e| Error::Unsuitable(format!("{}: densifying the key pairs: {e}", case.name)))?
+    };
+    let densify_error = {
+        // The true partner of source frame g is the target frame at the same offset.
+        let errs: Vec<f64> = densified
+            .0
+            .iter()
+            .map(|&(gs, gt)| {
+                let (ss, fs) = bench.src.locate(gs).expect("prepared");
+                let (st, ft) = bench.tgt.locate(gt).expect("prepared");
+                debug_assert_eq!(ss, st);
+                (fs as f64 - ft as f64).abs()
+            })
+            .collect();
+        MeanStd::of(&errs)
+    };
+    let training_sets: [(&str, &[(usize, usize)]); 3] =
+        [("keys", &keys), ("densified", &densified.0), ("all true pairs", &all_train)];
+    let unseen_frames: Vec<(usize, Vec<(usize, usize)>)> =
+        case.unseen.iter().map(|&(a, b)| true_pairs((a, b)).map(|p| (b, p))).collect::<Result<_>>()?;
+    let all_s: Vec<usize> = unseen_frames.iter().flat_map(|(_, p)| p.iter().map(|x| x.0)).collect();
+    let mut unseen = Vec::new();
     for method in Method::ALL {
-        for &(a, b) in &case.unseen {
-            let p = true_pairs((a, b))?;
-            let s: Vec<usize> = p.iter().map(|x| x.0).collect();
-            let t: Vec<usize> = p.iter().map(|x| x.1).collect();
-            let pred = bench.fit_predict(method, parts, opts.components, &all_train, &s)?;
-            let rms = rms_of(tgt, &pred, &t)?;
-            unseen.push(UnseenResult {
-                method: method.name().into(),
-                motion: case.target.sequences()[b].name.clone(),
-                frames: p.len(),
-                rms_percent: pct(rms),
-                rms,
-            });
+        for (set, pairs) in training_sets {
+            let pred = bench.fit_predict(method, parts, opts.components, pairs, &all_s)?;
+            let mut at = 0;
+            for (b, p) in &unseen_frames {
+                let t: Vec<usize> = p.iter().map(|x| x.1).collect();
+                let rms = rms_of(tgt, &pred[at..at + p.len()], &t)?;
+                at += p.len();
+                unseen.push(UnseenResult {
+                    method: method.name().into(),
+                    training: set.into(),
+                    training_pairs: pairs.len(),
+                    motion: case.target.sequences()[*b].name.clone(),
+                    frames: p.len(),
+                    rms_percent: pct(rms),
+                    rms,
+                });
+            }
         }
     }
     Ok(CaseEval {
@@ -474,6 +542,9 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         test_pairs: test_pool.len(),
         curves,
         unseen,
+        key_pairs: keys.len(),
+        densified_pairs: densified.0.len(),
+        densify_frame_error: densify_error,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

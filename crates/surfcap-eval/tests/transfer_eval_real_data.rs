@@ -1,11 +1,11 @@
 //! The transfer evaluation on the KayKit knight and barbarian (same clips, two bodies).
 
-use surfcap_eval::transfer_eval::{TransferEvalOptions, kaykit_case, transfer_case_eval};
+use surfcap_eval::transfer_eval::{CaseParts, TransferEvalOptions, kaykit_case, transfer_case_eval};
 
 #[test]
 fn knight_to_barbarian_learning_curves_fall_and_gp_nn_beats_linear() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
-    let case = kaykit_case(&data, "barbarian", None).unwrap();
+    let case = kaykit_case(&data, "barbarian", CaseParts::WholeBody).unwrap();
     let opts = TransferEvalOptions { sizes: vec![10, 50, 150], ..TransferEvalOptions::default() };
     let t0 = std::time::Instant::now();
     let r = transfer_case_eval(&case, &opts).unwrap();

@@ -197,6 +197,13 @@ pub enum What {
         /// Seed of the 70/30 split and the fits' restarts.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Evaluate on the whole body only (one part), instead of five proposed parts (plus the
+        /// whole-body comparison curve).
+        #[arg(long)]
+        whole_body: bool,
+        /// Overlap of the proposed parts, in edge rings.
+        #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::at_least(s, 1))]
+        overlap_rings: usize,
         #[arg(short, long, default_value = "transfer-eval")]
         output: PathBuf,
     },
@@ -274,8 +281,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             root_motion::run(ctx, &opts, &output)
         }
-        What::Transfer { data, cases, sizes, components, seed, output } => {
-            use surfcap_eval::transfer_eval::{kaykit_case, mannequin_case};
+        What::Transfer { data, cases, sizes, components, seed, whole_body, overlap_rings, output } => {
+            use surfcap_eval::transfer_eval::{CaseParts, kaykit_case, mannequin_case};
+            let parts = if whole_body { CaseParts::WholeBody } else { CaseParts::Proposed { overlap_rings } };
             use surfcap_synth::mannequin::BodyShape;
             let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
             let mut built = Vec::new();
@@ -286,12 +294,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                     continue;
                 }
                 built.push(match c.as_str() {
-                    "barbarian" | "mage" | "rogue" => kaykit_case(&data, c, None)?,
+                    "barbarian" | "mage" | "rogue" => kaykit_case(&data, c, parts)?,
                     "mannequins" => mannequin_case(
                         &data,
                         ("mannequin-average-3k", &BodyShape::average(), 3000),
                         ("mannequin-heavy-5k", &BodyShape::heavy(), 5000),
-                        None,
+                        parts,
                     )?,
                     other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue, mannequins or catlion"),
                 });

@@ -118,9 +118,16 @@ pub fn run(
                     .collect();
                 println!("  {:<8} {:<11} {}", c.method, c.variant, cells.join("  "));
             }
-            println!("  motions absent from training (trained on all {} pool pairs):", r.pool_pairs);
+            println!(
+                "  densification: {} key pairs -> {} pairs, frame error {:.2} +- {:.2} (truth: equal frames)",
+                r.key_pairs, r.densified_pairs, r.densify_frame_error.mean, r.densify_frame_error.std
+            );
+            println!("  motions absent from training, % of height, by training set:");
             for u in &r.unseen {
-                println!("    {:<8} {:<28} {:>4} frames {:>6.2}%", u.method, u.motion, u.frames, u.rms_percent);
+                println!(
+                    "    {:<8} {:<15} ({:>3} pairs) {:<28} {:>4} frames {:>6.2}%",
+                    u.method, u.training, u.training_pairs, u.motion, u.frames, u.rms_percent
+                );
             }
         }
         if let Some(l) = &loo {
