@@ -246,6 +246,43 @@ pub fn matmul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     out
 }
 
+/// Eigen-decomposition of the symmetric matrix `a` (lower triangle read) on the calling
+/// thread: eigenvalues ascending and the eigenvectors as columns. faer's parallel
+/// decomposition gives eigenvectors that differ in the last bits with the thread count; the
+/// project's results must not.
+pub fn symmetric_eigen_seq(a: MatRef<'_, f64>, what: &str) -> Result<(Mat<f64>, Vec<f64>)> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
+    let n = a.nrows();
+    let mut u = Mat::zeros(n, n);
+    let mut s = faer::diag::Diag::zeros(n);
+    let par = faer::Par::Seq;
+    let mut buf = MemBuffer::new(self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, Default::default()));
+    self_adjoint_evd(a, s.as_mut(), Some(u.as_mut()), par, MemStack::new(&mut buf), Default::default())
+        .map_err(|e| LearnError::Decomposition(format!("{what}: {e:?}")))?;
+    let values = (0..n).map(|i| s[i]).collect();
+    Ok((u, values))
+}
+
+/// Thin SVD of `a` (m x n) on the calling thread, for the same reason as
+/// [`symmetric_eigen_seq`]: singular values descending, `U` (m x k) and `V` (n x k), k = min(m, n).
+pub fn thin_svd_seq(a: MatRef<'_, f64>, what: &str) -> Result<(Mat<f64>, Vec<f64>, Mat<f64>)> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
+    let (m, n) = a.shape();
+    let k = m.min(n);
+    let mut u = Mat::zeros(m, k);
+    let mut v = Mat::zeros(n, k);
+    let mut s = faer::diag::Diag::zeros(k);
+    let par = faer::Par::Seq;
+    let thin = ComputeSvdVectors::Thin;
+    let mut buf = MemBuffer::new(svd_scratch::<f64>(m, n, thin, thin, par, Default::default()));
+    svd(a, s.as_mut(), Some(u.as_mut()), Some(v.as_mut()), par, MemStack::new(&mut buf), Default::default())
+        .map_err(|e| LearnError::Decomposition(format!("{what}: {e:?}")))?;
+    let values = (0..k).map(|i| s[i]).collect();
+    Ok((u, values, v))
+}
+
 /// Column means of the rows of `y` (N x D).
 pub fn column_means(y: MatRef<'_, f64>) -> Vec<f64> {
     let n = y.nrows().max(1) as f64;

@@ -7,7 +7,7 @@
 //! U^T`, whose eigenvectors give the components `V = Yc^T U S^-1` at O(N^2 D) cost instead of
 //! O(N D min(N, D)) with a D-sized workspace. Both give the same subspace (tested).
 
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{LearnError, Result};
@@ -64,11 +64,11 @@ impl Pca {
         };
         let (components, sv2) = match method {
             PcaMethod::Gram => {
-                let g = &yc * yc.transpose();
-                let eig = g
-                    .self_adjoint_eigen(Side::Lower)
-                    .map_err(|e| LearnError::Decomposition(format!("Gram eigen-decomposition: {e:?}")))?;
-                let (u, s) = (eig.U(), eig.S());
+                // Products on the calling thread: faer's parallel product splits the long inner
+                // dimension across threads, so its sums (and the components) would change in
+                // the last bit with the thread count.
+                let g = crate::matrix::matmul_seq(yc.as_ref(), yc.transpose());
+                let (u, s) = crate::matrix::symmetric_eigen_seq(g.as_ref(), "Gram eigen-decomposition")?;
                 // Eigenvalues ascend: take the last k.
                 let mut comps = Mat::zeros(k, d);
                 let mut sv2 = Vec::with_capacity(k);
@@ -80,16 +80,15 @@ impl Pca {
                         continue;
                     }
                     let inv = 1.0 / lambda.sqrt();
-                    let v = yc.transpose() * u.col(col);
+                    let v = crate::matrix::matmul_seq(yc.transpose(), u.col(col).as_mat());
                     for j in 0..d {
-                        comps[(c, j)] = v[j] * inv;
+                        comps[(c, j)] = v[(j, 0)] * inv;
                     }
                 }
                 (comps, sv2)
             }
             _ => {
-                let svd = yc.thin_svd().map_err(|e| LearnError::Decomposition(format!("thin SVD: {e:?}")))?;
-                let (v, s) = (svd.V(), svd.S());
+                let (_, s, v) = crate::matrix::thin_svd_seq(yc.as_ref(), "thin SVD")?;
                 let comps = Mat::from_fn(k, d, |c, j| v[(j, c)]);
                 ((comps), (0..k).map(|c| s[c] * s[c]).collect())
             }
@@ -192,5 +191,30 @@ mod tests {
         assert_eq!(back.variances, a.variances);
         assert!(a.project(Mat::<f64>::zeros(1, 5).as_ref()).is_err());
         assert!(Pca::fit(Mat::<f64>::zeros(1, 5).as_ref(), 1, PcaMethod::Auto).is_err());
+    }
+}
+
+#[cfg(test)]
+mod thread_count_tests {
+    use super::*;
+
+    /// The same components, to the bit, on one thread and on several (faer's parallel kernels
+    /// would otherwise split sums differently).
+    #[test]
+    fn pca_is_the_same_on_one_and_several_threads() {
+        for (n, d) in [(124, 3200), (300, 900)] {
+            let y = Mat::from_fn(n, d, |i, j| ((i * 31 + j * 17) % 97) as f64 * 0.01 + ((i * j) % 13) as f64 * 1e-3);
+            let fit = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| Pca::fit(y.as_ref(), 20, PcaMethod::Auto).unwrap())
+            };
+            let (a, b) = (fit(1), fit(4));
+            assert_eq!(a.variances, b.variances, "{n} x {d}");
+            for c in 0..a.components.nrows() {
+                for j in 0..d {
+                    assert_eq!(a.components[(c, j)].to_bits(), b.components[(c, j)].to_bits(), "{n} x {d} ({c}, {j})");
+                }
+            }
+        }
     }
 }

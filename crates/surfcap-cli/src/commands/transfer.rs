@@ -9,6 +9,8 @@ use serde_json::json;
 use surfcap_mesh::export::export;
 use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
 use surfcap_transfer::BodyParts;
+use surfcap_transfer::body_parts_file::{DEFAULT_OVERLAP_RINGS, read_parts_file};
+use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::pairs_file::parse_pairs;
@@ -42,13 +44,18 @@ pub struct TrainArgs {
     /// (ranges `walk:0-29, walk:0-29` pair frames one to one; `#` comments).
     #[arg(long)]
     pub pairs: PathBuf,
-    /// Body parts of the source (a parts file, see README "Body parts"); default: one part,
-    /// the whole body.
+    /// Body parts of the source (a parts file, see README "Body parts"); default: five parts
+    /// proposed from the subject (its joints, its separate meshes or the rigidity of its
+    /// motion), as `surfcap parts propose` does.
     #[arg(long)]
     pub source_parts: Option<PathBuf>,
     /// Body parts of the target, with the same part names as the source's.
     #[arg(long)]
     pub target_parts: Option<PathBuf>,
+    /// One part, the whole body, for a subject without a parts file (thesis Fig. 5.10's
+    /// baseline).
+    #[arg(long)]
+    pub whole_body: bool,
     /// PCA components per part (thesis 5.4.3: 20).
     #[arg(long, default_value_t = 20, value_parser = |s: &str| crate::options::at_least(s, 1))]
     pub components: usize,
@@ -123,17 +130,32 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     }
 }
 
-fn read_parts(path: Option<&Path>, s: &Subject, who: &str) -> anyhow::Result<BodyParts> {
+/// A subject's body parts: the user's file (any form README "Body parts" describes), one part
+/// with `--whole-body`, else five parts proposed from the subject (thesis 5.4.2: N = 5).
+fn parts_of(
+    ctx: &crate::Ctx,
+    path: Option<&Path>,
+    whole_body: bool,
+    s: &Subject,
+    who: &str,
+) -> anyhow::Result<BodyParts> {
     let parts = match path {
-        None => BodyParts::whole_body(s.topology().n_vertices()),
-        Some(p) => {
-            let text = String::from_utf8(surfcap_mesh::read_regular_file(p)?)
-                .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a JSON parts file", p.display()))?;
-            BodyParts::from_json(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?
+        Some(p) => read_parts_file(p, s.topology(), s.frame(0).unwrap_or_default())
+            .map_err(|e| anyhow::anyhow!("{e} (the {who} subject {:?})", s.name))?,
+        None if whole_body => BodyParts::whole_body(s.topology().n_vertices()),
+        None => {
+            let (parts, report) = propose(s, ProposalMethod::Auto, 5, DEFAULT_OVERLAP_RINGS)?;
+            ctx.note(&format!(
+                "{who} {:?}: no --{who}-parts given, so 5 parts were proposed from its {} ({}); `surfcap parts propose` writes them to a file you can edit",
+                s.name,
+                report.method.as_str(),
+                parts.names().join(", ")
+            ));
+            parts
         }
     };
     parts.check_fits(s.topology()).map_err(|e| {
-        let file = path.map_or("the whole-body part".to_string(), |p| p.display().to_string());
+        let file = path.map_or_else(|| "the parts".to_string(), |p| p.display().to_string());
         anyhow::anyhow!("{file} for the {who} subject {:?}: {e}", s.name)
     })?;
     Ok(parts)
@@ -151,8 +173,8 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let text = String::from_utf8(surfcap_mesh::read_regular_file(&a.pairs)?)
         .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a CSV of frame pairs", a.pairs.display()))?;
     let keys = parse_pairs(&text, &a.pairs.display().to_string(), &source, &target)?;
-    let source_parts = read_parts(a.source_parts.as_deref(), &source, "source")?;
-    let target_parts = read_parts(a.target_parts.as_deref(), &target, "target")?;
+    let source_parts = parts_of(ctx, a.source_parts.as_deref(), a.whole_body, &source, "source")?;
+    let target_parts = parts_of(ctx, a.target_parts.as_deref(), a.whole_body, &target, "target")?;
 
     // The sequences the pairs use, in order of first use; every frame of them feeds the PCA.
     let sequences_of = |s: &Subject, frames: &mut dyn Iterator<Item = usize>| -> Vec<usize> {
