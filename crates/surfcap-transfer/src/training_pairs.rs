@@ -18,6 +18,9 @@ use crate::error::{Error, Result};
 use crate::motion_transfer::{PreparedSubject, match_parts};
 use crate::pose_representation::PartSpace;
 
+/// A pair of frames (source, target): global frames, or frames of one sequence each.
+pub type FramePair = (usize, usize);
+
 /// What happened to one group of key pairs.
 #[derive(Debug, Clone, Serialize)]
 pub struct GroupReport {
@@ -38,10 +41,10 @@ pub fn densified_pairs(
     source_parts: &BodyParts,
     target: &PreparedSubject,
     target_parts: &BodyParts,
-    keys: &[(usize, usize)],
+    keys: &[FramePair],
     components: usize,
     opts: &DensifyOptions,
-) -> Result<(Vec<(usize, usize)>, Vec<GroupReport>)> {
+) -> Result<(Vec<FramePair>, Vec<GroupReport>)> {
     let source_of = match_parts(source_parts, target_parts)?;
     let src_space = PartSpace::fit(source_parts, &source.all_poses(), components)?;
     let tgt_space = PartSpace::fit(target_parts, &target.all_poses(), components)?;
@@ -49,7 +52,7 @@ pub fn densified_pairs(
         p.locate(g).ok_or_else(|| Error::Invalid(format!("{who} frame {g} is not a frame of the subject")))
     };
     // Groups in order of first appearance.
-    let mut groups: Vec<((usize, usize), Vec<(usize, usize)>)> = Vec::new();
+    let mut groups: Vec<(FramePair, Vec<FramePair>)> = Vec::new();
     for &(gs, gt) in keys {
         let (ss, fs) = locate(source, gs, "source")?;
         let (st, ft) = locate(target, gt, "target")?;
