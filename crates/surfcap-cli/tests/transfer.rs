@@ -86,7 +86,7 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     assert_eq!(rep["reconstruction"], "stitch");
     assert_eq!(rep["correction"], true);
     assert_eq!(rep["frames"], 49);
-    surfcap_testkit::validate_glb(&[out.clone()]);
+    surfcap_testkit::validate_glb(std::slice::from_ref(&out));
     let got = glb_frames(&out);
     let truth = surfcap_mesh::import::import(
         &[data.join("kaykit_adventurers/barbarian_Walking_C")],
