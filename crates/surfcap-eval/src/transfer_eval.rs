@@ -42,9 +42,10 @@ use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
-use surfcap_transfer::part_stitching::average_overlaps;
+use surfcap_transfer::part_stitching::{EdgeDistortion, average_overlaps, edge_distortion_by_region};
 use surfcap_transfer::pose_representation::align_to_reference;
 use surfcap_transfer::semantic_deformation_transfer::SemanticDeformationTransfer;
+use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 use surfcap_transfer::training_pairs::densified_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
 
@@ -152,6 +153,23 @@ pub struct UnseenResult {
     pub rms: f64,
 }
 
+/// One way of putting the predicted parts together (5.6), on the motions absent from
+/// training, GP-NN trained on every true pair: error against the truth and the edge-length
+/// change against the truth at part boundaries (edges touching an overlap) and inside parts.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReconstructionResult {
+    /// "average" (overlap vertices averaged), "stitch" (5.6.2) or "correct + stitch" (5.6.1-5.6.2).
+    pub reconstruction: String,
+    pub rms_percent: f64,
+    /// |l / l_true - 1| over the edges, max and mean over all frames; `None` without overlaps.
+    pub boundary_max: Option<f64>,
+    pub boundary_mean: Option<f64>,
+    pub inside_max: f64,
+    pub inside_mean: f64,
+    pub boundary_edges: usize,
+    pub inside_edges: usize,
+}
+
 #[derive(Debug, Clone, Serialize)]
 pub struct CaseEval {
     pub name: String,
@@ -174,6 +192,8 @@ pub struct CaseEval {
     pub densified_pairs: usize,
     /// |source frame - target frame| of the densified pairs, whose truth is equality (frames).
     pub densify_frame_error: MeanStd,
+    /// Reconstruction of the motions absent from training (5.6), GP-NN on every true pair.
+    pub reconstruction: Vec<ReconstructionResult>,
     pub seconds: f64,
 }
 
@@ -316,6 +336,88 @@ struct Bench<'a> {
 }
 
 impl Bench<'_> {
+    fn train(
+        &self,
+        parts: (&BodyParts, &BodyParts),
+        pairs: &[(usize, usize)],
+        pca_s: &[usize],
+        pca_t: &[usize],
+        opts: &TrainOptions,
+    ) -> surfcap_transfer::Result<MotionTransfer> {
+        Ok(MotionTransfer::train(&self.src, parts.0, pca_s, &self.tgt, parts.1, pca_t, pairs, opts)?.0)
+    }
+
+    /// GP-NN trained on `pairs`, the source frames `test` transferred and reconstructed three
+    /// ways, each against the true target frames `truth`.
+    fn reconstructions(
+        &self,
+        parts: (&BodyParts, &BodyParts),
+        components: usize,
+        pairs: &[(usize, usize)],
+        test: &[usize],
+        truth: &[usize],
+        height: f64,
+    ) -> Result<Vec<ReconstructionResult>> {
+        let unsuitable =
+            |e: surfcap_transfer::Error| Error::Unsuitable(format!("{}: reconstruction: {e}", self.case.name));
+        let mut frames_t: Vec<usize> = pairs.iter().map(|p| p.1).collect();
+        frames_t.sort_unstable();
+        frames_t.dedup();
+        let mut frames_s: Vec<usize> = pairs.iter().map(|p| p.0).collect();
+        frames_s.sort_unstable();
+        frames_s.dedup();
+        let mut opts = TrainOptions { components, ..TrainOptions::default() };
+        opts.mapping.fit.seed = self.seed;
+        let model = self.train(parts, pairs, &frames_s, &frames_t, &opts).map_err(unsuitable)?;
+        let poses: Vec<&[f32]> = test
+            .iter()
+            .map(|&g| self.src.frame(g).map(|f| f.0))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(unsuitable)?;
+        let predicted = model.predict_parts(&poses).map_err(unsuitable)?;
+        let training: Vec<Vec<f32>> = frames_t
+            .iter()
+            .map(|&g| self.tgt.frame(g).map(|f| f.0.to_vec()))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(unsuitable)?;
+        let topology = self.case.target.topology();
+        let mut out = Vec::new();
+        for name in ["average", "stitch", "correct + stitch"] {
+            let rebuilt: Vec<Vec<f32>> = match name {
+                "average" => {
+                    predicted.iter().map(|p| average_overlaps(parts.1, p, false)).collect::<std::result::Result<_, _>>()
+                }
+                _ => {
+                    let ro = ReconstructionOptions { correction: name != "stitch", ..ReconstructionOptions::default() };
+                    let r = Reconstructor::new(&model, topology, &training, &ro).map_err(unsuitable)?;
+                    predicted.iter().map(|p| r.reconstruct(p).map(|x| x.0)).collect()
+                }
+            }
+            .map_err(unsuitable)?;
+            let rms = rms_of(&self.tgt, &rebuilt, truth)?;
+            let mut d = Vec::new();
+            for (pose, &g) in rebuilt.iter().zip(truth) {
+                // Edge lengths do not depend on where the pose is: no alignment needed.
+                let t = self.tgt.frame(g).map_err(unsuitable)?.0;
+                d.push(edge_distortion_by_region(topology, parts.1, pose, t).map_err(unsuitable)?);
+            }
+            let max = |f: &dyn Fn(&EdgeDistortion) -> f64| d.iter().map(f).fold(0.0f64, f64::max);
+            let mean = |f: &dyn Fn(&EdgeDistortion) -> f64| d.iter().map(f).sum::<f64>() / d.len().max(1) as f64;
+            let has_boundary = d.first().is_some_and(|e| e.boundary_edges > 0);
+            out.push(ReconstructionResult {
+                reconstruction: name.into(),
+                rms_percent: 100.0 * rms / height,
+                boundary_max: has_boundary.then(|| max(&|e| e.boundary_max)),
+                boundary_mean: has_boundary.then(|| mean(&|e| e.boundary_mean)),
+                inside_max: max(&|e| e.inside_max),
+                inside_mean: mean(&|e| e.inside_mean),
+                boundary_edges: d.first().map_or(0, |e| e.boundary_edges),
+                inside_edges: d.first().map_or(0, |e| e.inside_edges),
+            });
+        }
+        Ok(out)
+    }
+
     /// Trains `method` on `pairs` (global frames) with `parts` and `components` per part, and
     /// predicts the target's aligned poses for the source frames `test` (global).
     fn fit_predict(
@@ -527,6 +629,8 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
             }
         }
     }
+    let all_t: Vec<usize> = unseen_frames.iter().flat_map(|(_, p)| p.iter().map(|x| x.1)).collect();
+    let reconstruction = bench.reconstructions(parts, opts.components, &all_train, &all_s, &all_t, h)?;
     Ok(CaseEval {
         name: case.name.clone(),
         source: case.source.name.clone(),
@@ -545,6 +649,7 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         key_pairs: keys.len(),
         densified_pairs: densified.0.len(),
         densify_frame_error: densify_error,
+        reconstruction,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

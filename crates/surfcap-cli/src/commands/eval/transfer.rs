@@ -122,6 +122,20 @@ pub fn run(
                 "  densification: {} key pairs -> {} pairs, frame error {:.2} +- {:.2} (truth: equal frames)",
                 r.key_pairs, r.densified_pairs, r.densify_frame_error.mean, r.densify_frame_error.std
             );
+            println!("  reconstruction of the motions absent from training (GP-NN, every true pair), against the truth:");
+            for x in &r.reconstruction {
+                let b = match (x.boundary_max, x.boundary_mean) {
+                    (Some(m), Some(a)) => format!("boundary edges max {:.1}% mean {:.2}%", 100.0 * m, 100.0 * a),
+                    _ => "no overlaps".to_string(),
+                };
+                println!(
+                    "    {:<17} {:>6.2}% of height; edge-length change: {b}, inside parts max {:.1}% mean {:.2}%",
+                    x.reconstruction,
+                    x.rms_percent,
+                    100.0 * x.inside_max,
+                    100.0 * x.inside_mean
+                );
+            }
             println!("  motions absent from training, % of height, by training set:");
             for u in &r.unseen {
                 println!(
