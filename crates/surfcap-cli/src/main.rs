@@ -20,6 +20,7 @@ mod signals;
 mod subject_summary;
 mod synthesis;
 mod travel;
+mod view_items;
 
 pub use output::Ctx;
 

@@ -2,38 +2,11 @@
 //! with joints and separate meshes): the proposal written and read back, a user's labels file,
 //! a bad file named in the error, and the viewer serving per-part colours.
 
-use std::io::BufRead;
-
-use surfcap_testkit::{http_request, p, stderr, surfcap};
+use surfcap_testkit::{ViewServer, http_request, p, stderr, surfcap};
 
 /// `surfcap parts show ...` running until dropped.
-struct Show {
-    child: std::process::Child,
-    url: String,
-}
-
-impl Show {
-    fn start(args: &[&str]) -> Show {
-        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_surfcap"))
-            .args(["parts", "show"])
-            .args(args)
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .expect("surfcap runs");
-        let mut line = String::new();
-        std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-        let url = line.trim().to_string();
-        assert!(url.starts_with("http://127.0.0.1:"), "surfcap parts show printed {url:?}");
-        Show { child, url }
-    }
-}
-
-impl Drop for Show {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+fn show(args: &[&str]) -> ViewServer {
+    ViewServer::start_command(env!("CARGO_BIN_EXE_surfcap"), &["parts", "show"], args)
 }
 
 #[test]
@@ -88,7 +61,7 @@ fn propose_check_and_show_parts_of_the_knight() {
     assert!(!o.status.success());
 
     // Shown: the items carry per-vertex colours and the parts' legend.
-    let show = Show::start(&[p(&knight), "--parts", p(&out)]);
+    let show = show(&[p(&knight), "--parts", p(&out)]);
     let (status, body) = http_request(&show.url, "GET", "/api/items");
     assert_eq!(status, 200);
     let items: serde_json::Value = serde_json::from_slice(&body).unwrap();
@@ -132,7 +105,7 @@ fn parts_show_draws_one_colour_per_part_in_chromium() {
     let out = d.path().join("knight.parts.json");
     let o = surfcap!(&["parts", "propose", p(&knight), "--method", "components", "-o", p(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let show = Show::start(&[p(&knight), "--parts", p(&out)]);
+    let show = show(&[p(&knight), "--parts", p(&out)]);
     let seen = browser_test(&show.url, &d.path().join("parts.png"));
     let legend: Vec<&str> = seen["legend"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
     assert_eq!(&legend[..6], ["torso", "arm_left", "arm_right", "leg_left", "leg_right", "overlap (darker)"]);

@@ -14,7 +14,13 @@ fn knight_to_barbarian_gp_nn_beats_baran_at_every_size_and_stitching_leaves_no_s
     let curve = |m: &str, v: &str| r.curves.iter().find(|c| c.method == m && c.variant == v).unwrap();
     let (nn, baran) = (curve("GP-NN", "random"), curve("Baran", "random"));
     for (a, b) in nn.points.iter().zip(&baran.points) {
-        assert!(a.cv_percent < b.cv_percent, "n = {}: GP-NN {:.3}% vs Baran {:.3}%", a.size, a.cv_percent, b.cv_percent);
+        assert!(
+            a.cv_percent < b.cv_percent,
+            "n = {}: GP-NN {:.3}% vs Baran {:.3}%",
+            a.size,
+            a.cv_percent,
+            b.cv_percent
+        );
     }
     assert!(nn.points[1].cv_percent < nn.points[0].cv_percent, "more pairs, lower error: {nn:?}");
     assert!(curve("GP-NN", "whole-body").points.len() == 2);

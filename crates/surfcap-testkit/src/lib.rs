@@ -220,9 +220,15 @@ pub struct ViewServer {
 impl ViewServer {
     /// Starts `<surfcap> view <args>` and waits for the URL it prints.
     pub fn start(surfcap: &str, args: &[&str]) -> Self {
+        Self::start_command(surfcap, &["view"], args)
+    }
+
+    /// Starts `<surfcap> <command...> <args>` (a command that serves the viewer, such as
+    /// `parts show`) and waits for the URL it prints.
+    pub fn start_command(surfcap: &str, command: &[&str], args: &[&str]) -> Self {
         use std::io::BufRead;
         let mut child = std::process::Command::new(surfcap)
-            .arg("view")
+            .args(command)
             .args(args)
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::null())
@@ -231,7 +237,7 @@ impl ViewServer {
         let mut line = String::new();
         std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
         let url = line.trim().to_string();
-        assert!(url.starts_with("http://127.0.0.1:"), "surfcap view printed {url:?}");
+        assert!(url.starts_with("http://127.0.0.1:"), "surfcap {} printed {url:?}", command.join(" "));
         ViewServer { child, url }
     }
 

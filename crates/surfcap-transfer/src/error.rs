@@ -23,3 +23,18 @@ pub enum Error {
 
 /// Result with the crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Checks that `p` holds `n` finite positions (`[n][3]`); `what` names it in the error
+/// ("the predicted part has 9 coordinates: expected 3 x 4 = 12").
+pub(crate) fn check_positions(p: &[f32], n: usize, what: &str) -> Result<()> {
+    if p.len() != 3 * n {
+        return Err(Error::Invalid(format!("{what} has {} coordinates: expected 3 x {n} = {}", p.len(), 3 * n)));
+    }
+    if let Some(i) = p.iter().position(|x| !x.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "{what} has a non-finite coordinate at vertex {}: expected finite positions",
+            i / 3
+        )));
+    }
+    Ok(())
+}

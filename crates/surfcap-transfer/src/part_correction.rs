@@ -47,7 +47,7 @@ use surfcap_geometry::motion_plane_alignment::procrustes;
 use surfcap_geometry::poisson_reconstruction::PoissonSolver;
 use surfcap_mesh::Topology;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, check_positions};
 
 /// The thesis's number of nearest training meshes ("3 nearest meshes were enough", 5.6.1).
 pub const DEFAULT_M_NEAREST: usize = 3;
@@ -95,24 +95,6 @@ fn rms_distance(a: &[f32], b: &[f32]) -> f64 {
     let n = (a.len() / 3).max(1) as f64;
     let s: f64 = a.iter().zip(b).map(|(x, y)| ((x - y) as f64).powi(2)).sum();
     (s / n).sqrt()
-}
-
-/// Checks that `p` holds `n` finite positions; `what` names it in the error.
-fn check_positions(p: &[f32], n: usize, what: &str) -> Result<()> {
-    if p.len() != 3 * n {
-        return Err(Error::Invalid(format!(
-            "{what} has {} values: expected 3 x {n} = {} (one position per part vertex)",
-            p.len(),
-            3 * n
-        )));
-    }
-    if let Some(i) = p.iter().position(|x| !x.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "{what} has a non-finite coordinate at vertex {}: expected finite positions",
-            i / 3
-        )));
-    }
-    Ok(())
 }
 
 impl PartCorrector {
@@ -345,13 +327,13 @@ mod tests {
         assert!(c.correct(&pred).unwrap().iter().all(|x| x.is_finite()));
 
         let e = c.correct(&rest[..9]).unwrap_err().to_string();
-        assert!(e.contains("the predicted part has 9 values: expected 3 x 40 = 120"), "{e}");
+        assert!(e.contains("the predicted part has 9 coordinates: expected 3 x 40 = 120"), "{e}");
         let mut nan = rest.clone();
         nan[7] = f32::NAN;
         let e = c.correct(&nan).unwrap_err().to_string();
         assert!(e.contains("non-finite coordinate at vertex 2"), "{e}");
         let e = PartCorrector::new(&t, &rest, vec![rest.clone(), rest[3..].to_vec()], 3).err().unwrap().to_string();
-        assert!(e.contains("training mesh 1 has 117 values"), "{e}");
+        assert!(e.contains("training mesh 1 has 117 coordinates"), "{e}");
         let e = PartCorrector::new(&t, &rest, vec![], 3).err().unwrap().to_string();
         assert!(e.contains("no training meshes"), "{e}");
         let e = PartCorrector::new(&t, &rest, vec![rest.clone()], 0).err().unwrap().to_string();

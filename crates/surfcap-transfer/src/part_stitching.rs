@@ -78,7 +78,7 @@ use surfcap_geometry::poisson_reconstruction::PoissonSolver;
 use surfcap_mesh::Topology;
 
 use crate::body_parts::BodyParts;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, check_positions};
 
 /// Weight of a curve's rest length in its cost, against its mismatch (both lengths).
 const LENGTH_WEIGHT: f64 = 1e-3;
@@ -137,20 +137,6 @@ pub struct EdgeDistortion {
     pub inside_mean: f64,
     pub boundary_edges: usize,
     pub inside_edges: usize,
-}
-
-/// Checks that `p` holds `n` finite positions.
-fn check_positions(p: &[f32], n: usize, what: &str) -> Result<()> {
-    if p.len() != 3 * n {
-        return Err(Error::Invalid(format!("{what} has {} values: expected 3 x {n} = {}", p.len(), 3 * n)));
-    }
-    if let Some(i) = p.iter().position(|x| !x.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "{what} has a non-finite coordinate at vertex {}: expected finite positions",
-            i / 3
-        )));
-    }
-    Ok(())
 }
 
 /// Checks every part's vertices index the template (parts built without
@@ -1389,7 +1375,7 @@ mod tests {
         let mut bad = good.clone();
         bad[1].pop();
         let e = s.stitch(&bad).unwrap_err().to_string();
-        assert!(e.contains("part \"upper\" has 623 values: expected 3 x 208 = 624"), "{e}");
+        assert!(e.contains("part \"upper\" has 623 coordinates: expected 3 x 208 = 624"), "{e}");
         let mut bad = good.clone();
         bad[0][5] = f32::INFINITY;
         let e = s.stitch(&bad).unwrap_err().to_string();
@@ -1404,11 +1390,11 @@ mod tests {
         let e = average_overlaps(&out_of_range, &good, true).unwrap_err().to_string();
         assert!(e.contains("has vertex 336"), "{e}");
         let e = Stitcher::new(&t, &rest[3..], &parts).err().unwrap().to_string();
-        assert!(e.contains("the template's rest pose has 1005 values: expected 3 x 336 = 1008"), "{e}");
+        assert!(e.contains("the template's rest pose has 1005 coordinates: expected 3 x 336 = 1008"), "{e}");
         let e = average_overlaps(&parts, &bad, true).unwrap_err().to_string();
         assert!(e.contains("non-finite"), "{e}");
         let e = edge_distortion_by_region(&t, &parts, &rest[3..], &rest).unwrap_err().to_string();
-        assert!(e.contains("the stitched mesh has 1005 values"), "{e}");
+        assert!(e.contains("the stitched mesh has 1005 coordinates"), "{e}");
     }
 
     #[test]

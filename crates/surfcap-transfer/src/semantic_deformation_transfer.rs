@@ -80,7 +80,7 @@ use surfcap_geometry::polar_decomposition::polar_decomposition;
 use surfcap_geometry::rotation_log_exp::{exp_rotation, log_rotation};
 use surfcap_mesh::{Components, Topology, connected_components};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, check_positions};
 
 /// Coordinates per triangle: 6 of S, 3 of the rotation relative to the patch.
 const PER_TRIANGLE: usize = 9;
@@ -135,23 +135,6 @@ struct ShapeSpace {
     scale: f64,
     /// Projection weight of each coordinate.
     metric: Vec<f64>,
-}
-
-fn check_pose(what: &str, pose: &[f32], n_vertices: usize) -> Result<()> {
-    if pose.len() != 3 * n_vertices {
-        return Err(Error::Invalid(format!(
-            "{what} has {} coordinates: expected 3 x {n_vertices} = {}",
-            pose.len(),
-            3 * n_vertices
-        )));
-    }
-    if let Some(k) = pose.iter().position(|x| !x.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "{what} has a non-finite coordinate at vertex {}: expected finite numbers",
-            k / 3
-        )));
-    }
-    Ok(())
 }
 
 fn centroid_of(p: &[f32], t: &[u32; 3]) -> Vector3<f64> {
@@ -685,10 +668,10 @@ impl SemanticDeformationTransfer {
             )));
         }
         for (k, p) in source_keys.iter().enumerate() {
-            check_pose(&format!("source key pose {k}"), p, source_topology.n_vertices())?;
+            check_positions(p, source_topology.n_vertices(), &format!("source key pose {k}"))?;
         }
         for (k, p) in target_keys.iter().enumerate() {
-            check_pose(&format!("target key pose {k}"), p, target_topology.n_vertices())?;
+            check_positions(p, target_topology.n_vertices(), &format!("target key pose {k}"))?;
         }
         let source = ShapeSpace::new("source", source_topology, &source_keys[0], opts)?;
         let target = ShapeSpace::new("target", target_topology, &target_keys[0], opts)?;
@@ -729,7 +712,7 @@ impl SemanticDeformationTransfer {
     /// The projection of `source_pose` onto the affine span of the source key poses: one weight
     /// per key pose, summing to 1.
     pub fn weights(&self, source_pose: &[f32]) -> Result<Vec<f64>> {
-        check_pose("source pose", source_pose, self.source.n_vertices)?;
+        check_positions(source_pose, self.source.n_vertices, "source pose")?;
         let x = self.source.encode(source_pose).coords;
         let d: Vec<f64> =
             x.iter().zip(&self.source_origin).zip(&self.source.metric).map(|((a, b), w)| w * (a - b)).collect();

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use serde::Serialize;
-use surfcap_mesh::{FrameLabel, Subject};
+use surfcap_mesh::Subject;
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_file::read_parts_file;
 use surfcap_transfer::body_parts_proposal::{Method, propose};
@@ -224,24 +224,11 @@ pub fn part_colours(b: &BodyParts) -> (Vec<f32>, Vec<[String; 2]>) {
 }
 
 fn items(s: &Subject, b: &BodyParts) -> Vec<ViewItem> {
-    let faces: Vec<u32> = s.topology().triangles().iter().flatten().copied().collect();
     let (colours, legend) = part_colours(b);
-    s.sequences()
-        .iter()
-        .map(|q| ViewItem {
-            name: q.name.clone(),
-            fps: s.fps,
-            up: s.up_axis.as_str().to_string(),
-            units: s.units.name.clone(),
-            metres_per_unit: s.units.metres_per_unit,
-            n_vertices: q.n_vertices(),
-            n_frames: q.n_frames(),
-            synthetic: q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect(),
-            faces: faces.clone(),
-            positions: q.positions().to_vec(),
-            overlay: None,
-            colours: Some(colours.clone()),
-            colour_legend: legend.clone(),
-        })
-        .collect()
+    let mut items = crate::view_items::view_items(s, &[]);
+    for item in &mut items {
+        item.colours = Some(colours.clone());
+        item.colour_legend = legend.clone();
+    }
+    items
 }

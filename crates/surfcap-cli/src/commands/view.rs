@@ -5,7 +5,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use surfcap_mesh::{FrameLabel, Subject};
+use surfcap_mesh::Subject;
 use surfcap_view::server::{ServeOptions, serve};
 use surfcap_view::{Overlay, ViewItem};
 
@@ -46,27 +46,12 @@ fn overlay_of(glb: &Path, frames: usize) -> Option<Overlay> {
 }
 
 fn items_of(s: &Subject, only: &[String], glb: Option<&Path>) -> Vec<ViewItem> {
-    let faces: Vec<u32> = s.topology().triangles().iter().flatten().copied().collect();
-    let n_sequences = s.sequences().len();
-    s.sequences()
-        .iter()
-        .filter(|q| only.is_empty() || only.contains(&q.name))
-        .map(|q| ViewItem {
-            name: q.name.clone(),
-            fps: s.fps,
-            up: s.up_axis.as_str().to_string(),
-            units: s.units.name.clone(),
-            metres_per_unit: s.units.metres_per_unit,
-            n_vertices: q.n_vertices(),
-            n_frames: q.n_frames(),
-            synthetic: q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect(),
-            faces: faces.clone(),
-            positions: q.positions().to_vec(),
-            overlay: glb.filter(|_| n_sequences == 1).and_then(|g| overlay_of(g, q.n_frames())),
-            colours: None,
-            colour_legend: Vec::new(),
-        })
-        .collect()
+    let single = s.sequences().len() == 1;
+    let mut items = crate::view_items::view_items(s, only);
+    for item in &mut items {
+        item.overlay = glb.filter(|_| single).and_then(|g| overlay_of(g, item.n_frames));
+    }
+    items
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {

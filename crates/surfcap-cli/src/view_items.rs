@@ -1,0 +1,30 @@
+//! A subject's sequences as the viewer's items (what `view` and `parts show` serve): one item
+//! per sequence with its frames, faces, frame labels and the subject's units; no overlay or
+//! colours (the commands add theirs).
+
+use surfcap_mesh::{FrameLabel, Subject};
+use surfcap_view::ViewItem;
+
+/// Items of the sequences of `s` named in `only` (every sequence when empty).
+pub fn view_items(s: &Subject, only: &[String]) -> Vec<ViewItem> {
+    let faces: Vec<u32> = s.topology().triangles().iter().flatten().copied().collect();
+    s.sequences()
+        .iter()
+        .filter(|q| only.is_empty() || only.contains(&q.name))
+        .map(|q| ViewItem {
+            name: q.name.clone(),
+            fps: s.fps,
+            up: s.up_axis.as_str().to_string(),
+            units: s.units.name.clone(),
+            metres_per_unit: s.units.metres_per_unit,
+            n_vertices: q.n_vertices(),
+            n_frames: q.n_frames(),
+            synthetic: q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect(),
+            faces: faces.clone(),
+            positions: q.positions().to_vec(),
+            overlay: None,
+            colours: None,
+            colour_legend: Vec::new(),
+        })
+        .collect()
+}
