@@ -84,7 +84,7 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     let rep: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.path().join("walk.report.json")).unwrap()).unwrap();
     assert_eq!(rep["reconstruction"], "stitch");
-    assert_eq!(rep["correction"], true);
+    assert_eq!(rep["correction"], false, "the correction is opt-in");
     assert_eq!(rep["frames"], 49);
     surfcap_testkit::validate_glb(std::slice::from_ref(&out));
     let got = glb_frames(&out);

@@ -78,7 +78,12 @@ pub fn run(ctx: &crate::Ctx, a: &TransferArgs) -> anyhow::Result<()> {
     let training: Vec<Vec<f32>> =
         pairs.iter().map(|p| tgt.frame(p.1).map(|f| f.0.to_vec())).collect::<Result<_, _>>()?;
     let t_apply = Instant::now();
-    let reconstructor = Reconstructor::new(&model, target.topology(), &training, &ReconstructionOptions::default())?;
+    let reconstructor = Reconstructor::new(
+        &model,
+        target.topology(),
+        &training,
+        &ReconstructionOptions { correction: true, ..ReconstructionOptions::default() },
+    )?;
     let setup_seconds = t_apply.elapsed().as_secs_f64();
     let out = model.transfer(&motion, |p| reconstructor.reconstruct(p).map(|r| r.0))?;
     let apply_seconds = t_apply.elapsed().as_secs_f64();
