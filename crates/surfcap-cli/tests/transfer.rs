@@ -181,6 +181,13 @@ fn transfer_errors_name_the_file_line_and_what_was_expected() {
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
     assert!(e.contains("2095 vertices, but the model") && e.contains("source of 2145 vertices (knight)"), "{e}");
+    // Sized before any work: a motion longer than --max-frames is refused, nothing written.
+    let motion = format!("{}:knight_Walking_A", p(&knight));
+    let x = d.path().join("x.glb");
+    let o = surfcap!(&["transfer", "apply", p(&model), "--motion", &motion, "--max-frames", "10", "-o", p(&x)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--max-frames"), "{}", stderr(&o));
+    assert!(!x.exists());
     let o = surfcap!(&["transfer", "apply", p(&model), "--motion", p(&knight), "-o", p(&d.path().join("x.glb"))]);
     let e = stderr(&o);
     assert!(e.contains("expected SUBJECT:SEQUENCE"), "{e}");

@@ -321,7 +321,12 @@ impl MotionTransfer {
         let motion = align_motion(&self.source.reference, source_frames);
         let refs: Vec<&[f32]> = motion.aligned.iter().map(|p| p.as_slice()).collect();
         let parts = self.predict_parts(&refs)?;
-        let displacements = self.predict_displacements(&motion.displacements)?;
+        let mut displacements = self.predict_displacements(&motion.displacements)?;
+        // The first frame has no previous frame: no displacement (the GP's value at a zero
+        // input is not one).
+        if let Some(d) = displacements.first_mut() {
+            *d = [0.0; 6];
+        }
         let aligned: Vec<Vec<f32>> = parts.iter().map(|p| reconstruct(p)).collect::<Result<_>>()?;
         let mut placement = Placement::identity();
         let mut world = Vec::with_capacity(aligned.len());

@@ -315,6 +315,22 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
     let meta = &saved.subjects;
     let nv = model.target.reference.len() / 3;
     let topology = Topology::new(nv, meta.target_triangles.clone(), None)?;
+    // Sized before any work: the output has the motion's frames on the target's mesh.
+    let shape = Subject::new(
+        meta.target_name.clone(),
+        topology.clone(),
+        vec![Sequence::new("size", nv, model.target.reference.clone())?],
+        meta.target_fps,
+        meta.target_up_axis,
+        meta.target_units.clone(),
+    )?;
+    a.out.limits.check(&Request {
+        what: format!("--motion {}", a.motion),
+        frames: seq.n_frames() as f64,
+        subject: &shape,
+        search_bytes: 0,
+        format,
+    })?;
     let frames: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
     let t_setup = Instant::now();
     let stitching = a.reconstruction == Reconstruction::Stitch;
@@ -368,13 +384,6 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
         meta.target_up_axis,
         meta.target_units.clone(),
     )?;
-    a.out.limits.check(&Request {
-        what: format!("--motion {}", a.motion),
-        frames: seq.n_frames() as f64,
-        subject: &out_subject,
-        search_bytes: 0,
-        format,
-    })?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&out_subject, format, &a.out.output, ctx.export_options(), &bar)?;
     let report = json!({
