@@ -195,6 +195,42 @@ fn transfer_errors_name_the_file_line_and_what_was_expected() {
     let o = surfcap!(&["transfer", "apply", p(&model), "--motion", &motion, "-o", p(&d.path().join("x.glb"))]);
     let e = stderr(&o);
     assert!(e.contains("has no sequence \"jog\"; it has knight_Walking_A"), "{e}");
+    // A motion on another mesh with the same vertex count: one triangle turned over.
+    let other = d.path().join("other_knight");
+    std::fs::create_dir(&other).unwrap();
+    let src = data.join("kaykit_adventurers/knight_Walking_A");
+    std::fs::copy(src.join("positions.npy"), other.join("positions.npy")).unwrap();
+    let obj = std::fs::read_to_string(src.join("template.obj")).unwrap();
+    let mut flipped = false;
+    let obj: String = obj
+        .lines()
+        .map(|l| {
+            if !flipped && l.starts_with("f ") {
+                flipped = true;
+                let f: Vec<&str> = l.split_whitespace().collect();
+                format!("f {} {} {}\n", f[1], f[3], f[2])
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    std::fs::write(other.join("template.obj"), obj).unwrap();
+    let motion = format!("{}:other_knight", p(&other));
+    let o = surfcap!(&[
+        "transfer",
+        "apply",
+        p(&model),
+        "--motion",
+        &motion,
+        "--fps",
+        "30",
+        "-o",
+        p(&d.path().join("x.glb"))
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("other triangles than the source knight was trained on"), "{e}");
+
     // A damaged model names its file.
     std::fs::write(model.join("model.json"), "{\"format\": \"surfcap-transfer-model\"").unwrap();
     let motion = format!("{}:knight_Walking_A", p(&knight));

@@ -35,6 +35,8 @@ struct Envelope<M, S> {
 pub struct SubjectsMeta {
     pub source_name: String,
     pub source_fps: f64,
+    /// [`mesh_fingerprint`] of the source's mesh: a motion to transfer must be on it.
+    pub source_mesh: String,
     pub target_name: String,
     pub target_triangles: Vec<[u32; 3]>,
     pub target_fps: f64,
@@ -47,6 +49,7 @@ impl SubjectsMeta {
         SubjectsMeta {
             source_name: source.name.clone(),
             source_fps: source.fps,
+            source_mesh: mesh_fingerprint(source.topology()),
             target_name: target.name.clone(),
             target_triangles: target.topology().triangles().to_vec(),
             target_fps: target.fps,
@@ -54,6 +57,36 @@ impl SubjectsMeta {
             target_units: target.units.clone(),
         }
     }
+}
+
+/// A short fingerprint of a mesh's connectivity (vertex count and triangles; FNV-1a, 64 bits,
+/// hex), so a motion on another mesh with the same vertex count is refused rather than
+/// transferred into nonsense.
+pub fn mesh_fingerprint(topology: &surfcap_mesh::Topology) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u32| {
+        for b in x.to_le_bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    // The same mesh with its triangles listed in another order, or each started at another
+    // corner, is the same mesh: each triangle is turned to start at its smallest index
+    // (keeping its orientation) and the list sorted.
+    let mut tris: Vec<[u32; 3]> = topology
+        .triangles()
+        .iter()
+        .map(|t| {
+            let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+            [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+        })
+        .collect();
+    tris.sort_unstable();
+    eat(topology.n_vertices() as u32);
+    for t in &tris {
+        t.iter().for_each(|&v| eat(v));
+    }
+    format!("{h:016x}")
 }
 
 /// A model read back.

@@ -18,7 +18,7 @@ use surfcap_transfer::part_stitching::{average_overlaps, edge_distortion_by_regi
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 use surfcap_transfer::training_pairs::densified_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
-use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, read_model, write_model};
+use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, mesh_fingerprint, read_model, write_model};
 
 use crate::limits::Request;
 use crate::options::{OutOpts, SourceOpts, open};
@@ -303,6 +303,21 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
             a.model.display(),
             saved.subjects.source_name
         );
+    }
+    if mesh_fingerprint(source.topology()) != saved.subjects.source_mesh {
+        anyhow::bail!(
+            "{}: its mesh has the model's {nv_source} vertices but other triangles than the source {} was trained on: expected a motion of that subject",
+            subject_path.display(),
+            saved.subjects.source_name
+        );
+    }
+    if (source.fps - saved.subjects.source_fps).abs() > 1e-9 * source.fps.abs().max(1.0) {
+        ctx.note(&format!(
+            "{} plays at {} fps and the model's source at {} fps: the displacement per frame is learnt at the model's rate, so the travel scales by their ratio",
+            subject_path.display(),
+            source.fps,
+            saved.subjects.source_fps
+        ));
     }
     let (_, seq) = source.sequence(sequence).ok_or_else(|| {
         let known: Vec<&str> = source.sequences().iter().map(|q| q.name.as_str()).collect();
