@@ -53,19 +53,14 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     let pairs = d.path().join("pairs.csv");
     std::fs::write(&pairs, csv).unwrap();
     let model = d.path().join("model");
-    let o = surfcap!(&[
-        "--json",
-        "transfer",
-        "train",
-        "--source",
-        p(&knight),
-        "--target",
-        p(&barbarian),
-        "--pairs",
-        p(&pairs),
-        "-o",
-        p(&model)
-    ]);
+    let cache = d.path().join("cache");
+    let train = |out: &Path, extra: &[&str]| {
+        let mut args = vec!["--json", "transfer", "train", "--source", p(&knight), "--target", p(&barbarian)];
+        args.extend(["--pairs", p(&pairs), "-o", p(out), "--cache-dir", p(&cache)]);
+        args.extend_from_slice(extra);
+        surfcap!(&args)
+    };
+    let o = train(&model, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["key_pairs"], 15);
@@ -74,6 +69,17 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     assert_eq!(names, ["torso", "arm_left", "arm_right", "leg_left", "leg_right"], "5 proposed parts");
     for f in ["model.json", "target_training.npy", "report.json", ".surfcap-output.json"] {
         assert!(model.join(f).is_file(), "{f}");
+    }
+    assert_eq!(r["cached"], false);
+    // The same training again comes from the cache, the same model.
+    let again_model = d.path().join("again_model");
+    let o = train(&again_model, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r2: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r2["cached"], true);
+    assert_eq!(r2["parts"], r["parts"]);
+    for f in ["model.json", "target_training.npy"] {
+        assert_eq!(std::fs::read(model.join(f)).unwrap(), std::fs::read(again_model.join(f)).unwrap(), "{f}");
     }
 
     // Transfer the unseen Walking_C; the barbarian's own Walking_C is the truth.
@@ -114,7 +120,7 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_surfcap"))
         .env("RAYON_NUM_THREADS", "1")
         .args(["--quiet", "transfer", "train", "--source", p(&knight), "--target", p(&barbarian)])
-        .args(["--pairs", p(&pairs), "-o", p(&model1)])
+        .args(["--pairs", p(&pairs), "-o", p(&model1), "--cache-dir", p(&cache), "--no-cache"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
@@ -132,9 +138,20 @@ fn transfer_errors_name_the_file_line_and_what_was_expected() {
     let barbarian = import(&data, d.path(), "barbarian", &["Walking_A"]);
     let pairs = d.path().join("pairs.csv");
     let model = d.path().join("model");
+    let cache = d.path().join("cache");
     let train = |extra: &[&str]| {
-        let mut args =
-            vec!["transfer", "train", "--source", p(&knight), "--target", p(&barbarian), "--pairs", p(&pairs)];
+        let mut args = vec![
+            "transfer",
+            "train",
+            "--source",
+            p(&knight),
+            "--target",
+            p(&barbarian),
+            "--pairs",
+            p(&pairs),
+            "--cache-dir",
+            p(&cache),
+        ];
         args.extend_from_slice(extra);
         surfcap!(&args)
     };

@@ -10,6 +10,7 @@ use surfcap_transfer::BodyParts;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::part_stitching::average_overlaps;
 use surfcap_transfer::pose_representation::align_to_reference;
+use surfcap_transfer::transfer_model_file::{SubjectsMeta, read_model, write_model};
 
 fn subject(character: &str, clips: &[&str]) -> Option<Subject> {
     let data = surfcap_testkit::shared_data()?;
@@ -67,4 +68,14 @@ fn knight_to_barbarian_walk_transfers_an_unseen_walk_within_a_few_percent_of_hei
     );
     assert!(mean < 0.03, "mean {mean}");
     assert!(out.world.iter().flatten().all(|v| v.is_finite()));
+
+    // Saved and read back, the model predicts the same poses to the bit.
+    let dir = tempfile::tempdir().unwrap();
+    let meta = SubjectsMeta::new(&knight, &barbarian);
+    write_model(dir.path(), &model, &meta, &[tgt.reference.clone()]).unwrap();
+    let saved = read_model(dir.path()).unwrap();
+    assert_eq!(saved.subjects.source_mesh, meta.source_mesh);
+    assert_eq!(saved.target_training.len(), 1);
+    let again = saved.model.transfer(&source, |p| average_overlaps(&saved.model.target.parts, p, false)).unwrap();
+    assert!(again.world == out.world, "a reloaded model transfers differently");
 }

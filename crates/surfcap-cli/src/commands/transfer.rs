@@ -21,7 +21,7 @@ use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, mesh_fingerprint, read_model, write_model};
 
 use crate::limits::Request;
-use crate::options::{OutOpts, SourceOpts, open};
+use crate::options::{CacheOpts, OutOpts, SourceOpts, open};
 
 #[derive(clap::Subcommand, Debug)]
 pub enum Cmd {
@@ -76,6 +76,8 @@ pub struct TrainArgs {
     /// The model folder to write.
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub cache: CacheOpts,
     #[command(flatten)]
     pub source_opts: SourceOpts,
 }
@@ -198,6 +200,31 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let pca_src: Vec<usize> = src_seqs.iter().flat_map(|&k| source.frame_index().range(k)).collect();
     let pca_tgt: Vec<usize> = tgt_seqs.iter().flat_map(|&k| target.frame_index().range(k)).collect();
     let key_pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
+    // The model is a derived product: cached under a key of everything it depends on (both
+    // subjects' geometry, the key pairs, both parts, every option), so training the same
+    // thing again copies it.
+    let params = json!({
+        "version": 1,
+        "target": surfcap_mesh::derived_cache::subject_hash(&target).to_hex().to_string(),
+        "keys": key_pairs, "source_parts": source_parts, "target_parts": target_parts,
+        "components": a.components, "kernel": a.kernel.name(), "seed": a.seed,
+        "densify": !a.no_densify, "max_straight": a.max_straight,
+    });
+    let entry = surfcap_mesh::derived_cache::DerivedCache::new(a.cache.dir())
+        .path("transfer-model", &surfcap_mesh::derived_cache::subject_hash(&source), &params.to_string())
+        .with_extension("");
+    if !a.cache.no_cache && entry.is_dir() {
+        match cached_model(&entry, &a.output) {
+            Ok(mut result) => {
+                result["model"] = json!(a.output);
+                result["cached"] = json!(true);
+                crate::output::write_json(&a.output.join("report.json"), &result)?;
+                ctx.result(&result, || print_trained(&result));
+                return Ok(());
+            }
+            Err(e) => ctx.note(&format!("cached model {} not used ({e:#}); training again", entry.display())),
+        }
+    }
     let (pairs, groups) = if a.no_densify {
         (key_pairs.clone(), Vec::new())
     } else {
@@ -251,33 +278,72 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
         "target_sequences": tgt_seqs.iter().map(|&k| target.sequences()[k].name.clone()).collect::<Vec<_>>(),
         "kernel": a.kernel.name(), "components": a.components,
         "parts": report.parts, "displacement": report.displacement,
-        "fit_seconds": fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
+        "fit_seconds": fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(), "cached": false,
     });
     crate::output::write_json(&a.output.join("report.json"), &result)?;
-    ctx.result(&result, || {
-        println!(
-            "{} -> {}: {} pairs ({} key pairs{}), {} parts, fitted in {fit_seconds:.2} s -> {}",
-            source.name,
-            target.name,
-            pairs.len(),
-            keys.len(),
-            if a.no_densify { "" } else { ", densified" },
-            report.parts.len(),
-            a.output.display()
-        );
-        for p in &report.parts {
-            println!(
-                "  {:<12} {:>6} -> {:>6} vertices, {:>2} -> {:>2} components ({:.1}% of the target part's variance)",
-                p.name,
-                p.source_vertices,
-                p.target_vertices,
-                p.source_components,
-                p.target_components,
-                100.0 * p.target_explained_variance
-            );
-        }
-    });
+    if let Err(e) = store_model(&a.output, &entry) {
+        ctx.note(&format!("the model could not be cached in {} ({e:#})", entry.display()));
+    }
+    ctx.result(&result, || print_trained(&result));
     Ok(())
+}
+
+/// The files of a model folder.
+const MODEL_FILES: [&str; 3] = ["model.json", "target_training.npy", "report.json"];
+
+/// Copies a cached model into `output` (after checking it reads) and returns its report.
+fn cached_model(entry: &Path, output: &Path) -> anyhow::Result<serde_json::Value> {
+    read_model(entry)?;
+    let report: serde_json::Value =
+        serde_json::from_slice(&surfcap_mesh::read_regular_file(&entry.join("report.json"))?)?;
+    for f in MODEL_FILES {
+        let bytes = surfcap_mesh::read_regular_file(&entry.join(f))?;
+        surfcap_mesh::atomic::write_file(&output.join(f), |w| w.write_all(&bytes))?;
+    }
+    Ok(report)
+}
+
+/// Copies a trained model folder into the cache entry (a marked folder of the model's kind).
+fn store_model(model: &Path, entry: &Path) -> anyhow::Result<()> {
+    surfcap_mesh::atomic::write_dir(entry, KIND, true, |dir| {
+        for f in MODEL_FILES {
+            let bytes = surfcap_mesh::read_regular_file(&model.join(f))?;
+            surfcap_mesh::atomic::write_file(&dir.join(f), |w| w.write_all(&bytes))?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// The human summary of a training, from its report.
+fn print_trained(r: &serde_json::Value) {
+    let cached = r["cached"].as_bool().unwrap_or(false);
+    println!(
+        "{} -> {}: {} pairs ({} key pairs{}), {} parts, {} -> {}",
+        r["source"].as_str().unwrap_or_default(),
+        r["target"].as_str().unwrap_or_default(),
+        r["pairs"],
+        r["key_pairs"],
+        if r["densified"] == true { ", densified" } else { "" },
+        r["parts"].as_array().map_or(0, Vec::len),
+        if cached {
+            "from the cache".to_string()
+        } else {
+            format!("fitted in {:.2} s", r["fit_seconds"].as_f64().unwrap_or(0.0))
+        },
+        r["model"].as_str().unwrap_or_default()
+    );
+    for p in r["parts"].as_array().into_iter().flatten() {
+        println!(
+            "  {:<12} {:>6} -> {:>6} vertices, {:>2} -> {:>2} components ({:.1}% of the target part's variance)",
+            p["name"].as_str().unwrap_or_default(),
+            p["source_vertices"],
+            p["target_vertices"],
+            p["source_components"],
+            p["target_components"],
+            100.0 * p["target_explained_variance"].as_f64().unwrap_or(0.0)
+        );
+    }
 }
 
 fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
