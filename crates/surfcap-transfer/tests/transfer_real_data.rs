@@ -72,7 +72,7 @@ fn knight_to_barbarian_walk_transfers_an_unseen_walk_within_a_few_percent_of_hei
     // Saved and read back, the model predicts the same poses to the bit.
     let dir = tempfile::tempdir().unwrap();
     let meta = SubjectsMeta::new(&knight, &barbarian);
-    write_model(dir.path(), &model, &meta, &[tgt.reference.clone()]).unwrap();
+    write_model(dir.path(), &model, &meta, std::slice::from_ref(&tgt.reference)).unwrap();
     let saved = read_model(dir.path()).unwrap();
     assert_eq!(saved.subjects.source_mesh, meta.source_mesh);
     assert_eq!(saved.target_training.len(), 1);
