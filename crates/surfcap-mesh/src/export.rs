@@ -25,6 +25,8 @@ pub enum ExportFormat {
     /// A folder in the shared-data layout: `<sequence>/template.obj + positions.npy (+ joints.npy)`
     /// and `meta.json`; `surfcap import` reads it back as is.
     Npy,
+    /// One `.usda` file (USD text): a time-sampled mesh per sequence (`io::usda`).
+    Usda,
 }
 
 impl ExportFormat {
@@ -36,6 +38,7 @@ impl ExportFormat {
             ExportFormat::Ply => "export-ply",
             ExportFormat::Pc2 => "export-pc2",
             ExportFormat::Npy => "export-npy",
+            ExportFormat::Usda => "export-usda",
         }
     }
 
@@ -46,6 +49,7 @@ impl ExportFormat {
             "ply" => ExportFormat::Ply,
             "pc2" => ExportFormat::Pc2,
             "npy" => ExportFormat::Npy,
+            "usda" | "usd" => ExportFormat::Usda,
             _ => return None,
         })
     }
@@ -55,7 +59,7 @@ impl std::str::FromStr for ExportFormat {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
         ExportFormat::parse(s).ok_or_else(|| {
-            crate::Error::new(crate::ErrorKind::Unsupported, format!("{s:?}: expected glb, obj, ply, pc2 or npy"))
+            crate::Error::new(crate::ErrorKind::Unsupported, format!("{s:?}: expected glb, obj, ply, pc2, npy or usda"))
         })
     }
 }
@@ -121,6 +125,14 @@ pub fn export(
         ExportFormat::Glb => {
             progress.start("writing glb", 1);
             write_file(out, |w| glb::write_glb(w, subject))?;
+            let side = glb_sidecar_path(out);
+            write_json(&side, &meta)?;
+            progress.finish();
+            Ok(vec![out.to_path_buf(), side])
+        }
+        ExportFormat::Usda => {
+            progress.start("writing usda", 1);
+            write_file(out, |w| crate::io::usda::write_usda(w, subject))?;
             let side = glb_sidecar_path(out);
             write_json(&side, &meta)?;
             progress.finish();

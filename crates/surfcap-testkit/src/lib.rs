@@ -126,6 +126,24 @@ pub fn meta(dataset: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("meta.json is JSON")
 }
 
+/// Reads a `.usda` file back with Pixar's USD (usd-core, in `tools/venv`, installed by the
+/// README's test command) through `tools/usd-read.py`; returns what it read as JSON.
+///
+/// # Panics
+/// When the virtual environment is missing or USD cannot read the file.
+pub fn read_usd(file: &Path) -> serde_json::Value {
+    let root = workspace_root();
+    let python = root.join("tools/venv/bin/python");
+    assert!(python.is_file(), "{} is missing: run scripts/test (it installs usd-core)", python.display());
+    let o = std::process::Command::new(&python)
+        .arg(root.join("tools/usd-read.py"))
+        .arg(file)
+        .output()
+        .expect("python runs");
+    assert!(o.status.success(), "USD could not read {}:\n{}", file.display(), String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).expect("usd-read.py prints JSON")
+}
+
 /// Runs the Khronos glTF validator on `.glb` files; returns its per-file JSON reports.
 ///
 /// # Panics

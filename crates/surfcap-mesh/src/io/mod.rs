@@ -8,3 +8,4 @@ pub mod pc2;
 pub mod ply;
 pub mod regular_file;
 pub mod shared_layout;
+pub mod usda;

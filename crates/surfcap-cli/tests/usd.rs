@@ -1,0 +1,63 @@
+//! `--format usda` read back by Pixar's USD (usd-core): topology, every time sample's points to
+//! the bit, sample count and times, time codes per second, up axis, metres per unit, labels.
+
+use surfcap_testkit::{p, stderr, surfcap};
+
+#[test]
+fn usda_export_reads_back_exactly_in_pixars_usd() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let k = data.join("kaykit_adventurers");
+    let (walk, run) = (k.join("knight_Walking_A"), k.join("knight_Running_A"));
+    let subject = d.path().join("knight.subject");
+    let o = surfcap!(&["--quiet", "import", p(&walk), p(&run), "-o", p(&subject)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.path().join("knight.usda");
+    let o = surfcap!(&["--quiet", "export", p(&subject), "--format", "usda", "-o", p(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let u = surfcap_testkit::read_usd(&out);
+    assert_eq!(u["time_codes_per_second"], 30.0);
+    assert_eq!(u["frames_per_second"], 30.0);
+    assert_eq!(u["up_axis"], "Y");
+    assert_eq!(u["meters_per_unit"], 1.0);
+    let s = surfcap_mesh::import::import(&[walk, run], &Default::default(), &surfcap_mesh::NoProgress).unwrap().subject;
+    let meshes = u["meshes"].as_array().unwrap();
+    assert_eq!(meshes.len(), 2);
+    let tris: Vec<u64> = s.topology().triangles().iter().flatten().map(|&v| v as u64).collect();
+    for (m, q) in meshes.iter().zip(s.sequences()) {
+        assert_eq!(m["path"].as_str().unwrap(), format!("{}/{}/mesh", u["default_prim"].as_str().unwrap(), q.name));
+        let counts = m["face_vertex_counts"].as_array().unwrap();
+        assert!(counts.len() == s.topology().n_triangles() && counts.iter().all(|c| c == 3));
+        let ix: Vec<u64> = m["face_vertex_indices"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+        assert_eq!(ix, tris);
+        let times: Vec<f64> = m["times"].as_array().unwrap().iter().map(|t| t.as_f64().unwrap()).collect();
+        assert_eq!(times, (0..q.n_frames()).map(|f| f as f64).collect::<Vec<_>>());
+        for (f, frame) in m["points"].as_array().unwrap().iter().enumerate() {
+            let got: Vec<f32> = frame.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect();
+            assert!(got == q.frame(f), "{} frame {f} differs", q.name);
+        }
+        assert_eq!(m["labels"].as_array().unwrap().len(), q.n_frames());
+    }
+
+    // Synthetic frames are labelled: an interpolation's ends are original, the rest synthetic.
+    let blend = d.path().join("blend.usda");
+    let o = surfcap!(&[
+        "--quiet",
+        "interpolate",
+        p(&k.join("knight_Walking_A")),
+        "--from",
+        "knight_Walking_A:0",
+        "--to",
+        "knight_Walking_A:16",
+        "--steps",
+        "5",
+        "--format",
+        "usda",
+        "-o",
+        p(&blend)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let u = surfcap_testkit::read_usd(&blend);
+    let labels: Vec<u64> = u["meshes"][0]["labels"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    assert_eq!(labels, [0, 1, 1, 1, 0]);
+}
