@@ -75,8 +75,9 @@ pub fn write_usda(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
     if let Some(r) = up_rotation(subject.up_axis) {
         // USD multiplies row vectors: the matrix is the transpose of the column-vector rotation.
         write!(w, "    matrix4d xformOp:transform = (")?;
-        for c in 0..3 {
-            write!(w, "({}, {}, {}, 0), ", r[0][c], r[1][c], r[2][c])?;
+        let [r0, r1, r2] = r;
+        for ((a, b), c) in r0.iter().zip(&r1).zip(&r2) {
+            write!(w, "({a}, {b}, {c}, 0), ")?;
         }
         writeln!(w, "(0, 0, 0, 1))")?;
         writeln!(w, "    uniform token[] xformOpOrder = [\"xformOp:transform\"]")?;
