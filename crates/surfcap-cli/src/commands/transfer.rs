@@ -203,9 +203,12 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     // The model is a derived product: cached under a key of everything it depends on (both
     // subjects' geometry, the key pairs, both parts, every option), so training the same
     // thing again copies it.
+    // `version` changes with what training computes or the model file holds.
     let params = json!({
         "version": 1,
         "target": surfcap_mesh::derived_cache::subject_hash(&target).to_hex().to_string(),
+        "names": [&source.name, &target.name], "fps": [source.fps, target.fps],
+        "target_units": target.units,
         "keys": key_pairs, "source_parts": source_parts, "target_parts": target_parts,
         "components": a.components, "kernel": a.kernel.name(), "seed": a.seed,
         "densify": !a.no_densify, "max_straight": a.max_straight,
