@@ -1,4 +1,4 @@
-//! `surfcap export <subject> --format glb|obj|ply|pc2|npy -o <out>`
+//! `surfcap export <subject> --format glb|obj|ply|pc2|npy|usda -o <out>`
 
 use std::path::PathBuf;
 
@@ -13,10 +13,10 @@ pub struct Args {
     /// A subject cache, or any source `surfcap import` reads.
     pub subject: PathBuf,
     /// glb (one file), obj or ply (a folder of frames per sequence), pc2 (a point cache per
-    /// sequence + template.obj), npy (the shared-data layout, re-importable).
+    /// sequence + template.obj), npy (the shared-data layout, re-importable), usda (USD text: a time-sampled mesh per sequence).
     #[arg(long)]
     pub format: ExportFormat,
-    /// Output file (glb) or folder (the others).
+    /// Output file (glb, usda) or folder (the others).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Only these sequences (repeatable; default: all).
