@@ -13,7 +13,8 @@ pub struct Args {
     /// A subject cache, or any source `surfcap import` reads.
     pub subject: PathBuf,
     /// glb (one file), obj or ply (a folder of frames per sequence), pc2 (a point cache per
-    /// sequence + template.obj), npy (the shared-data layout, re-importable), usda (USD text: a time-sampled mesh per sequence).
+    /// sequence + template.obj), npy (the shared-data layout, re-importable), usda (one USD
+    /// text file: a time-sampled mesh per sequence).
     #[arg(long)]
     pub format: ExportFormat,
     /// Output file (glb, usda) or folder (the others).
