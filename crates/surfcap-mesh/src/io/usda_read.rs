@@ -749,9 +749,13 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
             parts.join("/")
         })
         .collect();
-    for i in 0..names.len() {
-        if names.iter().filter(|n| **n == names[i]).count() > 1 {
-            names[i] = meshes[i].path.trim_start_matches('/').to_string();
+    let mut uses: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    for n in &names {
+        *uses.entry(n.clone()).or_default() += 1;
+    }
+    for (n, m) in names.iter_mut().zip(&meshes) {
+        if uses[n.as_str()] > 1 {
+            *n = m.path.trim_start_matches('/').to_string();
         }
     }
     for (m, n) in meshes.iter_mut().zip(names) {
@@ -1034,10 +1038,13 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
     })?;
     let labels = match m.labels {
         None => None,
-        Some(ls) => Some(
+        Some(mut ls) => Some({
+            // Sorted by time (stable: a repeated time keeps its last sample, as USD does), then
+            // looked up by binary search: linear in the frames, whatever their number.
+            ls.sort_by(|a, b| a.0.total_cmp(&b.0));
             frames
                 .iter()
-                .map(|(t, _, l)| match ls.iter().find(|x| x.0 == *t) {
+                .map(|(t, _, l)| match ls.partition_point(|x| x.0 <= *t).checked_sub(1).map(|i| &ls[i]).filter(|x| x.0 == *t) {
                     Some(x) => Ok(if x.1 == 1 { FrameLabel::Synthetic } else { FrameLabel::Original }),
                     None => Err(err!(
                         Metadata,
@@ -1045,8 +1052,8 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
                     )
                     .at_line(ls.first().map(|x| x.2).unwrap_or(line))),
                 })
-                .collect::<Result<Vec<_>>>()?,
-        ),
+                .collect::<Result<Vec<_>>>()?
+        }),
     };
     let times = frames.iter().map(|f| f.0).collect();
     let mut positions = Vec::new();
