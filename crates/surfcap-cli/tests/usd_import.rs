@@ -105,6 +105,7 @@ UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
 UsdGeom.SetStageMetersPerUnit(stage, 0.01)
 root = UsdGeom.Xform.Define(stage, "/grid")
 stage.SetDefaultPrim(root.GetPrim())
+root.AddTranslateOp().Set(Gf.Vec3d(1, 2, 3))
 mesh = UsdGeom.Mesh.Define(stage, "/grid/sheet")
 # A 3 x 2 grid of quads (12 points) plus one triangle.
 mesh.CreateFaceVertexCountsAttr([4, 4, 4, 4, 4, 4, 3])
@@ -134,6 +135,8 @@ fn a_stage_written_by_pixars_usd_imports_with_quads_fanned() {
     let out = d.path().join("grid.subject");
     let o = surfcap!(&["import", p(&usda), "-o", p(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let said = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(said.contains("xformOp:translate of </grid> (line"), "the ignored transform is noted:\n{said}");
     let s = surfcap_mesh::cache::read_cache(&out, &NoProgress).unwrap();
     assert_eq!((s.fps, s.up_axis, s.units.metres_per_unit), (24.0, surfcap_mesh::UpAxis::PosZ, Some(0.01)));
     assert_eq!(s.sequences().len(), 1);

@@ -225,6 +225,9 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
             // `.usd` may hold text or the binary crate format; the reader refuses the latter with
             // the command that converts it.
             let stage = crate::io::usda_read::read_usda(path)?;
+            for n in &stage.notes {
+                progress.note(&format!("{}: {n}", path.display()));
+            }
             Ok(stage
                 .meshes
                 .into_iter()
