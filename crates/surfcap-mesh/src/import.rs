@@ -43,6 +43,8 @@ pub enum SourceLayout {
     MeshFile(FrameFormat),
     /// A `.glb` file.
     Glb,
+    /// A USD text stage (`.usda`, or `.usd` holding text): one sequence per `Mesh` prim.
+    Usda,
     /// A `.pc2` or `.npy` with the template a manifest names.
     WithTemplate,
     /// A subject cache written by `surfcap import`.
@@ -64,6 +66,7 @@ impl std::fmt::Display for SourceLayout {
             }
             SourceLayout::MeshFile(format) => write!(f, "{} file (one frame)", upper(format)),
             SourceLayout::Glb => write!(f, "glb file"),
+            SourceLayout::Usda => write!(f, "USD text stage"),
             SourceLayout::WithTemplate => write!(f, "positions file with the manifest's template"),
             SourceLayout::Cache => write!(f, "subject cache"),
         }
@@ -127,7 +130,7 @@ pub(crate) fn simple(
 }
 
 /// Reads every sequence a path holds: a shared-layout sequence folder, a dataset folder of them,
-/// a folder of OBJ or PLY frames, a single `.obj`/`.ply` (one frame) or a `.glb`.
+/// a folder of OBJ or PLY frames, a single `.obj`/`.ply` (one frame), a `.glb` or a `.usda`.
 /// (Manifests and subject caches are whole subjects: see [`import`] and [`open_subject`].)
 pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSequence>> {
     if !path.exists() {
@@ -218,9 +221,34 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
                 })
                 .collect())
         }
+        "usda" | "usd" | "usdc" => {
+            // `.usd` may hold text or the binary crate format; the reader refuses the latter with
+            // the command that converts it.
+            let stage = crate::io::usda_read::read_usda(path)?;
+            for n in &stage.notes {
+                progress.note(&format!("{}: {n}", path.display()));
+            }
+            Ok(stage
+                .meshes
+                .into_iter()
+                .map(|m| SourceSequence {
+                    name: m.name,
+                    topology: m.topology,
+                    positions: m.positions,
+                    joints: None,
+                    tags: Vec::new(),
+                    labels: m.labels,
+                    fps: stage.fps,
+                    up_axis: stage.up_axis,
+                    units: stage.units.clone(),
+                    origin: path.to_path_buf(),
+                    layout: SourceLayout::Usda,
+                })
+                .collect())
+        }
         _ => Err(err!(
             Unsupported,
-            "unknown file type {ext:?}: expected .obj, .ply, .glb, surfcap.toml or a folder (a .pc2 or .npy needs a template: list it in surfcap.toml)"
+            "unknown file type {ext:?}: expected .obj, .ply, .glb, .usda, surfcap.toml or a folder (a .pc2 or .npy needs a template: list it in surfcap.toml)"
         )
         .in_file(path)),
     }

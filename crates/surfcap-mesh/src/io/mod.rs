@@ -9,3 +9,4 @@ pub mod ply;
 pub mod regular_file;
 pub mod shared_layout;
 pub mod usda;
+pub mod usda_read;
