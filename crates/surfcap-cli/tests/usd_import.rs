@@ -64,6 +64,10 @@ fn surfcaps_usda_imports_back_exactly_kaykit_and_vlasic_crane() {
         p(&blend)
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // As Pixar's USD reads them: the interpolation's ends original, the rest synthetic.
+    let u = surfcap_testkit::read_usd(&blend);
+    let labels: Vec<u64> = u["meshes"][0]["labels"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    assert_eq!(labels, [0, 1, 1, 1, 0]);
     let knight = d.path().join("knight.subject");
     let o = surfcap!(&["--quiet", "import", p(&walk), "-o", p(&knight)]);
     assert!(o.status.success(), "{}", stderr(&o));
