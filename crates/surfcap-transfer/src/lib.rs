@@ -29,6 +29,7 @@ pub mod shape_reconstruction;
 pub mod training_pairs;
 pub mod transfer_model;
 pub mod transfer_model_file;
+pub mod transfer_training;
 
 pub use body_parts::BodyParts;
 pub use error::{Error, Result};

@@ -10,7 +10,7 @@
 //! as it is (and reported).
 
 use faer::Mat;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::body_parts::BodyParts;
 use crate::correspondence_densification::{DensifyOptions, densify};
@@ -22,7 +22,7 @@ use crate::pose_representation::PartSpace;
 pub type FramePair = (usize, usize);
 
 /// What happened to one group of key pairs.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct GroupReport {
     /// `sequence` names are filled in by the caller that knows them; here the indices.
     pub source_sequence: usize,

@@ -1,7 +1,6 @@
 //! `surfcap transfer train | apply`: motion transfer between two subjects by GP regression on
 //! body parts (thesis chapter 5; `surfcap-transfer`).
 
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -12,13 +11,13 @@ use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_file::{DEFAULT_OVERLAP_RINGS, read_parts_file};
 use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
-use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
+use surfcap_transfer::motion_transfer::TrainOptions;
 use surfcap_transfer::pairs_file::parse_pairs;
 use surfcap_transfer::part_stitching::{average_overlaps, edge_distortion_by_region};
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
-use surfcap_transfer::training_pairs::densified_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
-use surfcap_transfer::transfer_model_file::{KIND, SubjectsMeta, mesh_fingerprint, read_model, write_model};
+use surfcap_transfer::transfer_model_file::{KIND, mesh_fingerprint, read_model, write_model};
+use surfcap_transfer::transfer_training::{TrainingRequest, train_cached};
 
 use crate::limits::Request;
 use crate::options::{CacheOpts, OutOpts, SourceOpts, open};
@@ -182,59 +181,40 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let source_parts = parts_of(ctx, a.source_parts.as_deref(), a.whole_body, &source, "source")?;
     let target_parts = parts_of(ctx, a.target_parts.as_deref(), a.whole_body, &target, "target")?;
 
-    // The sequences the pairs use, in order of first use; every frame of them feeds the PCA.
-    let sequences_of = |s: &Subject, frames: &mut dyn Iterator<Item = usize>| -> Vec<usize> {
-        let mut seen = Vec::new();
-        for g in frames {
-            let (k, _) = s.frame_index().locate(g).expect("resolved frames are in range");
-            if !seen.contains(&k) {
-                seen.push(k);
-            }
-        }
-        seen
-    };
-    let src_seqs = sequences_of(&source, &mut keys.iter().map(|k| k.source));
-    let tgt_seqs = sequences_of(&target, &mut keys.iter().map(|k| k.target));
-    let src = PreparedSubject::new(&source, &src_seqs)?;
-    let tgt = PreparedSubject::new(&target, &tgt_seqs)?;
-    let pca_src: Vec<usize> = src_seqs.iter().flat_map(|&k| source.frame_index().range(k)).collect();
-    let pca_tgt: Vec<usize> = tgt_seqs.iter().flat_map(|&k| target.frame_index().range(k)).collect();
     let key_pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
-    // The model is a derived product: cached under a key of everything it depends on (both
-    // subjects' geometry, the key pairs, both parts, every option), so training the same
-    // thing again copies it.
-    // `version` changes with what training computes or the model file holds.
-    let params = json!({
-        "version": 1,
-        "target": surfcap_mesh::derived_cache::subject_hash(&target).to_hex().to_string(),
-        "names": [&source.name, &target.name], "fps": [source.fps, target.fps],
-        "target_units": target.units,
-        "keys": key_pairs, "source_parts": source_parts, "target_parts": target_parts,
-        "components": a.components, "kernel": a.kernel.name(), "seed": a.seed,
-        "densify": !a.no_densify, "max_straight": a.max_straight,
-    });
-    let entry = surfcap_mesh::derived_cache::DerivedCache::new(a.cache.dir())
-        .path("transfer-model", &surfcap_mesh::derived_cache::subject_hash(&source), &params.to_string())
-        .with_extension("");
-    if !a.cache.no_cache && entry.is_dir() {
-        match cached_model(&entry, &a.output) {
-            Ok(mut result) => {
-                result["model"] = json!(a.output);
-                result["cached"] = json!(true);
-                crate::output::write_json(&a.output.join("report.json"), &result)?;
-                ctx.result(&result, || print_trained(&result));
-                return Ok(());
-            }
-            Err(e) => ctx.note(&format!("cached model {} not used ({e:#}); training again", entry.display())),
-        }
-    }
-    let (pairs, groups) = if a.no_densify {
-        (key_pairs.clone(), Vec::new())
-    } else {
-        let opts = DensifyOptions { max_straight: a.max_straight, ..DensifyOptions::default() };
-        densified_pairs(&src, &source_parts, &tgt, &target_parts, &key_pairs, a.components, &opts)?
+    let mut options = TrainOptions { components: a.components, ..TrainOptions::default() };
+    options.mapping.kernel = a.kernel;
+    options.mapping.fit.seed = a.seed;
+    let req = TrainingRequest {
+        source: &source,
+        target: &target,
+        source_parts: &source_parts,
+        target_parts: &target_parts,
+        keys: &key_pairs,
+        options,
+        densify: (!a.no_densify).then(|| DensifyOptions { max_straight: a.max_straight, ..DensifyOptions::default() }),
     };
-    let groups: Vec<serde_json::Value> = groups
+    ctx.say(&format!(
+        "training {} -> {} on {} key pairs, {} parts, {} components, kernel {}",
+        source.name,
+        target.name,
+        key_pairs.len(),
+        target_parts.len(),
+        a.components,
+        a.kernel.name()
+    ));
+    let trained = train_cached(&req, &a.cache.dir(), a.cache.no_cache, &mut |n: String| ctx.note(&n))?;
+    let t = &trained.summary;
+    for g in t.groups.iter().filter(|g| !g.densified) {
+        ctx.note(&format!(
+            "{} -> {}: a single key pair, kept as it is (densification needs at least two per pair of sequences)",
+            source.sequences()[g.source_sequence].name,
+            target.sequences()[g.target_sequence].name
+        ));
+    }
+    write_model(&a.output, &trained.model, &trained.subjects, &trained.target_training)?;
+    let groups: Vec<serde_json::Value> = t
+        .groups
         .iter()
         .map(|g| {
             json!({
@@ -244,77 +224,17 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
             })
         })
         .collect();
-    for g in groups.iter().filter(|g| g["densified"] == false) {
-        ctx.note(&format!(
-            "{} -> {}: a single key pair, kept as it is (densification needs at least two per pair of sequences)",
-            g["source_sequence"].as_str().unwrap_or_default(),
-            g["target_sequence"].as_str().unwrap_or_default()
-        ));
-    }
-
-    let mut opts = TrainOptions { components: a.components, ..TrainOptions::default() };
-    opts.mapping.kernel = a.kernel;
-    opts.mapping.fit.seed = a.seed;
-    ctx.say(&format!(
-        "training {} -> {} on {} pairs ({} source, {} target sequences), {} parts, {} components, kernel {}",
-        source.name,
-        target.name,
-        pairs.len(),
-        src_seqs.len(),
-        tgt_seqs.len(),
-        target_parts.len(),
-        a.components,
-        a.kernel.name()
-    ));
-    let t_fit = Instant::now();
-    let (model, report) =
-        MotionTransfer::train(&src, &source_parts, &pca_src, &tgt, &target_parts, &pca_tgt, &pairs, &opts)?;
-    let fit_seconds = t_fit.elapsed().as_secs_f64();
-    let distinct: BTreeSet<usize> = pairs.iter().map(|p| p.1).collect();
-    let training: Vec<Vec<f32>> =
-        distinct.iter().map(|&g| tgt.frame(g).map(|f| f.0.to_vec())).collect::<Result<_, _>>()?;
-    write_model(&a.output, &model, &SubjectsMeta::new(&source, &target), &training)?;
     let result = json!({
         "model": a.output, "source": source.name, "target": target.name,
-        "pairs": pairs.len(), "key_pairs": keys.len(), "densified": !a.no_densify, "sequence_pairs": groups,
-        "source_sequences": src_seqs.iter().map(|&k| source.sequences()[k].name.clone()).collect::<Vec<_>>(),
-        "target_sequences": tgt_seqs.iter().map(|&k| target.sequences()[k].name.clone()).collect::<Vec<_>>(),
+        "pairs": t.pairs.len(), "key_pairs": keys.len(), "densified": !a.no_densify, "sequence_pairs": groups,
+        "source_sequences": t.source_sequences.iter().map(|&k| source.sequences()[k].name.clone()).collect::<Vec<_>>(),
+        "target_sequences": t.target_sequences.iter().map(|&k| target.sequences()[k].name.clone()).collect::<Vec<_>>(),
         "kernel": a.kernel.name(), "components": a.components,
-        "parts": report.parts, "displacement": report.displacement,
-        "fit_seconds": fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(), "cached": false,
+        "parts": t.report.parts, "displacement": t.report.displacement,
+        "fit_seconds": t.fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(), "cached": trained.from_cache,
     });
     crate::output::write_json(&a.output.join("report.json"), &result)?;
-    if let Err(e) = store_model(&a.output, &entry) {
-        ctx.note(&format!("the model could not be cached in {} ({e:#})", entry.display()));
-    }
     ctx.result(&result, || print_trained(&result));
-    Ok(())
-}
-
-/// The files of a model folder.
-const MODEL_FILES: [&str; 3] = ["model.json", "target_training.npy", "report.json"];
-
-/// Copies a cached model into `output` (after checking it reads) and returns its report.
-fn cached_model(entry: &Path, output: &Path) -> anyhow::Result<serde_json::Value> {
-    read_model(entry)?;
-    let report: serde_json::Value =
-        serde_json::from_slice(&surfcap_mesh::read_regular_file(&entry.join("report.json"))?)?;
-    for f in MODEL_FILES {
-        let bytes = surfcap_mesh::read_regular_file(&entry.join(f))?;
-        surfcap_mesh::atomic::write_file(&output.join(f), |w| w.write_all(&bytes))?;
-    }
-    Ok(report)
-}
-
-/// Copies a trained model folder into the cache entry (a marked folder of the model's kind).
-fn store_model(model: &Path, entry: &Path) -> anyhow::Result<()> {
-    surfcap_mesh::atomic::write_dir(entry, KIND, true, |dir| {
-        for f in MODEL_FILES {
-            let bytes = surfcap_mesh::read_regular_file(&model.join(f))?;
-            surfcap_mesh::atomic::write_file(&dir.join(f), |w| w.write_all(&bytes))?;
-        }
-        Ok(())
-    })?;
     Ok(())
 }
 
