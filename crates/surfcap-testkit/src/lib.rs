@@ -144,6 +144,26 @@ pub fn read_usd(file: &Path) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).expect("usd-read.py prints JSON")
 }
 
+/// Reads an Alembic archive with the reference library (PyPI `alembic3d` in `tools/venv`,
+/// installed by `scripts/setup`) through `tools/abc-read.py`; returns its JSON (archive
+/// metadata, time samplings, and every PolyMesh's samples, UVs, normals and arbitrary
+/// geometry parameters).
+///
+/// # Panics
+/// When the virtual environment is missing or the reference library cannot read the file.
+pub fn read_abc(file: &Path) -> serde_json::Value {
+    let root = workspace_root();
+    let python = root.join("tools/venv/bin/python");
+    assert!(python.is_file(), "{} is missing: run scripts/test (it installs alembic3d)", python.display());
+    let o = std::process::Command::new(&python)
+        .arg(root.join("tools/abc-read.py"))
+        .arg(file)
+        .output()
+        .expect("python runs");
+    assert!(o.status.success(), "Alembic could not read {}:\n{}", file.display(), String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).expect("abc-read.py prints JSON")
+}
+
 /// Runs the Khronos glTF validator on `.glb` files; returns its per-file JSON reports.
 ///
 /// # Panics
