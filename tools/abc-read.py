@@ -2,7 +2,8 @@
 bindings) and prints what a test compares, as JSON: the archive's metadata and time samplings,
 and for every PolyMesh (at any depth) its path, schema metadata, sample count, sample times,
 topology variance, every sample's face counts, face indices and positions, its UVs and normals
-(values, indices, scope) and its arbitrary geometry parameters (name, scope, values)."""
+(values, indices, scope) and its arbitrary geometry parameters (name, scope, values); and every Xform's local matrix
+(Imath's row-vector layout) by path."""
 import json
 import sys
 
@@ -46,7 +47,8 @@ def geom_param(p, n):
 
 
 archive = Abc.IArchive(sys.argv[1])
-out = {"archive_metadata": archive.getTop().getMetaData().serialize(), "time_samplings": [], "meshes": []}
+out = {"archive_metadata": archive.getTop().getMetaData().serialize(), "time_samplings": [], "meshes": [],
+       "xforms": {}}
 for i in range(archive.getNumTimeSamplings()):
     ts = archive.getTimeSampling(i)
     tst = ts.getTimeSamplingType()
@@ -60,6 +62,13 @@ while stack:
     obj = stack.pop()
     for c in reversed(list(obj.children)):
         stack.append(c)
+    if G.IXform.matches(obj.getHeader()):
+        xs = G.IXform(obj, Abc.WrapExistingFlag.kWrapExisting).getSchema()
+        v = xs.getValue()
+        m = v.getMatrix()
+        out["xforms"][obj.getFullName()] = {
+            "samples": xs.getNumSamples(), "inherits": v.getInheritsXforms(),
+            "matrix": [[m[i][j] for j in range(4)] for i in range(4)]}
     if not G.IPolyMesh.matches(obj.getHeader()):
         continue
     schema = G.IPolyMesh(obj, Abc.WrapExistingFlag.kWrapExisting).getSchema()

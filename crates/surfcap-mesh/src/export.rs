@@ -27,6 +27,8 @@ pub enum ExportFormat {
     Npy,
     /// One `.usda` file (USD text): a time-sampled mesh per sequence (`io::usda`).
     Usda,
+    /// One `.abc` file (Alembic, Ogawa): an `Xform` + `PolyMesh` per sequence (`io::abc`).
+    Abc,
 }
 
 impl ExportFormat {
@@ -39,6 +41,7 @@ impl ExportFormat {
             ExportFormat::Pc2 => "export-pc2",
             ExportFormat::Npy => "export-npy",
             ExportFormat::Usda => "export-usda",
+            ExportFormat::Abc => "export-abc",
         }
     }
 
@@ -50,6 +53,7 @@ impl ExportFormat {
             "pc2" => ExportFormat::Pc2,
             "npy" => ExportFormat::Npy,
             "usda" | "usd" => ExportFormat::Usda,
+            "abc" | "alembic" => ExportFormat::Abc,
             _ => return None,
         })
     }
@@ -59,7 +63,10 @@ impl std::str::FromStr for ExportFormat {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
         ExportFormat::parse(s).ok_or_else(|| {
-            crate::Error::new(crate::ErrorKind::Unsupported, format!("{s:?}: expected glb, obj, ply, pc2, npy or usda"))
+            crate::Error::new(
+                crate::ErrorKind::Unsupported,
+                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda or abc"),
+            )
         })
     }
 }
@@ -130,9 +137,15 @@ pub fn export(
             progress.finish();
             Ok(vec![out.to_path_buf(), side])
         }
-        ExportFormat::Usda => {
-            progress.start("writing usda", 1);
-            write_file(out, |w| crate::io::usda::write_usda(w, subject))?;
+        ExportFormat::Usda | ExportFormat::Abc => {
+            let (what, write): (&str, fn(&mut dyn std::io::Write, &Subject) -> std::io::Result<()>) =
+                if format == ExportFormat::Usda {
+                    ("writing usda", crate::io::usda::write_usda)
+                } else {
+                    ("writing abc", crate::io::abc::write_abc)
+                };
+            progress.start(what, 1);
+            write_file(out, |w| write(w, subject))?;
             let side = glb_sidecar_path(out);
             write_json(&side, &meta)?;
             progress.finish();

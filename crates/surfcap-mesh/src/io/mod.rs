@@ -1,9 +1,11 @@
 //! Readers and writers, one format per file.
 
+pub mod abc;
 pub mod frame_folder;
 pub mod glb;
 pub mod npy;
 pub mod obj;
+pub mod ogawa_write;
 pub mod pc2;
 pub mod ply;
 pub mod regular_file;
