@@ -52,7 +52,7 @@ enum Command {
     Import(commands::import::Args),
     /// Describe a subject: sequences, frames, vertices, triangles, components, bounding box.
     Info(commands::info::Args),
-    /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches, npy arrays or USD (usda).
+    /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches, npy arrays, USD (usda) or Alembic (abc).
     Export(commands::export::Args),
     /// All-pairs pose distance matrix (thesis eq. 2.2, 2.13, 2.14) as .npy, cached.
     Distance(commands::distance::Args),

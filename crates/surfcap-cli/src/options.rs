@@ -209,11 +209,11 @@ impl GraphOpts {
 /// Where an animation goes.
 #[derive(clap::Args, Debug, Clone)]
 pub struct OutOpts {
-    /// Output: a .glb or .usda file, or a folder for --format obj, ply, pc2 or npy. The JSON report is written
+    /// Output: a .glb, .usda or .abc file, or a folder for --format obj, ply, pc2 or npy. The JSON report is written
     /// beside it as <output>.report.json.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// glb, obj, ply, pc2, npy or usda (default: from the output's extension, else glb).
+    /// glb, obj, ply, pc2, npy, usda or abc (default: from the output's extension, else glb).
     #[arg(long)]
     pub format: Option<ExportFormat>,
     #[command(flatten)]

@@ -14,10 +14,11 @@ pub struct Args {
     pub subject: PathBuf,
     /// glb (one file), obj or ply (a folder of frames per sequence), pc2 (a point cache per
     /// sequence + template.obj), npy (the shared-data layout, re-importable), usda (one USD
-    /// text file: a time-sampled mesh per sequence).
+    /// text file: a time-sampled mesh per sequence), abc (one Alembic archive: an Xform and a
+    /// PolyMesh per sequence).
     #[arg(long)]
     pub format: ExportFormat,
-    /// Output file (glb, usda) or folder (the others).
+    /// Output file (glb, usda, abc) or folder (the others).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Only these sequences (repeatable; default: all).

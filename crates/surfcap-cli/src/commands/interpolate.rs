@@ -32,7 +32,7 @@ pub struct Args {
     /// Output .glb (a sidecar .json is written next to it); .npy, .obj folders via --format.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Output format: glb, obj, ply, pc2, npy or usda.
+    /// Output format: glb, obj, ply, pc2, npy, usda or abc.
     #[arg(long, default_value = "glb")]
     pub format: ExportFormat,
     #[command(flatten)]

@@ -8,7 +8,7 @@ use surfcap_mesh::{NoProgress, Subject};
 use crate::options::{Positive, TableOpts};
 
 mod distance;
-mod glb;
+mod export;
 mod graph;
 mod interpolate;
 mod learn;
@@ -102,14 +102,20 @@ pub enum What {
     /// components, hyper-parameters fitted (< 10 s), and a 100-frame transfer onto a
     /// 10,000-vertex mannequin with part correction and stitching (< 10 s).
     Transfer(transfer::TransferArgs),
-    /// Write a long animation as .glb (default: 10 minutes at 30 fps of a 10,000-vertex tube,
-    /// 18,000 frames): file size, bytes per frame, time and peak resident memory.
-    Glb {
-        #[arg(long, default_value_t = 18_000, value_parser = crate::options::count)]
-        frames: usize,
+    /// Write long animations as .glb, .abc or .usda (default: glb, 10 minutes at 30 fps of a
+    /// 10,000-vertex tube, 18,000 frames): file size, time and the memory the write adds, for
+    /// each length (`--frames 1800,3600,9000,18000` shows that both grow linearly).
+    #[command(alias = "glb")]
+    Export {
+        /// glb, abc or usda.
+        #[arg(long, default_value = "glb")]
+        format: surfcap_mesh::export::ExportFormat,
+        /// Lengths in frames (at 30 fps), comma-separated.
+        #[arg(long, default_value = "18000", value_delimiter = ',', value_parser = crate::options::count)]
+        frames: Vec<usize>,
         #[arg(long, default_value_t = 10_000, value_parser = crate::options::count)]
         vertices: usize,
-        /// Keep the file here (default: a temporary folder, removed afterwards).
+        /// Keep the file here (one length only; default: a temporary folder, removed afterwards).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
@@ -154,7 +160,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         What::Interpolate { subject, from, to, repeat, fps } => interpolate::run(ctx, subject, &from, &to, repeat, fps),
         What::Graph { frames, sequences, alpha, seed } => graph::run(ctx, frames, sequences, alpha.0, seed),
-        What::Glb { frames, vertices, output } => glb::run(ctx, frames, vertices, output),
+        What::Export { format, frames, vertices, output } => export::run(ctx, format, &frames, vertices, output),
         What::Learn(l) => learn::run(ctx, &l),
         What::Transfer(t) => transfer::run(ctx, &t),
         What::Synth(b) => synth::run(ctx, b),
