@@ -25,7 +25,10 @@
 //! - Alembic has no up axis or unit: tools assume Y up. A subject whose up axis is not +Y gets
 //!   a static matrix on each sequence's `Xform` turning its up axis onto +Y (the points keep the
 //!   subject's coordinates, as in the glb and USD exports); the archive's metadata records
-//!   `surfcap_up_axis` and `surfcap_units` so surfcap's import gives both back exactly.
+//!   `surfcap_up_axis`, `surfcap_units` (the name; `surfcap_metres_per_unit` the scale when
+//!   known) and `surfcap_fps` (the rate in its shortest exact
+//!   decimal form, since `1 / (1 / fps)` is not always `fps` in floating point) so surfcap's
+//!   import gives all three back exactly.
 //!
 //! Choices where the reference library's internals are not part of any format contract:
 //! - Every stored sample starts with a 16-byte key that identifies its content; the reference
@@ -568,12 +571,18 @@ fn emit(o: &mut OgawaWriter<'_>, subject: &Subject) -> io::Result<Child> {
     let top = o.group(&top)?;
 
     let archive_md = format!(
-        "_ai_Application=surfcap {};_ai_Description={};surfcap_up_axis={};surfcap_units={}",
+        "_ai_Application=surfcap {};_ai_Description={};surfcap_fps={};surfcap_up_axis={};surfcap_units={}",
         env!("CARGO_PKG_VERSION"),
         metadata_value(&subject.name),
+        subject.fps,
         subject.up_axis.as_str(),
         metadata_value(&subject.units.name),
     );
+    // The units' scale, when they have one: their name alone may not say it ("0.5 m").
+    let archive_md = match subject.units.metres_per_unit {
+        Some(m) => format!("{archive_md};surfcap_metres_per_unit={m}"),
+        None => archive_md,
+    };
     let archive_md = o.data(&[archive_md.as_bytes()])?;
     // Time samplings: 0 the identity (the Xforms' one sample), 1 uniform at the subject's fps
     // from time 0. Each: the most samples a property has with it, the time per cycle, the

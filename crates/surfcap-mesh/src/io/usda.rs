@@ -3,7 +3,8 @@
 //! `extent`) are time-sampled, one sample per frame at the subject's rate, and whose frame
 //! labels are the constant primvar `primvars:surfcap:synthetic` (0 original, 1 synthetic),
 //! time-sampled too. The stage's `timeCodesPerSecond` and `framesPerSecond` are the subject's
-//! fps; `metersPerUnit` comes from its units when known; `upAxis` is `Y` or `Z` (USD knows only
+//! fps; `metersPerUnit` comes from its units when known (their name, which USD has no field
+//! for, is `customLayerData.surfcap_units`); `upAxis` is `Y` or `Z` (USD knows only
 //! those two): a subject whose up axis is another is written with `upAxis = "Y"` and a root
 //! transform turning its up axis onto +Y (the mesh keeps the subject's coordinates, as the glb
 //! does). UVs, when the template has them, are the face-varying `primvars:st` with indices.
@@ -59,6 +60,21 @@ pub fn write_usda(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
     writeln!(w, "#usda 1.0")?;
     writeln!(w, "(")?;
     writeln!(w, "    defaultPrim = \"{root}\"")?;
+    // The units' name: metersPerUnit carries only their scale ("metres" and "m" are both 1, and
+    // arbitrary units have none), so the name rides in the layer's custom data.
+    let units: String = subject
+        .units
+        .name
+        .chars()
+        .flat_map(|c| match c {
+            '"' | '\\' => vec!['\\', c],
+            '\n' => vec!['\\', 'n'],
+            c => vec![c],
+        })
+        .collect();
+    writeln!(w, "    customLayerData = {{")?;
+    writeln!(w, "        string surfcap_units = \"{units}\"")?;
+    writeln!(w, "    }}")?;
     writeln!(w, "    doc = \"written by surfcap {}\"", env!("CARGO_PKG_VERSION"))?;
     writeln!(w, "    endTimeCode = {last}")?;
     writeln!(w, "    framesPerSecond = {}", subject.fps)?;

@@ -558,6 +558,72 @@ fn surfcap_up_rotation(m: &[f64; 16]) -> Option<UpAxis> {
     table.iter().find(|(_, r)| (0..3).all(|i| (0..3).all(|j| m[i * 4 + j] == f64::from(r[j][i])))).map(|(u, _)| *u)
 }
 
+/// Reads the dictionary of `customLayerData = { ... }` (after the `=`): the value of
+/// `string surfcap_units`, every other entry skipped.
+fn custom_units(lx: &mut Lexer<'_>) -> Result<Option<String>> {
+    let open = lx.next()?;
+    if open.kind != Kind::Punct(b'{') {
+        return Err(lx.error(&open, format!("customLayerData: expected `{{`, found {}", lx.describe(&open))));
+    }
+    let mut found = None;
+    loop {
+        let t = lx.next()?;
+        match t.kind {
+            Kind::Punct(b'}') => return Ok(found),
+            Kind::Eof => return Err(lx.error(&t, "file ends: expected `}` closing customLayerData")),
+            Kind::Ident => {
+                // `type name = value`; the name may be quoted.
+                let ty = lx.text(&t).to_string();
+                let name_token = lx.next()?;
+                let name = match name_token.kind {
+                    Kind::Ident => lx.text(&name_token).to_string(),
+                    Kind::Str => lx.text(&name_token).trim_matches(|c| c == '"' || c == '\'').to_string(),
+                    _ => {
+                        return Err(lx.error(
+                            &name_token,
+                            format!("customLayerData: expected an entry name, found {}", lx.describe(&name_token)),
+                        ));
+                    }
+                };
+                if !lx.eat_punct(b'=')? {
+                    let t = lx.peek()?;
+                    return Err(lx.error(&t, format!("customLayerData: {name}: expected `=`")));
+                }
+                if ty == "string" && name == "surfcap_units" {
+                    found = Some(unescape(&lx.string("surfcap_units")?));
+                } else {
+                    lx.skip_value()?;
+                }
+            }
+            _ => {
+                return Err(
+                    lx.error(&t, format!("customLayerData: expected `type name = value`, found {}", lx.describe(&t)))
+                );
+            }
+        }
+    }
+}
+
+/// A USD string's escapes (`\\"`, `\\\\`, `\\n`, `\\t`) resolved; another escaped character
+/// stands for itself.
+fn unescape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars();
+    while let Some(c) = chars.next() {
+        if c != '\\' {
+            out.push(c);
+            continue;
+        }
+        match chars.next() {
+            Some('n') => out.push('\n'),
+            Some('t') => out.push('\t'),
+            Some(other) => out.push(other),
+            None => out.push('\\'),
+        }
+    }
+    out
+}
+
 fn units_of(m: f64) -> Units {
     let name = match m {
         1.0 => "m".to_string(),
@@ -593,6 +659,7 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     let mut fps = None;
     let mut up_axis = None;
     let mut units = None;
+    let mut units_name: Option<String> = None;
     let mut start = 0.0f64;
     let mut notes = Vec::new();
 
@@ -634,6 +701,7 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
                             }
                             units = Some(units_of(v));
                         }
+                        "customLayerData" => units_name = custom_units(&mut lx)?.or(units_name),
                         "upAxis" => {
                             let line = lx.peek()?.line;
                             let v = lx.string("upAxis")?;
@@ -652,6 +720,10 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     }
     // USD's own fallback: time codes per second default to the frames per second.
     let rate = tcps.or(fps);
+    // surfcap's own name for the units (`customLayerData.surfcap_units`) with the layer's scale.
+    if let Some(name) = units_name {
+        units = Some(Units { name, metres_per_unit: units.and_then(|u: Units| u.metres_per_unit) });
+    }
 
     let mut meshes: Vec<UsdaMesh> = Vec::new();
     let mut stack: Vec<Prim> = Vec::new();
@@ -1072,6 +1144,31 @@ mod tests {
     use super::*;
     use crate::error::{ErrorKind, Location};
     use crate::subject::{Sequence, Subject};
+
+    /// The units' name comes back from `customLayerData` with the layer's scale, escapes and
+    /// all; a stage without it keeps the name `metersPerUnit` gives.
+    #[test]
+    fn the_units_name_rides_in_the_custom_layer_data() {
+        let topo = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
+        let seq = Sequence::new("s", 3, vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]).unwrap();
+        for units in [
+            Units { name: "model units (\"not\" metres; a\\b)".into(), metres_per_unit: None },
+            Units { name: "metres".into(), metres_per_unit: Some(1.0) },
+            Units { name: "0.5 m".into(), metres_per_unit: Some(0.5) },
+        ] {
+            let s = Subject::new("t", topo.clone(), vec![seq.clone()], 30.0, UpAxis::PosY, units.clone()).unwrap();
+            let mut text = Vec::new();
+            crate::io::usda::write_usda(&mut text, &s).unwrap();
+            assert_eq!(parse_usda(&text).unwrap().units, Some(units));
+        }
+        let plain =
+            b"#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef Mesh \"m\" {\n    int[] faceVertexCounts = [3]\n    \
+            int[] faceVertexIndices = [0, 1, 2]\n    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n}\n";
+        assert_eq!(parse_usda(plain).unwrap().units.unwrap().name, "cm");
+        let bad = b"#usda 1.0\n(\n    customLayerData = { string surfcap_units }\n)\n";
+        let e = parse_usda(bad).unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("surfcap_units: expected `=`"), "{e}");
+    }
 
     const HAND: &str = r#"#usda 1.0
 (

@@ -14,6 +14,7 @@ use crate::output::write_json;
 
 mod gpdm;
 mod graphs;
+mod interchange;
 mod interpolation;
 mod pose_metric;
 mod root_motion;
@@ -207,6 +208,24 @@ pub enum What {
         #[arg(short, long, default_value = "transfer-eval")]
         output: PathBuf,
     },
+    /// Round trips through Alembic and USD (issue 22): every sequence of the data folder
+    /// imported, exported as .abc and .usda, imported back and compared (positions to the bit,
+    /// topology and UVs, names, labels, rate, up axis, units), with sizes and times.
+    Interchange {
+        /// The data folder (datasets as sub-folders).
+        #[arg(long, default_value = "../shared/data")]
+        data: PathBuf,
+        /// Only these datasets (folder names, comma-separated; default: all).
+        #[arg(long, value_delimiter = ',')]
+        datasets: Vec<String>,
+        /// Formats to go through.
+        #[arg(long, value_delimiter = ',', default_value = "abc,usda")]
+        formats: Vec<surfcap_mesh::export::ExportFormat>,
+        /// Folder for the report (interchange.json); the exported files go to a temporary
+        /// folder and are removed once read back.
+        #[arg(short, long, default_value = "interchange-eval")]
+        output: PathBuf,
+    },
 }
 
 /// Refuses an output that overlaps the subject, then makes it an evaluation folder of `kind`.
@@ -232,6 +251,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Transfer { data, output, .. } => {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-transfer")?;
+        }
+        What::Interchange { data, output, .. } => {
+            surfcap_mesh::output_path::check_not_input(output, &[data])?;
+            ctx.claim_dir(output, "eval-interchange")?;
         }
     }
     match a.what {
@@ -280,6 +303,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 },
             };
             root_motion::run(ctx, &opts, &output)
+        }
+        What::Interchange { data, datasets, formats, output } => {
+            interchange::run(ctx, data, datasets, formats, &output)
         }
         What::Transfer { data, cases, sizes, components, seed, whole_body, overlap_rings, output } => {
             use surfcap_eval::transfer_eval::{CaseParts, kaykit_case, mannequin_case};
