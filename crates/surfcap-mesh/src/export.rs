@@ -138,12 +138,12 @@ pub fn export(
             Ok(vec![out.to_path_buf(), side])
         }
         ExportFormat::Usda | ExportFormat::Abc => {
-            let (what, write): (&str, fn(&mut dyn std::io::Write, &Subject) -> std::io::Result<()>) =
-                if format == ExportFormat::Usda {
-                    ("writing usda", crate::io::usda::write_usda)
-                } else {
-                    ("writing abc", crate::io::abc::write_abc)
-                };
+            type Writer = fn(&mut dyn std::io::Write, &Subject) -> std::io::Result<()>;
+            let (what, write): (&str, Writer) = if format == ExportFormat::Usda {
+                ("writing usda", crate::io::usda::write_usda)
+            } else {
+                ("writing abc", crate::io::abc::write_abc)
+            };
             progress.start(what, 1);
             write_file(out, |w| write(w, subject))?;
             let side = glb_sidecar_path(out);

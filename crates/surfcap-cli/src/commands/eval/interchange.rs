@@ -24,7 +24,9 @@ pub fn run(
     let (report, path) = super::save_report(output, "interchange.json", &r, "written", &[])?;
     ctx.result(&report, || {
         // Per dataset and format: sequences, frames, exact ones, bytes, write and read time.
-        let mut rows: BTreeMap<(String, String), (usize, usize, usize, u64, f64, f64)> = BTreeMap::new();
+        // (sequences, frames, exact, bytes, write seconds, read seconds)
+        type Totals = (usize, usize, usize, u64, f64, f64);
+        let mut rows: BTreeMap<(String, String), Totals> = BTreeMap::new();
         for t in &r.round_trips {
             let e = rows.entry((t.dataset.clone(), t.format.clone())).or_default();
             *e = (
