@@ -6,11 +6,18 @@
 //! - [`shape_similarity`]: frame-to-frame shape similarity, the minimum over 360 rotations about
 //!   the vertical axis (eq. 2), for all pairs of a frame set;
 //! - [`temporal_shape_similarity`]: the similarity over a triangular temporal window (eq. 3-4) and
-//!   the optimal transition between two sequences (eq. 5).
+//!   the optimal transition between two sequences (eq. 5);
+//! - [`surface_motion_graph`]: the two-level graph, the lower level built from the user's higher
+//!   level and key frames (3.3);
+//! - [`path_optimisation`]: walks and loops by depth-first search (Algorithm 1), the repetitions
+//!   by four integer linear programs per walk (eq. 6-20) with the feedback cuts of Algorithm 2,
+//!   and the composition of the path (4.2.3).
 
 pub mod error;
+pub mod path_optimisation;
 pub mod shape_histogram;
 pub mod shape_similarity;
+pub mod surface_motion_graph;
 pub mod temporal_shape_similarity;
 pub mod volume_voxelisation;
 

@@ -1,0 +1,568 @@
+//! Path optimisation on the surface motion graph (Huang et al. 2009, section 4): the path between
+//! two key frames that best meets a target distance and time at the least transition cost.
+//!
+//! Cost of a path F (eq. 6-9): `C(F) = C_s + w_d |d(F) - d_T| + w_t |t(F) - t_T|` with `C_s` the
+//! sum of its transition costs, `d(F)` the ground distance travelled and `t(F)` its frame count.
+//!
+//! Decomposition (4.2.1, Algorithm 1): every path from the start to the end key frame is a walk
+//! (a path visiting no node twice) plus a number of repetitions of elementary cycles ("loops"),
+//! each loop sharing a node with the walk or with another loop of the path. Walks are enumerated
+//! by depth-first search, loops as the graph's elementary cycles (each found once, from its
+//! smallest node); a walk's loops are those connected to it through shared nodes, nested
+//! sub-loops included (a loop inside a loop shares its nodes).
+//!
+//! Repetitions (4.2.2, eq. 15-20): for a walk `l0` and its loops `l1 ... lm`, `d`, `t` and `C_s`
+//! are linear in the repetitions `n` (`n0 = 1`). Each of the four sign combinations of
+//! `d(F) - d_T` and `t(F) - t_T` gives an integer linear program without absolute values: minimise
+//! `C_s(n) + sd w_d (d(n) - d_T) + st w_t (t(n) - t_T)` subject to `sd (d(n) - d_T) >= 0` and
+//! `st (t(n) - t_T) >= 0`; the best of the four is the walk's optimum (eq. 20). Eq. 19 writes the
+//! target inside every element's coefficient; with `n0 = 1` it belongs to the walk's only (the
+//! target is subtracted once, not once per loop repetition), which is how it is folded here.
+//! Each ILP is solved by a real MILP solver (`good_lp` with the pure-Rust `microlp`).
+//!
+//! Feedback (4.2.3, Algorithm 2): a loop attached only through other loops cannot be played when
+//! none of those is. After each solve, used loops not connected to the walk through used loops
+//! form groups; for each group `G` a cut `sum over G of n <= M * sum over the loops adjacent to
+//! G of n` is added (valid for every playable path: a used group needs a used neighbour) and the
+//! ILP solved again, until every used loop is reachable.
+//!
+//! Composition (4.2.3): the walk's edges, each loop's repetitions inserted where it first meets
+//! the path built so far (loops attached through loops after their hosts). The frames follow;
+//! at each transition the next sequence is moved on the ground so that its first frame's
+//! centroid lies where the last frame's was (the paper matches the centroids; the height is
+//! kept, so feet stay on the floor).
+
+use good_lp::{Expression, ProblemVariables, Solution, SolverModel, Variable, microlp, variable};
+
+use crate::error::{Error, Result};
+use crate::surface_motion_graph::{EdgeKind, SurfaceMotionGraph};
+
+/// A synthesis request: from key frame to key frame, covering a distance in a time.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct PathQuery {
+    /// Global frames of the start and end key frames.
+    pub start: usize,
+    pub end: usize,
+    /// Target ground distance, in the subject's units.
+    pub distance: f64,
+    /// Target length, in frames.
+    pub frames: f64,
+    /// Weights of eq. 6: the paper's `1/0.3` per metre and `1/10` per frame by default.
+    pub w_d: f64,
+    pub w_t: f64,
+    /// The most walks (and loops) enumerated before the query is refused as too large.
+    pub max_paths: usize,
+}
+
+impl PathQuery {
+    /// A query with the paper's weights (`w_d = 1/0.3` per unit, for subjects in metres).
+    pub fn new(start: usize, end: usize, distance: f64, frames: f64) -> Self {
+        PathQuery { start, end, distance, frames, w_d: 1.0 / 0.3, w_t: 1.0 / 10.0, max_paths: 100_000 }
+    }
+}
+
+/// The optimal path found for a query.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PathSolution {
+    /// Edges of the composed path, in order.
+    pub edges: Vec<usize>,
+    /// The global frame played at each output frame.
+    pub frames: Vec<usize>,
+    /// The ground offset added to each output frame (centroids matched at the transitions).
+    pub offsets: Vec<[f64; 2]>,
+    /// Output frames that start a new sequence after a transition.
+    pub switches: Vec<usize>,
+    /// The walk (edges) and the repetitions of its loops (edges, count).
+    pub walk: Vec<usize>,
+    pub loops: Vec<(Vec<usize>, u64)>,
+    pub distance: f64,
+    pub transition_cost: f64,
+    /// `C(F)` of eq. 6, and the two constraint errors (distance in units, time in frames).
+    pub cost: f64,
+    pub distance_error: f64,
+    pub time_error: f64,
+    pub walks: usize,
+    pub loops_in_graph: usize,
+    pub ilp_solves: usize,
+}
+
+/// Totals of a list of edges.
+fn totals(g: &SurfaceMotionGraph, edges: &[usize]) -> (f64, f64, f64) {
+    edges.iter().fold((0.0, 0.0, 0.0), |(d, t, s), &e| {
+        let e = &g.edges[e];
+        (d + e.distance, t + e.frames as f64, s + e.cost)
+    })
+}
+
+fn nodes_of(g: &SurfaceMotionGraph, edges: &[usize]) -> Vec<usize> {
+    edges.iter().flat_map(|&e| [g.edges[e].from, g.edges[e].to]).collect()
+}
+
+/// Every walk (node-simple path) from `s` to `t`, as edge lists.
+fn walks(g: &SurfaceMotionGraph, out: &[Vec<usize>], s: usize, t: usize, max: usize) -> Result<Vec<Vec<usize>>> {
+    let mut found = Vec::new();
+    if s == t {
+        found.push(Vec::new());
+        return Ok(found);
+    }
+    let mut on_path = vec![false; g.nodes.len()];
+    on_path[s] = true;
+    // Iterative DFS: (node, next out-edge position).
+    let mut stack: Vec<(usize, usize)> = vec![(s, 0)];
+    let mut path: Vec<usize> = Vec::new();
+    while let Some(&mut (node, ref mut next)) = stack.last_mut() {
+        if *next >= out[node].len() {
+            stack.pop();
+            on_path[node] = false;
+            path.pop();
+            continue;
+        }
+        let e = out[node][*next];
+        *next += 1;
+        let to = g.edges[e].to;
+        if to == t {
+            let mut w = path.clone();
+            w.push(e);
+            found.push(w);
+            if found.len() > max {
+                return Err(Error::Invalid(format!(
+                    "more than {max} walks between the key frames: the graph is too dense"
+                )));
+            }
+        } else if !on_path[to] {
+            on_path[to] = true;
+            path.push(e);
+            stack.push((to, 0));
+        }
+    }
+    Ok(found)
+}
+
+/// Every elementary cycle, each from its smallest node, as edge lists.
+fn cycles(g: &SurfaceMotionGraph, out: &[Vec<usize>], max: usize) -> Result<Vec<Vec<usize>>> {
+    let mut found = Vec::new();
+    for s in 0..g.nodes.len() {
+        let mut on_path = vec![false; g.nodes.len()];
+        on_path[s] = true;
+        let mut stack: Vec<(usize, usize)> = vec![(s, 0)];
+        let mut path: Vec<usize> = Vec::new();
+        while let Some(&mut (node, ref mut next)) = stack.last_mut() {
+            if *next >= out[node].len() {
+                stack.pop();
+                on_path[node] = false;
+                path.pop();
+                continue;
+            }
+            let e = out[node][*next];
+            *next += 1;
+            let to = g.edges[e].to;
+            if to == s {
+                let mut c = path.clone();
+                c.push(e);
+                found.push(c);
+                if found.len() > max {
+                    return Err(Error::Invalid(format!("more than {max} loops in the graph: it is too dense")));
+                }
+            } else if to > s && !on_path[to] {
+                on_path[to] = true;
+                path.push(e);
+                stack.push((to, 0));
+            }
+        }
+    }
+    Ok(found)
+}
+
+/// The loops connected to `walk` through shared nodes, and for each loop its neighbours (other
+/// loops sharing a node) and whether it touches the walk.
+struct Attached {
+    loops: Vec<usize>,
+    touches_walk: Vec<bool>,
+    neighbours: Vec<Vec<usize>>,
+}
+
+fn attach(g: &SurfaceMotionGraph, walk_nodes: &[usize], all: &[Vec<usize>]) -> Attached {
+    let node_sets: Vec<Vec<usize>> = all.iter().map(|c| nodes_of(g, c)).collect();
+    let shares = |a: &[usize], b: &[usize]| a.iter().any(|x| b.contains(x));
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut is_chosen = vec![false; all.len()];
+    for (i, ns) in node_sets.iter().enumerate() {
+        if shares(ns, walk_nodes) {
+            chosen.push(i);
+            is_chosen[i] = true;
+        }
+    }
+    let mut k = 0;
+    while k < chosen.len() {
+        let c = chosen[k];
+        for (i, ns) in node_sets.iter().enumerate() {
+            if !is_chosen[i] && shares(ns, &node_sets[c]) {
+                chosen.push(i);
+                is_chosen[i] = true;
+            }
+        }
+        k += 1;
+    }
+    chosen.sort_unstable();
+    let touches_walk = chosen.iter().map(|&c| shares(&node_sets[c], walk_nodes)).collect();
+    let neighbours = chosen
+        .iter()
+        .map(|&a| {
+            chosen
+                .iter()
+                .enumerate()
+                .filter(|&(_, &b)| b != a && shares(&node_sets[a], &node_sets[b]))
+                .map(|(j, _)| j)
+                .collect()
+        })
+        .collect();
+    Attached { loops: chosen, touches_walk, neighbours }
+}
+
+/// Used loops (by position in `attached`) not reachable from the walk through used loops,
+/// grouped by their connections.
+fn isolated_groups(a: &Attached, n: &[u64]) -> Vec<Vec<usize>> {
+    let m = a.loops.len();
+    let mut reached = vec![false; m];
+    let mut queue: Vec<usize> = (0..m).filter(|&i| n[i] > 0 && a.touches_walk[i]).collect();
+    for &i in &queue {
+        reached[i] = true;
+    }
+    while let Some(i) = queue.pop() {
+        for &j in &a.neighbours[i] {
+            if n[j] > 0 && !reached[j] {
+                reached[j] = true;
+                queue.push(j);
+            }
+        }
+    }
+    let mut seen = reached.clone();
+    let mut groups = Vec::new();
+    for i in 0..m {
+        if n[i] == 0 || seen[i] {
+            continue;
+        }
+        let mut group = vec![i];
+        seen[i] = true;
+        let mut k = 0;
+        while k < group.len() {
+            for &j in &a.neighbours[group[k]] {
+                if n[j] > 0 && !seen[j] {
+                    seen[j] = true;
+                    group.push(j);
+                }
+            }
+            k += 1;
+        }
+        group.sort_unstable();
+        groups.push(group);
+    }
+    groups
+}
+
+/// Solves one sign combination with the feedback cuts; `None` when infeasible.
+#[allow(clippy::too_many_arguments)]
+fn solve_signs(
+    base: (f64, f64, f64),
+    per_loop: &[(f64, f64, f64)],
+    a: &Attached,
+    q: &PathQuery,
+    sd: f64,
+    st: f64,
+    bound: f64,
+    solves: &mut usize,
+) -> Result<Option<Vec<u64>>> {
+    let mut cuts: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
+    for _ in 0..=per_loop.len() + 1 {
+        let mut vars = ProblemVariables::new();
+        let n: Vec<Variable> = per_loop.iter().map(|_| vars.add(variable().integer().min(0.0).max(bound))).collect();
+        let lin = |f: &dyn Fn(&(f64, f64, f64)) -> f64, c0: f64| -> Expression {
+            let mut e = Expression::from(c0);
+            for (v, l) in n.iter().zip(per_loop) {
+                e += f(l) * *v;
+            }
+            e
+        };
+        let d = lin(&|l| l.0, base.0 - q.distance);
+        let t = lin(&|l| l.1, base.1 - q.frames);
+        let s = lin(&|l| l.2, base.2);
+        let objective = s + sd * q.w_d * d.clone() + st * q.w_t * t.clone();
+        let mut model = vars.minimise(objective).using(microlp);
+        model = model.with((sd * d).geq(0.0));
+        model = model.with((st * t).geq(0.0));
+        for (group, adjacent) in &cuts {
+            let mut lhs = Expression::from(0.0);
+            for &i in group {
+                lhs += n[i];
+            }
+            let mut rhs = Expression::from(0.0);
+            for &j in adjacent {
+                rhs += bound * n[j];
+            }
+            model = model.with(lhs.leq(rhs));
+        }
+        *solves += 1;
+        let sol = match model.solve() {
+            Ok(s) => s,
+            Err(good_lp::ResolutionError::Infeasible) => return Ok(None),
+            Err(e) => return Err(Error::Invalid(format!("the ILP solver failed: {e}"))),
+        };
+        let values: Vec<u64> = n.iter().map(|&v| sol.value(v).round().max(0.0) as u64).collect();
+        let groups = isolated_groups(a, &values);
+        if groups.is_empty() {
+            return Ok(Some(values));
+        }
+        for g in groups {
+            let mut adjacent: Vec<usize> =
+                g.iter().flat_map(|&i| a.neighbours[i].iter().copied()).filter(|j| !g.contains(j)).collect();
+            adjacent.sort_unstable();
+            adjacent.dedup();
+            cuts.push((g, adjacent));
+        }
+    }
+    Err(Error::Invalid("the feedback cuts did not converge".into()))
+}
+
+/// Inserts each used loop's repetitions into the walk (see the module documentation).
+fn compose(g: &SurfaceMotionGraph, walk: &[usize], loops: &[(Vec<usize>, u64)], start: usize) -> Result<Vec<usize>> {
+    let mut path = walk.to_vec();
+    let mut pending: Vec<usize> = (0..loops.len()).filter(|&i| loops[i].1 > 0).collect();
+    while !pending.is_empty() {
+        let before = pending.len();
+        pending.retain(|&i| {
+            let (cycle, count) = &loops[i];
+            // Path nodes in visiting order: the start, then each edge's end.
+            let visits: Vec<usize> = std::iter::once(start).chain(path.iter().map(|&e| g.edges[e].to)).collect();
+            let Some((pos, rot)) = visits
+                .iter()
+                .enumerate()
+                .find_map(|(p, &v)| cycle.iter().position(|&e| g.edges[e].from == v).map(|r| (p, r)))
+            else {
+                return true;
+            };
+            let rotated: Vec<usize> = cycle[rot..].iter().chain(&cycle[..rot]).copied().collect();
+            let insert: Vec<usize> = (0..*count).flat_map(|_| rotated.iter().copied()).collect();
+            path.splice(pos..pos, insert);
+            false
+        });
+        if pending.len() == before {
+            return Err(Error::Invalid("a loop could not be attached to the path".into()));
+        }
+    }
+    Ok(path)
+}
+
+/// The optimal path for `q` on `g` (eq. 10-20), with `ground` each frame's ground centroid.
+pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery) -> Result<PathSolution> {
+    if !(q.distance.is_finite() && q.distance >= 0.0 && q.frames.is_finite() && q.frames >= 1.0) {
+        return Err(Error::Invalid(format!(
+            "target distance {} and time {} frames: expected a distance >= 0 and at least one frame",
+            q.distance, q.frames
+        )));
+    }
+    let (Some(s), Some(t)) = (g.node_of(q.start), g.node_of(q.end)) else {
+        return Err(Error::Invalid(format!(
+            "key frames {} and {}: both must be nodes of the graph (build it with them)",
+            q.start, q.end
+        )));
+    };
+    let out = g.out_edges();
+    let all_walks = walks(g, &out, s, t, q.max_paths)?;
+    if all_walks.is_empty() {
+        return Err(Error::Invalid(format!(
+            "no path from frame {} to frame {}: the higher-level graph does not connect them",
+            q.start, q.end
+        )));
+    }
+    let all_loops = cycles(g, &out, q.max_paths)?;
+    // (cost, walk, loops with their repetitions)
+    type Candidate = (f64, Vec<usize>, Vec<(Vec<usize>, u64)>);
+    let mut best: Option<Candidate> = None;
+    let mut solves = 0;
+    for walk in &all_walks {
+        let mut walk_nodes = nodes_of(g, walk);
+        walk_nodes.push(s);
+        let a = attach(g, &walk_nodes, &all_loops);
+        let (d0, t0, s0) = totals(g, walk);
+        let base = (d0, t0 + 1.0, s0);
+        let per_loop: Vec<(f64, f64, f64)> = a.loops.iter().map(|&c| totals(g, &all_loops[c])).collect();
+        // Repetitions beyond this cannot help: every loop adds at least one frame.
+        let bound = (4.0 * (q.frames + base.1)).ceil() + 10.0;
+        for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let Some(n) = solve_signs(base, &per_loop, &a, q, sd, st, bound, &mut solves)? else { continue };
+            let d = base.0 + n.iter().zip(&per_loop).map(|(&k, l)| k as f64 * l.0).sum::<f64>();
+            let tt = base.1 + n.iter().zip(&per_loop).map(|(&k, l)| k as f64 * l.1).sum::<f64>();
+            let cs = base.2 + n.iter().zip(&per_loop).map(|(&k, l)| k as f64 * l.2).sum::<f64>();
+            let cost = cs + q.w_d * (d - q.distance).abs() + q.w_t * (tt - q.frames).abs();
+            if best.as_ref().is_none_or(|b| cost < b.0) {
+                let loops =
+                    a.loops.iter().zip(&n).filter(|&(_, &k)| k > 0).map(|(&c, &k)| (all_loops[c].clone(), k)).collect();
+                best = Some((cost, walk.clone(), loops));
+            }
+        }
+    }
+    let Some((cost, walk, loops)) = best else {
+        return Err(Error::Invalid("no sub-problem was feasible".into()));
+    };
+    let edges = compose(g, &walk, &loops, s)?;
+    // Frames and ground offsets.
+    let mut frames = vec![g.nodes[s]];
+    let mut offsets = vec![[0.0, 0.0]];
+    let mut switches = Vec::new();
+    let mut offset = [0.0, 0.0];
+    for &e in &edges {
+        let edge = &g.edges[e];
+        let (from, to) = (g.nodes[edge.from], g.nodes[edge.to]);
+        match edge.kind {
+            EdgeKind::Segment { .. } => {
+                for f in from + 1..=to {
+                    frames.push(f);
+                    offsets.push(offset);
+                }
+            }
+            EdgeKind::Transition { .. } => {
+                offset = [offset[0] + ground[from][0] - ground[to][0], offset[1] + ground[from][1] - ground[to][1]];
+                switches.push(frames.len());
+                frames.push(to);
+                offsets.push(offset);
+            }
+        }
+    }
+    let (distance, _, transition_cost) = totals(g, &edges);
+    Ok(PathSolution {
+        distance_error: (distance - q.distance).abs(),
+        time_error: (frames.len() as f64 - q.frames).abs(),
+        edges,
+        frames,
+        offsets,
+        switches,
+        walk,
+        loops,
+        distance,
+        transition_cost,
+        cost,
+        walks: all_walks.len(),
+        loops_in_graph: all_loops.len(),
+        ilp_solves: solves,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface_motion_graph::{GraphInput, build_graph};
+
+    /// A "walk" sequence of 20 frames moving 0.1 per frame, with a self-transition (loop) from
+    /// its frame 15 back to frame 5, and a "stand" sequence of 10 still frames reachable from
+    /// the walk's end.
+    fn graph() -> (SurfaceMotionGraph, Vec<[f64; 2]>) {
+        let f = 30;
+        let mut s = vec![1.0; f * f];
+        for i in 0..f {
+            s[i * f + i] = 0.0;
+        }
+        // Walk frames 14..=16 look like 4..=6: the loop 15 -> 6.
+        for k in 0..3 {
+            s[(14 + k) * f + 4 + k] = 0.1;
+            s[(4 + k) * f + 14 + k] = 0.1;
+        }
+        // Walk 17..=19 look like stand 20..=22: 18 -> 22.
+        for k in 0..3 {
+            s[(17 + k) * f + 20 + k] = 0.2;
+            s[(20 + k) * f + 17 + k] = 0.2;
+        }
+        let ground: Vec<[f64; 2]> = (0..f).map(|i| if i < 20 { [0.1 * i as f64, 0.0] } else { [5.0, 0.0] }).collect();
+        let seqs = [0..20, 20..30];
+        let g = build_graph(&GraphInput {
+            sequences: &seqs,
+            similarity: &s,
+            ground: &ground,
+            connections: &[(0, 0), (0, 1)],
+            key_frames: &[0, 29],
+            lengths: 3..=3,
+        })
+        .unwrap();
+        (g, ground)
+    }
+
+    #[test]
+    fn loops_are_repeated_to_meet_the_distance_and_time() {
+        let (g, ground) = graph();
+        let loop_edges: Vec<_> = g
+            .edges
+            .iter()
+            .filter(|e| matches!(e.kind, EdgeKind::Transition { from_sequence: 0, to_sequence: 0, .. }))
+            .collect();
+        assert_eq!(loop_edges.len(), 1);
+        // The walk alone: 0..=18 (19 frames), switch to stand 22, then 23..=29: 27 frames, 1.8 units.
+        let q = PathQuery { w_d: 1.0 / 0.3, w_t: 0.1, ..PathQuery::new(0, 29, 1.8, 27.0) };
+        let p = optimise_path(&g, &ground, &q).unwrap();
+        assert!(p.loops.is_empty(), "{:?}", p.loops);
+        assert_eq!(p.frames.len(), 27);
+        assert!((p.distance - 1.8).abs() < 1e-9);
+        // Each loop repetition (frames 6..=15: 10 frames, 0.9 units) adds 10 frames and 0.9:
+        // three repetitions meet 4.5 units in 57 frames exactly.
+        let q = PathQuery::new(0, 29, 4.5, 57.0);
+        let p = optimise_path(&g, &ground, &q).unwrap();
+        assert_eq!(p.loops.iter().map(|l| l.1).collect::<Vec<_>>(), vec![3]);
+        assert_eq!(p.frames.len(), 57);
+        assert!(p.distance_error < 1e-9 && p.time_error == 0.0, "{} {}", p.distance_error, p.time_error);
+        // The frames play the walk, loop back three times, then stand; offsets keep the ground
+        // track continuous across each switch.
+        assert_eq!(&p.frames[..17], &(0..=15).chain([6]).collect::<Vec<_>>()[..]);
+        for &k in &p.switches {
+            let (a, b) = (p.frames[k - 1], p.frames[k]);
+            let pa = [ground[a][0] + p.offsets[k - 1][0], ground[a][1] + p.offsets[k - 1][1]];
+            let pb = [ground[b][0] + p.offsets[k][0], ground[b][1] + p.offsets[k][1]];
+            assert!((pa[0] - pb[0]).abs() < 1e-12 && (pa[1] - pb[1]).abs() < 1e-12);
+        }
+        assert!(p.ilp_solves >= 4);
+    }
+
+    /// Loop B (which travels) touches only loop A (which does not): the solver's first answer
+    /// plays B alone, which no path can; the feedback cut makes it play A once to reach B.
+    #[test]
+    fn a_loop_attached_through_another_needs_its_host() {
+        use crate::surface_motion_graph::Edge;
+        let seg = |from, to, distance| Edge {
+            from,
+            to,
+            kind: EdgeKind::Segment { sequence: 0 },
+            frames: 1,
+            distance,
+            cost: 0.0,
+        };
+        let jump = |from, to, distance, cost| Edge {
+            from,
+            to,
+            kind: EdgeKind::Transition { from_sequence: 0, to_sequence: 0, window: 3 },
+            frames: 1,
+            distance,
+            cost,
+        };
+        let g = SurfaceMotionGraph {
+            nodes: vec![0, 1, 2, 3],
+            edges: vec![seg(0, 1, 0.0), seg(1, 2, 0.0), jump(2, 1, 0.0, 1.0), seg(2, 3, 1.0), jump(3, 2, 1.0, 0.05)],
+            transitions: Vec::new(),
+            missing: Vec::new(),
+        };
+        let ground = vec![[0.0, 0.0]; 4];
+        // The walk 0 -> 1 is 2 frames; B twice adds 4 frames and 4 units: 6 frames would be
+        // exact, but B needs A (2 frames, cost 1).
+        let p = optimise_path(&g, &ground, &PathQuery::new(0, 1, 4.0, 6.0)).unwrap();
+        let reps: Vec<(usize, u64)> = p.loops.iter().map(|(c, k)| (c.len(), *k)).collect();
+        assert_eq!(p.loops.len(), 2, "{reps:?}");
+        assert!(p.loops.iter().all(|(_, k)| *k >= 1), "{reps:?}");
+        assert!((p.distance - 4.0).abs() < 1e-9 && p.frames.len() == 8, "{} {}", p.distance, p.frames.len());
+        assert!(p.ilp_solves > 4, "a cut was added: {} solves", p.ilp_solves);
+    }
+
+    #[test]
+    fn unreachable_and_unknown_key_frames_are_refused() {
+        let (g, ground) = graph();
+        let e = optimise_path(&g, &ground, &PathQuery::new(29, 0, 1.0, 10.0)).unwrap_err().to_string();
+        assert!(e.contains("no path from frame 29 to frame 0"), "{e}");
+        let e = optimise_path(&g, &ground, &PathQuery::new(3, 29, 1.0, 10.0)).unwrap_err().to_string();
+        assert!(e.contains("must be nodes"), "{e}");
+    }
+}
