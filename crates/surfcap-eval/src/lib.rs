@@ -24,6 +24,7 @@ pub mod mantel_test;
 pub mod pose_metric_eval;
 pub mod root_motion_eval;
 pub mod skeleton_distance;
+pub mod smg_eval;
 pub mod transfer_eval;
 pub mod transition_costs_eval;
 

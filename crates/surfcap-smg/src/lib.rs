@@ -1,6 +1,8 @@
 //! Huang, Hilton and Starck 2009, "Human motion synthesis from 3D video" (CVPR): the surface
 //! motion graph, surfcap's second synthesis engine, which needs no shared topology (every frame
 //! may have its own vertices and triangles). One algorithm per file:
+//! - [`motion_frames`]: the input (named sequences of frames, each with its own triangles), the
+//!   ground centroids and the cached similarity matrix;
 //! - [`volume_voxelisation`]: the voxels inside a mesh (3.1 step 1);
 //! - [`shape_histogram`]: the volume-sampling spherical shape histogram (3.1 steps 2-4);
 //! - [`shape_similarity`]: frame-to-frame shape similarity, the minimum over 360 rotations about
@@ -14,6 +16,7 @@
 //!   and the composition of the path (4.2.3).
 
 pub mod error;
+pub mod motion_frames;
 pub mod path_optimisation;
 pub mod shape_histogram;
 pub mod shape_similarity;
