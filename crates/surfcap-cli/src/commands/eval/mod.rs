@@ -18,6 +18,7 @@ mod interchange;
 mod interpolation;
 mod pose_metric;
 mod root_motion;
+mod smg;
 mod transfer;
 mod transitions;
 
@@ -208,6 +209,22 @@ pub enum What {
         #[arg(short, long, default_value = "transfer-eval")]
         output: PathBuf,
     },
+    /// Huang et al. 2009's Table 1 (issue 17): the surface motion graph of the CMU-driven
+    /// mannequin (walk, jog, jump, stop; walk and jog loops), 800 targets (1-20 m x 1-40 s) per
+    /// key-frame pair: distance and time errors, smoothness at the transitions, CPU time.
+    Smg {
+        /// The shared data folder (CMU clips).
+        #[arg(long, default_value = "../shared/data")]
+        data: PathBuf,
+        /// Vertices of the mannequin (1000 to 20000).
+        #[arg(long, default_value_t = 2000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
+        vertices: usize,
+        #[command(flatten)]
+        cache: CacheOpts,
+        /// Folder for the report (smg.json).
+        #[arg(short, long, default_value = "smg-eval")]
+        output: PathBuf,
+    },
     /// Round trips through Alembic and USD (issue 22): every sequence of the data folder
     /// imported, exported as .abc and .usda, imported back and compared (positions to the bit,
     /// topology and UVs, names, labels, rate, up axis, units), with sizes and times.
@@ -251,6 +268,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Transfer { data, output, .. } => {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-transfer")?;
+        }
+        What::Smg { data, output, .. } => {
+            surfcap_mesh::output_path::check_not_input(output, &[data])?;
+            ctx.claim_dir(output, "eval-smg")?;
         }
         What::Interchange { data, output, .. } => {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
@@ -304,6 +325,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             root_motion::run(ctx, &opts, &output)
         }
+        What::Smg { data, vertices, cache, output } => smg::run(ctx, &data, vertices, &cache, &output),
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)
         }
