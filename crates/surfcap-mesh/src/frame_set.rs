@@ -445,7 +445,7 @@ mod tests {
         let subject = Subject::new("tet", tet(), vec![s1, s2], 25.0, UpAxis::PosZ, Units::metres()).unwrap();
         let set = FrameSet::from_subject(&subject);
         assert_eq!(set.frame_count(), 3);
-        assert_eq!(set.frame(1).unwrap().positions(), &subject.frame(1).unwrap()[..]);
+        assert_eq!(set.frame(1).unwrap().positions(), subject.frame(1).unwrap());
         assert_eq!(set.frame_index(), subject.frame_index());
         assert!(set.first_topology_difference().is_none());
         assert_eq!(set.clone().into_subject().unwrap(), subject);
