@@ -105,6 +105,18 @@ impl FrameSetSequence {
         if frames.is_empty() {
             return Err(err!(Empty, "sequence {name:?} has no frames: expected at least one"));
         }
+        // Texture coordinates for every frame or for none, so that the `.frames` folder can
+        // keep them in one array per sequence (a reader that meets a mix strips them, saying so).
+        if let Some(f) = frames.iter().position(|fr| fr.topology.uv().is_some() != frames[0].topology.uv().is_some()) {
+            let has = |k: usize| if frames[k].topology.uv().is_some() { "has" } else { "has no" };
+            return Err(err!(
+                Metadata,
+                "sequence {name:?}: frame {name}:{f} {} texture coordinates and frame {name}:0 {}: expected all \
+                 frames of a sequence with texture coordinates or none",
+                has(f),
+                has(0)
+            ));
+        }
         let n = frames.len();
         Ok(FrameSetSequence {
             name,
@@ -202,6 +214,12 @@ impl FrameSetSequence {
     /// Smallest and largest vertex count of a frame.
     pub fn vertex_count_range(&self) -> (usize, usize) {
         min_max(self.frames.iter().map(Frame::n_vertices))
+    }
+
+    /// Whether the frames have texture coordinates (all of them, or none: checked on
+    /// construction).
+    pub fn has_uv(&self) -> bool {
+        self.frames[0].topology.uv().is_some()
     }
 
     /// Smallest and largest triangle count of a frame.
@@ -449,6 +467,17 @@ mod tests {
         assert_eq!(set.frame_index(), subject.frame_index());
         assert!(set.first_topology_difference().is_none());
         assert_eq!(set.clone().into_subject().unwrap(), subject);
+    }
+
+    #[test]
+    fn texture_coordinates_are_all_or_none() {
+        let uv = crate::UvAtlas { coords: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], corners: vec![[0, 1, 2]] };
+        let with = Topology::new(3, vec![[0, 1, 2]], Some(uv)).unwrap();
+        let e = FrameSetSequence::from_frames("a", vec![(with.clone(), vec![0.0; 9]), (tri(), vec![0.0; 9])]);
+        let e = e.unwrap_err().to_string();
+        assert!(e.contains("frame a:1 has no texture coordinates and frame a:0 has"), "{e}");
+        let s = FrameSetSequence::from_frames("a", vec![(with.clone(), vec![0.0; 9]), (with, vec![0.0; 9])]).unwrap();
+        assert!(s.has_uv());
     }
 
     #[test]

@@ -12,6 +12,10 @@
 //! face_offsets_<k>.npy     uint64 [frames + 1]: frame f's triangles are rows off[f]..off[f+1]
 //! correspondence_<k>.npy   float64 [sum of vertices, 4]  (optional: the known answer of
 //!                          `surfcap remesh-frames`: source triangle, then 3 barycentrics)
+//! uv_<k>.npy               float32 [sum of the frames' texture coordinates, 2]  (when the
+//! uv_offsets_<k>.npy       uint64 [frames + 1]                 frames have texture coordinates)
+//! uv_faces_<k>.npy         uint32 [sum of triangles, 3]: each corner's texture coordinate,
+//!                          local to the frame, rows as in faces_<k>.npy
 //! ```
 //! In numpy, frame `f` of sequence `k` is `P[vo[f]:vo[f+1]]` and `F[fo[f]:fo[f+1]]`.
 //!
@@ -37,7 +41,7 @@ use crate::frame_set::{Correspondence, FrameSet, FrameSetSequence, frame_error};
 use crate::io::npy::{NpyElement, expect_shape, read_npy, write_npy};
 use crate::progress::Progress;
 use crate::subject::{FrameLabel, Units, UpAxis};
-use crate::topology::Topology;
+use crate::topology::{Topology, UvAtlas};
 
 const FORMAT: &str = "surfcap-frame-set";
 const VERSION: u32 = 1;
@@ -69,6 +73,8 @@ struct SeqHeader {
     labels: Vec<FrameLabel>,
     /// Whether `correspondence_<k>.npy` is there.
     correspondence: bool,
+    /// Whether `uv_<k>.npy`, `uv_offsets_<k>.npy` and `uv_faces_<k>.npy` are there.
+    uv: bool,
 }
 
 /// Whether `path` is a frame set folder (holds `frameset.json`).
@@ -96,6 +102,7 @@ pub fn write_frame_set(path: &Path, set: &FrameSet, force: bool, progress: &dyn 
                 tags: s.tags.clone(),
                 labels: s.labels().to_vec(),
                 correspondence: s.correspondence().is_some(),
+                uv: s.has_uv(),
             })
             .collect(),
     };
@@ -115,6 +122,20 @@ pub fn write_frame_set(path: &Path, set: &FrameSet, force: bool, progress: &dyn 
             write_file(&dir.join(format!("vertex_offsets_{k}.npy")), |w| write_npy(w, &[vo.len()], &vo))?;
             write_file(&dir.join(format!("faces_{k}.npy")), |w| write_npy(w, &[nt, 3], &faces))?;
             write_file(&dir.join(format!("face_offsets_{k}.npy")), |w| write_npy(w, &[fo.len()], &fo))?;
+            if s.has_uv() {
+                let (mut coords, mut corners, mut uo) = (Vec::new(), Vec::new(), vec![0u64]);
+                for f in s.frames() {
+                    let uv = f.topology().uv().expect("all frames have UVs");
+                    coords.extend(uv.coords.iter().flatten().copied());
+                    corners.extend(uv.corners.iter().flatten().copied());
+                    uo.push(uo.last().unwrap() + uv.coords.len() as u64);
+                }
+                write_file(&dir.join(format!("uv_{k}.npy")), |w| write_npy(w, &[coords.len() / 2, 2], &coords))?;
+                write_file(&dir.join(format!("uv_offsets_{k}.npy")), |w| write_npy(w, &[uo.len()], &uo))?;
+                write_file(&dir.join(format!("uv_faces_{k}.npy")), |w| {
+                    write_npy(w, &[corners.len() / 3, 3], &corners)
+                })?;
+            }
             if let Some(c) = s.correspondence() {
                 write_file(&dir.join(format!("correspondence_{k}.npy")), |w| write_npy(w, &[nv, 4], &c.rows))?;
             }
@@ -245,6 +266,20 @@ fn read_sequence(path: &Path, k: usize, sh: &SeqHeader) -> Result<FrameSetSequen
     expect_shape(&faces, &[None, Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
     let op = path.join(format!("face_offsets_{k}.npy"));
     let fo = read_offsets(&op, sh.frames, faces.shape[0], "triangles")?;
+    let uv = if sh.uv {
+        let up = path.join(format!("uv_{k}.npy"));
+        let c = read_npy::<f32>(&up)?;
+        expect_shape(&c, &[None, Some(2)], "texture coordinates").map_err(|e| e.in_file(&up))?;
+        let uop = path.join(format!("uv_offsets_{k}.npy"));
+        let uo = read_offsets(&uop, sh.frames, c.shape[0], "texture coordinates")?;
+        let ufp = path.join(format!("uv_faces_{k}.npy"));
+        let uf = read_npy::<u32>(&ufp)?;
+        expect_shape(&uf, &[Some(faces.shape[0]), Some(3)], "texture corners (one row per triangle)")
+            .map_err(|e| e.in_file(&ufp))?;
+        Some((c.data, uo, uf.data, ufp))
+    } else {
+        None
+    };
     let mut frames = Vec::with_capacity(sh.frames);
     for f in 0..sh.frames {
         let tris: Vec<[u32; 3]> =
@@ -267,12 +302,22 @@ fn read_sequence(path: &Path, k: usize, sh: &SeqHeader) -> Result<FrameSetSequen
             .in_file(&fp)
             .at(Location::Face(fo[f] + i / 3)));
         }
-        let topology = Topology::new(nv, tris, None).map_err(|mut e| {
+        let atlas = uv.as_ref().map(|(c, uo, uf, _)| UvAtlas {
+            coords: c[2 * uo[f]..2 * uo[f + 1]].chunks_exact(2).map(|x| [x[0], x[1]]).collect(),
+            corners: uf[3 * fo[f]..3 * fo[f + 1]].chunks_exact(3).map(|x| [x[0], x[1], x[2]]).collect(),
+        });
+        // The texture corners' file when they are what is wrong.
+        let file = match &uv {
+            Some((_, _, _, ufp)) if atlas.is_some() => ufp.clone(),
+            _ => fp.clone(),
+        };
+        let topology = Topology::new(nv, tris, atlas).map_err(|mut e| {
+            let file = if e.message.starts_with("texture") { &file } else { &fp };
             // The triangle's row in the file, so it can be found there.
             if let Some(Location::Face(i)) = e.location {
                 e.location = Some(Location::Face(fo[f] + i));
             }
-            frame_error(e, &sh.name, f).in_file(&fp)
+            frame_error(e, &sh.name, f).in_file(file)
         })?;
         frames.push((topology, p.data[3 * vo[f]..3 * vo[f + 1]].to_vec()));
     }
@@ -317,7 +362,9 @@ mod tests {
         .unwrap()
         .with_correspondence(Correspondence { rows: (0..28).map(|x| (x / 4) as f64).collect() })
         .unwrap();
-        let b = FrameSetSequence::from_frames("b", vec![(tri, vec![0.5; 9])]).unwrap();
+        let uv = UvAtlas { coords: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.5]], corners: vec![[0, 1, 3]] };
+        let with_uv = Topology::new(3, vec![[0, 1, 2]], Some(uv)).unwrap();
+        let b = FrameSetSequence::from_frames("b", vec![(with_uv, vec![0.5; 9])]).unwrap();
         FrameSet::new("s", vec![a, b], 30.0, UpAxis::PosZ, Units::metres()).unwrap()
     }
 
@@ -404,6 +451,13 @@ mod tests {
         check(&format!("{}: frame a:1: vertex 1: correspondence [-1", c.display()));
         rows[16] = 0.0;
         overwrite(&c, &[7, 4], &rows);
+        let uf = out.join("uv_faces_1.npy");
+        overwrite(&uf, &[1, 3], &[0u32, 1, 4]);
+        check(&format!(
+            "{}: triangle 0: frame b:0: texture coordinate index 4 out of range (there are 4)",
+            uf.display()
+        ));
+        overwrite(&uf, &[1, 3], &[0u32, 1, 3]);
         assert!(read_frame_set(&out, &NoProgress).is_ok());
         std::fs::write(out.join(HEADER_FILE), b"{\"format\": 1").unwrap();
         check(&format!("{}: line 1: not a surfcap frame set description", out.join(HEADER_FILE).display()));

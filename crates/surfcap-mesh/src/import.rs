@@ -478,11 +478,12 @@ enum Piece {
     Frames(SourceFrames),
 }
 
-/// How frame `k` differs from frame 0, for the note: vertex counts, else triangle counts, else
+/// How the first frame whose vertices or triangles differ from frame 0's (texture coordinates
+/// aside) differs, for the note: vertex counts, else triangle counts, else
 /// the connectivity.
 fn frame_difference(frames: &[(Topology, Vec<f32>)]) -> Option<String> {
     let t0 = &frames[0].0;
-    let (k, (t, _)) = frames.iter().enumerate().skip(1).find(|(_, (t, _))| t != t0)?;
+    let (k, (t, _)) = frames.iter().enumerate().skip(1).find(|(_, (t, _))| t0.first_difference(t).is_some())?;
     Some(if t.n_vertices() != t0.n_vertices() {
         format!("frame {k}: {} vertices, frame 0: {}", thousands(t.n_vertices()), thousands(t0.n_vertices()))
     } else if t.n_triangles() != t0.n_triangles() {
@@ -630,7 +631,16 @@ pub fn import_any(paths: &[PathBuf], opts: &ImportOptions, progress: &dyn Progre
     let seqs: Vec<SourceFrames> = pieces
         .into_iter()
         .map(|p| match p {
-            Piece::Shared(s) => SourceFrames::from_sequence(s),
+            Piece::Shared(s) => {
+                if s.joints.is_some() {
+                    notes.push(format!(
+                        "sequence {:?}: its ground-truth joints are not kept in a frame set (they belong to one \
+                         topology)",
+                        s.name
+                    ));
+                }
+                SourceFrames::from_sequence(s)
+            }
             Piece::Frames(f) => f,
         })
         .collect();
@@ -676,8 +686,21 @@ fn assemble_frames(default_name: &str, seqs: Vec<SourceFrames>, opts: &ImportOpt
         })
         .collect();
     let mut sequences = Vec::with_capacity(seqs.len());
-    for s in seqs {
+    for mut s in seqs {
         let origin = s.origin.clone();
+        // A sequence's frames keep texture coordinates all or none (the `.frames` folder holds
+        // them in one array per sequence): a mix loses them, with a note.
+        let with_uv = s.frames.iter().filter(|(t, _)| t.uv().is_some()).count();
+        if with_uv > 0 && with_uv < s.frames.len() {
+            notes.push(format!(
+                "sequence {:?}: only {with_uv} of its {} frames have texture coordinates: dropped from all of them",
+                s.name,
+                s.frames.len()
+            ));
+            for (t, _) in &mut s.frames {
+                *t = Topology::new(t.n_vertices(), t.triangles().to_vec(), None)?;
+            }
+        }
         let mut seq =
             FrameSetSequence::from_frames(s.name, s.frames).map_err(|e| e.in_file(&origin))?.with_tags(s.tags);
         if let Some(l) = s.labels {
@@ -943,6 +966,14 @@ mod tests {
         assert!(
             f.notes[0].contains("(frame 2: the same 4 vertices and 4 triangles as frame 0, connected differently)")
         );
+        // Texture coordinates on some frames only are dropped from all, with a note.
+        let textured = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 3/3 2/2\nf 1/1 2/2 4/3\nf 2/2 3/3 4/1\nf 1/1 4/3 3/2\n";
+        std::fs::write(dir.join("f_0.obj"), textured).unwrap();
+        let ImportedData::FrameSet(f) = open_any(&dir, &opts, &NoProgress).unwrap() else { panic!() };
+        let note = "sequence \"capture\": only 1 of its 4 frames have texture coordinates: dropped from all of them";
+        assert!(f.notes.iter().any(|n| n == note), "{:?}", f.notes);
+        assert!(f.notes[0].contains("(frame 2: the same 4 vertices"), "{:?}", f.notes);
+        assert!(!f.frame_set.sequences()[0].has_uv());
     }
 
     /// A FIFO named like a frame is an error when the folder is read, not a hang or a frame

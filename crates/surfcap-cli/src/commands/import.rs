@@ -92,9 +92,16 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     let s = &s;
     if a.as_frame_set || is_frames_path(&a.output) {
+        let mut notes = imported.notes;
+        for q in s.sequences().iter().filter(|q| q.joints.is_some()) {
+            notes.push(format!(
+                "sequence {:?}: its ground-truth joints are not kept in a frame set (they belong to one topology)",
+                q.name
+            ));
+        }
         let f = ImportedFrames {
             frame_set: FrameSet::from_subject(s),
-            notes: imported.notes,
+            notes,
             sources: imported.sources,
             frame_set_origin: None,
         };
