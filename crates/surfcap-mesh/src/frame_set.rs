@@ -302,14 +302,17 @@ impl FrameSet {
         }
     }
 
-    /// The first frame (as `sequence:frame`) whose topology differs from the first frame's, and
-    /// how; `None` when every frame shares one topology.
+    /// The first frame (as `sequence:frame`) whose topology (vertex count, triangles, texture
+    /// coordinates) differs from the first frame's, and how; `None` when every frame shares one.
     pub fn first_topology_difference(&self) -> Option<(String, String)> {
         let first = &self.sequences[0].frames[0].topology;
         for g in 1..self.frame_count() {
             let frame = self.frame(g).expect("in range");
             if let Some(diff) = first.first_difference(&frame.topology) {
                 return Some((self.index.label(g), diff));
+            }
+            if first.uv() != frame.topology.uv() {
+                return Some((self.index.label(g), "texture coordinates differ from the first frame's".into()));
             }
         }
         None
