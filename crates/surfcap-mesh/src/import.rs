@@ -522,26 +522,32 @@ fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>
         return Err(e);
     }
     progress.start(&format!("reading {} frames, each with its own topology", files.len()), files.len() as u64);
-    let frames: Vec<Result<(Topology, Vec<f32>)>> = files
+    // A frame with no faces at all is positions only, which only makes sense with one shared
+    // topology: then the subject's error (a vertex count differing from the first frame's) is
+    // what the user needs to read.
+    let frames: Vec<Result<Option<(Topology, Vec<f32>)>>> = files
         .par_iter()
         .enumerate()
         .map(|(k, file)| {
-            let (t, p) = match format {
+            let (t, p, faceless) = match format {
                 FrameFormat::Obj => {
                     let m = crate::io::obj::read_obj(file).map_err(|e| e.at_frame(k))?;
-                    (m.topology(), m.positions)
+                    (m.topology(), m.positions, m.triangles.is_empty())
                 }
                 FrameFormat::Ply => {
                     let m = crate::io::ply::read_ply(file).map_err(|e| e.at_frame(k))?;
-                    (m.topology(), m.positions)
+                    (m.topology(), m.positions, m.triangles.is_empty())
                 }
             };
             progress.advance(1);
-            Ok((t.map_err(|e| e.in_file(file).at_frame(k))?, p))
+            if faceless {
+                return Ok(None);
+            }
+            Ok(Some((t.map_err(|e| e.in_file(file).at_frame(k))?, p)))
         })
         .collect();
     progress.finish();
-    let frames = frames.into_iter().collect::<Result<Vec<_>>>()?;
+    let Some(frames) = frames.into_iter().collect::<Result<Option<Vec<_>>>>()? else { return Err(e) };
     let Some(diff) = frame_difference(&frames) else { return Err(e) };
     notes.push(format!(
         "frames of {} have different vertices/triangles ({diff}): imported as a frame set; commands that need one \
