@@ -433,11 +433,14 @@ fn thousands(n: usize) -> String {
     out
 }
 
+/// One frame's own topology and positions.
+type MeshFrame = (Topology, Vec<f32>);
+
 /// One sequence of a frame set read from some source, before it is merged.
 #[derive(Debug, Clone)]
 struct SourceFrames {
     name: String,
-    frames: Vec<(Topology, Vec<f32>)>,
+    frames: Vec<MeshFrame>,
     tags: Vec<String>,
     labels: Option<Vec<crate::subject::FrameLabel>>,
     fps: Option<f64>,
@@ -481,7 +484,7 @@ enum Piece {
 /// How the first frame whose vertices or triangles differ from frame 0's (texture coordinates
 /// aside) differs, for the note: vertex counts, else triangle counts, else
 /// the connectivity.
-fn frame_difference(frames: &[(Topology, Vec<f32>)]) -> Option<String> {
+fn frame_difference(frames: &[MeshFrame]) -> Option<String> {
     let t0 = &frames[0].0;
     let (k, (t, _)) = frames.iter().enumerate().skip(1).find(|(_, (t, _))| t0.first_difference(t).is_some())?;
     Some(if t.n_vertices() != t0.n_vertices() {
@@ -525,7 +528,7 @@ fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>
     // A frame with no faces at all is positions only, which only makes sense with one shared
     // topology: then the subject's error (a vertex count differing from the first frame's) is
     // what the user needs to read.
-    let frames: Vec<Result<Option<(Topology, Vec<f32>)>>> = files
+    let frames: Vec<Result<Option<MeshFrame>>> = files
         .par_iter()
         .enumerate()
         .map(|(k, file)| {
