@@ -1,7 +1,9 @@
 //! Frame sets: the input of Huang et al. 2009 ("Human motion synthesis from 3D video", CVPR;
-//! `../shared/papers/huang2009-human-motion-synthesis-from-3d-video.txt`, sections 1 and 3),
-//! whose surface motion graph works on raw per-frame reconstructions: every frame has its own
-//! vertices and triangles, with no correspondence between frames (issue 17, item 1).
+//! `../shared/papers/huang2009-human-motion-synthesis-from-3d-video.txt`), whose surface motion
+//! graph works on raw per-frame reconstructions, "an unstructured volumetric or mesh
+//! approximation of the surface shape at each frame without temporal correspondence" (section
+//! 1), "different mesh connectivity at each time-frame" (section 5): every frame has its own
+//! vertices and triangles (issue 17, item 1).
 //!
 //! A [`FrameSet`] is the counterpart of a [`Subject`] without the shared [`Topology`]: named
 //! sequences of [`Frame`]s (each its own topology and f32 positions), frame labels, tags, fps, up
