@@ -48,9 +48,11 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Read sequences from files into a subject cache that later commands read fast.
+    /// Read sequences from files into a subject cache that later commands read fast (or a
+    /// `.frames` folder when every frame has its own vertices and triangles).
     Import(commands::import::Args),
-    /// Describe a subject: sequences, frames, vertices, triangles, components, bounding box.
+    /// Describe a subject (sequences, frames, vertices, triangles, components, bounding box) or
+    /// a frame set (sequences, frames, vertex and triangle count ranges).
     Info(commands::info::Args),
     /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches, npy arrays, USD (usda) or Alembic (abc).
     Export(commands::export::Args),
@@ -88,6 +90,10 @@ enum Command {
     /// train a model from pairs of corresponding frames, apply it to new motions.
     #[command(subcommand)]
     Transfer(commands::transfer::Cmd),
+    /// A frame set with known answers: every frame of a subject re-meshed on its own (its own
+    /// vertices and triangles, as per-frame reconstructions for Huang et al.'s surface motion
+    /// graph), with each new vertex's source triangle and barycentrics.
+    RemeshFrames(commands::remesh_frames::Args),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -204,6 +210,7 @@ fn main() -> ExitCode {
             Command::Report(a) => commands::report::run(&ctx, a),
             Command::Transfer(c) => commands::transfer::run(&ctx, c),
             Command::Parts(a) => commands::parts::run(&ctx, a),
+            Command::RemeshFrames(a) => commands::remesh_frames::run(&ctx, a),
         }
     });
     match result {

@@ -4,6 +4,7 @@
 //! (`mannequin_subject`); and a procedural tube (`worm`) whose size benchmarks can choose.
 
 pub mod bvh;
+pub mod frame_remeshing;
 pub mod locomotion;
 pub mod mannequin;
 pub mod mannequin_subject;

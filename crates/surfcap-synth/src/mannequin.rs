@@ -25,6 +25,8 @@ use std::collections::HashMap;
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use surfcap_mesh::{Error, ErrorKind, Result, Topology};
 
+use crate::frame_remeshing::{collapse_short_edges, flip_edges, mean_edge_length, vertex_neighbours};
+
 /// Body shape parameters (metres).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BodyShape {
@@ -239,190 +241,6 @@ pub fn body_sdf(sk: &Skeleton, p: &Point3<f64>, blend: f64) -> f64 {
     (0..4).map(|k| smooth_min(torso, union_of(Part::Limb(k)), blend)).fold(torso, f64::min)
 }
 
-/// Collapses every edge shorter than `min_length` into its midpoint, when that keeps the mesh a
-/// closed 2-manifold (the link condition: the two ends share exactly the two opposite
-/// vertices, neither of which has only three neighbours) and turns no surrounding triangle over.
-/// Marching tetrahedra leaves stars of up to fourteen vertices within a tenth of a grid step of
-/// a grid point that lies almost on the surface; this merges them. Passes repeat (each end of a
-/// collapse and its neighbours wait for the next pass) until nothing changes. Returns the
-/// compacted positions and triangles.
-fn collapse_short_edges(positions: &[f32], tris: &[[u32; 3]], min_length: f64) -> (Vec<f32>, Vec<[u32; 3]>) {
-    let mut pos: Vec<Vector3<f64>> =
-        positions.chunks_exact(3).map(|v| Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
-    let mut tris: Vec<[u32; 3]> = tris.to_vec();
-    loop {
-        let mut around: Vec<Vec<usize>> = vec![Vec::new(); pos.len()];
-        for (i, t) in tris.iter().enumerate() {
-            for &v in t {
-                around[v as usize].push(i);
-            }
-        }
-        let neighbours = |v: u32, tris: &[[u32; 3]]| {
-            let mut n: Vec<u32> = around[v as usize].iter().flat_map(|&i| tris[i]).filter(|&u| u != v).collect();
-            n.sort_unstable();
-            n.dedup();
-            n
-        };
-        let mut short: Vec<(f64, u32, u32)> = tris
-            .iter()
-            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-            .filter(|&(a, b)| a < b)
-            .map(|(a, b)| ((pos[a as usize] - pos[b as usize]).norm(), a, b))
-            .filter(|&(l, _, _)| l < min_length)
-            .collect();
-        short.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let mut touched = vec![false; pos.len()];
-        let mut dead = vec![false; tris.len()];
-        let mut collapsed = 0;
-        for (_, a, b) in short {
-            if touched[a as usize] || touched[b as usize] {
-                continue;
-            }
-            let (na, nb) = (neighbours(a, &tris), neighbours(b, &tris));
-            let common: Vec<u32> = na.iter().copied().filter(|v| nb.binary_search(v).is_ok()).collect();
-            if common.len() != 2 || common.iter().any(|&c| neighbours(c, &tris).len() <= 3) {
-                continue;
-            }
-            let mid = (pos[a as usize] + pos[b as usize]) * 0.5;
-            // No triangle that stays may turn over.
-            let turns_over = [a, b].iter().flat_map(|&v| around[v as usize].iter()).any(|&i| {
-                let t = tris[i];
-                if t.contains(&a) && t.contains(&b) {
-                    return false;
-                }
-                let p = |u: u32| if u == a || u == b { mid } else { pos[u as usize] };
-                let before =
-                    (pos[t[1] as usize] - pos[t[0] as usize]).cross(&(pos[t[2] as usize] - pos[t[0] as usize]));
-                let after = (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0])));
-                after.dot(&before) <= 0.0
-            });
-            if turns_over {
-                continue;
-            }
-            pos[a as usize] = mid;
-            for &i in &around[b as usize] {
-                if tris[i].contains(&a) {
-                    dead[i] = true;
-                } else {
-                    for v in tris[i].iter_mut() {
-                        if *v == b {
-                            *v = a;
-                        }
-                    }
-                }
-            }
-            for v in na.iter().chain(&nb).chain([&a, &b]) {
-                touched[*v as usize] = true;
-            }
-            collapsed += 1;
-        }
-        if collapsed == 0 {
-            break;
-        }
-        let mut k = 0;
-        tris.retain(|_| {
-            k += 1;
-            !dead[k - 1]
-        });
-    }
-    // Compact: drop the vertices no triangle uses any more.
-    let mut new_index = vec![u32::MAX; pos.len()];
-    let mut out = Vec::new();
-    for t in tris.iter_mut() {
-        for v in t.iter_mut() {
-            if new_index[*v as usize] == u32::MAX {
-                new_index[*v as usize] = (out.len() / 3) as u32;
-                let p = pos[*v as usize];
-                out.extend_from_slice(&[p.x as f32, p.y as f32, p.z as f32]);
-            }
-            *v = new_index[*v as usize];
-        }
-    }
-    (out, tris)
-}
-
-/// Delaunay-style edge flips on a closed oriented mesh: an edge whose two opposite angles sum
-/// to more than pi is replaced by the other diagonal of its two triangles, when the two
-/// triangles are nearly coplanar (so the shape is kept), the new edge is not already an edge,
-/// and neither end of the old edge drops below four neighbours. Removes the slivers marching
-/// tetrahedra leaves, whose normals no skinning could keep steady.
-fn flip_edges(positions: &[f32], tris: &mut [[u32; 3]]) {
-    let at = |v: u32| {
-        let k = 3 * v as usize;
-        Vector3::new(positions[k] as f64, positions[k + 1] as f64, positions[k + 2] as f64)
-    };
-    let angle = |apex: u32, a: u32, b: u32| {
-        let (u, v) = (at(a) - at(apex), at(b) - at(apex));
-        u.angle(&v)
-    };
-    let normal = |t: &[u32; 3]| (at(t[1]) - at(t[0])).cross(&(at(t[2]) - at(t[0])));
-    // Directed edge -> triangle holding it.
-    let mut edge: HashMap<(u32, u32), usize> = HashMap::new();
-    let mut valence: HashMap<u32, usize> = HashMap::new();
-    for (i, t) in tris.iter().enumerate() {
-        for k in 0..3 {
-            edge.insert((t[k], t[(k + 1) % 3]), i);
-            *valence.entry(t[k]).or_default() += 1;
-        }
-    }
-    for i in 0..tris.len() {
-        for k in 0..3 {
-            let t1 = tris[i];
-            let (a, b, c) = (t1[k], t1[(k + 1) % 3], t1[(k + 2) % 3]);
-            let Some(&j) = edge.get(&(b, a)) else { continue };
-            let t2 = tris[j];
-            let d = t2.iter().copied().find(|&v| v != a && v != b).expect("a triangle has three vertices");
-            if edge.contains_key(&(c, d)) || edge.contains_key(&(d, c)) || valence[&a] <= 4 || valence[&b] <= 4 {
-                continue;
-            }
-            if angle(c, a, b) + angle(d, a, b) <= std::f64::consts::PI + 1e-9 {
-                continue;
-            }
-            let (n1, n2) = (normal(&t1), normal(&t2));
-            if n1.normalize().dot(&n2.normalize()) < 0.9 {
-                continue;
-            }
-            let (t3, t4) = ([c, a, d], [d, b, c]);
-            let n = n1 + n2;
-            if normal(&t3).dot(&n) <= 0.0 || normal(&t4).dot(&n) <= 0.0 {
-                continue;
-            }
-            for t in [t1, t2] {
-                for q in 0..3 {
-                    edge.remove(&(t[q], t[(q + 1) % 3]));
-                }
-            }
-            tris[i] = t3;
-            tris[j] = t4;
-            for (t, ti) in [(t3, i), (t4, j)] {
-                for q in 0..3 {
-                    edge.insert((t[q], t[(q + 1) % 3]), ti);
-                }
-            }
-            *valence.get_mut(&a).expect("vertex") -= 1;
-            *valence.get_mut(&b).expect("vertex") -= 1;
-            *valence.get_mut(&c).expect("vertex") += 1;
-            *valence.get_mut(&d).expect("vertex") += 1;
-        }
-    }
-}
-
-/// Vertex neighbour lists of a closed mesh of `n` vertices (each undirected edge once per side).
-fn vertex_neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            // On a closed oriented mesh each undirected edge appears once in each direction.
-            if a < b {
-                neighbours[a as usize].push(b);
-                neighbours[b as usize].push(a);
-            }
-        }
-    }
-    neighbours
-}
-
 /// Evens out the triangles that marching tetrahedra leaves (its edges range over 15x in
 /// length; slivers would make any skinning look like extreme stretching): each round moves
 /// every vertex halfway to the centroid of its neighbours within the tangent plane, then back
@@ -458,18 +276,6 @@ fn relax(f: &dyn Fn(&Point3<f64>) -> f64, positions: &mut [f32], neighbours: &[V
             }
         }
     }
-}
-
-fn mean_edge_length(positions: &[f32], neighbours: &[Vec<u32>]) -> f64 {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (a, nb) in neighbours.iter().enumerate() {
-        for &b in nb {
-            let d = (0..3).map(|c| (positions[3 * a + c] - positions[3 * b as usize + c]) as f64);
-            sum += d.map(|x| x * x).sum::<f64>().sqrt();
-            n += 1;
-        }
-    }
-    sum / n as f64
 }
 
 /// Skinning weights by diffusion over the surface: one-hot on the joint of the nearest segment,
@@ -691,7 +497,7 @@ pub fn mannequin(shape: &BodyShape, target_vertices: usize) -> Result<Mannequin>
     let mut edge = (4.0 * area / (3f64.sqrt() * 2.0 * target_vertices as f64)).sqrt();
     let mut best: Option<(Vec<f32>, Vec<[u32; 3]>)> = None;
     for _ in 0..6 {
-        let (p, t) = collapse_short_edges(&fine_p, &fine_t, 0.8 * edge);
+        let (p, t) = collapse_short_edges(&fine_p, &fine_t, 0.8 * edge, None);
         let ratio = (p.len() / 3) as f64 / target_vertices as f64;
         best = Some((p, t));
         if (0.93..=1.07).contains(&ratio) {

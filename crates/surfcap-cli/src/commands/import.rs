@@ -1,9 +1,14 @@
-//! `surfcap import <sources...> -o <subject>`
+//! `surfcap import <sources...> -o <subject>`: a subject cache, or a `.frames` folder when the
+//! sources are a frame set (every frame its own vertices and triangles: issue 17, Huang et al.
+//! 2009) or `--as-frame-set` is given.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
+
+use surfcap_mesh::FrameSet;
+use surfcap_mesh::import::{ImportedData, ImportedFrames};
 
 use crate::options::SourceOpts;
 
@@ -13,9 +18,14 @@ pub struct Args {
     /// of OBJ or PLY frames, .obj/.ply/.glb files, surfcap.toml manifests, subject caches.
     #[arg(required = true)]
     pub sources: Vec<PathBuf>,
-    /// The subject cache folder to write.
+    /// The subject cache folder to write; for a frame set (sources whose frames have their own
+    /// vertices and triangles), a `.frames` folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write a subject as a frame set (`.frames`: every frame with its own copy of the
+    /// triangles), as Huang et al.'s surface motion graph reads them. Implied by `-o x.frames`.
+    #[arg(long)]
+    pub as_frame_set: bool,
     /// Subject name (default: from the manifest or the first source).
     #[arg(long)]
     pub name: Option<String>,
@@ -43,7 +53,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
-    let imported = surfcap_mesh::import::import(&a.sources, &a.source.to_import(a.name.clone())?, &bar)?;
+    let opts = a.source.to_import(a.name.clone())?;
+    let imported = match surfcap_mesh::import::import_any(&a.sources, &opts, &bar)? {
+        ImportedData::Subject(i) => i,
+        ImportedData::FrameSet(f) => return write_frame_set(ctx, &a, f, t0),
+    };
     for n in &imported.notes {
         ctx.note(n);
     }
@@ -77,6 +91,22 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
     }
     let s = &s;
+    if a.as_frame_set || is_frames_path(&a.output) {
+        let mut notes = imported.notes;
+        for q in s.sequences().iter().filter(|q| q.joints.is_some()) {
+            notes.push(format!(
+                "sequence {:?}: its ground-truth joints are not kept in a frame set (they belong to one topology)",
+                q.name
+            ));
+        }
+        let f = ImportedFrames {
+            frame_set: FrameSet::from_subject(s),
+            notes,
+            sources: imported.sources,
+            frame_set_origin: None,
+        };
+        return write_frame_set(ctx, &a, f, t0);
+    }
     surfcap_mesh::cache::write_cache(&a.output, s, ctx.force, &bar)?;
     let secs = t0.elapsed().as_secs_f64();
     ctx.result(
@@ -107,6 +137,71 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 crate::output::count_of(s.n_frames(), "frame"),
                 s.topology().n_vertices(),
                 s.topology().n_triangles(),
+                a.output.display()
+            );
+        },
+    );
+    Ok(())
+}
+
+fn is_frames_path(p: &std::path::Path) -> bool {
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("frames"))
+}
+
+/// Writes a frame set folder, refusing an output named like a subject cache.
+fn write_frame_set(ctx: &crate::Ctx, a: &Args, f: ImportedFrames, t0: Instant) -> anyhow::Result<()> {
+    if a.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("subject")) {
+        let first = f.notes.first().map(|n| format!(" ({n})")).unwrap_or_default();
+        anyhow::bail!(
+            "{}: the sources are a frame set, not a subject{first}: write it as a frame set folder, e.g. -o {}",
+            a.output.display(),
+            a.output.with_extension("frames").display()
+        );
+    }
+    if a.root_motion == RootMotion::Contacts {
+        anyhow::bail!("--root-motion contacts needs one shared topology: these sources are a frame set");
+    }
+    for n in &f.notes {
+        ctx.note(n);
+    }
+    for src in &f.sources {
+        ctx.say(&format!(
+            "read {}: {} -> sequence {:?}, {}",
+            src.origin.display(),
+            src.layout,
+            src.sequence,
+            crate::output::count_of(src.frames, "frame")
+        ));
+    }
+    let set = &f.frame_set;
+    let bar = crate::progress::Bar::new(ctx);
+    surfcap_mesh::frame_set_cache::write_frame_set(&a.output, set, ctx.force, &bar)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let (vlo, vhi) = set.vertex_count_range();
+    let (tlo, thi) = set.triangle_count_range();
+    ctx.result(
+        &json!({
+            "frame_set": set.name,
+            "output": a.output,
+            "sequences": set.sequences().len(),
+            "frames": set.frame_count(),
+            "vertices": { "min": vlo, "max": vhi },
+            "triangles": { "min": tlo, "max": thi },
+            "notes": f.notes,
+            "sources": f.sources.iter().map(|src| json!({
+                "sequence": src.sequence,
+                "origin": src.origin,
+                "layout": src.layout.to_string(),
+                "frames": src.frames,
+            })).collect::<Vec<_>>(),
+            "seconds": secs,
+        }),
+        || {
+            println!(
+                "imported frame set {:?}: {}, {}, {vlo}-{vhi} vertices, {tlo}-{thi} triangles per frame -> {} ({secs:.2} s)",
+                set.name,
+                crate::output::count_of(set.sequences().len(), "sequence"),
+                crate::output::count_of(set.frame_count(), "frame"),
                 a.output.display()
             );
         },

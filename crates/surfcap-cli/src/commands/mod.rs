@@ -11,6 +11,7 @@ pub mod import;
 pub mod info;
 pub mod interpolate;
 pub mod parts;
+pub mod remesh_frames;
 pub mod report;
 pub mod synth;
 pub mod transfer;
