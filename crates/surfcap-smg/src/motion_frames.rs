@@ -13,6 +13,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use surfcap_mesh::derived_cache::DerivedCache;
+use surfcap_mesh::frame_set::FrameSet;
 use surfcap_mesh::io::npy::NpyArray;
 use surfcap_mesh::{Progress, Subject, UpAxis};
 
@@ -49,6 +50,29 @@ impl MotionFrames {
             sequences,
             positions,
             triangles: vec![t; n],
+            up: s.up_axis,
+            fps: s.fps,
+        }
+    }
+
+    /// A frame set's frames, each with its own triangles (Huang et al.'s input).
+    pub fn from_frame_set(s: &FrameSet) -> Self {
+        let mut sequences = Vec::new();
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for q in s.sequences() {
+            let start = positions.len();
+            for f in q.frames() {
+                positions.push(f.positions().to_vec());
+                triangles.push(Arc::new(f.topology().triangles().to_vec()));
+            }
+            sequences.push(start..positions.len());
+        }
+        MotionFrames {
+            names: s.sequences().iter().map(|q| q.name.clone()).collect(),
+            sequences,
+            positions,
+            triangles,
             up: s.up_axis,
             fps: s.fps,
         }

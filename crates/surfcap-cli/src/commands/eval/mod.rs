@@ -219,6 +219,10 @@ pub enum What {
         /// Vertices of the mannequin (1000 to 20000).
         #[arg(long, default_value_t = 2000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
         vertices: usize,
+        /// Re-mesh every frame on its own first (seeded), so no two frames share vertices or
+        /// triangles: the input Huang et al.'s engine is made for.
+        #[arg(long, value_name = "SEED")]
+        remeshed: Option<u64>,
         #[command(flatten)]
         cache: CacheOpts,
         /// Folder for the report (smg.json).
@@ -325,7 +329,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             root_motion::run(ctx, &opts, &output)
         }
-        What::Smg { data, vertices, cache, output } => smg::run(ctx, &data, vertices, &cache, &output),
+        What::Smg { data, vertices, remeshed, cache, output } => {
+            smg::run(ctx, &data, vertices, remeshed, &cache, &output)
+        }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)
         }

@@ -13,16 +13,26 @@ pub fn run(
     ctx: &crate::Ctx,
     data: &Path,
     vertices: usize,
+    remeshed: Option<u64>,
     cache: &crate::options::CacheOpts,
     output: &Path,
 ) -> anyhow::Result<()> {
     let subject = locomotion_subject(data, vertices)?;
-    let frames = MotionFrames::from_subject(&subject);
-    let store = surfcap_mesh::derived_cache::DerivedCache::new(cache.dir());
     let bar = crate::progress::Bar::new(ctx);
+    // Either the shared topology, or every frame re-meshed on its own (issue 17 item 1): the
+    // same motion without any correspondence between frames.
+    let (frames, form) = match remeshed {
+        None => (MotionFrames::from_subject(&subject), "shared topology".to_string()),
+        Some(seed) => {
+            let opts = surfcap_synth::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
+            let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&subject, &opts, &bar)?;
+            (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"))
+        }
+    };
+    let store = surfcap_mesh::derived_cache::DerivedCache::new(cache.dir());
     let r = smg_eval(
         &frames,
-        "shared topology",
+        &form,
         &LOCOMOTION_CONNECTIONS,
         &LOCOMOTION_KEY_PAIRS,
         &SmgEvalOptions::default(),
