@@ -94,6 +94,11 @@ enum Command {
     /// vertices and triangles, as per-frame reconstructions for Huang et al.'s surface motion
     /// graph), with each new vertex's source triangle and barycentrics.
     RemeshFrames(commands::remesh_frames::Args),
+    /// Huang et al. 2009's surface motion graph, the second synthesis engine: works on subjects
+    /// and on frame sets (every frame its own topology); paths between key frames that cover a
+    /// distance in a time, by integer linear programming.
+    #[command(subcommand)]
+    Smg(commands::smg::Cmd),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -211,6 +216,7 @@ fn main() -> ExitCode {
             Command::Transfer(c) => commands::transfer::run(&ctx, c),
             Command::Parts(a) => commands::parts::run(&ctx, a),
             Command::RemeshFrames(a) => commands::remesh_frames::run(&ctx, a),
+            Command::Smg(c) => commands::smg::run(&ctx, c),
         }
     });
     match result {

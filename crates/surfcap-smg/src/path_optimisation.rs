@@ -447,6 +447,45 @@ pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery)
     })
 }
 
+/// The frames of a solved path as meshes: each frame's positions moved on the ground by its
+/// offset (centroids matched at every switch, 4.2.3), with its own triangles.
+pub fn play_path(
+    frames: &crate::motion_frames::MotionFrames,
+    p: &PathSolution,
+) -> Vec<(Vec<f32>, std::sync::Arc<Vec<[u32; 3]>>)> {
+    let (axis, _) = frames.up.axis_and_sign();
+    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+    p.frames
+        .iter()
+        .zip(&p.offsets)
+        .map(|(&f, o)| {
+            let mut pos = frames.positions[f].clone();
+            for v in pos.chunks_exact_mut(3) {
+                v[a] = (f64::from(v[a]) + o[0]) as f32;
+                v[b] = (f64::from(v[b]) + o[1]) as f32;
+            }
+            (pos, frames.triangles[f].clone())
+        })
+        .collect()
+}
+
+/// The path as runs of consecutive frames `sequence:first-last`, for reports.
+pub fn path_segments(frames: &crate::motion_frames::MotionFrames, p: &PathSolution) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < p.frames.len() {
+        let mut j = i;
+        while j + 1 < p.frames.len() && p.frames[j + 1] == p.frames[j] + 1 && !p.switches.contains(&(j + 1)) {
+            j += 1;
+        }
+        let (first, last) = (frames.name_of(p.frames[i]), frames.name_of(p.frames[j]));
+        let last_frame = last.rsplit_once(':').map(|(_, f)| f.to_string()).unwrap_or(last);
+        out.push(format!("{first}-{last_frame}"));
+        i = j + 1;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

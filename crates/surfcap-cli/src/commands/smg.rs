@@ -1,0 +1,249 @@
+//! `surfcap smg query <input> --connect A:B ... --from seq:frame --to seq:frame --distance D
+//! --time SECONDS -o out`: Huang et al. 2009's surface motion graph, surfcap's second synthesis
+//! engine (issue 17): the input may be a subject or a frame set (every frame its own topology).
+//! The library does the work (`surfcap_smg`: the similarity, cached; the graph from the user's
+//! higher level and the two key frames; the ILP path); this command opens the input, writes the
+//! animation (a subject's: any `--format`; a frame set's: a `.frames` folder) and its report,
+//! and reports a missed distance or time as missed (`--strict`: exit 3).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use serde_json::json;
+use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
+use surfcap_mesh::import::{ImportedData, open_any};
+use surfcap_mesh::{Sequence, Topology};
+use surfcap_smg::motion_frames::MotionFrames;
+use surfcap_smg::path_optimisation::{PathQuery, optimise_path, path_segments, play_path};
+use surfcap_smg::shape_similarity::HistogramParams;
+use surfcap_smg::surface_motion_graph::{GraphInput, build_graph};
+
+use crate::options::{CacheOpts, ConstraintOpts, SourceOpts};
+use crate::synthesis::{Constraint, check_constraints, report_path};
+
+#[derive(clap::Subcommand, Debug)]
+pub enum Cmd {
+    /// One synthesis: the path between two key frames that covers a distance in a time at the
+    /// least transition cost (eq. 6-20), written with its report.
+    Query(QueryArgs),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct QueryArgs {
+    /// A subject or a frame set (`.frames`), or any source `surfcap import` reads.
+    pub input: PathBuf,
+    /// The higher-level graph: sequence pairs FROM:TO that may follow each other (TO may be
+    /// FROM: a loop in a cyclic motion), comma-separated or repeated.
+    #[arg(long = "connect", value_delimiter = ',', required = true)]
+    pub connect: Vec<String>,
+    /// Start and end key frames, `sequence:frame`.
+    #[arg(long)]
+    pub from: String,
+    #[arg(long)]
+    pub to: String,
+    /// Ground distance to cover, in the subject's units.
+    #[arg(long, value_parser = crate::options::non_negative)]
+    pub distance: f64,
+    /// Duration, in seconds.
+    #[arg(long, value_parser = crate::options::positive)]
+    pub time: f64,
+    /// Transition windows searched, in frames: MIN-MAX (eq. 5's adaptive window).
+    #[arg(long, default_value = "3-30")]
+    pub windows: String,
+    /// Voxels along the frames' largest extent (the shape histograms' lattice).
+    #[arg(long, default_value_t = 64, value_parser = |s: &str| crate::options::whole_in(s, 8, 512))]
+    pub resolution: usize,
+    /// Weight of a distance error per subject unit (the paper: 1/0.3 per metre).
+    #[arg(long, default_value_t = 1.0 / 0.3, value_parser = crate::options::positive)]
+    pub distance_weight: f64,
+    /// Weight of a time error per frame (the paper: 1/10).
+    #[arg(long, default_value_t = 0.1, value_parser = crate::options::positive)]
+    pub time_weight: f64,
+    /// Output: for a subject a .glb, .abc or .usda file or a folder (see --format); for a frame
+    /// set a `.frames` folder. The report goes beside it as <output>.report.json.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// glb, obj, ply, pc2, npy, usda or abc (a subject's output; default from the extension).
+    #[arg(long)]
+    pub format: Option<surfcap_mesh::export::ExportFormat>,
+    #[command(flatten)]
+    pub constraints: ConstraintOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+fn windows(text: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
+    let parse = |s: &str| s.trim().parse::<usize>().ok().filter(|&n| n >= 1);
+    let (a, b) = text.split_once('-').unwrap_or((text, text));
+    match (parse(a), parse(b)) {
+        (Some(a), Some(b)) if a <= b => Ok(a..=b),
+        _ => anyhow::bail!("--windows {text:?}: expected MIN-MAX frames, 1 <= MIN <= MAX"),
+    }
+}
+
+pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
+    match cmd {
+        Cmd::Query(a) => query(ctx, a),
+    }
+}
+
+fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
+    let lengths = windows(&a.windows)?;
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.input])?;
+    let bar = crate::progress::Bar::new(ctx);
+    let data = open_any(&a.input, &a.source.to_import(None)?, &bar)?;
+    let (frames, subject, set_name, units) = match &data {
+        ImportedData::Subject(i) => {
+            (MotionFrames::from_subject(&i.subject), Some(&i.subject), i.subject.name.clone(), i.subject.units.clone())
+        }
+        ImportedData::FrameSet(f) => {
+            (MotionFrames::from_frame_set(&f.frame_set), None, f.frame_set.name.clone(), f.frame_set.units.clone())
+        }
+    };
+    let t0 = Instant::now();
+    let store = surfcap_mesh::derived_cache::DerivedCache::new(a.cache.dir());
+    let params = HistogramParams { resolution: a.resolution, ..Default::default() };
+    let (similarity, cached) = frames.shape_similarity(params, Some((&store, a.cache.no_cache)), &bar)?;
+    let similarity_seconds = t0.elapsed().as_secs_f64();
+    let seq = |name: &str| {
+        frames.names.iter().position(|n| n == name).ok_or_else(|| {
+            anyhow::anyhow!("--connect: no sequence {name:?}: expected one of {}", frames.names.join(", "))
+        })
+    };
+    let mut connections = Vec::new();
+    for c in &a.connect {
+        let (x, y) = c.split_once(':').with_context(|| format!("--connect {c:?}: expected FROM:TO"))?;
+        connections.push((seq(x)?, seq(y)?));
+    }
+    let key = |spec: &str, option: &str| -> anyhow::Result<usize> {
+        let (s, f) = spec.rsplit_once(':').with_context(|| format!("{option} {spec:?}: expected sequence:frame"))?;
+        let f: usize = f.parse().with_context(|| format!("{option} {spec:?}: expected a whole frame number"))?;
+        Ok(frames.frame(s, f).with_context(|| format!("{option} {spec:?}"))?)
+    };
+    let (from, to) = (key(&a.from, "--from")?, key(&a.to, "--to")?);
+    let ground = frames.ground_centroids();
+    let graph = build_graph(&GraphInput {
+        sequences: &frames.sequences,
+        similarity: &similarity,
+        ground: &ground,
+        connections: &connections,
+        key_frames: &[from, to],
+        lengths,
+    })?;
+    for (x, y) in &graph.missing {
+        eprintln!(
+            "note: no transition {} -> {}: a sequence is shorter than the smallest window",
+            frames.names[*x], frames.names[*y]
+        );
+    }
+    let q = PathQuery {
+        w_d: a.distance_weight,
+        w_t: a.time_weight,
+        ..PathQuery::new(from, to, a.distance, a.time * frames.fps)
+    };
+    let t1 = Instant::now();
+    let path = optimise_path(&graph, &ground, &q)?;
+    let query_seconds = t1.elapsed().as_secs_f64();
+    let played = play_path(&frames, &path);
+    let name = format!("{set_name}-smg");
+    let written = match subject {
+        Some(s) => {
+            let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
+            let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
+            let result = s.derived(name, sequence)?;
+            let format = a.format.unwrap_or_else(|| {
+                a.output
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .and_then(surfcap_mesh::export::ExportFormat::parse)
+                    .unwrap_or(surfcap_mesh::export::ExportFormat::Glb)
+            });
+            surfcap_mesh::export::export(&result, format, &a.output, ctx.export_options(), &bar)?
+        }
+        None => {
+            if a.format.is_some() {
+                anyhow::bail!(
+                    "--format: a frame set's animation is written as a .frames folder (every frame its own topology)"
+                );
+            }
+            let per_frame = played
+                .into_iter()
+                .map(|(p, t)| Ok((Topology::new(p.len() / 3, t.to_vec(), None)?, p)))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            let set = FrameSet::new(
+                name,
+                vec![FrameSetSequence::from_frames("smg", per_frame)?],
+                frames.fps,
+                frames.up,
+                units.clone(),
+            )?;
+            surfcap_mesh::frame_set_cache::write_frame_set(&a.output, &set, ctx.force, &bar)?;
+            vec![a.output.clone()]
+        }
+    };
+    let unit = crate::output::unit_name(&units).to_string();
+    let constraints = vec![
+        Constraint::new(
+            "distance",
+            unit.clone(),
+            a.distance,
+            path.distance,
+            path.distance_error,
+            a.constraints.distance(a.distance),
+        )
+        .relative_to(a.distance),
+        Constraint::new("time", "frames", q.frames, path.frames.len() as f64, path.time_error, a.constraints.frames())
+            .relative_to(q.frames),
+    ];
+    let report = json!({
+        "input": a.input,
+        "engine": "surface motion graph (Huang et al. 2009)",
+        "fps": frames.fps,
+        "from": a.from,
+        "to": a.to,
+        "connections": a.connect,
+        "frames": path.frames.len(),
+        "distance": path.distance,
+        "unit": unit,
+        "transition_cost": path.transition_cost,
+        "cost": path.cost,
+        "path": path_segments(&frames, &path),
+        "loops": path.loops.iter().map(|(c, n)| json!({"edges": c.len(), "repetitions": n})).collect::<Vec<_>>(),
+        "graph": {"nodes": graph.nodes.len(), "edges": graph.edges.len(),
+            "transitions": graph.transitions.iter().map(|(x, y, t)| json!({
+                "from": frames.name_of(frames.sequences[*x].start + t.last_x),
+                "to": frames.name_of(frames.sequences[*y].start + t.first_y),
+                "window": t.length, "cost": t.cost})).collect::<Vec<_>>(),
+            "walks": path.walks, "loops": path.loops_in_graph},
+        "similarity_seconds": similarity_seconds,
+        "similarity_cached": cached,
+        "query_seconds": query_seconds,
+        "ilp_solves": path.ilp_solves,
+        "constraints": constraints,
+        "outputs": written,
+    });
+    let rp = report_path(&a.output);
+    crate::output::write_json(&rp, &report)?;
+    ctx.result(&report, || {
+        println!(
+            "{} frames ({:.1} s), {:.2} {unit} covered (asked {} in {} s); {} transition(s), cost {:.3}; {} walk(s), {} loop(s) in the graph, {} ILP solve(s) in {:.3} s",
+            path.frames.len(),
+            path.frames.len() as f64 / frames.fps,
+            path.distance,
+            a.distance,
+            a.time,
+            path.switches.len(),
+            path.transition_cost,
+            path.walks,
+            path.loops_in_graph,
+            path.ilp_solves,
+            query_seconds
+        );
+        println!("path: {}", path_segments(&frames, &path).join(", "));
+        println!("wrote {}, {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "), rp.display());
+    });
+    check_constraints(ctx, &a.constraints, &constraints)
+}
