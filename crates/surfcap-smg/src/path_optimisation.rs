@@ -447,12 +447,12 @@ pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery)
     })
 }
 
+/// One played frame: its positions and its own triangles.
+pub type PlayedFrame = (Vec<f32>, std::sync::Arc<Vec<[u32; 3]>>);
+
 /// The frames of a solved path as meshes: each frame's positions moved on the ground by its
 /// offset (centroids matched at every switch, 4.2.3), with its own triangles.
-pub fn play_path(
-    frames: &crate::motion_frames::MotionFrames,
-    p: &PathSolution,
-) -> Vec<(Vec<f32>, std::sync::Arc<Vec<[u32; 3]>>)> {
+pub fn play_path(frames: &crate::motion_frames::MotionFrames, p: &PathSolution) -> Vec<PlayedFrame> {
     let (axis, _) = frames.up.axis_and_sign();
     let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
     p.frames
