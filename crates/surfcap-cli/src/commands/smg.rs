@@ -121,7 +121,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
     let key = |spec: &str, option: &str| -> anyhow::Result<usize> {
         let (s, f) = spec.rsplit_once(':').with_context(|| format!("{option} {spec:?}: expected sequence:frame"))?;
         let f: usize = f.parse().with_context(|| format!("{option} {spec:?}: expected a whole frame number"))?;
-        Ok(frames.frame(s, f).with_context(|| format!("{option} {spec:?}"))?)
+        frames.frame(s, f).with_context(|| format!("{option} {spec:?}"))
     };
     let (from, to) = (key(&a.from, "--from")?, key(&a.to, "--to")?);
     let ground = frames.ground_centroids();
