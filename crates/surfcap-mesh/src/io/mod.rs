@@ -1,9 +1,11 @@
 //! Readers and writers, one format per file.
 
+pub mod abc_read;
 pub mod frame_folder;
 pub mod glb;
 pub mod npy;
 pub mod obj;
+pub mod ogawa_read;
 pub mod pc2;
 pub mod ply;
 pub mod regular_file;
