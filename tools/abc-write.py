@@ -114,8 +114,11 @@ for obj in spec["objects"]:
                     sample.setUVs(gs)
                 if "normals" in obj and k == 0 and not obj.get("subd"):
                     sample.setNormals(G.ON3fGeomParamSample(v3f(obj["normals"]), G.GeometryScope.kVertexScope))
+            elif obj.get("subd"):
+                sample = G.OSubDSchemaSample()
+                sample.setPositions(P)
             else:
-                sample = (G.OSubDSchemaSample if obj.get("subd") else G.OPolyMeshSchemaSample)(P)
+                sample = G.OPolyMeshSchemaSample(P)
             schema.set(sample)
             if labels is not None:
                 labels.set(G.OUcharGeomParamSample(ints([obj["labels"][k]], imath.UnsignedCharArray), G.GeometryScope.kConstantScope))

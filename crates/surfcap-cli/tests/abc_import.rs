@@ -157,24 +157,31 @@ fn several_meshes_under_xforms_are_sequences_and_other_objects_are_noted() {
         {"type": "xform", "path": "/b/rig"},
         sheet_mesh("/b/rig/body", 5, json!({})),
         {"type": "curves", "path": "/hair"},
+        {"type": "xform", "path": "/s"},
+        sheet_mesh("/s/mesh", 2, json!({"subd": true})),
     ]});
     write_abc(&spec, &abc);
     let (s, text) = import(&abc, d.path());
     let s = s.unwrap_or_else(|e| panic!("{e}"));
     let names: Vec<&str> = s.sequences().iter().map(|q| q.name.as_str()).collect();
-    assert_eq!(names, ["a", "b/rig/body"]);
-    assert_eq!((s.sequences()[0].n_frames(), s.sequences()[1].n_frames()), (3, 5));
+    assert_eq!(names, ["a", "b/rig/body", "s"]);
+    let frames: Vec<usize> = s.sequences().iter().map(|q| q.n_frames()).collect();
+    assert_eq!(frames, [3, 5, 2]);
     assert_eq!(s.fps, 30.0);
     assert_eq!(s.up_axis, UpAxis::PosY);
     let reference = surfcap_testkit::read_abc(&abc);
-    for (i, q) in s.sequences().iter().enumerate() {
+    // abc-read.py reads the PolyMeshes; the SubD's positions are checked against what was written.
+    for (i, q) in s.sequences().iter().take(2).enumerate() {
         let back: Vec<f64> = q.positions().iter().map(|&x| f(x)).collect();
         assert_eq!(back, reference_positions(&reference, i), "{}", q.name);
     }
+    let written: Vec<f32> = (0..2).flat_map(sheet_frame).collect();
+    assert!(s.sequences()[2].positions() == &written[..], "SubD positions");
     for note in [
         "the transform of /a is ignored: points are read in the mesh's own coordinates",
         "/a/dust (AbcGeom_Points_v1) skipped",
         "/hair (AbcGeom_Curve_v2) skipped",
+        "/s/mesh: a SubD surface, read as its control mesh (not subdivided)",
         "no surfcap_up_axis in the archive metadata: +y assumed",
     ] {
         assert!(text.contains(note), "no note {note:?} in:\n{text}");

@@ -55,8 +55,9 @@
 //!   animated UVs keep the first sample's, other schemas (curves, points, cameras, ...) are
 //!   skipped: each with a note. Several meshes must share one topology (one subject).
 //! - Sizes: a mesh may repeat a stored sample for many frames at no cost in the file, so the
-//!   positions read are capped at 16 times the file's length plus 256 MiB; a file asking for
-//!   more is refused rather than allocating from its numbers.
+//!   positions read (and, for a varying mesh, each frame's copy of its triangles) are capped at
+//!   16 times the file's length plus 256 MiB, and a sample count above the file's length is
+//!   refused: a file asking for more is refused rather than allocating from its numbers.
 
 use std::collections::HashSet;
 use std::path::Path;
@@ -1064,6 +1065,16 @@ fn read_mesh(r: &Reader, path: &str, geom: &Prop, depth: usize, notes: &mut Vec<
             }
         };
         if varying {
+            // Each varying frame holds its own copy of its topology: counted against the cap too.
+            let t = &cur.topology;
+            total = total.saturating_add(12 * t.n_triangles() as u64 * if t.uv().is_some() { 2 } else { 1 });
+            if total > cap {
+                return Err(err!(
+                    Shape,
+                    "{path} sample {k}: the frames read reach {total} bytes from a file of {} bytes: refused (samples repeated too often)",
+                    r.file_len
+                ));
+            }
             frames.push(AbcFrame { topology: cur.topology.clone(), positions: pts, faces: cur.faces });
         } else if positions.is_empty() {
             positions = pts;
