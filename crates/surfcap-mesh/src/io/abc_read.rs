@@ -320,14 +320,12 @@ impl<'a> Reader<'a> {
                 _ => {
                     return Err(err!(
                         Syntax,
-                        "object {child_path}: the object group at byte {} has no group for child {i} (expected the object's group before the headers)",
-                        hpos
+                        "object {child_path}: the object group has no group for child {i} (expected the object's group before the headers at byte {hpos})"
                     )
                     .at(Location::Byte(hpos)));
                 }
             };
             out.push((name, metadata, g));
-            let _ = child_path;
         }
         Ok(out)
     }
@@ -415,11 +413,12 @@ impl<'a> Reader<'a> {
         Ok(out)
     }
 
-    fn time_samplings(o: &Ogawa, pos: u64, b: &[u8]) -> Result<Vec<TimeSampling>> {
+    fn time_samplings(pos: u64, b: &[u8]) -> Result<Vec<TimeSampling>> {
         let mut c = Cursor { b, pos: 0, base: pos, what: "time samplings" };
         let mut out = Vec::new();
         while !c.done() {
-            let _max_samples = c.u32("the sample count")?;
+            // The largest sample count using this sampling: not needed to read the samples.
+            c.u32("the sample count")?;
             let tpc = c.f64("the time per cycle")?;
             let n = c.u32("the number of stored times")? as usize;
             // Checked against the block before anything is allocated.
@@ -427,7 +426,6 @@ impl<'a> Reader<'a> {
             let times = (0..n).map(|_| c.f64("a time")).collect::<Result<Vec<_>>>()?;
             out.push(TimeSampling { time_per_cycle: tpc, times });
         }
-        let _ = o;
         Ok(out)
     }
 }
@@ -637,7 +635,7 @@ pub fn parse_abc(bytes: &[u8]) -> Result<AbcArchive> {
     let mut r = Reader { o, indexed: vec![String::new()], samplings: Vec::new(), file_len };
     let archive_meta = r.string(r.o.child_data(root.get(3), names[3])?, names[3])?;
     let (tpos, tdata) = r.o.child_data(root.get(4), names[4])?;
-    r.samplings = Reader::time_samplings(&r.o, tpos, tdata)?;
+    r.samplings = Reader::time_samplings(tpos, tdata)?;
     if r.samplings.is_empty() {
         // The reference library always writes the identity sampling first; an archive without
         // it still reads, every property then using that default.
@@ -794,7 +792,6 @@ fn read_objects(r: &Reader, top: u64, archive_meta: &str) -> Result<AbcArchive> 
             }
         }
     }
-    let _ = r.file_len;
     Ok(AbcArchive { meshes, fps, up_axis, units, notes })
 }
 
