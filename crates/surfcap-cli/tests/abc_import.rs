@@ -108,12 +108,14 @@ fn a_reference_written_mesh_imports_with_ccw_triangles_uvs_labels_and_ntsc_rate(
     });
     let spec = json!({
         "metadata": {"surfcap_up_axis": "+z", "surfcap_units": "cm"},
-        "objects": [{"type": "xform", "path": "/sheet"}, sheet_mesh("/sheet/mesh", 4, extra)],
+        "objects": [{"type": "xform", "path": "/sheet", "translate": [0.0, 0.0, 2.0]}, sheet_mesh("/sheet/mesh", 4, extra)],
     });
     write_abc(&spec, &abc);
     let (s, text) = import(&abc, d.path());
     let s = s.unwrap_or_else(|e| panic!("{e}"));
     assert!(!text.contains("assumed") && !text.contains("no units"), "metadata came from the file:\n{text}");
+    // The sequence Xform's transform is surfcap's up-axis rotation when surfcap_up_axis is set.
+    assert!(!text.contains("is ignored"), "the sequence Xform was noted:\n{text}");
     assert_eq!(s.fps, 24000.0 / 1001.0);
     assert_eq!(s.up_axis, UpAxis::PosZ);
     assert_eq!(s.units.metres_per_unit, Some(0.01));
@@ -143,6 +145,28 @@ fn a_reference_written_mesh_imports_with_ccw_triangles_uvs_labels_and_ntsc_rate(
     let back: Vec<f64> = seq.positions().iter().map(|&x| f(x)).collect();
     assert_eq!(back, reference_positions(&reference, 0));
     assert_eq!(reference["meshes"][0]["topology_variance"], "kHomogenousTopology");
+}
+
+/// UVs per vertex, and per corner without indices, land on the triangles' corners.
+#[test]
+fn vertex_and_unindexed_face_varying_uvs_are_read() {
+    let d = tempfile::tempdir().unwrap();
+    let vals = |n: usize| -> Vec<Value> { (0..n).map(|j| json!([f(j as f32 / 8.0), 0.5])).collect() };
+    let abc = d.path().join("vertex_uv.abc");
+    let uv = json!({"uv": {"vals": vals(7), "indices": null, "scope": "vertex"}});
+    write_abc(&json!({"objects": [sheet_mesh("/v", 2, uv)]}), &abc);
+    let s = import(&abc, d.path()).0.unwrap_or_else(|e| panic!("{e}"));
+    let uv = s.topology().uv().expect("vertex UVs");
+    assert_eq!(uv.corners, s.topology().triangles());
+    assert_eq!(uv.coords[6], [0.75, 0.5]);
+    assert_eq!(surfcap_testkit::read_abc(&abc)["meshes"][0]["uvs"]["scope"], "vertex");
+    let abc = d.path().join("corner_uv.abc");
+    let uv = json!({"uv": {"vals": vals(13), "indices": null, "scope": "facevarying"}});
+    write_abc(&json!({"objects": [sheet_mesh("/c", 2, uv)]}), &abc);
+    let s = import(&abc, d.path()).0.unwrap_or_else(|e| panic!("{e}"));
+    let uv = s.topology().uv().expect("face-varying UVs");
+    assert_eq!(uv.corners, [[3, 2, 1], [3, 1, 0], [6, 5, 4], [9, 8, 7], [12, 11, 10]]);
+    assert_eq!(surfcap_testkit::read_abc(&abc)["meshes"][0]["uvs"]["indexed"], false);
 }
 
 #[test]
