@@ -559,12 +559,12 @@ fn rate_of(ts: &TimeSampling, index: u32, n: usize, path: &str) -> Result<(Optio
         // The identity sampling: the writer never set a rate.
         return Ok((None, times));
     }
-    let dt = if !acyclic && spc == 1 {
-        ts.time_per_cycle
+    // The frame time: the time per cycle over the samples per cycle (uniform: the time per
+    // cycle itself), or for acyclic times their mean step; then every time is checked.
+    let dt = if !acyclic {
+        ts.time_per_cycle / spc as f64
     } else if n >= 2 {
         (times[n - 1] - times[0]) / (n - 1) as f64
-    } else if !acyclic {
-        ts.time_per_cycle / spc as f64
     } else {
         return Ok((None, times));
     };
