@@ -7,10 +7,11 @@
 //! `AbcGeom/IPolyMesh.cpp`, `IXform.cpp`, `GeometryScope.cpp`) and checked against files written
 //! by it (PyPI `alembic3d`, the PyAlembic bindings, in `crates/surfcap-cli/tests/abc_import.rs`).
 //! The crate `ogawa-rs` was tried first (issue 22 says use it only if it reads PolyMesh samples
-//! correctly): version 0.4.0 panicked ("attempt to subtract with overflow" in
-//! `DataChunk::read_pod_array`) reading the first `P` sample of a 3-sample mesh under an Xform
-//! written by alembic3d 1.8.12.1, a 7-byte truncated file panicked in `Archive::new`, and it
-//! `assert!`s on schema metadata and allocates buffers from sizes in the file, so it is not used.
+//! correctly): version 0.4.0 read the archive and object tree of a 3-sample quad + triangle
+//! mesh under an Xform written by alembic3d 1.8.12.1, then panicked ("attempt to subtract with
+//! overflow" in `DataChunk::read_pod_array`) reading its first `P` sample; its source also
+//! `assert!`s on schema metadata and allocates buffers from sizes read in the file before
+//! checking them, so it is not used.
 //!
 //! The archive (root group children): 0 the Alembic file version, 1 the library version, 2 the
 //! top object's group, 3 the archive metadata, 4 the time samplings, 5 the indexed metadata.
