@@ -58,6 +58,8 @@ pub enum SourceLayout {
     Glb,
     /// A USD text stage (`.usda`, or `.usd` holding text): one sequence per `Mesh` prim.
     Usda,
+    /// An Alembic archive (`.abc`, Ogawa): one sequence per `PolyMesh` object.
+    Alembic,
     /// A `.pc2` or `.npy` with the template a manifest names.
     WithTemplate,
     /// A subject cache written by `surfcap import`.
@@ -82,6 +84,7 @@ impl std::fmt::Display for SourceLayout {
             SourceLayout::MeshFile(format) => write!(f, "{} file (one frame)", upper(format)),
             SourceLayout::Glb => write!(f, "glb file"),
             SourceLayout::Usda => write!(f, "USD text stage"),
+            SourceLayout::Alembic => write!(f, "Alembic archive"),
             SourceLayout::WithTemplate => write!(f, "positions file with the manifest's template"),
             SourceLayout::Cache => write!(f, "subject cache"),
             SourceLayout::FrameSetFolder => write!(f, "frame set folder"),
@@ -146,7 +149,8 @@ pub(crate) fn simple(
 }
 
 /// Reads every sequence a path holds: a shared-layout sequence folder, a dataset folder of them,
-/// a folder of OBJ or PLY frames, a single `.obj`/`.ply` (one frame), a `.glb` or a `.usda`.
+/// a folder of OBJ or PLY frames, a single `.obj`/`.ply` (one frame), a `.glb`, a `.usda` or an
+/// `.abc` (Alembic).
 /// (Manifests and subject caches are whole subjects: see [`import`] and [`open_subject`].)
 pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSequence>> {
     if !path.exists() {
@@ -262,9 +266,50 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
                 })
                 .collect())
         }
+        "abc" => {
+            let archive = crate::io::abc_read::read_abc(path)?;
+            for n in &archive.notes {
+                progress.note(&format!("{}: {n}", path.display()));
+            }
+            let mut out = Vec::with_capacity(archive.meshes.len());
+            for m in archive.meshes {
+                // A mesh whose topology changes between samples is a frame set, not a sequence.
+                if let Some((frame, faces, was)) = m.topology_change() {
+                    return Err(err!(
+                        Unsupported,
+                        "{}: the topology changes at frame {frame} ({faces} faces, was {was}): a varying-topology mesh imports as a frame set",
+                        m.path
+                    )
+                    .in_file(path));
+                }
+                let (topology, positions) = match m.frames {
+                    crate::io::abc_read::AbcFrames::Constant { topology, positions } => (topology, positions),
+                    // Stored as varying but every frame has the same topology: one after all.
+                    crate::io::abc_read::AbcFrames::Varying { frames } => {
+                        let Some(first) = frames.first() else { continue };
+                        let positions = frames.iter().flat_map(|f| f.positions.iter().copied()).collect();
+                        (first.topology.clone(), positions)
+                    }
+                };
+                out.push(SourceSequence {
+                    name: m.name,
+                    topology,
+                    positions,
+                    joints: None,
+                    tags: Vec::new(),
+                    labels: m.labels,
+                    fps: archive.fps,
+                    up_axis: archive.up_axis,
+                    units: archive.units.clone(),
+                    origin: path.to_path_buf(),
+                    layout: SourceLayout::Alembic,
+                });
+            }
+            Ok(out)
+        }
         _ => Err(err!(
             Unsupported,
-            "unknown file type {ext:?}: expected .obj, .ply, .glb, .usda, surfcap.toml or a folder (a .pc2 or .npy needs a template: list it in surfcap.toml)"
+            "unknown file type {ext:?}: expected .obj, .ply, .glb, .usda, .abc, surfcap.toml or a folder (a .pc2 or .npy needs a template: list it in surfcap.toml)"
         )
         .in_file(path)),
     }
