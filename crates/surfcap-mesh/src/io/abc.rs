@@ -307,9 +307,19 @@ fn object_name(name: &str, taken: &mut Vec<String>) -> String {
     unique
 }
 
-/// Metadata values cannot hold the separators `;` and `=`.
-fn metadata_value(s: &str) -> String {
-    s.chars().map(|c| if c == ';' || c == '=' { '_' } else { c }).collect()
+/// Metadata values cannot hold Alembic's separators `;` and `=`: they are percent-encoded (with
+/// `%` itself), as `io::abc_read::metadata_unescape` reads them back.
+pub fn metadata_value(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            ';' => out.push_str("%3B"),
+            '=' => out.push_str("%3D"),
+            '%' => out.push_str("%25"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 fn object_header(out: &mut Vec<u8>, name: &str, metadata: &str, md: &mut MetaDataMap) {
@@ -668,6 +678,15 @@ mod tests {
             assert_eq!(p, vec![0.0, 1.0, 0.0], "{up:?}");
         }
         assert!(up_matrix(UpAxis::PosY).is_none());
+    }
+
+    #[test]
+    fn metadata_values_escape_the_separators_and_read_back() {
+        for v in ["plain", "a;b=c", "100%", "%3B literal; and %25", "model units (not meters; ~200 tall)"] {
+            let e = metadata_value(v);
+            assert!(!e.contains(';') && !e.contains('='), "{e}");
+            assert_eq!(crate::io::abc_read::metadata_unescape(&e), v);
+        }
     }
 
     #[test]

@@ -663,6 +663,12 @@ struct Walk {
     xforms: Vec<String>,
 }
 
+/// The inverse of surfcap's `io::abc::metadata_value`: `%3B`, `%3D` and `%25` back to `;`, `=`
+/// and `%` (anything else is kept as written).
+pub fn metadata_unescape(s: &str) -> String {
+    s.replace("%3B", ";").replace("%3D", "=").replace("%25", "%")
+}
+
 fn read_objects(r: &Reader, top: u64, archive_meta: &str) -> Result<AbcArchive> {
     let mut notes = Vec::new();
     let surfcap_up = meta_get(archive_meta, "surfcap_up_axis");
@@ -676,7 +682,20 @@ fn read_objects(r: &Reader, top: u64, archive_meta: &str) -> Result<AbcArchive> 
         }
     };
     let units = match meta_get(archive_meta, "surfcap_units") {
-        Some(u) => Some(Units::parse(u)),
+        // surfcap's writer records the name and, when known, the scale (`surfcap_metres_per_unit`):
+        // the name alone may not say it ("0.5 m"), nor the scale the name ("metres" or "m").
+        Some(u) => Some(match meta_get(archive_meta, "surfcap_metres_per_unit") {
+            Some(m) => match m.parse::<f64>() {
+                Ok(v) if v.is_finite() && v > 0.0 => Units { name: metadata_unescape(u), metres_per_unit: Some(v) },
+                _ => {
+                    return Err(err!(
+                        Metadata,
+                        "archive metadata surfcap_metres_per_unit={m:?}: expected a positive number of metres"
+                    ));
+                }
+            },
+            None => Units::parse(&metadata_unescape(u)),
+        }),
         None => {
             notes.push("no surfcap_units in the archive metadata: units unknown (Alembic does not record them)".into());
             None
@@ -774,7 +793,17 @@ fn read_objects(r: &Reader, top: u64, archive_meta: &str) -> Result<AbcArchive> 
             }
         }
     }
-    let fps = fps.map(|f| f.0);
+    let mut fps = fps.map(|f| f.0);
+    // surfcap's writer records the rate in its shortest exact form (`surfcap_fps`): 1 / (1 / fps)
+    // is not always fps in floating point. It is used when the sampling agrees with it.
+    if let (Some(f), Some(text)) = (fps, meta_get(archive_meta, "surfcap_fps")) {
+        match text.parse::<f64>() {
+            Ok(exact) if exact > 0.0 && (exact - f).abs() <= 1e-9 * exact => fps = Some(exact),
+            _ => notes.push(format!(
+                "archive metadata surfcap_fps={text:?} does not match the sampling's {f} fps: the sampling's rate is used"
+            )),
+        }
+    }
     if fps.is_none() {
         notes.push("no time sampling on the meshes (the default of one second per sample): pass --fps".into());
     }
