@@ -225,7 +225,7 @@ fn several_meshes_under_xforms_are_sequences_and_other_objects_are_noted() {
 #[test]
 fn varying_topology_irregular_times_and_hdf5_are_refused_by_name() {
     let d = tempfile::tempdir().unwrap();
-    // The faces change at sample 2: every frame keeps its own topology; import refuses it.
+    // The faces change at sample 2: every frame keeps its own topology: a frame set.
     let mut spec = json!({"objects": [{"type": "xform", "path": "/walk"}, sheet_mesh("/walk/mesh", 4, json!({}))]});
     let s2 = &mut spec["objects"][1]["samples"][2];
     s2["faceIndices"] = json!([0, 3, 4, 0, 4, 1, 1, 4, 2, 2, 4, 5, 4, 6, 5]);
@@ -234,12 +234,24 @@ fn varying_topology_irregular_times_and_hdf5_are_refused_by_name() {
     spec["objects"][1]["samples"][3]["faceCounts"] = json!([3, 3, 3, 3, 3]);
     let abc = d.path().join("varying.abc");
     write_abc(&spec, &abc);
+    // As a subject: refused, saying what it is and where it can go.
     let e = import(&abc, d.path()).0.unwrap_err();
     let want = format!(
-        "{}: /walk/mesh: the topology changes at frame 2 (5 faces, was 4): a varying-topology mesh imports as a frame set",
+        "{} /walk/mesh: the topology changes at frame 2 (5 faces, was 4): imported as a frame set",
         abc.display()
     );
-    assert!(e.contains(&want), "{e}");
+    assert!(e.contains(&want) && e.contains(".frames"), "{e}");
+    // As a frame set: every frame with its own triangles.
+    let frames = d.path().join("varying.frames");
+    let o = surfcap!(&["--quiet", "import", p(&abc), "--fps", "30", "-o", p(&frames)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let set = surfcap_mesh::frame_set_cache::read_frame_set(&frames, &NoProgress).unwrap();
+    let tris: Vec<usize> = set.sequences()[0].frames().iter().map(|f| f.n_triangles()).collect();
+    assert_eq!(tris, [5, 5, 5, 5]);
+    assert_eq!(set.sequences()[0].name, "walk");
+    // A command that needs one topology, given the .abc itself: it says what the file is.
+    let o = surfcap!(&["export", p(&abc), "--format", "glb", "-o", p(&d.path().join("v.glb"))]);
+    assert!(!o.status.success() && stderr(&o).contains("is a frame set"), "{}", stderr(&o));
     let a = surfcap_mesh::io::abc_read::read_abc(&abc).unwrap();
     let surfcap_mesh::io::abc_read::AbcFrames::Varying { frames } = &a.meshes[0].frames else {
         panic!("expected varying frames")

@@ -458,8 +458,8 @@ pub fn frame_set_refusal(path: &Path, frames: usize) -> Error {
     err!(
         TopologyMismatch,
         "is a frame set (every frame has its own vertices and triangles; {} frames): this command needs one shared \
-         topology (`surfcap import` and `surfcap info` read frame sets; `surfcap remesh-frames` makes them from a \
-         subject). Frame sets are for Huang et al.'s surface motion graph",
+         topology (`surfcap import`, `surfcap info` and `surfcap smg query` read frame sets; `surfcap remesh-frames` \
+         makes them from a subject). Frame sets are for Huang et al.'s surface motion graph (`surfcap smg`)",
         thousands(frames)
     )
     .in_file(path)
@@ -549,6 +549,10 @@ fn frame_difference(frames: &[MeshFrame]) -> Option<String> {
 /// triangles differ between frames is read frame by frame into a frame-set piece, with the note
 /// saying so.
 fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
+    let is_abc = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("abc"));
+    if is_abc && !path.is_dir() {
+        return alembic_pieces(path, progress, notes);
+    }
     let first_try = read_source(path, progress);
     let e = match first_try {
         Ok(seqs) => return Ok(seqs.into_iter().map(Piece::Shared).collect()),
@@ -614,6 +618,64 @@ fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>
         origin: path.to_path_buf(),
         layout,
     })])
+}
+
+/// An Alembic archive's meshes as pieces: a mesh of constant topology is a sequence, one whose
+/// topology changes between samples (per-frame reconstructions) a sequence of frames of their
+/// own, which makes the import a frame set.
+fn alembic_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
+    let archive = crate::io::abc_read::read_abc(path)?;
+    for n in &archive.notes {
+        progress.note(&format!("{}: {n}", path.display()));
+    }
+    let mut pieces = Vec::with_capacity(archive.meshes.len());
+    for m in archive.meshes {
+        if let Some((frame, faces, was)) = m.topology_change() {
+            notes.push(format!(
+                "{} {}: the topology changes at frame {frame} ({faces} faces, was {was}): imported as a frame set; \
+                 commands that need one topology cannot use it",
+                path.display(),
+                m.path
+            ));
+            let crate::io::abc_read::AbcFrames::Varying { frames } = m.frames else {
+                return Err(err!(Syntax, "{}: a topology change in a mesh of constant topology", m.path).in_file(path));
+            };
+            pieces.push(Piece::Frames(SourceFrames {
+                name: m.name,
+                frames: frames.into_iter().map(|f| (f.topology, f.positions)).collect(),
+                tags: Vec::new(),
+                labels: m.labels,
+                fps: archive.fps,
+                up_axis: archive.up_axis,
+                units: archive.units.clone(),
+                origin: path.to_path_buf(),
+                layout: SourceLayout::Alembic,
+            }));
+            continue;
+        }
+        let (topology, positions) = match m.frames {
+            crate::io::abc_read::AbcFrames::Constant { topology, positions } => (topology, positions),
+            crate::io::abc_read::AbcFrames::Varying { frames } => {
+                let Some(first) = frames.first() else { continue };
+                let topology = first.topology.clone();
+                (topology, frames.into_iter().flat_map(|f| f.positions).collect())
+            }
+        };
+        pieces.push(Piece::Shared(SourceSequence {
+            name: m.name,
+            topology,
+            positions,
+            joints: None,
+            tags: Vec::new(),
+            labels: m.labels,
+            fps: archive.fps,
+            up_axis: archive.up_axis,
+            units: archive.units.clone(),
+            origin: path.to_path_buf(),
+            layout: SourceLayout::Alembic,
+        }));
+    }
+    Ok(pieces)
 }
 
 /// A frame set's sequences as pieces (to merge a `.frames` folder with more data).

@@ -41,7 +41,9 @@
 //!   `/<subject>/<sequence>/mesh`), so surfcap's own files give their sequences back by name.
 //!   Two meshes mapped to the same name keep their full paths.
 //! - One subject has one topology: meshes with different face counts, indices, point counts or
-//!   UVs are refused with both prims named (a varying-topology frame set does not exist yet).
+//!   UVs are refused with both prims named (frame sets, where every frame has its own topology,
+//!   come from Alembic meshes whose faces change and from frame folders; USD stages of
+//!   different meshes are not read as one).
 //! - Binary crate files (`PXR-USDC`) are refused with the `usdcat` command that converts them.
 
 use std::path::Path;
