@@ -1,0 +1,108 @@
+//! `surfcap smg query` on a subject and on a frame set (every frame re-meshed): the animation,
+//! its report (path as `sequence:first-last` runs, constraints), missed constraints reported and
+//! `--strict` exiting 3.
+
+use serde_json::Value;
+use surfcap_testkit::{p, stderr, surfcap};
+
+fn report(out: &std::path::Path) -> Value {
+    let stem = out.file_stem().unwrap().to_string_lossy().into_owned();
+    serde_json::from_slice(&std::fs::read(out.with_file_name(format!("{stem}.report.json"))).unwrap()).unwrap()
+}
+
+#[test]
+fn a_gallop_loops_to_fill_the_time_on_a_subject_and_on_a_frame_set() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let cache = d.path().join("cache");
+    let horse = d.path().join("horse.subject");
+    let o = surfcap!(&["--quiet", "import", p(&data.join("threejs_morph_animals/horse_gallop")), "-o", p(&horse)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // 16 frames at 10 fps with a self-transition: 4 s (40 frames) needs the loop. The gallop
+    // travels (46 units a cycle): the distance weight is made negligible, so the time decides.
+    let args = |input: &std::path::Path, out: &std::path::Path| {
+        vec![
+            "smg".to_string(),
+            "query".into(),
+            p(input).into(),
+            "--connect".into(),
+            "horse_gallop:horse_gallop".into(),
+            "--from".into(),
+            "horse_gallop:0".into(),
+            "--to".into(),
+            "horse_gallop:15".into(),
+            "--time".into(),
+            "4".into(),
+            "--distance".into(),
+            "0".into(),
+            "--distance-weight".into(),
+            "0.0001".into(),
+            "--windows".into(),
+            "2-4".into(),
+            "--tolerance".into(),
+            "1000".into(),
+            "--cache-dir".into(),
+            p(&cache).into(),
+            "-o".into(),
+            p(out).into(),
+        ]
+    };
+    let out = d.path().join("gallop.glb");
+    let a = args(&horse, &out);
+    let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&out);
+    let frames = r["frames"].as_u64().unwrap();
+    assert!((30..=50).contains(&frames), "{frames} frames for 40 asked");
+    assert!(r["path"].as_array().unwrap().len() >= 2, "the loop was taken: {}", r["path"]);
+    assert!(r["path"][0].as_str().unwrap().starts_with("horse_gallop:0-"));
+    surfcap_testkit::validate_glb(std::slice::from_ref(&out));
+    // The same motion re-meshed frame by frame: a frame set in, a frame set out.
+    let set = d.path().join("horse.frames");
+    let o = surfcap!(&["--quiet", "remesh-frames", p(&horse), "--seed", "2", "-o", p(&set)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.path().join("gallop-remeshed.frames");
+    let a = args(&set, &out);
+    let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let played = surfcap_mesh::frame_set_cache::read_frame_set(&out, &surfcap_mesh::NoProgress).unwrap();
+    assert_eq!(played.frame_count() as u64, report(&out)["frames"].as_u64().unwrap());
+    let (lo, hi) = played.vertex_count_range();
+    assert!(lo < hi, "frames keep their own meshes ({lo}..{hi} vertices)");
+    // A time the loop cannot meet within one frame, under --strict: written, reported, exit 3.
+    let mut a = args(&horse, &d.path().join("strict.glb"));
+    let t = a.iter().position(|x| x == "--tolerance").unwrap();
+    a.splice(t..t + 2, ["--frame-tolerance".to_string(), "0".into(), "--strict".into()]);
+    let i = a.iter().position(|x| x == "4").unwrap();
+    a[i] = "4.15".into();
+    let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("constraint time missed"), "{}", stderr(&o));
+    assert!(d.path().join("strict.glb").is_file());
+}
+
+#[test]
+fn bad_queries_are_refused_by_name() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let src = data.join("threejs_morph_animals/horse_gallop");
+    let out = d.path().join("x.glb");
+    for (args, want) in [
+        (
+            vec!["--connect", "gallop:horse_gallop", "--from", "horse_gallop:0", "--to", "horse_gallop:15"],
+            "no sequence \"gallop\"",
+        ),
+        (
+            vec!["--connect", "horse_gallop:horse_gallop", "--from", "horse_gallop:99", "--to", "horse_gallop:15"],
+            "horse_gallop:99",
+        ),
+        (vec!["--connect", "horse_gallop", "--from", "horse_gallop:0", "--to", "horse_gallop:15"], "expected FROM:TO"),
+    ] {
+        let mut a = vec!["smg", "query", p(&src)];
+        a.extend(args);
+        a.extend(["--distance", "1", "--time", "2", "--cache-dir", p(d.path()), "-o", p(&out)]);
+        let o = surfcap!(&a);
+        assert_eq!(o.status.code(), Some(1), "{a:?}");
+        assert!(stderr(&o).contains(want), "{want}: {}", stderr(&o));
+    }
+}
