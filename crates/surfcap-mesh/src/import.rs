@@ -326,6 +326,36 @@ impl HasOrigin for SourceSequence {
     }
 }
 
+/// The frame rate (required), up axis and units the sources agree on, the user's values first;
+/// a missing axis or unit is assumed with a note.
+fn agreed_metadata<S: HasOrigin>(
+    opts: &ImportOptions,
+    seqs: &[S],
+    get: impl Fn(&S) -> (Option<f64>, Option<UpAxis>, Option<Units>),
+    notes: &mut Vec<String>,
+) -> Result<(f64, UpAxis, Units)> {
+    let origin = seqs.first().map(|s| s.origin().to_path_buf()).unwrap_or_default();
+    let fps = agree("frame rate", opts.fps, seqs, |s| get(s).0)?.ok_or_else(|| {
+        err!(Metadata, "no frame rate is known for these sequences: pass --fps (or set fps in surfcap.toml)")
+            .in_file(&origin)
+    })?;
+    let up_axis = match agree("up axis", opts.up_axis, seqs, |s| get(s).1)? {
+        Some(u) => u,
+        None => {
+            notes.push("no up axis in the sources: assumed +y (pass --up-axis to change it)".into());
+            UpAxis::PosY
+        }
+    };
+    let units = match agree("units", opts.units.clone(), seqs, |s| get(s).2)? {
+        Some(u) => u,
+        None => {
+            notes.push("no units in the sources: recorded as arbitrary (pass --units to set them)".into());
+            Units::arbitrary()
+        }
+    };
+    Ok((fps, up_axis, units))
+}
+
 /// Agreement of an optional per-source value: the user's value wins; otherwise all sources
 /// that know it must agree.
 fn agree<T: Clone + PartialEq + std::fmt::Debug, S: HasOrigin>(
@@ -374,24 +404,7 @@ pub fn assemble(default_name: &str, seqs: Vec<SourceSequence>, opts: &ImportOpti
         }
     }
     let mut notes = Vec::new();
-    let fps = agree("frame rate", opts.fps, &seqs, |s| s.fps)?.ok_or_else(|| {
-        err!(Metadata, "no frame rate is known for these sequences: pass --fps (or set fps in surfcap.toml)")
-            .in_file(&first.origin)
-    })?;
-    let up_axis = match agree("up axis", opts.up_axis, &seqs, |s| s.up_axis)? {
-        Some(u) => u,
-        None => {
-            notes.push("no up axis in the sources: assumed +y (pass --up-axis to change it)".into());
-            UpAxis::PosY
-        }
-    };
-    let units = match agree("units", opts.units.clone(), &seqs, |s| s.units.clone())? {
-        Some(u) => u,
-        None => {
-            notes.push("no units in the sources: recorded as arbitrary (pass --units to set them)".into());
-            Units::arbitrary()
-        }
-    };
+    let (fps, up_axis, units) = agreed_metadata(opts, &seqs, |s| (s.fps, s.up_axis, s.units.clone()), &mut notes)?;
     let nv = topology.n_vertices();
     let sources = seqs
         .iter()
@@ -770,28 +783,11 @@ pub fn import_any(paths: &[PathBuf], opts: &ImportOptions, progress: &dyn Progre
 /// Merges frame sequences into one frame set: frame rate, up axis and units agree as for
 /// [`assemble`]; each frame keeps its own topology.
 fn assemble_frames(default_name: &str, seqs: Vec<SourceFrames>, opts: &ImportOptions) -> Result<ImportedFrames> {
-    let Some(first) = seqs.first() else {
+    if seqs.is_empty() {
         return Err(err!(Empty, "nothing to import: no sequences were found"));
-    };
+    }
     let mut notes = Vec::new();
-    let fps = agree("frame rate", opts.fps, &seqs, |s| s.fps)?.ok_or_else(|| {
-        err!(Metadata, "no frame rate is known for these sequences: pass --fps (or set fps in surfcap.toml)")
-            .in_file(&first.origin)
-    })?;
-    let up_axis = match agree("up axis", opts.up_axis, &seqs, |s| s.up_axis)? {
-        Some(u) => u,
-        None => {
-            notes.push("no up axis in the sources: assumed +y (pass --up-axis to change it)".into());
-            UpAxis::PosY
-        }
-    };
-    let units = match agree("units", opts.units.clone(), &seqs, |s| s.units.clone())? {
-        Some(u) => u,
-        None => {
-            notes.push("no units in the sources: recorded as arbitrary (pass --units to set them)".into());
-            Units::arbitrary()
-        }
-    };
+    let (fps, up_axis, units) = agreed_metadata(opts, &seqs, |s| (s.fps, s.up_axis, s.units.clone()), &mut notes)?;
     let sources = seqs
         .iter()
         .map(|s| ImportedSource {
@@ -1057,7 +1053,10 @@ mod tests {
         ] {
             assert_eq!(e.kind, ErrorKind::TopologyMismatch);
             assert!(e.to_string().starts_with(&refusal), "{e}");
-            assert!(e.to_string().ends_with("Frame sets are for Huang et al.'s surface motion graph"), "{e}");
+            assert!(
+                e.to_string().ends_with("Frame sets are for Huang et al.'s surface motion graph (`surfcap smg`)"),
+                "{e}"
+            );
         }
         // Its .frames folder opens as a frame set and is refused as a subject likewise.
         let out = d.path().join("x.frames");

@@ -98,16 +98,22 @@ fn nodes_of(g: &SurfaceMotionGraph, edges: &[usize]) -> Vec<usize> {
     edges.iter().flat_map(|&e| [g.edges[e].from, g.edges[e].to]).collect()
 }
 
-/// Every walk (node-simple path) from `s` to `t`, as edge lists.
-fn walks(g: &SurfaceMotionGraph, out: &[Vec<usize>], s: usize, t: usize, max: usize) -> Result<Vec<Vec<usize>>> {
+/// Every path from `s` that visits no node twice and ends with an edge into `t`, going only
+/// through nodes `allowed`, as edge lists (iterative depth-first search); `what` names them in
+/// the error when there are more than `max`.
+fn simple_paths(
+    g: &SurfaceMotionGraph,
+    out: &[Vec<usize>],
+    s: usize,
+    t: usize,
+    allowed: impl Fn(usize) -> bool,
+    max: usize,
+    what: &str,
+) -> Result<Vec<Vec<usize>>> {
     let mut found = Vec::new();
-    if s == t {
-        found.push(Vec::new());
-        return Ok(found);
-    }
     let mut on_path = vec![false; g.nodes.len()];
     on_path[s] = true;
-    // Iterative DFS: (node, next out-edge position).
+    // (node, next out-edge position)
     let mut stack: Vec<(usize, usize)> = vec![(s, 0)];
     let mut path: Vec<usize> = Vec::new();
     while let Some(&mut (node, ref mut next)) = stack.last_mut() {
@@ -125,11 +131,9 @@ fn walks(g: &SurfaceMotionGraph, out: &[Vec<usize>], s: usize, t: usize, max: us
             w.push(e);
             found.push(w);
             if found.len() > max {
-                return Err(Error::Invalid(format!(
-                    "more than {max} walks between the key frames: the graph is too dense"
-                )));
+                return Err(Error::Invalid(format!("more than {max} {what}: the graph is too dense")));
             }
-        } else if !on_path[to] {
+        } else if !on_path[to] && allowed(to) {
             on_path[to] = true;
             path.push(e);
             stack.push((to, 0));
@@ -138,37 +142,19 @@ fn walks(g: &SurfaceMotionGraph, out: &[Vec<usize>], s: usize, t: usize, max: us
     Ok(found)
 }
 
+/// Every walk (node-simple path) from `s` to `t`, as edge lists.
+fn walks(g: &SurfaceMotionGraph, out: &[Vec<usize>], s: usize, t: usize, max: usize) -> Result<Vec<Vec<usize>>> {
+    if s == t {
+        return Ok(vec![Vec::new()]);
+    }
+    simple_paths(g, out, s, t, |_| true, max, "walks between the key frames")
+}
+
 /// Every elementary cycle, each from its smallest node, as edge lists.
 fn cycles(g: &SurfaceMotionGraph, out: &[Vec<usize>], max: usize) -> Result<Vec<Vec<usize>>> {
     let mut found = Vec::new();
     for s in 0..g.nodes.len() {
-        let mut on_path = vec![false; g.nodes.len()];
-        on_path[s] = true;
-        let mut stack: Vec<(usize, usize)> = vec![(s, 0)];
-        let mut path: Vec<usize> = Vec::new();
-        while let Some(&mut (node, ref mut next)) = stack.last_mut() {
-            if *next >= out[node].len() {
-                stack.pop();
-                on_path[node] = false;
-                path.pop();
-                continue;
-            }
-            let e = out[node][*next];
-            *next += 1;
-            let to = g.edges[e].to;
-            if to == s {
-                let mut c = path.clone();
-                c.push(e);
-                found.push(c);
-                if found.len() > max {
-                    return Err(Error::Invalid(format!("more than {max} loops in the graph: it is too dense")));
-                }
-            } else if to > s && !on_path[to] {
-                on_path[to] = true;
-                path.push(e);
-                stack.push((to, 0));
-            }
-        }
+        found.extend(simple_paths(g, out, s, s, |v| v > s, max.saturating_sub(found.len()), "loops in the graph")?);
     }
     Ok(found)
 }
