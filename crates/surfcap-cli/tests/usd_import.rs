@@ -159,3 +159,41 @@ fn a_stage_written_by_pixars_usd_imports_with_quads_fanned() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("usdcat"), "{}", stderr(&o));
 }
+
+/// Per-frame reconstructions as Pixar's USD writes them: a mesh whose faces and point count
+/// are time-sampled and change between frames.
+const PIXAR_VARYING: &str = r#"
+import sys
+from pxr import Usd, UsdGeom, Vt, Gf
+stage = Usd.Stage.CreateInMemory()
+stage.SetTimeCodesPerSecond(25)
+mesh = UsdGeom.Mesh.Define(stage, "/capture")
+counts, indices, points = mesh.CreateFaceVertexCountsAttr(), mesh.CreateFaceVertexIndicesAttr(), mesh.CreatePointsAttr()
+for t in range(3):
+    # Frame t: a fan of t + 1 triangles around point 0.
+    n = t + 3
+    p = [Gf.Vec3f(0, 0, 0.1 * t)] + [Gf.Vec3f(float(k), 1.0, 0.1 * t) for k in range(n - 1)]
+    points.Set(Vt.Vec3fArray(p), Usd.TimeCode(t))
+    counts.Set([3] * (n - 2), Usd.TimeCode(t))
+    indices.Set(sum([[0, k + 1, k + 2] for k in range(n - 2)], []), Usd.TimeCode(t))
+stage.GetRootLayer().Export(sys.argv[1])
+"#;
+
+#[test]
+fn a_stage_whose_faces_change_imports_as_a_frame_set() {
+    let Some(_) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let usda = d.path().join("capture.usda");
+    python_usd(PIXAR_VARYING, &[&usda]);
+    let o = surfcap!(&["import", p(&usda), "-o", p(&d.path().join("c.subject"))]);
+    assert!(!o.status.success() && stderr(&o).contains("frame set"), "{}", stderr(&o));
+    let out = d.path().join("c.frames");
+    let o = surfcap!(&["--quiet", "import", p(&usda), "-o", p(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let set = surfcap_mesh::frame_set_cache::read_frame_set(&out, &NoProgress).unwrap();
+    let q = &set.sequences()[0];
+    let sizes: Vec<(usize, usize)> = q.frames().iter().map(|f| (f.n_vertices(), f.n_triangles())).collect();
+    assert_eq!(sizes, [(3, 1), (4, 2), (5, 3)]);
+    assert_eq!(set.fps, 25.0);
+    assert_eq!(q.frames()[2].positions()[2], 0.2f32);
+}

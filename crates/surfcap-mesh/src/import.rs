@@ -248,6 +248,9 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
             for n in &stage.notes {
                 progress.note(&format!("{}: {n}", path.display()));
             }
+            if let Some(e) = stage.topology_mismatch() {
+                return Err(e.in_file(path));
+            }
             Ok(stage
                 .meshes
                 .into_iter()
@@ -562,9 +565,12 @@ fn frame_difference(frames: &[MeshFrame]) -> Option<String> {
 /// triangles differ between frames is read frame by frame into a frame-set piece, with the note
 /// saying so.
 fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
-    let is_abc = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("abc"));
-    if is_abc && !path.is_dir() {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if ext == "abc" && !path.is_dir() {
         return alembic_pieces(path, progress, notes);
+    }
+    if matches!(ext.as_str(), "usda" | "usd") && !path.is_dir() {
+        return usda_pieces(path, progress, notes);
     }
     let first_try = read_source(path, progress);
     let e = match first_try {
@@ -686,6 +692,62 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>)
             units: archive.units.clone(),
             origin: path.to_path_buf(),
             layout: SourceLayout::Alembic,
+        }));
+    }
+    Ok(pieces)
+}
+
+/// A USD stage's meshes as pieces: one subject's sequences when they share one topology;
+/// otherwise (meshes of different topology, or faces time-sampled so that they change between
+/// frames) every mesh a sequence of frames with their own topology, which makes a frame set.
+fn usda_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
+    let stage = crate::io::usda_read::read_usda(path)?;
+    for n in &stage.notes {
+        progress.note(&format!("{}: {n}", path.display()));
+    }
+    let mismatch = stage.topology_mismatch();
+    if let Some(e) = &mismatch {
+        notes.push(format!(
+            "{}: {}: imported as a frame set; commands that need one topology cannot use it",
+            path.display(),
+            e.message
+        ));
+    }
+    let mut pieces = Vec::with_capacity(stage.meshes.len());
+    for m in stage.meshes {
+        if mismatch.is_none() {
+            pieces.push(Piece::Shared(SourceSequence {
+                name: m.name,
+                topology: m.topology,
+                positions: m.positions,
+                joints: None,
+                tags: Vec::new(),
+                labels: m.labels,
+                fps: stage.fps,
+                up_axis: stage.up_axis,
+                units: stage.units.clone(),
+                origin: path.to_path_buf(),
+                layout: SourceLayout::Usda,
+            }));
+            continue;
+        }
+        let frames = match m.varying {
+            Some(frames) => frames,
+            None => {
+                let per = (3 * m.topology.n_vertices()).max(1);
+                m.positions.chunks(per).map(|p| (m.topology.clone(), p.to_vec())).collect()
+            }
+        };
+        pieces.push(Piece::Frames(SourceFrames {
+            name: m.name,
+            frames,
+            tags: Vec::new(),
+            labels: m.labels,
+            fps: stage.fps,
+            up_axis: stage.up_axis,
+            units: stage.units.clone(),
+            origin: path.to_path_buf(),
+            layout: SourceLayout::Usda,
         }));
     }
     Ok(pieces)

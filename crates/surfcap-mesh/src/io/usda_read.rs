@@ -66,6 +66,35 @@ pub struct UsdaMesh {
     pub times: Vec<f64>,
     /// From `primvars:surfcap:synthetic.timeSamples` when present.
     pub labels: Option<Vec<FrameLabel>>,
+    /// When the faces are time-sampled and change between frames (per-frame reconstructions):
+    /// every frame's own topology and points, in time order; `topology` and `positions` then
+    /// hold the first frame only. Such a mesh imports as a frame set.
+    pub varying: Option<Vec<(Topology, Vec<f32>)>>,
+}
+
+impl UsdaStage {
+    /// The first pair of meshes whose topologies differ (or a mesh whose faces change between
+    /// frames), as the error of an import that needs one topology.
+    pub fn topology_mismatch(&self) -> Option<Error> {
+        if let Some(m) = self.meshes.iter().find(|m| m.varying.is_some()) {
+            return Some(err!(
+                TopologyMismatch,
+                "Mesh <{}>: its faces change between frames (time-sampled faceVertexCounts/faceVertexIndices): a varying-topology mesh imports as a frame set",
+                m.path
+            ));
+        }
+        let first = self.meshes.first()?;
+        self.meshes[1..].iter().find_map(|m| {
+            first.topology.first_difference(&m.topology).map(|d| {
+                err!(
+                    TopologyMismatch,
+                    "meshes <{}> and <{}> differ in topology ({d}): one subject needs one topology (import them separately, or as a frame set: -o x.frames)",
+                    first.path,
+                    m.path
+                )
+            })
+        })
+    }
 }
 
 /// Everything read from a `.usda` stage.
@@ -529,6 +558,9 @@ fn closer(open: u8) -> u8 {
 struct MeshAcc {
     counts: Option<(Vec<u32>, usize)>,
     indices: Option<(Vec<u32>, usize)>,
+    /// `faceVertexCounts.timeSamples` / `faceVertexIndices.timeSamples`: (time, value, line).
+    counts_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
+    indices_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
     points: Option<(Vec<f32>, usize)>,
     samples: Option<Vec<(f64, Vec<f32>, usize)>>,
     labels: Option<Vec<(f64, u32, usize)>>,
@@ -835,16 +867,6 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     for (m, n) in meshes.iter_mut().zip(names) {
         m.name = n;
     }
-    for m in &meshes[1..] {
-        if let Some(d) = meshes[0].topology.first_difference(&m.topology) {
-            return Err(err!(
-                TopologyMismatch,
-                "meshes <{}> and <{}> differ in topology ({d}): one subject needs one topology (import them separately)",
-                meshes[0].path,
-                m.path
-            ));
-        }
-    }
     if root_up.is_some() && up_axis == Some(UpAxis::PosY) {
         up_axis = root_up;
     }
@@ -902,6 +924,18 @@ fn property(
             (Some(m), "primvars:st") => m.st = Some((lx.tuple_array(name, 2)?, line)),
             (Some(m), "primvars:st:indices") => m.st_indices = Some(lx.int_array(name)?),
             (Some(m), "orientation") => m.left_handed = lx.string(name)? == "leftHanded",
+            (Some(m), "faceVertexCounts.timeSamples" | "faceVertexIndices.timeSamples") => {
+                let mut v = Vec::new();
+                lx.time_samples(name, |l, time, tok| {
+                    v.push((time, l.int_array(name)?, tok.line));
+                    Ok(())
+                })?;
+                if name.starts_with("faceVertexCounts") {
+                    m.counts_samples = Some(v);
+                } else {
+                    m.indices_samples = Some(v);
+                }
+            }
             (Some(m), "points.timeSamples") => {
                 let mut v = Vec::new();
                 lx.time_samples(name, |l, time, tok| {
@@ -975,14 +1009,10 @@ fn property(
 }
 
 /// Checks a mesh and turns it into a sequence: frames by time, fan-triangulated faces, labels.
-fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<String>) -> Result<UsdaMesh> {
+fn finish_mesh(path: &str, line: usize, mut m: MeshAcc, start: f64, notes: &mut Vec<String>) -> Result<UsdaMesh> {
     let missing = |what: &str| err!(Syntax, "Mesh <{path}> has no {what}").at_line(line);
-    let (counts, counts_line) =
-        m.counts.ok_or_else(|| missing("faceVertexCounts: expected an int[] of polygon sizes"))?;
-    let (indices, indices_line) =
-        m.indices.ok_or_else(|| missing("faceVertexIndices: expected an int[] of polygon corners"))?;
     // Frames.
-    let mut frames: Vec<(f64, Vec<f32>, usize)> = match (m.samples, m.points) {
+    let mut frames: Vec<(f64, Vec<f32>, usize)> = match (m.samples.take(), m.points.take()) {
         (Some(s), _) if !s.is_empty() => s,
         (_, Some((p, l))) => vec![(0.0, p, l)],
         _ => return Err(missing("points: expected `points = [...]` or `points.timeSamples = { ... }`")),
@@ -1009,6 +1039,9 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
         }
     }
     let n_points = frames[0].1.len() / 3;
+    if m.counts_samples.is_some() || m.indices_samples.is_some() {
+        return varying_mesh(path, line, m, frames, notes);
+    }
     for (t, p, l) in &frames {
         if p.len() / 3 != n_points {
             return Err(err!(
@@ -1023,6 +1056,48 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
     if n_points == 0 {
         return Err(err!(Empty, "Mesh <{path}> has no points").at_line(frames[0].2));
     }
+    let (counts, counts_line) =
+        m.counts.ok_or_else(|| missing("faceVertexCounts: expected an int[] of polygon sizes"))?;
+    let (indices, indices_line) =
+        m.indices.ok_or_else(|| missing("faceVertexIndices: expected an int[] of polygon corners"))?;
+    let topology = polygon_topology(
+        path,
+        line,
+        (&counts, counts_line),
+        (&indices, indices_line),
+        n_points,
+        m.left_handed,
+        m.st,
+        (m.st_interpolation.as_deref(), m.st_indices.as_ref()),
+        notes,
+    )?;
+    let labels = frame_labels(path, line, m.labels, &frames)?;
+    let times = frames.iter().map(|f| f.0).collect();
+    let mut positions = Vec::new();
+    for (_, p, _) in frames {
+        if positions.is_empty() {
+            positions = p;
+        } else {
+            positions.extend_from_slice(&p);
+        }
+    }
+    Ok(UsdaMesh { path: path.to_string(), name: String::new(), topology, positions, times, labels, varying: None })
+}
+
+/// The fan-triangulated topology of one set of faces (`counts`, `indices`) over `n_points`
+/// points, checked, with its UVs when `uv_source` fits the faces.
+#[allow(clippy::too_many_arguments)]
+fn polygon_topology(
+    path: &str,
+    line: usize,
+    (counts, counts_line): (&[u32], usize),
+    (indices, indices_line): (&[u32], usize),
+    n_points: usize,
+    left_handed: bool,
+    uv_source: Option<(Vec<f32>, usize)>,
+    (st_interpolation, st_indices): (Option<&str>, Option<&Vec<u32>>),
+    notes: &mut Vec<String>,
+) -> Result<Topology> {
     // Faces.
     let mut total: usize = 0;
     for (f, &c) in counts.iter().enumerate() {
@@ -1056,11 +1131,11 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
     let mut tris = Vec::new();
     let mut corners_fv = Vec::new();
     let mut base = 0usize;
-    for &c in &counts {
+    for &c in counts {
         let c = c as usize;
         for k in 1..c - 1 {
             let mut fv = [base, base + k, base + k + 1];
-            if m.left_handed {
+            if left_handed {
                 fv.swap(1, 2);
             }
             tris.push(fv.map(|i| indices[i]));
@@ -1079,11 +1154,11 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
         )
         .at_line(indices_line));
     }
-    let uv = m.st.and_then(|(st, st_line)| {
+    let uv = uv_source.and_then(|(st, st_line)| {
         let coords: Vec<[f32; 2]> = st.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-        let interp = m.st_interpolation.as_deref().unwrap_or("faceVarying");
+        let interp = st_interpolation.unwrap_or("faceVarying");
         let lookup = |i: usize| -> Option<u32> {
-            let j = match &m.st_indices {
+            let j = match st_indices {
                 Some(ix) => *ix.get(i)? as usize,
                 None => i,
             };
@@ -1106,11 +1181,20 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
         }
         corners.map(|corners| UvAtlas { coords, corners })
     });
-    let topology = Topology::new(n_points, tris, uv).map_err(|mut e: Error| {
+    Topology::new(n_points, tris, uv).map_err(|mut e: Error| {
         e.message = format!("Mesh <{path}>: {}", e.message);
         e.at_line(line)
-    })?;
-    let labels = match m.labels {
+    })
+}
+
+/// One label per frame from `primvars:surfcap:synthetic.timeSamples`, when present.
+fn frame_labels(
+    path: &str,
+    line: usize,
+    labels: Option<Vec<(f64, u32, usize)>>,
+    frames: &[(f64, Vec<f32>, usize)],
+) -> Result<Option<Vec<FrameLabel>>> {
+    Ok(match labels {
         None => None,
         Some(mut ls) => Some({
             // Sorted by time (stable: a repeated time keeps its last sample, as USD does), then
@@ -1128,17 +1212,99 @@ fn finish_mesh(path: &str, line: usize, m: MeshAcc, start: f64, notes: &mut Vec<
                 })
                 .collect::<Result<Vec<_>>>()?
         }),
-    };
-    let times = frames.iter().map(|f| f.0).collect();
-    let mut positions = Vec::new();
-    for (_, p, _) in frames {
-        if positions.is_empty() {
-            positions = p;
-        } else {
-            positions.extend_from_slice(&p);
+    })
+}
+
+/// A mesh whose faces are time-sampled: each frame's faces are the latest sample at or before
+/// its time (USD holds an array value until the next sample; before the first sample, the
+/// first, or the default value when there is one), with that frame's own point count. Frames
+/// whose faces all agree make an ordinary mesh; otherwise every frame keeps its own topology
+/// (`UsdaMesh::varying`). UVs are dropped with a note then: a face-varying `st` written once
+/// cannot fit faces that change.
+fn varying_mesh(
+    path: &str,
+    line: usize,
+    m: MeshAcc,
+    frames: Vec<(f64, Vec<f32>, usize)>,
+    notes: &mut Vec<String>,
+) -> Result<UsdaMesh> {
+    let missing = |what: &str| err!(Syntax, "Mesh <{path}> has no {what}").at_line(line);
+    let held = |samples: &Option<Vec<(f64, Vec<u32>, usize)>>,
+                default: &Option<(Vec<u32>, usize)>,
+                what: &str|
+     -> Result<Vec<(f64, Vec<u32>, usize)>> {
+        let mut v: Vec<(f64, Vec<u32>, usize)> = samples.clone().unwrap_or_default();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if v.is_empty() {
+            let (d, l) = default.clone().ok_or_else(|| missing(what))?;
+            v.push((f64::NEG_INFINITY, d, l));
         }
+        Ok(v)
+    };
+    let counts = held(&m.counts_samples, &m.counts, "faceVertexCounts: expected an int[] of polygon sizes")?;
+    let indices = held(&m.indices_samples, &m.indices, "faceVertexIndices: expected an int[] of polygon corners")?;
+    let at = |v: &[(f64, Vec<u32>, usize)], t: f64| v.partition_point(|x| x.0 <= t).saturating_sub(1);
+    let labels = frame_labels(path, line, m.labels.clone(), &frames)?;
+    let mut per_frame: Vec<(Topology, Vec<f32>)> = Vec::with_capacity(frames.len());
+    let mut built: Vec<((usize, usize, usize), Topology)> = Vec::new();
+    for (t, p, l) in &frames {
+        let n_points = p.len() / 3;
+        if n_points == 0 {
+            return Err(err!(Empty, "Mesh <{path}> has no points at time {t}").at_line(*l));
+        }
+        let key = (at(&counts, *t), at(&indices, *t), n_points);
+        let topology = match built.iter().find(|(k, _)| *k == key) {
+            Some((_, topo)) => topo.clone(),
+            None => {
+                let (c, i) = (&counts[key.0], &indices[key.1]);
+                let topo = polygon_topology(
+                    path,
+                    line,
+                    (&c.1, c.2),
+                    (&i.1, i.2),
+                    n_points,
+                    m.left_handed,
+                    None,
+                    (None, None),
+                    notes,
+                )
+                .map_err(|mut e| {
+                    e.message = format!("at time {t}: {}", e.message);
+                    e
+                })?;
+                built.push((key, topo.clone()));
+                topo
+            }
+        };
+        per_frame.push((topology, p.clone()));
     }
-    Ok(UsdaMesh { path: path.to_string(), name: String::new(), topology, positions, times, labels })
+    if m.st.is_some() {
+        notes.push(format!("primvars:st of <{path}> is dropped: its faces are time-sampled"));
+    }
+    let times: Vec<f64> = frames.iter().map(|f| f.0).collect();
+    let same = per_frame.windows(2).all(|w| w[0].0 == w[1].0);
+    let (topology, first) = per_frame[0].clone();
+    if same {
+        let positions = per_frame.into_iter().flat_map(|(_, p)| p).collect();
+        return Ok(UsdaMesh {
+            path: path.to_string(),
+            name: String::new(),
+            topology,
+            positions,
+            times,
+            labels,
+            varying: None,
+        });
+    }
+    Ok(UsdaMesh {
+        path: path.to_string(),
+        name: String::new(),
+        topology,
+        positions: first,
+        times,
+        labels,
+        varying: Some(per_frame),
+    })
 }
 
 #[cfg(test)]
@@ -1326,10 +1492,34 @@ def Xform "root" (
         );
     }
 
+    /// Faces time-sampled and changing (per-frame reconstructions): every frame keeps its own
+    /// topology, a face sample held until the next; faces sampled but never changing are one.
+    #[test]
+    fn time_sampled_faces_give_each_frame_its_topology() {
+        let text = "#usda 1.0\ndef Mesh \"m\" {\n  int[] faceVertexCounts.timeSamples = { 0: [3], 1: [3, 3] }\n  \
+                    int[] faceVertexIndices.timeSamples = { 0: [0, 1, 2], 1: [0, 1, 2, 0, 2, 3] }\n  \
+                    point3f[] points.timeSamples = {\n    0: [(0,0,0),(1,0,0),(0,1,0)],\n    \
+                    1: [(0,0,0),(1,0,0),(1,1,0),(0,1,0)],\n    2: [(0,0,1),(1,0,1),(1,1,1),(0,1,1)],\n  }\n}\n";
+        let s = parse_usda(text.as_bytes()).unwrap();
+        let frames = s.meshes[0].varying.as_ref().expect("faces change");
+        let tris: Vec<usize> = frames.iter().map(|(t, _)| t.n_triangles()).collect();
+        assert_eq!(tris, [1, 2, 2]);
+        assert_eq!(frames[2].1[2], 1.0);
+        assert!(s.topology_mismatch().unwrap().to_string().contains("imports as a frame set"));
+        let steady = text.replace("1: [3, 3] }", "1: [3] }").replace("1: [0, 1, 2, 0, 2, 3] }", "1: [0, 1, 2] }");
+        let steady = steady.replace("1: [(0,0,0),(1,0,0),(1,1,0),(0,1,0)]", "1: [(0,0,0),(1,0,0),(1,1,0)]");
+        let steady = steady.replace("2: [(0,0,1),(1,0,1),(1,1,1),(0,1,1)]", "2: [(0,0,1),(1,0,1),(1,1,1)]");
+        let s = parse_usda(steady.as_bytes()).unwrap();
+        assert!(s.meshes[0].varying.is_none() && s.meshes[0].positions.len() == 27);
+        let bad = text.replace("1: [0, 1, 2, 0, 2, 3] }", "1: [0, 1, 2, 0, 2, 9] }");
+        let e = parse_usda(bad.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("at time 1") && e.contains("index 9"), "{e}");
+    }
+
     #[test]
     fn meshes_of_different_topology_are_refused_naming_both() {
         let b = MESH.replace("  }\n}\n", "  }\n  def Mesh \"b\" {\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 2, 1]\n    point3f[] points = [(0,0,0),(1,0,0),(0,1,0)]\n  }\n}\n");
-        let e = error(&b);
+        let e = parse_usda(b.as_bytes()).unwrap().topology_mismatch().unwrap();
         assert_eq!(e.kind, ErrorKind::TopologyMismatch);
         assert!(e.message.contains("</r/a>") && e.message.contains("</r/b>"), "{e}");
         let same = b.replace("[0, 2, 1]", "[0, 1, 2]");
