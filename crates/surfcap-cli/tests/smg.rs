@@ -106,3 +106,28 @@ fn bad_queries_are_refused_by_name() {
         assert!(stderr(&o).contains(want), "{want}: {}", stderr(&o));
     }
 }
+
+/// `eval smg --input` runs Table 1 on a user's data; its options are checked by name.
+#[test]
+fn eval_smg_takes_any_input_with_its_graph_and_key_pairs() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let src = data.join("threejs_morph_animals/horse_gallop");
+    let out = d.path().join("eval");
+    let base =
+        ["eval", "smg", "--input", p(&src), "--connect", "horse_gallop:horse_gallop", "--cache-dir", p(d.path())];
+    let mut a = base.to_vec();
+    a.extend(["--pair", "horse_gallop:0,horse_gallop:15", "-o", p(&out), "--json"]);
+    let o = surfcap!(&a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["pairs"][0]["queries"], 800);
+    assert_eq!(r["form"], "shared topology");
+    assert!(r["pairs"][0]["cpu_seconds"]["mean"].as_f64().unwrap() < 0.1);
+    let bad = d.path().join("bad");
+    let mut a = base.to_vec();
+    a.extend(["--pair", "horse_gallop:0", "-o", p(&bad)]);
+    let o = surfcap!(&a);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--pair \"horse_gallop:0\": expected FROM,TO"), "{}", stderr(&o));
+}

@@ -223,6 +223,18 @@ pub enum What {
         /// triangles: the input Huang et al.'s engine is made for.
         #[arg(long, value_name = "SEED")]
         remeshed: Option<u64>,
+        /// Evaluate this subject or frame set instead of the CMU mannequin (with --connect and
+        /// --pair).
+        #[arg(long)]
+        input: Option<PathBuf>,
+        /// The higher-level graph of --input: FROM:TO sequence pairs.
+        #[arg(long = "connect", value_delimiter = ',')]
+        connect: Vec<String>,
+        /// Key-frame pairs of --input: FROM,TO as sequence:frame (repeatable).
+        #[arg(long = "pair")]
+        pairs: Vec<String>,
+        #[command(flatten)]
+        source: SourceOpts,
         #[command(flatten)]
         cache: CacheOpts,
         /// Folder for the report (smg.json).
@@ -273,8 +285,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-transfer")?;
         }
-        What::Smg { data, output, .. } => {
-            surfcap_mesh::output_path::check_not_input(output, &[data])?;
+        What::Smg { data, input, output, .. } => {
+            let mut inputs: Vec<&Path> = vec![data];
+            inputs.extend(input.as_deref());
+            surfcap_mesh::output_path::check_not_input(output, &inputs)?;
             ctx.claim_dir(output, "eval-smg")?;
         }
         What::Interchange { data, output, .. } => {
@@ -329,8 +343,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             root_motion::run(ctx, &opts, &output)
         }
-        What::Smg { data, vertices, remeshed, cache, output } => {
-            smg::run(ctx, &data, vertices, remeshed, &cache, &output)
+        What::Smg { data, vertices, remeshed, input, connect, pairs, source, cache, output } => {
+            let input = input.map(|i| smg::Input { path: i, connect, pairs, source });
+            smg::run(ctx, &data, vertices, remeshed, input, &cache, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)

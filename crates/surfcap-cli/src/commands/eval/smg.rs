@@ -1,40 +1,89 @@
 //! `surfcap eval smg`: Huang et al. 2009's Table 1 for the surface motion graph on the
-//! CMU-driven mannequin (`surfcap_eval::smg_eval` computes it; this command writes `smg.json`
+//! CMU-driven mannequin, or on any subject or frame set (`--input` with `--connect` and `--pair`) (`surfcap_eval::smg_eval` computes it; this command writes `smg.json`
 //! and prints one row per key-frame pair beside the paper's own figures).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+use surfcap_mesh::import::{ImportedData, open_any};
 
 use surfcap_eval::smg_eval::{
     LOCOMOTION_CONNECTIONS, LOCOMOTION_KEY_PAIRS, SmgEvalOptions, locomotion_subject, smg_eval,
 };
 use surfcap_smg::motion_frames::MotionFrames;
 
+/// A user's subject or frame set to evaluate instead of the mannequin.
+pub struct Input {
+    pub path: PathBuf,
+    pub connect: Vec<String>,
+    pub pairs: Vec<String>,
+    pub source: crate::options::SourceOpts,
+}
+
+/// `A<sep>B` split at its last `sep`.
+fn split_pair(text: &str, sep: char, option: &str, expected: &str) -> anyhow::Result<(String, String)> {
+    text.rsplit_once(sep)
+        .map(|(a, b)| (a.trim().to_string(), b.trim().to_string()))
+        .filter(|(a, b)| !a.is_empty() && !b.is_empty())
+        .ok_or_else(|| anyhow::anyhow!("{option} {text:?}: expected {expected}"))
+}
+
 pub fn run(
     ctx: &crate::Ctx,
     data: &Path,
     vertices: usize,
     remeshed: Option<u64>,
+    input: Option<Input>,
     cache: &crate::options::CacheOpts,
     output: &Path,
 ) -> anyhow::Result<()> {
-    let subject = locomotion_subject(data, vertices)?;
     let bar = crate::progress::Bar::new(ctx);
+    // The subject: the CMU mannequin, or the user's; a frame set is used as it is.
+    let data = match &input {
+        None => ImportedData::Subject(surfcap_mesh::import::Imported {
+            subject: locomotion_subject(data, vertices)?,
+            notes: Vec::new(),
+            sources: Vec::new(),
+        }),
+        Some(i) => open_any(&i.path, &i.source.to_import(None)?, &bar)?,
+    };
     // Either the shared topology, or every frame re-meshed on its own (issue 17 item 1): the
     // same motion without any correspondence between frames.
-    let (frames, form) = match remeshed {
-        None => (MotionFrames::from_subject(&subject), "shared topology".to_string()),
-        Some(seed) => {
+    let (frames, form) = match (data, remeshed) {
+        (ImportedData::FrameSet(f), _) => (MotionFrames::from_frame_set(&f.frame_set), "frame set".to_string()),
+        (ImportedData::Subject(s), None) => (MotionFrames::from_subject(&s.subject), "shared topology".to_string()),
+        (ImportedData::Subject(s), Some(seed)) => {
             let opts = surfcap_synth::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
-            let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&subject, &opts, &bar)?;
+            let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&s.subject, &opts, &bar)?;
             (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"))
         }
     };
+    let (connections, pairs): (Vec<(String, String)>, Vec<(String, String)>) = match &input {
+        None => (
+            LOCOMOTION_CONNECTIONS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
+            LOCOMOTION_KEY_PAIRS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
+        ),
+        Some(i) => {
+            if i.connect.is_empty() || i.pairs.is_empty() {
+                anyhow::bail!("--input needs --connect FROM:TO and --pair FROM,TO (each sequence:frame)");
+            }
+            let c =
+                i.connect.iter().map(|t| split_pair(t, ':', "--connect", "FROM:TO")).collect::<anyhow::Result<_>>()?;
+            let p = i
+                .pairs
+                .iter()
+                .map(|t| split_pair(t, ',', "--pair", "FROM,TO (each sequence:frame)"))
+                .collect::<anyhow::Result<_>>()?;
+            (c, p)
+        }
+    };
+    let connections: Vec<(&str, &str)> = connections.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
+    let pairs: Vec<(&str, &str)> = pairs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
     let store = surfcap_mesh::derived_cache::DerivedCache::new(cache.dir());
     let r = smg_eval(
         &frames,
         &form,
-        &LOCOMOTION_CONNECTIONS,
-        &LOCOMOTION_KEY_PAIRS,
+        &connections,
+        &pairs,
         &SmgEvalOptions::default(),
         Some((&store, cache.no_cache)),
         &bar,
