@@ -57,7 +57,9 @@ pub fn run(
             (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"))
         }
     };
-    let (connections, pairs): (Vec<(String, String)>, Vec<(String, String)>) = match &input {
+    // Sequence pairs of the higher-level graph, and key-frame pairs.
+    type Pairs = Vec<(String, String)>;
+    let (connections, pairs): (Pairs, Pairs) = match &input {
         None => (
             LOCOMOTION_CONNECTIONS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
             LOCOMOTION_KEY_PAIRS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
