@@ -77,6 +77,10 @@ pub struct SmgEvalOptions {
     /// eq. 6's weights per subject unit and per frame.
     pub w_d: f64,
     pub w_t: f64,
+    /// Transitions per connection (1: the paper's) and the least distance between their
+    /// switches, frames.
+    pub per_connection: usize,
+    pub separation: usize,
 }
 
 impl Default for SmgEvalOptions {
@@ -88,6 +92,8 @@ impl Default for SmgEvalOptions {
             histogram: HistogramParams::default(),
             w_d: 1.0 / 0.3,
             w_t: 1.0 / 10.0,
+            per_connection: 1,
+            separation: 15,
         }
     }
 }
@@ -151,6 +157,8 @@ pub struct TransitionRow {
 #[derive(Debug, Clone, Serialize)]
 pub struct SmgEval {
     pub form: String,
+    /// Transitions per connection (1: the paper's).
+    pub per_connection: usize,
     pub frames: usize,
     pub vertices_min: usize,
     pub vertices_max: usize,
@@ -189,9 +197,12 @@ fn transition_smoothness(m: &MotionFrames, g: &SurfaceMotionGraph, centroids: &[
         .iter()
         .map(|e| {
             let EdgeKind::Transition { from_sequence, to_sequence, .. } = e.kind else { return None };
-            let (_, _, t) = g.transitions.iter().find(|(x, y, _)| *x == from_sequence && *y == to_sequence)?;
-            let (x0, y0) = (m.sequences[from_sequence].start + t.window_x, m.sequences[to_sequence].start + t.window_y);
             let (last, first) = (g.nodes[e.from], g.nodes[e.to]);
+            let (sx, sy) = (m.sequences[from_sequence].start, m.sequences[to_sequence].start);
+            let (_, _, t) = g.transitions.iter().find(|(x, y, t)| {
+                *x == from_sequence && *y == to_sequence && sx + t.last_x == last && sy + t.first_y == first
+            })?;
+            let (x0, y0) = (sx + t.window_x, sy + t.window_y);
             // Y moved on the ground so that the centroids meet at the switch.
             let mut shift = [0.0; 3];
             for k in 0..3 {
@@ -244,6 +255,8 @@ pub fn smg_eval(
         connections: &conns,
         key_frames: &key_frames,
         lengths: opts.lengths.clone(),
+        per_connection: opts.per_connection,
+        separation: opts.separation,
     })
     .map_err(|e| Error::Unsuitable(e.to_string()))?;
     let centroids = frames.centroids();
@@ -301,6 +314,7 @@ pub fn smg_eval(
     let counts: Vec<usize> = frames.positions.iter().map(|p| p.len() / 3).collect();
     Ok(SmgEval {
         form: form.into(),
+        per_connection: opts.per_connection,
         frames: frames.n_frames(),
         vertices_min: counts.iter().copied().min().unwrap_or(0),
         vertices_max: counts.iter().copied().max().unwrap_or(0),

@@ -48,4 +48,26 @@ fn locomotion_paths_meet_distance_and_time_targets() {
     let w = &r.pairs[0];
     assert!(w.distance_error.max < 1.0 && w.distance_error.rms < 0.5, "{:?}", w.distance_error);
     assert!(w.time_error_frames.max <= 36.0, "{:?}", w.time_error_frames);
+    // Three transitions per connection (the extension): more entry points, more loops in reach;
+    // the walk pair does at least as well (the paper's single transitions are among them).
+    let opts3 = SmgEvalOptions { per_connection: 3, ..opts };
+    let r3 = smg_eval(
+        &frames,
+        "shared topology",
+        &LOCOMOTION_CONNECTIONS,
+        &LOCOMOTION_KEY_PAIRS,
+        &opts3,
+        None,
+        &surfcap_mesh::NoProgress,
+    )
+    .unwrap();
+    assert!(r3.graph_edges > r.graph_edges && r3.transitions.len() > r.transitions.len());
+    let w3 = &r3.pairs[0];
+    println!("3 per connection: distance {:?}, time {:?}", w3.distance_error, w3.time_error_frames);
+    assert!(
+        w3.distance_error.rms < 0.5 && w3.time_error_frames.max <= 36.0,
+        "{:?} {:?}",
+        w3.distance_error,
+        w3.time_error_frames
+    );
 }

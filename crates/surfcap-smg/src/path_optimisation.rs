@@ -505,6 +505,8 @@ mod tests {
             connections: &[(0, 0), (0, 1)],
             key_frames: &[0, 29],
             lengths: 3..=3,
+            per_connection: 1,
+            separation: 0,
         })
         .unwrap();
         (g, ground)

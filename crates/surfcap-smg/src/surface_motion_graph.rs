@@ -4,7 +4,8 @@
 //! loop in a cyclic motion), and the key frames. The lower level is built from it:
 //! 1. every sequence is an edge between its first and last frames;
 //! 2. each higher-level edge `X -> Y` gets its optimal transition (eq. 5,
-//!    [`crate::temporal_shape_similarity::optimal_transition`]);
+//!    [`crate::temporal_shape_similarity::optimal_transition`]), or its `per_connection` best
+//!    (an extension, see [`crate::temporal_shape_similarity::best_transitions`]);
 //! 3. the transitions' ends and the key frames become nodes, splitting the sequence edges into
 //!    sub-sequences, and the transitions are inserted as edges.
 //!
@@ -22,7 +23,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 use crate::error::{Error, Result};
-use crate::temporal_shape_similarity::{Transition, optimal_transition};
+use crate::temporal_shape_similarity::{Transition, best_transitions};
 
 /// What one lower-level edge is.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -90,6 +91,11 @@ pub struct GraphInput<'a> {
     pub key_frames: &'a [usize],
     /// Window lengths searched for the transitions.
     pub lengths: std::ops::RangeInclusive<usize>,
+    /// Transitions per connection: 1 is the paper's; more is an extension
+    /// ([`crate::temporal_shape_similarity::best_transitions`]), their switches at least
+    /// `separation` frames apart.
+    pub per_connection: usize,
+    pub separation: usize,
 }
 
 /// Builds the lower-level graph (see the module documentation).
@@ -121,13 +127,22 @@ pub fn build_graph(input: &GraphInput<'_>) -> Result<SurfaceMotionGraph> {
                 input.sequences.len()
             )));
         };
-        match optimal_transition(input.similarity, frames, sx.clone(), sy.clone(), input.lengths.clone())? {
-            Some(t) => {
-                nodes.push(sx.start + t.last_x);
-                nodes.push(sy.start + t.first_y);
-                transitions.push((x, y, t));
-            }
-            None => missing.push((x, y)),
+        let found = best_transitions(
+            input.similarity,
+            frames,
+            sx.clone(),
+            sy.clone(),
+            input.lengths.clone(),
+            input.per_connection,
+            input.separation,
+        )?;
+        if found.is_empty() {
+            missing.push((x, y));
+        }
+        for t in found {
+            nodes.push(sx.start + t.last_x);
+            nodes.push(sy.start + t.first_y);
+            transitions.push((x, y, t));
         }
     }
     nodes.sort_unstable();
@@ -191,6 +206,8 @@ mod tests {
             connections: &[(0, 1)],
             key_frames: &[2],
             lengths: 3..=3,
+            per_connection: 1,
+            separation: 0,
         })
         .unwrap();
         // Nodes: 0, 9, 10, 19, key 2, transition 4 -> 18 (Y's first frame 8 + 10).
@@ -207,6 +224,8 @@ mod tests {
             connections: &[(0, 2)],
             key_frames: &[],
             lengths: 3..=3,
+            per_connection: 1,
+            separation: 0,
         })
         .unwrap_err();
         assert!(e.to_string().contains("below 2"), "{e}");

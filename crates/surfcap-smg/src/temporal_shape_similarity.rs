@@ -107,6 +107,81 @@ pub fn optimal_transition(
     Ok(best)
 }
 
+/// The `k` best transitions from X to Y: the optimal one of eq. 5, then repeatedly the best
+/// window whose switch lies at least `separation` frames away, in X or in Y, from every switch
+/// already chosen. `k = 1` is the paper's single transition per connection
+/// ([`optimal_transition`]'s answer). More than one is an extension, not in Huang et al.: with
+/// one transition per connection a loop can lie where no path between the key frames passes
+/// (measured on the CMU mannequin: `surfcap eval smg`), and a second entry point reaches it.
+pub fn best_transitions(
+    s: &[f64],
+    frames: usize,
+    x: Range<usize>,
+    y: Range<usize>,
+    lengths: std::ops::RangeInclusive<usize>,
+    k: usize,
+    separation: usize,
+) -> Result<Vec<Transition>> {
+    if k <= 1 {
+        return Ok(optimal_transition(s, frames, x, y, lengths)?.into_iter().collect());
+    }
+    // Validates the arguments and finds the first as eq. 5 does.
+    let Some(first) = optimal_transition(s, frames, x.clone(), y.clone(), lengths.clone())? else {
+        return Ok(Vec::new());
+    };
+    // The best window for each switch (last X frame, first Y frame), ties as eq. 5 breaks them.
+    let same = x == y;
+    let mut best: std::collections::BTreeMap<(usize, usize), Transition> = std::collections::BTreeMap::new();
+    for n in lengths {
+        if n > x.len() || n > y.len() {
+            break;
+        }
+        let w = window_weights(n);
+        let half = n.div_ceil(2);
+        for i0 in x.start..=x.end - n {
+            for j0 in y.start..=y.end - n {
+                if same && j0 + n > i0 {
+                    continue;
+                }
+                let cost = window_similarity(s, frames, i0, j0, &w);
+                let t = Transition {
+                    window_x: i0 - x.start,
+                    window_y: j0 - y.start,
+                    length: n,
+                    cost,
+                    last_x: i0 - x.start + half - 1,
+                    first_y: j0 - y.start + half,
+                };
+                let e = best.entry((t.last_x, t.first_y)).or_insert(t);
+                if cost < e.cost {
+                    *e = t;
+                }
+            }
+        }
+    }
+    let mut chosen = vec![first];
+    let mut candidates: Vec<Transition> = best.into_values().collect();
+    candidates.sort_by(|a, b| {
+        a.cost
+            .total_cmp(&b.cost)
+            .then(a.length.cmp(&b.length))
+            .then(a.window_x.cmp(&b.window_x))
+            .then(a.window_y.cmp(&b.window_y))
+    });
+    for t in candidates {
+        if chosen.len() >= k {
+            break;
+        }
+        let apart = chosen
+            .iter()
+            .all(|c| c.last_x.abs_diff(t.last_x) >= separation || c.first_y.abs_diff(t.first_y) >= separation);
+        if apart {
+            chosen.push(t);
+        }
+    }
+    Ok(chosen)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -142,6 +217,14 @@ mod tests {
         let t = optimal_transition(&s, f, 0..10, 0..10, 3..=3).unwrap().unwrap();
         assert!(t.window_y + 3 <= t.window_x && t.cost == 1.0, "{t:?}");
         assert!(optimal_transition(&s, f, 0..4, 0..4, 3..=3).unwrap().is_none(), "no two disjoint windows");
+        // k best: the optimal one first, then switches at least 4 frames away.
+        let ts = best_transitions(&s, f, 0..10, 10..20, 3..=5, 3, 4).unwrap();
+        assert_eq!(ts[0], optimal_transition(&s, f, 0..10, 10..20, 3..=5).unwrap().unwrap());
+        assert_eq!(ts.len(), 3);
+        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+            assert!(ts[a].last_x.abs_diff(ts[b].last_x) >= 4 || ts[a].first_y.abs_diff(ts[b].first_y) >= 4);
+        }
+        assert_eq!(best_transitions(&s, f, 0..10, 10..20, 3..=5, 1, 4).unwrap(), vec![ts[0]]);
         assert!(optimal_transition(&s, f, 0..10, 10..21, 3..=3).unwrap_err().to_string().contains("within 0..20"));
     }
 }

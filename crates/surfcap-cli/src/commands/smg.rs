@@ -51,6 +51,14 @@ pub struct QueryArgs {
     /// Transition windows searched, in frames: MIN-MAX (eq. 5's adaptive window).
     #[arg(long, default_value = "3-30")]
     pub windows: String,
+    /// Transitions per connection: 1 is the paper's (eq. 5's single best); more adds the next
+    /// best windows whose switches lie at least --separation frames apart (an extension: more
+    /// entry points, so loops are reachable from more key frames).
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
+    pub transitions: usize,
+    /// Least distance between the switches of one connection's transitions, frames.
+    #[arg(long, default_value_t = 15, value_parser = crate::options::count)]
+    pub separation: usize,
     /// Voxels along the frames' largest extent (the shape histograms' lattice).
     #[arg(long, default_value_t = 64, value_parser = |s: &str| crate::options::whole_in(s, 8, 512))]
     pub resolution: usize,
@@ -132,6 +140,8 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         connections: &connections,
         key_frames: &[from, to],
         lengths,
+        per_connection: a.transitions,
+        separation: a.separation,
     })?;
     for (x, y) in &graph.missing {
         eprintln!(

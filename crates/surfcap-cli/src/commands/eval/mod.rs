@@ -223,6 +223,10 @@ pub enum What {
         /// triangles: the input Huang et al.'s engine is made for.
         #[arg(long, value_name = "SEED")]
         remeshed: Option<u64>,
+        /// Transitions per connection: 1 is the paper's; more adds the next best windows whose
+        /// switches lie at least 15 frames apart (an extension).
+        #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
+        transitions: usize,
         /// Evaluate this subject or frame set instead of the CMU mannequin (with --connect and
         /// --pair).
         #[arg(long)]
@@ -343,9 +347,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             root_motion::run(ctx, &opts, &output)
         }
-        What::Smg { data, vertices, remeshed, input, connect, pairs, source, cache, output } => {
+        What::Smg { data, vertices, remeshed, transitions, input, connect, pairs, source, cache, output } => {
             let input = input.map(|i| smg::Input { path: i, connect, pairs, source });
-            smg::run(ctx, &data, vertices, remeshed, input, &cache, &output)
+            smg::run(ctx, &data, vertices, remeshed, transitions, input, &cache, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)

@@ -32,6 +32,7 @@ pub fn run(
     data: &Path,
     vertices: usize,
     remeshed: Option<u64>,
+    transitions: usize,
     input: Option<Input>,
     cache: &crate::options::CacheOpts,
     output: &Path,
@@ -86,15 +87,16 @@ pub fn run(
         &form,
         &connections,
         &pairs,
-        &SmgEvalOptions::default(),
+        &SmgEvalOptions { per_connection: transitions, ..SmgEvalOptions::default() },
         Some((&store, cache.no_cache)),
         &bar,
     )?;
     let (report, path) = super::save_report(output, "smg.json", &r, "written", &[])?;
     ctx.result(&report, || {
         println!(
-            "surface motion graph ({}): {} frames of {}-{} vertices, {} nodes, {} edges; similarity {:.1} s{}",
+            "surface motion graph ({}, {} transition(s) per connection): {} frames of {}-{} vertices, {} nodes, {} edges; similarity {:.1} s{}",
             r.form,
+            r.per_connection,
             r.frames,
             r.vertices_min,
             r.vertices_max,
