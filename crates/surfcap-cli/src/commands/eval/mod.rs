@@ -349,7 +349,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         What::Smg { data, vertices, remeshed, transitions, input, connect, pairs, source, cache, output } => {
             let input = input.map(|i| smg::Input { path: i, connect, pairs, source });
-            smg::run(ctx, &data, vertices, remeshed, transitions, input, &cache, &output)
+            smg::run(ctx, &data, smg::Options { vertices, remeshed, transitions }, input, &cache, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)

@@ -27,12 +27,17 @@ fn split_pair(text: &str, sep: char, option: &str, expected: &str) -> anyhow::Re
         .ok_or_else(|| anyhow::anyhow!("{option} {text:?}: expected {expected}"))
 }
 
+/// The evaluation's choices: the mannequin's vertices, re-meshing, transitions per connection.
+pub struct Options {
+    pub vertices: usize,
+    pub remeshed: Option<u64>,
+    pub transitions: usize,
+}
+
 pub fn run(
     ctx: &crate::Ctx,
     data: &Path,
-    vertices: usize,
-    remeshed: Option<u64>,
-    transitions: usize,
+    Options { vertices, remeshed, transitions }: Options,
     input: Option<Input>,
     cache: &crate::options::CacheOpts,
     output: &Path,
