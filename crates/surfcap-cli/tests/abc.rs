@@ -154,3 +154,42 @@ fn a_z_up_subject_gets_a_transform_onto_y_and_an_interpolation_keeps_its_labels(
         .collect();
     assert_eq!(labels, [0, 1, 1, 1, 0]);
 }
+
+/// A frame set (every frame re-meshed on its own) as Alembic: a `PolyMesh` of heterogeneous
+/// topology that the reference library reads frame by frame, and surfcap imports back as the
+/// same frame set.
+#[test]
+fn a_frame_set_exports_as_heterogeneous_topology_and_comes_back() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let set = d.path().join("horse.frames");
+    let src = data.join("threejs_morph_animals/horse_gallop");
+    let o = surfcap!(&["--quiet", "remesh-frames", p(&src), "--seed", "4", "--frames", "5", "-o", p(&set)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.path().join("horse.abc");
+    let o = surfcap!(&["--quiet", "export", p(&set), "--format", "abc", "-o", p(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = surfcap_testkit::read_abc(&out);
+    let m = &a["meshes"][0];
+    assert_eq!(m["topology_variance"], "kHeterogenousTopology");
+    let original = surfcap_mesh::frame_set_cache::read_frame_set(&set, &surfcap_mesh::NoProgress).unwrap();
+    let frames = original.sequences()[0].frames();
+    assert_eq!(m["samples"], frames.len());
+    for (k, f) in frames.iter().enumerate() {
+        let clockwise: Vec<u64> =
+            f.topology().triangles().iter().flat_map(|t| [t[2], t[1], t[0]]).map(u64::from).collect();
+        let ix: Vec<u64> = m["face_indices"][k].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+        assert!(ix == clockwise, "frame {k}: faces");
+        let got: Vec<f32> = m["positions"][k].as_array().unwrap().iter().flat_map(floats).map(|x| x as f32).collect();
+        assert!(got == f.positions(), "frame {k}: positions");
+    }
+    let back = d.path().join("back.frames");
+    let o = surfcap!(&["--quiet", "import", p(&out), "-o", p(&back)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let back = surfcap_mesh::frame_set_cache::read_frame_set(&back, &surfcap_mesh::NoProgress).unwrap();
+    assert!(back.sequences()[0].frames() == frames, "the frame set comes back exactly");
+    assert_eq!((back.fps, back.up_axis, &back.units), (original.fps, original.up_axis, &original.units));
+    // A format of one topology refuses it by name.
+    let o = surfcap!(&["export", p(&set), "--format", "glb", "-o", p(&d.path().join("x.glb"))]);
+    assert!(!o.status.success() && stderr(&o).contains("expected abc or obj"), "{}", stderr(&o));
+}

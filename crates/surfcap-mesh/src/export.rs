@@ -7,6 +7,7 @@ use serde_json::json;
 
 use crate::atomic::{write_dir, write_file};
 use crate::error::Result;
+use crate::frame_set::FrameSet;
 use crate::io::{glb, obj, pc2, ply, shared_layout};
 use crate::progress::Progress;
 use crate::subject::Subject;
@@ -116,6 +117,71 @@ fn write_json(path: &Path, v: &serde_json::Value) -> Result<()> {
 /// Where the sidecar of a `.glb` goes: `out.glb` -> `out.json`.
 pub fn glb_sidecar_path(out: &Path) -> PathBuf {
     out.with_extension("json")
+}
+
+/// The sidecar of a frame set: what the formats cannot keep, as for a subject.
+pub fn frame_set_sidecar(set: &FrameSet) -> serde_json::Value {
+    json!({
+        "frame_set": set.name,
+        "fps": set.fps,
+        "up_axis": set.up_axis.as_str(),
+        "units": set.units,
+        "vertices": set.vertex_count_range(),
+        "triangles": set.triangle_count_range(),
+        "sequences": set.sequences().iter().map(|s| json!({
+            "name": s.name,
+            "file_name": safe_name(&s.name),
+            "frames": s.n_frames(),
+            "tags": s.tags,
+            "frame_labels": s.labels(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Writes a frame set (every frame its own topology) to `out`: `.abc` (a `PolyMesh` of
+/// heterogeneous topology per sequence) or `obj` (a folder per sequence of `frame_NNNNN.obj`,
+/// as per-frame reconstructions are exchanged); the other formats hold one topology and refuse
+/// it. Returns the paths written.
+pub fn export_frame_set(
+    set: &FrameSet,
+    format: ExportFormat,
+    out: &Path,
+    opts: ExportOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<PathBuf>> {
+    let meta = frame_set_sidecar(set);
+    match format {
+        ExportFormat::Abc => {
+            progress.start("writing abc", 1);
+            write_file(out, |w| crate::io::abc::write_abc_frame_set(w, set))?;
+            let side = glb_sidecar_path(out);
+            write_json(&side, &meta)?;
+            progress.finish();
+            Ok(vec![out.to_path_buf(), side])
+        }
+        ExportFormat::Obj => {
+            progress.start("writing obj frames", set.frame_count() as u64);
+            write_dir(out, format.output_kind(), opts.force, |dir| {
+                for s in set.sequences() {
+                    let sd = dir.join(safe_name(&s.name));
+                    for (f, frame) in s.frames().iter().enumerate() {
+                        let p = sd.join(format!("frame_{f:05}.obj"));
+                        write_file(&p, |w| obj::write_obj(w, frame.topology(), frame.positions()))?;
+                        progress.advance(1);
+                    }
+                }
+                write_json(&dir.join("frames.json"), &meta)
+            })?;
+            progress.finish();
+            Ok(vec![out.to_path_buf()])
+        }
+        other => Err(crate::Error::new(
+            crate::ErrorKind::Unsupported,
+            format!(
+                "a frame set (every frame its own topology) cannot be written as {other:?}, which holds one topology: expected abc or obj"
+            ),
+        )),
+    }
 }
 
 /// Writes the subject to `out` and returns the paths written (outputs, then the sidecar).

@@ -33,6 +33,21 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
+    // A frame set (every frame its own topology) goes to the formats that hold that: abc, obj.
+    if surfcap_mesh::frame_set_cache::is_frame_set(&a.subject) {
+        if !a.sequences.is_empty() {
+            anyhow::bail!("--sequence: a frame set is exported whole");
+        }
+        let bar = crate::progress::Bar::new(ctx);
+        let set = surfcap_mesh::frame_set_cache::read_frame_set(&a.subject, &bar)?;
+        let written = surfcap_mesh::export::export_frame_set(&set, a.format, &a.output, ctx.export_options(), &bar)
+            .with_context(|| format!("exporting {:?}", set.name))?;
+        ctx.result(
+            &json!({ "written": written, "frames": set.frame_count(), "sequences": set.sequences().len() }),
+            || ctx.wrote(&written),
+        );
+        return Ok(());
+    }
     let s = open(ctx, &a.subject, &a.source)?.select(&a.sequences)?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&s, a.format, &a.output, ExportOptions { ply_ascii: a.ascii, ..ctx.export_options() }, &bar)

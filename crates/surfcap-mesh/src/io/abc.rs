@@ -46,7 +46,8 @@
 use std::io::{self, Write};
 
 use super::ogawa_write::{Child, OgawaWriter, write_ogawa};
-use crate::subject::{FrameLabel, Sequence, Subject, UpAxis};
+use crate::frame_set::FrameSet;
+use crate::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
 use crate::topology::Topology;
 
 /// The plain-old-data types of Alembic's `PlainOldDataType` that surfcap writes.
@@ -333,16 +334,31 @@ fn object_header(out: &mut Vec<u8>, name: &str, metadata: &str, md: &mut MetaDat
     }
 }
 
+/// One sequence as the writer sees it: each frame's topology and points, and its labels.
+struct SequenceView<'a> {
+    name: &'a str,
+    frames: Vec<(&'a Topology, &'a [f32])>,
+    labels: &'a [FrameLabel],
+}
+
+impl SequenceView<'_> {
+    /// Whether some frame's topology differs from the one before (a frame set's sequence).
+    fn varying(&self) -> bool {
+        self.frames.windows(2).any(|w| !std::ptr::eq(w[0].0, w[1].0) && w[0].0 != w[1].0)
+    }
+}
+
 /// The `.geom` compound of one sequence's mesh.
 fn polymesh_properties(
     o: &mut OgawaWriter<'_>,
     md: &mut MetaDataMap,
-    topo: &Topology,
-    seq: &Sequence,
+    seq: &SequenceView<'_>,
     hash: &mut ObjectHash,
 ) -> io::Result<Child> {
-    let frames = seq.n_frames() as u32;
+    let frames = seq.frames.len() as u32;
+    let topo = seq.frames[0].0;
     let n = topo.n_vertices();
+    let varying = seq.varying();
     let homogeneous_samples = |kind, pod, extent, metadata, constant| PropertyHeader {
         name: String::new(),
         kind,
@@ -357,9 +373,8 @@ fn polymesh_properties(
     let mut props = Vec::new();
 
     // .selfBnds: each frame's box, min then max, as f64.
-    let mut bounds = Vec::with_capacity(seq.n_frames());
-    for f in 0..seq.n_frames() {
-        let p = seq.frame(f);
+    let mut bounds = Vec::with_capacity(seq.frames.len());
+    for &(_, p) in &seq.frames {
         let mut b =
             [f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
         for v in p.chunks_exact(3) {
@@ -380,42 +395,76 @@ fn polymesh_properties(
     ));
 
     // P: one sample per frame, streamed.
-    let mut points = Vec::with_capacity(seq.n_frames());
-    for f in 0..seq.n_frames() {
-        let p = seq.frame(f);
+    let mut points = Vec::with_capacity(seq.frames.len());
+    for &(_, p) in &seq.frames {
         let bytes = if o.writing() { le_bytes(p.iter().copied(), f32::to_le_bytes) } else { vec![0; p.len() * 4] };
         points.push(sample(o, &bytes, hash)?);
     }
     let g = array_group(o, &points)?;
-    let scalar_like = n == 1;
+    let same_count = seq.frames.iter().all(|(t, _)| t.n_vertices() == n);
+    let scalar_like = same_count && n == 1;
     props.push((
         g,
         PropertyHeader {
             name: "P".into(),
+            homogeneous: same_count,
             ..homogeneous_samples(Kind::Array { scalar_like }, Pod::Float32, 3, MD_POINT, false)
         },
     ));
 
-    // Topology, stored once; faces reversed to Alembic's clockwise order.
-    let tris = topo.triangles();
-    let indices = le_bytes(tris.iter().flat_map(|t| [t[2], t[1], t[0]]), |v| (v as i32).to_le_bytes());
-    let s = sample(o, &indices, hash)?;
-    let g = array_group(o, &[s])?;
+    // Topology, faces reversed to Alembic's clockwise order: stored once when every frame
+    // shares it; for a frame set's sequence one sample per frame (heterogeneous topology), a
+    // frame whose faces equal the previous frame's referring to the blocks already written.
+    let face_blocks = |o: &mut OgawaWriter<'_>, t: &Topology, hash: &mut ObjectHash| -> io::Result<(Child, Child)> {
+        let tris = t.triangles();
+        let indices = le_bytes(tris.iter().flat_map(|t| [t[2], t[1], t[0]]), |v| (v as i32).to_le_bytes());
+        let counts = le_bytes(tris.iter().map(|_| 3i32), i32::to_le_bytes);
+        Ok((sample(o, &indices, hash)?, sample(o, &counts, hash)?))
+    };
+    let mut index_samples = Vec::new();
+    let mut count_samples = Vec::new();
+    let mut previous: Option<(&Topology, (Child, Child))> = None;
+    for &(t, _) in if varying { &seq.frames[..] } else { &seq.frames[..1] } {
+        let blocks = match previous {
+            Some((p, b)) if std::ptr::eq(p, t) || p.triangles() == t.triangles() => {
+                hash.add(&key(o, &[]));
+                b
+            }
+            _ => face_blocks(o, t, hash)?,
+        };
+        index_samples.push(blocks.0);
+        count_samples.push(blocks.1);
+        previous = Some((t, blocks));
+    }
+    let same_faces = seq.frames.iter().all(|(t, _)| t.n_triangles() == topo.n_triangles());
+    let g = array_group(o, &index_samples)?;
     props.push((
         g,
         PropertyHeader {
             name: ".faceIndices".into(),
-            ..homogeneous_samples(Kind::Array { scalar_like: tris.len() * 3 == 1 }, Pod::Int32, 1, "", true)
+            homogeneous: same_faces,
+            ..homogeneous_samples(
+                Kind::Array { scalar_like: same_faces && topo.n_triangles() * 3 == 1 },
+                Pod::Int32,
+                1,
+                "",
+                !varying,
+            )
         },
     ));
-    let counts = le_bytes(tris.iter().map(|_| 3i32), i32::to_le_bytes);
-    let s = sample(o, &counts, hash)?;
-    let g = array_group(o, &[s])?;
+    let g = array_group(o, &count_samples)?;
     props.push((
         g,
         PropertyHeader {
             name: ".faceCounts".into(),
-            ..homogeneous_samples(Kind::Array { scalar_like: tris.len() == 1 }, Pod::Int32, 1, "", true)
+            homogeneous: same_faces,
+            ..homogeneous_samples(
+                Kind::Array { scalar_like: same_faces && topo.n_triangles() == 1 },
+                Pod::Int32,
+                1,
+                "",
+                !varying,
+            )
         },
     ));
 
@@ -454,8 +503,9 @@ fn polymesh_properties(
     )?;
     props.push((arb, PropertyHeader::compound(".arbGeomParams", "")));
 
-    // uv: indexed, face-varying, corners in the written (reversed) order.
-    if let Some(uv) = topo.uv() {
+    // uv: indexed, face-varying, corners in the written (reversed) order; not for a frame set's
+    // sequence (one atlas cannot fit faces that change).
+    if let Some(uv) = topo.uv().filter(|_| !varying) {
         let vals = le_bytes(uv.coords.iter().flatten().copied(), f32::to_le_bytes);
         let s = sample(o, &vals, hash)?;
         let gv = array_group(o, &[s])?;
@@ -540,23 +590,30 @@ fn xform_properties(
     compound_group(o, &props, md)
 }
 
+/// What the archive says of the whole animation.
+struct ArchiveInfo<'a> {
+    name: &'a str,
+    fps: f64,
+    up_axis: UpAxis,
+    units: &'a Units,
+}
+
 /// Emits the whole archive; returns the root group.
-fn emit(o: &mut OgawaWriter<'_>, subject: &Subject) -> io::Result<Child> {
+fn emit(o: &mut OgawaWriter<'_>, info: &ArchiveInfo<'_>, sequences: &[SequenceView<'_>]) -> io::Result<Child> {
     let mut md = MetaDataMap::default();
     let version = o.data(&[&0i32.to_le_bytes()])?;
     let library = o.data(&[&LIBRARY_VERSION.to_le_bytes()])?;
-    let topo = subject.topology();
-    let matrix = up_matrix(subject.up_axis);
+    let matrix = up_matrix(info.up_axis);
     let mut top_children = Vec::new();
     let mut top_headers = Vec::new();
     let mut top_hashes = Vec::new();
     let mut taken = Vec::new();
     let mut max_samples = 0u32;
-    for seq in subject.sequences() {
-        max_samples = max_samples.max(seq.n_frames() as u32);
+    for seq in sequences {
+        max_samples = max_samples.max(seq.frames.len() as u32);
         // The mesh object: its properties (one compound `.geom`), no children.
         let mut mesh_hash = ObjectHash::new();
-        let geom = polymesh_properties(o, &mut md, topo, seq, &mut mesh_hash)?;
+        let geom = polymesh_properties(o, &mut md, seq, &mut mesh_hash)?;
         let mesh_props = compound_group(o, &[(geom, PropertyHeader::compound(".geom", MD_POLYMESH))], &mut md)?;
         let mesh_hashes = if o.writing() { mesh_hash.finish(&[]) } else { [0; 32] };
         let mesh_data = o.data(&[&mesh_hashes])?;
@@ -570,7 +627,7 @@ fn emit(o: &mut OgawaWriter<'_>, subject: &Subject) -> io::Result<Child> {
         let xform_hashes = if o.writing() { xform_hash.finish(&[mesh_hashes]) } else { [0; 32] };
         let xform_data = o.data(&[&headers, &xform_hashes])?;
         top_children.push(o.group(&[xform_props, mesh, xform_data])?);
-        object_header(&mut top_headers, &object_name(&seq.name, &mut taken), MD_XFORM_OBJECT, &mut md);
+        object_header(&mut top_headers, &object_name(seq.name, &mut taken), MD_XFORM_OBJECT, &mut md);
         top_hashes.push(xform_hashes);
     }
     let top_hash = if o.writing() { ObjectHash::new().finish(&top_hashes) } else { [0; 32] };
@@ -583,13 +640,13 @@ fn emit(o: &mut OgawaWriter<'_>, subject: &Subject) -> io::Result<Child> {
     let archive_md = format!(
         "_ai_Application=surfcap {};_ai_Description={};surfcap_fps={};surfcap_up_axis={};surfcap_units={}",
         env!("CARGO_PKG_VERSION"),
-        metadata_value(&subject.name),
-        subject.fps,
-        subject.up_axis.as_str(),
-        metadata_value(&subject.units.name),
+        metadata_value(info.name),
+        info.fps,
+        info.up_axis.as_str(),
+        metadata_value(&info.units.name),
     );
     // The units' scale, when they have one: their name alone may not say it ("0.5 m").
-    let archive_md = match subject.units.metres_per_unit {
+    let archive_md = match info.units.metres_per_unit {
         Some(m) => format!("{archive_md};surfcap_metres_per_unit={m}"),
         None => archive_md,
     };
@@ -598,7 +655,7 @@ fn emit(o: &mut OgawaWriter<'_>, subject: &Subject) -> io::Result<Child> {
     // from time 0. Each: the most samples a property has with it, the time per cycle, the
     // stored times.
     let mut times = Vec::new();
-    for (max, per_cycle) in [(u32::from(!subject.sequences().is_empty()), 1.0), (max_samples, 1.0 / subject.fps)] {
+    for (max, per_cycle) in [(u32::from(!sequences.is_empty()), 1.0), (max_samples, 1.0 / info.fps)] {
         times.extend_from_slice(&max.to_le_bytes());
         times.extend_from_slice(&f64::to_le_bytes(per_cycle));
         times.extend_from_slice(&1u32.to_le_bytes());
@@ -609,12 +666,44 @@ fn emit(o: &mut OgawaWriter<'_>, subject: &Subject) -> io::Result<Child> {
     o.group(&[version, library, top, archive_md, times, md_block])
 }
 
+fn write_views(w: &mut dyn Write, info: &ArchiveInfo<'_>, views: &[SequenceView<'_>]) -> io::Result<()> {
+    if !(info.fps.is_finite() && info.fps > 0.0) {
+        return Err(io::Error::other(format!("frame rate {}: expected a positive number", info.fps)));
+    }
+    write_ogawa(w, |o| emit(o, info, views))
+}
+
 /// Writes `subject` as an Alembic (Ogawa) archive.
 pub fn write_abc(w: &mut dyn Write, subject: &Subject) -> io::Result<()> {
-    if !(subject.fps.is_finite() && subject.fps > 0.0) {
-        return Err(io::Error::other(format!("frame rate {}: expected a positive number", subject.fps)));
-    }
-    write_ogawa(w, |o| emit(o, subject))
+    let topo = subject.topology();
+    let views: Vec<SequenceView<'_>> = subject
+        .sequences()
+        .iter()
+        .map(|q: &Sequence| SequenceView {
+            name: &q.name,
+            frames: (0..q.n_frames()).map(|f| (topo, q.frame(f))).collect(),
+            labels: &q.labels,
+        })
+        .collect();
+    let info = ArchiveInfo { name: &subject.name, fps: subject.fps, up_axis: subject.up_axis, units: &subject.units };
+    write_views(w, &info, &views)
+}
+
+/// Writes a frame set (every frame its own topology) as an Alembic archive: each sequence a
+/// `PolyMesh` of heterogeneous topology, faces and points sampled per frame, as per-frame
+/// reconstructions are exchanged; surfcap's import reads it back as a frame set.
+pub fn write_abc_frame_set(w: &mut dyn Write, set: &FrameSet) -> io::Result<()> {
+    let views: Vec<SequenceView<'_>> = set
+        .sequences()
+        .iter()
+        .map(|q| SequenceView {
+            name: &q.name,
+            frames: q.frames().iter().map(|f| (f.topology(), f.positions())).collect(),
+            labels: q.labels(),
+        })
+        .collect();
+    let info = ArchiveInfo { name: &set.name, fps: set.fps, up_axis: set.up_axis, units: &set.units };
+    write_views(w, &info, &views)
 }
 
 #[cfg(test)]
