@@ -65,7 +65,7 @@ fn a_folder_of_frames_with_their_own_topologies_imports_as_a_frame_set_and_subje
                    shared topology";
     for args in [
         vec!["distance", p(&frames), "-o", "d.npy"],
-        vec!["export", p(&frames), "--format", "glb", "-o", "x.glb"],
+        vec!["export", p(&dir), "--fps", "25", "--format", "glb", "-o", "x.glb"],
         vec!["interpolate", p(&frames), "--from", "capture:0", "--to", "capture:2", "-o", "i.glb"],
         vec!["distance", p(&dir), "--fps", "25", "-o", "d.npy"],
     ] {
@@ -79,6 +79,15 @@ fn a_folder_of_frames_with_their_own_topologies_imports_as_a_frame_set_and_subje
         assert!(e.contains(refusal) && e.contains("Huang et al.'s surface motion graph"), "{args:?}: {e}");
         assert!(!out.exists());
     }
+    // A .frames folder exports to the formats that hold per-frame topology, and only to them.
+    let out = tmp.path().join("x.glb");
+    let o = surfcap!(&["export", p(&frames), "--format", "glb", "-o", p(&out)]);
+    assert!(
+        stderr(&o).contains("cannot be written as Glb, which holds one topology: expected abc or obj"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
 
     // A subject written as a frame set keeps its one topology, and reads back as that subject.
     let same = tmp.path().join("same");
