@@ -217,12 +217,7 @@ fn transition_smoothness(m: &MotionFrames, g: &SurfaceMotionGraph, centroids: &[
 }
 
 fn key_frame(m: &MotionFrames, text: &str) -> Result<usize> {
-    let (s, f) = text
-        .rsplit_once(':')
-        .ok_or_else(|| Error::parameter("--pairs", Some(text.into()), "expected sequence:frame"))?;
-    let f: usize =
-        f.parse().map_err(|_| Error::parameter("--pairs", Some(text.into()), "expected a whole frame number"))?;
-    m.frame(s, f).map_err(|e| Error::Unsuitable(e.to_string()))
+    m.resolve(text).map_err(|e| Error::parameter("--pair", None, e.to_string()))
 }
 
 /// Runs the evaluation on `frames` (see the module documentation). `connections` and `pairs`

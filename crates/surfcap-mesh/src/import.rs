@@ -241,75 +241,10 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
                 })
                 .collect())
         }
-        "usda" | "usd" | "usdc" => {
-            // `.usd` may hold text or the binary crate format; the reader refuses the latter with
-            // the command that converts it.
-            let stage = crate::io::usda_read::read_usda(path)?;
-            for n in &stage.notes {
-                progress.note(&format!("{}: {n}", path.display()));
-            }
-            if let Some(e) = stage.topology_mismatch() {
-                return Err(e.in_file(path));
-            }
-            Ok(stage
-                .meshes
-                .into_iter()
-                .map(|m| SourceSequence {
-                    name: m.name,
-                    topology: m.topology,
-                    positions: m.positions,
-                    joints: None,
-                    tags: Vec::new(),
-                    labels: m.labels,
-                    fps: stage.fps,
-                    up_axis: stage.up_axis,
-                    units: stage.units.clone(),
-                    origin: path.to_path_buf(),
-                    layout: SourceLayout::Usda,
-                })
-                .collect())
-        }
-        "abc" => {
-            let archive = crate::io::abc_read::read_abc(path)?;
-            for n in &archive.notes {
-                progress.note(&format!("{}: {n}", path.display()));
-            }
-            let mut out = Vec::with_capacity(archive.meshes.len());
-            for m in archive.meshes {
-                // A mesh whose topology changes between samples is a frame set, not a sequence.
-                if let Some((frame, faces, was)) = m.topology_change() {
-                    return Err(err!(
-                        Unsupported,
-                        "{}: the topology changes at frame {frame} ({faces} faces, was {was}): a varying-topology mesh imports as a frame set",
-                        m.path
-                    )
-                    .in_file(path));
-                }
-                let (topology, positions) = match m.frames {
-                    crate::io::abc_read::AbcFrames::Constant { topology, positions } => (topology, positions),
-                    // Stored as varying but every frame has the same topology: one after all.
-                    crate::io::abc_read::AbcFrames::Varying { frames } => {
-                        let Some(first) = frames.first() else { continue };
-                        let positions = frames.iter().flat_map(|f| f.positions.iter().copied()).collect();
-                        (first.topology.clone(), positions)
-                    }
-                };
-                out.push(SourceSequence {
-                    name: m.name,
-                    topology,
-                    positions,
-                    joints: None,
-                    tags: Vec::new(),
-                    labels: m.labels,
-                    fps: archive.fps,
-                    up_axis: archive.up_axis,
-                    units: archive.units.clone(),
-                    origin: path.to_path_buf(),
-                    layout: SourceLayout::Alembic,
-                });
-            }
-            Ok(out)
-        }
+        // `.usd` may hold text or the binary crate format; the reader refuses the latter with the
+        // command that converts it.
+        "usda" | "usd" | "usdc" => subject_only(usda_pieces(path, progress)?),
+        "abc" => subject_only(alembic_pieces(path, progress)?),
         _ => Err(err!(
             Unsupported,
             "unknown file type {ext:?}: expected .obj, .ply, .glb, .usda, .abc, surfcap.toml or a folder (a .pc2 or .npy needs a template: list it in surfcap.toml)"
@@ -566,11 +501,16 @@ fn frame_difference(frames: &[MeshFrame]) -> Option<String> {
 /// saying so.
 fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
-    if ext == "abc" && !path.is_dir() {
-        return alembic_pieces(path, progress, notes);
-    }
-    if matches!(ext.as_str(), "usda" | "usd") && !path.is_dir() {
-        return usda_pieces(path, progress, notes);
+    let file_pieces = match ext.as_str() {
+        "abc" if !path.is_dir() => Some(alembic_pieces(path, progress)?),
+        "usda" | "usd" if !path.is_dir() => Some(usda_pieces(path, progress)?),
+        _ => None,
+    };
+    if let Some((pieces, frame_set)) = file_pieces {
+        if let Some(why) = frame_set {
+            notes.push(format!("{why}: imported as a frame set; commands that need one topology cannot use it"));
+        }
+        return Ok(pieces);
     }
     let first_try = read_source(path, progress);
     let e = match first_try {
@@ -639,23 +579,44 @@ fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>
     })])
 }
 
+/// Pieces read from one file, and why they are a frame set rather than a subject's sequences
+/// (the file and what varies), when they are.
+type FilePieces = (Vec<Piece>, Option<String>);
+
+/// A file's pieces as a subject's sequences (the readers of [`read_source`], which build one
+/// subject): a file that holds a frame set is refused, saying why and where it can go.
+fn subject_only((pieces, frame_set): FilePieces) -> Result<Vec<SourceSequence>> {
+    if let Some(why) = frame_set {
+        return Err(err!(TopologyMismatch, "{why}: a varying-topology source imports as a frame set (-o x.frames)"));
+    }
+    Ok(pieces
+        .into_iter()
+        .filter_map(|p| match p {
+            Piece::Shared(s) => Some(s),
+            Piece::Frames(_) => None,
+        })
+        .collect())
+}
+
 /// An Alembic archive's meshes as pieces: a mesh of constant topology is a sequence, one whose
 /// topology changes between samples (per-frame reconstructions) a sequence of frames of their
 /// own, which makes the import a frame set.
-fn alembic_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
+fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
     let archive = crate::io::abc_read::read_abc(path)?;
     for n in &archive.notes {
         progress.note(&format!("{}: {n}", path.display()));
     }
     let mut pieces = Vec::with_capacity(archive.meshes.len());
+    let mut frame_set = None;
     for m in archive.meshes {
         if let Some((frame, faces, was)) = m.topology_change() {
-            notes.push(format!(
-                "{} {}: the topology changes at frame {frame} ({faces} faces, was {was}): imported as a frame set; \
-                 commands that need one topology cannot use it",
-                path.display(),
-                m.path
-            ));
+            frame_set.get_or_insert_with(|| {
+                format!(
+                    "{} {}: the topology changes at frame {frame} ({faces} faces, was {was})",
+                    path.display(),
+                    m.path
+                )
+            });
             let crate::io::abc_read::AbcFrames::Varying { frames } = m.frames else {
                 return Err(err!(Syntax, "{}: a topology change in a mesh of constant topology", m.path).in_file(path));
             };
@@ -694,25 +655,18 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>)
             layout: SourceLayout::Alembic,
         }));
     }
-    Ok(pieces)
+    Ok((pieces, frame_set))
 }
 
 /// A USD stage's meshes as pieces: one subject's sequences when they share one topology;
 /// otherwise (meshes of different topology, or faces time-sampled so that they change between
 /// frames) every mesh a sequence of frames with their own topology, which makes a frame set.
-fn usda_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) -> Result<Vec<Piece>> {
+fn usda_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
     let stage = crate::io::usda_read::read_usda(path)?;
     for n in &stage.notes {
         progress.note(&format!("{}: {n}", path.display()));
     }
-    let mismatch = stage.topology_mismatch();
-    if let Some(e) = &mismatch {
-        notes.push(format!(
-            "{}: {}: imported as a frame set; commands that need one topology cannot use it",
-            path.display(),
-            e.message
-        ));
-    }
+    let mismatch = stage.topology_mismatch().map(|e| format!("{}: {}", path.display(), e.message));
     let mut pieces = Vec::with_capacity(stage.meshes.len());
     for m in stage.meshes {
         if mismatch.is_none() {
@@ -750,7 +704,7 @@ fn usda_pieces(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>) ->
             layout: SourceLayout::Usda,
         }));
     }
-    Ok(pieces)
+    Ok((pieces, mismatch))
 }
 
 /// A frame set's sequences as pieces (to merge a `.frames` folder with more data).

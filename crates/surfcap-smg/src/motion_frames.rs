@@ -98,6 +98,16 @@ impl MotionFrames {
         Ok(r.start + frame)
     }
 
+    /// The global frame written `sequence:frame`.
+    pub fn resolve(&self, spec: &str) -> Result<usize> {
+        let (s, f) =
+            spec.rsplit_once(':').ok_or_else(|| Error::Invalid(format!("{spec:?}: expected sequence:frame")))?;
+        let f: usize = f
+            .parse()
+            .map_err(|_| Error::Invalid(format!("{spec:?}: expected a whole frame number after the colon")))?;
+        self.frame(s, f)
+    }
+
     /// `sequence:frame` of a global frame.
     pub fn name_of(&self, global: usize) -> String {
         match self.sequences.iter().position(|r| r.contains(&global)) {
@@ -211,6 +221,9 @@ mod tests {
         assert_eq!(m.name_of(1), "walk:1");
         assert!(m.frame("walk", 2).unwrap_err().to_string().contains("below 2"));
         assert!(m.frame("run", 0).unwrap_err().to_string().contains("one of walk"));
+        assert_eq!(m.resolve("walk:1").unwrap(), 1);
+        assert!(m.resolve("walk").unwrap_err().to_string().contains("expected sequence:frame"));
+        assert!(m.resolve("walk:x").unwrap_err().to_string().contains("whole frame number"));
         let g = m.ground_centroids();
         // Up +y: ground coordinates are (z, x); frame 1 is frame 0 moved 2 along x.
         assert!((g[1][1] - g[0][1] - 2.0).abs() < 1e-12 && (g[1][0] - g[0][0]).abs() < 1e-12);

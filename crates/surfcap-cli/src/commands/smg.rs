@@ -126,11 +126,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         let (x, y) = c.split_once(':').with_context(|| format!("--connect {c:?}: expected FROM:TO"))?;
         connections.push((seq(x)?, seq(y)?));
     }
-    let key = |spec: &str, option: &str| -> anyhow::Result<usize> {
-        let (s, f) = spec.rsplit_once(':').with_context(|| format!("{option} {spec:?}: expected sequence:frame"))?;
-        let f: usize = f.parse().with_context(|| format!("{option} {spec:?}: expected a whole frame number"))?;
-        frames.frame(s, f).with_context(|| format!("{option} {spec:?}"))
-    };
+    let key = |spec: &str, option: &str| frames.resolve(spec).with_context(|| format!("{option} {spec:?}"));
     let (from, to) = (key(&a.from, "--from")?, key(&a.to, "--to")?);
     let ground = frames.ground_centroids();
     let graph = build_graph(&GraphInput {

@@ -298,14 +298,7 @@ fn object_name(name: &str, taken: &mut Vec<String>) -> String {
     if s.is_empty() {
         s.push('_');
     }
-    let mut unique = s.clone();
-    let mut k = 1;
-    while taken.contains(&unique) {
-        unique = format!("{s}_{k}");
-        k += 1;
-    }
-    taken.push(unique.clone());
-    unique
+    super::unique_name(s, taken)
 }
 
 /// Metadata values cannot hold Alembic's separators `;` and `=`: they are percent-encoded (with

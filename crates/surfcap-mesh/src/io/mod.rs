@@ -14,3 +14,16 @@ pub mod regular_file;
 pub mod shared_layout;
 pub mod usda;
 pub mod usda_read;
+
+/// `base`, or `base_1`, `base_2`, ... : the first not in `taken`, which it joins (names of
+/// sibling objects in the USD and Alembic writers).
+pub(crate) fn unique_name(base: String, taken: &mut Vec<String>) -> String {
+    let mut unique = base.clone();
+    let mut k = 1;
+    while taken.contains(&unique) {
+        unique = format!("{base}_{k}");
+        k += 1;
+    }
+    taken.push(unique.clone());
+    unique
+}

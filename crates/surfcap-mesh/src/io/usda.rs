@@ -24,14 +24,7 @@ fn prim_name(name: &str, taken: &mut Vec<String>) -> String {
     if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
         s.insert(0, '_');
     }
-    let mut unique = s.clone();
-    let mut k = 1;
-    while taken.contains(&unique) {
-        unique = format!("{s}_{k}");
-        k += 1;
-    }
-    taken.push(unique.clone());
-    unique
+    super::unique_name(s, taken)
 }
 
 /// The rotation (column-vector convention, rows) that turns `up` onto +Y, or `None` when USD
