@@ -26,6 +26,15 @@
 //! G of n` is added (valid for every playable path: a used group needs a used neighbour) and the
 //! ILP solved again, until every used loop is reachable.
 //!
+//! Targets within a tolerance (an extension, beyond the paper; [`PathQuery::tolerance`]): eq. 6
+//! trades transition cost against the constraint errors, so its optimum may miss a target that
+//! some path meets. With a tolerance (1% of the distance and 1 frame by default), each sign
+//! combination's ILP also bounds the errors (`0 <= sd (d(n) - d_T) <= 1% d_T`, `0 <= st (t(n) -
+//! t_T) <= 1`), and the least eq. 6 cost among the paths within the tolerance is taken. When no
+//! walk has one, the paper's optimum is returned with the reason ([`Unreachable`]): the target
+//! is shorter than every path, asks for a speed outside what the loops travel, there is no loop
+//! to repeat, or the loops' lengths do not combine to within the tolerance.
+//!
 //! Composition (4.2.3): the walk's edges, each loop's repetitions inserted where it first meets
 //! the path built so far (loops attached through loops after their hosts). The frames follow;
 //! at each transition the next sequence is moved on the ground so that its first frame's
@@ -52,12 +61,85 @@ pub struct PathQuery {
     pub w_t: f64,
     /// The most walks (and loops) enumerated before the query is refused as too large.
     pub max_paths: usize,
+    /// Meet the targets within this tolerance where the graph allows it (an extension; `None`:
+    /// the paper's eq. 6 optimum).
+    pub tolerance: Option<Tolerance>,
+}
+
+/// How close a path must come to the targets to meet them.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Tolerance {
+    /// Of the target distance (0.01: 1%).
+    pub distance_relative: f64,
+    /// Frames.
+    pub frames: f64,
+}
+
+impl Default for Tolerance {
+    /// 1% of the distance and 1 frame (issue 17's goal).
+    fn default() -> Self {
+        Tolerance { distance_relative: 0.01, frames: 1.0 }
+    }
+}
+
+/// Why no path of the graph meets a query's targets within its tolerance.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum Unreachable {
+    /// Every path between the key frames takes more frames than the target allows.
+    TooShort { shortest_frames: f64 },
+    /// Every path travels farther than the target allows (its shortest walk already does).
+    TooNear { shortest_distance: f64 },
+    /// No loop can be repeated between the key frames: every path has a fixed length.
+    NoLoop,
+    /// The target asks for a speed (units per frame over what the walk leaves to the loops)
+    /// above what any loop travels.
+    TooFast { needed: f64, fastest: f64 },
+    /// ... or below: there is no loop slow enough (no in-place loop).
+    TooSlow { needed: f64, slowest: f64 },
+    /// The speed is in range, but no whole number of repetitions of the loops lands within the
+    /// tolerance.
+    Granularity,
+}
+
+impl std::fmt::Display for Unreachable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unreachable::TooShort { shortest_frames } => {
+                write!(f, "too short: every path takes at least {shortest_frames} frames")
+            }
+            Unreachable::TooNear { shortest_distance } => {
+                write!(f, "too near: every path travels at least {shortest_distance:.3} units")
+            }
+            Unreachable::NoLoop => write!(f, "no loop between the key frames: every path has a fixed length"),
+            Unreachable::TooFast { needed, fastest } => write!(
+                f,
+                "too fast: needs {needed:.4} units per frame, the fastest loop travels {fastest:.4}"
+            ),
+            Unreachable::TooSlow { needed, slowest } => write!(
+                f,
+                "too slow: needs {needed:.4} units per frame, the slowest loop travels {slowest:.4} (no in-place loop)"
+            ),
+            Unreachable::Granularity => {
+                write!(f, "no whole number of loop repetitions lands within the tolerance")
+            }
+        }
+    }
 }
 
 impl PathQuery {
     /// A query with the paper's weights (`w_d = 1/0.3` per unit, for subjects in metres).
     pub fn new(start: usize, end: usize, distance: f64, frames: f64) -> Self {
-        PathQuery { start, end, distance, frames, w_d: 1.0 / 0.3, w_t: 1.0 / 10.0, max_paths: 100_000 }
+        PathQuery {
+            start,
+            end,
+            distance,
+            frames,
+            w_d: 1.0 / 0.3,
+            w_t: 1.0 / 10.0,
+            max_paths: 100_000,
+            tolerance: None,
+        }
     }
 }
 
@@ -84,6 +166,9 @@ pub struct PathSolution {
     pub walks: usize,
     pub loops_in_graph: usize,
     pub ilp_solves: usize,
+    /// With a tolerance: whether the path meets it, and if not why no path can.
+    pub within_tolerance: Option<bool>,
+    pub unreachable: Option<Unreachable>,
 }
 
 /// Totals of a list of edges.
@@ -256,6 +341,7 @@ fn solve_signs(
     sd: f64,
     st: f64,
     bound: f64,
+    within: Option<(f64, f64)>,
     solves: &mut usize,
 ) -> Result<Option<Vec<u64>>> {
     let mut cuts: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
@@ -274,8 +360,12 @@ fn solve_signs(
         let s = lin(&|l| l.2, base.2);
         let objective = s + sd * q.w_d * d.clone() + st * q.w_t * t.clone();
         let mut model = vars.minimise(objective).using(microlp);
-        model = model.with((sd * d).geq(0.0));
-        model = model.with((st * t).geq(0.0));
+        model = model.with((sd * d.clone()).geq(0.0));
+        model = model.with((st * t.clone()).geq(0.0));
+        if let Some((tol_d, tol_t)) = within {
+            model = model.with((sd * d).leq(tol_d));
+            model = model.with((st * t).leq(tol_t));
+        }
         for (group, adjacent) in &cuts {
             let mut lhs = Expression::from(0.0);
             for &i in group {
@@ -361,32 +451,36 @@ pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery)
         )));
     }
     let all_loops = cycles(g, &out, q.max_paths)?;
-    // (cost, walk, loops with their repetitions)
-    type Candidate = (f64, Vec<usize>, Vec<(Vec<usize>, u64)>);
-    let mut best: Option<Candidate> = None;
+    // Each walk with its attached loops: (walk, loops, base totals, per-loop totals, bound).
+    let prepared: Vec<Prepared> = all_walks
+        .iter()
+        .map(|walk| {
+            let mut walk_nodes = nodes_of(g, walk);
+            walk_nodes.push(s);
+            let a = attach(g, &walk_nodes, &all_loops);
+            let (d0, t0, s0) = totals(g, walk);
+            let base = (d0, t0 + 1.0, s0);
+            let per_loop: Vec<(f64, f64, f64)> = a.loops.iter().map(|&c| totals(g, &all_loops[c])).collect();
+            // Repetitions beyond this cannot help: every loop adds at least one frame.
+            let bound = (4.0 * (q.frames + base.1)).ceil() + 10.0;
+            Prepared { walk, a, base, per_loop, bound }
+        })
+        .collect();
     let mut solves = 0;
-    for walk in &all_walks {
-        let mut walk_nodes = nodes_of(g, walk);
-        walk_nodes.push(s);
-        let a = attach(g, &walk_nodes, &all_loops);
-        let (d0, t0, s0) = totals(g, walk);
-        let base = (d0, t0 + 1.0, s0);
-        let per_loop: Vec<(f64, f64, f64)> = a.loops.iter().map(|&c| totals(g, &all_loops[c])).collect();
-        // Repetitions beyond this cannot help: every loop adds at least one frame.
-        let bound = (4.0 * (q.frames + base.1)).ceil() + 10.0;
-        for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-            let Some(n) = solve_signs(base, &per_loop, &a, q, sd, st, bound, &mut solves)? else { continue };
-            let d = base.0 + n.iter().zip(&per_loop).map(|(&k, l)| k as f64 * l.0).sum::<f64>();
-            let tt = base.1 + n.iter().zip(&per_loop).map(|(&k, l)| k as f64 * l.1).sum::<f64>();
-            let cs = base.2 + n.iter().zip(&per_loop).map(|(&k, l)| k as f64 * l.2).sum::<f64>();
-            let cost = cs + q.w_d * (d - q.distance).abs() + q.w_t * (tt - q.frames).abs();
-            if best.as_ref().is_none_or(|b| cost < b.0) {
-                let loops =
-                    a.loops.iter().zip(&n).filter(|&(_, &k)| k > 0).map(|(&c, &k)| (all_loops[c].clone(), k)).collect();
-                best = Some((cost, walk.clone(), loops));
+    let (best, within_tolerance, unreachable) = match q.tolerance {
+        None => (best_path(&prepared, &all_loops, q, None, &mut solves)?, None, None),
+        Some(tol) => {
+            let within = (tol.distance_relative * q.distance, tol.frames);
+            match best_path(&prepared, &all_loops, q, Some(within), &mut solves)? {
+                Some(b) => (Some(b), Some(true), None),
+                None => (
+                    best_path(&prepared, &all_loops, q, None, &mut solves)?,
+                    Some(false),
+                    Some(unreachable_reason(&prepared, q, within)),
+                ),
             }
         }
-    }
+    };
     let Some((cost, walk, loops)) = best else {
         return Err(Error::Invalid("no sub-problem was feasible".into()));
     };
@@ -430,7 +524,103 @@ pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery)
         walks: all_walks.len(),
         loops_in_graph: all_loops.len(),
         ilp_solves: solves,
+        within_tolerance,
+        unreachable,
     })
+}
+
+/// A walk ready for its ILPs: its attached loops, `(d, t, C_s)` of the walk (with the start
+/// frame) and of each loop, and the repetition bound.
+struct Prepared<'a> {
+    walk: &'a Vec<usize>,
+    a: Attached,
+    base: (f64, f64, f64),
+    per_loop: Vec<(f64, f64, f64)>,
+    bound: f64,
+}
+
+/// (cost, walk, loops with their repetitions)
+type Candidate = (f64, Vec<usize>, Vec<(Vec<usize>, u64)>);
+
+/// The least eq. 6 cost over every walk and sign combination (eq. 20), the errors bounded by
+/// `within` (distance, frames) when given; `None` when no sub-problem is feasible.
+fn best_path(
+    prepared: &[Prepared],
+    all_loops: &[Vec<usize>],
+    q: &PathQuery,
+    within: Option<(f64, f64)>,
+    solves: &mut usize,
+) -> Result<Option<Candidate>> {
+    let mut best: Option<Candidate> = None;
+    for p in prepared {
+        let (base, per_loop) = (p.base, &p.per_loop);
+        for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let Some(n) = solve_signs(base, per_loop, &p.a, q, sd, st, p.bound, within, solves)? else { continue };
+            let sum = |f: &dyn Fn(&(f64, f64, f64)) -> f64| n.iter().zip(per_loop).map(|(&k, l)| k as f64 * f(l)).sum::<f64>();
+            let d = base.0 + sum(&|l| l.0);
+            let tt = base.1 + sum(&|l| l.1);
+            let cs = base.2 + sum(&|l| l.2);
+            let cost = cs + q.w_d * (d - q.distance).abs() + q.w_t * (tt - q.frames).abs();
+            if best.as_ref().is_none_or(|b| cost < b.0) {
+                let loops = p
+                    .a
+                    .loops
+                    .iter()
+                    .zip(&n)
+                    .filter(|&(_, &k)| k > 0)
+                    .map(|(&c, &k)| (all_loops[c].clone(), k))
+                    .collect();
+                best = Some((cost, p.walk.clone(), loops));
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// Why no walk meets the targets within `(tol_d, tol_t)`: checked in order, the length and
+/// distance of the shortest walks, then for each walk the speed its loops must make up
+/// (`(d_T - d0) / (t_T - t0)`, units per frame) against the range of its loops' speeds (every
+/// repetition count mixes them, so any reachable target lies in that cone up to the tolerance).
+/// When some walk's cone holds the target, only the integer repetitions stand in the way.
+fn unreachable_reason(prepared: &[Prepared], q: &PathQuery, (tol_d, tol_t): (f64, f64)) -> Unreachable {
+    let shortest_frames = prepared.iter().map(|p| p.base.1).fold(f64::INFINITY, f64::min);
+    if shortest_frames > q.frames + tol_t {
+        return Unreachable::TooShort { shortest_frames };
+    }
+    let shortest_distance = prepared.iter().map(|p| p.base.0).fold(f64::INFINITY, f64::min);
+    if shortest_distance > q.distance + tol_d {
+        return Unreachable::TooNear { shortest_distance };
+    }
+    if prepared.iter().all(|p| p.per_loop.is_empty()) {
+        return Unreachable::NoLoop;
+    }
+    // (needed, fastest) over the walks whose target asks more speed than their loops make, and
+    // (needed, slowest) over those asking less; a walk in neither is kept from the target only
+    // by whole repetitions.
+    let (mut too_fast, mut too_slow): (Option<(f64, f64)>, Option<(f64, f64)>) = (None, None);
+    for p in prepared.iter().filter(|p| !p.per_loop.is_empty()) {
+        let (dd, dt) = (q.distance - p.base.0, q.frames - p.base.1);
+        let speeds = p.per_loop.iter().map(|l| l.0 / l.1);
+        let fastest = speeds.clone().fold(f64::NEG_INFINITY, f64::max);
+        let slowest = speeds.fold(f64::INFINITY, f64::min);
+        // With the tolerance, the loops must cover dd +- tol_d in dt +- tol_t frames.
+        let (lo, hi) = ((dd - tol_d) / (dt + tol_t).max(1e-9), (dd + tol_d) / (dt - tol_t).max(1e-9));
+        if dt + tol_t <= 0.0 {
+            continue;
+        }
+        if lo > fastest {
+            too_fast = Some(too_fast.map_or((lo, fastest), |(n, f)| (n.min(lo), f.max(fastest))));
+        } else if hi < slowest {
+            too_slow = Some(too_slow.map_or((hi, slowest), |(n, s)| (n.max(hi), s.min(slowest))));
+        } else {
+            return Unreachable::Granularity;
+        }
+    }
+    match (too_fast, too_slow) {
+        (Some((needed, fastest)), _) => Unreachable::TooFast { needed, fastest },
+        (None, Some((needed, slowest))) => Unreachable::TooSlow { needed, slowest },
+        (None, None) => Unreachable::Granularity,
+    }
 }
 
 /// One played frame: its positions and its own triangles.
@@ -582,6 +772,49 @@ mod tests {
         assert!(p.loops.iter().all(|(_, k)| *k >= 1), "{reps:?}");
         assert!((p.distance - 4.0).abs() < 1e-9 && p.frames.len() == 8, "{} {}", p.distance, p.frames.len());
         assert!(p.ilp_solves > 4, "a cut was added: {} solves", p.ilp_solves);
+    }
+
+    /// With weights that make the loop not worth its transition cost, the paper's optimum misses
+    /// the targets; with a tolerance the loop is played and the targets met.
+    #[test]
+    fn a_tolerance_meets_targets_the_paper_cost_trades_away() {
+        let (g, ground) = graph();
+        let q = PathQuery { w_d: 0.01, w_t: 0.001, ..PathQuery::new(0, 29, 2.7, 37.0) };
+        let paper = optimise_path(&g, &ground, &q).unwrap();
+        assert!(paper.loops.is_empty() && paper.frames.len() == 27, "{:?}", paper.loops);
+        assert_eq!((paper.within_tolerance, paper.unreachable.clone()), (None, None));
+        let q = PathQuery { tolerance: Some(Tolerance::default()), ..q };
+        let p = optimise_path(&g, &ground, &q).unwrap();
+        assert_eq!(p.within_tolerance, Some(true));
+        assert_eq!(p.loops.iter().map(|l| l.1).collect::<Vec<_>>(), vec![1]);
+        assert!(p.distance_error <= 0.027 && p.time_error <= 1.0, "{} {}", p.distance_error, p.time_error);
+        assert!(p.cost > paper.cost, "the tolerance costs realism: {} vs {}", p.cost, paper.cost);
+    }
+
+    /// Each reason a target cannot be met: the walk alone is 27 frames and 1.8 units, the loop
+    /// adds 10 frames and 0.9 units (0.09 per frame).
+    #[test]
+    fn unreachable_targets_say_why() {
+        let (g, ground) = graph();
+        let reason = |d: f64, t: f64| {
+            let q = PathQuery { tolerance: Some(Tolerance::default()), ..PathQuery::new(0, 29, d, t) };
+            let p = optimise_path(&g, &ground, &q).unwrap();
+            assert_eq!(p.within_tolerance, Some(p.unreachable.is_none()));
+            p.unreachable
+        };
+        assert_eq!(reason(1.8, 27.0), None);
+        assert_eq!(reason(4.5, 57.0), None);
+        assert_eq!(reason(1.0, 10.0), Some(Unreachable::TooShort { shortest_frames: 27.0 }));
+        assert!(matches!(reason(1.0, 40.0), Some(Unreachable::TooNear { .. })));
+        assert!(matches!(reason(10.0, 40.0), Some(Unreachable::TooFast { fastest, .. }) if (fastest - 0.09).abs() < 1e-9));
+        assert!(matches!(reason(1.8, 100.0), Some(Unreachable::TooSlow { slowest, .. }) if (slowest - 0.09).abs() < 1e-9));
+        // One and a half loops: the right speed, but no whole number of repetitions.
+        assert_eq!(reason(3.15, 42.0), Some(Unreachable::Granularity));
+        // A walk without loops: from the stand's first frame to its last.
+        let stand = g.nodes.iter().position(|&f| f == 29).unwrap();
+        let first = g.edges.iter().find(|e| e.to == stand).map(|e| g.nodes[e.from]).unwrap();
+        let q = PathQuery { tolerance: Some(Tolerance::default()), ..PathQuery::new(first, 29, 3.0, 60.0) };
+        assert_eq!(optimise_path(&g, &ground, &q).unwrap().unreachable, Some(Unreachable::NoLoop));
     }
 
     #[test]
