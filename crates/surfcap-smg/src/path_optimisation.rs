@@ -102,6 +102,21 @@ pub enum Unreachable {
     Granularity,
 }
 
+impl Unreachable {
+    /// The reason's name, as in reports (`too_short`, `too_near`, `no_loop`, `too_fast`,
+    /// `too_slow`, `granularity`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Unreachable::TooShort { .. } => "too_short",
+            Unreachable::TooNear { .. } => "too_near",
+            Unreachable::NoLoop => "no_loop",
+            Unreachable::TooFast { .. } => "too_fast",
+            Unreachable::TooSlow { .. } => "too_slow",
+            Unreachable::Granularity => "granularity",
+        }
+    }
+}
+
 impl std::fmt::Display for Unreachable {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
@@ -166,6 +181,8 @@ pub struct PathSolution {
     pub walks: usize,
     pub loops_in_graph: usize,
     pub ilp_solves: usize,
+    /// Sub-problems given up because their feedback cuts did not settle (normally 0).
+    pub unconverged_subproblems: usize,
     /// With a tolerance: whether the path meets it, and if not why no path can.
     pub within_tolerance: Option<bool>,
     pub unreachable: Option<Unreachable>,
@@ -342,10 +359,13 @@ fn solve_signs(
     st: f64,
     bound: f64,
     within: Option<(f64, f64)>,
-    solves: &mut usize,
+    counts: &mut SolveCounts,
 ) -> Result<Option<Vec<u64>>> {
     let mut cuts: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
-    for _ in 0..=per_loop.len() + 1 {
+    // Each round cuts off at least one group of loops; groups grow as cuts accumulate, so a
+    // handful of rounds usually suffice. Past this many the sub-problem is given up (and
+    // counted in the solution) rather than the whole query.
+    for _ in 0..MAX_CUT_ROUNDS.max(per_loop.len() + 2) {
         let mut vars = ProblemVariables::new();
         let n: Vec<Variable> = per_loop.iter().map(|_| vars.add(variable().integer().min(0.0).max(bound))).collect();
         let lin = |f: &dyn Fn(&(f64, f64, f64)) -> f64, c0: f64| -> Expression {
@@ -377,7 +397,7 @@ fn solve_signs(
             }
             model = model.with(lhs.leq(rhs));
         }
-        *solves += 1;
+        counts.solves += 1;
         let sol = match model.solve() {
             Ok(s) => s,
             Err(good_lp::ResolutionError::Infeasible) => return Ok(None),
@@ -396,7 +416,19 @@ fn solve_signs(
             cuts.push((g, adjacent));
         }
     }
-    Err(Error::Invalid("the feedback cuts did not converge".into()))
+    counts.unconverged += 1;
+    Ok(None)
+}
+
+/// Rounds of feedback cuts tried on one sub-problem.
+const MAX_CUT_ROUNDS: usize = 64;
+
+/// ILP solves of a query, and sub-problems whose feedback cuts did not settle in
+/// [`MAX_CUT_ROUNDS`] rounds (skipped).
+#[derive(Debug, Clone, Copy, Default)]
+struct SolveCounts {
+    solves: usize,
+    unconverged: usize,
 }
 
 /// Inserts each used loop's repetitions into the walk (see the module documentation).
@@ -428,55 +460,103 @@ fn compose(g: &SurfaceMotionGraph, walk: &[usize], loops: &[(Vec<usize>, u64)], 
     Ok(path)
 }
 
+/// The target-independent part of a query between two key frames (4.2.1, Algorithm 1): the
+/// walks, the graph's loops and each walk's attached loops with their totals. Computed once
+/// per key-frame pair ([`plan_paths`]) and shared by every target ([`optimise_planned`]).
+pub struct PathPlan {
+    start: usize,
+    end: usize,
+    start_node: usize,
+    all_loops: Vec<Vec<usize>>,
+    /// By increasing transition cost of the walk (a lower bound of its paths' costs).
+    prepared: Vec<Prepared>,
+    pub walks: usize,
+    pub loops_in_graph: usize,
+}
+
+/// The walks and loops between the key frames `start` and `end` (global frames); more than
+/// `max_paths` of either is refused.
+pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: usize) -> Result<PathPlan> {
+    let (Some(s), Some(t)) = (g.node_of(start), g.node_of(end)) else {
+        return Err(Error::Invalid(format!(
+            "key frames {start} and {end}: both must be nodes of the graph (build it with them)"
+        )));
+    };
+    let out = g.out_edges();
+    let all_walks = walks(g, &out, s, t, max_paths)?;
+    if all_walks.is_empty() {
+        return Err(Error::Invalid(format!(
+            "no path from frame {start} to frame {end}: the higher-level graph does not connect them"
+        )));
+    }
+    let all_loops = cycles(g, &out, max_paths)?;
+    let mut prepared: Vec<Prepared> = all_walks
+        .into_iter()
+        .map(|walk| {
+            let mut walk_nodes = nodes_of(g, &walk);
+            walk_nodes.push(s);
+            let a = attach(g, &walk_nodes, &all_loops);
+            let (d0, t0, s0) = totals(g, &walk);
+            let per_loop: Vec<(f64, f64, f64)> = a.loops.iter().map(|&c| totals(g, &all_loops[c])).collect();
+            Prepared { walk, a, base: (d0, t0 + 1.0, s0), per_loop }
+        })
+        .collect();
+    // Stable: walks of equal cost keep their depth-first order.
+    prepared.sort_by(|x, y| x.base.2.total_cmp(&y.base.2));
+    Ok(PathPlan {
+        start,
+        end,
+        start_node: s,
+        walks: prepared.len(),
+        loops_in_graph: all_loops.len(),
+        all_loops,
+        prepared,
+    })
+}
+
 /// The optimal path for `q` on `g` (eq. 10-20), with `ground` each frame's ground centroid.
 pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery) -> Result<PathSolution> {
+    check_targets(q)?;
+    let plan = plan_paths(g, q.start, q.end, q.max_paths)?;
+    optimise_planned(g, ground, &plan, q)
+}
+
+fn check_targets(q: &PathQuery) -> Result<()> {
     if !(q.distance.is_finite() && q.distance >= 0.0 && q.frames.is_finite() && q.frames >= 1.0) {
         return Err(Error::Invalid(format!(
             "target distance {} and time {} frames: expected a distance >= 0 and at least one frame",
             q.distance, q.frames
         )));
     }
-    let (Some(s), Some(t)) = (g.node_of(q.start), g.node_of(q.end)) else {
+    Ok(())
+}
+
+/// [`optimise_path`] with the walks and loops already planned for `q`'s key frames.
+pub fn optimise_planned(
+    g: &SurfaceMotionGraph,
+    ground: &[[f64; 2]],
+    plan: &PathPlan,
+    q: &PathQuery,
+) -> Result<PathSolution> {
+    check_targets(q)?;
+    if (plan.start, plan.end) != (q.start, q.end) {
         return Err(Error::Invalid(format!(
-            "key frames {} and {}: both must be nodes of the graph (build it with them)",
-            q.start, q.end
-        )));
-    };
-    let out = g.out_edges();
-    let all_walks = walks(g, &out, s, t, q.max_paths)?;
-    if all_walks.is_empty() {
-        return Err(Error::Invalid(format!(
-            "no path from frame {} to frame {}: the higher-level graph does not connect them",
-            q.start, q.end
+            "the plan is for frames {} -> {}, the query for {} -> {}",
+            plan.start, plan.end, q.start, q.end
         )));
     }
-    let all_loops = cycles(g, &out, q.max_paths)?;
-    // Each walk with its attached loops: (walk, loops, base totals, per-loop totals, bound).
-    let prepared: Vec<Prepared> = all_walks
-        .iter()
-        .map(|walk| {
-            let mut walk_nodes = nodes_of(g, walk);
-            walk_nodes.push(s);
-            let a = attach(g, &walk_nodes, &all_loops);
-            let (d0, t0, s0) = totals(g, walk);
-            let base = (d0, t0 + 1.0, s0);
-            let per_loop: Vec<(f64, f64, f64)> = a.loops.iter().map(|&c| totals(g, &all_loops[c])).collect();
-            // Repetitions beyond this cannot help: every loop adds at least one frame.
-            let bound = (4.0 * (q.frames + base.1)).ceil() + 10.0;
-            Prepared { walk, a, base, per_loop, bound }
-        })
-        .collect();
-    let mut solves = 0;
+    let (s, prepared, all_loops) = (plan.start_node, &plan.prepared, &plan.all_loops);
+    let mut counts = SolveCounts::default();
     let (best, within_tolerance, unreachable) = match q.tolerance {
-        None => (best_path(&prepared, &all_loops, q, None, &mut solves)?, None, None),
+        None => (best_path(prepared, all_loops, q, None, &mut counts)?, None, None),
         Some(tol) => {
             let within = (tol.distance_relative * q.distance, tol.frames);
-            match best_path(&prepared, &all_loops, q, Some(within), &mut solves)? {
+            match best_path(prepared, all_loops, q, Some(within), &mut counts)? {
                 Some(b) => (Some(b), Some(true), None),
                 None => (
-                    best_path(&prepared, &all_loops, q, None, &mut solves)?,
+                    best_path(prepared, all_loops, q, None, &mut counts)?,
                     Some(false),
-                    Some(unreachable_reason(&prepared, q, within)),
+                    Some(unreachable_reason(prepared, q, within)),
                 ),
             }
         }
@@ -521,41 +601,48 @@ pub fn optimise_path(g: &SurfaceMotionGraph, ground: &[[f64; 2]], q: &PathQuery)
         distance,
         transition_cost,
         cost,
-        walks: all_walks.len(),
-        loops_in_graph: all_loops.len(),
-        ilp_solves: solves,
+        walks: plan.walks,
+        loops_in_graph: plan.loops_in_graph,
+        ilp_solves: counts.solves,
+        unconverged_subproblems: counts.unconverged,
         within_tolerance,
         unreachable,
     })
 }
 
-/// A walk ready for its ILPs: its attached loops, `(d, t, C_s)` of the walk (with the start
-/// frame) and of each loop, and the repetition bound.
-struct Prepared<'a> {
-    walk: &'a Vec<usize>,
+/// A walk ready for its ILPs: its attached loops, and `(d, t, C_s)` of the walk (with the
+/// start frame) and of each loop.
+struct Prepared {
+    walk: Vec<usize>,
     a: Attached,
     base: (f64, f64, f64),
     per_loop: Vec<(f64, f64, f64)>,
-    bound: f64,
 }
 
 /// (cost, walk, loops with their repetitions)
 type Candidate = (f64, Vec<usize>, Vec<(Vec<usize>, u64)>);
 
 /// The least eq. 6 cost over every walk and sign combination (eq. 20), the errors bounded by
-/// `within` (distance, frames) when given; `None` when no sub-problem is feasible.
+/// `within` (distance, frames) when given; `None` when no sub-problem is feasible. Walks come
+/// by increasing transition cost, which bounds the cost of every path built on them (loops
+/// and errors only add): once it reaches the best cost found, no later walk can do better.
 fn best_path(
     prepared: &[Prepared],
     all_loops: &[Vec<usize>],
     q: &PathQuery,
     within: Option<(f64, f64)>,
-    solves: &mut usize,
+    counts: &mut SolveCounts,
 ) -> Result<Option<Candidate>> {
     let mut best: Option<Candidate> = None;
     for p in prepared {
+        if best.as_ref().is_some_and(|b| p.base.2 >= b.0) {
+            break;
+        }
         let (base, per_loop) = (p.base, &p.per_loop);
+        // Repetitions beyond this cannot help: every loop adds at least one frame.
+        let bound = (4.0 * (q.frames + base.1)).ceil() + 10.0;
         for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-            let Some(n) = solve_signs(base, per_loop, &p.a, q, sd, st, p.bound, within, solves)? else { continue };
+            let Some(n) = solve_signs(base, per_loop, &p.a, q, sd, st, bound, within, counts)? else { continue };
             let sum = |f: &dyn Fn(&(f64, f64, f64)) -> f64| n.iter().zip(per_loop).map(|(&k, l)| k as f64 * f(l)).sum::<f64>();
             let d = base.0 + sum(&|l| l.0);
             let tt = base.1 + sum(&|l| l.1);

@@ -134,6 +134,24 @@ pub fn run(
                 1e3 * p.cpu_seconds.std
             );
         }
+        for p in &r.pairs {
+            let g = &p.goal;
+            let why: Vec<String> = g.unreachable.iter().map(|(k, n)| format!("{n} {k}")).collect();
+            println!(
+                "goal ({}% and {} frame): {} -> {}: {} of {} targets met (worst {:.2}% and {} frame(s)); unreachable: {}; cpu {:.2} +- {:.2} ms",
+                100.0 * g.tolerance.distance_relative,
+                g.tolerance.frames,
+                p.from,
+                p.to,
+                g.met,
+                p.queries,
+                100.0 * g.met_distance_relative_max,
+                g.met_time_error_max,
+                if why.is_empty() { "none".to_string() } else { why.join(", ") },
+                1e3 * g.cpu_seconds.mean,
+                1e3 * g.cpu_seconds.std
+            );
+        }
         println!(
             "Huang et al. 2009 (Table 1): distance error rms 0.17-0.47 m, max < 1 m; time error max 22-25 frames; 5.7-15.0 s per query (Matlab)"
         );
