@@ -13,6 +13,7 @@ mod graph;
 mod interpolate;
 mod learn;
 mod load;
+mod smg;
 mod synth;
 mod transfer;
 mod transitions;
@@ -94,6 +95,10 @@ pub enum What {
     /// build times, then the latency of one query of each kind: a 15 m S-path, ten key poses,
     /// and a distance-and-time query (target: under 1 s each).
     Synth(synth::SynthBench),
+    /// The surface motion graph's speed targets (Huang et al. 2009, issue 17): shape histograms
+    /// of 2,000 frames of 10,000 vertices (< 2 min) and a path query (< 50 ms), on the
+    /// CMU-driven mannequin.
+    Smg(smg::SmgArgs),
     /// The learning toolkit's speed targets (thesis chapters 5-6): GP fit and prediction on
     /// 2,000 x 20 points (< 5 s), a GPDM fit on 400 frames x ~3,000 coordinates (< 60 s), 20 HMC
     /// trajectory samples of 100 frames (< 30 s).
@@ -164,5 +169,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Learn(l) => learn::run(ctx, &l),
         What::Transfer(t) => transfer::run(ctx, &t),
         What::Synth(b) => synth::run(ctx, b),
+        What::Smg(b) => smg::run(ctx, &b),
     }
 }

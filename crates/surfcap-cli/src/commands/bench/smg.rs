@@ -1,0 +1,185 @@
+//! `surfcap bench smg`: the surface motion graph's speed targets (issue 17 item 8) on 2 cores:
+//! the shape histograms (Huang et al. 2009, 3.1) of 2,000 frames of 10,000 vertices under
+//! 2 minutes, and a path query (4.1-4.2) under 50 ms (the paper: 5.7-15 s in Matlab).
+//!
+//! The frames are the built-in mannequin of `--vertices` vertices moved by the CMU locomotion
+//! clips of `surfcap eval smg`, cycled to `--frames` frames for the histograms (every frame is
+//! voxelised and histogrammed afresh: nothing is shared between repeated frames). The
+//! similarity (eq. 2) and the graph are then built on the clips' own frames, and every key pair
+//! of `eval smg` is queried on an evenly spaced subset of the paper's 20 m x 40 s grid, as the
+//! paper asks (eq. 6 optimum) and with the 1%-and-1-frame tolerance. A query's time is given
+//! two ways: the targets alone (the walks and loops planned once per key pair, as `eval smg`
+//! does) and from scratch (planning included, as one `surfcap smg query` does).
+
+use std::time::Instant;
+
+use serde_json::json;
+use surfcap_eval::smg_eval::{LOCOMOTION_CONNECTIONS, LOCOMOTION_KEY_PAIRS, grid, locomotion_subject};
+use surfcap_smg::motion_frames::MotionFrames;
+use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths};
+use surfcap_smg::shape_similarity::{FrameHistograms, HistogramParams, frame_histograms, shape_similarity_matrix};
+use surfcap_smg::surface_motion_graph::{GraphInput, build_graph};
+
+use super::peak_rss;
+
+#[derive(clap::Args, Debug)]
+pub struct SmgArgs {
+    /// The shared data folder (the CMU clips).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: std::path::PathBuf,
+    /// Mannequin vertices (about: the mannequin's remeshing lands near it).
+    #[arg(long, default_value_t = 10_000, value_parser = |s: &str| crate::options::whole_in(s, 500, 50_000))]
+    pub vertices: usize,
+    /// Frames histogrammed (the clips cycled).
+    #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
+    pub frames: usize,
+    /// Targets per key pair, evenly spaced over the 800 of the paper's grid.
+    #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::options::whole_in(s, 1, 800))]
+    pub targets: usize,
+    /// Transitions per connection to time (1: the paper's), comma-separated.
+    #[arg(long, default_value = "1,3", value_delimiter = ',', value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
+    pub transitions: Vec<usize>,
+}
+
+fn verdict(secs: f64, target: f64) -> &'static str {
+    if secs < target { "met" } else { "NOT met" }
+}
+
+/// Mean, 95th percentile and maximum.
+fn summary(v: &mut [f64]) -> serde_json::Value {
+    v.sort_by(f64::total_cmp);
+    let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let p95 = v.get((0.95 * v.len() as f64).ceil() as usize - 1).copied().unwrap_or(0.0);
+    json!({"mean": mean, "p95": p95, "max": v.last().copied().unwrap_or(0.0), "count": v.len()})
+}
+
+pub fn run(ctx: &crate::Ctx, a: &SmgArgs) -> anyhow::Result<()> {
+    ctx.say("building the mannequin and its CMU clips (not timed) ...");
+    let subject = locomotion_subject(&a.data, a.vertices)?;
+    let frames = MotionFrames::from_subject(&subject);
+    let real = frames.n_frames();
+    anyhow::ensure!(
+        a.frames >= real,
+        "--frames {}: expected at least the clips' {real} frames (the similarity is built on them)",
+        a.frames
+    );
+    let meshes = frames.meshes();
+    let cycled: Vec<_> = (0..a.frames).map(|i| meshes[i % real]).collect();
+    let params = HistogramParams::default();
+    let rss0 = peak_rss();
+    ctx.say(&format!("shape histograms of {} frames of {} vertices ...", a.frames, subject.topology().n_vertices()));
+    let t = Instant::now();
+    let all = frame_histograms(&cycled, frames.up, params)?;
+    let histogram_seconds = t.elapsed().as_secs_f64();
+    let rss1 = peak_rss();
+    // The clips' own frames: the first `real` of the cycle.
+    let own = FrameHistograms { histograms: all.histograms[..real].to_vec(), ..all.clone() };
+    drop(all);
+    let t = Instant::now();
+    let similarity = shape_similarity_matrix(&own)?;
+    let similarity_seconds = t.elapsed().as_secs_f64();
+
+    let ground = frames.ground_centroids();
+    let seq = |n: &str| {
+        frames.names.iter().position(|x| x == n).ok_or_else(|| anyhow::anyhow!("no sequence {n:?} in the clips"))
+    };
+    let conns: Vec<(usize, usize)> =
+        LOCOMOTION_CONNECTIONS.iter().map(|(x, y)| Ok((seq(x)?, seq(y)?))).collect::<anyhow::Result<_>>()?;
+    let keys: Vec<(usize, usize)> =
+        LOCOMOTION_KEY_PAIRS.iter().map(|(x, y)| Ok((frames.resolve(x)?, frames.resolve(y)?))).collect::<surfcap_smg::error::Result<_>>()?;
+    let key_frames: Vec<usize> = keys.iter().flat_map(|&(x, y)| [x, y]).collect();
+    let full = grid(&(1..=20).map(f64::from).collect::<Vec<_>>(), &(1..=40).map(f64::from).collect::<Vec<_>>());
+    let targets: Vec<(f64, f64)> = (0..a.targets).map(|i| full[i * full.len() / a.targets]).collect();
+
+    let mut runs = Vec::new();
+    for &k in &a.transitions {
+        let t = Instant::now();
+        let g = build_graph(&GraphInput {
+            sequences: &frames.sequences,
+            similarity: &similarity,
+            ground: &ground,
+            connections: &conns,
+            key_frames: &key_frames,
+            lengths: 3..=30,
+            per_connection: k,
+            separation: 15,
+        })?;
+        let graph_seconds = t.elapsed().as_secs_f64();
+        let (mut plans, mut paper, mut goal, mut fresh) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut walks, mut loops) = (Vec::new(), 0);
+        for &(s, e) in &keys {
+            let max_paths = PathQuery::new(s, e, 0.0, 1.0).max_paths;
+            let t = Instant::now();
+            let plan = plan_paths(&g, s, e, max_paths)?;
+            let plan_seconds = t.elapsed().as_secs_f64();
+            plans.push(plan_seconds);
+            walks.push(plan.walks);
+            loops = plan.loops_in_graph;
+            for &(d, secs) in &targets {
+                let q = PathQuery::new(s, e, d, secs * frames.fps);
+                let t = Instant::now();
+                optimise_planned(&g, &ground, &plan, &q)?;
+                let query = t.elapsed().as_secs_f64();
+                paper.push(query);
+                fresh.push(query + plan_seconds);
+                let q = PathQuery { tolerance: Some(Tolerance::default()), ..q };
+                let t = Instant::now();
+                optimise_planned(&g, &ground, &plan, &q)?;
+                goal.push(t.elapsed().as_secs_f64());
+            }
+        }
+        let fresh_mean = fresh.iter().sum::<f64>() / fresh.len().max(1) as f64;
+        runs.push(json!({
+            "transitions_per_connection": k, "graph_nodes": g.nodes.len(), "graph_edges": g.edges.len(),
+            "loops": loops, "walks_per_key_pair": walks, "graph_seconds": graph_seconds,
+            "plan_seconds": summary(&mut plans), "query_seconds": summary(&mut paper),
+            "query_with_tolerance_seconds": summary(&mut goal), "query_from_scratch_seconds": summary(&mut fresh),
+            "query_target_seconds": 0.05, "query_verdict": verdict(fresh_mean, 0.05),
+        }));
+    }
+    let result = json!({
+        "vertices": subject.topology().n_vertices(), "histogram_frames": a.frames,
+        "histogram_seconds": histogram_seconds, "histogram_target_seconds": 120.0,
+        "histogram_verdict": verdict(histogram_seconds, 120.0),
+        "histogram_peak_rss_added_bytes": rss1.zip(rss0).map(|(b, a)| b.saturating_sub(a)),
+        "similarity_frames": real, "similarity_seconds": similarity_seconds,
+        "key_pairs": keys.len(), "targets_per_key_pair": targets.len(), "runs": runs,
+        "threads": rayon::current_num_threads(),
+    });
+    ctx.result(&result, || {
+        println!(
+            "shape histograms: {} frames of {} vertices in {histogram_seconds:.1} s (target < 120 s: {}); similarity of the clips' {real} frames: {similarity_seconds:.1} s",
+            a.frames,
+            subject.topology().n_vertices(),
+            verdict(histogram_seconds, 120.0)
+        );
+        for r in &runs {
+            let ms = |v: &serde_json::Value, k: &str| 1e3 * v[k].as_f64().unwrap_or(0.0);
+            println!(
+                "{} transition(s) per connection: {} nodes, {} edges, {} loops, walks per key pair {}; graph {:.2} s",
+                r["transitions_per_connection"],
+                r["graph_nodes"],
+                r["graph_edges"],
+                r["loops"],
+                r["walks_per_key_pair"],
+                r["graph_seconds"].as_f64().unwrap_or(0.0)
+            );
+            for (name, key) in [
+                ("plan (once per key pair)", "plan_seconds"),
+                ("query, eq. 6 optimum", "query_seconds"),
+                ("query, 1% and 1 frame", "query_with_tolerance_seconds"),
+                ("query from scratch", "query_from_scratch_seconds"),
+            ] {
+                let v = &r[key];
+                println!(
+                    "  {name:<28} mean {:8.2} ms, p95 {:8.2} ms, max {:8.2} ms",
+                    ms(v, "mean"),
+                    ms(v, "p95"),
+                    ms(v, "max")
+                );
+            }
+            println!("  target < 50 ms per query from scratch: {}", r["query_verdict"].as_str().unwrap_or(""));
+        }
+    });
+    Ok(())
+}
