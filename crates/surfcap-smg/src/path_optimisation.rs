@@ -127,10 +127,9 @@ impl std::fmt::Display for Unreachable {
                 write!(f, "too near: every path travels at least {shortest_distance:.3} units")
             }
             Unreachable::NoLoop => write!(f, "no loop between the key frames: every path has a fixed length"),
-            Unreachable::TooFast { needed, fastest } => write!(
-                f,
-                "too fast: needs {needed:.4} units per frame, the fastest loop travels {fastest:.4}"
-            ),
+            Unreachable::TooFast { needed, fastest } => {
+                write!(f, "too fast: needs {needed:.4} units per frame, the fastest loop travels {fastest:.4}")
+            }
             Unreachable::TooSlow { needed, slowest } => write!(
                 f,
                 "too slow: needs {needed:.4} units per frame, the slowest loop travels {slowest:.4} (no in-place loop)"
@@ -145,16 +144,7 @@ impl std::fmt::Display for Unreachable {
 impl PathQuery {
     /// A query with the paper's weights (`w_d = 1/0.3` per unit, for subjects in metres).
     pub fn new(start: usize, end: usize, distance: f64, frames: f64) -> Self {
-        PathQuery {
-            start,
-            end,
-            distance,
-            frames,
-            w_d: 1.0 / 0.3,
-            w_t: 1.0 / 10.0,
-            max_paths: 100_000,
-            tolerance: None,
-        }
+        PathQuery { start, end, distance, frames, w_d: 1.0 / 0.3, w_t: 1.0 / 10.0, max_paths: 100_000, tolerance: None }
     }
 }
 
@@ -357,7 +347,7 @@ fn solve_signs(
     q: &PathQuery,
     sd: f64,
     st: f64,
-    bound: f64,
+    caps: &Caps,
     within: Option<(f64, f64)>,
     counts: &mut SolveCounts,
 ) -> Result<Option<Vec<u64>>> {
@@ -367,7 +357,7 @@ fn solve_signs(
     // counted in the solution) rather than the whole query.
     for _ in 0..MAX_CUT_ROUNDS.max(per_loop.len() + 2) {
         let mut vars = ProblemVariables::new();
-        let n: Vec<Variable> = per_loop.iter().map(|_| vars.add(variable().integer().min(0.0).max(bound))).collect();
+        let n: Vec<Variable> = caps.n.iter().map(|&c| vars.add(variable().integer().min(0.0).max(c))).collect();
         let lin = |f: &dyn Fn(&(f64, f64, f64)) -> f64, c0: f64| -> Expression {
             let mut e = Expression::from(c0);
             for (v, l) in n.iter().zip(per_loop) {
@@ -386,14 +376,22 @@ fn solve_signs(
             model = model.with((sd * d).leq(tol_d));
             model = model.with((st * t).leq(tol_t));
         }
+        if caps.frames.is_finite() {
+            model = model.with(lin(&|l| l.1, 0.0).leq(caps.frames));
+        }
+        if caps.distance.is_finite() {
+            model = model.with(lin(&|l| l.0, 0.0).leq(caps.distance));
+        }
         for (group, adjacent) in &cuts {
             let mut lhs = Expression::from(0.0);
             for &i in group {
                 lhs += n[i];
             }
+            // No more than the group's caps: the cut binds only when no neighbour plays.
+            let big: f64 = group.iter().map(|&i| caps.n[i]).sum();
             let mut rhs = Expression::from(0.0);
             for &j in adjacent {
-                rhs += bound * n[j];
+                rhs += big * n[j];
             }
             model = model.with(lhs.leq(rhs));
         }
@@ -418,6 +416,50 @@ fn solve_signs(
     }
     counts.unconverged += 1;
     Ok(None)
+}
+
+/// What a walk's loops may add and still beat the best cost known (`ub`): every path cheaper
+/// than `ub` overshoots the targets by less than `(ub - C_s(walk)) / w`, which caps the frames
+/// and distance its loops add and each loop's repetitions. Valid cuts: they remove only paths
+/// that cost more than `ub`, so the optimum is unchanged, and they make the ILPs far smaller.
+struct Caps {
+    n: Vec<f64>,
+    frames: f64,
+    distance: f64,
+}
+
+impl Caps {
+    fn new(
+        base: (f64, f64, f64),
+        per_loop: &[(f64, f64, f64)],
+        q: &PathQuery,
+        ub: f64,
+        within: Option<(f64, f64)>,
+    ) -> Self {
+        let over = |w: f64| if ub.is_finite() && w > 0.0 { (ub - base.2).max(0.0) / w } else { f64::INFINITY };
+        let mut frames = (q.frames - base.1) + over(q.w_t);
+        let mut distance = (q.distance - base.0) + over(q.w_d);
+        if let Some((tol_d, tol_t)) = within {
+            frames = frames.min(q.frames + tol_t - base.1);
+            distance = distance.min(q.distance + tol_d - base.0);
+        }
+        if !frames.is_finite() {
+            // Without a known cost: repetitions beyond this cannot help, every loop adding at
+            // least one frame.
+            frames = (4.0 * (q.frames + base.1)).ceil() + 10.0;
+        }
+        // A hair of slack so that rounding never removes a path of exactly the bound.
+        let (frames, distance) = (frames + 1e-9, distance + 1e-9);
+        let n = per_loop
+            .iter()
+            .map(|l| {
+                let by_frames = (frames / l.1.max(1.0)).floor();
+                let by_distance = if l.0 > 0.0 { (distance / l.0).floor() } else { f64::INFINITY };
+                by_frames.min(by_distance).max(0.0)
+            })
+            .collect();
+        Caps { n, frames, distance }
+    }
 }
 
 /// Rounds of feedback cuts tried on one sub-problem.
@@ -468,7 +510,6 @@ pub struct PathPlan {
     end: usize,
     start_node: usize,
     all_loops: Vec<Vec<usize>>,
-    /// By increasing transition cost of the walk (a lower bound of its paths' costs).
     prepared: Vec<Prepared>,
     pub walks: usize,
     pub loops_in_graph: usize,
@@ -490,7 +531,7 @@ pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: u
         )));
     }
     let all_loops = cycles(g, &out, max_paths)?;
-    let mut prepared: Vec<Prepared> = all_walks
+    let prepared: Vec<Prepared> = all_walks
         .into_iter()
         .map(|walk| {
             let mut walk_nodes = nodes_of(g, &walk);
@@ -501,8 +542,6 @@ pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: u
             Prepared { walk, a, base: (d0, t0 + 1.0, s0), per_loop }
         })
         .collect();
-    // Stable: walks of equal cost keep their depth-first order.
-    prepared.sort_by(|x, y| x.base.2.total_cmp(&y.base.2));
     Ok(PathPlan {
         start,
         end,
@@ -623,9 +662,9 @@ struct Prepared {
 type Candidate = (f64, Vec<usize>, Vec<(Vec<usize>, u64)>);
 
 /// The least eq. 6 cost over every walk and sign combination (eq. 20), the errors bounded by
-/// `within` (distance, frames) when given; `None` when no sub-problem is feasible. Walks come
-/// by increasing transition cost, which bounds the cost of every path built on them (loops
-/// and errors only add): once it reaches the best cost found, no later walk can do better.
+/// `within` (distance, frames) when given; `None` when no sub-problem is feasible. Walks are
+/// tried by increasing lower bound of their paths' costs (see `lower_bound`): once it reaches
+/// the best cost found, no later walk can do better.
 fn best_path(
     prepared: &[Prepared],
     all_loops: &[Vec<usize>],
@@ -634,29 +673,46 @@ fn best_path(
     counts: &mut SolveCounts,
 ) -> Result<Option<Candidate>> {
     let mut best: Option<Candidate> = None;
-    for p in prepared {
-        if best.as_ref().is_some_and(|b| p.base.2 >= b.0) {
+    // Loops only add distance, frames and cost, so a walk's paths cost at least its transition
+    // cost plus the errors by which the walk alone already overshoots the targets.
+    let lower_bound =
+        |p: &Prepared| p.base.2 + q.w_d * (p.base.0 - q.distance).max(0.0) + q.w_t * (p.base.1 - q.frames).max(0.0);
+    let mut order: Vec<(f64, usize)> = prepared.iter().enumerate().map(|(i, p)| (lower_bound(p), i)).collect();
+    order.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    for (bound_cost, i) in order {
+        if best.as_ref().is_some_and(|b| bound_cost >= b.0) {
             break;
         }
+        let p = &prepared[i];
         let (base, per_loop) = (p.base, &p.per_loop);
-        // Repetitions beyond this cannot help: every loop adds at least one frame.
-        let bound = (4.0 * (q.frames + base.1)).ceil() + 10.0;
+        // The best cost known: the best path so far, or this walk played without loops (a
+        // path, though perhaps not within the tolerance).
+        let mut ub = best.as_ref().map_or(f64::INFINITY, |b| b.0);
+        if within.is_none() {
+            ub = ub.min(base.2 + q.w_d * (base.0 - q.distance).abs() + q.w_t * (base.1 - q.frames).abs());
+        }
+        let caps = Caps::new(base, per_loop, q, ub, within);
         for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-            let Some(n) = solve_signs(base, per_loop, &p.a, q, sd, st, bound, within, counts)? else { continue };
-            let sum = |f: &dyn Fn(&(f64, f64, f64)) -> f64| n.iter().zip(per_loop).map(|(&k, l)| k as f64 * f(l)).sum::<f64>();
+            // Staying under a target the walk alone exceeds is infeasible: skip the solve.
+            if (sd < 0.0 && base.0 > q.distance) || (st < 0.0 && base.1 > q.frames) {
+                continue;
+            }
+            let Some(n) = solve_signs(base, per_loop, &p.a, q, sd, st, &caps, within, counts)? else { continue };
+            let sum = |f: &dyn Fn(&(f64, f64, f64)) -> f64| {
+                n.iter().zip(per_loop).map(|(&k, l)| k as f64 * f(l)).sum::<f64>()
+            };
             let d = base.0 + sum(&|l| l.0);
             let tt = base.1 + sum(&|l| l.1);
             let cs = base.2 + sum(&|l| l.2);
             let cost = cs + q.w_d * (d - q.distance).abs() + q.w_t * (tt - q.frames).abs();
             if best.as_ref().is_none_or(|b| cost < b.0) {
-                let loops = p
-                    .a
-                    .loops
-                    .iter()
-                    .zip(&n)
-                    .filter(|&(_, &k)| k > 0)
-                    .map(|(&c, &k)| (all_loops[c].clone(), k))
-                    .collect();
+                let loops =
+                    p.a.loops
+                        .iter()
+                        .zip(&n)
+                        .filter(|&(_, &k)| k > 0)
+                        .map(|(&c, &k)| (all_loops[c].clone(), k))
+                        .collect();
                 best = Some((cost, p.walk.clone(), loops));
             }
         }
@@ -684,7 +740,8 @@ fn unreachable_reason(prepared: &[Prepared], q: &PathQuery, (tol_d, tol_t): (f64
     // (needed, fastest) over the walks whose target asks more speed than their loops make, and
     // (needed, slowest) over those asking less; a walk in neither is kept from the target only
     // by whole repetitions.
-    let (mut too_fast, mut too_slow): (Option<(f64, f64)>, Option<(f64, f64)>) = (None, None);
+    let mut too_fast: Option<(f64, f64)> = None;
+    let mut too_slow: Option<(f64, f64)> = None;
     for p in prepared.iter().filter(|p| !p.per_loop.is_empty()) {
         let (dd, dt) = (q.distance - p.base.0, q.frames - p.base.1);
         let speeds = p.per_loop.iter().map(|l| l.0 / l.1);
@@ -878,6 +935,40 @@ mod tests {
         assert!(p.cost > paper.cost, "the tolerance costs realism: {} vs {}", p.cost, paper.cost);
     }
 
+    /// The caps drawn from the best known cost never change the optimum: on the one-loop graph
+    /// every target's cost equals the least over every repetition count, by enumeration.
+    #[test]
+    fn the_optimum_equals_enumeration_over_repetitions() {
+        let (g, ground) = graph();
+        let stand_edges: f64 = 8.0; // the switch frame and 23..=29 after the walk's 0..=18
+        for d in [0.5, 1.8, 3.0, 4.4, 9.0, 20.0] {
+            for t in [10.0, 27.0, 40.0, 61.0, 130.0, 400.0] {
+                let q = PathQuery::new(0, 29, d, t);
+                let p = optimise_path(&g, &ground, &q).unwrap();
+                let loop_cost = p.loops.first().map(|(c, _)| totals(&g, c).2);
+                let cost_of = |n: f64, lc: f64| {
+                    let (dn, tn) = (1.8 + 0.9 * n, 19.0 + stand_edges + 10.0 * n);
+                    let walk_cost = p.transition_cost - p.loops.iter().map(|l| l.1 as f64).sum::<f64>() * lc;
+                    walk_cost + n * lc + q.w_d * (dn - d).abs() + q.w_t * (tn - t).abs()
+                };
+                if let Some(lc) = loop_cost {
+                    let best = (0..200).map(|n| cost_of(f64::from(n), lc)).fold(f64::INFINITY, f64::min);
+                    assert!((p.cost - best).abs() < 1e-9, "d {d} t {t}: {} vs {best}", p.cost);
+                } else {
+                    // No loop played: playing one (at its cost, read from the graph) is no better.
+                    let lc = g
+                        .edges
+                        .iter()
+                        .find(|e| matches!(e.kind, EdgeKind::Transition { from_sequence: 0, to_sequence: 0, .. }))
+                        .unwrap()
+                        .cost;
+                    let best = (0..200).map(|n| cost_of(f64::from(n), lc)).fold(f64::INFINITY, f64::min);
+                    assert!((p.cost - best).abs() < 1e-9, "d {d} t {t}: {} vs {best}", p.cost);
+                }
+            }
+        }
+    }
+
     /// Each reason a target cannot be met: the walk alone is 27 frames and 1.8 units, the loop
     /// adds 10 frames and 0.9 units (0.09 per frame).
     #[test]
@@ -893,8 +984,12 @@ mod tests {
         assert_eq!(reason(4.5, 57.0), None);
         assert_eq!(reason(1.0, 10.0), Some(Unreachable::TooShort { shortest_frames: 27.0 }));
         assert!(matches!(reason(1.0, 40.0), Some(Unreachable::TooNear { .. })));
-        assert!(matches!(reason(10.0, 40.0), Some(Unreachable::TooFast { fastest, .. }) if (fastest - 0.09).abs() < 1e-9));
-        assert!(matches!(reason(1.8, 100.0), Some(Unreachable::TooSlow { slowest, .. }) if (slowest - 0.09).abs() < 1e-9));
+        assert!(
+            matches!(reason(10.0, 40.0), Some(Unreachable::TooFast { fastest, .. }) if (fastest - 0.09).abs() < 1e-9)
+        );
+        assert!(
+            matches!(reason(1.8, 100.0), Some(Unreachable::TooSlow { slowest, .. }) if (slowest - 0.09).abs() < 1e-9)
+        );
         // One and a half loops: the right speed, but no whole number of repetitions.
         assert_eq!(reason(3.15, 42.0), Some(Unreachable::Granularity));
         // A walk without loops: from the stand's first frame to its last.

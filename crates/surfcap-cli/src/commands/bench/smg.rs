@@ -85,8 +85,10 @@ pub fn run(ctx: &crate::Ctx, a: &SmgArgs) -> anyhow::Result<()> {
     };
     let conns: Vec<(usize, usize)> =
         LOCOMOTION_CONNECTIONS.iter().map(|(x, y)| Ok((seq(x)?, seq(y)?))).collect::<anyhow::Result<_>>()?;
-    let keys: Vec<(usize, usize)> =
-        LOCOMOTION_KEY_PAIRS.iter().map(|(x, y)| Ok((frames.resolve(x)?, frames.resolve(y)?))).collect::<surfcap_smg::error::Result<_>>()?;
+    let keys: Vec<(usize, usize)> = LOCOMOTION_KEY_PAIRS
+        .iter()
+        .map(|(x, y)| Ok((frames.resolve(x)?, frames.resolve(y)?)))
+        .collect::<surfcap_smg::error::Result<_>>()?;
     let key_frames: Vec<usize> = keys.iter().flat_map(|&(x, y)| [x, y]).collect();
     let full = grid(&(1..=20).map(f64::from).collect::<Vec<_>>(), &(1..=40).map(f64::from).collect::<Vec<_>>());
     let targets: Vec<(f64, f64)> = (0..a.targets).map(|i| full[i * full.len() / a.targets]).collect();
