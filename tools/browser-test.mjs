@@ -3,7 +3,7 @@
 // Checks what holds for any input: no console error, playback advances, the timeline and the
 // arrow keys seek, the speed control sets the speed, the legend lists exactly what is drawn
 // (from /api/items), and every vertex of every frame projects inside the view and clear of the
-// info panel. Prints one JSON line of what it saw, including the colours counted on the canvas
+// info panel; a frame set's item draws each frame's own vertex and triangle counts. Prints one JSON line of what it saw, including the colours counted on the canvas
 // and the timeline at an original and a synthetic frame (the caller asserts on those, since
 // which must appear depends on the input); exits 1 with a message when a check fails.
 import { chromium } from 'playwright-core';
@@ -72,7 +72,9 @@ try {
     await page.keyboard.press(key);
     const after = await viewer(() => window.surfcapViewer.frame);
     keys.push([key, before, after]);
-    if (after !== before + delta) fail(`${key} went from frame ${before} to ${after}, not ${before + delta}`);
+    // Stepping wraps around the ends (a short sequence wraps within the ten frames of Shift).
+    const expected = (((before + delta) % frames) + frames) % frames;
+    if (after !== expected) fail(`${key} went from frame ${before} to ${after}, not ${expected}`);
   }
   if (await viewer(() => window.surfcapViewer.playing)) fail('stepping with the arrow keys left the animation playing');
   // Speed.
@@ -96,6 +98,7 @@ try {
     labels.some((s) => s) && 'synthetic frame',
     meta.items.some((m) => m.overlay && m.overlay.curve) && 'requested path',
     meta.items.some((m) => m.overlay) && 'achieved centre of mass',
+    meta.items.some((m) => m.overlay && m.overlay.transitions.length) && 'transition (timeline)',
   ].filter(Boolean);
   const grid = await viewer(() => window.surfcapViewer.grid);
   if (!grid || !grid.text.includes(meta.items[0].units)) fail(`the grid is not labelled in ${meta.items[0].units}: ${JSON.stringify(grid)}`);
@@ -126,6 +129,21 @@ try {
     }
     return out;
   });
+  // A frame set (every frame its own mesh): each frame draws its own vertex and triangle
+  // counts, and they change from frame to frame.
+  const frameSets = [];
+  for (const [k, m] of meta.items.entries()) {
+    if (!m.frame_vertices) continue;
+    const seen = await viewer(({ k, n }) => {
+      const v = window.surfcapViewer, out = [];
+      for (let f = 0; f < n; f++) { v.setFrame(f); out.push([v.vertexCounts[k], v.triangleCounts[k]]); }
+      return out;
+    }, { k, n: m.n_frames });
+    const wrong = seen.findIndex(([nv, nt], f) => nv !== m.frame_vertices[f] || nt !== m.frame_triangles[f]);
+    if (wrong >= 0) fail(`${m.name} frame ${wrong} draws ${JSON.stringify(seen[wrong])} vertices/triangles, expected ${m.frame_vertices[wrong]}/${m.frame_triangles[wrong]}`);
+    const distinct = new Set(seen.map(([nv]) => nv)).size;
+    frameSets.push({ item: k, frames: seen.length, distinct_vertex_counts: distinct, first: seen.slice(0, 3) });
+  }
   if (framing.outside.length) fail(`${framing.outside.length} frames leave the view or pass under the panel, first ${JSON.stringify(framing.outside[0])}`);
   // Colours at an original and a synthetic frame (when the sequence has them): canvas and timeline.
   const spans = await viewer(() => window.surfcapViewer.spans[0]);
@@ -144,7 +162,7 @@ try {
   const painted = (colours.original || colours.synthetic).painted / (colours.original || colours.synthetic).pixels;
   if (!(painted > 0.001)) fail(`the canvas is blank (${(100 * painted).toFixed(2)}% painted)`);
   console.log(JSON.stringify({ advanced: [f0, f1], counter: text1, seeked: want, keys, speed, legend, grid,
-    framing: framing.worst, colours, timeline, painted, frames }));
+    framing: framing.worst, colours, timeline, painted, frames, frame_sets: frameSets }));
 } finally {
   await browser.close();
 }

@@ -256,10 +256,15 @@ impl ConstraintOpts {
 
 impl OutOpts {
     pub fn format(&self) -> ExportFormat {
-        self.format.unwrap_or_else(|| {
-            self.output.extension().and_then(|e| e.to_str()).and_then(ExportFormat::parse).unwrap_or(ExportFormat::Glb)
-        })
+        output_format(self.format, &self.output)
     }
+}
+
+/// The format an animation is written in: `--format`, else the output's extension, else glb.
+pub fn output_format(format: Option<ExportFormat>, output: &Path) -> ExportFormat {
+    format.unwrap_or_else(|| {
+        output.extension().and_then(|e| e.to_str()).and_then(ExportFormat::parse).unwrap_or(ExportFormat::Glb)
+    })
 }
 
 /// Opens a subject (cache or any importable source) with a progress bar and shows the notes.

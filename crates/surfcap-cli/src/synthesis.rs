@@ -9,7 +9,8 @@ use std::time::Instant;
 
 use serde_json::json;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
-use surfcap_mesh::export::export;
+use surfcap_mesh::export::{ExportFormat, export, export_frame_set};
+use surfcap_mesh::frame_set::FrameSet;
 use surfcap_mesh::{Subject, UpAxis};
 use surfcap_motion::graph::Graph;
 use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path, path_errors};
@@ -23,7 +24,7 @@ use crate::options::{ConstraintOpts, OutOpts};
 use crate::output::{count_of, mean, write_json};
 
 /// A soft constraint and how closely the walk met it (the report's `constraints`).
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Constraint {
     pub name: String,
     /// `frames`, or the subject's length unit (`m`, `cm`, ... or `arbitrary`).
@@ -58,6 +59,20 @@ impl Constraint {
             tolerance,
             missed: error > tolerance,
         }
+    }
+
+    /// One line for people: `distance: 3.02 m (asked 3, error 0.02)`, `missed` added when it was
+    /// (what the viewer shows beside a synthesis output).
+    pub fn summary(&self) -> String {
+        let missed = if self.missed { ", missed" } else { "" };
+        format!(
+            "{}: {} {} (asked {}, error {}{missed})",
+            self.name,
+            fmt_number(self.achieved),
+            self.unit,
+            fmt_number(self.asked),
+            fmt_number(self.error)
+        )
     }
 
     /// Sets `relative_error` to the error over `size` (the asked length or duration), when it
@@ -226,8 +241,7 @@ pub fn write_walk(
     let played = play_walk(&prep.pipe, &prep.params, prep.tracked.as_deref(), walk, start, name)?;
     let frames = played.frames();
     let result = s.derived(format!("{}-{name}", s.name), played.sequence)?;
-    let bar = crate::progress::Bar::new(ctx);
-    let written = export(&result, out.format(), &out.output, ctx.export_options(), &bar)?;
+    let written = write_animation(ctx, Animation::Subject(&result), out.format, &out.output)?;
     let obj = report.as_object_mut().expect("reports are JSON objects");
     obj.insert("subject".into(), json!(s.name));
     obj.insert("graph".into(), json!({ "kind": prep.params.kind, "alpha": prep.params.alpha,
@@ -249,6 +263,53 @@ pub fn write_walk(
         output: result,
         transitions: played.transitions,
     })
+}
+
+/// A synthesised animation to write: one topology (a subject's frames) or a frame set (every
+/// frame its own mesh: the surface motion graph's output on per-frame reconstructions).
+pub enum Animation<'a> {
+    Subject(&'a Subject),
+    FrameSet(&'a FrameSet),
+}
+
+/// Writes a synthesised animation to `output` and returns the paths written. An output ending
+/// in `.frames` (with no `--format`) is a frame-set folder, lossless and surfcap's own; anything
+/// else goes through the exporters in `format` (`--format`, else the extension, else glb: a
+/// frame set's glb holds a mesh per frame, see `surfcap_mesh::io::glb_frame_set`).
+pub fn write_animation(
+    ctx: &crate::Ctx,
+    animation: Animation,
+    format: Option<ExportFormat>,
+    output: &Path,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let bar = crate::progress::Bar::new(ctx);
+    if format.is_none() && output.extension().is_some_and(|e| e == "frames") {
+        let from_subject;
+        let set = match animation {
+            Animation::FrameSet(set) => set,
+            Animation::Subject(s) => {
+                from_subject = FrameSet::from_subject(s);
+                &from_subject
+            }
+        };
+        surfcap_mesh::frame_set_cache::write_frame_set(output, set, ctx.force, &bar)?;
+        return Ok(vec![output.to_path_buf()]);
+    }
+    let format = crate::options::output_format(format, output);
+    Ok(match animation {
+        Animation::Subject(s) => export(s, format, output, ctx.export_options(), &bar)?,
+        Animation::FrameSet(set) => export_frame_set(set, format, output, ctx.export_options(), &bar)?,
+    })
+}
+
+/// Adds what a synthesis report says about the travel of the written animation: the centre of
+/// every output frame (`per_frame.centre`, which `surfcap view` draws over the animation), and
+/// the net displacement and path length of that centre on the ground.
+pub fn add_travel(report: &mut serde_json::Value, centres: &[[f64; 3]], up: UpAxis) {
+    let (net, path) = surfcap_motion::clip_travel::horizontal_travel(centres, up);
+    report["net_displacement"] = json!(net);
+    report["path_length"] = json!(path);
+    report["per_frame"] = json!({ "centre": centres });
 }
 
 /// `x.glb` -> `x.report.json`, `dir/out` -> `dir/out.report.json`.

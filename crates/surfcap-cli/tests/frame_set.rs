@@ -80,14 +80,34 @@ fn a_folder_of_frames_with_their_own_topologies_imports_as_a_frame_set_and_subje
         assert!(!out.exists());
     }
     // A .frames folder exports to the formats that hold per-frame topology, and only to them.
-    let out = tmp.path().join("x.glb");
-    let o = surfcap!(&["export", p(&frames), "--format", "glb", "-o", p(&out)]);
+    let out = tmp.path().join("x.ply");
+    let o = surfcap!(&["export", p(&frames), "--format", "ply", "-o", p(&out)]);
     assert!(
-        stderr(&o).contains("cannot be written as Glb, which holds one topology: expected abc or obj"),
+        stderr(&o).contains("cannot be written as Ply, which holds one topology: expected glb, abc or obj"),
         "{}",
         stderr(&o)
     );
     assert!(!out.exists());
+    // As glb: a mesh per frame, valid glTF, played frame by frame by three.js, read back exactly.
+    let glb = tmp.path().join("x.glb");
+    let o = surfcap!(&["export", p(&frames), "--format", "glb", "-o", p(&glb), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
+    let played = &surfcap_testkit::three_load_glb(std::slice::from_ref(&glb))[0];
+    assert_eq!((played["kind"].as_str(), played["frames"][0].as_u64()), (Some("frame-set"), Some(3)), "{played}");
+    assert!(played["distinct_vertex_counts"][0].as_u64().unwrap() >= 2, "{played}");
+    let back = tmp.path().join("back.frames");
+    let o = surfcap!(&["import", p(&glb), "-o", p(&back), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (a, b) = (
+        surfcap_mesh::frame_set_cache::read_frame_set(&frames, &surfcap_mesh::NoProgress).unwrap(),
+        surfcap_mesh::frame_set_cache::read_frame_set(&back, &surfcap_mesh::NoProgress).unwrap(),
+    );
+    assert!(a.sequences()[0].frames() == b.sequences()[0].frames(), "the glb reads back as the same frames");
+    // A command that needs one topology refuses the glb, saying what it holds.
+    let o = surfcap!(&["distance", p(&glb), "-o", p(&tmp.path().join("d.npy"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains(refusal), "{}", stderr(&o));
 
     // A subject written as a frame set keeps its one topology, and reads back as that subject.
     let same = tmp.path().join("same");

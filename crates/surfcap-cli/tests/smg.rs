@@ -57,10 +57,26 @@ fn a_gallop_loops_to_fill_the_time_on_a_subject_and_on_a_frame_set() {
     assert!(r["path"].as_array().unwrap().len() >= 2, "the loop was taken: {}", r["path"]);
     assert!(r["path"][0].as_str().unwrap().starts_with("horse_gallop:0-"));
     surfcap_testkit::validate_glb(std::slice::from_ref(&out));
+    // Outputs as the other synthesis commands write them: the centre track (its length the
+    // distance covered), the asked distance and time, the transition frames; the viewer reads them.
+    overlay_checks(&out, &r);
+    assert_eq!(surfcap_testkit::three_load_glb(std::slice::from_ref(&out))[0]["targets"].as_u64(), Some(frames));
     // The same motion re-meshed frame by frame: a frame set in, a frame set out.
     let set = d.path().join("horse.frames");
     let o = surfcap!(&["--quiet", "remesh-frames", p(&horse), "--seed", "2", "-o", p(&set)]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // By default (here by its extension) a glb with a mesh per frame, played by three.js.
+    let glb = d.path().join("gallop-remeshed.glb");
+    let a = args(&set, &glb);
+    let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
+    let r = report(&glb);
+    overlay_checks(&glb, &r);
+    let played = &surfcap_testkit::three_load_glb(std::slice::from_ref(&glb))[0];
+    assert_eq!((played["kind"].as_str(), played["frames"][0].as_u64()), (Some("frame-set"), r["frames"].as_u64()));
+    assert!(played["distinct_vertex_counts"][0].as_u64().unwrap() > 1, "{played}");
+    // A .frames folder: the lossless product.
     let out = d.path().join("gallop-remeshed.frames");
     let a = args(&set, &out);
     let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
@@ -79,6 +95,31 @@ fn a_gallop_loops_to_fill_the_time_on_a_subject_and_on_a_frame_set() {
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(stderr(&o).contains("constraint time missed"), "{}", stderr(&o));
     assert!(d.path().join("strict.glb").is_file());
+}
+
+/// The report of `out` holds the centre of every frame, whose ground path is the distance
+/// covered, the asked distance and time and the transition frames; `surfcap view out` serves
+/// them as the item's overlay (a frame set's item with its per-frame vertex counts).
+fn overlay_checks(out: &std::path::Path, r: &Value) {
+    let frames = r["frames"].as_u64().unwrap();
+    assert_eq!(r["per_frame"]["centre"].as_array().unwrap().len() as u64, frames);
+    let (path, distance) = (r["path_length"].as_f64().unwrap(), r["distance"].as_f64().unwrap());
+    assert!((path - distance).abs() <= 1e-6 * distance.max(1.0), "centre path {path} vs distance {distance}");
+    assert_eq!((r["target_distance"].as_f64(), r["target_seconds"].as_f64()), (Some(0.0), Some(4.0)));
+    let switches = r["transition_frames"].as_array().unwrap();
+    assert_eq!(switches.len() + 1, r["path"].as_array().unwrap().len(), "a run of frames between transitions");
+    let server = surfcap_testkit::ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(out)]);
+    let (status, body) = server.get("/api/items");
+    assert_eq!(status, 200);
+    let item = &serde_json::from_slice::<Value>(&body).unwrap()["items"][0];
+    assert_eq!(item["n_frames"].as_u64(), Some(frames));
+    assert_eq!(item["overlay"]["centres"].as_array().unwrap().len() as u64, frames);
+    assert_eq!(&item["overlay"]["transitions"], &r["transition_frames"]);
+    let lines = item["overlay"]["constraints"].as_array().unwrap();
+    assert!(lines.len() == 2 && lines[0].as_str().unwrap().starts_with("distance: "), "{lines:?}");
+    if out.extension().is_some_and(|e| e == "glb") && r["input"].as_str().unwrap().ends_with(".frames") {
+        assert_eq!(item["frame_vertices"].as_array().unwrap().len() as u64, frames);
+    }
 }
 
 #[test]

@@ -167,6 +167,71 @@ fn the_viewer_frames_and_explains_synthesis_outputs() {
     assert_eq!(count(&seen, "colours/original", "red") + count(&seen, "colours/synthetic", "green"), 0, "{seen}");
 }
 
+/// A frame set (every frame its own mesh) plays: the surface motion graph's output on the
+/// re-meshed horse gallop, as a glb with a mesh per frame and as a `.frames` folder. Every frame
+/// draws its own vertex and triangle counts (checked frame by frame in Chromium), the counts
+/// change between frames, and the report's overlay is in the legend and its transitions on the
+/// timeline (the centre track runs inside the horse's body, so no colour count checks it).
+#[test]
+fn the_viewer_plays_a_frame_set() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let subject = tmp.path().join("horse.subject");
+    let horse = data.join("threejs_morph_animals/horse_gallop");
+    let o = surfcap!(&["--quiet", "import", p(&horse), "-o", p(&subject)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let set = tmp.path().join("horse.frames");
+    let o = surfcap!(&["--quiet", "remesh-frames", p(&subject), "--seed", "2", "-o", p(&set)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let glb = tmp.path().join("gallop.glb");
+    let o = surfcap!(&[
+        "--quiet",
+        "smg",
+        "query",
+        p(&set),
+        "--connect",
+        "horse_gallop:horse_gallop",
+        "--from",
+        "horse_gallop:0",
+        "--to",
+        "horse_gallop:15",
+        "--time",
+        "3",
+        "--distance",
+        "0",
+        "--distance-weight",
+        "0.0001",
+        "--windows",
+        "2-4",
+        "--tolerance",
+        "1000",
+        "--cache-dir",
+        p(&tmp.path().join("cache")),
+        "-o",
+        p(&glb)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("gallop.report.json")).unwrap()).unwrap();
+    let frames = report["frames"].as_u64().unwrap();
+    for input in [&glb, &set] {
+        let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(input)]);
+        let seen = browser_test(&server.url, &tmp.path().join("frames.png"));
+        let f = &seen["frame_sets"][0];
+        assert!(f["distinct_vertex_counts"].as_u64().unwrap() > 1, "{seen}");
+        if input == &glb {
+            assert_eq!((seen["frames"].as_u64(), f["frames"].as_u64()), (Some(frames), Some(frames)), "{seen}");
+            let legend = ["original frame", "achieved centre of mass", "transition (timeline)"];
+            assert_eq!(seen["legend"].as_array().unwrap()[..3], legend.map(serde_json::Value::from), "{seen}");
+            // The transitions on the timeline (counted as blue there: no other blue is drawn).
+            assert!(count(&seen, "timeline", "blue") > 100, "{seen}");
+        } else {
+            assert_eq!(seen["frames"].as_u64(), Some(16), "{seen}");
+        }
+        assert!(count(&seen, "colours/original", "green") > 500, "{seen}");
+    }
+}
+
 #[test]
 fn bad_paths_get_a_clear_error() {
     let tmp = tempfile::tempdir().unwrap();

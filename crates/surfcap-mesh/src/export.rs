@@ -138,7 +138,8 @@ pub fn frame_set_sidecar(set: &FrameSet) -> serde_json::Value {
     })
 }
 
-/// Writes a frame set (every frame its own topology) to `out`: `.abc` (a `PolyMesh` of
+/// Writes a frame set (every frame its own topology) to `out`: `.glb` (a mesh per frame, shown
+/// one at a time: `io::glb_frame_set`), `.abc` (a `PolyMesh` of
 /// heterogeneous topology per sequence) or `obj` (a folder per sequence of `frame_NNNNN.obj`,
 /// as per-frame reconstructions are exchanged); the other formats hold one topology and refuse
 /// it. Returns the paths written.
@@ -151,9 +152,13 @@ pub fn export_frame_set(
 ) -> Result<Vec<PathBuf>> {
     let meta = frame_set_sidecar(set);
     match format {
-        ExportFormat::Abc => {
-            progress.start("writing abc", 1);
-            write_file(out, |w| crate::io::abc::write_abc_frame_set(w, set))?;
+        ExportFormat::Glb | ExportFormat::Abc => {
+            progress.start(if format == ExportFormat::Glb { "writing glb" } else { "writing abc" }, 1);
+            if format == ExportFormat::Glb {
+                write_file(out, |w| crate::io::glb_frame_set::write_glb_frame_set(w, set))?;
+            } else {
+                write_file(out, |w| crate::io::abc::write_abc_frame_set(w, set))?;
+            }
             let side = glb_sidecar_path(out);
             write_json(&side, &meta)?;
             progress.finish();
@@ -178,7 +183,7 @@ pub fn export_frame_set(
         other => Err(crate::Error::new(
             crate::ErrorKind::Unsupported,
             format!(
-                "a frame set (every frame its own topology) cannot be written as {other:?}, which holds one topology: expected abc or obj"
+                "a frame set (every frame its own topology) cannot be written as {other:?}, which holds one topology: expected glb, abc or obj"
             ),
         )),
     }

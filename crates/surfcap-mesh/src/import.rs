@@ -223,6 +223,11 @@ pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSeq
         }
         "glb" => {
             let bytes = crate::io::regular_file::read_regular_file(path)?;
+            if let Some(m) = crate::io::glb_frame_set::frame_set_meta(&bytes) {
+                let frames: u64 = m["sequences"].as_array().into_iter().flatten().filter_map(|q| q["frames"].as_u64()).sum();
+                let why = format!("{} holds a frame set (a mesh per frame, {} frames)", path.display(), thousands(frames as usize));
+                return subject_only((Vec::new(), Some(why)));
+            }
             let g = crate::io::glb::parse_glb(&bytes).map_err(|e| e.in_file(path))?;
             Ok(g.sequences
                 .into_iter()
@@ -503,6 +508,7 @@ fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     let file_pieces = match ext.as_str() {
         "abc" if !path.is_dir() => Some(alembic_pieces(path, progress)?),
+
         "usda" | "usd" if !path.is_dir() => Some(usda_pieces(path, progress)?),
         _ => None,
     };
@@ -516,6 +522,15 @@ fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut Vec<String>
     let e = match first_try {
         Ok(seqs) => return Ok(seqs.into_iter().map(Piece::Shared).collect()),
         Err(e) if e.kind == ErrorKind::TopologyMismatch && path.is_dir() => e,
+        // A frame-set glb (read again only then: a subject's glb is read once).
+        Err(e) if e.kind == ErrorKind::TopologyMismatch && ext == "glb" => {
+            let bytes = crate::io::regular_file::read_regular_file(path)?;
+            let (pieces, why) = glb_frame_set_pieces(path, &bytes)?;
+            if let Some(why) = why {
+                notes.push(format!("{why}: imported as a frame set; commands that need one topology cannot use it"));
+            }
+            return Ok(pieces);
+        }
         Err(e) => return Err(e),
     };
     // Only a frame folder reaches `read_frame_folder`, the one reader that reports a frame's
@@ -705,6 +720,20 @@ fn usda_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
         }));
     }
     Ok((pieces, mismatch))
+}
+
+/// A frame-set glb (`io::glb_frame_set`: a mesh per frame) as pieces, with why it is a frame set.
+fn glb_frame_set_pieces(path: &Path, bytes: &[u8]) -> Result<FilePieces> {
+    let set = crate::io::glb_frame_set::parse_glb_frame_set(bytes, &file_stem(path)).map_err(|e| e.in_file(path))?;
+    let why =
+        format!("{} holds a frame set (a mesh per frame, {} frames)", path.display(), thousands(set.frame_count()));
+    let mut pieces = frame_set_pieces(&set, path);
+    for p in &mut pieces {
+        if let Piece::Frames(f) = p {
+            f.layout = SourceLayout::Glb;
+        }
+    }
+    Ok((pieces, Some(why)))
 }
 
 /// A frame set's sequences as pieces (to merge a `.frames` folder with more data).

@@ -24,13 +24,19 @@ pub struct ViewItem {
     pub units: String,
     /// Metres per unit, `None` for arbitrary units.
     pub metres_per_unit: Option<f64>,
+    /// Vertices of a frame; for a frame set (every frame its own mesh) the largest frame's.
     pub n_vertices: usize,
     pub n_frames: usize,
+    /// A frame set's vertex and triangle counts, frame by frame: `positions` then holds the
+    /// frames one after the other (`[sum of vertices][3]`) and `faces` their triangles, indices
+    /// local to the frame. `None` for one shared topology.
+    pub frame_vertices: Option<Vec<usize>>,
+    pub frame_triangles: Option<Vec<usize>>,
     /// One flag per frame: whether surfcap made it (red) rather than captured it (green).
     pub synthetic: Vec<bool>,
     #[serde(skip)]
     pub faces: Vec<u32>,
-    /// `[frames][vertices][3]` positions.
+    /// `[frames][vertices][3]` positions (a frame set's: see `frame_vertices`).
     #[serde(skip)]
     pub positions: Vec<f32>,
     /// The centre trajectory a synthesis achieved, with the path it was asked to follow if any.
@@ -56,6 +62,12 @@ impl ViewItem {
 pub struct Overlay {
     pub curve: Option<Vec<[f64; 3]>>,
     pub centres: Vec<[f64; 3]>,
+    /// Frames at which the animation jumps to another part of the data (the surface motion
+    /// graph's transitions, which play captured frames only): marked on the timeline.
+    pub transitions: Vec<usize>,
+    /// What was asked and achieved, one line per constraint (`distance: 3.02 of 3 m asked`),
+    /// shown in the panel.
+    pub constraints: Vec<String>,
 }
 
 /// Why an item cannot be shown.
@@ -67,6 +79,10 @@ pub enum ViewError {
     Labels(String, usize, usize),
     #[error("{0}: face index {1} is not a vertex (expected 0 to {last})", last = .2.saturating_sub(1))]
     Face(String, u32, usize),
+    #[error("{0}: {1} per-frame counts for {2} frames, or they do not add up to the positions and faces")]
+    FrameCounts(String, usize, usize),
+    #[error("{0}: transition mark at frame {1}, past the last frame ({2})")]
+    Transition(String, usize, usize),
     #[error("{0}: {1} colour values: expected 3 per vertex ({2})")]
     Colours(String, usize, usize),
     #[error("{0}: the sequence has no frames")]
@@ -88,6 +104,17 @@ impl ViewItem {
         if self.n_frames == 0 {
             return Err(ViewError::Empty(self.name.clone()));
         }
+        if let Some(o) = &self.overlay
+            && let Some(&t) = o.transitions.iter().find(|&&t| t >= self.n_frames)
+        {
+            return Err(ViewError::Transition(self.name.clone(), t, self.n_frames - 1));
+        }
+        if let (Some(nv), Some(nt)) = (&self.frame_vertices, &self.frame_triangles) {
+            return self.check_frames(nv, nt);
+        }
+        if self.frame_vertices.is_some() || self.frame_triangles.is_some() {
+            return Err(ViewError::FrameCounts(self.name.clone(), 0, self.n_frames));
+        }
         if per_frame == 0 || self.positions.len() != per_frame * self.n_frames {
             return Err(ViewError::Shape(self.name.clone(), self.positions.len(), self.n_vertices));
         }
@@ -104,11 +131,74 @@ impl ViewItem {
         }
         Ok(())
     }
+
+    /// [`ViewItem::check`] for a frame set: counts per frame that add up, every frame's face
+    /// indices inside its own vertices, `n_vertices` the largest frame's, one label per frame.
+    fn check_frames(&self, nv: &[usize], nt: &[usize]) -> Result<(), ViewError> {
+        let bad = || ViewError::FrameCounts(self.name.clone(), nv.len(), self.n_frames);
+        if nv.len() != self.n_frames || nt.len() != self.n_frames || self.colours.is_some() {
+            return Err(bad());
+        }
+        if nv.iter().sum::<usize>() * 3 != self.positions.len()
+            || nt.iter().sum::<usize>() * 3 != self.faces.len()
+            || nv.iter().max() != Some(&self.n_vertices)
+            || self.n_vertices == 0
+        {
+            return Err(bad());
+        }
+        if self.synthetic.len() != self.n_frames {
+            return Err(ViewError::Labels(self.name.clone(), self.synthetic.len(), self.n_frames));
+        }
+        let mut at = 0;
+        for (&v, &t) in nv.iter().zip(nt) {
+            if let Some(&f) = self.faces[at..at + 3 * t].iter().find(|&&f| f as usize >= v) {
+                return Err(ViewError::Face(self.name.clone(), f, v));
+            }
+            at += 3 * t;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
 mod message_tests {
-    use super::ViewError;
+    use super::{ViewError, ViewItem};
+
+    /// A frame set's item: a triangle, then a quad of two triangles.
+    fn frames() -> ViewItem {
+        ViewItem {
+            name: "set".into(),
+            fps: 25.0,
+            up: "+y".into(),
+            units: "m".into(),
+            metres_per_unit: Some(1.0),
+            n_vertices: 4,
+            n_frames: 2,
+            frame_vertices: Some(vec![3, 4]),
+            frame_triangles: Some(vec![1, 2]),
+            synthetic: vec![false, false],
+            faces: vec![0, 1, 2, 0, 1, 2, 0, 2, 3],
+            positions: vec![0.0; 21],
+            overlay: None,
+            colours: None,
+            colour_legend: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_frame_set_item_is_checked_frame_by_frame() {
+        frames().check().unwrap();
+        // Index 3 is a vertex of frame 1 but not of frame 0.
+        let mut bad = frames();
+        bad.faces[2] = 3;
+        assert_eq!(bad.check().unwrap_err().to_string(), "set: face index 3 is not a vertex (expected 0 to 2)");
+        let mut short = frames();
+        short.positions.pop();
+        assert!(matches!(short.check(), Err(ViewError::FrameCounts(..))));
+        let mut counts = frames();
+        counts.frame_triangles = None;
+        assert!(matches!(counts.check(), Err(ViewError::FrameCounts(..))));
+    }
 
     #[test]
     fn a_bad_face_index_names_the_last_valid_vertex() {

@@ -3,7 +3,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 const GREEN = new THREE.Color(0x2e9e44), RED = new THREE.Color(0xd03030);
-const PATH = 0x1f5fbf, CENTRE = 0xe08a00, GRID = 0xb4b4b0;
+const PATH = 0x1f5fbf, CENTRE = 0xe08a00, GRID = 0xb4b4b0, TRANSITION = 0x7b2cbf;
 const $ = (id) => document.getElementById(id);
 const hex = (c) => `#${new THREE.Color(c).getHexString()}`;
 
@@ -57,6 +57,18 @@ function animationBox(m, positions) {
   return box;
 }
 
+// Start of every frame's vertices and triangles in a frame set's arrays, and its largest frame.
+function offsets(vertices, triangles) {
+  const v = [0], t = [0];
+  let maxTriangles = 0;
+  for (let f = 0; f < vertices.length; f++) {
+    v.push(v[f] + vertices[f]);
+    t.push(t[f] + triangles[f]);
+    maxTriangles = Math.max(maxTriangles, triangles[f]);
+  }
+  return { v, t, maxTriangles };
+}
+
 async function load() {
   const meta = await (await fetch('/api/items')).json();
   if (meta.report) $('report').innerHTML = `<a href="${meta.report}" target="_blank">open the report</a>`;
@@ -69,11 +81,17 @@ async function load() {
       m.has_colours ? fetchBytes(`/api/items/${k}/colours`) : null,
     ]);
     const positions = new Float32Array(pos);
+    const faceArray = new Uint32Array(faces);
+    // A frame set (every frame its own mesh): where each frame's vertices and triangles start.
+    const frameSet = m.frame_vertices ? offsets(m.frame_vertices, m.frame_triangles) : null;
     const geometry = new THREE.BufferGeometry();
     const attr = new THREE.BufferAttribute(positions.slice(0, 3 * m.n_vertices), 3);
     attr.setUsage(THREE.DynamicDrawUsage);
     geometry.setAttribute('position', attr);
-    geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(faces), 1));
+    // A frame set's index holds the largest frame's triangles; each frame fills its start.
+    const index = new THREE.BufferAttribute(frameSet ? new Uint32Array(3 * frameSet.maxTriangles) : faceArray, 1);
+    if (frameSet) index.setUsage(THREE.DynamicDrawUsage);
+    geometry.setIndex(index);
     geometry.computeVertexNormals();
     // Per-vertex colours (body parts...), linear RGB in 0..1, replace the frame colour.
     if (colours) geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(colours), 3));
@@ -95,11 +113,19 @@ async function load() {
     placed.add(turned);
     scene.add(placed);
     const hue = new THREE.Color().setHSL((k * 0.61803) % 1, 0.6, 0.5);
-    list.push({ meta: m, positions, geometry, material, mesh, placed, turned, hue, box: animationBox(m, positions) });
+    list.push({ meta: m, positions, faces: faceArray, frameSet, nv: m.n_vertices, geometry, material, mesh, placed, turned, hue,
+      box: animationBox(m, positions) });
+    const vertices = frameSet ? `${m.frame_vertices.reduce((a, b) => Math.min(a, b))}-${m.n_vertices} vertices (a mesh per frame)` : `${m.n_vertices} vertices`;
     const row = document.createElement('div');
-    row.textContent = `${m.name}: ${m.n_frames} frames, ${m.n_vertices} vertices, ${m.fps} fps` +
+    row.textContent = `${m.name}: ${m.n_frames} frames, ${vertices}, ${m.fps} fps` +
       (m.synthetic.some((s) => s) ? `, ${m.synthetic.filter((s) => s).length} synthetic` : '');
     $('items').appendChild(row);
+    for (const c of (m.overlay && m.overlay.constraints) || []) {
+      const line = document.createElement('div');
+      line.className = 'constraint';
+      line.textContent = c;
+      $('items').appendChild(line);
+    }
   }
   state.items = list;
   state.fps = list[0].meta.fps;
@@ -271,6 +297,7 @@ function buildLegend() {
   }
   if (state.items.some((it) => it.meta.overlay && it.meta.overlay.curve)) entries.push([hex(PATH), 'requested path']);
   if (state.items.some((it) => it.meta.overlay)) entries.push([hex(CENTRE), 'achieved centre of mass']);
+  if (state.items.some((it) => it.meta.overlay && it.meta.overlay.transitions.length)) entries.push([hex(TRANSITION), 'transition (timeline)']);
   if (state.grid) entries.push([hex(GRID), `grid: ${state.grid.text}`]);
   $('legend').replaceChildren(...entries.map(([colour, text]) => {
     const row = document.createElement('div'), swatch = document.createElement('span');
@@ -303,6 +330,12 @@ function drawTrack() {
       g.fillStyle = hex(s.synthetic ? RED : GREEN);
       g.fillRect(x(s.from), k * rowH + 1, Math.max(1, x(s.to) - x(s.from)), rowH - 2);
     }
+    // Transitions (shorter items loop, so are their marks).
+    const m = it.meta, marks = (m.overlay && m.overlay.transitions) || [];
+    g.fillStyle = hex(TRANSITION);
+    for (let r = 0; r * m.n_frames < state.frames; r++) {
+      for (const f of marks) g.fillRect(x(r * m.n_frames + f) - 1, k * rowH, Math.max(2, W / state.frames / 3), rowH);
+    }
   });
   g.fillStyle = '#111';
   const w = Math.max(2, W / state.frames);
@@ -314,7 +347,19 @@ function showFrame(f) {
   for (const it of state.items) {
     const m = it.meta, k = f % m.n_frames, n = 3 * m.n_vertices;  // shorter sequences loop
     const attr = it.geometry.getAttribute('position');
-    attr.array.set(it.positions.subarray(k * n, (k + 1) * n));
+    if (it.frameSet) {
+      // This frame's own mesh: its vertices and triangles at the start of the arrays, the rest
+      // of the index zeroed (degenerate) and left out of the draw range.
+      const { v, t } = it.frameSet, index = it.geometry.getIndex();
+      attr.array.set(it.positions.subarray(3 * v[k], 3 * v[k + 1]));
+      index.array.set(it.faces.subarray(3 * t[k], 3 * t[k + 1]));
+      index.array.fill(0, 3 * (t[k + 1] - t[k]));
+      index.needsUpdate = true;
+      it.geometry.setDrawRange(0, 3 * (t[k + 1] - t[k]));
+      it.nv = v[k + 1] - v[k];
+    } else {
+      attr.array.set(it.positions.subarray(k * n, (k + 1) * n));
+    }
     attr.needsUpdate = true;
     it.geometry.computeVertexNormals();
     if (!m.has_colours) it.material.color.copy($('hues').checked ? it.hue : (m.synthetic[k] ? RED : GREEN));
@@ -370,7 +415,7 @@ function screenBounds() {
   for (const it of state.items) {
     it.mesh.updateMatrixWorld(true);
     const a = it.geometry.getAttribute('position').array;
-    for (let i = 0; i < a.length; i += 3) {
+    for (let i = 0; i < 3 * it.nv; i += 3) {
       p.set(a[i], a[i + 1], a[i + 2]).applyMatrix4(it.mesh.matrixWorld).project(camera);
       const x = ((p.x + 1) / 2) * v.clientWidth, y = ((1 - p.y) / 2) * v.clientHeight;
       r.left = Math.min(r.left, x); r.right = Math.max(r.right, x);
@@ -393,6 +438,9 @@ window.surfcapViewer = {
   get overlays() { return state.items.map((it) => ({ curve: !!(it.meta.overlay && it.meta.overlay.curve), centres: !!it.meta.overlay })); },
   get spans() { return state.items.map((it) => spans(it.meta)); },
   get colours() { return state.items.map((it) => !!it.meta.has_colours); },
+  // Vertices and triangles of the mesh drawn now, per item (a frame set's change frame by frame).
+  get vertexCounts() { return state.items.map((it) => it.nv); },
+  get triangleCounts() { return state.items.map((it) => it.geometry.drawRange.count === Infinity ? it.geometry.getIndex().count / 3 : it.geometry.drawRange.count / 3); },
   setFrame(f) { state.time = (f + 0.5) / state.fps; showFrame(Math.max(0, Math.min(state.frames - 1, f))); },
   screenBounds,
   ready: false,

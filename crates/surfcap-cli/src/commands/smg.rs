@@ -3,8 +3,11 @@
 //! engine (issue 17): the input may be a subject or a frame set (every frame its own topology).
 //! The library does the work (`surfcap_smg`: the similarity, cached; the graph from the user's
 //! higher level and the two key frames; the ILP path); this command opens the input, writes the
-//! animation (a subject's: any `--format`; a frame set's: a `.frames` folder) and its report,
-//! and reports a missed distance or time as missed (`--strict`: exit 3).
+//! animation and its report as the other synthesis commands do (`synthesis::write_animation`:
+//! glb by default, a subject's in any `--format`, a frame set's as glb (a mesh per frame), abc,
+//! obj or a `.frames` folder; the report with the centre track, the target distance and the
+//! transition frames that `surfcap view` draws), and reports a missed distance or time as
+//! missed (`--strict`: exit 3).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -13,14 +16,14 @@ use anyhow::Context;
 use serde_json::json;
 use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
 use surfcap_mesh::import::{ImportedData, open_any};
-use surfcap_mesh::{Sequence, Topology};
+use surfcap_mesh::{Sequence, Subject, Topology, Units};
 use surfcap_smg::motion_frames::MotionFrames;
-use surfcap_smg::path_optimisation::{PathQuery, optimise_path, path_segments, play_path};
+use surfcap_smg::path_optimisation::{PathQuery, PathSolution, PlayedFrame, optimise_path, path_segments, play_path};
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{GraphInput, build_graph};
 
 use crate::options::{CacheOpts, ConstraintOpts, SourceOpts};
-use crate::synthesis::{Constraint, check_constraints, report_path};
+use crate::synthesis::{Animation, Constraint, add_travel, check_constraints, report_path, write_animation};
 
 #[derive(clap::Subcommand, Debug)]
 pub enum Cmd {
@@ -68,11 +71,13 @@ pub struct QueryArgs {
     /// Weight of a time error per frame (the paper: 1/10).
     #[arg(long, default_value_t = 0.1, value_parser = crate::options::positive)]
     pub time_weight: f64,
-    /// Output: for a subject a .glb, .abc or .usda file or a folder (see --format); for a frame
-    /// set a `.frames` folder. The report goes beside it as <output>.report.json.
+    /// Output: a .glb (the default format), .abc or .usda file, a folder (see --format), or a
+    /// `.frames` folder (surfcap's own frame set, lossless). The report goes beside it as
+    /// <output>.report.json, which `surfcap view <output>` shows over the animation.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// glb, obj, ply, pc2, npy, usda or abc (a subject's output; default from the extension).
+    /// glb, obj, ply, pc2, npy, usda or abc (default: from the extension, else glb); a frame
+    /// set's output (every frame its own mesh) is glb, abc or obj.
     #[arg(long)]
     pub format: Option<surfcap_mesh::export::ExportFormat>,
     #[command(flatten)]
@@ -81,6 +86,55 @@ pub struct QueryArgs {
     pub cache: CacheOpts,
     #[command(flatten)]
     pub source: SourceOpts,
+}
+
+/// Writes the played path: a subject's frames as one sequence of the subject, a frame set's as a
+/// frame set (every frame its own mesh), in the format the output asks for
+/// (`synthesis::write_animation`: glb by default, `.frames` a frame-set folder).
+fn write_output(
+    ctx: &crate::Ctx,
+    a: &QueryArgs,
+    frames: &MotionFrames,
+    subject: Option<&Subject>,
+    played: Vec<PlayedFrame>,
+    name: String,
+    units: &Units,
+) -> anyhow::Result<Vec<PathBuf>> {
+    match subject {
+        Some(s) => {
+            let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
+            let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
+            let result = s.derived(name, sequence)?;
+            write_animation(ctx, Animation::Subject(&result), a.format, &a.output)
+        }
+        None => {
+            let per_frame = played
+                .into_iter()
+                .map(|(p, t)| Ok((Topology::new(p.len() / 3, t.to_vec(), None)?, p)))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            let sequence = FrameSetSequence::from_frames("smg", per_frame)?;
+            let set = FrameSet::new(name, vec![sequence], frames.fps, frames.up, units.clone())?;
+            write_animation(ctx, Animation::FrameSet(&set), a.format, &a.output)
+        }
+    }
+}
+
+/// The area-weighted centroid of every output frame: its source frame's, moved by the ground
+/// offset the path adds there (as `play_path` moves the vertices).
+fn played_centres(frames: &MotionFrames, path: &PathSolution) -> Vec<[f64; 3]> {
+    let centroids = frames.centroids();
+    let (axis, _) = frames.up.axis_and_sign();
+    let (x, y) = ((axis + 1) % 3, (axis + 2) % 3);
+    path.frames
+        .iter()
+        .zip(&path.offsets)
+        .map(|(&f, o)| {
+            let mut c = centroids[f];
+            c[x] += o[0];
+            c[y] += o[1];
+            c
+        })
+        .collect()
 }
 
 fn windows(text: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
@@ -154,42 +208,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
     let path = optimise_path(&graph, &ground, &q)?;
     let query_seconds = t1.elapsed().as_secs_f64();
     let played = play_path(&frames, &path);
-    let name = format!("{set_name}-smg");
-    let written = match subject {
-        Some(s) => {
-            let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
-            let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
-            let result = s.derived(name, sequence)?;
-            let format = a.format.unwrap_or_else(|| {
-                a.output
-                    .extension()
-                    .and_then(|e| e.to_str())
-                    .and_then(surfcap_mesh::export::ExportFormat::parse)
-                    .unwrap_or(surfcap_mesh::export::ExportFormat::Glb)
-            });
-            surfcap_mesh::export::export(&result, format, &a.output, ctx.export_options(), &bar)?
-        }
-        None => {
-            if a.format.is_some() {
-                anyhow::bail!(
-                    "--format: a frame set's animation is written as a .frames folder (every frame its own topology)"
-                );
-            }
-            let per_frame = played
-                .into_iter()
-                .map(|(p, t)| Ok((Topology::new(p.len() / 3, t.to_vec(), None)?, p)))
-                .collect::<anyhow::Result<Vec<_>>>()?;
-            let set = FrameSet::new(
-                name,
-                vec![FrameSetSequence::from_frames("smg", per_frame)?],
-                frames.fps,
-                frames.up,
-                units.clone(),
-            )?;
-            surfcap_mesh::frame_set_cache::write_frame_set(&a.output, &set, ctx.force, &bar)?;
-            vec![a.output.clone()]
-        }
-    };
+    let written = write_output(ctx, &a, &frames, subject, played, format!("{set_name}-smg"), &units)?;
     let unit = crate::output::unit_name(&units).to_string();
     let constraints = vec![
         Constraint::new(
@@ -204,7 +223,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         Constraint::new("time", "frames", q.frames, path.frames.len() as f64, path.time_error, a.constraints.frames())
             .relative_to(q.frames),
     ];
-    let report = json!({
+    let mut report = json!({
         "input": a.input,
         "engine": "surface motion graph (Huang et al. 2009)",
         "fps": frames.fps,
@@ -230,7 +249,15 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         "ilp_solves": path.ilp_solves,
         "constraints": constraints,
         "outputs": written,
+        "target_distance": a.distance,
+        "target_seconds": a.time,
+        "seconds": path.frames.len() as f64 / frames.fps,
+        // Output frames where the path jumps to another sequence or back (the transitions play
+        // captured frames only, nothing is blended, so every frame is labelled original):
+        // `surfcap view` marks them on its timeline.
+        "transition_frames": path.switches,
     });
+    add_travel(&mut report, &played_centres(&frames, &path), frames.up);
     let rp = report_path(&a.output);
     crate::output::write_json(&rp, &report)?;
     ctx.result(&report, || {

@@ -1,20 +1,22 @@
 //! `surfcap view`: plays sequences in the browser (see `surfcap-view`). Accepts anything
-//! `surfcap import` reads (a glb, a subject cache, a capture folder) and report folders written
-//! by `surfcap report` or `surfcap demo`; several at once play side by side.
+//! `surfcap import` reads (a glb, a subject cache, a capture folder, a frame set: a `.frames`
+//! folder or its glb, every frame its own mesh) and report folders written by `surfcap report`
+//! or `surfcap demo`; several at once play side by side. A synthesis output (`x.glb`,
+//! `x.frames`) shows what its report `x.report.json` holds (see [`overlay_of`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use surfcap_mesh::Subject;
+use surfcap_mesh::import::ImportedData;
 use surfcap_view::server::{ServeOptions, serve};
 use surfcap_view::{Overlay, ViewItem};
 
-use crate::options::{SourceOpts, open};
+use crate::options::SourceOpts;
 use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to play: .glb files, subject caches, capture folders, or a report folder.
+    /// What to play: .glb files, subject caches, frame sets (.frames), capture folders, or a report folder.
     #[arg(required = true)]
     pub paths: Vec<PathBuf>,
     /// Port on 127.0.0.1 (default: any free one; the URL is printed).
@@ -32,26 +34,53 @@ fn is_report(p: &Path) -> bool {
     p.is_dir() && p.join("index.html").is_file() && !surfcap_mesh::cache::is_cache(p)
 }
 
-/// The achieved centres (and the requested path, when there is one) a synthesis report
-/// (`x.report.json` next to `x.glb`) holds.
-fn overlay_of(glb: &Path, frames: usize) -> Option<Overlay> {
-    let report = crate::synthesis::report_path(glb);
+/// What a synthesis report (`x.report.json` next to the output `x.glb` or `x.frames`) adds to
+/// the animation: the achieved centres (one per frame), the requested path when there is one,
+/// the frames where a transition lands, and a line per constraint.
+fn overlay_of(output: &Path, frames: usize) -> Option<Overlay> {
+    let report = crate::synthesis::report_path(output);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(report).ok()?).ok()?;
     let points = |x: &serde_json::Value| -> Option<Vec<[f64; 3]>> {
         x.as_array()?.iter().map(|p| Some([p[0].as_f64()?, p[1].as_f64()?, p[2].as_f64()?])).collect()
     };
     let curve = points(&v["curve"]);
     let centres = points(&v["per_frame"]["centre"])?;
-    (centres.len() == frames).then_some(Overlay { curve, centres })
+    let transitions: Vec<usize> = v["transition_frames"]
+        .as_array()
+        .map(|t| t.iter().filter_map(|f| f.as_u64().map(|f| f as usize)).filter(|&f| f < frames).collect())
+        .unwrap_or_default();
+    let constraints = serde_json::from_value::<Vec<crate::synthesis::Constraint>>(v["constraints"].clone())
+        .map(|c| c.iter().map(crate::synthesis::Constraint::summary).collect())
+        .unwrap_or_default();
+    (centres.len() == frames).then_some(Overlay { curve, centres, transitions, constraints })
 }
 
-fn items_of(s: &Subject, only: &[String], glb: Option<&Path>) -> Vec<ViewItem> {
-    let single = s.sequences().len() == 1;
-    let mut items = crate::view_items::view_items(s, only);
-    for item in &mut items {
-        item.overlay = glb.filter(|_| single).and_then(|g| overlay_of(g, item.n_frames));
+/// Whether `p` may be a synthesis output with a report beside it (a `.glb` or a `.frames` folder).
+fn is_output(p: &Path) -> bool {
+    p.extension().is_some_and(|x| x == "glb" || x == "frames")
+}
+
+/// The items of what `p` holds (a subject's or a frame set's), with the overlay of the report
+/// beside `output` when it has one sequence.
+fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> anyhow::Result<Vec<ViewItem>> {
+    let bar = crate::progress::Bar::new(ctx);
+    let mut items = match surfcap_mesh::import::open_any(p, &a.source.to_import(None)?, &bar)? {
+        ImportedData::Subject(i) => {
+            for n in &i.notes {
+                ctx.note(n);
+            }
+            let single = i.subject.sequences().len() == 1;
+            (crate::view_items::view_items(&i.subject, &a.sequences), single)
+        }
+        ImportedData::FrameSet(f) => {
+            let single = f.frame_set.sequences().len() == 1;
+            (crate::view_items::frame_set_items(&f.frame_set, &a.sequences), single)
+        }
+    };
+    for item in &mut items.0 {
+        item.overlay = output.filter(|_| items.1).and_then(|g| overlay_of(g, item.n_frames));
     }
-    items
+    Ok(items.0)
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -64,14 +93,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let glbs = crate::files::files_under(p, &["glb"])?;
             anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
             for g in glbs {
-                let s = open(ctx, &g, &a.source)?;
-                items.extend(items_of(&s, &a.sequences, Some(&g)));
+                items.extend(open_items(ctx, &g, &a, Some(&g))?);
             }
             report = Some(p.clone());
         } else {
-            let s = open(ctx, p, &a.source)?;
-            let glb = p.extension().is_some_and(|x| x == "glb").then_some(p.as_path());
-            items.extend(items_of(&s, &a.sequences, glb));
+            items.extend(open_items(ctx, p, &a, is_output(p).then_some(p.as_path()))?);
         }
     }
     anyhow::ensure!(!items.is_empty(), "view: no sequence named {} in what was given", a.sequences.join(", "));

@@ -35,7 +35,7 @@ pub struct GlbAnimation {
 }
 
 /// Quaternion (x, y, z, w) turning `up` onto +Y.
-fn up_to_y(up: UpAxis) -> Option<json::scene::UnitQuaternion> {
+pub(super) fn up_to_y(up: UpAxis) -> Option<json::scene::UnitQuaternion> {
     let h = std::f32::consts::FRAC_1_SQRT_2;
     let q = match up {
         UpAxis::PosY => return None,
@@ -48,7 +48,7 @@ fn up_to_y(up: UpAxis) -> Option<json::scene::UnitQuaternion> {
     Some(json::scene::UnitQuaternion(q))
 }
 
-fn raw(v: Value) -> json::Extras {
+pub(super) fn raw(v: Value) -> json::Extras {
     Some(serde_json::value::to_raw_value(&v).expect("a serde_json::Value always serialises"))
 }
 
@@ -56,7 +56,7 @@ fn raw(v: Value) -> json::Extras {
 pub const GLB_MAX_BYTES: u64 = u32::MAX as u64;
 
 /// Bytes of the glTF header and the two chunk headers.
-const HEADERS: u64 = 12 + 8 + 8;
+pub(super) const HEADERS: u64 = 12 + 8 + 8;
 
 /// One buffer view's data, produced from the subject while the binary chunk is written.
 enum Part {
@@ -131,7 +131,7 @@ fn key_time(s: &Subject, frame: usize) -> f32 {
     (frame as f64 / s.fps) as f32
 }
 
-fn accessor(
+pub(super) fn accessor(
     view: json::Index<json::buffer::View>,
     count: usize,
     component: json::accessor::ComponentType,
@@ -155,7 +155,7 @@ fn accessor(
     }
 }
 
-fn vec3_bounds(p: &[f32]) -> (Value, Value) {
+pub(super) fn vec3_bounds(p: &[f32]) -> (Value, Value) {
     let (lo, hi) = crate::bounding_box(p);
     (json!(lo), json!(hi))
 }
@@ -173,18 +173,24 @@ fn delta_bounds(p: &[f32], base: &[f32]) -> (Value, Value) {
     (json!(lo), json!(hi))
 }
 
-struct Layout {
-    parts: Vec<(Part, u64)>,
-    len: u64,
+/// The binary chunk being laid out: its parts (of any kind `P`, each producing its bytes when
+/// the file is written) in file order, and its length so far.
+pub(super) struct Layout<P> {
+    pub(super) parts: Vec<(P, u64)>,
+    pub(super) len: u64,
 }
 
-impl Layout {
+impl<P> Layout<P> {
+    pub(super) fn new() -> Self {
+        Layout { parts: Vec::new(), len: 0 }
+    }
+
     /// Reserves `len` bytes for `part` as a new buffer view. Every array here has 4-byte
     /// elements, so views stay 4-byte aligned without padding.
-    fn view(
+    pub(super) fn view(
         &mut self,
         root: &mut json::Root,
-        part: Part,
+        part: P,
         len: usize,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::buffer::View> {
@@ -260,18 +266,8 @@ impl<'a> GlbPlan<'a> {
                 ));
             }
         }
-        let mut root = json::Root {
-            asset: json::Asset {
-                copyright: None,
-                extensions: None,
-                extras: None,
-                generator: Some(format!("surfcap {}", env!("CARGO_PKG_VERSION"))),
-                min_version: None,
-                version: "2.0".into(),
-            },
-            ..Default::default()
-        };
-        let mut bin = Layout { parts: Vec::new(), len: 0 };
+        let mut root = new_root();
+        let mut bin = Layout::new();
 
         let iv = bin.view(&mut root, Part::Indices, 12 * topo.n_triangles(), Some(ElementArrayBuffer));
         let indices = root.push(accessor(iv, topo.n_triangles() * 3, ComponentType::U32, Type::Scalar, None));
@@ -368,17 +364,7 @@ impl<'a> GlbPlan<'a> {
             "units": subject.units,
             "sequences": seq_meta.iter().map(|m| json!({"name": m["sequence"], "frames": m["frames"], "tags": m["tags"]})).collect::<Vec<_>>(),
         }}));
-        root.push(json::Buffer {
-            byte_length: USize64(bin.len),
-            name: None,
-            uri: None,
-            extensions: None,
-            extras: None,
-        });
-        let mut json = root.to_vec().map_err(|e| err!(Syntax, "cannot serialise the glTF JSON: {e}"))?;
-        while !json.len().is_multiple_of(4) {
-            json.push(b' ');
-        }
+        let json = finish_json(root, bin.len)?;
         let plan = GlbPlan { subject, json, parts: bin.parts, bin_len: bin.len };
         if plan.size() > GLB_MAX_BYTES {
             return Err(err!(
@@ -398,24 +384,63 @@ impl<'a> GlbPlan<'a> {
 
     /// Writes the file, one buffer view at a time.
     pub fn write(&self, w: &mut dyn Write) -> std::io::Result<()> {
-        let u32_le = |x: u64| u32::try_from(x).map_err(std::io::Error::other).map(u32::to_le_bytes);
-        w.write_all(b"glTF")?;
-        w.write_all(&2u32.to_le_bytes())?;
-        w.write_all(&u32_le(self.size())?)?;
-        w.write_all(&u32_le(self.json.len() as u64)?)?;
-        w.write_all(b"JSON")?;
-        w.write_all(&self.json)?;
-        w.write_all(&u32_le(self.bin_len)?)?;
-        w.write_all(b"BIN\0")?;
-        let mut buf = Vec::new();
-        for (part, len) in &self.parts {
-            buf.clear();
-            part.bytes(self.subject, &mut buf);
-            debug_assert_eq!(buf.len() as u64, *len, "a part's bytes match its reserved view");
-            w.write_all(&buf)?;
-        }
-        Ok(())
+        write_container(w, &self.json, &self.parts, |part, buf| part.bytes(self.subject, buf))
     }
+}
+
+/// A glTF root with surfcap's asset description.
+pub(super) fn new_root() -> json::Root {
+    json::Root {
+        asset: json::Asset {
+            copyright: None,
+            extensions: None,
+            extras: None,
+            generator: Some(format!("surfcap {}", env!("CARGO_PKG_VERSION"))),
+            min_version: None,
+            version: "2.0".into(),
+        },
+        ..Default::default()
+    }
+}
+
+/// Adds the one buffer (the binary chunk, `bin_len` bytes) and serialises the JSON chunk,
+/// padded with spaces to a multiple of 4 bytes.
+pub(super) fn finish_json(mut root: json::Root, bin_len: u64) -> Result<Vec<u8>> {
+    root.push(json::Buffer { byte_length: USize64(bin_len), name: None, uri: None, extensions: None, extras: None });
+    let mut json = root.to_vec().map_err(|e| err!(Syntax, "cannot serialise the glTF JSON: {e}"))?;
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    Ok(json)
+}
+
+/// Writes a glb: the header, the JSON chunk, then the binary chunk streamed part by part
+/// (`bytes(part, buf)` appends a part's bytes; each must fill the view reserved for it).
+pub(super) fn write_container<P>(
+    w: &mut dyn Write,
+    json: &[u8],
+    parts: &[(P, u64)],
+    mut bytes: impl FnMut(&P, &mut Vec<u8>),
+) -> std::io::Result<()> {
+    let bin_len: u64 = parts.iter().map(|(_, n)| n).sum();
+    let size = HEADERS + json.len() as u64 + bin_len;
+    let u32_le = |x: u64| u32::try_from(x).map_err(std::io::Error::other).map(u32::to_le_bytes);
+    w.write_all(b"glTF")?;
+    w.write_all(&2u32.to_le_bytes())?;
+    w.write_all(&u32_le(size)?)?;
+    w.write_all(&u32_le(json.len() as u64)?)?;
+    w.write_all(b"JSON")?;
+    w.write_all(json)?;
+    w.write_all(&u32_le(bin_len)?)?;
+    w.write_all(b"BIN\0")?;
+    let mut buf = Vec::new();
+    for (part, len) in parts {
+        buf.clear();
+        bytes(part, &mut buf);
+        debug_assert_eq!(buf.len() as u64, *len, "a part's bytes match its reserved view");
+        w.write_all(&buf)?;
+    }
+    Ok(())
 }
 
 /// Bytes of a `.glb` of sequences of `frames` frames of a mesh of `n_vertices` vertices and
@@ -454,7 +479,7 @@ pub fn parse_glb(bytes: &[u8]) -> Result<GlbAnimation> {
 
 /// Checks the GLB container (header and chunk lengths) before the gltf crate splits it: its
 /// splitter subtracts lengths without checking them (found by the fuzzer, see fuzz/FINDINGS.md).
-fn check_container(bytes: &[u8]) -> Result<&[u8]> {
+pub(super) fn check_container(bytes: &[u8]) -> Result<&[u8]> {
     let u32_at = |k: usize| bytes.get(k..k + 4).map(|b| u32::from_le_bytes(b.try_into().unwrap()) as usize);
     if bytes.len() < 20 || &bytes[..4] != b"glTF" {
         return Err(err!(Syntax, "no glTF binary header: expected a .glb file starting with 'glTF'"));
@@ -495,7 +520,7 @@ fn check_span(view: &gltf::buffer::View, offset: usize, len: Option<usize>, blob
 
 /// Checks that an accessor's data (dense and sparse) lies inside the binary chunk, before any
 /// reader touches it.
-fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
+pub(super) fn check_accessor(a: &gltf::Accessor, blob_len: usize) -> Result<()> {
     let what = format!("accessor {}", a.index());
     let count = a.count();
     if count == 0 {
@@ -631,6 +656,14 @@ impl Target<'_> {
 }
 
 fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
+    if let Some(m) = super::glb_frame_set::frame_set_meta(bytes) {
+        let frames: u64 = m["sequences"].as_array().into_iter().flatten().filter_map(|q| q["frames"].as_u64()).sum();
+        return Err(err!(
+            TopologyMismatch,
+            "a frame set ({frames} frames, every frame its own mesh): one topology cannot hold it; it imports as a \
+             frame set (-o x.frames)"
+        ));
+    }
     let bytes = check_container(bytes)?;
     let g = gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
     let blob = g.blob.as_deref();

@@ -4,6 +4,7 @@ pub mod abc;
 pub mod abc_read;
 pub mod frame_folder;
 pub mod glb;
+pub mod glb_frame_set;
 pub mod npy;
 pub mod obj;
 pub mod ogawa_read;

@@ -14,7 +14,8 @@ use crate::limits::Request;
 use crate::options::{GraphOpts, OutOpts, Positive, open};
 use crate::output::length;
 use crate::synthesis::{
-    Constraint, Prepared, add_constraints, check_constraints, length_unit, pose_distance_to_output, write_walk,
+    Constraint, Prepared, add_constraints, add_travel, check_constraints, length_unit, pose_distance_to_output,
+    write_walk,
 };
 
 #[derive(clap::Args, Debug)]
@@ -98,11 +99,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "realism_cost": w.cost, "total_cost": cost, "search_seconds": search_seconds,
     });
     let mut played = write_walk(ctx, &prep, &w.walk, &PlaneMotion::identity(prep.up()), "reach", &a.out, report)?;
-    let (net, path) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, prep.up());
-    played.report["net_displacement"] = json!(net);
-    played.report["path_length"] = json!(path);
-    // The viewer draws this track over the animation, as it does for `synth path`.
-    played.report["per_frame"] = json!({ "centre": played.centres });
+    // The viewer draws the centre track over the animation, as it does for `synth path`.
+    add_travel(&mut played.report, &played.centres, prep.up());
     // The poses shown first and last against the frames asked for there.
     let last = played.output.n_frames() - 1;
     played.report["pose_distance_from"] = json!(pose_distance_to_output(&prep, &played.output, from, 0)?);
