@@ -200,6 +200,7 @@ pub fn write_report(
                 rows: n,
                 cols: n,
                 origin: (0, 0),
+                range: None,
                 path: Vec::new(),
             };
             let written = surfcap_plot::write_heat_map(&plots_dir.join("distances"), &heat)?;

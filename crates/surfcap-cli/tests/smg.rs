@@ -176,3 +176,102 @@ fn eval_smg_takes_any_input_with_its_graph_and_key_pairs() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--pair \"horse_gallop:0\": expected FROM,TO"), "{}", stderr(&o));
 }
+
+/// `eval smg` on the CMU mannequin runs the essential graph beside the surface motion graph on
+/// the same key frames and targets (issue 17 item 7): a comparison row per engine with finite
+/// errors, transition costs and times, and the error heat maps as PNGs; re-meshed frames say
+/// why there is no essential graph.
+#[test]
+fn eval_smg_compares_with_the_essential_graph_and_draws_heat_maps() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("eval");
+    let base = [
+        "eval",
+        "smg",
+        "--data",
+        p(&data),
+        "--vertices",
+        "1000",
+        "--pair",
+        "16_15:0,16_15:116",
+        "--distances",
+        "5,10",
+        "--seconds",
+        "5,8,12",
+        "--cache-dir",
+        p(d.path()),
+    ];
+    let mut a = base.to_vec();
+    a.extend(["-o", p(&out)]);
+    let o = surfcap!(&a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Printed: both engines' rows and the heat maps' paths.
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains(" SMG ") && text.contains(" EG "), "{text}");
+    let shown = out.join("time-error_essential_16_15-0_to_16_15-116.png");
+    assert!(text.contains(&format!("wrote {}", shown.display())), "{text}");
+    let r: Value = serde_json::from_slice(&std::fs::read(out.join("smg.json")).unwrap()).unwrap();
+    let rows = r["comparison"]["rows"].as_array().unwrap();
+    let engines: Vec<&str> = rows.iter().map(|x| x["engine"].as_str().unwrap()).collect();
+    assert_eq!(engines, ["surface motion graph", "essential graph"]);
+    let finite = |v: &Value| v.as_f64().is_some_and(f64::is_finite);
+    for row in rows {
+        assert_eq!((row["from"].as_str(), row["to"].as_str()), (Some("16_15:0"), Some("16_15:116")));
+        assert_eq!(row["queries"], 6, "{row}");
+        for m in ["distance_error", "time_error_frames"] {
+            for s in ["min", "rms", "max"] {
+                assert!(finite(&row[m][s]), "{m}.{s}: {row}");
+            }
+            assert!(
+                row[m]["min"].as_f64() <= row[m]["rms"].as_f64() && row[m]["rms"].as_f64() <= row[m]["max"].as_f64()
+            );
+        }
+        for m in ["transition_cost", "smoothness"] {
+            for s in ["min", "mean", "max"] {
+                assert!(finite(&row[m][s]) && row[m][s].as_f64().unwrap() >= 0.0, "{m}.{s}: {row}");
+            }
+        }
+        assert!(row["cpu_seconds"]["mean"].as_f64().unwrap() > 0.0, "{row}");
+    }
+    // Walking 5-10 m in 5-12 s from the walk's first frame to its last needs transitions in
+    // both engines (the clip alone is 117 frames).
+    for row in rows {
+        assert!(row["transitions_per_query"].as_f64().unwrap() >= 1.0, "{row}");
+        assert!(row["transition_cost"]["max"].as_f64().unwrap() > 0.0, "{row}");
+    }
+    let eg = &r["comparison"]["essential_graph"];
+    assert!(eg["nodes"].as_u64().unwrap() > 300 && eg["transitions"].as_u64().unwrap() > 0, "{eg}");
+    assert!(finite(&eg["precompute_seconds"]));
+    // Four heat maps (distance and time errors, both engines), valid PNGs named as reported.
+    let pngs: Vec<std::path::PathBuf> = r["written"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| std::path::PathBuf::from(x.as_str().unwrap()))
+        .filter(|x| x.extension().is_some_and(|e| e == "png"))
+        .collect();
+    assert_eq!(pngs.len(), 4, "{pngs:?}");
+    for (measure, engine) in
+        [("distance-error", "smg"), ("distance-error", "essential"), ("time-error", "smg"), ("time-error", "essential")]
+    {
+        let want = out.join(format!("{measure}_{engine}_16_15-0_to_16_15-116.png"));
+        assert!(pngs.contains(&want), "{want:?} in {pngs:?}");
+        let bytes = std::fs::read(&want).unwrap();
+        assert!(bytes.len() > 1000 && bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "{want:?}: {} bytes", bytes.len());
+        let (w, h) = (
+            u32::from_be_bytes(bytes[16..20].try_into().unwrap()),
+            u32::from_be_bytes(bytes[20..24].try_into().unwrap()),
+        );
+        assert!(w > 100 && h > 100, "{want:?}: {w} x {h}");
+    }
+    // --no-compare: the surface motion graph alone, and said so.
+    let mut a = base.to_vec();
+    let alone = d.path().join("alone");
+    a.extend(["-o", p(&alone), "--no-compare", "--json"]);
+    let o = surfcap!(&a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["pairs"][0]["queries"], 6);
+    assert!(r.get("comparison").is_none() && r["comparison_skipped"].as_str().unwrap().contains("--no-compare"));
+}

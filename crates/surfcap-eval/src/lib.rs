@@ -24,9 +24,11 @@ pub mod mantel_test;
 pub mod pose_metric_eval;
 pub mod root_motion_eval;
 pub mod skeleton_distance;
+pub mod smg_comparison;
 pub mod smg_eval;
 pub mod transfer_eval;
 pub mod transition_costs_eval;
+pub mod transition_measures;
 
 pub use error::{Error, Result};
 pub use gpdm_eval::{GpdmEval, GpdmEvalOptions, gpdm_eval};

@@ -14,20 +14,20 @@
 use std::path::Path;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::Serialize;
+use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::Subject;
 use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths};
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
-use surfcap_smg::temporal_shape_similarity::window_weights;
 use surfcap_synth::bvh::read_bvh;
 use surfcap_synth::mannequin::{BodyShape, mannequin};
 use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
 use crate::MeanStd;
 use crate::error::{Error, Result};
+use crate::transition_measures::{MatchedTransition, smoothness};
 
 /// The CMU clips of the locomotion subject: stand-to-walk, walk, jog, jump, jog-to-stop.
 pub const LOCOMOTION_CLIPS: [&str; 5] = ["16_31", "16_15", "16_36", "16_07", "16_57"];
@@ -117,7 +117,8 @@ pub struct MinRmsMax {
 }
 
 impl MinRmsMax {
-    fn of(v: &[f64]) -> Self {
+    /// Of some values; all 0 for none.
+    pub fn of(v: &[f64]) -> Self {
         if v.is_empty() {
             return MinRmsMax { min: 0.0, rms: 0.0, max: 0.0 };
         }
@@ -151,6 +152,9 @@ pub struct KeyPairRow {
     pub unconverged_subproblems: usize,
     /// The same targets with the tolerance of issue 17's goal (beyond the paper).
     pub goal: GoalRow,
+    /// Each query's outcome, in the order of the targets.
+    #[serde(skip)]
+    pub outcomes: Vec<QueryOutcome>,
 }
 
 /// The queries of a key pair asked to meet their targets within a tolerance
@@ -169,6 +173,17 @@ pub struct GoalRow {
     pub met_distance_relative_max: f64,
     pub met_time_error_max: f64,
     pub cpu_seconds: MeanStd,
+}
+
+/// What one query gave: its errors and the transitions its path took.
+#[derive(Debug, Clone)]
+pub struct QueryOutcome {
+    /// Subject units.
+    pub distance_error: f64,
+    /// Frames.
+    pub time_error: f64,
+    /// The path's transition edges (indices into [`SmgEval::matched`]), in order, repeats kept.
+    pub transitions: Vec<usize>,
 }
 
 /// One transition of the graph.
@@ -193,35 +208,30 @@ pub struct SmgEval {
     pub vertices_max: usize,
     pub similarity_seconds: f64,
     pub similarity_cached: bool,
+    /// Time to build the lower-level graph from the similarity, seconds.
+    pub graph_seconds: f64,
     pub graph_nodes: usize,
     pub graph_edges: usize,
     pub transitions: Vec<TransitionRow>,
     pub missing_transitions: Vec<(String, String)>,
     pub pairs: Vec<KeyPairRow>,
+    /// Each key pair's global frames, in the order of `pairs`.
+    #[serde(skip)]
+    pub key_frames: Vec<(usize, usize)>,
+    /// Each graph edge's transition as the measures see it (`None`: a sub-sequence).
+    #[serde(skip)]
+    pub matched: Vec<Option<MatchedTransition>>,
 }
 
-/// The symmetric Hausdorff distance between two point sets, `b` moved by `shift` (brute force).
-fn hausdorff(a: &[f32], b: &[f32], shift: [f64; 3]) -> f64 {
-    let one_way = |p: &[f32], q: &[f32], sp: [f64; 3], sq: [f64; 3]| -> f64 {
-        p.par_chunks_exact(3)
-            .map(|x| {
-                let x = [f64::from(x[0]) + sp[0], f64::from(x[1]) + sp[1], f64::from(x[2]) + sp[2]];
-                q.chunks_exact(3)
-                    .map(|y| {
-                        let y = [f64::from(y[0]) + sq[0], f64::from(y[1]) + sq[1], f64::from(y[2]) + sq[2]];
-                        (x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)
-                    })
-                    .fold(f64::INFINITY, f64::min)
-            })
-            .reduce(|| 0.0, f64::max)
-            .sqrt()
-    };
-    one_way(a, b, [0.0; 3], shift).max(one_way(b, a, shift, [0.0; 3]))
-}
-
-/// The smoothness of each transition edge of `g` (by edge index).
-fn transition_smoothness(m: &MotionFrames, g: &SurfaceMotionGraph, centroids: &[[f64; 3]]) -> Vec<Option<f64>> {
-    let (axis, _) = m.up.axis_and_sign();
+/// Each edge's transition as the measures see it (`None` for a sub-sequence): the eq. 4 window
+/// matched frame by frame, Y moved on the ground so that the centroids of the switch's frames
+/// meet (4.2.3).
+fn matched_transitions(
+    m: &MotionFrames,
+    g: &SurfaceMotionGraph,
+    centroids: &[[f64; 3]],
+) -> Vec<Option<MatchedTransition>> {
+    let (iu, iv, _) = plane_axes(m.up);
     g.edges
         .iter()
         .map(|e| {
@@ -232,15 +242,12 @@ fn transition_smoothness(m: &MotionFrames, g: &SurfaceMotionGraph, centroids: &[
                 *x == from_sequence && *y == to_sequence && sx + t.last_x == last && sy + t.first_y == first
             })?;
             let (x0, y0) = (sx + t.window_x, sy + t.window_y);
-            // Y moved on the ground so that the centroids meet at the switch.
-            let mut shift = [0.0; 3];
-            for k in 0..3 {
-                if k != axis {
-                    shift[k] = centroids[last][k] - centroids[first][k];
-                }
-            }
-            let w = window_weights(t.length);
-            Some((0..t.length).map(|k| w[k] * hausdorff(&m.positions[x0 + k], &m.positions[y0 + k], shift)).sum())
+            let shift = |k: usize| centroids[last][k] - centroids[first][k];
+            let place = PlaneMotion { theta: 0.0, t: [shift(iu), shift(iv)], up: m.up };
+            Some(MatchedTransition {
+                pairs: (0..t.length).map(|k| (x0 + k, y0 + k)).collect(),
+                placements: vec![place; t.length],
+            })
         })
         .collect()
 }
@@ -272,6 +279,7 @@ pub fn smg_eval(
         pairs.iter().map(|(a, b)| Ok((key_frame(frames, a)?, key_frame(frames, b)?))).collect::<Result<Vec<_>>>()?;
     let key_frames: Vec<usize> = keys.iter().flat_map(|&(a, b)| [a, b]).collect();
     let ground = frames.ground_centroids();
+    let t_graph = Instant::now();
     let g = build_graph(&GraphInput {
         sequences: &frames.sequences,
         similarity: &similarity,
@@ -283,8 +291,11 @@ pub fn smg_eval(
         separation: opts.separation,
     })
     .map_err(|e| Error::Unsuitable(e.to_string()))?;
+    let graph_seconds = t_graph.elapsed().as_secs_f64();
     let centroids = frames.centroids();
-    let smooth = transition_smoothness(frames, &g, &centroids);
+    let matched = matched_transitions(frames, &g, &centroids);
+    let smooth: Vec<Option<f64>> =
+        matched.iter().map(|t| t.as_ref().map(|t| smoothness(&frames.positions, t))).collect();
     let transitions = g
         .edges
         .iter()
@@ -304,6 +315,7 @@ pub fn smg_eval(
     progress.start("path queries", (keys.len() * opts.targets.len()) as u64);
     for (&(a, b), (na, nb)) in keys.iter().zip(pairs) {
         let (mut derr, mut terr, mut cpu, mut smooth_used) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut outcomes = Vec::new();
         let (mut walks, mut loops) = (0, 0);
         let (mut goal_derr, mut goal_terr, mut goal_cpu) = (Vec::new(), Vec::new(), Vec::new());
         let (mut met, mut met_rel, mut met_frames) = (0, 0.0_f64, 0.0_f64);
@@ -323,6 +335,11 @@ pub fn smg_eval(
             derr.push(p.distance_error);
             terr.push(p.time_error);
             smooth_used.extend(p.edges.iter().filter_map(|&e| smooth[e]));
+            outcomes.push(QueryOutcome {
+                distance_error: p.distance_error,
+                time_error: p.time_error,
+                transitions: p.edges.iter().copied().filter(|&e| matched[e].is_some()).collect(),
+            });
             (walks, loops) = (p.walks, p.loops_in_graph);
             // The goal: the same target within the tolerance where the graph allows it.
             let qg = PathQuery { tolerance: Some(opts.tolerance), ..q };
@@ -371,6 +388,7 @@ pub fn smg_eval(
                 met_time_error_max: met_frames,
                 cpu_seconds: MeanStd::of(&goal_cpu),
             },
+            outcomes,
         });
     }
     progress.finish();
@@ -383,6 +401,7 @@ pub fn smg_eval(
         vertices_max: counts.iter().copied().max().unwrap_or(0),
         similarity_seconds,
         similarity_cached: cached,
+        graph_seconds,
         graph_nodes: g.nodes.len(),
         graph_edges: g.edges.len(),
         transitions,
@@ -392,5 +411,7 @@ pub fn smg_eval(
             .map(|&(x, y)| (frames.names[x].clone(), frames.names[y].clone()))
             .collect(),
         pairs: rows,
+        key_frames: keys,
+        matched,
     })
 }

@@ -25,6 +25,9 @@ pub struct HeatMap {
     pub cols: usize,
     /// Index of the first row and column (a window of a larger matrix keeps its indices).
     pub origin: (usize, usize),
+    /// Values drawn from the first to the last colour of the ramp (clamped outside); `None`:
+    /// the finite values' own range. Two maps drawn with one range compare by colour.
+    pub range: Option<(f64, f64)>,
     /// Cells (row, col) joined by a line on top (in matrix indices, origin included).
     pub path: Vec<(usize, usize)>,
 }
@@ -71,7 +74,8 @@ where
     root.fill(&WHITE)?;
     let (br, bc, v, sr, sc) = blocks(h);
     let finite = v.iter().copied().filter(|x| x.is_finite());
-    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    let (lo, hi) =
+        h.range.unwrap_or_else(|| finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x))));
     let span = if hi > lo { hi - lo } else { 1.0 };
     let (r0, c0) = (h.origin.0 as f64, h.origin.1 as f64);
     let mut c = ChartBuilder::on(&root)
@@ -133,6 +137,7 @@ mod tests {
             rows: n,
             cols: n,
             origin: (0, 0),
+            range: None,
             path: (0..n).map(|k| (k, k)).collect(),
         };
         let (br, bc, v, sr, _) = blocks(&h);
@@ -142,6 +147,9 @@ mod tests {
         let svg = std::fs::read_to_string(&files[0]).unwrap();
         assert!(svg.contains("distances") && svg.matches("<rect").count() >= br * bc);
         assert_eq!(&std::fs::read(&files[1]).unwrap()[1..4], b"PNG");
+        // A fixed range: the same colours whatever the values.
+        let fixed = HeatMap { range: Some((0.0, 1000.0)), ..h.clone() };
+        assert!(write_heat_map(&d.path().join("fixed"), &fixed).unwrap()[1].is_file());
         let bad = HeatMap { rows: 3, ..h };
         assert!(write_heat_map(&d.path().join("bad"), &bad).is_err());
     }

@@ -88,6 +88,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         rows: r1 - r0,
         cols: c1 - c0,
         origin: (r0, c0),
+        range: None,
         path: warp.path.clone(),
     };
     let stem = a.output.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();

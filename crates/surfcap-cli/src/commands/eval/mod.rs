@@ -234,9 +234,21 @@ pub enum What {
         /// The higher-level graph of --input: FROM:TO sequence pairs.
         #[arg(long = "connect", value_delimiter = ',')]
         connect: Vec<String>,
-        /// Key-frame pairs of --input: FROM,TO as sequence:frame (repeatable).
+        /// Key-frame pairs: FROM,TO as sequence:frame (repeatable); needed with --input, and on
+        /// the mannequin they replace its four.
         #[arg(long = "pair")]
         pairs: Vec<String>,
+        /// Target distances, subject units (Huang et al.: 1 to 20 m).
+        #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20", value_parser = crate::options::non_negative)]
+        distances: Vec<f64>,
+        /// Target times, seconds (Huang et al.: 1 to 40 s); every distance with every time is a
+        /// query.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,25,26,27,28,29,30,31,32,33,34,35,36,37,38,39,40", value_parser = crate::options::positive)]
+        seconds: Vec<f64>,
+        /// Skip the essential graph's run beside the surface motion graph (on by default when
+        /// the frames share one topology).
+        #[arg(long)]
+        no_compare: bool,
         #[command(flatten)]
         source: SourceOpts,
         #[command(flatten)]
@@ -347,9 +359,28 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             root_motion::run(ctx, &opts, &output)
         }
-        What::Smg { data, vertices, remeshed, transitions, input, connect, pairs, source, cache, output } => {
-            let input = input.map(|i| smg::Input { path: i, connect, pairs, source });
-            smg::run(ctx, &data, smg::Options { vertices, remeshed, transitions }, input, &cache, &output)
+        What::Smg {
+            data,
+            vertices,
+            remeshed,
+            transitions,
+            input,
+            connect,
+            pairs,
+            distances,
+            seconds,
+            no_compare,
+            source,
+            cache,
+            output,
+        } => {
+            let (input, pairs) = match input {
+                Some(i) => (Some(smg::Input { path: i, connect, pairs, source }), Vec::new()),
+                None => (None, pairs),
+            };
+            let opts =
+                smg::Options { vertices, remeshed, transitions, distances, seconds, pairs, compare: !no_compare };
+            smg::run(ctx, &data, opts, input, &cache, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)

@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 
 use surfcap_mesh::import::{ImportedData, open_any};
 
+use surfcap_eval::smg_comparison::{ESSENTIAL_GRAPH, SmgComparison, default_graph_params, smg_comparison};
 use surfcap_eval::smg_eval::{
-    LOCOMOTION_CONNECTIONS, LOCOMOTION_KEY_PAIRS, SmgEvalOptions, locomotion_subject, smg_eval,
+    LOCOMOTION_CONNECTIONS, LOCOMOTION_KEY_PAIRS, SmgEval, SmgEvalOptions, grid, locomotion_subject, smg_eval,
 };
 use surfcap_smg::motion_frames::MotionFrames;
 
@@ -27,17 +28,25 @@ fn split_pair(text: &str, sep: char, option: &str, expected: &str) -> anyhow::Re
         .ok_or_else(|| anyhow::anyhow!("{option} {text:?}: expected {expected}"))
 }
 
-/// The evaluation's choices: the mannequin's vertices, re-meshing, transitions per connection.
+/// The evaluation's choices: the mannequin's vertices, re-meshing, transitions per connection,
+/// the target grid, key pairs replacing the mannequin's, and whether the essential graph runs
+/// beside the surface motion graph.
 pub struct Options {
     pub vertices: usize,
     pub remeshed: Option<u64>,
     pub transitions: usize,
+    /// Target distances (subject units) and times (seconds): every combination is a query.
+    pub distances: Vec<f64>,
+    pub seconds: Vec<f64>,
+    /// `--pair` on the mannequin (with `--input` the pairs are in `Input`).
+    pub pairs: Vec<String>,
+    pub compare: bool,
 }
 
 pub fn run(
     ctx: &crate::Ctx,
     data: &Path,
-    Options { vertices, remeshed, transitions }: Options,
+    Options { vertices, remeshed, transitions, distances, seconds, pairs: mannequin_pairs, compare }: Options,
     input: Option<Input>,
     cache: &crate::options::CacheOpts,
     output: &Path,
@@ -54,21 +63,31 @@ pub fn run(
     };
     // Either the shared topology, or every frame re-meshed on its own (issue 17 item 1): the
     // same motion without any correspondence between frames.
-    let (frames, form) = match (data, remeshed) {
-        (ImportedData::FrameSet(f), _) => (MotionFrames::from_frame_set(&f.frame_set), "frame set".to_string()),
-        (ImportedData::Subject(s), None) => (MotionFrames::from_subject(&s.subject), "shared topology".to_string()),
+    // The subject stays for the essential graph when its topology is shared.
+    let (frames, form, subject) = match (data, remeshed) {
+        (ImportedData::FrameSet(f), _) => (MotionFrames::from_frame_set(&f.frame_set), "frame set".to_string(), None),
+        (ImportedData::Subject(s), None) => {
+            (MotionFrames::from_subject(&s.subject), "shared topology".to_string(), Some(s.subject))
+        }
         (ImportedData::Subject(s), Some(seed)) => {
             let opts = surfcap_synth::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
             let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&s.subject, &opts, &bar)?;
-            (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"))
+            (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"), None)
         }
     };
     // Sequence pairs of the higher-level graph, and key-frame pairs.
     type Pairs = Vec<(String, String)>;
+    let parse_pairs = |p: &[String]| -> anyhow::Result<Pairs> {
+        p.iter().map(|t| split_pair(t, ',', "--pair", "FROM,TO (each sequence:frame)")).collect()
+    };
     let (connections, pairs): (Pairs, Pairs) = match &input {
         None => (
             LOCOMOTION_CONNECTIONS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
-            LOCOMOTION_KEY_PAIRS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
+            if mannequin_pairs.is_empty() {
+                LOCOMOTION_KEY_PAIRS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect()
+            } else {
+                parse_pairs(&mannequin_pairs)?
+            },
         ),
         Some(i) => {
             if i.connect.is_empty() || i.pairs.is_empty() {
@@ -76,27 +95,45 @@ pub fn run(
             }
             let c =
                 i.connect.iter().map(|t| split_pair(t, ':', "--connect", "FROM:TO")).collect::<anyhow::Result<_>>()?;
-            let p = i
-                .pairs
-                .iter()
-                .map(|t| split_pair(t, ',', "--pair", "FROM,TO (each sequence:frame)"))
-                .collect::<anyhow::Result<_>>()?;
-            (c, p)
+            (c, parse_pairs(&i.pairs)?)
         }
     };
     let connections: Vec<(&str, &str)> = connections.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
     let pairs: Vec<(&str, &str)> = pairs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
     let store = surfcap_mesh::derived_cache::DerivedCache::new(cache.dir());
-    let r = smg_eval(
-        &frames,
-        &form,
-        &connections,
-        &pairs,
-        &SmgEvalOptions { per_connection: transitions, ..SmgEvalOptions::default() },
-        Some((&store, cache.no_cache)),
-        &bar,
-    )?;
-    let (report, path) = super::save_report(output, "smg.json", &r, "written", &[])?;
+    let opts = SmgEvalOptions {
+        per_connection: transitions,
+        targets: grid(&distances, &seconds),
+        ..SmgEvalOptions::default()
+    };
+    let r = smg_eval(&frames, &form, &connections, &pairs, &opts, Some((&store, cache.no_cache)), &bar)?;
+    let not_compared = match (&subject, compare) {
+        (None, _) => Some(format!(
+            "no essential graph beside it: the essential graph needs a shared topology, and this is {}",
+            if remeshed.is_some() { "every frame re-meshed on its own" } else { "a frame set" }
+        )),
+        (Some(_), false) => Some("no essential graph beside it (--no-compare)".to_string()),
+        (Some(_), true) => None,
+    };
+    // The essential graph on the same key frames and targets: only with a shared topology.
+    let comparison = match (subject, compare) {
+        (Some(s), true) => {
+            let params = default_graph_params(s.fps);
+            let pipe = cache.pipeline(ctx, s);
+            Some(smg_comparison(&pipe, &frames, &r, &opts, &params, &bar)?)
+        }
+        _ => None,
+    };
+    let plots = heat_maps(output, &r, comparison.as_ref(), (&distances, &seconds))?;
+    let path = output.join("smg.json");
+    let mut report = serde_json::to_value(&r)?;
+    report["written"] = serde_json::to_value(&plots)?;
+    report["targets"] = serde_json::json!({ "distances": distances, "seconds": seconds });
+    match &comparison {
+        Some(c) => report["comparison"] = serde_json::to_value(c)?,
+        None => report["comparison_skipped"] = serde_json::json!(not_compared),
+    }
+    crate::output::write_json(&path, &report)?;
     ctx.result(&report, || {
         println!(
             "surface motion graph ({}, {} transition(s) per connection): {} frames of {}-{} vertices, {} nodes, {} edges; similarity {:.1} s{}",
@@ -155,7 +192,152 @@ pub fn run(
         println!(
             "Huang et al. 2009 (Table 1): distance error rms 0.17-0.47 m, max < 1 m; time error max 22-25 frames; 5.7-15.0 s per query (Matlab)"
         );
+        match &comparison {
+            Some(c) => print_comparison(c),
+            None => println!("{}", not_compared.as_deref().unwrap_or_default()),
+        }
         println!("wrote {}", path.display());
+        for p in plots.iter().filter(|p| p.extension().is_some_and(|e| e == "png")) {
+            println!("wrote {}", p.display());
+        }
     });
     Ok(())
+}
+
+/// The comparison table: one row per key pair and engine.
+fn print_comparison(c: &SmgComparison) {
+    let eg = &c.essential_graph;
+    println!(
+        "beside it, the essential graph (alpha {}, segments {}-{} frames): {} nodes, {} edges, {} transitions; \
+         precomputed in {:.1} s{} (the surface motion graph's: {:.1} s)",
+        eg.alpha,
+        eg.l_min,
+        eg.l_max,
+        eg.nodes,
+        eg.edges,
+        eg.transitions,
+        eg.precompute_seconds,
+        if eg.graph_cached { " (graph cached)" } else { "" },
+        c.smg_precompute_seconds
+    );
+    println!(
+        "{:<22} {:<4} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>5} {:>7} {:>7} {:>6} {:>6} {:>16}",
+        "key frames",
+        "eng",
+        "dist",
+        "err",
+        "(m)",
+        "time",
+        "err",
+        "(fr)",
+        "trans",
+        "cost",
+        "(def)",
+        "smooth",
+        "(cm)",
+        "cpu ms"
+    );
+    println!(
+        "{:<22} {:<4} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>5} {:>7} {:>7} {:>6} {:>6} {:>16}",
+        "", "", "min", "rms", "max", "min", "rms", "max", "/q", "mean", "max", "mean", "max", "mean +- std"
+    );
+    for r in &c.rows {
+        println!(
+            "{:<22} {:<4} {:>6.2} {:>6.2} {:>6.2} {:>6.0} {:>6.1} {:>6.0} {:>5.1} {:>7.2} {:>7.2} {:>6.1} {:>6.1} {:>7.2} +- {:<6.2}",
+            format!("{} -> {}", r.from, r.to),
+            if r.engine == ESSENTIAL_GRAPH { "EG" } else { "SMG" },
+            r.distance_error.min,
+            r.distance_error.rms,
+            r.distance_error.max,
+            r.time_error_frames.min,
+            r.time_error_frames.rms,
+            r.time_error_frames.max,
+            r.transitions_per_query,
+            r.transition_cost.mean,
+            r.transition_cost.max,
+            100.0 * r.smoothness.mean,
+            100.0 * r.smoothness.max,
+            1e3 * r.cpu_seconds.mean,
+            1e3 * r.cpu_seconds.std
+        );
+    }
+    for r in c.rows.iter().filter(|r| r.failed > 0) {
+        println!(
+            "{} {} -> {}: {} of {} queries found no path (first: {})",
+            r.engine,
+            r.from,
+            r.to,
+            r.failed,
+            r.failed + r.queries,
+            r.first_failure.as_deref().unwrap_or_default()
+        );
+    }
+    println!(
+        "(cost: deformation distance, thesis eq. 2.13; smoothness: Hausdorff; both per transition taken, over the frames it matches)"
+    );
+}
+
+/// A file-name part for a `sequence:frame`.
+fn file_part(frame: &str) -> String {
+    frame.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '-' }).collect()
+}
+
+/// The axis label of a list of target values: its unit when the values are 1, 2, 3, ... from
+/// a whole number (the map's cells then sit at their values), else the list itself.
+fn axis_label(what: &str, unit: &str, values: &[f64]) -> (String, usize) {
+    let whole = values.first().is_some_and(|v| v.fract() == 0.0 && *v >= 0.0);
+    if whole && values.windows(2).all(|w| w[1] - w[0] == 1.0) {
+        (format!("target {what} ({unit})"), values[0] as usize)
+    } else {
+        let list: Vec<String> = values.iter().map(|v| format!("{v}")).collect();
+        (format!("target {what}: cell k of [{}] {unit}", list.join(", ")), 0)
+    }
+}
+
+/// For each key pair, distance- and time-error heat maps over the target grid (rows: distance,
+/// columns: time) for the surface motion graph and, beside it, the essential graph, each
+/// measure on one colour range for both engines. Written as `<measure>_<engine>_<from>_to_<to>`
+/// .png and .svg.
+fn heat_maps(
+    output: &Path,
+    r: &SmgEval,
+    comparison: Option<&SmgComparison>,
+    (distances, seconds): (&[f64], &[f64]),
+) -> anyhow::Result<Vec<PathBuf>> {
+    let (y_label, r0) = axis_label("distance", "m", distances);
+    let (x_label, c0) = axis_label("time", "s", seconds);
+    let mut written = Vec::new();
+    for (k, p) in r.pairs.iter().enumerate() {
+        let smg: Vec<(f64, f64)> = p.outcomes.iter().map(|q| (q.distance_error, q.time_error)).collect();
+        let mut engines = vec![("smg", "surface motion graph", smg)];
+        if let Some(c) = comparison {
+            let eg = c.rows.iter().filter(|row| row.engine == ESSENTIAL_GRAPH).nth(k).expect("one row per pair");
+            engines.push(("essential", "essential graph", eg.errors.clone()));
+        }
+        for (measure, unit, pick) in [("distance-error", "m", 0usize), ("time-error", "frames", 1usize)] {
+            let value = |e: &(f64, f64)| if pick == 0 { e.0 } else { e.1 };
+            let hi = engines.iter().flat_map(|(_, _, e)| e.iter().map(value)).fold(0.0, f64::max);
+            for (tag, name, errors) in &engines {
+                let heat = surfcap_plot::HeatMap {
+                    title: format!(
+                        "{name}, {} -> {}: {} ({unit}; dark 0, yellow {hi:.2})",
+                        p.from,
+                        p.to,
+                        measure.replace('-', " ")
+                    ),
+                    x_label: x_label.clone(),
+                    y_label: y_label.clone(),
+                    values: errors.iter().map(value).collect(),
+                    rows: distances.len(),
+                    cols: seconds.len(),
+                    origin: (r0, c0),
+                    range: Some((0.0, hi.max(1e-12))),
+                    path: Vec::new(),
+                };
+                let stem = format!("{measure}_{tag}_{}_to_{}", file_part(&p.from), file_part(&p.to));
+                written.extend(surfcap_plot::write_heat_map(&output.join(stem), &heat)?);
+            }
+        }
+    }
+    Ok(written)
 }

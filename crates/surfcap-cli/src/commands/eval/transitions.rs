@@ -50,6 +50,7 @@ pub fn run(ctx: &crate::Ctx, pipe: Pipeline, opts: &TransitionCostsOptions, outp
         rows: d.n,
         cols: d.n,
         origin: (0, 0),
+        range: None,
         path: r.plot.shown.as_ref().map(|w| w.path.clone()).unwrap_or_default(),
     };
     plots.extend(surfcap_plot::write_heat_map(&output.join("distances"), &heat)?);
