@@ -34,7 +34,7 @@ pub const LOCOMOTION_CLIPS: [&str; 5] = ["16_31", "16_15", "16_36", "16_07", "16
 
 /// The higher-level graph of the locomotion subject (by clip): start walking into the walk
 /// cycle, walk and jog loops, walk to and from jog, walk to jump and back, jog to stop.
-pub const LOCOMOTION_CONNECTIONS: [(&str, &str); 10] = [
+pub const LOCOMOTION_CONNECTIONS: [(&str, &str); 8] = [
     ("16_31", "16_15"),
     ("16_15", "16_15"),
     ("16_15", "16_36"),
@@ -43,8 +43,6 @@ pub const LOCOMOTION_CONNECTIONS: [(&str, &str); 10] = [
     ("16_15", "16_07"),
     ("16_07", "16_15"),
     ("16_36", "16_57"),
-    ("16_57", "16_57"),
-    ("16_57", "16_31"),
 ];
 
 /// Key-frame pairs (`sequence:frame`): walk -> walk, walk -> jog, jog -> stop, walk -> jump,

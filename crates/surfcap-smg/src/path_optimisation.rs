@@ -685,6 +685,9 @@ fn best_path(
         }
         let p = &prepared[i];
         let (base, per_loop) = (p.base, &p.per_loop);
+        if within.is_some_and(|w| !may_meet(base, per_loop, q, w)) {
+            continue;
+        }
         // The best cost known: the best path so far, or this walk played without loops (a
         // path, though perhaps not within the tolerance).
         let mut ub = best.as_ref().map_or(f64::INFINITY, |b| b.0);
@@ -718,6 +721,39 @@ fn best_path(
         }
     }
     Ok(best)
+}
+
+/// Whether some non-negative (not necessarily whole) repetitions of the loops bring the walk
+/// within `(tol_d, tol_t)` of the targets: the box of what the loops must add, `[D - d0 -
+/// tol_d, D - d0 + tol_d] x [T - t0 - tol_t, T - t0 + tol_t]` (distance x frames), meets the
+/// cone the loops' `(d, t)` span (speeds from the slowest to the fastest loop). A necessary
+/// condition for the ILP with the tolerance, checked first because proving such an ILP
+/// infeasible can take the solver long.
+fn may_meet(base: (f64, f64, f64), per_loop: &[(f64, f64, f64)], q: &PathQuery, (tol_d, tol_t): (f64, f64)) -> bool {
+    let (x0, x1) = (q.distance - base.0 - tol_d, q.distance - base.0 + tol_d);
+    let (y0, y1) = (q.frames - base.1 - tol_t, q.frames - base.1 + tol_t);
+    if y1 < 0.0 || x1 < 0.0 {
+        return false;
+    }
+    if x0 <= 0.0 && y0 <= 0.0 {
+        return true; // the walk alone
+    }
+    if per_loop.is_empty() {
+        return false;
+    }
+    let speeds = per_loop.iter().map(|l| l.0 / l.1);
+    let fastest = speeds.clone().fold(f64::NEG_INFINITY, f64::max);
+    let slowest = speeds.fold(f64::INFINITY, f64::min);
+    // Frames y the loops add with slowest * y <= x1 and fastest * y >= x0.
+    let lo = y0.max(0.0).max(if x0 <= 0.0 {
+        0.0
+    } else if fastest > 0.0 {
+        x0 / fastest
+    } else {
+        f64::INFINITY
+    });
+    let hi = y1.min(if slowest > 0.0 { x1 / slowest } else { f64::INFINITY });
+    lo <= hi
 }
 
 /// Why no walk meets the targets within `(tol_d, tol_t)`: checked in order, the length and

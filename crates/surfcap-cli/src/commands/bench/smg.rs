@@ -6,7 +6,7 @@
 //! clips of `surfcap eval smg`, cycled to `--frames` frames for the histograms (every frame is
 //! voxelised and histogrammed afresh: nothing is shared between repeated frames). The
 //! similarity (eq. 2) and the graph are then built on the clips' own frames, and every key pair
-//! of `eval smg` is queried on an evenly spaced subset of the paper's 20 m x 40 s grid, as the
+//! of `eval smg` is queried on an evenly spaced sub-grid of the paper's 20 m x 40 s, as the
 //! paper asks (eq. 6 optimum) and with the 1%-and-1-frame tolerance. A query's time is given
 //! two ways: the targets alone (the walks and loops planned once per key pair, as `eval smg`
 //! does) and from scratch (planning included, as one `surfcap smg query` does).
@@ -33,7 +33,7 @@ pub struct SmgArgs {
     /// Frames histogrammed (the clips cycled).
     #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
     pub frames: usize,
-    /// Targets per key pair, evenly spaced over the 800 of the paper's grid.
+    /// Targets per key pair (about): a sub-grid of the paper's 20 m x 40 s, evenly spaced.
     #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::options::whole_in(s, 1, 800))]
     pub targets: usize,
     /// Transitions per connection to time (1: the paper's), comma-separated.
@@ -90,8 +90,13 @@ pub fn run(ctx: &crate::Ctx, a: &SmgArgs) -> anyhow::Result<()> {
         .map(|(x, y)| Ok((frames.resolve(x)?, frames.resolve(y)?)))
         .collect::<surfcap_smg::error::Result<_>>()?;
     let key_frames: Vec<usize> = keys.iter().flat_map(|&(x, y)| [x, y]).collect();
-    let full = grid(&(1..=20).map(f64::from).collect::<Vec<_>>(), &(1..=40).map(f64::from).collect::<Vec<_>>());
-    let targets: Vec<(f64, f64)> = (0..a.targets).map(|i| full[i * full.len() / a.targets]).collect();
+    // A sub-grid of the paper's, every `step` metres and seconds: about `--targets` targets
+    // spread over both axes.
+    let step = ((800.0 / a.targets as f64).sqrt().round() as usize).max(1);
+    let targets = grid(
+        &(1..=20).step_by(step).map(f64::from).collect::<Vec<_>>(),
+        &(1..=40).step_by(step).map(f64::from).collect::<Vec<_>>(),
+    );
 
     let mut runs = Vec::new();
     for &k in &a.transitions {
