@@ -275,3 +275,73 @@ fn eval_smg_compares_with_the_essential_graph_and_draws_heat_maps() {
     assert_eq!(r["pairs"][0]["queries"], 6);
     assert!(r.get("comparison").is_none() && r["comparison_skipped"].as_str().unwrap().contains("--no-compare"));
 }
+
+/// `smg build` computes the similarity once (cached) and writes the graph; a query on the same
+/// frames then reads the similarity back; a bad key frame is refused by name.
+#[test]
+fn build_precomputes_what_queries_reuse() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let src = data.join("threejs_morph_animals/horse_gallop");
+    let cache = d.path().join("cache");
+    let graph = d.path().join("graph.json");
+    let build = |keys: &str| {
+        surfcap!(&[
+            "smg",
+            "build",
+            p(&src),
+            "--connect",
+            "horse_gallop:horse_gallop",
+            "--keys",
+            keys,
+            "--windows",
+            "2-4",
+            "--cache-dir",
+            p(&cache),
+            "-o",
+            p(&graph)
+        ])
+    };
+    let o = build("horse_gallop:0,horse_gallop:15");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let g: Value = serde_json::from_slice(&std::fs::read(&graph).unwrap()).unwrap();
+    assert_eq!(g["similarity_cached"].as_bool(), Some(false));
+    let nodes: Vec<&str> = g["nodes"].as_array().unwrap().iter().filter_map(Value::as_str).collect();
+    assert!(nodes.contains(&"horse_gallop:0") && nodes.contains(&"horse_gallop:15"), "{nodes:?}");
+    let transitions = g["transitions"].as_array().unwrap();
+    assert_eq!(transitions.len(), 1, "one loop of the gallop: {transitions:?}");
+    // Every transition is an edge of the lower level, between two of its nodes.
+    let edges = g["edges"].as_array().unwrap();
+    assert!(
+        edges.iter().any(|e| e["kind"]["kind"] == "transition" && e["from"] == transitions[0]["from"]),
+        "{edges:?}"
+    );
+    // A query on the same frames reads the similarity back.
+    let out = d.path().join("q.glb");
+    let o = surfcap!(&[
+        "smg",
+        "query",
+        p(&src),
+        "--connect",
+        "horse_gallop:horse_gallop",
+        "--from",
+        "horse_gallop:0",
+        "--to",
+        "horse_gallop:15",
+        "--distance",
+        "50",
+        "--time",
+        "3",
+        "--windows",
+        "2-4",
+        "--cache-dir",
+        p(&cache),
+        "-o",
+        p(&out)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(report(&out)["similarity_cached"].as_bool(), Some(true));
+    let o = build("horse_gallop:0,horse_gallop:16");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--keys \"horse_gallop:16\""), "{}", stderr(&o));
+}

@@ -22,7 +22,7 @@ use surfcap_smg::path_optimisation::{
     PathQuery, PathSolution, PlayedFrame, Tolerance, optimise_path, path_segments, play_path,
 };
 use surfcap_smg::shape_similarity::HistogramParams;
-use surfcap_smg::surface_motion_graph::{GraphInput, build_graph};
+use surfcap_smg::surface_motion_graph::{GraphInput, SurfaceMotionGraph, build_graph};
 
 use crate::options::{CacheOpts, ConstraintOpts, SourceOpts};
 use crate::synthesis::{Animation, Constraint, add_travel, check_constraints, report_path, write_animation};
@@ -32,27 +32,21 @@ pub enum Cmd {
     /// One synthesis: the path between two key frames that covers a distance in a time at the
     /// least transition cost (eq. 6-20), written with its report.
     Query(QueryArgs),
+    /// The precomputation alone: the shape similarity of every frame pair (eq. 2, cached as
+    /// `smg-similarity-*.npy`, which later queries on the same frames reuse) and the two-level
+    /// graph (3.3), written as JSON for inspection.
+    Build(BuildArgs),
 }
 
+/// What the graph is built from: the input, the user's higher level, the transitions.
 #[derive(clap::Args, Debug)]
-pub struct QueryArgs {
+pub struct GraphArgs {
     /// A subject or a frame set (`.frames`), or any source `surfcap import` reads.
     pub input: PathBuf,
     /// The higher-level graph: sequence pairs FROM:TO that may follow each other (TO may be
     /// FROM: a loop in a cyclic motion), comma-separated or repeated.
     #[arg(long = "connect", value_delimiter = ',', required = true)]
     pub connect: Vec<String>,
-    /// Start and end key frames, `sequence:frame`.
-    #[arg(long)]
-    pub from: String,
-    #[arg(long)]
-    pub to: String,
-    /// Ground distance to cover, in the subject's units.
-    #[arg(long, value_parser = crate::options::non_negative)]
-    pub distance: f64,
-    /// Duration, in seconds.
-    #[arg(long, value_parser = crate::options::positive)]
-    pub time: f64,
     /// Transition windows searched, in frames: MIN-MAX (eq. 5's adaptive window).
     #[arg(long, default_value = "3-30")]
     pub windows: String,
@@ -67,6 +61,40 @@ pub struct QueryArgs {
     /// Voxels along the frames' largest extent (the shape histograms' lattice).
     #[arg(long, default_value_t = 64, value_parser = |s: &str| crate::options::whole_in(s, 8, 512))]
     pub resolution: usize,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct BuildArgs {
+    #[command(flatten)]
+    pub graph: GraphArgs,
+    /// Key frames (`sequence:frame`, comma-separated or repeated) that become nodes of the
+    /// lower level (a query adds its own).
+    #[arg(long = "keys", value_delimiter = ',')]
+    pub keys: Vec<String>,
+    /// The graph as JSON (nodes, edges, transitions), for inspection.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct QueryArgs {
+    #[command(flatten)]
+    pub graph: GraphArgs,
+    /// Start and end key frames, `sequence:frame`.
+    #[arg(long)]
+    pub from: String,
+    #[arg(long)]
+    pub to: String,
+    /// Ground distance to cover, in the subject's units.
+    #[arg(long, value_parser = crate::options::non_negative)]
+    pub distance: f64,
+    /// Duration, in seconds.
+    #[arg(long, value_parser = crate::options::positive)]
+    pub time: f64,
     /// Weight of a distance error per subject unit (the paper: 1/0.3 per metre).
     #[arg(long, default_value_t = 1.0 / 0.3, value_parser = crate::options::positive)]
     pub distance_weight: f64,
@@ -90,10 +118,6 @@ pub struct QueryArgs {
     pub format: Option<surfcap_mesh::export::ExportFormat>,
     #[command(flatten)]
     pub constraints: ConstraintOpts,
-    #[command(flatten)]
-    pub cache: CacheOpts,
-    #[command(flatten)]
-    pub source: SourceOpts,
 }
 
 /// Writes the played path: a subject's frames as one sequence of the subject, a frame set's as a
@@ -157,26 +181,36 @@ fn windows(text: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
 pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     match cmd {
         Cmd::Query(a) => query(ctx, a),
+        Cmd::Build(a) => build(ctx, a),
     }
 }
 
-fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
+/// An opened input with its similarity and graph.
+struct Opened {
+    data: ImportedData,
+    frames: MotionFrames,
+    ground: Vec<[f64; 2]>,
+    similarity_seconds: f64,
+    similarity_cached: bool,
+    graph: SurfaceMotionGraph,
+    /// The key frames asked for (global frames), in order.
+    keys: Vec<usize>,
+}
+
+/// Opens `a.input`, computes (or reads back) its similarity and builds the graph with the
+/// key frames `keys` (`(option, sequence:frame)`, named in errors).
+fn open_graph(ctx: &crate::Ctx, a: &GraphArgs, keys: &[(&str, &str)]) -> anyhow::Result<Opened> {
     let lengths = windows(&a.windows)?;
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.input])?;
     let bar = crate::progress::Bar::new(ctx);
     let data = open_any(&a.input, &a.source.to_import(None)?, &bar)?;
-    let (frames, subject, set_name, units) = match &data {
-        ImportedData::Subject(i) => {
-            (MotionFrames::from_subject(&i.subject), Some(&i.subject), i.subject.name.clone(), i.subject.units.clone())
-        }
-        ImportedData::FrameSet(f) => {
-            (MotionFrames::from_frame_set(&f.frame_set), None, f.frame_set.name.clone(), f.frame_set.units.clone())
-        }
+    let frames = match &data {
+        ImportedData::Subject(i) => MotionFrames::from_subject(&i.subject),
+        ImportedData::FrameSet(f) => MotionFrames::from_frame_set(&f.frame_set),
     };
     let t0 = Instant::now();
     let store = surfcap_mesh::derived_cache::DerivedCache::new(a.cache.dir());
     let params = HistogramParams { resolution: a.resolution, ..Default::default() };
-    let (similarity, cached) = frames.shape_similarity(params, Some((&store, a.cache.no_cache)), &bar)?;
+    let (similarity, similarity_cached) = frames.shape_similarity(params, Some((&store, a.cache.no_cache)), &bar)?;
     let similarity_seconds = t0.elapsed().as_secs_f64();
     let seq = |name: &str| {
         frames.names.iter().position(|n| n == name).ok_or_else(|| {
@@ -188,25 +222,90 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         let (x, y) = c.split_once(':').with_context(|| format!("--connect {c:?}: expected FROM:TO"))?;
         connections.push((seq(x)?, seq(y)?));
     }
-    let key = |spec: &str, option: &str| frames.resolve(spec).with_context(|| format!("{option} {spec:?}"));
-    let (from, to) = (key(&a.from, "--from")?, key(&a.to, "--to")?);
+    let keys = keys
+        .iter()
+        .map(|(option, spec)| frames.resolve(spec).with_context(|| format!("{option} {spec:?}")))
+        .collect::<anyhow::Result<Vec<usize>>>()?;
     let ground = frames.ground_centroids();
     let graph = build_graph(&GraphInput {
         sequences: &frames.sequences,
         similarity: &similarity,
         ground: &ground,
         connections: &connections,
-        key_frames: &[from, to],
+        key_frames: &keys,
         lengths,
         per_connection: a.transitions,
         separation: a.separation,
     })?;
     for (x, y) in &graph.missing {
-        eprintln!(
-            "note: no transition {} -> {}: a sequence is shorter than the smallest window",
+        ctx.note(&format!(
+            "no transition {} -> {}: a sequence is shorter than the smallest window",
             frames.names[*x], frames.names[*y]
-        );
+        ));
     }
+    Ok(Opened { data, frames, ground, similarity_seconds, similarity_cached, graph, keys })
+}
+
+fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.graph.input])?;
+    let keys: Vec<(&str, &str)> = a.keys.iter().map(|k| ("--keys", k.as_str())).collect();
+    let o = open_graph(ctx, &a.graph, &keys)?;
+    let (f, g) = (&o.frames, &o.graph);
+    let name = |node: usize| f.name_of(g.nodes[node]);
+    let report = json!({
+        "input": a.graph.input,
+        "frames": f.n_frames(),
+        "sequences": f.names,
+        "connections": a.graph.connect,
+        "key_frames": o.keys.iter().map(|&k| f.name_of(k)).collect::<Vec<_>>(),
+        "similarity_seconds": o.similarity_seconds,
+        "similarity_cached": o.similarity_cached,
+        "nodes": g.nodes.iter().map(|&n| f.name_of(n)).collect::<Vec<_>>(),
+        "edges": g.edges.iter().map(|e| json!({
+            "from": name(e.from), "to": name(e.to), "kind": e.kind, "frames": e.frames,
+            "distance": e.distance, "cost": e.cost})).collect::<Vec<_>>(),
+        "transitions": g.transitions.iter().map(|(x, y, t)| json!({
+            "from": f.name_of(f.sequences[*x].start + t.last_x),
+            "to": f.name_of(f.sequences[*y].start + t.first_y),
+            "window": t.length, "cost": t.cost})).collect::<Vec<_>>(),
+        "missing_transitions": g.missing.iter().map(|&(x, y)| format!("{}:{}", f.names[x], f.names[y])).collect::<Vec<_>>(),
+    });
+    crate::output::write_json(&a.output, &report)?;
+    ctx.result(&report, || {
+        println!(
+            "{} frames in {} sequence(s); similarity {:.1} s{}; {} nodes, {} edges, {} transition(s)",
+            f.n_frames(),
+            f.names.len(),
+            o.similarity_seconds,
+            if o.similarity_cached { " (cached)" } else { "" },
+            g.nodes.len(),
+            g.edges.len(),
+            g.transitions.len()
+        );
+        for t in report["transitions"].as_array().into_iter().flatten() {
+            println!(
+                "  transition {} -> {} (window {}, cost {:.4})",
+                t["from"].as_str().unwrap_or(""),
+                t["to"].as_str().unwrap_or(""),
+                t["window"],
+                t["cost"].as_f64().unwrap_or(0.0)
+            );
+        }
+        println!("wrote {}", a.output.display());
+    });
+    Ok(())
+}
+
+fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.graph.input])?;
+    let o = open_graph(ctx, &a.graph, &[("--from", &a.from), ("--to", &a.to)])?;
+    let (frames, graph, ground) = (&o.frames, &o.graph, &o.ground);
+    let (from, to) = (o.keys[0], o.keys[1]);
+    let (similarity_seconds, cached) = (o.similarity_seconds, o.similarity_cached);
+    let (subject, set_name, units) = match &o.data {
+        ImportedData::Subject(i) => (Some(&i.subject), i.subject.name.clone(), i.subject.units.clone()),
+        ImportedData::FrameSet(f) => (None, f.frame_set.name.clone(), f.frame_set.units.clone()),
+    };
     let q = PathQuery {
         w_d: a.distance_weight,
         w_t: a.time_weight,
@@ -214,10 +313,10 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         ..PathQuery::new(from, to, a.distance, a.time * frames.fps)
     };
     let t1 = Instant::now();
-    let path = optimise_path(&graph, &ground, &q)?;
+    let path = optimise_path(graph, ground, &q)?;
     let query_seconds = t1.elapsed().as_secs_f64();
-    let played = play_path(&frames, &path);
-    let written = write_output(ctx, &a, &frames, subject, played, format!("{set_name}-smg"), &units)?;
+    let played = play_path(frames, &path);
+    let written = write_output(ctx, &a, frames, subject, played, format!("{set_name}-smg"), &units)?;
     let unit = crate::output::unit_name(&units).to_string();
     let constraints = vec![
         Constraint::new(
@@ -233,18 +332,18 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
             .relative_to(q.frames),
     ];
     let mut report = json!({
-        "input": a.input,
+        "input": a.graph.input,
         "engine": "surface motion graph (Huang et al. 2009)",
         "fps": frames.fps,
         "from": a.from,
         "to": a.to,
-        "connections": a.connect,
+        "connections": a.graph.connect,
         "frames": path.frames.len(),
         "distance": path.distance,
         "unit": unit,
         "transition_cost": path.transition_cost,
         "cost": path.cost,
-        "path": path_segments(&frames, &path),
+        "path": path_segments(frames, &path),
         "loops": path.loops.iter().map(|(c, n)| json!({"edges": c.len(), "repetitions": n})).collect::<Vec<_>>(),
         "graph": {"nodes": graph.nodes.len(), "edges": graph.edges.len(),
             "transitions": graph.transitions.iter().map(|(x, y, t)| json!({
@@ -271,7 +370,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         "unreachable": path.unreachable.as_ref().map(|u| json!({"kind": u.kind(), "why": u.to_string(), "detail": u})),
         "unconverged_subproblems": path.unconverged_subproblems,
     });
-    add_travel(&mut report, &played_centres(&frames, &path), frames.up);
+    add_travel(&mut report, &played_centres(frames, &path), frames.up);
     let rp = report_path(&a.output);
     crate::output::write_json(&rp, &report)?;
     ctx.result(&report, || {
@@ -289,7 +388,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
             path.ilp_solves,
             query_seconds
         );
-        println!("path: {}", path_segments(&frames, &path).join(", "));
+        println!("path: {}", path_segments(frames, &path).join(", "));
         if let Some(u) = &path.unreachable {
             println!("no path of the graph meets {} {unit} in {} s within 1% and 1 frame: {u}", a.distance, a.time);
         }
