@@ -477,6 +477,19 @@ pub fn parse_glb(bytes: &[u8]) -> Result<GlbAnimation> {
     }
 }
 
+/// Parses a glb whose container and every accessor were checked to fit (see
+/// [`check_container`], `check_accessor`), so that reading the accessors cannot run off the
+/// binary chunk.
+pub(super) fn open_checked(bytes: &[u8]) -> Result<gltf::Gltf> {
+    let bytes = check_container(bytes)?;
+    let g = gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
+    let blob_len = g.blob.as_deref().map_or(0, <[u8]>::len);
+    for a in g.accessors() {
+        check_accessor(&a, blob_len)?;
+    }
+    Ok(g)
+}
+
 /// Checks the GLB container (header and chunk lengths) before the gltf crate splits it: its
 /// splitter subtracts lengths without checking them (found by the fuzzer, see fuzz/FINDINGS.md).
 pub(super) fn check_container(bytes: &[u8]) -> Result<&[u8]> {
@@ -664,13 +677,8 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
              frame set (-o x.frames)"
         ));
     }
-    let bytes = check_container(bytes)?;
-    let g = gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
+    let g = open_checked(bytes)?;
     let blob = g.blob.as_deref();
-    let blob_len = blob.map_or(0, <[u8]>::len);
-    for a in g.accessors() {
-        check_accessor(&a, blob_len)?;
-    }
     let buffers = |b: gltf::Buffer| match b.source() {
         gltf::buffer::Source::Bin => blob,
         _ => None,

@@ -40,7 +40,7 @@ use json::validation::{Checked::Valid, USize64};
 use serde_json::{Value, json};
 
 use super::glb::{
-    GLB_MAX_BYTES, HEADERS, Layout, accessor, check_accessor, check_container, finish_json, new_root, raw, up_to_y,
+    GLB_MAX_BYTES, HEADERS, Layout, accessor, check_container, finish_json, new_root, open_checked, raw, up_to_y,
     vec3_bounds, write_container,
 };
 use crate::error::{Result, err};
@@ -326,13 +326,8 @@ pub fn parse_glb_frame_set(bytes: &[u8], name: &str) -> Result<FrameSet> {
 fn decode(bytes: &[u8], name: &str) -> Result<FrameSet> {
     let meta = frame_set_meta(bytes)
         .ok_or_else(|| err!(Syntax, "not a surfcap frame-set glb: expected extras.surfcap.kind \"frame-set\""))?;
-    let bytes = check_container(bytes)?;
-    let g = gltf::Gltf::from_slice(bytes).map_err(|e| err!(Syntax, "not a valid glTF binary: {e}"))?;
+    let g = open_checked(bytes)?;
     let blob = g.blob.as_deref();
-    let blob_len = blob.map_or(0, <[u8]>::len);
-    for a in g.accessors() {
-        check_accessor(&a, blob_len)?;
-    }
     let buffers = |b: gltf::Buffer| match b.source() {
         gltf::buffer::Source::Bin => blob,
         _ => None,
