@@ -220,6 +220,15 @@ fn several_meshes_under_xforms_are_sequences_and_other_objects_are_noted() {
     write_abc(&spec, &abc);
     let e = import(&abc, d.path()).0.unwrap_err();
     assert!(e.contains("meshes /a and /c/mesh differ in topology"), "{e}");
+    // ... but they are one frame set: every mesh a sequence, every frame its own mesh.
+    let set_path = d.path().join("mixed.frames");
+    let o = surfcap!(&["--quiet", "import", p(&abc), "-o", p(&set_path)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let set = surfcap_mesh::frame_set_cache::read_frame_set(&set_path, &surfcap_mesh::NoProgress).unwrap();
+    let seqs: Vec<(&str, usize)> = set.sequences().iter().map(|q| (q.name.as_str(), q.frames().len())).collect();
+    assert_eq!(seqs, [("a", 2), ("c", 1)]);
+    let (lo, hi) = set.vertex_count_range();
+    assert!(lo < hi, "{lo}..{hi} vertices");
 }
 
 #[test]

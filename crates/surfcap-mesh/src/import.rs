@@ -621,6 +621,7 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
     for n in &archive.notes {
         progress.note(&format!("{}: {n}", path.display()));
     }
+    let mismatch = archive.topology_mismatch().map(|d| format!("{}: {d}", path.display()));
     let mut pieces = Vec::with_capacity(archive.meshes.len());
     let mut frame_set = None;
     for m in archive.meshes {
@@ -656,6 +657,22 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
                 (topology, frames.into_iter().flat_map(|f| f.positions).collect())
             }
         };
+        if mismatch.is_some() {
+            // Meshes of different topology: each a sequence of frames with its own.
+            let per = (3 * topology.n_vertices()).max(1);
+            pieces.push(Piece::Frames(SourceFrames {
+                name: m.name,
+                frames: positions.chunks(per).map(|p| (topology.clone(), p.to_vec())).collect(),
+                tags: Vec::new(),
+                labels: m.labels,
+                fps: archive.fps,
+                up_axis: archive.up_axis,
+                units: archive.units.clone(),
+                origin: path.to_path_buf(),
+                layout: SourceLayout::Alembic,
+            }));
+            continue;
+        }
         pieces.push(Piece::Shared(SourceSequence {
             name: m.name,
             topology,
@@ -670,7 +687,7 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
             layout: SourceLayout::Alembic,
         }));
     }
-    Ok((pieces, frame_set))
+    Ok((pieces, frame_set.or(mismatch)))
 }
 
 /// A USD stage's meshes as pieces: one subject's sequences when they share one topology;

@@ -807,22 +807,28 @@ fn read_objects(r: &Reader, top: u64, archive_meta: &str) -> Result<AbcArchive> 
     if fps.is_none() {
         notes.push("no time sampling on the meshes (the default of one second per sample): pass --fps".into());
     }
-    let constant: Vec<&AbcMesh> = meshes.iter().filter(|m| matches!(m.frames, AbcFrames::Constant { .. })).collect();
-    if let Some((first, rest)) = constant.split_first() {
-        let AbcFrames::Constant { topology: t0, .. } = &first.frames else { return Err(err!(Syntax, "internal")) };
-        for m in rest {
-            let AbcFrames::Constant { topology, .. } = &m.frames else { continue };
-            if let Some(d) = t0.first_difference(topology) {
-                return Err(err!(
-                    TopologyMismatch,
-                    "meshes {} and {} differ in topology ({d}): one subject needs one topology (import them separately)",
-                    first.path,
-                    m.path
-                ));
-            }
-        }
-    }
     Ok(AbcArchive { meshes, fps, up_axis, units, notes })
+}
+
+impl AbcArchive {
+    /// Why the meshes cannot be one subject's sequences: two meshes of constant topology differ
+    /// (a mesh whose own topology changes is reported by [`AbcMesh::topology_change`]). Such an
+    /// archive imports as a frame set.
+    pub fn topology_mismatch(&self) -> Option<String> {
+        let mut constant = self.meshes.iter().filter_map(|m| match &m.frames {
+            AbcFrames::Constant { topology, .. } => Some((m, topology)),
+            AbcFrames::Varying { .. } => None,
+        });
+        let (first, t0) = constant.next()?;
+        constant.find_map(|(m, t)| {
+            t0.first_difference(t).map(|d| {
+                format!(
+                    "meshes {} and {} differ in topology ({d}): one subject needs one topology (import them separately, or as a frame set: -o x.frames)",
+                    first.path, m.path
+                )
+            })
+        })
+    }
 }
 
 fn name_of(path: &str) -> String {
