@@ -617,6 +617,7 @@ fn subject_only((pieces, frame_set): FilePieces) -> Result<Vec<SourceSequence>> 
 /// topology changes between samples (per-frame reconstructions) a sequence of frames of their
 /// own, which makes the import a frame set.
 fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
+    use crate::io::abc_read::AbcFrames;
     let archive = crate::io::abc_read::read_abc(path)?;
     for n in &archive.notes {
         progress.note(&format!("{}: {n}", path.display()));
@@ -625,7 +626,8 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
     let mut pieces = Vec::with_capacity(archive.meshes.len());
     let mut frame_set = None;
     for m in archive.meshes {
-        if let Some((frame, faces, was)) = m.topology_change() {
+        let changes = m.topology_change();
+        if let Some((frame, faces, was)) = changes {
             frame_set.get_or_insert_with(|| {
                 format!(
                     "{} {}: the topology changes at frame {frame} ({faces} faces, was {was})",
@@ -633,12 +635,19 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
                     m.path
                 )
             });
-            let crate::io::abc_read::AbcFrames::Varying { frames } = m.frames else {
-                return Err(err!(Syntax, "{}: a topology change in a mesh of constant topology", m.path).in_file(path));
+        }
+        if changes.is_some() || mismatch.is_some() {
+            // Every frame with its own topology (a frame set's sequence).
+            let frames = match m.frames {
+                AbcFrames::Varying { frames } => frames.into_iter().map(|f| (f.topology, f.positions)).collect(),
+                AbcFrames::Constant { topology, positions } => {
+                    let per = (3 * topology.n_vertices()).max(1);
+                    positions.chunks(per).map(|p| (topology.clone(), p.to_vec())).collect()
+                }
             };
             pieces.push(Piece::Frames(SourceFrames {
                 name: m.name,
-                frames: frames.into_iter().map(|f| (f.topology, f.positions)).collect(),
+                frames,
                 tags: Vec::new(),
                 labels: m.labels,
                 fps: archive.fps,
@@ -650,29 +659,13 @@ fn alembic_pieces(path: &Path, progress: &dyn Progress) -> Result<FilePieces> {
             continue;
         }
         let (topology, positions) = match m.frames {
-            crate::io::abc_read::AbcFrames::Constant { topology, positions } => (topology, positions),
-            crate::io::abc_read::AbcFrames::Varying { frames } => {
+            AbcFrames::Constant { topology, positions } => (topology, positions),
+            AbcFrames::Varying { frames } => {
                 let Some(first) = frames.first() else { continue };
                 let topology = first.topology.clone();
                 (topology, frames.into_iter().flat_map(|f| f.positions).collect())
             }
         };
-        if mismatch.is_some() {
-            // Meshes of different topology: each a sequence of frames with its own.
-            let per = (3 * topology.n_vertices()).max(1);
-            pieces.push(Piece::Frames(SourceFrames {
-                name: m.name,
-                frames: positions.chunks(per).map(|p| (topology.clone(), p.to_vec())).collect(),
-                tags: Vec::new(),
-                labels: m.labels,
-                fps: archive.fps,
-                up_axis: archive.up_axis,
-                units: archive.units.clone(),
-                origin: path.to_path_buf(),
-                layout: SourceLayout::Alembic,
-            }));
-            continue;
-        }
         pieces.push(Piece::Shared(SourceSequence {
             name: m.name,
             topology,
