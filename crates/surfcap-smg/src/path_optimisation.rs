@@ -511,8 +511,18 @@ pub struct PathPlan {
     start_node: usize,
     all_loops: Vec<Vec<usize>>,
     prepared: Vec<Prepared>,
-    pub walks: usize,
-    pub loops_in_graph: usize,
+}
+
+impl PathPlan {
+    /// Walks between the key frames.
+    pub fn walks(&self) -> usize {
+        self.prepared.len()
+    }
+
+    /// Elementary loops of the whole graph.
+    pub fn loops_in_graph(&self) -> usize {
+        self.all_loops.len()
+    }
 }
 
 /// The walks and loops between the key frames `start` and `end` (global frames); more than
@@ -542,15 +552,7 @@ pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: u
             Prepared { walk, a, base: (d0, t0 + 1.0, s0), per_loop }
         })
         .collect();
-    Ok(PathPlan {
-        start,
-        end,
-        start_node: s,
-        walks: prepared.len(),
-        loops_in_graph: all_loops.len(),
-        all_loops,
-        prepared,
-    })
+    Ok(PathPlan { start, end, start_node: s, all_loops, prepared })
 }
 
 /// The optimal path for `q` on `g` (eq. 10-20), with `ground` each frame's ground centroid.
@@ -640,8 +642,8 @@ pub fn optimise_planned(
         distance,
         transition_cost,
         cost,
-        walks: plan.walks,
-        loops_in_graph: plan.loops_in_graph,
+        walks: plan.walks(),
+        loops_in_graph: plan.loops_in_graph(),
         ilp_solves: counts.solves,
         unconverged_subproblems: counts.unconverged,
         within_tolerance,
@@ -741,9 +743,7 @@ fn may_meet(base: (f64, f64, f64), per_loop: &[(f64, f64, f64)], q: &PathQuery, 
     if per_loop.is_empty() {
         return false;
     }
-    let speeds = per_loop.iter().map(|l| l.0 / l.1);
-    let fastest = speeds.clone().fold(f64::NEG_INFINITY, f64::max);
-    let slowest = speeds.fold(f64::INFINITY, f64::min);
+    let (slowest, fastest) = speed_range(per_loop);
     // Frames y the loops add with slowest * y <= x1 and fastest * y >= x0.
     let lo = y0.max(0.0).max(if x0 <= 0.0 {
         0.0
@@ -754,6 +754,11 @@ fn may_meet(base: (f64, f64, f64), per_loop: &[(f64, f64, f64)], q: &PathQuery, 
     });
     let hi = y1.min(if slowest > 0.0 { x1 / slowest } else { f64::INFINITY });
     lo <= hi
+}
+
+/// The slowest and fastest of the loops' speeds (distance per frame).
+fn speed_range(per_loop: &[(f64, f64, f64)]) -> (f64, f64) {
+    per_loop.iter().map(|l| l.0 / l.1).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
 }
 
 /// Why no walk meets the targets within `(tol_d, tol_t)`: checked in order, the length and
@@ -780,9 +785,7 @@ fn unreachable_reason(prepared: &[Prepared], q: &PathQuery, (tol_d, tol_t): (f64
     let mut too_slow: Option<(f64, f64)> = None;
     for p in prepared.iter().filter(|p| !p.per_loop.is_empty()) {
         let (dd, dt) = (q.distance - p.base.0, q.frames - p.base.1);
-        let speeds = p.per_loop.iter().map(|l| l.0 / l.1);
-        let fastest = speeds.clone().fold(f64::NEG_INFINITY, f64::max);
-        let slowest = speeds.fold(f64::INFINITY, f64::min);
+        let (slowest, fastest) = speed_range(&p.per_loop);
         // With the tolerance, the loops must cover dd +- tol_d in dt +- tol_t frames.
         let (lo, hi) = ((dd - tol_d) / (dt + tol_t).max(1e-9), (dd + tol_d) / (dt - tol_t).max(1e-9));
         if dt + tol_t <= 0.0 {

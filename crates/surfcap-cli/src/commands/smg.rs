@@ -246,6 +246,20 @@ fn open_graph(ctx: &crate::Ctx, a: &GraphArgs, keys: &[(&str, &str)]) -> anyhow:
     Ok(Opened { data, frames, ground, similarity_seconds, similarity_cached, graph, keys })
 }
 
+/// The graph's transitions for reports: last frame played, first frame switched to
+/// (`sequence:frame`), window and cost.
+fn transitions_json(f: &MotionFrames, g: &SurfaceMotionGraph) -> Vec<serde_json::Value> {
+    g.transitions
+        .iter()
+        .map(|(x, y, t)| {
+            json!({
+                "from": f.name_of(f.sequences[*x].start + t.last_x),
+                "to": f.name_of(f.sequences[*y].start + t.first_y),
+                "window": t.length, "cost": t.cost})
+        })
+        .collect()
+}
+
 fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.graph.input])?;
     let keys: Vec<(&str, &str)> = a.keys.iter().map(|k| ("--keys", k.as_str())).collect();
@@ -264,10 +278,7 @@ fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
         "edges": g.edges.iter().map(|e| json!({
             "from": name(e.from), "to": name(e.to), "kind": e.kind, "frames": e.frames,
             "distance": e.distance, "cost": e.cost})).collect::<Vec<_>>(),
-        "transitions": g.transitions.iter().map(|(x, y, t)| json!({
-            "from": f.name_of(f.sequences[*x].start + t.last_x),
-            "to": f.name_of(f.sequences[*y].start + t.first_y),
-            "window": t.length, "cost": t.cost})).collect::<Vec<_>>(),
+        "transitions": transitions_json(f, g),
         "missing_transitions": g.missing.iter().map(|&(x, y)| format!("{}:{}", f.names[x], f.names[y])).collect::<Vec<_>>(),
     });
     crate::output::write_json(&a.output, &report)?;
@@ -346,10 +357,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         "path": path_segments(frames, &path),
         "loops": path.loops.iter().map(|(c, n)| json!({"edges": c.len(), "repetitions": n})).collect::<Vec<_>>(),
         "graph": {"nodes": graph.nodes.len(), "edges": graph.edges.len(),
-            "transitions": graph.transitions.iter().map(|(x, y, t)| json!({
-                "from": frames.name_of(frames.sequences[*x].start + t.last_x),
-                "to": frames.name_of(frames.sequences[*y].start + t.first_y),
-                "window": t.length, "cost": t.cost})).collect::<Vec<_>>(),
+            "transitions": transitions_json(frames, graph),
             "walks": path.walks, "loops": path.loops_in_graph},
         "similarity_seconds": similarity_seconds,
         "similarity_cached": cached,

@@ -121,8 +121,8 @@ pub fn run(ctx: &crate::Ctx, a: &SmgArgs) -> anyhow::Result<()> {
             let plan = plan_paths(&g, s, e, max_paths)?;
             let plan_seconds = t.elapsed().as_secs_f64();
             plans.push(plan_seconds);
-            walks.push(plan.walks);
-            loops = plan.loops_in_graph;
+            walks.push(plan.walks());
+            loops = plan.loops_in_graph();
             for &(d, secs) in &targets {
                 let q = PathQuery::new(s, e, d, secs * frames.fps);
                 let t = Instant::now();
