@@ -8,6 +8,7 @@
 
 pub mod atlas_raster;
 pub mod error;
+pub mod flow_cache;
 pub mod flow_field;
 pub mod texel_mask;
 pub mod texture_image;
