@@ -18,6 +18,42 @@ pub struct TransitionFrames {
     pub warp: Warp,
 }
 
+impl TransitionFrames {
+    /// What each frame mixes: (source frame, destination frame, destination weight), global
+    /// frame numbers, the weight the ramp of Algorithm 2 gives the cell (`Lambda::Ramp`: cell
+    /// t of l has weight t / (l - 1)). Whatever else a frame carries (its texture, thesis
+    /// 4.6.1 and Fig. 7.1) is blended with these weights so it follows the geometry.
+    pub fn mix(&self) -> Vec<FrameMix> {
+        let l = self.warp.path.len();
+        self.warp
+            .path
+            .iter()
+            .enumerate()
+            .map(|(t, &(a, b))| FrameMix {
+                from: a as u32,
+                to: b as u32,
+                weight: if l > 1 { t as f32 / (l - 1) as f32 } else { 1.0 },
+            })
+            .collect()
+    }
+}
+
+/// The frames an output frame is made from: `from` with weight `1 - weight`, `to` with
+/// `weight` (global frame numbers; an original frame is itself with weight 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameMix {
+    pub from: u32,
+    pub to: u32,
+    pub weight: f32,
+}
+
+impl FrameMix {
+    /// An original frame.
+    pub fn original(frame: u32) -> FrameMix {
+        FrameMix { from: frame, to: frame, weight: 0.0 }
+    }
+}
+
 /// The transition from global frame `i` (source segment `i .. i + li`) to global frame `j`
 /// (destination segment `j + 1 - lj ..= j`) of `subject`, whose all-pairs distances are `d`
 /// (row-major over the global frame index). `None` when the segments do not fit in the subject

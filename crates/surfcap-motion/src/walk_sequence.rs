@@ -27,7 +27,7 @@ use crate::blend::{Lambda, blend_placements_from, centre};
 use crate::dtw::{Slope, dtw_window};
 use crate::error::{Error, Result};
 use crate::graph::Graph;
-use crate::transition_frames::transition_frames;
+use crate::transition_frames::{FrameMix, transition_frames};
 use crate::transition_table::TransitionTable;
 
 /// The rigid track of one transition edge u -> v, in the coordinates where frame u is unmoved.
@@ -316,6 +316,8 @@ pub struct WalkSequence {
     pub labels: Vec<FrameLabel>,
     /// The walk node each output frame shows, `None` for the inside of a transition.
     pub nodes: Vec<Option<u32>>,
+    /// The captured frames each output frame is made from, with the blend weight.
+    pub mix: Vec<FrameMix>,
     pub n_transitions: usize,
 }
 
@@ -337,30 +339,40 @@ pub fn walk_sequence(
 ) -> Result<WalkSequence> {
     let first = *walk.first().ok_or(Error::EmptyWalk)?;
     let frame = |g: u32| subject.frame(g as usize).expect("walk nodes are frames of the subject");
-    let mut out = WalkSequence { positions: Vec::new(), labels: Vec::new(), nodes: Vec::new(), n_transitions: 0 };
-    let push = |out: &mut WalkSequence, p: &[f32], g: &PlaneMotion, label, node| {
+    let mut out = WalkSequence {
+        positions: Vec::new(),
+        labels: Vec::new(),
+        nodes: Vec::new(),
+        mix: Vec::new(),
+        n_transitions: 0,
+    };
+    let push = |out: &mut WalkSequence, p: &[f32], g: &PlaneMotion, label, node: Option<u32>, mix: Option<FrameMix>| {
         let start = out.positions.len();
         out.positions.extend_from_slice(p);
         g.apply(&mut out.positions[start..]);
         out.labels.push(label);
         out.nodes.push(node);
+        out.mix.push(mix.or(node.map(FrameMix::original)).expect("a frame is a node or a mix"));
     };
     let mut g = *start;
-    push(&mut out, frame(first), &g, FrameLabel::Original, Some(first));
+    push(&mut out, frame(first), &g, FrameLabel::Original, Some(first), None);
     for (at, w) in walk.windows(2).enumerate() {
         let (u, v) = (w[0], w[1]);
         match model.step(u, v).ok_or(Error::NotAnEdge { at, from: u, to: v })? {
-            Step::Original => push(&mut out, frame(v), &g, FrameLabel::Original, Some(v)),
+            Step::Original => push(&mut out, frame(v), &g, FrameLabel::Original, Some(v), None),
             Step::Transition(t) => {
                 let ends = ((u as usize, t.li as usize), (v as usize, t.lj as usize));
-                let s = transition_frames(subject, d, ends.0, ends.1, model.slope)?
-                    .ok_or(Error::NotAnEdge { at, from: u, to: v })?
-                    .frames;
-                for f in &s[1..s.len().saturating_sub(1)] {
-                    push(&mut out, f, &g, FrameLabel::Synthetic, None);
+                let tf = transition_frames(subject, d, ends.0, ends.1, model.slope)?.ok_or(Error::NotAnEdge {
+                    at,
+                    from: u,
+                    to: v,
+                })?;
+                let (s, mix) = (&tf.frames, tf.mix());
+                for (f, m) in s.iter().zip(&mix).take(s.len().saturating_sub(1)).skip(1) {
+                    push(&mut out, f, &g, FrameLabel::Synthetic, None, Some(*m));
                 }
                 g = g.after(&t.end);
-                push(&mut out, frame(v), &g, FrameLabel::Original, Some(v));
+                push(&mut out, frame(v), &g, FrameLabel::Original, Some(v), None);
                 out.n_transitions += 1;
             }
         }
@@ -450,6 +462,27 @@ pub(crate) mod tests {
         assert_eq!(originals, walk);
         assert_eq!(out.labels.iter().filter(|l| **l == FrameLabel::Original).count(), walk.len());
         assert!(out.n_transitions >= 1);
+        // Each frame says what it is made of: an original frame is its node, a blended one
+        // mixes the frame just before its transition's span with weights rising in (0, 1).
+        assert_eq!(out.mix.len(), out.n_frames());
+        let mut last_weight = 0.0;
+        for (k, m) in out.mix.iter().enumerate() {
+            match out.nodes[k] {
+                Some(node) => {
+                    assert_eq!(*m, FrameMix::original(node));
+                    last_weight = 0.0;
+                }
+                None => {
+                    assert!(
+                        m.weight > last_weight && m.weight < 1.0,
+                        "frame {k}: weight {} after {last_weight}",
+                        m.weight
+                    );
+                    assert!(m.from < n && m.to < n && m.from != m.to);
+                    last_weight = m.weight;
+                }
+            }
+        }
         let mut first = s.frame(walk[0] as usize).unwrap().to_vec();
         start.apply(&mut first);
         let d0 = first.iter().zip(&out.positions[..3 * nv]).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);

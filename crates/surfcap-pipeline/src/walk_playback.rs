@@ -7,6 +7,7 @@ use std::time::Instant;
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_motion::transition_frames::FrameMix;
 use surfcap_motion::walk_sequence::{Step, WalkModel, tracked_centre, walk_sequence};
 
 use crate::error::{Error, Result};
@@ -32,6 +33,9 @@ pub struct PlayedWalk {
     pub synthetic_frames: usize,
     pub transitions: usize,
     pub segments: Vec<WalkSegment>,
+    /// The captured frames (global numbers) each output frame is made from, with the weight
+    /// its transition blends them by: what a per-frame texture follows (issue 20 item 8).
+    pub mix: Vec<FrameMix>,
     /// Time spent blending the transitions.
     pub blend_seconds: f64,
 }
@@ -72,6 +76,7 @@ pub fn play_walk(
         synthetic_frames,
         transitions: ws.n_transitions,
         segments: walk_segments(s, &model.value, walk)?,
+        mix: ws.mix,
         blend_seconds,
     })
 }
