@@ -5,6 +5,7 @@
 
 pub mod bvh;
 pub mod frame_remeshing;
+pub mod head_motion;
 pub mod locomotion;
 pub mod mannequin;
 pub mod mannequin_subject;
