@@ -8,6 +8,7 @@ pub mod frame_remeshing;
 pub mod head_motion;
 pub mod locomotion;
 pub mod mannequin;
+pub mod mannequin_atlas;
 pub mod mannequin_subject;
 pub mod retarget;
 mod worm;
