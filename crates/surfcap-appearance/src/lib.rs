@@ -10,6 +10,7 @@ pub mod atlas_raster;
 pub mod error;
 pub mod flow_cache;
 pub mod flow_field;
+pub mod solid_texture;
 pub mod texel_mask;
 pub mod texture_image;
 
