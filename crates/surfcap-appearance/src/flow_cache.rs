@@ -16,6 +16,11 @@ use crate::error::{Error, Result};
 use crate::flow_field::FlowField;
 use crate::texel_mask::TexelMask;
 use crate::texture_image::TextureImage;
+use crate::texture_preprocessing::PreprocessOptions;
+use crate::tv_l1_flow::{FlowOptions, texture_flow};
+
+/// Layout version of the entries: bump when the flow's meaning or the file layout changes.
+const LAYOUT: u32 = 1;
 
 /// Where flows are kept: a cache folder, or nowhere (computed every time).
 pub struct FlowCache<'a> {
@@ -79,6 +84,26 @@ impl<'a> FlowCache<'a> {
         };
         let (flow, _) = cache.fetch(&path, self.refresh, self.progress, encode, decode)?;
         Ok(flow)
+    }
+}
+
+/// The thesis's flow (pre-processing, then TV-L1 on the grey images, 4.4.1) through a cache:
+/// the estimator every appearance command hands to the model.
+pub struct TextureFlow<'a> {
+    pub cache: FlowCache<'a>,
+    pub preprocess: PreprocessOptions,
+    pub options: FlowOptions,
+}
+
+impl TextureFlow<'_> {
+    /// The parameter text of the cache key: every option the flow depends on.
+    fn params(&self) -> String {
+        format!("layout {LAYOUT}; {:?}; {:?}", self.preprocess, self.options)
+    }
+
+    /// `w` with `reference(x) ~ target(x + w(x))` over the active texels of `mask`.
+    pub fn estimate(&self, reference: &TextureImage, target: &TextureImage, mask: &TexelMask) -> Result<FlowField> {
+        self.cache.flow(reference, target, mask, &self.params(), || texture_flow(reference, target, mask, &self.preprocess, &self.options))
     }
 }
 

@@ -29,6 +29,7 @@ pub mod naive_texture_pca;
 pub mod poisson_texture_warp;
 pub mod solid_texture;
 pub mod texel_mask;
+pub mod texture_folder;
 pub mod texture_image;
 pub mod texture_preprocessing;
 pub mod tv_l1_flow;
