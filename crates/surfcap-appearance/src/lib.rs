@@ -20,6 +20,9 @@ pub mod poisson_texture_warp;
 pub mod texel_mask;
 pub mod texture_image;
 
+#[cfg(test)]
+mod test_support;
+
 pub use appearance_model::{AppearanceModel, AppearanceOptions, BuildReport, build_appearance_model};
 pub use eigen_maps::EigenBasis;
 pub use error::{Error, Result};
