@@ -622,3 +622,227 @@ struct Header {
     warp_eigenvalues: Vec<f64>,
     warp_total_variance: f64,
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::needless_range_loop)]
+    use super::*;
+    use crate::medoid_shift_alignment::gram_matrix;
+    use crate::test_support::{disc_mask, head_crop, known_warp, mse, quadratic_flow, synthetic_frame};
+    use surfcap_mesh::NoProgress;
+
+    fn estimator(a: &TextureImage, b: &TextureImage) -> Result<FlowField> {
+        quadratic_flow(a, b, None)
+    }
+
+    fn masked_estimator(a: &TextureImage, b: &TextureImage, m: &TexelMask) -> Result<FlowField> {
+        quadratic_flow(a, b, Some(m))
+    }
+
+    fn names(f: usize) -> Vec<String> {
+        (0..f).map(|k| format!("synthetic:{k}")).collect()
+    }
+
+    fn synthetic_model(frames: &[u64]) -> (TexelMask, Vec<TextureImage>, AppearanceModel, BuildReport) {
+        let mask = disc_mask(32);
+        let textures: Vec<TextureImage> = frames.iter().map(|&k| synthetic_frame(&mask, k, 1.2)).collect();
+        let (model, report) = build_appearance_model(
+            &textures,
+            &names(frames.len()),
+            &mask,
+            &AppearanceOptions::default(),
+            &estimator,
+            &NoProgress,
+        )
+        .unwrap();
+        (mask, textures, model, report)
+    }
+
+    #[test]
+    fn the_medoid_from_the_gram_matrix_is_the_brute_force_one() {
+        let vs: Vec<Vec<f32>> =
+            (0..7).map(|k| (0..50).map(|i| ((i * (k + 3)) % 17) as f32 + k as f32).collect()).collect();
+        let refs: Vec<&[f32]> = vs.iter().map(Vec::as_slice).collect();
+        let f = vs.len();
+        let g = gram_matrix(&refs, Some(&vs[2]));
+        let trace: f64 = (0..f).map(|l| g[l * f + l]).sum();
+        let spread: Vec<f64> =
+            (0..f).map(|k| f as f64 * g[k * f + k] + trace - 2.0 * g[k * f..(k + 1) * f].iter().sum::<f64>()).collect();
+        for k in 0..f {
+            let brute: f64 =
+                (0..f).map(|l| vs[k].iter().zip(&vs[l]).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>()).sum();
+            assert!((spread[k] - brute).abs() < 1e-6 * brute.max(1.0), "frame {k}: {} vs {brute}", spread[k]);
+        }
+    }
+
+    #[test]
+    fn every_training_frame_is_rebuilt_up_to_the_warping_error() {
+        let (mask, textures, model, report) = synthetic_model(&[0, 1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(model.n_textures(), 7);
+        assert_eq!(model.n_warps(), 7);
+        assert!(!report.medoid_errors.is_empty());
+        let ev: f64 = report.texture_explained_variance.iter().sum();
+        assert!((ev - 1.0).abs() < 1e-6, "{ev}");
+        // The same alignment and backward warps, recomputed: the warping error alone.
+        let warper = TextureWarper::new(Warping::Poisson, &mask, DEFAULT_LAMBDA).unwrap();
+        let al = align_by_medoid_shift(&textures, &mask, &warper, &estimator, 5, &NoProgress).unwrap();
+        assert_eq!(al.reference, model.reference());
+        let active = |i: usize| mask.is_active(i);
+        for k in 0..textures.len() {
+            let bw = if k == al.reference {
+                FlowField::zeros(32, 32)
+            } else {
+                estimator(&textures[k], &al.aligned[k]).unwrap()
+            };
+            let round_trip = warper.warp(&al.aligned[k], &bw).unwrap();
+            let warping_error = mse(&round_trip, &textures[k], active);
+            let rebuilt = model.reconstruct(k).unwrap();
+            let model_error = mse(&rebuilt, &textures[k], active);
+            assert!(
+                model_error <= warping_error * 1.01 + 1e-3,
+                "frame {k}: model {model_error}, warping alone {warping_error}"
+            );
+            let variance = mse(&textures[k], &model.aligned_texture(&[]).unwrap(), active);
+            assert!(
+                model_error < 0.15 * variance,
+                "frame {k}: error {model_error}, variance about the mean {variance}"
+            );
+            // Fewer components, more error.
+            let mean_only = mse(&model.instantiate(&[], &[]).unwrap(), &textures[k], active);
+            assert!(model_error < mean_only, "frame {k}: all components {model_error}, none {mean_only}");
+        }
+    }
+
+    #[test]
+    fn interpolation_with_weights_one_and_zero_gives_the_frame() {
+        let (_, _, model, _) = synthetic_model(&[0, 1, 2, 3, 4, 5]);
+        let frame = model.reconstruct(2).unwrap();
+        let blend = model.interpolate(&[(2, 1.0), (4, 0.0)]).unwrap();
+        let worst = frame.data().iter().zip(blend.data()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-3, "{worst}");
+        let mid = model.interpolate(&[(2, 0.5), (4, 0.25), (1, 0.25)]).unwrap();
+        assert!(mid.data().iter().zip(frame.data()).any(|(a, b)| (a - b).abs() > 1.0));
+        let e = model.interpolate(&[(2, 0.5), (4, 0.2)]).unwrap_err().to_string();
+        assert!(e.contains("sum to 0.7") && e.contains("summing to 1"), "{e}");
+        let e = model.interpolate(&[(9, 1.0)]).unwrap_err().to_string();
+        assert!(e.contains("frame 9: the model has 6 training frames"), "{e}");
+    }
+
+    #[test]
+    fn completion_fills_a_hole_closer_to_the_truth_than_the_holed_input() {
+        // Frame 3 of the training set seen with a hole (an unseen frame generalises poorly
+        // from 8 tiny frames: see the report of issue 20).
+        let (mask, _, model, _) = synthetic_model(&[0, 1, 2, 3, 4, 5, 6, 7]);
+        let truth = synthetic_frame(&mask, 3, 1.2);
+        let hole = |i: usize| (10..18).contains(&(i % 32)) && (12..20).contains(&(i / 32));
+        let observed: Vec<bool> = (0..32 * 32).map(|i| !hole(i)).collect();
+        let mut holed = truth.clone();
+        for c in 0..3 {
+            for i in (0..32 * 32).filter(|&i| hole(i)) {
+                holed.plane_mut(c)[i] = 0.0;
+            }
+        }
+        let done = model.complete(&holed, &observed, &masked_estimator).unwrap();
+        let in_hole = |i: usize| hole(i) && mask.is_active(i);
+        let (before, after) = (mse(&holed, &truth, in_hole), mse(&done, &truth, in_hole));
+        let mean_fill = mse(&model.instantiate(&[], &[]).unwrap(), &truth, in_hole);
+        eprintln!("hole MSE: holed {before:.1}, mean texture {mean_fill:.1}, completed {after:.1}");
+        assert!(after < 0.05 * before, "completed {after}, holed {before}");
+        // Measured: holed 17027, completed 49.0, the mean texture 33.5: the unregularised
+        // least-squares projection (4.6.2) does not beat the mean inside the hole here.
+    }
+
+    #[test]
+    fn a_saved_model_instantiates_the_same_and_a_damaged_array_is_named() {
+        let (_, _, model, _) = synthetic_model(&[0, 1, 2, 3, 4]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("head.appearance");
+        model.save(&path, false).unwrap();
+        let back = AppearanceModel::load(&path).unwrap();
+        assert_eq!(back.names(), model.names());
+        assert_eq!(back.reference(), model.reference());
+        let (t, w) = model.frame_coefficients(1).unwrap();
+        let coeffs = (t.to_vec(), w[..2].to_vec());
+        assert_eq!(back.instantiate(&coeffs.0, &coeffs.1).unwrap(), model.instantiate(&coeffs.0, &coeffs.1).unwrap());
+        // Saving again over its own folder is allowed.
+        model.save(&path, false).unwrap();
+        let npy = path.join("eigen_textures.npy");
+        let bytes = std::fs::read(&npy).unwrap();
+        std::fs::write(&npy, &bytes[..bytes.len() - 40]).unwrap();
+        let e = AppearanceModel::load(&path).unwrap_err().to_string();
+        assert!(e.contains("eigen_textures.npy"), "{e}");
+        std::fs::write(&npy, &bytes).unwrap();
+        surfcap_mesh::atomic::write_file(&path.join("mean_warp.npy"), |w| write_npy(w, &[3, 4], &[0.0f32; 12]))
+            .unwrap();
+        let e = AppearanceModel::load(&path).unwrap_err().to_string();
+        assert!(e.contains("mean_warp.npy") && e.contains("the mean backward warp"), "{e}");
+    }
+
+    #[test]
+    fn frames_of_another_size_are_refused_by_name() {
+        let mask = disc_mask(16);
+        let textures = vec![synthetic_frame(&mask, 0, 1.0), TextureImage::zeros(16, 12, 3)];
+        let names = vec!["walk:0".to_string(), "walk:1".to_string()];
+        let e =
+            build_appearance_model(&textures, &names, &mask, &AppearanceOptions::default(), &estimator, &NoProgress)
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("frame walk:1 is 16x12x3: expected 16x16x3"), "{e}");
+    }
+
+    #[test]
+    fn the_naive_pca_reconstructs_with_all_components_and_loses_with_fewer() {
+        let mask = disc_mask(32);
+        let textures: Vec<TextureImage> = (0..6).map(|k| synthetic_frame(&mask, k, 1.2)).collect();
+        let pca = crate::NaiveTexturePca::new(&textures, &mask, 100).unwrap();
+        assert_eq!(pca.n_components(), 5);
+        let active = |i: usize| mask.is_active(i);
+        let full = mse(&pca.reconstruct(3, 5).unwrap(), &textures[3], active);
+        let one = mse(&pca.reconstruct(3, 1).unwrap(), &textures[3], active);
+        assert!(full < 1e-4 && one > 1.0, "all {full}, one {one}");
+    }
+
+    /// Real texture: five frames made from a 64x64 crop of the head's colour map (its 256x256
+    /// face region averaged by 4) by known smooth warps and gains; the model with every
+    /// component rebuilds each frame far better than its mean.
+    #[test]
+    fn a_model_of_warped_real_texture_rebuilds_its_frames() {
+        let Some(base) = head_crop(256, 256, 64, 4) else { return };
+        let mask = TexelMask::full(64, 64);
+        let textures: Vec<TextureImage> = (0..5u64)
+            .map(|k| {
+                let mut t = crate::flow_field::warp_direct(&base, &known_warp(64, 1.5, k + 1)).unwrap();
+                let gain = 1.0 + 0.04 * (k as f32 - 2.0);
+                t.data_mut().iter_mut().for_each(|v| *v *= gain);
+                t
+            })
+            .collect();
+        let (model, report) =
+            build_appearance_model(&textures, &names(5), &mask, &AppearanceOptions::default(), &estimator, &NoProgress)
+                .unwrap();
+        let pca = crate::NaiveTexturePca::new(&textures, &mask, 100).unwrap();
+        let keep = |i: usize| {
+            let (x, y) = (i % 64, i / 64);
+            (4..60).contains(&x) && (4..60).contains(&y)
+        };
+        let (mut ours1, mut naive1) = (0.0, 0.0);
+        for k in 0..5 {
+            let all = mse(&model.reconstruct(k).unwrap(), &textures[k], keep);
+            let mean = mse(&model.instantiate(&[], &[]).unwrap(), &textures[k], keep);
+            assert!(all < 0.5 * mean, "frame {k}: all components {all}, mean {mean}");
+            let (t, w) = model.frame_coefficients(k).unwrap();
+            ours1 += mse(&model.instantiate(&t[..1], &w[..1]).unwrap(), &textures[k], keep);
+            naive1 += mse(&pca.reconstruct(k, 1).unwrap(), &textures[k], keep);
+        }
+        eprintln!(
+            "reference {}, medoid errors {:?}; one component each: ours {:.1}, naive {:.1}",
+            report.reference,
+            report.medoid_errors,
+            ours1 / 5.0,
+            naive1 / 5.0
+        );
+        // Measured at F = 5: ours 63.4, naive 22.8 with one component each; the thesis's
+        // advantage needs more frames than this test builds (the evaluation measures it).
+        assert!(ours1.is_finite() && naive1.is_finite());
+    }
+}

@@ -260,7 +260,7 @@ fn cholesky_solve(a: &mut [f64], b: &mut [f64], k: usize) -> Result<()> {
         for p in 0..j {
             d -= a[j * k + p] * a[j * k + p];
         }
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return Err(Error::Solver {
                 what: "the least-squares projection onto the observed texels".into(),
                 message: "the normal matrix is not positive definite".into(),
@@ -300,7 +300,7 @@ mod tests {
 
     fn random_vectors(f: usize, n: usize, seed: u64) -> Vec<Vec<f32>> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        (0..f).map(|_| (0..n).map(|_| rng.gen_range(-10.0f32..10.0)).collect()).collect()
+        (0..f).map(|_| (0..n).map(|_| rng.random_range(-10.0f32..10.0)).collect()).collect()
     }
 
     #[test]

@@ -34,6 +34,9 @@ pub mod texture_image;
 pub mod texture_preprocessing;
 pub mod tv_l1_flow;
 
+#[cfg(test)]
+mod test_support;
+
 pub use appearance_model::{AppearanceModel, AppearanceOptions, BuildReport, build_appearance_model};
 pub use bilateral_filter::BilateralParams;
 pub use eigen_maps::EigenBasis;

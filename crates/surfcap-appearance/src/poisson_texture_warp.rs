@@ -192,10 +192,8 @@ impl PoissonTextureWarp {
         let (w, h) = (self.mask.width(), self.mask.height());
         self.mask.check_size(image.width(), image.height(), "the texture to warp")?;
         flow.check_size(w, h, "the flow")?;
-        if let Some(v) = valid {
-            if v.len() != w * h {
-                return Err(Error::Mismatch(format!("{} validity flags for a {w}x{h} texture", v.len())));
-            }
+        if let Some(v) = valid.filter(|v| v.len() != w * h) {
+            return Err(Error::Mismatch(format!("{} validity flags for a {w}x{h} texture", v.len())));
         }
         let valid_texel = |t: usize| self.mask.is_active(t) && valid.is_none_or(|v| v[t]);
         let flags: Vec<bool> = (0..w * h).map(valid_texel).collect();
@@ -363,7 +361,7 @@ pub fn reads_only_valid(flow: &FlowField, valid: &[bool], t: usize) -> bool {
 /// (which reads the mask's active texels only, as the Poisson warp does).
 #[derive(Debug)]
 pub enum TextureWarper {
-    Poisson(PoissonTextureWarp),
+    Poisson(Box<PoissonTextureWarp>),
     Direct(TexelMask),
 }
 
@@ -371,7 +369,7 @@ impl TextureWarper {
     /// The warper of `mode` on `mask` (Poisson factorises its system here).
     pub fn new(mode: Warping, mask: &TexelMask, lambda: f64) -> Result<TextureWarper> {
         Ok(match mode {
-            Warping::Poisson => TextureWarper::Poisson(PoissonTextureWarp::new(mask, lambda)?),
+            Warping::Poisson => TextureWarper::Poisson(Box::new(PoissonTextureWarp::new(mask, lambda)?)),
             Warping::Direct => TextureWarper::Direct(mask.clone()),
         })
     }
@@ -391,5 +389,114 @@ impl TextureWarper {
                 warp_direct_reading(image, flow, &valid)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{disc_mask, head_crop, known_warp, mse};
+
+    #[test]
+    fn a_constant_image_stays_constant_and_a_zero_flow_gives_the_image_back() {
+        let mask = disc_mask(24);
+        let warp = PoissonTextureWarp::new(&mask, DEFAULT_LAMBDA).unwrap();
+        let constant = TextureImage::from_planes(24, 24, 2, vec![77.0; 2 * 576]).unwrap();
+        let out = warp.warp(&constant, &known_warp(24, 2.0, 3)).unwrap();
+        for &t in mask.index() {
+            for c in 0..2 {
+                assert!((out.plane(c)[t as usize] - 77.0).abs() < 1e-3, "texel {t}: {}", out.plane(c)[t as usize]);
+            }
+        }
+        let data: Vec<f32> = (0..3 * 576).map(|i| ((i * 37) % 251) as f32).collect();
+        let img = TextureImage::from_planes(24, 24, 3, data).unwrap();
+        let back = warp.warp(&img, &FlowField::zeros(24, 24)).unwrap();
+        let worst = mask
+            .index()
+            .iter()
+            .flat_map(|&t| (0..3).map(move |c| (c, t as usize)))
+            .map(|(c, t)| (back.plane(c)[t] - img.plane(c)[t]).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 1e-3, "zero flow changed a texel by {worst}");
+    }
+
+    #[test]
+    fn bad_lambda_and_sizes_are_refused() {
+        let mask = disc_mask(8);
+        let e = PoissonTextureWarp::new(&mask, 0.0).unwrap_err().to_string();
+        assert!(e.contains("lambda is 0"), "{e}");
+        let warp = PoissonTextureWarp::new(&mask, 0.02).unwrap();
+        let e = warp.warp(&TextureImage::zeros(9, 8, 3), &FlowField::zeros(9, 8)).unwrap_err().to_string();
+        assert!(e.contains("the texture to warp is 9x8: expected 8x8"), "{e}");
+    }
+
+    fn inner(size: usize) -> impl Fn(usize) -> bool {
+        move |i: usize| {
+            let (x, y) = (i % size, i / size);
+            (6..size - 6).contains(&x) && (6..size - 6).contains(&y)
+        }
+    }
+
+    /// Real texture (a 128x128 crop of the head's colour map around the eye), warped by a known
+    /// smooth field and warped back by its inverse: the Poisson warp gets back as close to the
+    /// crop as the direct one (measured: MSE 4.56 vs 4.55 on the 0-255 scale; bilinear reads of
+    /// values and of edge differences blur alike on a smooth flow).
+    #[test]
+    fn poisson_round_trip_on_the_real_texture_matches_the_direct_one() {
+        let Some(img) = head_crop(330, 360, 128, 1) else { return };
+        let size = 128;
+        let mask = TexelMask::full(size, size);
+        let mut fwd = FlowField::zeros(size, size);
+        for i in 0..size * size {
+            let (x, y) = ((i % size) as f32 / size as f32, (i / size) as f32 / size as f32);
+            fwd.u[i] = 2.5 * (std::f32::consts::TAU * y).sin();
+            fwd.v[i] = 1.8 * (std::f32::consts::TAU * 1.3 * x).cos();
+        }
+        // Inverse field: inv(x) = -fwd(x + inv(x)), by fixed-point iteration.
+        let mut inv = FlowField::zeros(size, size);
+        for _ in 0..30 {
+            let prev = inv.clone();
+            for i in 0..size * size {
+                let (x, y) = ((i % size) as f32 + prev.u[i], (i / size) as f32 + prev.v[i]);
+                inv.u[i] = -sample_bilinear(&fwd.u, size, size, x, y);
+                inv.v[i] = -sample_bilinear(&fwd.v, size, size, x, y);
+            }
+        }
+        let poisson = PoissonTextureWarp::new(&mask, DEFAULT_LAMBDA).unwrap();
+        let p_back = poisson.warp(&poisson.warp(&img, &fwd).unwrap(), &inv).unwrap();
+        let d_back = warp_direct(&warp_direct(&img, &fwd).unwrap(), &inv).unwrap();
+        let keep = inner(size);
+        let (p_mse, d_mse) = (mse(&p_back, &img, &keep), mse(&d_back, &img, &keep));
+        let unwarped = mse(&warp_direct(&img, &fwd).unwrap(), &img, &keep);
+        eprintln!("round trip MSE: Poisson {p_mse:.2}, direct {d_mse:.2}; warped and not back {unwarped:.1}");
+        assert!(p_mse < 1.05 * d_mse, "Poisson round trip MSE {p_mse}, direct {d_mse}");
+        assert!(p_mse < 0.15 * unwarped, "Poisson round trip MSE {p_mse} against {unwarped} for the warped crop");
+    }
+
+    /// The thesis's point (Fig. 4.5: direct warping "generates many intensity discontinuities"):
+    /// through a flow with per-texel noise (what an optical flow gives where the texture is
+    /// flat), the direct warp tears the edges texel by texel while the Poisson warp integrates
+    /// moved gradients. The truth is the crop itself (the noise-free flow is zero). Measured:
+    /// MSE Poisson 3.55 vs direct 7.66 at ±0.7 texel noise.
+    #[test]
+    fn poisson_warp_halves_the_error_of_a_noisy_flow_on_the_real_texture() {
+        let Some(img) = head_crop(330, 360, 128, 1) else { return };
+        let size = 128;
+        let poisson = PoissonTextureWarp::new(&TexelMask::full(size, size), DEFAULT_LAMBDA).unwrap();
+        let mut f = FlowField::zeros(size, size);
+        let mut s = 12345u64;
+        let mut next = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 33) as f32 / (1u64 << 31) as f32 - 0.5) * 2.0
+        };
+        for i in 0..size * size {
+            f.u[i] = 0.7 * next();
+            f.v[i] = 0.7 * next();
+        }
+        let keep = inner(size);
+        let p = mse(&poisson.warp(&img, &f).unwrap(), &img, &keep);
+        let d = mse(&warp_direct(&img, &f).unwrap(), &img, &keep);
+        eprintln!("noisy flow MSE: Poisson {p:.2}, direct {d:.2}");
+        assert!(p < 0.6 * d, "Poisson {p}, direct {d}");
     }
 }
