@@ -351,7 +351,8 @@ fn solve_scale(l: &Level, u: &mut [[f32; 2]], opts: &FlowOptions) {
 }
 
 /// One row of the thresholding step and of `u = v + theta div p`; returns the row's sum of
-/// squared changes.
+/// squared changes. `above` is the previous row of p (None on the first row, where the
+/// divergence's vertical term reads zero).
 #[inline]
 fn update_u_row(
     urow: &mut [[f32; 2]],
@@ -360,25 +361,28 @@ fn update_u_row(
     above: Option<&[[f32; 4]]>,
     theta: f32,
 ) -> f32 {
-    let mut error = 0.0f32;
-    let mut left = [0.0f32; 4];
-    for x in 0..urow.len() {
-        let d = drow[x];
-        let [u1, u2] = urow[x];
-        let rho = d.rho_c + d.ix * u1 + d.iy * u2;
+    // Branch-free inner loop: on the first row `above` is this row, multiplied by zero.
+    let (above, has_above) = match above {
+        Some(a) => (a, 1.0f32),
+        None => (prow, 0.0f32),
+    };
+    let texel = |u: [f32; 2], d: WarpData, pc: [f32; 4], pl: [f32; 4], pu: [f32; 4]| -> ([f32; 2], f32) {
+        let rho = d.rho_c + d.ix * u[0] + d.iy * u[1];
         let fi = (-rho * d.inv_grad).max(-d.lt).min(d.lt);
-        let pc = prow[x];
-        let pu = match above {
-            Some(a) => a[x],
-            None => [0.0; 4],
-        };
-        let div1 = pc[0] - left[0] + pc[1] - pu[1];
-        let div2 = pc[2] - left[2] + pc[3] - pu[3];
-        left = pc;
-        let n1 = u1 + fi * d.ix + theta * div1;
-        let n2 = u2 + fi * d.iy + theta * div2;
-        error += (n1 - u1) * (n1 - u1) + (n2 - u2) * (n2 - u2);
-        urow[x] = [n1, n2];
+        let div1 = pc[0] - pl[0] + pc[1] - has_above * pu[1];
+        let div2 = pc[2] - pl[2] + pc[3] - has_above * pu[3];
+        let n1 = u[0] + fi * d.ix + theta * div1;
+        let n2 = u[1] + fi * d.iy + theta * div2;
+        ([n1, n2], (n1 - u[0]) * (n1 - u[0]) + (n2 - u[1]) * (n2 - u[1]))
+    };
+    let w = urow.len();
+    let (first, e0) = texel(urow[0], drow[0], prow[0], [0.0; 4], above[0]);
+    urow[0] = first;
+    let mut error = e0;
+    for x in 1..w {
+        let (n, e) = texel(urow[x], drow[x], prow[x], prow[x - 1], above[x]);
+        urow[x] = n;
+        error += e;
     }
     error
 }
@@ -386,24 +390,20 @@ fn update_u_row(
 /// One row of Chambolle's projection with forward differences (zero past the last column/row).
 #[inline]
 fn update_p_row(prow: &mut [[f32; 4]], urow: &[[f32; 2]], below: Option<&[[f32; 2]]>, taut: f32) {
-    let w = prow.len();
-    for x in 0..w {
-        let uc = urow[x];
-        let (ux1, ux2) = if x + 1 < w { (urow[x + 1][0] - uc[0], urow[x + 1][1] - uc[1]) } else { (0.0, 0.0) };
-        let (uy1, uy2) = match below {
-            Some(b) => (b[x][0] - uc[0], b[x][1] - uc[1]),
-            None => (0.0, 0.0),
-        };
+    // On the last row `below` is this row: the vertical differences are then zero.
+    let below = below.unwrap_or(urow);
+    let texel = |q: [f32; 4], ux1: f32, ux2: f32, uy1: f32, uy2: f32| -> [f32; 4] {
         let ng1 = 1.0 + taut * (ux1 * ux1 + uy1 * uy1).sqrt();
         let ng2 = 1.0 + taut * (ux2 * ux2 + uy2 * uy2).sqrt();
-        let q = prow[x];
-        prow[x] = [
-            (q[0] + taut * ux1) / ng1,
-            (q[1] + taut * uy1) / ng1,
-            (q[2] + taut * ux2) / ng2,
-            (q[3] + taut * uy2) / ng2,
-        ];
+        [(q[0] + taut * ux1) / ng1, (q[1] + taut * uy1) / ng1, (q[2] + taut * ux2) / ng2, (q[3] + taut * uy2) / ng2]
+    };
+    let w = prow.len();
+    for x in 0..w - 1 {
+        let (uc, ur, ub) = (urow[x], urow[x + 1], below[x]);
+        prow[x] = texel(prow[x], ur[0] - uc[0], ur[1] - uc[1], ub[0] - uc[0], ub[1] - uc[1]);
     }
+    let (uc, ub) = (urow[w - 1], below[w - 1]);
+    prow[w - 1] = texel(prow[w - 1], 0.0, 0.0, ub[0] - uc[0], ub[1] - uc[1]);
 }
 
 #[cfg(test)]
