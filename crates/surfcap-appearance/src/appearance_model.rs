@@ -58,10 +58,18 @@ pub struct AppearanceOptions {
     pub warping: Warping,
     /// Alignments the medoid shift may run (Algorithm 4).
     pub max_medoid_iterations: usize,
+    /// The warping of the medoid shift's search for the reference. Algorithm 4 aligns with
+    /// the model's warping at every iteration; a Poisson warp of a 1024 x 1024 map costs 1.2 s
+    /// against 0.06 s for a direct one, and every iteration warps every frame, so by default
+    /// the search warps directly and only the chosen reference's alignment is redone with
+    /// `warping` (the error that drives the search is then the direct warp's). `warping` here
+    /// is Algorithm 4 to the letter.
+    pub selection_warping: Warping,
 }
 
 impl Default for AppearanceOptions {
-    /// λ = 0.02, every component, Poisson warping, at most 5 medoid-shift alignments.
+    /// λ = 0.02, every component, Poisson warping, at most 5 medoid-shift alignments searched
+    /// with direct warps.
     fn default() -> Self {
         AppearanceOptions {
             lambda: DEFAULT_LAMBDA,
@@ -69,6 +77,7 @@ impl Default for AppearanceOptions {
             n_warps: usize::MAX,
             warping: Warping::Poisson,
             max_medoid_iterations: 5,
+            selection_warping: Warping::Direct,
         }
     }
 }
@@ -154,7 +163,30 @@ pub fn build_appearance_model(
     let warper = warper?;
     seconds.factorisation = t;
     let t = Instant::now();
-    let alignment = align_by_medoid_shift(textures, mask, &warper, flow, options.max_medoid_iterations, progress)?;
+    let mut alignment = if options.selection_warping == options.warping {
+        align_by_medoid_shift(textures, mask, &warper, flow, options.max_medoid_iterations, progress)?
+    } else {
+        let selection = TextureWarper::new(options.selection_warping, mask, options.lambda)?;
+        align_by_medoid_shift(textures, mask, &selection, flow, options.max_medoid_iterations, progress)?
+    };
+    if options.selection_warping != options.warping {
+        // The reference is chosen: align every frame to it with the model's warping.
+        progress.start(
+            &format!("aligning to frame {} ({:?} warping)", names[alignment.reference], options.warping),
+            textures.len() as u64,
+        );
+        alignment.aligned = textures
+            .par_iter()
+            .zip(&alignment.forward)
+            .enumerate()
+            .map(|(k, (t, fw))| {
+                let a = if k == alignment.reference { t.clone() } else { warper.warp(t, fw)? };
+                progress.advance(1);
+                Ok(a)
+            })
+            .collect::<Result<_>>()?;
+        progress.finish();
+    }
     seconds.alignment = t.elapsed().as_secs_f64();
     let reference = alignment.reference;
     let (w, h) = (mask.width(), mask.height());

@@ -351,8 +351,10 @@ mod tests {
         let b = EigenBasis::new(&refs, 100, "test vectors").unwrap();
         let observed: Vec<bool> = (0..200).map(|j| j % 3 != 0).collect();
         let c = b.project_observed(&data[3], &observed).unwrap();
+        // The PPCA prior shrinks the coefficients a little (its noise floor is 1% of the
+        // variance per entry, against 133 observed entries): within 0.1%.
         for (a, want) in c.iter().zip(b.frame_coefficients(3)) {
-            assert!((a - want).abs() < 1e-2, "{a} vs {want}");
+            assert!((a - want).abs() < 1e-3 * (1.0 + want.abs()), "{a} vs {want}");
         }
     }
 

@@ -8,6 +8,9 @@
 //! cache folder, keyed by a BLAKE3 hash of both images' texels, the active texels and the
 //! caller's parameter text (the flow and pre-processing options), so any change recomputes.
 
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+
 use surfcap_mesh::Progress;
 use surfcap_mesh::derived_cache::DerivedCache;
 use surfcap_mesh::io::npy::NpyArray;
@@ -17,7 +20,8 @@ use crate::flow_field::FlowField;
 use crate::texel_mask::TexelMask;
 use crate::texture_image::TextureImage;
 use crate::texture_preprocessing::PreprocessOptions;
-use crate::tv_l1_flow::{FlowOptions, texture_flow};
+use crate::texture_preprocessing::preprocess;
+use crate::tv_l1_flow::{FlowOptions, tv_l1_flow};
 
 /// Layout version of the entries: bump when the flow's meaning or the file layout changes.
 const LAYOUT: u32 = 1;
@@ -54,16 +58,21 @@ impl<'a> FlowCache<'a> {
         params: &str,
         compute: impl Fn() -> Result<FlowField>,
     ) -> Result<FlowField> {
+        let key = pair_key(&image_hash(reference), &image_hash(target), mask);
+        self.flow_keyed(&key, reference.width(), reference.height(), params, compute)
+    }
+
+    /// [`Self::flow`] under a key the caller computed with [`pair_key`].
+    fn flow_keyed(
+        &self,
+        key: &blake3::Hash,
+        w: usize,
+        h: usize,
+        params: &str,
+        compute: impl Fn() -> Result<FlowField>,
+    ) -> Result<FlowField> {
         let Some(cache) = &self.cache else { return compute() };
-        let (w, h) = (reference.width(), reference.height());
-        let mut hasher = blake3::Hasher::new();
-        hash_image(&mut hasher, reference);
-        hash_image(&mut hasher, target);
-        for i in mask.index() {
-            hasher.update(&i.to_le_bytes());
-        }
-        let key = hasher.finalize();
-        let path = cache.path("texture-flow", &key, params);
+        let path = cache.path("texture-flow", key, params);
         let encode = || -> Result<NpyArray<f32>> {
             let f = compute()?;
             f.check_size(w, h, "the computed flow")?;
@@ -87,23 +96,82 @@ impl<'a> FlowCache<'a> {
     }
 }
 
-/// The thesis's flow (pre-processing, then TV-L1 on the grey images, 4.4.1) through a cache:
-/// the estimator every appearance command hands to the model.
-pub struct TextureFlow<'a> {
-    pub cache: FlowCache<'a>,
-    pub preprocess: PreprocessOptions,
-    pub options: FlowOptions,
+/// The content hash of a texture map (size, channels, every texel).
+pub fn image_hash(image: &TextureImage) -> blake3::Hash {
+    let mut h = blake3::Hasher::new();
+    hash_image(&mut h, image);
+    h.finalize()
 }
 
-impl TextureFlow<'_> {
+/// The cache key of a flow between two maps (by their [`image_hash`]) over `mask`.
+pub fn pair_key(reference: &blake3::Hash, target: &blake3::Hash, mask: &TexelMask) -> blake3::Hash {
+    let mut h = blake3::Hasher::new();
+    h.update(reference.as_bytes());
+    h.update(target.as_bytes());
+    for i in mask.index() {
+        h.update(&i.to_le_bytes());
+    }
+    h.finalize()
+}
+
+/// How many pre-processed maps [`TextureFlow`] keeps in memory (grey f32 planes: 4 MB each at
+/// 1024 x 1024).
+const PREPROCESSED_KEPT: usize = 160;
+
+/// The thesis's flow (pre-processing, then TV-L1 on the grey images, 4.4.1) through a cache:
+/// the estimator every appearance command hands to the model. Each map is pre-processed once
+/// and its grey image kept in memory (the medoid shift flows every frame against a new
+/// reference at each iteration, and the bilateral filter costs as much as a half-resolution
+/// flow), up to [`PREPROCESSED_KEPT`] maps, the oldest dropped first.
+pub struct TextureFlow<'a> {
+    cache: FlowCache<'a>,
+    preprocess: PreprocessOptions,
+    options: FlowOptions,
+    kept: Mutex<VecDeque<(blake3::Hash, Arc<Vec<f32>>)>>,
+}
+
+impl<'a> TextureFlow<'a> {
+    pub fn new(cache: FlowCache<'a>, preprocess: PreprocessOptions, options: FlowOptions) -> TextureFlow<'a> {
+        TextureFlow { cache, preprocess, options, kept: Mutex::new(VecDeque::new()) }
+    }
+
+    pub fn options(&self) -> &FlowOptions {
+        &self.options
+    }
+
     /// The parameter text of the cache key: every option the flow depends on.
     fn params(&self) -> String {
         format!("layout {LAYOUT}; {:?}; {:?}", self.preprocess, self.options)
     }
 
+    /// The pre-processed grey image of `image` over `mask` (keyed by the map and the mask).
+    fn grey(&self, image: &TextureImage, key: blake3::Hash, mask: &TexelMask) -> Result<Arc<Vec<f32>>> {
+        let key = pair_key(&key, &key, mask);
+        if let Some((_, g)) = self.kept.lock().expect("no panic holds the lock").iter().find(|(k, _)| *k == key) {
+            return Ok(g.clone());
+        }
+        let g = Arc::new(preprocess(image, mask, &self.preprocess)?.grey());
+        let mut kept = self.kept.lock().expect("no panic holds the lock");
+        if !kept.iter().any(|(k, _)| *k == key) {
+            if kept.len() >= PREPROCESSED_KEPT {
+                kept.pop_front();
+            }
+            kept.push_back((key, g.clone()));
+        }
+        Ok(g)
+    }
+
     /// `w` with `reference(x) ~ target(x + w(x))` over the active texels of `mask`.
     pub fn estimate(&self, reference: &TextureImage, target: &TextureImage, mask: &TexelMask) -> Result<FlowField> {
-        self.cache.flow(reference, target, mask, &self.params(), || texture_flow(reference, target, mask, &self.preprocess, &self.options))
+        reference.check_same_shape(target, "the target texture")?;
+        mask.check_size(reference.width(), reference.height(), "the reference texture")?;
+        let (hr, ht) = (image_hash(reference), image_hash(target));
+        let (w, h) = (reference.width(), reference.height());
+        self.cache.flow_keyed(&pair_key(&hr, &ht, mask), w, h, &self.params(), || {
+            let a = self.grey(reference, hr, mask)?;
+            let b = self.grey(target, ht, mask)?;
+            tv_l1_flow(&a, &b, w, h, Some(mask), &self.options)
+        })
     }
 }
 
@@ -135,5 +203,28 @@ mod tests {
         cache.flow(&a, &b, &mask, "q", compute).unwrap();
         cache.flow(&b, &a, &mask, "p", compute).unwrap();
         assert_eq!(calls.get(), 3);
+    }
+
+    #[test]
+    fn the_estimator_gives_texture_flow_s_result_and_reads_it_back() {
+        let (w, h) = (24, 20);
+        let plane = |dx: f32| -> Vec<f32> {
+            (0..w * h)
+                .map(|i| 128.0 + 60.0 * (((i % w) as f32 + dx) * 0.5).sin() * ((i / w) as f32 * 0.4).cos())
+                .collect()
+        };
+        let data = |dx: f32| [plane(dx), plane(dx), plane(dx)].concat();
+        let a = TextureImage::from_planes(w, h, 3, data(0.0)).unwrap();
+        let b = TextureImage::from_planes(w, h, 3, data(1.0)).unwrap();
+        let mask = TexelMask::full(w, h);
+        let pre = PreprocessOptions::none();
+        let opts = FlowOptions::default();
+        let direct = crate::tv_l1_flow::texture_flow(&a, &b, &mask, &pre, &opts).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        for _ in 0..2 {
+            let est = TextureFlow::new(FlowCache::new(Some(dir.path()), false, &surfcap_mesh::NoProgress), pre, opts);
+            assert_eq!(est.estimate(&a, &b, &mask).unwrap(), direct);
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }

@@ -21,7 +21,8 @@ pub fn is_texture_file(path: &Path) -> bool {
 /// The texture files of `dir` whose file names start with `prefix` (empty: all), in natural
 /// order.
 pub fn list_textures(dir: &Path, prefix: &str) -> Result<Vec<PathBuf>> {
-    let entries = std::fs::read_dir(dir).map_err(|e| Error::Invalid(format!("{}: cannot list the folder: {e}", dir.display())))?;
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| Error::Invalid(format!("{}: cannot list the folder: {e}", dir.display())))?;
     let mut files = Vec::new();
     for entry in entries {
         let entry = entry.map_err(|e| Error::Invalid(format!("{}: cannot list the folder: {e}", dir.display())))?;
@@ -34,7 +35,10 @@ pub fn list_textures(dir: &Path, prefix: &str) -> Result<Vec<PathBuf>> {
     files.sort_by(|a, b| surfcap_mesh::natural_order::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     if files.is_empty() {
         let what = if prefix.is_empty() { String::new() } else { format!(" named {prefix}*") };
-        return Err(Error::Invalid(format!("{}: no texture map{what} (expected .png, .jpg or .jpeg files)", dir.display())));
+        return Err(Error::Invalid(format!(
+            "{}: no texture map{what} (expected .png, .jpg or .jpeg files)",
+            dir.display()
+        )));
     }
     Ok(files)
 }
