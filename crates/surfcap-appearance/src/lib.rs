@@ -12,24 +12,35 @@
 //! [`eigen_maps`] (PCA through the Gram matrix, eq. 4.4-4.11), [`appearance_model`] (eigen
 //! textures and eigen warps: build, instantiate, interpolate, complete, save/load),
 //! [`naive_texture_pca`] (the baseline of 4.5), [`solid_texture`] (a base texture painted from
-//! 3D positions).
+//! 3D positions); benchmark data with ground truth (issue 20 item 7):
+//! [`texture_generator`] (per-frame textures from a real mesh and texture: drift,
+//! illumination, blur, noise, holes), [`texture_drift`] (the known drift and the true flow),
+//! [`atlas_normals`] (normals and positions in texture space), [`generated_frames`] (the folder
+//! and its reader); evaluation (4.5): [`mesh_rasteriser`] (textured renders from virtual
+//! cameras), [`image_similarity`] (masked MSE and SSIM).
 
 pub mod appearance_model;
+pub mod atlas_normals;
 pub mod atlas_raster;
 pub mod bilateral_filter;
 pub mod eigen_maps;
 pub mod error;
 pub mod flow_cache;
 pub mod flow_field;
+pub mod generated_frames;
 pub mod histogram_equalisation;
 pub mod image_pyramid;
+pub mod image_similarity;
 pub mod inactive_fill;
 pub mod medoid_shift_alignment;
+pub mod mesh_rasteriser;
 pub mod naive_texture_pca;
 pub mod poisson_texture_warp;
 pub mod solid_texture;
 pub mod texel_mask;
+pub mod texture_drift;
 pub mod texture_folder;
+pub mod texture_generator;
 pub mod texture_image;
 pub mod texture_preprocessing;
 pub mod tv_l1_flow;

@@ -99,6 +99,10 @@ enum Command {
     /// distance in a time, by integer linear programming.
     #[command(subcommand)]
     Smg(commands::smg::Cmd),
+    /// Eigen appearance maps (thesis ch. 4): generate benchmark texture sequences with ground
+    /// truth (known drift, moving light, blur, noise, occlusion holes).
+    #[command(subcommand)]
+    Appearance(commands::appearance::AppearanceCmd),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -217,6 +221,7 @@ fn main() -> ExitCode {
             Command::Parts(a) => commands::parts::run(&ctx, a),
             Command::RemeshFrames(a) => commands::remesh_frames::run(&ctx, a),
             Command::Smg(c) => commands::smg::run(&ctx, c),
+            Command::Appearance(c) => commands::appearance::run(&ctx, c),
         }
     });
     match result {

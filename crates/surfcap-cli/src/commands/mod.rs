@@ -1,6 +1,7 @@
 //! One file (or folder) per command family. Commands import the shared modules of the crate
 //! (`crate::options`, `crate::output`, `crate::synthesis`, ...), never each other.
 
+pub mod appearance;
 pub mod bench;
 pub mod demo;
 pub mod distance;

@@ -1,0 +1,165 @@
+//! `surfcap appearance ...`: eigen appearance maps (thesis chapter 4, issue 20).
+//!
+//! `surfcap appearance generate [--data ../shared/data | --mesh M --texture T] --frames 100
+//! --seed 7 [--size 1024] -o out/`: benchmark texture sequences with ground truth (issue 20
+//! item 7, `surfcap_appearance::texture_generator`): per-frame textures of a real UV-mapped
+//! mesh drifting by known smooth warps, lit by a moving light, blurred, noisy and with
+//! occlusion holes in some frames, with the clean frames, the hole masks and the known drift
+//! (the folder's layout: `surfcap_appearance::generated_frames`).
+
+mod model;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use serde_json::json;
+use surfcap_appearance::texture_generator::{GeneratorOptions, write_generated_frames};
+
+/// The head scan of the shared data, the default source of `generate`.
+const HEAD: &str = "leeperrysmith_head";
+
+#[derive(clap::Subcommand, Debug)]
+pub enum AppearanceCmd {
+    /// Benchmark textures with ground truth: F per-frame textures from a UV-mapped mesh and its
+    /// texture (default: the real head scan of the shared data), with known drift, moving
+    /// light, blur, noise and occlusion holes; the clean frames and hole masks kept.
+    Generate(GenerateArgs),
+    /// Eigen textures and eigen warps of per-frame texture maps (thesis 4.4): flows to a
+    /// reference chosen by medoid shift, Poisson warping, PCA; written as a model folder.
+    Build(model::BuildArgs),
+    /// A training frame's texture rebuilt from its coefficients (4.4.3), with all or fewer
+    /// eigen maps.
+    Reconstruct(model::ReconstructArgs),
+    /// A texture blended from two or more frames in the eigen spaces (4.6.1).
+    Interpolate(model::InterpolateArgs),
+    /// An incomplete texture map (occluded texels) completed by projection (4.6.2).
+    Complete(model::CompleteArgs),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct GenerateArgs {
+    /// The shared data folder: the mesh and texture default to its leeperrysmith_head
+    /// (template.obj, Map-COL.jpg).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// A UV-mapped OBJ mesh (with `vt` on every face corner) instead of the head scan.
+    #[arg(long, requires = "texture")]
+    pub mesh: Option<PathBuf>,
+    /// The mesh's texture map (PNG or JPEG).
+    #[arg(long, requires = "mesh")]
+    pub texture: Option<PathBuf>,
+    /// Frames to generate.
+    #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
+    pub frames: usize,
+    /// Seed of every random choice (drift, light, holes, noise): the same seed gives the same
+    /// frames, whatever the thread count.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Width of the generated textures in texels (the height keeps the texture's aspect;
+    /// default: the texture's own size).
+    #[arg(long, value_parser = |s: &str| crate::options::whole_in(s, 8, 16384))]
+    pub size: Option<usize>,
+    /// Largest drift, texels of the generated size.
+    #[arg(long, default_value_t = 3.0, value_parser = crate::options::non_negative)]
+    pub max_drift: f64,
+    /// Gaussian blur, texels (0: none).
+    #[arg(long, default_value_t = 0.6, value_parser = crate::options::non_negative)]
+    pub blur: f64,
+    /// Gaussian noise, on the 0-255 scale (0: none).
+    #[arg(long, default_value_t = 2.0, value_parser = crate::options::non_negative)]
+    pub noise: f64,
+    /// Share of frames with an occlusion hole.
+    #[arg(long, default_value_t = 0.15, value_parser = crate::options::fraction)]
+    pub hole_fraction: f64,
+    /// No illumination change: constant shading (ambient 1, no diffuse term, no colour tint).
+    #[arg(long)]
+    pub no_lighting: bool,
+    /// Also write displacement.npy (f32 [F, 2, H, W]: 800 MB for 100 frames at 1024); without
+    /// it the drift is stored as its waves in frames.json, from which it is recomputed exactly.
+    #[arg(long)]
+    pub displacement_npy: bool,
+    /// The folder to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, cmd: AppearanceCmd) -> anyhow::Result<()> {
+    match cmd {
+        AppearanceCmd::Generate(a) => generate(ctx, a),
+        AppearanceCmd::Build(a) => model::build(ctx, &a),
+        AppearanceCmd::Reconstruct(a) => model::reconstruct(ctx, &a),
+        AppearanceCmd::Interpolate(a) => model::interpolate(ctx, &a),
+        AppearanceCmd::Complete(a) => model::complete(ctx, &a),
+    }
+}
+
+fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
+    let (mesh, texture) = match (&a.mesh, &a.texture) {
+        (Some(m), Some(t)) => (m.clone(), t.clone()),
+        _ => {
+            let head = a.data.join(HEAD);
+            if !head.is_dir() {
+                anyhow::bail!(
+                    "{}: no such folder: expected the shared data's head scan (give --data FOLDER, or --mesh and --texture)",
+                    head.display()
+                );
+            }
+            (head.join("template.obj"), head.join("Map-COL.jpg"))
+        }
+    };
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&mesh, &texture])?;
+    let defaults = GeneratorOptions::default();
+    let options = GeneratorOptions {
+        frames: a.frames,
+        seed: a.seed,
+        size: a.size,
+        max_drift: a.max_drift,
+        blur_sigma: a.blur,
+        noise_sigma: a.noise,
+        hole_fraction: a.hole_fraction,
+        ambient: if a.no_lighting { 1.0 } else { defaults.ambient },
+        diffuse: if a.no_lighting { 0.0 } else { defaults.diffuse },
+        tint: if a.no_lighting { 0.0 } else { defaults.tint },
+        ..defaults
+    };
+    let t0 = Instant::now();
+    let bar = crate::progress::Bar::new(ctx);
+    let header = write_generated_frames(&mesh, &texture, &options, &a.output, ctx.force, a.displacement_npy, &bar)
+        .with_context(|| format!("cannot generate texture frames into {}", a.output.display()))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let bytes: u64 = std::fs::read_dir(&a.output)
+        .map(|d| d.filter_map(|e| e.ok()?.metadata().ok()).map(|m| m.len()).sum())
+        .unwrap_or(0);
+    ctx.result(
+        &json!({
+            "output": a.output,
+            "mesh": mesh,
+            "texture": texture,
+            "frames": header.frames,
+            "seed": header.seed,
+            "width": header.width,
+            "height": header.height,
+            "hole_frames": header.hole_frames,
+            "drift_bound_texels": header.drift_bound,
+            "displacement_npy": header.displacement_file.is_some(),
+            "bytes": bytes,
+            "seconds": seconds,
+        }),
+        || {
+            println!(
+                "generated {} of {}x{} from {} and {} ({} with holes, drift up to {:.2} texels) -> {} ({:.0} MB, {seconds:.1} s)",
+                crate::output::count_of(header.frames, "frame"),
+                header.width,
+                header.height,
+                mesh.display(),
+                texture.display(),
+                header.hole_frames.len(),
+                header.drift_bound,
+                a.output.display(),
+                bytes as f64 / 1e6
+            );
+        },
+    );
+    Ok(())
+}

@@ -1,0 +1,382 @@
+//! `surfcap appearance build | reconstruct | interpolate | complete`: eigen appearance maps of
+//! a subject's per-frame textures (thesis chapter 4; `surfcap-appearance`).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use serde_json::json;
+use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
+use surfcap_appearance::texture_folder::{frame_name, list_textures, read_textures};
+use surfcap_appearance::{
+    AppearanceModel, AppearanceOptions, FlowOptions, PreprocessOptions, TexelMask, TextureImage, Warping,
+    build_appearance_model,
+};
+
+use crate::options::{CacheOpts, SourceOpts, open};
+
+/// Parses `poisson` or `direct`.
+pub fn parse_warping(s: &str) -> Result<Warping, String> {
+    match s {
+        "poisson" => Ok(Warping::Poisson),
+        "direct" => Ok(Warping::Direct),
+        _ => Err(format!("{s}: expected poisson (thesis eq. 4.1-4.3) or direct")),
+    }
+}
+
+/// How the optical flow runs (thesis 4.4.1).
+#[derive(clap::Args, Debug, Clone)]
+pub struct FlowArgs {
+    /// Finest scale of the TV-L1 flow: 0 solves at full resolution, 1 stops at half
+    /// resolution and upsamples (4x faster; the flow between texture maps is smooth).
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 0, 4))]
+    pub flow_scale: usize,
+    /// Skip the pre-processing (histogram equalisation and bilateral filter) before the flow.
+    #[arg(long)]
+    pub no_preprocess: bool,
+}
+
+impl FlowArgs {
+    pub fn estimator<'a>(&self, cache: &CacheOpts, progress: &'a dyn surfcap_mesh::Progress) -> TextureFlow<'a> {
+        let dir = cache.dir();
+        let pre = if self.no_preprocess { PreprocessOptions::none() } else { PreprocessOptions::default() };
+        let options = FlowOptions { finest_scale: self.flow_scale, ..FlowOptions::default() };
+        TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options)
+    }
+}
+
+#[derive(clap::Args, Debug)]
+pub struct BuildArgs {
+    /// A folder of per-frame texture maps (PNG or JPEG, natural order of their names; in a
+    /// folder written by `surfcap appearance generate`, its `frame_*` maps).
+    pub textures: PathBuf,
+    /// The UV-mapped mesh whose atlas the maps follow (an OBJ with `vt`, or any subject
+    /// `surfcap import` reads that has texture coordinates). With a subject of as many frames
+    /// as maps, the frames are named `sequence:frame` in the subject's order, so `synth
+    /// --appearance` can give every output frame its texture; otherwise by the maps' file
+    /// names. Default: the folder's `template.obj` (as `generate` writes it).
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+    /// Eigen maps kept in total, two thirds eigen textures and one third eigen warps (thesis
+    /// 4.5.1); default: every component (at most one per frame less one of each kind).
+    #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 2))]
+    pub components: Option<usize>,
+    /// Weight of the intensity term of the Poisson warp (thesis eq. 4.1-4.3).
+    #[arg(long, default_value_t = 0.02, value_parser = crate::options::positive)]
+    pub lambda: f64,
+    /// How textures are warped: poisson (thesis) or direct (the baseline of Fig. 4.5).
+    #[arg(long, default_value = "poisson", value_parser = parse_warping)]
+    pub warping: Warping,
+    /// How the medoid shift's search for the reference warps (Algorithm 4 uses --warping;
+    /// direct is 20 times cheaper per frame and the chosen reference's alignment is redone with
+    /// --warping).
+    #[arg(long, default_value = "direct", value_parser = parse_warping)]
+    pub search_warping: Warping,
+    /// Alignments the medoid shift may run (Algorithm 4).
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::at_least(s, 1))]
+    pub medoid_iterations: usize,
+    /// Rings of texels added around the atlas's covered texels.
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 0, 8))]
+    pub dilation: usize,
+    #[command(flatten)]
+    pub flow: FlowArgs,
+    /// The model folder to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+/// The texture files of `dir`: a generated folder's `frame_*` maps, else every map.
+pub fn texture_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    if dir.join("frames.json").is_file() {
+        return Ok(list_textures(dir, "frame_")?);
+    }
+    Ok(list_textures(dir, "")?)
+}
+
+/// The active texels of `mesh`'s atlas at the maps' size, and the frame names the mesh gives
+/// (`sequence:frame` when it is a subject of `frames` frames).
+pub fn atlas_mask(
+    ctx: &crate::Ctx,
+    mesh: &Path,
+    source: &SourceOpts,
+    width: usize,
+    height: usize,
+    dilation: usize,
+    frames: usize,
+) -> anyhow::Result<(TexelMask, Option<Vec<String>>)> {
+    let s = open(ctx, mesh, source)?;
+    let atlas = s.topology().uv().with_context(|| {
+        format!("{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt` and `f v/vt`)", mesh.display())
+    })?;
+    let mask = TexelMask::from_atlas(atlas, width, height, dilation).with_context(|| format!("{}: the UV atlas", mesh.display()))?;
+    let names = (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
+    Ok((mask, names))
+}
+
+/// Splits `k` eigen maps two thirds textures, one third warps (thesis 4.5.1).
+pub fn split_components(k: usize) -> (usize, usize) {
+    let textures = (2 * k).div_ceil(3);
+    (textures, k - textures)
+}
+
+/// The mesh of a texture folder: `--mesh`, else the folder's `template.obj`.
+pub fn mesh_of(textures: &Path, mesh: Option<&Path>) -> anyhow::Result<PathBuf> {
+    if let Some(m) = mesh {
+        return Ok(m.to_path_buf());
+    }
+    let own = textures.join("template.obj");
+    anyhow::ensure!(
+        own.is_file(),
+        "{}: no template.obj in the folder: give the UV-mapped mesh the maps belong to with --mesh",
+        textures.display()
+    );
+    Ok(own)
+}
+
+pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
+    let mesh = mesh_of(&a.textures, a.mesh.as_deref())?;
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.textures, &mesh])?;
+    let t0 = Instant::now();
+    let bar = crate::progress::Bar::new(ctx);
+    let files = texture_files(&a.textures)?;
+    let textures = read_textures(&files, &bar)?;
+    let (w, h) = (textures[0].width(), textures[0].height());
+    let (mask, subject_names) = atlas_mask(ctx, &mesh, &a.source, w, h, a.dilation, textures.len())?;
+    let names: Vec<String> = subject_names.unwrap_or_else(|| files.iter().map(|f| frame_name(f)).collect());
+    let (n_textures, n_warps) = a.components.map_or((usize::MAX, usize::MAX), split_components);
+    let options = AppearanceOptions {
+        lambda: a.lambda,
+        n_textures,
+        n_warps,
+        warping: a.warping,
+        max_medoid_iterations: a.medoid_iterations,
+        selection_warping: a.search_warping,
+    };
+    ctx.say(&format!(
+        "{} texture maps of {w}x{h}, {} active texels ({:.1}%)",
+        textures.len(),
+        mask.len(),
+        100.0 * mask.len() as f64 / (w * h) as f64
+    ));
+    let flow = a.flow.estimator(&a.cache, &bar);
+    let estimate = |r: &TextureImage, t: &TextureImage| flow.estimate(r, t, &mask);
+    let (model, report) = build_appearance_model(&textures, &names, &mask, &options, &estimate, &bar)?;
+    drop(textures);
+    model.save(&a.output, ctx.force)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let value = json!({
+        "model": a.output, "frames": report.frames, "size": [w, h], "active_texels": report.active_texels,
+        "reference": names[report.reference], "medoid_references": report.medoid_references.iter().map(|&k| &names[k]).collect::<Vec<_>>(),
+        "medoid_errors": report.medoid_errors, "eigen_textures": model.n_textures(), "eigen_warps": model.n_warps(),
+        "texture_explained_variance": report.texture_explained_variance.iter().sum::<f64>(),
+        "warp_explained_variance": report.warp_explained_variance.iter().sum::<f64>(),
+        "stages": report.seconds, "seconds": seconds,
+    });
+    ctx.result(&value, || {
+        println!(
+            "reference {} (medoid shift: {} alignment{}), {} eigen textures ({:.1}% of the variance), {} eigen warps ({:.1}%)",
+            names[report.reference],
+            report.medoid_errors.len(),
+            if report.medoid_errors.len() == 1 { "" } else { "s" },
+            model.n_textures(),
+            100.0 * report.texture_explained_variance.iter().sum::<f64>(),
+            model.n_warps(),
+            100.0 * report.warp_explained_variance.iter().sum::<f64>()
+        );
+        println!("built in {seconds:.1} s");
+    });
+    ctx.wrote([&a.output]);
+    Ok(())
+}
+
+/// The model's frame named `name` (as `model.json` lists them), or its number.
+pub fn frame_of(model: &AppearanceModel, name: &str) -> anyhow::Result<usize> {
+    if let Some(k) = model.names().iter().position(|n| n == name) {
+        return Ok(k);
+    }
+    let shown: Vec<&str> = model.names().iter().take(4).map(String::as_str).collect();
+    anyhow::bail!(
+        "frame {name:?}: the model has no frame of that name (its {} frames are named like {})",
+        model.n_frames(),
+        shown.join(", ")
+    )
+}
+
+fn load(path: &Path) -> anyhow::Result<AppearanceModel> {
+    AppearanceModel::load(path).with_context(|| format!("{}: cannot open the appearance model", path.display()))
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ReconstructArgs {
+    /// The model folder (`surfcap appearance build`).
+    pub model: PathBuf,
+    /// The frame to rebuild from its coefficients (a name the model lists, e.g. `walk:12`).
+    #[arg(long)]
+    pub frame: String,
+    /// Eigen maps used (two thirds textures, one third warps); default: all the model has.
+    #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 0))]
+    pub components: Option<usize>,
+    /// The texture map to write (PNG).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+pub fn reconstruct(ctx: &crate::Ctx, a: &ReconstructArgs) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.model])?;
+    let model = load(&a.model)?;
+    let k = frame_of(&model, &a.frame)?;
+    let (tc, wc) = model.frame_coefficients(k)?;
+    let (nt, nw) = a.components.map_or((tc.len(), wc.len()), split_components);
+    let t = Instant::now();
+    let texture = model.instantiate(&tc[..nt.min(tc.len())], &wc[..nw.min(wc.len())])?;
+    let seconds = t.elapsed().as_secs_f64();
+    texture.write_png(&a.output)?;
+    let value = json!({"frame": a.frame, "eigen_textures": nt.min(tc.len()), "eigen_warps": nw.min(wc.len()), "seconds": seconds, "output": a.output});
+    ctx.result(&value, || println!("frame {} from {} eigen textures and {} eigen warps in {seconds:.2} s", a.frame, nt.min(tc.len()), nw.min(wc.len())));
+    ctx.wrote([&a.output]);
+    Ok(())
+}
+
+#[derive(clap::Args, Debug)]
+pub struct InterpolateArgs {
+    /// The model folder.
+    pub model: PathBuf,
+    /// The frames to blend, comma-separated, each `NAME=WEIGHT` (weights summing to 1) or
+    /// `NAME` alone for equal weights, e.g. `walk:3=0.25,run:7=0.75` (thesis 4.6.1).
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub frames: Vec<String>,
+    /// The texture map to write (PNG).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// `NAME=WEIGHT` or `NAME` items into (frame, weight), equal weights when none is given.
+pub fn parse_weights(model: &AppearanceModel, items: &[String]) -> anyhow::Result<Vec<(usize, f64)>> {
+    let weighted = items.iter().filter(|s| s.contains('=')).count();
+    anyhow::ensure!(
+        weighted == 0 || weighted == items.len(),
+        "--frames {}: give every frame a weight (NAME=WEIGHT) or none",
+        items.join(",")
+    );
+    items
+        .iter()
+        .map(|item| {
+            let (name, w) = match item.rsplit_once('=') {
+                Some((n, w)) => {
+                    let w: f64 = w.trim().parse().map_err(|_| anyhow::anyhow!("--frames {item}: the weight {w:?} is not a number"))?;
+                    (n.trim(), w)
+                }
+                None => (item.trim(), 1.0 / items.len() as f64),
+            };
+            Ok((frame_of(model, name)?, w))
+        })
+        .collect()
+}
+
+pub fn interpolate(ctx: &crate::Ctx, a: &InterpolateArgs) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.model])?;
+    let model = load(&a.model)?;
+    let weights = parse_weights(&model, &a.frames)?;
+    let t = Instant::now();
+    let texture = model.interpolate(&weights)?;
+    let seconds = t.elapsed().as_secs_f64();
+    texture.write_png(&a.output)?;
+    let frames: Vec<_> = weights.iter().map(|&(k, w)| json!({"frame": model.names()[k], "weight": w})).collect();
+    ctx.result(&json!({"frames": frames, "seconds": seconds, "output": a.output}), || {
+        println!("blended {} frames in the eigen spaces in {seconds:.2} s", weights.len())
+    });
+    ctx.wrote([&a.output]);
+    Ok(())
+}
+
+#[derive(clap::Args, Debug)]
+pub struct CompleteArgs {
+    /// The model folder.
+    pub model: PathBuf,
+    /// The incomplete texture map (PNG or JPEG, the model's size).
+    pub texture: PathBuf,
+    /// Which texels were observed: an image of the map's size, observed where it is not black;
+    /// default: every texel of the map that is not pure black (how occluded texels are left by
+    /// texturing tools and by `surfcap appearance generate`).
+    #[arg(long)]
+    pub observed: Option<PathBuf>,
+    /// Keep the observed texels as they are and fill only the missing ones (default: the
+    /// model's whole texture, as thesis 4.6.2 shows it).
+    #[arg(long)]
+    pub keep_observed: bool,
+    #[command(flatten)]
+    pub flow: FlowArgs,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    /// The texture map to write (PNG).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+pub fn complete(ctx: &crate::Ctx, a: &CompleteArgs) -> anyhow::Result<()> {
+    let mut inputs: Vec<&Path> = vec![&a.model, &a.texture];
+    if let Some(o) = &a.observed {
+        inputs.push(o);
+    }
+    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
+    let model = load(&a.model)?;
+    let texture = TextureImage::read(&a.texture)?;
+    let mask = model.mask();
+    anyhow::ensure!(
+        texture.width() == mask.width() && texture.height() == mask.height(),
+        "{}: the map is {}x{}: expected {}x{} like the model's",
+        a.texture.display(),
+        texture.width(),
+        texture.height(),
+        mask.width(),
+        mask.height()
+    );
+    let observed: Vec<bool> = match &a.observed {
+        Some(path) => {
+            let o = TextureImage::read(path)?;
+            anyhow::ensure!(
+                o.width() == texture.width() && o.height() == texture.height(),
+                "{}: the observed-texel image is {}x{}: expected {}x{} like the map",
+                path.display(),
+                o.width(),
+                o.height(),
+                texture.width(),
+                texture.height()
+            );
+            o.grey().iter().map(|&v| v > 0.5).collect()
+        }
+        None => (0..texture.texels()).map(|i| (0..texture.channels()).any(|c| texture.plane(c)[i] > 0.0)).collect(),
+    };
+    let missing = (0..texture.texels()).filter(|&i| mask.is_active(i) && !observed[i]).count();
+    let bar = crate::progress::Bar::new(ctx);
+    let flow = a.flow.estimator(&a.cache, &bar);
+    let estimate = |r: &TextureImage, t: &TextureImage, m: &TexelMask| flow.estimate(r, t, m);
+    let t = Instant::now();
+    let mut out = model.complete(&texture, &observed, &estimate)?;
+    let seconds = t.elapsed().as_secs_f64();
+    if a.keep_observed {
+        for c in 0..out.channels() {
+            let src = texture.plane(c).to_vec();
+            for (i, o) in out.plane_mut(c).iter_mut().enumerate() {
+                if observed[i] {
+                    *o = src[i];
+                }
+            }
+        }
+    }
+    out.write_png(&a.output)?;
+    let value = json!({"missing_texels": missing, "active_texels": mask.len(), "seconds": seconds, "output": a.output});
+    ctx.result(&value, || {
+        println!(
+            "completed {missing} missing texels of {} ({:.1}%) in {seconds:.2} s",
+            mask.len(),
+            100.0 * missing as f64 / mask.len() as f64
+        )
+    });
+    ctx.wrote([&a.output]);
+    Ok(())
+}
