@@ -108,12 +108,19 @@ pub fn atlas_mask(
     dilation: usize,
     frames: usize,
 ) -> anyhow::Result<(TexelMask, Option<Vec<String>>)> {
-    let s = open(ctx, mesh, source)?;
-    let atlas = s.topology().uv().with_context(|| {
+    // A single OBJ is a mesh, not a subject (no frame rate to ask for); anything else is
+    // opened as a subject, whose frames may name the maps.
+    let (topology, names) = if mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+        (surfcap_mesh::io::obj::read_obj(mesh)?.topology()?, None)
+    } else {
+        let s = open(ctx, mesh, source)?;
+        let names = (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
+        (s.topology().clone(), names)
+    };
+    let atlas = topology.uv().with_context(|| {
         format!("{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt` and `f v/vt`)", mesh.display())
     })?;
     let mask = TexelMask::from_atlas(atlas, width, height, dilation).with_context(|| format!("{}: the UV atlas", mesh.display()))?;
-    let names = (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
     Ok((mask, names))
 }
 
