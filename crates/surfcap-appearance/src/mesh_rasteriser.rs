@@ -88,8 +88,9 @@ fn project_with(basis: &[[f64; 3]; 3], cam: &Camera, p: [f64; 3]) -> Option<[f64
 }
 
 /// `n` cameras on a horizontal ring (about `up`) of radius `radius` around `center`, raised by
-/// `elevation_deg` above the ring's plane, equally spaced in azimuth from the direction of the
-/// smallest world axis perpendicular to `up`, all looking at `center`.
+/// `elevation_deg` above the ring's plane, equally spaced in azimuth (turning from the start
+/// towards up x start) from the world axis least aligned with `up` (ties to z then x: +z for a y-up
+/// subject), all looking at `center`.
 pub fn cameras_around(
     center: [f64; 3],
     up: [f64; 3],
@@ -99,10 +100,14 @@ pub fn cameras_around(
     lens: Lens,
 ) -> Vec<Camera> {
     let up_n = normalise(up).unwrap_or([0.0, 1.0, 0.0]);
-    // A horizontal start direction: the world axis least aligned with up, made perpendicular.
-    let axis = (0..3)
-        .min_by(|&a, &b| up_n[a].abs().partial_cmp(&up_n[b].abs()).unwrap_or(std::cmp::Ordering::Equal))
-        .unwrap_or(2);
+    // A horizontal start direction: the world axis least aligned with up (ties to z, then x),
+    // made perpendicular: +z for a y-up subject (glTF's front), +x for a z-up one.
+    let mut axis = 2;
+    for a in [0, 1] {
+        if up_n[a].abs() < up_n[axis].abs() {
+            axis = a;
+        }
+    }
     let mut e = [0.0; 3];
     e[axis] = 1.0;
     let a = normalise(sub(e, up_n.map(|v| v * dot(e, up_n)))).unwrap_or([1.0, 0.0, 0.0]);
@@ -484,6 +489,30 @@ mod tests {
             .unwrap()
             .install(|| render(&topo, &pos, &tex, &cam).unwrap());
         assert_eq!(one, many);
+    }
+
+    #[test]
+    fn the_real_head_seen_by_eight_cameras() {
+        let Some(data) = surfcap_testkit::shared_data() else { return };
+        let head = data.join("leeperrysmith_head");
+        let (topo, pos) = crate::texture_generator::read_uv_mesh(&head.join("template.obj")).unwrap();
+        let tex = TextureImage::read(&head.join("Map-COL.jpg")).unwrap();
+        let cams = cameras_around_mesh(&pos, [0.0, 1.0, 0.0], 8, 15.0, lens(96));
+        let renders = render_views(&topo, &pos, &tex, &cams).unwrap();
+        assert_eq!(renders.len(), 8);
+        for (k, r) in renders.iter().enumerate() {
+            let covered = r.mask.iter().filter(|&&m| m).count() as f64 / (96.0 * 96.0);
+            // The whole head is in view (the border rows and columns stay background) and fills
+            // a good part of it.
+            assert!((0.08..0.8).contains(&covered), "camera {k}: {covered}");
+            assert!((0..96).all(|i| !r.mask[i] && !r.mask[95 * 96 + i] && !r.mask[i * 96] && !r.mask[i * 96 + 95]));
+            let mean = r.image.plane(0).iter().zip(&r.mask).filter(|(_, m)| **m).map(|(v, _)| *v as f64).sum::<f64>()
+                / (covered * 96.0 * 96.0);
+            assert!(mean > 60.0, "camera {k}: the skin texture shows, mean red {mean}");
+        }
+        // The front camera (k = 0 looks from +z, the face) and the back one see different things.
+        let s = crate::image_similarity::ssim(&renders[0].image, &renders[4].image, &vec![true; 96 * 96]).unwrap();
+        assert!(s < 0.9, "{s}");
     }
 
     #[test]
