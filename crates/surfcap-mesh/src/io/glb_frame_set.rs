@@ -47,7 +47,8 @@
 //! gets the material of its texture. Each distinct texture of the [`FrameTextures`] that a frame
 //! uses is one PNG image embedded in the binary chunk (a buffer view padded to 4 bytes), one
 //! texture (one shared sampler: linear, mipmapped, clamped) and one material (`baseColorTexture`,
-//! metallic 0, roughness 1); frames that share a texture share its material.
+//! metallic 0, roughness 1); frames that share a texture share its material. The root's
+//! `extras.surfcap.textures` then counts them.
 
 use std::io::Write;
 
@@ -408,6 +409,15 @@ impl<'a> FrameSetGlbPlan<'a> {
             "units": set.units,
             "sequences": seq_meta,
         }}));
+        if textures.is_some() {
+            // How many textures the frames show, so a reader knows before decoding the frames.
+            let n = materials.iter().flatten().count();
+            if let Some(x) = root.extras.take() {
+                let mut v: Value = serde_json::from_str(x.get()).expect("written above");
+                v["surfcap"]["textures"] = n.into();
+                root.extras = raw(v);
+            }
+        }
         let bin_len = bin.len;
         let json = finish_json(root, bin_len)?;
         let plan = FrameSetGlbPlan { set, textures, json, parts: bin.parts };
