@@ -3,7 +3,8 @@
 // Checks what holds for any input: no console error, playback advances, the timeline and the
 // arrow keys seek, the speed control sets the speed, the legend lists exactly what is drawn
 // (from /api/items), and every vertex of every frame projects inside the view and clear of the
-// info panel; a frame set's item draws each frame's own vertex and triangle counts. Prints one JSON line of what it saw, including the colours counted on the canvas
+// info panel; a frame set's item draws each frame's own vertex and triangle counts; a textured
+// item binds each frame's own texture. Prints one JSON line of what it saw, including the colours counted on the canvas
 // and the timeline at an original and a synthetic frame (the caller asserts on those, since
 // which must appear depends on the input); exits 1 with a message when a check fails.
 import { chromium } from 'playwright-core';
@@ -90,10 +91,13 @@ try {
   const legend = await viewer(() => window.surfcapViewer.legend);
   // Items with per-vertex colours (body parts) show their own legend rows instead of frame kinds.
   const colourRows = meta.items.flatMap((m) => (m.colour_legend || []).map((r) => r[1]));
-  const plain = meta.items.filter((m) => !m.has_colours);
+  // Items with a texture per frame draw it instead of the frame kinds.
+  const texturedRow = meta.items.some((m) => m.frame_textures) ? ['texture per frame'] : [];
+  const plain = meta.items.filter((m) => !m.has_colours && !m.frame_textures);
   const labels = plain.flatMap((m) => m.synthetic);
   const expected = [
     ...colourRows,
+    ...texturedRow,
     labels.some((s) => !s) && 'original frame',
     labels.some((s) => s) && 'synthetic frame',
     meta.items.some((m) => m.overlay && m.overlay.curve) && 'requested path',
@@ -110,7 +114,7 @@ try {
   // One colour per sequence: the legend names the sequences instead of the frame kinds.
   await page.check('#hues');
   const hued = await viewer(() => window.surfcapViewer.legend);
-  const huedWant = [...colourRows, ...plain.map((m) => m.name)];
+  const huedWant = [...colourRows, ...texturedRow, ...plain.map((m) => m.name)];
   if (JSON.stringify(hued.slice(0, huedWant.length)) !== JSON.stringify(huedWant) || hued.includes('original frame')) {
     fail(`legend with one colour per sequence: ${JSON.stringify(hued)}`);
   }
@@ -144,6 +148,28 @@ try {
     const distinct = new Set(seen.map(([nv]) => nv)).size;
     frameSets.push({ item: k, frames: seen.length, distinct_vertex_counts: distinct, first: seen.slice(0, 3) });
   }
+  // A texture per frame: at every frame the item's map is the frame's texture; the canvas's
+  // colours are counted at the first frame showing each texture.
+  const textured = [];
+  for (const [k, m] of meta.items.entries()) {
+    if (!m.frame_textures) continue;
+    const bound = await viewer(({ k, n }) => {
+      const v = window.surfcapViewer, out = [];
+      for (let f = 0; f < n; f++) { v.setFrame(f); out.push(v.boundTextures[k]); }
+      return out;
+    }, { k, n: m.n_frames });
+    const wrong = bound.findIndex((t, f) => t !== m.frame_textures[f]);
+    if (wrong >= 0) fail(`${m.name} frame ${wrong} binds texture ${bound[wrong]}, expected ${m.frame_textures[wrong]}`);
+    const seenAt = [];
+    for (let t = 0; t < m.n_textures; t++) {
+      const f = m.frame_textures.indexOf(t);
+      if (f < 0) continue;
+      await viewer((f) => window.surfcapViewer.setFrame(f), f);
+      await rendered();
+      seenAt.push({ texture: t, frame: f, colours: await page.evaluate(`(${countColours.toString()})("#view canvas")`) });
+    }
+    textured.push({ item: k, bound, seen: seenAt });
+  }
   if (framing.outside.length) fail(`${framing.outside.length} frames leave the view or pass under the panel, first ${JSON.stringify(framing.outside[0])}`);
   // Colours at an original and a synthetic frame (when the sequence has them): canvas and timeline.
   const spans = await viewer(() => window.surfcapViewer.spans[0]);
@@ -162,7 +188,7 @@ try {
   const painted = (colours.original || colours.synthetic).painted / (colours.original || colours.synthetic).pixels;
   if (!(painted > 0.001)) fail(`the canvas is blank (${(100 * painted).toFixed(2)}% painted)`);
   console.log(JSON.stringify({ advanced: [f0, f1], counter: text1, seeked: want, keys, speed, legend, grid,
-    framing: framing.worst, colours, timeline, painted, frames, frame_sets: frameSets }));
+    framing: framing.worst, colours, timeline, painted, frames, frame_sets: frameSets, textured }));
 } finally {
   await browser.close();
 }

@@ -232,6 +232,74 @@ fn the_viewer_plays_a_frame_set() {
     }
 }
 
+/// The head scan's colour texture at 128 x 128, each channel scaled by `tint`, as a PNG.
+fn head_texture(path: &Path, tint: [f32; 3]) -> Vec<u8> {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
+    let mut small = image::imageops::resize(&img, 128, 128, image::imageops::FilterType::Triangle);
+    for px in small.pixels_mut() {
+        for (x, t) in px.0.iter_mut().zip(tint) {
+            *x = (*x as f32 * t).round().min(255.0) as u8;
+        }
+    }
+    let mut png = Vec::new();
+    image::DynamicImage::ImageRgb8(small)
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageOutputFormat::Png)
+        .unwrap();
+    png
+}
+
+/// A texture per frame (issue 20 item 8) plays: the head scan turning over six frames with its
+/// real texture, a red tint and a blue tint (frames 0-5 show 0, 1, 2, 2, 1, 0), written as a
+/// textured glb by the library and opened by `surfcap view`. Chromium checks that every frame
+/// binds its own texture; the canvas turns red at the red frame and blue at the blue one.
+#[test]
+fn the_viewer_plays_a_texture_per_frame() {
+    use surfcap_mesh::{FrameTextures, Sequence, Subject, Units, UpAxis};
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let head = data.join("leeperrysmith_head");
+    let obj = surfcap_mesh::io::obj::read_obj(&head.join("template.obj")).unwrap();
+    let topology = obj.topology().unwrap();
+    let nv = topology.n_vertices();
+    let mut positions = Vec::with_capacity(6 * 3 * nv);
+    for f in 0..6 {
+        let (s, c) = (0.1 * f as f32).sin_cos();
+        for q in obj.positions.chunks_exact(3) {
+            positions.extend_from_slice(&[c * q[0] + s * q[2], q[1], -s * q[0] + c * q[2]]);
+        }
+    }
+    let seq = Sequence::new("turn", nv, positions).unwrap();
+    let subject = Subject::new("head", topology, vec![seq], 10.0, UpAxis::PosY, Units::arbitrary()).unwrap();
+    let map = head.join("Map-COL.jpg");
+    let images = [[1.0, 1.0, 1.0], [1.0, 0.15, 0.15], [0.15, 0.15, 1.0]].map(|t| head_texture(&map, t)).to_vec();
+    let textures = FrameTextures::new(images, vec![vec![0, 1, 2, 2, 1, 0]]).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let glb = tmp.path().join("head.glb");
+    let set = surfcap_mesh::FrameSet::from_subject(&subject);
+    surfcap_mesh::export::export_textured_glb(&set, &textures, &glb, &surfcap_mesh::NoProgress).unwrap();
+
+    let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&glb)]);
+    let (status, items) = server.get("/api/items");
+    assert_eq!(status, 200);
+    let items: serde_json::Value = serde_json::from_slice(&items).unwrap();
+    assert_eq!(items["items"][0]["frame_textures"], serde_json::json!([0, 1, 2, 2, 1, 0]));
+    assert_eq!(items["items"][0]["n_textures"], 3);
+    // The textures are served as the PNG files given; past the last one, 404.
+    let (status, png) = server.get("/api/items/0/textures/1");
+    assert_eq!((status, &png[..]), (200, &textures.images()[1][..]));
+    assert_eq!(server.get("/api/items/0/textures/3").0, 404);
+    assert_eq!(server.get("/api/items/0/textures/..%2F0").0, 404);
+
+    let seen = browser_test(&server.url, &tmp.path().join("textured.png"));
+    let t = &seen["textured"][0];
+    assert_eq!(t["bound"], serde_json::json!([0, 1, 2, 2, 1, 0]), "{seen}");
+    let at = |k: usize, colour: &str| t["seen"][k]["colours"][colour].as_u64().unwrap();
+    assert_eq!(t["seen"][1]["texture"], 1, "{seen}");
+    // The red tint draws red and hardly blue, the blue tint the other way round.
+    assert!(at(1, "red") > 500 && at(1, "red") > 10 * at(1, "blue"), "{seen}");
+    assert!(at(2, "blue") > 500 && at(2, "blue") > 10 * at(2, "red"), "{seen}");
+    assert!(seen["legend"].as_array().unwrap().contains(&"texture per frame".into()), "{seen}");
+}
+
 #[test]
 fn bad_paths_get_a_clear_error() {
     let tmp = tempfile::tempdir().unwrap();

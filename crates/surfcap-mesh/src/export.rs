@@ -189,6 +189,28 @@ pub fn export_frame_set(
     }
 }
 
+/// Writes an animation with a texture per frame to `out` as one `.glb` (a mesh per frame, each
+/// with the material of its texture: `io::glb_frame_set`) and its sidecar, which lists the
+/// number of distinct textures and each sequence's texture per frame; returns the paths
+/// written. A subject's animation goes through [`FrameSet::from_subject`] first (see
+/// `io::glb_frame_set::write_glb_subject_textured` for why and what it costs).
+pub fn export_textured_glb(
+    set: &FrameSet,
+    textures: &crate::FrameTextures,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<Vec<PathBuf>> {
+    let mut meta = frame_set_sidecar(set);
+    meta["textures"] = textures.images().len().into();
+    meta["frame_textures"] = serde_json::json!(textures.frames());
+    progress.start("writing glb", 1);
+    write_file(out, |w| crate::io::glb_frame_set::write_glb_frame_set_textured(w, set, textures))?;
+    let side = glb_sidecar_path(out);
+    write_json(&side, &meta)?;
+    progress.finish();
+    Ok(vec![out.to_path_buf(), side])
+}
+
 /// Writes the subject to `out` and returns the paths written (outputs, then the sidecar).
 pub fn export(
     subject: &Subject,

@@ -40,6 +40,11 @@ impl FrameIndex {
         }
     }
 
+    /// Sequence `s` as users write it: its name, or `sequence s` when the index has no names.
+    pub fn sequence_name(&self, s: usize) -> String {
+        self.names.get(s).cloned().unwrap_or_else(|| format!("sequence {s}"))
+    }
+
     /// Total number of frames.
     pub fn len(&self) -> usize {
         *self.offsets.last().unwrap()

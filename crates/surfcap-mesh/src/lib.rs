@@ -16,6 +16,7 @@ pub mod export;
 pub mod frame_index;
 pub mod frame_set;
 pub mod frame_set_cache;
+pub mod frame_textures;
 pub mod import;
 pub mod io;
 pub mod manifest;
@@ -25,15 +26,18 @@ pub mod progress;
 pub mod subject;
 pub mod temporaries;
 pub mod topology;
+pub mod uv_vertices;
 
 pub use connected_components::{Components, connected_components};
 pub use error::{Error, ErrorKind, Location, Result};
 pub use frame_index::FrameIndex;
 pub use frame_set::{Correspondence, Frame, FrameSet, FrameSetSequence};
+pub use frame_textures::FrameTextures;
 pub use io::regular_file::read_regular_file;
 pub use progress::{NoProgress, Progress};
 pub use subject::{FrameLabel, JointTrack, Sequence, Subject, Units, UpAxis};
 pub use topology::{Topology, UvAtlas};
+pub use uv_vertices::UvVertices;
 
 /// Axis-aligned bounding box (min, max) of `[n][3]` positions; zeros for no positions.
 pub fn bounding_box(positions: &[f32]) -> ([f32; 3], [f32; 3]) {

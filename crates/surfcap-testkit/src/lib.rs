@@ -225,6 +225,30 @@ pub fn three_load_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
     reports
 }
 
+/// Plays a frame-set `.glb` with a texture per frame in headless Chromium with three.js's
+/// GLTFLoader (`tools/three-gltf-textures.mjs`): at every frame the frame's own mesh is shown
+/// with the texture its material names bound as `material.map`. Returns the script's report
+/// (per animation the texture bound at each frame, and each texture's size and mean colour).
+///
+/// # Panics
+/// When node, Chromium or the viewer's three.js is missing, or a frame shows the wrong mesh or
+/// texture.
+pub fn three_play_textured_glb(file: &Path) -> serde_json::Value {
+    let root = workspace_root();
+    let out = std::process::Command::new("node")
+        .arg(root.join("tools/three-gltf-textures.mjs"))
+        .arg(file)
+        .output()
+        .expect("node runs (install Node.js)");
+    assert!(
+        out.status.success(),
+        "three.js textured glb check failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("the check prints one JSON line")
+}
+
 /// A raw HTTP/1.1 request to `url` (`http://host:port/`), the target sent exactly as written
 /// (no normalisation, so path-traversal attempts reach the server): status and body.
 ///

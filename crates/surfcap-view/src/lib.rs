@@ -47,6 +47,19 @@ pub struct ViewItem {
     pub colours: Option<Vec<f32>>,
     /// What the colours mean: `[css colour, text]` rows added to the legend.
     pub colour_legend: Vec<[String; 2]>,
+    /// Optional `[vertices][2]` texture coordinates laid out as the positions are (a frame set's:
+    /// every frame's one after the other), in OBJ's convention (`v` = 1 at the image's top row;
+    /// the page keeps three.js's `flipY`). One per vertex, so a mesh whose atlas has seams comes
+    /// with its vertices split along them (`surfcap_mesh::UvVertices`).
+    #[serde(skip)]
+    pub uvs: Option<Vec<f32>>,
+    /// The distinct textures, encoded PNG files, served as `/api/items/{id}/textures/{k}`.
+    #[serde(skip)]
+    pub textures: Vec<Vec<u8>>,
+    /// Per frame, the index into `textures` of the texture it shows (thesis Fig. 7.1: shape and
+    /// appearance played together); `None` when the item is not textured. Drawn instead of the
+    /// frame colour.
+    pub frame_textures: Option<Vec<usize>>,
 }
 
 impl ViewItem {
@@ -54,7 +67,15 @@ impl ViewItem {
     pub fn has_colours(&self) -> bool {
         self.colours.is_some()
     }
+
+    /// Whether the item carries texture coordinates (served as `/api/items/{id}/uvs`).
+    pub fn has_uvs(&self) -> bool {
+        self.uvs.is_some()
+    }
 }
+
+/// The 8 bytes every PNG file starts with.
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
 /// What a synthesis report adds to its animation: `centres` has one point per frame; `curve`
 /// is there only for path following (`reach` has a distance to cover, not a path).
@@ -85,6 +106,10 @@ pub enum ViewError {
     Transition(String, usize, usize),
     #[error("{0}: {1} colour values: expected 3 per vertex ({2})")]
     Colours(String, usize, usize),
+    #[error("{0}: {1} texture coordinates: expected 2 per vertex ({2}), finite")]
+    Uvs(String, usize, usize),
+    #[error("{0}: {1}")]
+    Textures(String, String),
     #[error("{0}: the sequence has no frames")]
     Empty(String),
     #[error("nothing to show: no sequence was given")]
@@ -109,6 +134,7 @@ impl ViewItem {
         {
             return Err(ViewError::Transition(self.name.clone(), t, self.n_frames - 1));
         }
+        self.check_textures()?;
         if let (Some(nv), Some(nt)) = (&self.frame_vertices, &self.frame_triangles) {
             return self.check_frames(nv, nt);
         }
@@ -130,6 +156,34 @@ impl ViewItem {
             return Err(ViewError::Colours(self.name.clone(), c.len(), per_frame));
         }
         Ok(())
+    }
+
+    /// [`ViewItem::check`] for the texture coordinates and textures: two finite numbers per
+    /// vertex of the positions, one PNG index per frame, UVs wherever there are textures.
+    fn check_textures(&self) -> Result<(), ViewError> {
+        let bad = |why: String| Err(ViewError::Textures(self.name.clone(), why));
+        if let Some(uv) = &self.uvs {
+            // One topology: the vertices of a frame; a frame set: every frame's.
+            let nv = if self.frame_vertices.is_some() { self.positions.len() / 3 } else { self.n_vertices };
+            if uv.len() != 2 * nv || uv.iter().any(|x| !x.is_finite()) {
+                return Err(ViewError::Uvs(self.name.clone(), uv.len(), nv));
+            }
+        }
+        if let Some(k) = self.textures.iter().position(|t| t.len() < 8 || t[..8] != PNG_SIGNATURE) {
+            return bad(format!("texture {k} is not a PNG file"));
+        }
+        match &self.frame_textures {
+            None if !self.textures.is_empty() => bad("textures given without a texture per frame".into()),
+            None => Ok(()),
+            Some(_) if self.uvs.is_none() => bad("textures given without texture coordinates".into()),
+            Some(t) if t.len() != self.n_frames => {
+                bad(format!("{} texture indices for {} frames: expected one per frame", t.len(), self.n_frames))
+            }
+            Some(t) => match t.iter().enumerate().find(|&(_, &k)| k >= self.textures.len()) {
+                Some((f, k)) => bad(format!("frame {f} shows texture {k}, expected below {}", self.textures.len())),
+                None => Ok(()),
+            },
+        }
     }
 
     /// [`ViewItem::check`] for a frame set: counts per frame that add up, every frame's face
@@ -182,7 +236,32 @@ mod message_tests {
             overlay: None,
             colours: None,
             colour_legend: Vec::new(),
+            uvs: None,
+            textures: Vec::new(),
+            frame_textures: None,
         }
+    }
+
+    #[test]
+    fn textures_are_checked_against_the_frames_and_uvs() {
+        let png = |c: u8| [&super::PNG_SIGNATURE[..], &[c]].concat();
+        let mut t = frames();
+        t.uvs = Some(vec![0.5; 14]);
+        t.textures = vec![png(0), png(1)];
+        t.frame_textures = Some(vec![1, 0]);
+        t.check().unwrap();
+        let mut e = t.clone();
+        e.frame_textures = Some(vec![0, 2]);
+        assert_eq!(e.check().unwrap_err().to_string(), "set: frame 1 shows texture 2, expected below 2");
+        let mut e = t.clone();
+        e.uvs = None;
+        assert_eq!(e.check().unwrap_err().to_string(), "set: textures given without texture coordinates");
+        let mut e = t.clone();
+        e.uvs = Some(vec![0.5; 12]);
+        assert!(matches!(e.check(), Err(ViewError::Uvs(_, 12, 7))));
+        let mut e = t.clone();
+        e.textures[1] = b"GIF89a".to_vec();
+        assert_eq!(e.check().unwrap_err().to_string(), "set: texture 1 is not a PNG file");
     }
 
     #[test]

@@ -60,6 +60,8 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/items/{id}/positions", get(positions))
         .route("/api/items/{id}/faces", get(faces))
         .route("/api/items/{id}/colours", get(colours))
+        .route("/api/items/{id}/uvs", get(uvs))
+        .route("/api/items/{id}/textures/{k}", get(texture))
         .route("/report/{*path}", get(report))
         .fallback(not_found)
         .layer(axum::middleware::from_fn_with_state(app.clone(), check_host))
@@ -123,6 +125,8 @@ async fn items(State(app): State<Arc<App>>) -> Response {
         .map(|it| {
             let mut v = serde_json::to_value(it).expect("items serialise");
             v["has_colours"] = it.has_colours().into();
+            v["has_uvs"] = it.has_uvs().into();
+            v["n_textures"] = it.textures.len().into();
             v
         })
         .collect();
@@ -152,6 +156,23 @@ async fn colours(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> R
     let Some(c) = &app.items[k].colours else { return not_found().await };
     let bytes: Vec<u8> = c.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
+}
+
+/// The item's texture coordinates, when it has some (else 404).
+async fn uvs(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
+    let Some(k) = item(&app, &id) else { return not_found().await };
+    let Some(uv) = &app.items[k].uvs else { return not_found().await };
+    let bytes: Vec<u8> = uv.iter().flat_map(|x| x.to_le_bytes()).collect();
+    respond("application/octet-stream", bytes)
+}
+
+/// Texture `t` of the item (a PNG file held in memory, never a path), else 404.
+async fn texture(State(app): State<Arc<App>>, UrlPath((id, t)): UrlPath<(String, String)>) -> Response {
+    let Some(k) = item(&app, &id) else { return not_found().await };
+    let Some(png) = t.parse::<usize>().ok().and_then(|t| app.items[k].textures.get(t)) else {
+        return not_found().await;
+    };
+    respond("image/png", png.clone())
 }
 
 /// The report file at `rel`, when `rel` is a plain relative path (no `..`, no root) naming a

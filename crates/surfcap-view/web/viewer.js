@@ -69,16 +69,31 @@ function offsets(vertices, triangles) {
   return { v, t, maxTriangles };
 }
 
+// An item's textures (PNG files), each decoded once and kept: a frame binds its own as the
+// material's map. Texture coordinates come in OBJ's convention (v = 1 at the image's top row),
+// which is three.js's default `flipY`; sRGB colours, as PNGs hold them.
+async function loadTextures(k, n) {
+  const loader = new THREE.TextureLoader();
+  return Promise.all([...Array(n).keys()].map(async (t) => {
+    const texture = await loader.loadAsync(`/api/items/${k}/textures/${t}`);
+    texture.colorSpace = THREE.SRGBColorSpace;
+    texture.flipY = true;
+    return texture;
+  }));
+}
+
 async function load() {
   const meta = await (await fetch('/api/items')).json();
   if (meta.report) $('report').innerHTML = `<a href="${meta.report}" target="_blank">open the report</a>`;
   const list = [];
   for (let k = 0; k < meta.items.length; k++) {
     const m = meta.items[k];
-    const [pos, faces, colours] = await Promise.all([
+    const [pos, faces, colours, uvBytes, textures] = await Promise.all([
       fetchBytes(`/api/items/${k}/positions`),
       fetchBytes(`/api/items/${k}/faces`),
       m.has_colours ? fetchBytes(`/api/items/${k}/colours`) : null,
+      m.has_uvs ? fetchBytes(`/api/items/${k}/uvs`) : null,
+      loadTextures(k, m.n_textures),
     ]);
     const positions = new Float32Array(pos);
     const faceArray = new Uint32Array(faces);
@@ -95,8 +110,18 @@ async function load() {
     geometry.computeVertexNormals();
     // Per-vertex colours (body parts...), linear RGB in 0..1, replace the frame colour.
     if (colours) geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(colours), 3));
+    // Texture coordinates, one per vertex as the positions (a frame set's: each frame fills the
+    // start of the attribute, as its positions do).
+    const uvs = uvBytes ? new Float32Array(uvBytes) : null;
+    if (uvs) {
+      const uv = new THREE.BufferAttribute(uvs.slice(0, 2 * m.n_vertices), 2);
+      if (frameSet) uv.setUsage(THREE.DynamicDrawUsage);
+      geometry.setAttribute('uv', uv);
+    }
+    const textured = !!m.frame_textures;
     const material = new THREE.MeshStandardMaterial({
-      color: colours ? 0xffffff : GREEN, vertexColors: !!colours, roughness: 0.7, side: THREE.DoubleSide,
+      color: colours || textured ? 0xffffff : GREEN, vertexColors: !!colours, roughness: 0.7, side: THREE.DoubleSide,
+      map: textured ? textures[m.frame_textures[0]] : null,
     });
     const mesh = new THREE.Mesh(geometry, material);
     mesh.frustumCulled = false;  // its bounding sphere is frame 0's
@@ -114,7 +139,7 @@ async function load() {
     scene.add(placed);
     const hue = new THREE.Color().setHSL((k * 0.61803) % 1, 0.6, 0.5);
     list.push({ meta: m, positions, faces: faceArray, frameSet, nv: m.n_vertices, geometry, material, mesh, placed, turned, hue,
-      box: animationBox(m, positions) });
+      uvs, textures, box: animationBox(m, positions) });
     const vertices = frameSet ? `${m.frame_vertices.reduce((a, b) => Math.min(a, b))}-${m.n_vertices} vertices (a mesh per frame)` : `${m.n_vertices} vertices`;
     const row = document.createElement('div');
     row.textContent = `${m.name}: ${m.n_frames} frames, ${vertices}, ${m.fps} fps` +
@@ -287,7 +312,8 @@ window.addEventListener('resize', resize);
 function buildLegend() {
   const entries = [];
   for (const it of state.items) for (const [colour, text] of it.meta.colour_legend || []) entries.push([colour, text]);
-  const plain = state.items.filter((it) => !it.meta.has_colours);
+  if (state.items.some((it) => it.meta.frame_textures)) entries.push(['#a0a0a0', 'texture per frame']);
+  const plain = state.items.filter((it) => !it.meta.has_colours && !it.meta.frame_textures);
   if ($('hues').checked) {
     for (const it of plain) entries.push([hex(it.hue), it.meta.name]);
   } else {
@@ -357,12 +383,18 @@ function showFrame(f) {
       index.needsUpdate = true;
       it.geometry.setDrawRange(0, 3 * (t[k + 1] - t[k]));
       it.nv = v[k + 1] - v[k];
+      if (it.uvs) {
+        const uv = it.geometry.getAttribute('uv');
+        uv.array.set(it.uvs.subarray(2 * v[k], 2 * v[k + 1]));
+        uv.needsUpdate = true;
+      }
     } else {
       attr.array.set(it.positions.subarray(k * n, (k + 1) * n));
     }
     attr.needsUpdate = true;
     it.geometry.computeVertexNormals();
-    if (!m.has_colours) it.material.color.copy($('hues').checked ? it.hue : (m.synthetic[k] ? RED : GREEN));
+    if (m.frame_textures) it.material.map = it.textures[m.frame_textures[k]];
+    else if (!m.has_colours) it.material.color.copy($('hues').checked ? it.hue : (m.synthetic[k] ? RED : GREEN));
   }
   const first = state.items[0].meta, k = f % first.n_frames;
   $('counter').textContent =
@@ -438,6 +470,8 @@ window.surfcapViewer = {
   get overlays() { return state.items.map((it) => ({ curve: !!(it.meta.overlay && it.meta.overlay.curve), centres: !!it.meta.overlay })); },
   get spans() { return state.items.map((it) => spans(it.meta)); },
   get colours() { return state.items.map((it) => !!it.meta.has_colours); },
+  // The texture bound as each item's map now: its index among the item's textures (null: none).
+  get boundTextures() { return state.items.map((it) => (it.material.map ? it.textures.indexOf(it.material.map) : null)); },
   // Vertices and triangles of the mesh drawn now, per item (a frame set's change frame by frame).
   get vertexCounts() { return state.items.map((it) => it.nv); },
   get triangleCounts() { return state.items.map((it) => it.geometry.drawRange.count === Infinity ? it.geometry.getIndex().count / 3 : it.geometry.drawRange.count / 3); },

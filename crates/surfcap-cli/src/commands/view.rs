@@ -60,6 +60,25 @@ fn is_output(p: &Path) -> bool {
     p.extension().is_some_and(|x| x == "glb" || x == "frames")
 }
 
+/// The frames' textures of a frame-set glb with a texture per frame (written by
+/// `surfcap_mesh::io::glb_frame_set::write_glb_frame_set_textured`, which counts them in the
+/// root's `extras.surfcap.textures`); `None` for anything else. The file is read a second time
+/// only when it has textures.
+fn glb_textures(p: &Path) -> anyhow::Result<Option<surfcap_mesh::FrameTextures>> {
+    if !p.extension().is_some_and(|x| x.eq_ignore_ascii_case("glb")) {
+        return Ok(None);
+    }
+    let bytes = surfcap_mesh::read_regular_file(p)?;
+    let textured = surfcap_mesh::io::glb_frame_set::frame_set_meta(&bytes)
+        .is_some_and(|m| m["textures"].as_u64().is_some_and(|n| n > 0));
+    if !textured {
+        return Ok(None);
+    }
+    let (_, textures) =
+        surfcap_mesh::io::glb_frame_set::parse_glb_frame_set_textured(&bytes, "").map_err(|e| e.in_file(p))?;
+    Ok(textures)
+}
+
 /// The items of what `p` holds (a subject's or a frame set's), with the overlay of the report
 /// beside `output` when it has one sequence.
 fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> anyhow::Result<Vec<ViewItem>> {
@@ -74,7 +93,15 @@ fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> an
         }
         ImportedData::FrameSet(f) => {
             let single = f.frame_set.sequences().len() == 1;
-            (crate::view_items::frame_set_items(&f.frame_set, &a.sequences), single)
+            // A textured glb of a subject (every frame the same mesh, written as a frame set so
+            // that each frame has its material) plays with one topology: one index array.
+            match glb_textures(p)? {
+                Some(t) if f.frame_set.first_topology_difference().is_none() => {
+                    let s = f.frame_set.into_subject()?;
+                    (crate::view_items::view_items_textured(&s, &t, &a.sequences)?, single)
+                }
+                t => (crate::view_items::frame_set_items(&f.frame_set, t.as_ref(), &a.sequences)?, single),
+            }
         }
     };
     for item in &mut items.0 {

@@ -194,9 +194,32 @@ impl<P> Layout<P> {
         len: usize,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::buffer::View> {
+        self.reserve(root, part, len, len, target)
+    }
+
+    /// Reserves `len` bytes of data of any length (an embedded image) as a new view, followed by
+    /// zeros up to the next multiple of 4 so that the views after it stay aligned; `part` must
+    /// write the padding too.
+    pub(super) fn view_padded(
+        &mut self,
+        root: &mut json::Root,
+        part: P,
+        len: usize,
+    ) -> json::Index<json::buffer::View> {
+        self.reserve(root, part, len, len.div_ceil(4) * 4, None)
+    }
+
+    fn reserve(
+        &mut self,
+        root: &mut json::Root,
+        part: P,
+        len: usize,
+        reserved: usize,
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
         let offset = self.len;
-        self.len += len as u64;
-        self.parts.push((part, len as u64));
+        self.len += reserved as u64;
+        self.parts.push((part, reserved as u64));
         root.push(json::buffer::View {
             buffer: json::Index::new(0),
             byte_length: USize64::from(len),
@@ -458,7 +481,7 @@ pub fn write_glb(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
     GlbPlan::new(subject).map_err(std::io::Error::other)?.write(w)
 }
 
-fn extras_surfcap(extras: &json::Extras) -> Option<Value> {
+pub(super) fn extras_surfcap(extras: &json::Extras) -> Option<Value> {
     let v: Value = serde_json::from_str(extras.as_ref()?.get()).ok()?;
     v.get("surfcap").cloned()
 }
