@@ -7,6 +7,7 @@ use surfcap_mesh::{NoProgress, Subject};
 
 use crate::options::{Positive, TableOpts};
 
+mod appearance;
 mod distance;
 mod export;
 mod graph;
@@ -99,6 +100,9 @@ pub enum What {
     /// of 2,000 frames of 10,000 vertices (< 2 min) and a path query (< 50 ms), on the
     /// CMU-driven mannequin.
     Smg(smg::SmgArgs),
+    /// Eigen appearance maps (issue 20 item 9): flow between two 1024 x 1024 maps, the model
+    /// of 100 maps (time and peak memory), instantiating one map.
+    Appearance(appearance::AppearanceArgs),
     /// The learning toolkit's speed targets (thesis chapters 5-6): GP fit and prediction on
     /// 2,000 x 20 points (< 5 s), a GPDM fit on 400 frames x ~3,000 coordinates (< 60 s), 20 HMC
     /// trajectory samples of 100 frames (< 30 s).
@@ -170,5 +174,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Transfer(t) => transfer::run(ctx, &t),
         What::Synth(b) => synth::run(ctx, b),
         What::Smg(b) => smg::run(ctx, &b),
+        What::Appearance(b) => appearance::run(ctx, &b),
     }
 }
