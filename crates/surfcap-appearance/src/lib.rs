@@ -5,7 +5,7 @@
 //! Layout, one algorithm per file: [`texture_image`] (the texture map and its files),
 //! [`atlas_raster`] and [`texel_mask`] (the active texels of a UV atlas), [`flow_field`] (a
 //! dense warp and bilinear sampling), [`histogram_equalisation`], [`bilateral_filter`] and
-//! [`texture_preprocessing`] (4.4.1: the pre-processing before flow), [`image_pyramid`] and
+//! [`texture_preprocessing`] (4.4.1: the pre-processing before flow, with [`shading_removal`]), [`image_pyramid`] and
 //! [`inactive_fill`] (the flow's resampling and its extension of active texels), [`tv_l1_flow`]
 //! (4.4.1: TV-L1 flow between texture maps), [`flow_cache`] (flows kept on disk),
 //! [`poisson_texture_warp`] (eq. 4.1-4.3), [`medoid_shift_alignment`] (Algorithm 4),
@@ -36,6 +36,7 @@ pub mod medoid_shift_alignment;
 pub mod mesh_rasteriser;
 pub mod naive_texture_pca;
 pub mod poisson_texture_warp;
+pub mod shading_removal;
 pub mod solid_texture;
 pub mod texel_mask;
 pub mod texture_drift;

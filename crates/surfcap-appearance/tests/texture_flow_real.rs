@@ -92,6 +92,7 @@ fn thesis_preprocessing() -> PreprocessOptions {
     PreprocessOptions {
         equalise: true,
         bilateral: Some(BilateralParams { diameter: 20, sigma_colour: 15.0, sigma_space: 20.0 }),
+        shading_sigma: None,
     }
 }
 
@@ -120,7 +121,7 @@ fn equalisation_makes_the_flow_robust_to_a_brightness_change() {
     }
     let opts = FlowOptions::default();
     let raw = texture_flow(&case.reference, &case.target, &case.mask, &PreprocessOptions::none(), &opts).unwrap();
-    let eq = PreprocessOptions { equalise: true, bilateral: None };
+    let eq = PreprocessOptions { equalise: true, bilateral: None, shading_sigma: None };
     let equalised = texture_flow(&case.reference, &case.target, &case.mask, &eq, &opts).unwrap();
     let pre = texture_flow(&case.reference, &case.target, &case.mask, &thesis_preprocessing(), &opts).unwrap();
     let magnitude = mean_magnitude(&case);

@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use serde_json::json;
 use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
+use surfcap_appearance::generated_frames::GeneratedFrames;
 use surfcap_appearance::texture_folder::{frame_name, list_textures, read_textures};
 use surfcap_appearance::{
     AppearanceModel, AppearanceOptions, FlowOptions, PreprocessOptions, TexelMask, TextureImage, Warping,
@@ -75,6 +76,10 @@ pub struct BuildArgs {
     /// Alignments the medoid shift may run (Algorithm 4).
     #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::at_least(s, 1))]
     pub medoid_iterations: usize,
+    /// With a folder of `surfcap appearance generate`, keep the frames with occlusion holes in
+    /// the model (by default they are left out, as thesis 4.6.2 does, to be completed).
+    #[arg(long)]
+    pub keep_holed: bool,
     /// Rings of texels added around the atlas's covered texels.
     #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 0, 8))]
     pub dilation: usize,
@@ -89,10 +94,28 @@ pub struct BuildArgs {
     pub source: SourceOpts,
 }
 
-/// The texture files of `dir`: a generated folder's `frame_*` maps, else every map.
-pub fn texture_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+/// The texture files of `dir`: a generated folder's `frame_*` maps (without the frames it
+/// says have occlusion holes, unless `keep_holed`: thesis 4.6.2 builds the model without the
+/// incomplete frames, then completes them), else every map.
+pub fn texture_files(ctx: &crate::Ctx, dir: &Path, keep_holed: bool) -> anyhow::Result<Vec<PathBuf>> {
     if dir.join("frames.json").is_file() {
-        return Ok(list_textures(dir, "frame_")?);
+        let generated = GeneratedFrames::open(dir)?;
+        let header = generated.header();
+        let holed = &header.hole_frames;
+        if !keep_holed && !holed.is_empty() {
+            ctx.note(&format!(
+                "{} of the {} frames have occlusion holes and are left out of the model (--keep-holed keeps them)",
+                holed.len(),
+                header.frames
+            ));
+        }
+        return Ok(header
+            .frame_files
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| keep_holed || !holed.contains(k))
+            .map(|(_, f)| dir.join(f))
+            .collect());
     }
     Ok(list_textures(dir, "")?)
 }
@@ -151,7 +174,7 @@ pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.textures, &mesh])?;
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
-    let files = texture_files(&a.textures)?;
+    let files = texture_files(ctx, &a.textures, a.keep_holed)?;
     let textures = read_textures(&files, &bar)?;
     let (w, h) = (textures[0].width(), textures[0].height());
     let (mask, subject_names) = atlas_mask(ctx, &mesh, &a.source, w, h, a.dilation, textures.len())?;
