@@ -32,7 +32,7 @@ use surfcap_mesh::io::npy::{NpyElement, expect_shape, read_npy, write_npy};
 use crate::eigen_maps::EigenBasis;
 use crate::error::{Error, Result};
 use crate::flow_field::FlowField;
-use crate::medoid_shift_alignment::{FlowEstimator, active_vector, align_by_medoid_shift, check_textures};
+use crate::medoid_shift_alignment::{FlowEstimator, active_vector, check_textures, medoid_shift};
 use crate::poisson_texture_warp::{DEFAULT_LAMBDA, TextureWarper, Warping, reads_only_valid, warp_direct_reading};
 use crate::texel_mask::TexelMask;
 use crate::texture_image::TextureImage;
@@ -85,8 +85,12 @@ impl Default for AppearanceOptions {
 /// Wall-clock seconds of each stage of a build.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct BuildTimings {
+    /// The Poisson warp's normal equations (eq. 4.3).
     pub factorisation: f64,
+    /// The medoid shift (Algorithm 4): forward flows, warps, the Gram matrix per iteration.
     pub alignment: f64,
+    /// Every frame warped to the chosen reference with the model's warping (when the search
+    /// warped otherwise), then its backward flow.
     pub backward_flows: f64,
     pub texture_pca: f64,
     pub warp_pca: f64,
@@ -163,45 +167,43 @@ pub fn build_appearance_model(
     let warper = warper?;
     seconds.factorisation = t;
     let t = Instant::now();
-    let mut alignment = if options.selection_warping == options.warping {
-        align_by_medoid_shift(textures, mask, &warper, flow, options.max_medoid_iterations, progress)?
-    } else {
+    // With another warping for the search, only its flows are kept and every frame is warped
+    // again with the model's warping below, one frame at a time (no set of aligned maps held).
+    let rewarp = options.selection_warping != options.warping;
+    let alignment = if rewarp {
         let selection = TextureWarper::new(options.selection_warping, mask, options.lambda)?;
-        align_by_medoid_shift(textures, mask, &selection, flow, options.max_medoid_iterations, progress)?
+        medoid_shift(textures, mask, &selection, flow, options.max_medoid_iterations, progress, false)?
+    } else {
+        medoid_shift(textures, mask, &warper, flow, options.max_medoid_iterations, progress, true)?
     };
-    if options.selection_warping != options.warping {
-        // The reference is chosen: align every frame to it with the model's warping.
-        progress.start(
-            &format!("aligning to frame {} ({:?} warping)", names[alignment.reference], options.warping),
-            textures.len() as u64,
-        );
-        alignment.aligned = textures
-            .par_iter()
-            .zip(&alignment.forward)
-            .enumerate()
-            .map(|(k, (t, fw))| {
-                let a = if k == alignment.reference { t.clone() } else { warper.warp(t, fw)? };
-                progress.advance(1);
-                Ok(a)
-            })
-            .collect::<Result<_>>()?;
-        progress.finish();
-    }
-    seconds.alignment = t.elapsed().as_secs_f64();
     let reference = alignment.reference;
     let (w, h) = (mask.width(), mask.height());
-    let t = Instant::now();
-    progress.start("backward warps", textures.len() as u64);
-    let pairs: Vec<(Vec<f32>, Vec<f32>)> = alignment
-        .aligned
-        .into_par_iter()
+    let t_back = Instant::now();
+    let label = if rewarp {
+        format!("aligning to frame {} ({:?} warping) and backward warps", names[reference], options.warping)
+    } else {
+        "backward warps".to_string()
+    };
+    progress.start(&label, textures.len() as u64);
+    let mut aligned_maps = alignment.aligned.into_iter();
+    let forward = alignment.forward;
+    let pairs: Vec<(Vec<f32>, Vec<f32>)> = textures
+        .par_iter()
+        .zip(forward.into_par_iter())
+        .zip((0..textures.len()).map(|_| aligned_maps.next()).collect::<Vec<_>>().into_par_iter())
         .enumerate()
-        .map(|(k, a)| {
+        .map(|(k, ((t, fw), kept))| {
+            let a = match kept {
+                Some(a) => a,
+                None if k == reference => t.clone(),
+                None => warper.warp(t, &fw)?,
+            };
+            drop(fw);
             let bw = if k == reference {
                 FlowField::zeros(w, h)
             } else {
-                let bw = flow(&textures[k], &a)
-                    .map_err(|e| Error::Invalid(format!("backward warp of frame {}: {e}", names[k])))?;
+                let bw =
+                    flow(t, &a).map_err(|e| Error::Invalid(format!("backward warp of frame {}: {e}", names[k])))?;
                 bw.check_size(w, h, &format!("the backward warp of frame {}", names[k]))?;
                 bw
             };
@@ -210,7 +212,8 @@ pub fn build_appearance_model(
         })
         .collect::<Result<_>>()?;
     progress.finish();
-    seconds.backward_flows = t.elapsed().as_secs_f64();
+    seconds.backward_flows = t_back.elapsed().as_secs_f64();
+    seconds.alignment = t.elapsed().as_secs_f64() - seconds.backward_flows;
     let (aligned, warps): (Vec<Vec<f32>>, Vec<Vec<f32>>) = pairs.into_iter().unzip();
     let reference_texture = aligned[reference].clone();
     let (texture_basis, t) = progress_stage(progress, "eigen textures (eq. 4.4-4.7)", || {
@@ -659,7 +662,7 @@ struct Header {
 mod tests {
     #![allow(clippy::needless_range_loop)]
     use super::*;
-    use crate::medoid_shift_alignment::gram_matrix;
+    use crate::medoid_shift_alignment::{align_by_medoid_shift, gram_matrix};
     use crate::test_support::{disc_mask, head_crop, known_warp, mse, quadratic_flow, synthetic_frame};
     use surfcap_mesh::NoProgress;
 
@@ -715,18 +718,22 @@ mod tests {
         assert!(!report.medoid_errors.is_empty());
         let ev: f64 = report.texture_explained_variance.iter().sum();
         assert!((ev - 1.0).abs() < 1e-6, "{ev}");
-        // The same alignment and backward warps, recomputed: the warping error alone.
+        // The same alignment and backward warps, recomputed as the build does them (the search
+        // with direct warps, then each frame warped by Poisson): the warping error alone.
         let warper = TextureWarper::new(Warping::Poisson, &mask, DEFAULT_LAMBDA).unwrap();
-        let al = align_by_medoid_shift(&textures, &mask, &warper, &estimator, 5, &NoProgress).unwrap();
+        let search = TextureWarper::new(Warping::Direct, &mask, DEFAULT_LAMBDA).unwrap();
+        let al = align_by_medoid_shift(&textures, &mask, &search, &estimator, 5, &NoProgress).unwrap();
         assert_eq!(al.reference, model.reference());
         let active = |i: usize| mask.is_active(i);
         for k in 0..textures.len() {
-            let bw = if k == al.reference {
-                FlowField::zeros(32, 32)
+            let aligned = if k == al.reference {
+                textures[k].clone()
             } else {
-                estimator(&textures[k], &al.aligned[k]).unwrap()
+                warper.warp(&textures[k], &al.forward[k]).unwrap()
             };
-            let round_trip = warper.warp(&al.aligned[k], &bw).unwrap();
+            let bw =
+                if k == al.reference { FlowField::zeros(32, 32) } else { estimator(&textures[k], &aligned).unwrap() };
+            let round_trip = warper.warp(&aligned, &bw).unwrap();
             let warping_error = mse(&round_trip, &textures[k], active);
             let rebuilt = model.reconstruct(k).unwrap();
             let model_error = mse(&rebuilt, &textures[k], active);

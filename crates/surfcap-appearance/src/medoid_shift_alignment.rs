@@ -120,6 +120,16 @@ fn argmin(values: &[f64]) -> usize {
     best
 }
 
+/// The map whose active texels are `v` (channel after channel), zero elsewhere.
+pub(crate) fn image_of(v: &[f32], mask: &TexelMask, channels: usize) -> TextureImage {
+    let n = mask.len();
+    let mut out = TextureImage::zeros(mask.width(), mask.height(), channels);
+    for c in 0..channels {
+        mask.scatter(&v[c * n..(c + 1) * n], out.plane_mut(c));
+    }
+    out
+}
+
 /// Checks that every texture has the first one's shape and the mask's size, naming the frame.
 pub(crate) fn check_textures(textures: &[TextureImage], mask: &TexelMask, names: Option<&[String]>) -> Result<()> {
     let Some(first) = textures.first() else {
@@ -133,7 +143,8 @@ pub(crate) fn check_textures(textures: &[TextureImage], mask: &TexelMask, names:
     Ok(())
 }
 
-/// Aligns `textures` (all on `mask`) by Algorithm 4: see the module documentation.
+/// Aligns `textures` (all on `mask`) by Algorithm 4: see the module documentation. The
+/// aligned textures' inactive texels are zero (only active texels are aligned).
 pub fn align_by_medoid_shift(
     textures: &[TextureImage],
     mask: &TexelMask,
@@ -141,6 +152,23 @@ pub fn align_by_medoid_shift(
     flow: &FlowEstimator<'_>,
     max_iterations: usize,
     progress: &dyn Progress,
+) -> Result<Alignment> {
+    medoid_shift(textures, mask, warper, flow, max_iterations, progress, true)
+}
+
+/// [`align_by_medoid_shift`], with the aligned textures kept only when `keep_aligned` (else
+/// `Alignment::aligned` is empty: a caller that re-warps with another warping needs only the
+/// flows). An iteration holds its frames' active texels and flows, never whole aligned maps,
+/// and the best iteration so far only what is kept: at 100 maps of 1024 x 1024 that is about
+/// 2 GB against 5 GB with the images of both.
+pub(crate) fn medoid_shift(
+    textures: &[TextureImage],
+    mask: &TexelMask,
+    warper: &TextureWarper,
+    flow: &FlowEstimator<'_>,
+    max_iterations: usize,
+    progress: &dyn Progress,
+    keep_aligned: bool,
 ) -> Result<Alignment> {
     check_textures(textures, mask, None)?;
     if max_iterations == 0 {
@@ -156,27 +184,26 @@ pub fn align_by_medoid_shift(
     let mut references = Vec::new();
     for iteration in 0..max_iterations {
         progress.start(&format!("aligning to frame {reference} (medoid shift iteration {})", iteration + 1), f as u64);
-        let aligned: Vec<(TextureImage, FlowField)> = textures
+        let aligned: Vec<(Vec<f32>, FlowField)> = textures
             .par_iter()
             .enumerate()
             .map(|(k, t)| {
                 let out = if k == reference {
-                    (t.clone(), FlowField::zeros(w, h))
+                    (active_vector(t, mask), FlowField::zeros(w, h))
                 } else {
                     let fw = flow(&textures[reference], t)
                         .and_then(|fw| fw.check_size(w, h, "the flow").map(|()| fw))
                         .map_err(|e| Error::Invalid(format!("aligning frame {k} to frame {reference}: {e}")))?;
-                    (warper.warp(t, &fw)?, fw)
+                    (active_vector(&warper.warp(t, &fw)?, mask), fw)
                 };
                 progress.advance(1);
                 Ok(out)
             })
             .collect::<Result<_>>()?;
         progress.finish();
-        let vectors: Vec<Vec<f32>> = aligned.par_iter().map(|(a, _)| active_vector(a, mask)).collect();
-        let refs: Vec<&[f32]> = vectors.iter().map(Vec::as_slice).collect();
-        let g = gram_matrix(&refs, Some(&vectors[reference]));
-        drop(vectors);
+        let refs: Vec<&[f32]> = aligned.iter().map(|(v, _)| v.as_slice()).collect();
+        let g = gram_matrix(&refs, Some(&aligned[reference].0));
+        drop(refs);
         let error: f64 = (0..f).map(|k| g[k * f + k]).sum();
         errors.push(error);
         references.push(reference);
@@ -188,7 +215,11 @@ pub fn align_by_medoid_shift(
         let spread: Vec<f64> =
             (0..f).map(|k| f as f64 * g[k * f + k] + trace - 2.0 * g[k * f..(k + 1) * f].iter().sum::<f64>()).collect();
         let medoid = argmin(&spread);
-        let (aligned, forward): (Vec<_>, Vec<_>) = aligned.into_iter().unzip();
+        let (vectors, forward): (Vec<_>, Vec<_>) = aligned.into_iter().unzip();
+        let channels = textures[0].channels();
+        let aligned =
+            if keep_aligned { vectors.iter().map(|v| image_of(v, mask, channels)).collect() } else { Vec::new() };
+        drop(vectors);
         best = Some(Alignment { reference, aligned, forward, errors: errors.clone(), references: references.clone() });
         if medoid == reference {
             break;
