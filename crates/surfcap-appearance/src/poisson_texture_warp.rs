@@ -41,6 +41,7 @@ use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, Mat, Par, Side};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -200,55 +201,63 @@ impl PoissonTextureWarp {
         let n = self.mask.len();
         let c = image.channels();
         let lambda2 = self.lambda * self.lambda;
-        let mut rhs = Mat::<f64>::zeros(n, c);
         let index = self.mask.index();
         let mut out = warp_direct(image, flow)?;
-        for ch in 0..c {
-            let plane = image.plane(ch);
-            // Data term d = I(x + w) from valid texels.
-            let data: Vec<f64> = index
-                .iter()
-                .map(|&t| {
-                    let t = t as usize;
-                    let (x, y) = ((t % w) as f32 + flow.u[t], (t / w) as f32 + flow.v[t]);
-                    sample_valid(plane, &flags, w, h, x, y, 0, 0)
-                        .unwrap_or_else(|| sample_bilinear(plane, w, h, x, y) as f64)
-                })
-                .collect();
-            // Divergence of the moved gradients: Gᵀ g.
-            let mut div = vec![0.0f64; n];
-            for (p, nb) in self.neighbours.iter().enumerate() {
-                let tp = index[p] as usize;
-                let (xp, yp) = ((tp % w) as f32, (tp / w) as f32);
-                for (dir, q) in [(0usize, nb[1]), (1, nb[3])] {
-                    if q == INACTIVE {
-                        continue;
+        // The right-hand side of each channel (the moved gradients' divergence and the data
+        // term), channels in parallel: a third of a warp's time at 1024 x 1024.
+        let columns: Vec<Vec<f64>> = (0..c)
+            .into_par_iter()
+            .map(|ch| {
+                let plane = image.plane(ch);
+                // Data term d = I(x + w) from valid texels.
+                let data: Vec<f64> = index
+                    .iter()
+                    .map(|&t| {
+                        let t = t as usize;
+                        let (x, y) = ((t % w) as f32 + flow.u[t], (t / w) as f32 + flow.v[t]);
+                        sample_valid(plane, &flags, w, h, x, y, 0, 0)
+                            .unwrap_or_else(|| sample_bilinear(plane, w, h, x, y) as f64)
+                    })
+                    .collect();
+                // Divergence of the moved gradients: Gᵀ g.
+                let mut div = vec![0.0f64; n];
+                for (p, nb) in self.neighbours.iter().enumerate() {
+                    let tp = index[p] as usize;
+                    let (xp, yp) = ((tp % w) as f32, (tp / w) as f32);
+                    for (dir, q) in [(0usize, nb[1]), (1, nb[3])] {
+                        if q == INACTIVE {
+                            continue;
+                        }
+                        let tq = index[q as usize] as usize;
+                        let mu = 0.5 * (flow.u[tp] + flow.u[tq]);
+                        let mv = 0.5 * (flow.v[tp] + flow.v[tq]);
+                        // The edge difference grid of direction `dir` sits at half-texel offsets:
+                        // difference (x, y) -> (x + 1, y) is located at (x + 0.5, y).
+                        let (ox, oy) = if dir == 0 { (1, 0) } else { (0, 1) };
+                        let (sx, sy) = (xp + 0.5 * ox as f32 + mu, yp + 0.5 * oy as f32 + mv);
+                        let g = sample_valid(plane, &flags, w, h, sx, sy, ox, oy)
+                            .unwrap_or_else(|| data[q as usize] - data[p]);
+                        div[p] -= g;
+                        div[q as usize] += g;
                     }
-                    let tq = index[q as usize] as usize;
-                    let mu = 0.5 * (flow.u[tp] + flow.u[tq]);
-                    let mv = 0.5 * (flow.v[tp] + flow.v[tq]);
-                    // The edge difference grid of direction `dir` sits at half-texel offsets:
-                    // difference (x, y) -> (x + 1, y) is located at (x + 0.5, y).
-                    let (ox, oy) = if dir == 0 { (1, 0) } else { (0, 1) };
-                    let (sx, sy) = (xp + 0.5 * ox as f32 + mu, yp + 0.5 * oy as f32 + mv);
-                    let g =
-                        sample_valid(plane, &flags, w, h, sx, sy, ox, oy).unwrap_or_else(|| data[q as usize] - data[p]);
-                    div[p] -= g;
-                    div[q as usize] += g;
                 }
-            }
-            // Right-hand side Lᵀ (Gᵀ g) + λ² d.
-            for p in 0..n {
-                let nb = &self.neighbours[p];
-                let mut l = 0.0;
-                let mut deg = 0.0;
-                for &q in nb.iter().filter(|&&q| q != INACTIVE) {
-                    l -= div[q as usize];
-                    deg += 1.0;
+                // Right-hand side Lᵀ (Gᵀ g) + λ² d.
+                let mut column = vec![0.0f64; n];
+                for p in 0..n {
+                    let nb = &self.neighbours[p];
+                    let mut l = 0.0;
+                    let mut deg = 0.0;
+                    for &q in nb.iter().filter(|&&q| q != INACTIVE) {
+                        l -= div[q as usize];
+                        deg += 1.0;
+                    }
+                    column[p] = l + deg * div[p] + lambda2 * data[p];
                 }
-                rhs[(p, ch)] = l + deg * div[p] + lambda2 * data[p];
-            }
-        }
+                column
+            })
+            .collect();
+        let mut rhs = Mat::<f64>::from_fn(n, c, |p, ch| columns[ch][p]);
+        drop(columns);
         let scratch = self.symbolic.solve_in_place_scratch::<f64>(c, Par::Seq);
         faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric)
             .solve_in_place_with_conj(Conj::No, rhs.as_mut(), Par::Seq, MemStack::new(&mut MemBuffer::new(scratch)));
