@@ -114,13 +114,15 @@ pub fn atlas_mask(
         (surfcap_mesh::io::obj::read_obj(mesh)?.topology()?, None)
     } else {
         let s = open(ctx, mesh, source)?;
-        let names = (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
+        let names =
+            (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
         (s.topology().clone(), names)
     };
     let atlas = topology.uv().with_context(|| {
         format!("{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt` and `f v/vt`)", mesh.display())
     })?;
-    let mask = TexelMask::from_atlas(atlas, width, height, dilation).with_context(|| format!("{}: the UV atlas", mesh.display()))?;
+    let mask = TexelMask::from_atlas(atlas, width, height, dilation)
+        .with_context(|| format!("{}: the UV atlas", mesh.display()))?;
     Ok((mask, names))
 }
 
@@ -243,7 +245,14 @@ pub fn reconstruct(ctx: &crate::Ctx, a: &ReconstructArgs) -> anyhow::Result<()> 
     let seconds = t.elapsed().as_secs_f64();
     texture.write_png(&a.output)?;
     let value = json!({"frame": a.frame, "eigen_textures": nt.min(tc.len()), "eigen_warps": nw.min(wc.len()), "seconds": seconds, "output": a.output});
-    ctx.result(&value, || println!("frame {} from {} eigen textures and {} eigen warps in {seconds:.2} s", a.frame, nt.min(tc.len()), nw.min(wc.len())));
+    ctx.result(&value, || {
+        println!(
+            "frame {} from {} eigen textures and {} eigen warps in {seconds:.2} s",
+            a.frame,
+            nt.min(tc.len()),
+            nw.min(wc.len())
+        )
+    });
     ctx.wrote([&a.output]);
     Ok(())
 }
@@ -274,7 +283,10 @@ pub fn parse_weights(model: &AppearanceModel, items: &[String]) -> anyhow::Resul
         .map(|item| {
             let (name, w) = match item.rsplit_once('=') {
                 Some((n, w)) => {
-                    let w: f64 = w.trim().parse().map_err(|_| anyhow::anyhow!("--frames {item}: the weight {w:?} is not a number"))?;
+                    let w: f64 = w
+                        .trim()
+                        .parse()
+                        .map_err(|_| anyhow::anyhow!("--frames {item}: the weight {w:?} is not a number"))?;
                     (n.trim(), w)
                 }
                 None => (item.trim(), 1.0 / items.len() as f64),
