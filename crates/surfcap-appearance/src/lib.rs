@@ -17,12 +17,15 @@
 //! illumination, blur, noise, holes), [`texture_drift`] (the known drift and the true flow),
 //! [`atlas_normals`] (normals and positions in texture space), [`generated_frames`] (the folder
 //! and its reader); evaluation (4.5): [`mesh_rasteriser`] (textured renders from virtual
-//! cameras), [`image_similarity`] (masked MSE and SSIM).
+//! cameras), [`image_similarity`] (masked MSE and SSIM); shape and appearance together (Fig.
+//! 7.1): [`blended_frame_textures`] (a texture for every frame of a synthesised animation, with
+//! the weights Blend gives the geometry).
 
 pub mod appearance_model;
 pub mod atlas_normals;
 pub mod atlas_raster;
 pub mod bilateral_filter;
+pub mod blended_frame_textures;
 pub mod eigen_maps;
 pub mod error;
 pub mod flow_cache;

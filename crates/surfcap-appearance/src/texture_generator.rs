@@ -477,19 +477,53 @@ pub fn write_generated_frames(
 ) -> Result<crate::generated_frames::FramesHeader> {
     let (topology, positions) = read_uv_mesh(mesh)?;
     let source = TextureImage::read(texture)?;
-    let generator = TextureGenerator::new(&topology, &positions, &source, options).map_err(|e| match e {
-        Error::Invalid(m) if m.starts_with("the mesh") || m.starts_with("the UV atlas") => {
-            Error::Invalid(format!("{}: {m}", mesh.display()))
-        }
-        other => other,
-    })?;
     let mesh_bytes = surfcap_mesh::read_regular_file(mesh)?;
+    let source = GeneratorSource {
+        topology: &topology,
+        positions: &positions,
+        texture: &source,
+        mesh_name: mesh,
+        texture_name: texture,
+        mesh_obj: &mesh_bytes,
+    };
+    write_generated_frames_of(&source, options, out, force, displacement, progress)
+}
+
+/// The mesh and texture a sequence is generated from, in memory, with the names `frames.json`
+/// gives them and the OBJ text copied as `template.obj`.
+pub struct GeneratorSource<'a> {
+    pub topology: &'a Topology,
+    pub positions: &'a [f32],
+    pub texture: &'a TextureImage,
+    pub mesh_name: &'a Path,
+    pub texture_name: &'a Path,
+    pub mesh_obj: &'a [u8],
+}
+
+/// As [`write_generated_frames`], from a mesh and texture in memory (a subject's frame: the
+/// head moved by `surfcap synth --head`, the mannequin with its atlas).
+pub fn write_generated_frames_of(
+    source: &GeneratorSource,
+    options: &GeneratorOptions,
+    out: &Path,
+    force: bool,
+    displacement: bool,
+    progress: &dyn Progress,
+) -> Result<crate::generated_frames::FramesHeader> {
+    let (mesh, texture) = (source.mesh_name, source.texture_name);
+    let generator =
+        TextureGenerator::new(source.topology, source.positions, source.texture, options).map_err(|e| match e {
+            Error::Invalid(m) if m.starts_with("the mesh") || m.starts_with("the UV atlas") => {
+                Error::Invalid(format!("{}: {m}", mesh.display()))
+            }
+            other => other,
+        })?;
     crate::generated_frames::write(
         &generator,
         mesh,
         texture,
-        [source.width(), source.height()],
-        &mesh_bytes,
+        [source.texture.width(), source.texture.height()],
+        source.mesh_obj,
         out,
         force,
         displacement,

@@ -141,15 +141,22 @@ impl TextureImage {
         out
     }
 
-    /// Writes the image as an 8-bit RGB PNG, atomically (a temporary sibling renamed into place).
-    pub fn write_png(&self, path: &Path) -> Result<()> {
+    /// The image encoded as an 8-bit RGB PNG file, in memory (what a glb embeds); the same
+    /// image gives the same bytes.
+    pub fn to_png_bytes(&self) -> std::result::Result<Vec<u8>, String> {
         let buffer: ImageBuffer<Rgb<u8>, Vec<u8>> =
             ImageBuffer::from_raw(self.width as u32, self.height as u32, self.to_rgb8())
                 .expect("buffer sized from the image");
         let mut encoded = Vec::new();
         image::DynamicImage::ImageRgb8(buffer)
             .write_to(&mut std::io::Cursor::new(&mut encoded), image::ImageOutputFormat::Png)
-            .map_err(|e| Error::WriteImage { path: path.to_path_buf(), message: e.to_string() })?;
+            .map_err(|e| e.to_string())?;
+        Ok(encoded)
+    }
+
+    /// Writes the image as an 8-bit RGB PNG, atomically (a temporary sibling renamed into place).
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let encoded = self.to_png_bytes().map_err(|message| Error::WriteImage { path: path.to_path_buf(), message })?;
         surfcap_mesh::atomic::write_file(path, |w| w.write_all(&encoded))?;
         Ok(())
     }

@@ -10,6 +10,7 @@
 
 mod commands;
 mod files;
+mod frame_appearance;
 mod html_report;
 mod limits;
 mod mannequin_spec;

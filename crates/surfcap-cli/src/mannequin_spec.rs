@@ -36,6 +36,11 @@ pub struct MannequinArgs {
     /// Metres per BVH unit (default: guessed from each file's rest-pose height and printed).
     #[arg(long, value_parser = crate::options::positive)]
     pub bvh_units: Option<f64>,
+    /// Keep a UV atlas in the mannequin's topology (a cylindrical chart per bone,
+    /// `surfcap_synth::mannequin_atlas`), so it can carry a texture per frame (`surfcap
+    /// appearance paint | generate | build`, then `synth ... --appearance`).
+    #[arg(long)]
+    pub uv_atlas: bool,
     /// Subject name (default: mannequin-<shape>).
     #[arg(long)]
     pub name: Option<String>,
@@ -51,7 +56,12 @@ pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     }
     let gaits: Vec<Gait> = a.procedural.iter().map(|g| Gait::parse(g)).collect::<Result<_, _>>()?;
     let shape = BodyShape::parse(&a.shape)?;
-    let m = mannequin(&shape, a.vertices)?;
+    let mut m = mannequin(&shape, a.vertices)?;
+    if a.uv_atlas {
+        let atlas = surfcap_synth::mannequin_atlas::mannequin_uv_atlas(&m);
+        m.topology =
+            surfcap_mesh::Topology::new(m.topology.n_vertices(), m.topology.triangles().to_vec(), Some(atlas))?;
+    }
     let mut clips = Vec::new();
     for path in &a.bvh {
         let b = read_bvh(path)?;

@@ -179,6 +179,8 @@ pub struct Prepared {
     pub tracked: Option<Vec<usize>>,
     /// Time to read or build the graph and the walk model.
     pub seconds: f64,
+    /// Where every output frame's texture comes from (`--appearance`), if anywhere.
+    pub appearance: Option<crate::frame_appearance::SubjectAppearance>,
 }
 
 impl Prepared {
@@ -194,7 +196,14 @@ impl Prepared {
         let graph = pipe.graph(&params)?.value;
         let model = pipe.walk_model(&params, tracked)?.value;
         let tracked = tracked.map(<[usize]>::to_vec);
-        Ok(Prepared { pipe, params, graph, model, tracked, seconds: t0.elapsed().as_secs_f64() })
+        Ok(Prepared { pipe, params, graph, model, tracked, seconds: t0.elapsed().as_secs_f64(), appearance: None })
+    }
+
+    /// The same, texturing every output frame from `appearance` (`--appearance`, opened and
+    /// checked against the subject by [`crate::frame_appearance::AppearanceOpts::open`]).
+    pub fn with_appearance(mut self, appearance: Option<crate::frame_appearance::SubjectAppearance>) -> Self {
+        self.appearance = appearance;
+        self
     }
 
     pub fn subject(&self) -> &Subject {
@@ -241,8 +250,18 @@ pub fn write_walk(
     let played = play_walk(&prep.pipe, &prep.params, prep.tracked.as_deref(), walk, start, name)?;
     let frames = played.frames();
     let result = s.derived(format!("{}-{name}", s.name), played.sequence)?;
-    let written = write_animation(ctx, Animation::Subject(&result), out.format, &out.output)?;
+    let (written, appearance) = match &prep.appearance {
+        // Thesis Fig. 7.1: each frame's texture blended with the geometry's weights.
+        Some(a) => {
+            let textured = a.textures(ctx, &played.mix)?;
+            (crate::frame_appearance::write_textured(ctx, &result, &textured, &out.output)?, Some(textured.report))
+        }
+        None => (write_animation(ctx, Animation::Subject(&result), out.format, &out.output)?, None),
+    };
     let obj = report.as_object_mut().expect("reports are JSON objects");
+    if let Some(a) = appearance {
+        obj.insert("appearance".into(), a);
+    }
     obj.insert("subject".into(), json!(s.name));
     obj.insert("graph".into(), json!({ "kind": prep.params.kind, "alpha": prep.params.alpha,
         "edges": prep.graph.edges().len(), "transitions": prep.model.n_transitions(), "prepare_seconds": prep.seconds }));

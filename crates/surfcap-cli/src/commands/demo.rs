@@ -60,6 +60,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         fps: None,
         duration: None,
         bvh_units: None,
+        uv_atlas: false,
         name: Some("mannequin".into()),
         output: None,
     };

@@ -6,6 +6,7 @@ use serde_json::json;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
+use surfcap_motion::transition_frames::FrameMix;
 
 use crate::limits::{LimitOpts, Request};
 use crate::options::{SourceOpts, open};
@@ -39,6 +40,10 @@ pub struct Args {
     pub source: SourceOpts,
     #[command(flatten)]
     pub limits: LimitOpts,
+    /// With --appearance, the in-between poses' textures are the two frames interpolated in the
+    /// eigen spaces with the same weight as the geometry (thesis 4.6.1, Fig. 7.1).
+    #[command(flatten)]
+    pub appearance: crate::frame_appearance::AppearanceOpts,
 }
 
 /// How the poses in between are made.
@@ -66,14 +71,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let what = format!("--steps {}", a.steps);
     a.limits.check(&Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
+    let appearance = a.appearance.open(&s, format, &a.output)?;
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let t0 = std::time::Instant::now();
     let interp = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis)?;
     let setup = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
     let mut positions = Vec::with_capacity(a.steps * 3 * nv);
+    let mut mix = Vec::with_capacity(a.steps);
     for k in 0..a.steps {
         let lambda = k as f64 / (a.steps - 1) as f64;
+        mix.push(FrameMix { from: gi as u32, to: gj as u32, weight: lambda as f32 });
         let p = match (k, nonlinear) {
             (0, _) => pi.to_vec(),
             (k, _) if k == a.steps - 1 => interp.aligned_target().to_vec(),
@@ -87,9 +95,21 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .with_labels(FrameLabel::original_ends(a.steps))?
         .with_tags(vec!["interpolation".into()]);
     let out = s.derived(format!("{}-interpolation", s.name), seq)?;
-    let bar = crate::progress::Bar::new(ctx);
-    let written = export(&out, format, &a.output, ctx.export_options(), &bar)?;
-    ctx.result(&json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() }), || {
+    let (written, textures) = match &appearance {
+        Some(app) => {
+            let textured = app.textures(ctx, &mix)?;
+            (crate::frame_appearance::write_textured(ctx, &out, &textured, &a.output)?, Some(textured.report))
+        }
+        None => {
+            let bar = crate::progress::Bar::new(ctx);
+            (export(&out, format, &a.output, ctx.export_options(), &bar)?, None)
+        }
+    };
+    let mut result = json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() });
+    if let Some(t) = textures {
+        result["appearance"] = t;
+    }
+    ctx.result(&result, || {
         println!(
             "{} interpolation of global frames {gi} -> {gj} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",
             if nonlinear { "nonlinear" } else { "linear" },

@@ -5,7 +5,10 @@
 //! item 7, `surfcap_appearance::texture_generator`): per-frame textures of a real UV-mapped
 //! mesh drifting by known smooth warps, lit by a moving light, blurred, noisy and with
 //! occlusion holes in some frames, with the clean frames, the hole masks and the known drift
-//! (the folder's layout: `surfcap_appearance::generated_frames`).
+//! (the folder's layout: `surfcap_appearance::generated_frames`). `--mesh` may be a subject
+//! with texture coordinates (its first frame; as many maps as it has frames by default).
+//! `surfcap appearance paint --mesh M --size 256 -o base.png`: a base texture painted from the
+//! mesh's 3D positions (`surfcap_appearance::solid_texture`), for a mesh that has none.
 
 mod model;
 
@@ -14,7 +17,15 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_appearance::texture_generator::{GeneratorOptions, write_generated_frames};
+use surfcap_appearance::TextureImage;
+use surfcap_appearance::atlas_raster::AtlasRaster;
+use surfcap_appearance::solid_texture::solid_texture;
+use surfcap_appearance::texture_generator::{
+    GeneratorOptions, GeneratorSource, write_generated_frames, write_generated_frames_of,
+};
+use surfcap_mesh::Subject;
+
+use crate::options::{SourceOpts, open};
 
 /// The head scan of the shared data, the default source of `generate`.
 const HEAD: &str = "leeperrysmith_head";
@@ -25,6 +36,10 @@ pub enum AppearanceCmd {
     /// texture (default: the real head scan of the shared data), with known drift, moving
     /// light, blur, noise and occlusion holes; the clean frames and hole masks kept.
     Generate(GenerateArgs),
+    /// A base texture painted from a UV-mapped mesh's 3D positions (garment bands, a checker
+    /// and noise, continuous across the atlas's seams): the texture of a mesh that has none,
+    /// e.g. the mannequin of `surfcap synth --uv-atlas`, for `generate --texture`.
+    Paint(PaintArgs),
     /// Eigen textures and eigen warps of per-frame texture maps (thesis 4.4): flows to a
     /// reference chosen by medoid shift, Poisson warping, PCA; written as a model folder.
     Build(model::BuildArgs),
@@ -43,15 +58,19 @@ pub struct GenerateArgs {
     /// (template.obj, Map-COL.jpg).
     #[arg(long, default_value = "../shared/data")]
     pub data: PathBuf,
-    /// A UV-mapped OBJ mesh (with `vt` on every face corner) instead of the head scan.
+    /// A UV-mapped mesh instead of the head scan: an OBJ (with `vt` on every face corner), or a
+    /// subject with texture coordinates (`surfcap synth --head`, `--uv-atlas`), whose first
+    /// frame is used and whose frame count is the default of --frames, so `appearance build
+    /// --mesh SUBJECT` names the maps by its frames.
     #[arg(long, requires = "texture")]
     pub mesh: Option<PathBuf>,
-    /// The mesh's texture map (PNG or JPEG).
+    /// The mesh's texture map (PNG or JPEG; `surfcap appearance paint` makes one for a mesh
+    /// that has none).
     #[arg(long, requires = "mesh")]
     pub texture: Option<PathBuf>,
-    /// Frames to generate.
-    #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
-    pub frames: usize,
+    /// Frames to generate (default: the subject's frame count with a subject --mesh, else 100).
+    #[arg(long, value_parser = crate::options::count)]
+    pub frames: Option<usize>,
     /// Seed of every random choice (drift, light, holes, noise): the same seed gives the same
     /// frames, whatever the thread count.
     #[arg(long, default_value_t = 0)]
@@ -87,6 +106,7 @@ pub struct GenerateArgs {
 pub fn run(ctx: &crate::Ctx, cmd: AppearanceCmd) -> anyhow::Result<()> {
     match cmd {
         AppearanceCmd::Generate(a) => generate(ctx, a),
+        AppearanceCmd::Paint(a) => paint(ctx, &a),
         AppearanceCmd::Build(a) => model::build(ctx, &a),
         AppearanceCmd::Reconstruct(a) => model::reconstruct(ctx, &a),
         AppearanceCmd::Interpolate(a) => model::interpolate(ctx, &a),
@@ -109,9 +129,11 @@ fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
         }
     };
     surfcap_mesh::output_path::check_not_input(&a.output, &[&mesh, &texture])?;
+    // A subject (anything but an OBJ) gives its first frame and its frame count.
+    let subject = if is_obj(&mesh) { None } else { Some(open(ctx, &mesh, &SourceOpts::default())?) };
     let defaults = GeneratorOptions::default();
     let options = GeneratorOptions {
-        frames: a.frames,
+        frames: a.frames.unwrap_or(subject.as_ref().map_or(100, Subject::n_frames)),
         seed: a.seed,
         size: a.size,
         max_drift: a.max_drift,
@@ -125,8 +147,29 @@ fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
     };
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
-    let header = write_generated_frames(&mesh, &texture, &options, &a.output, ctx.force, a.displacement_npy, &bar)
-        .with_context(|| format!("cannot generate texture frames into {}", a.output.display()))?;
+    let header = match &subject {
+        None => write_generated_frames(&mesh, &texture, &options, &a.output, ctx.force, a.displacement_npy, &bar),
+        Some(s) => {
+            let (topology, positions) = (s.topology(), s.frame(0).expect("a subject has frames"));
+            anyhow::ensure!(
+                topology.uv().is_some(),
+                "{}: the subject has no texture coordinates: expected a UV-mapped mesh (e.g. `surfcap synth --head` or `--uv-atlas`)",
+                mesh.display()
+            );
+            let mut obj = Vec::new();
+            surfcap_mesh::io::obj::write_obj(&mut obj, topology, positions)?;
+            let source = GeneratorSource {
+                topology,
+                positions,
+                texture: &TextureImage::read(&texture)?,
+                mesh_name: &mesh,
+                texture_name: &texture,
+                mesh_obj: &obj,
+            };
+            write_generated_frames_of(&source, &options, &a.output, ctx.force, a.displacement_npy, &bar)
+        }
+    }
+    .with_context(|| format!("cannot generate texture frames into {}", a.output.display()))?;
     let seconds = t0.elapsed().as_secs_f64();
     let bytes: u64 = std::fs::read_dir(&a.output)
         .map(|d| d.filter_map(|e| e.ok()?.metadata().ok()).map(|m| m.len()).sum())
@@ -161,5 +204,52 @@ fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
             );
         },
     );
+    Ok(())
+}
+
+fn is_obj(path: &std::path::Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+}
+
+#[derive(clap::Args, Debug)]
+pub struct PaintArgs {
+    /// A UV-mapped mesh: a subject with texture coordinates (its first frame is painted, in
+    /// its up axis) or an OBJ with `vt` (+y up).
+    #[arg(long)]
+    pub mesh: PathBuf,
+    /// Width and height of the texture, texels.
+    #[arg(long, default_value_t = 1024, value_parser = |s: &str| crate::options::whole_in(s, 8, 16384))]
+    pub size: usize,
+    /// The PNG file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+fn paint(ctx: &crate::Ctx, a: &PaintArgs) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.mesh])?;
+    let t0 = Instant::now();
+    let (topology, positions, up) = if is_obj(&a.mesh) {
+        let obj = surfcap_mesh::io::obj::read_obj(&a.mesh)?;
+        (obj.topology().map_err(|e| e.in_file(&a.mesh))?, obj.positions, 1)
+    } else {
+        let s = open(ctx, &a.mesh, &SourceOpts::default())?;
+        let positions = s.frame(0).expect("a subject has frames").to_vec();
+        (s.topology().clone(), positions, s.up_axis.axis_and_sign().0)
+    };
+    let atlas = topology.uv().with_context(|| {
+        format!(
+            "{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt`, `surfcap synth --uv-atlas`)",
+            a.mesh.display()
+        )
+    })?;
+    let raster =
+        AtlasRaster::new(atlas, a.size, a.size).with_context(|| format!("{}: the UV atlas", a.mesh.display()))?;
+    let texture = solid_texture(&raster, topology.triangles(), &positions, up)?;
+    texture.write_png(&a.output)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    ctx.result(&json!({ "mesh": a.mesh, "size": a.size, "output": a.output, "seconds": seconds }), || {
+        println!("painted a {0}x{0} texture from {1} in {seconds:.2} s", a.size, a.mesh.display())
+    });
+    ctx.wrote([&a.output]);
     Ok(())
 }

@@ -1,10 +1,16 @@
 //! `surfcap synth --bvh <files...> | --procedural walk,jog,... -o <subject>`: the built-in
 //! mannequin moved by motion capture or by procedural locomotion, written as a subject cache
-//! with per-sequence tags and ground-truth joints.
+//! with per-sequence tags and ground-truth joints (`--uv-atlas`: with a UV atlas).
+//! `surfcap synth --head ../shared/data/leeperrysmith_head -o head.subject`: the head scan
+//! bent into three sequences (nod, turn, tilt; `surfcap_synth::head_motion`), keeping its UV
+//! atlas, the textured subject of thesis Fig. 7.1.
 
+use std::path::Path;
 use std::time::Instant;
 
 use serde_json::json;
+use surfcap_mesh::Subject;
+use surfcap_synth::head_motion::head_motion_subject;
 
 use crate::mannequin_spec::{MannequinArgs, build};
 
@@ -20,6 +26,21 @@ pub struct Cmd {
     pub what: Option<What>,
     #[command(flatten)]
     pub build: MannequinArgs,
+    #[command(flatten)]
+    pub head: HeadArgs,
+}
+
+/// The moving head: a UV-mapped scan bent into nod, turn and tilt sequences.
+#[derive(clap::Args, Debug)]
+pub struct HeadArgs {
+    /// A UV-mapped head scan (a folder holding `template.obj`, e.g.
+    /// ../shared/data/leeperrysmith_head, or an OBJ file) moved into three sequences, nod, turn
+    /// and tilt (a non-rigid bend of the neck), at 30 fps, keeping its UV atlas.
+    #[arg(long, conflicts_with_all = ["bvh", "procedural", "uv_atlas"])]
+    pub head: Option<std::path::PathBuf>,
+    /// Frames of each head sequence (one period of the motion, starting and ending at rest).
+    #[arg(long, default_value_t = 34, requires = "head", value_parser = |s: &str| crate::options::at_least(s, 2))]
+    pub frames_per_sequence: usize,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -37,18 +58,40 @@ pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
         Some(What::Path(a)) => path::run(ctx, a),
         Some(What::Keyposes(a)) => keyposes::run(ctx, a),
         Some(What::Reach(a)) => reach::run(ctx, a),
-        None => build_and_write(ctx, c.build),
+        None => build_and_write(ctx, c.build, c.head),
     }
 }
 
-fn build_and_write(ctx: &crate::Ctx, a: MannequinArgs) -> anyhow::Result<()> {
+/// The head scan of `head` (a folder's `template.obj`, or an OBJ) bent into its sequences.
+fn head_subject(head: &Path, frames_per_sequence: usize, name: Option<&str>) -> anyhow::Result<Subject> {
+    let obj = if head.is_dir() { head.join("template.obj") } else { head.to_path_buf() };
+    let mesh = surfcap_mesh::io::obj::read_obj(&obj)?;
+    let topology = mesh.topology().map_err(|e| e.in_file(&obj))?;
+    anyhow::ensure!(
+        topology.uv().is_some(),
+        "{}: the scan has no texture coordinates: expected a UV-mapped mesh (`vt` on every face corner)",
+        obj.display()
+    );
+    let mut s = head_motion_subject(&topology, &mesh.positions, frames_per_sequence, "arbitrary")
+        .map_err(|e| e.in_file(&obj))?;
+    if let Some(n) = name {
+        s.name = n.to_string();
+    }
+    Ok(s)
+}
+
+fn build_and_write(ctx: &crate::Ctx, a: MannequinArgs, head: HeadArgs) -> anyhow::Result<()> {
     let Some(output) = a.output.clone() else {
         anyhow::bail!("-o/--output: the subject cache folder to write is required");
     };
-    let inputs: Vec<&std::path::Path> = a.bvh.iter().map(|p| p.as_path()).collect();
+    let mut inputs: Vec<&Path> = a.bvh.iter().map(|p| p.as_path()).collect();
+    inputs.extend(head.head.as_deref());
     surfcap_mesh::output_path::check_not_input(&output, &inputs)?;
     let t0 = Instant::now();
-    let s = build(ctx, &a)?;
+    let s = match &head.head {
+        Some(h) => head_subject(h, head.frames_per_sequence, a.name.as_deref())?,
+        None => build(ctx, &a)?,
+    };
     let bar = crate::progress::Bar::new(ctx);
     surfcap_mesh::cache::write_cache(&output, &s, ctx.force, &bar)?;
     let secs = t0.elapsed().as_secs_f64();

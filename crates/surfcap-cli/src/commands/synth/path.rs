@@ -48,12 +48,15 @@ pub struct Args {
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
+    #[command(flatten)]
+    pub appearance: crate::frame_appearance::AppearanceOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject, &a.curve])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
+    let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
     let curve = read_curve(&a.curve, s.up_axis, a.planar)?;
     if let Some(speed) = fastest_speed(&s, curve.axes()) {
         let what = format!(
@@ -83,7 +86,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         ..PathSearch::for_fps(s.fps)
     };
     let tracked = (!a.track.is_empty()).then_some(a.track.as_slice());
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?;
+    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?.with_appearance(appearance);
     let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     let units = &prep.subject().units;
     ctx.result(&o.played.report, || {

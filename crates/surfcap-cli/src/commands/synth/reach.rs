@@ -45,6 +45,8 @@ pub struct Args {
     pub graph: GraphOpts,
     #[command(flatten)]
     pub out: OutOpts,
+    #[command(flatten)]
+    pub appearance: crate::frame_appearance::AppearanceOpts,
 }
 
 impl Args {
@@ -61,6 +63,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
+    let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
     let frames = match a.time.frames(s.fps, TimeUnit::Seconds) {
         Some(f) if f >= 1 => f as usize,
@@ -78,7 +81,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         let travel = surfcap_motion::clip_travel::subject_travel(&s);
         crate::travel::require_travel(&s, &travel, &format!("--distance {}", a.distance), None)?;
     }
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?;
+    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?.with_appearance(appearance);
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
     let scales = (a.distance_scale.0, a.time_scale.0);
