@@ -6,14 +6,12 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
 use surfcap_appearance::texture_folder::{frame_name, list_textures, read_textures};
 use surfcap_appearance::{
-    AppearanceModel, AppearanceOptions, FlowOptions, PreprocessOptions, TexelMask, TextureImage, Warping,
-    build_appearance_model,
+    AppearanceModel, AppearanceOptions, TexelMask, TextureImage, Warping, build_appearance_model,
 };
 
-use crate::options::{CacheOpts, SourceOpts, open};
+use crate::options::{CacheOpts, FlowArgs, SourceOpts, open};
 
 /// Parses `poisson` or `direct`.
 pub fn parse_warping(s: &str) -> Result<Warping, String> {
@@ -21,27 +19,6 @@ pub fn parse_warping(s: &str) -> Result<Warping, String> {
         "poisson" => Ok(Warping::Poisson),
         "direct" => Ok(Warping::Direct),
         _ => Err(format!("{s}: expected poisson (thesis eq. 4.1-4.3) or direct")),
-    }
-}
-
-/// How the optical flow runs (thesis 4.4.1).
-#[derive(clap::Args, Debug, Clone)]
-pub struct FlowArgs {
-    /// Finest scale of the TV-L1 flow: 0 solves at full resolution, 1 stops at half
-    /// resolution and upsamples (4x faster; the flow between texture maps is smooth).
-    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 0, 4))]
-    pub flow_scale: usize,
-    /// Skip the pre-processing (histogram equalisation and bilateral filter) before the flow.
-    #[arg(long)]
-    pub no_preprocess: bool,
-}
-
-impl FlowArgs {
-    pub fn estimator<'a>(&self, cache: &CacheOpts, progress: &'a dyn surfcap_mesh::Progress) -> TextureFlow<'a> {
-        let dir = cache.dir();
-        let pre = if self.no_preprocess { PreprocessOptions::none() } else { PreprocessOptions::default() };
-        let options = FlowOptions { finest_scale: self.flow_scale, ..FlowOptions::default() };
-        TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options)
     }
 }
 
@@ -114,21 +91,20 @@ pub fn atlas_mask(
         (surfcap_mesh::io::obj::read_obj(mesh)?.topology()?, None)
     } else {
         let s = open(ctx, mesh, source)?;
-        let names = (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
+        let names =
+            (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
         (s.topology().clone(), names)
     };
     let atlas = topology.uv().with_context(|| {
         format!("{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt` and `f v/vt`)", mesh.display())
     })?;
-    let mask = TexelMask::from_atlas(atlas, width, height, dilation).with_context(|| format!("{}: the UV atlas", mesh.display()))?;
+    let mask = TexelMask::from_atlas(atlas, width, height, dilation)
+        .with_context(|| format!("{}: the UV atlas", mesh.display()))?;
     Ok((mask, names))
 }
 
 /// Splits `k` eigen maps two thirds textures, one third warps (thesis 4.5.1).
-pub fn split_components(k: usize) -> (usize, usize) {
-    let textures = (2 * k).div_ceil(3);
-    (textures, k - textures)
-}
+pub use surfcap_appearance::appearance_model::split_components;
 
 /// The mesh of a texture folder: `--mesh`, else the folder's `template.obj`.
 pub fn mesh_of(textures: &Path, mesh: Option<&Path>) -> anyhow::Result<PathBuf> {
@@ -243,7 +219,14 @@ pub fn reconstruct(ctx: &crate::Ctx, a: &ReconstructArgs) -> anyhow::Result<()> 
     let seconds = t.elapsed().as_secs_f64();
     texture.write_png(&a.output)?;
     let value = json!({"frame": a.frame, "eigen_textures": nt.min(tc.len()), "eigen_warps": nw.min(wc.len()), "seconds": seconds, "output": a.output});
-    ctx.result(&value, || println!("frame {} from {} eigen textures and {} eigen warps in {seconds:.2} s", a.frame, nt.min(tc.len()), nw.min(wc.len())));
+    ctx.result(&value, || {
+        println!(
+            "frame {} from {} eigen textures and {} eigen warps in {seconds:.2} s",
+            a.frame,
+            nt.min(tc.len()),
+            nw.min(wc.len())
+        )
+    });
     ctx.wrote([&a.output]);
     Ok(())
 }
@@ -274,7 +257,10 @@ pub fn parse_weights(model: &AppearanceModel, items: &[String]) -> anyhow::Resul
         .map(|item| {
             let (name, w) = match item.rsplit_once('=') {
                 Some((n, w)) => {
-                    let w: f64 = w.trim().parse().map_err(|_| anyhow::anyhow!("--frames {item}: the weight {w:?} is not a number"))?;
+                    let w: f64 = w
+                        .trim()
+                        .parse()
+                        .map_err(|_| anyhow::anyhow!("--frames {item}: the weight {w:?} is not a number"))?;
                     (n.trim(), w)
                 }
                 None => (item.trim(), 1.0 / items.len() as f64),
