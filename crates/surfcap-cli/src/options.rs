@@ -1,5 +1,6 @@
 //! The options several commands share, in one place: what the sources do not say
-//! ([`SourceOpts`]), where derived products are cached ([`CacheOpts`]), the transition table
+//! ([`SourceOpts`]), where derived products are cached ([`CacheOpts`]), how the flow between
+//! texture maps runs ([`FlowArgs`]), the transition table
 //! ([`TableOpts`]), the graph ([`GraphOpts`]), where an animation goes ([`OutOpts`]) and when
 //! its constraints count as missed ([`ConstraintOpts`]).
 //!
@@ -15,6 +16,8 @@
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
+use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
+use surfcap_appearance::{FlowOptions, PreprocessOptions};
 use surfcap_mesh::export::ExportFormat;
 use surfcap_mesh::import::ImportOptions;
 use surfcap_mesh::{Subject, Units, UpAxis};
@@ -73,6 +76,29 @@ impl CacheOpts {
     /// The derived-product pipeline of `subject`, with progress bars.
     pub fn pipeline(&self, ctx: &crate::Ctx, subject: Subject) -> Pipeline {
         Pipeline::new(subject, self.store(), Box::new(crate::progress::Bar::new(ctx)))
+    }
+}
+
+/// How the optical flow between texture maps runs (thesis 4.4.1): `appearance build |
+/// complete` and `eval appearance`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct FlowArgs {
+    /// Finest scale of the TV-L1 flow: 0 solves at full resolution, 1 stops at half
+    /// resolution and upsamples (4x faster; the flow between texture maps is smooth).
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| whole_in(s, 0, 4))]
+    pub flow_scale: usize,
+    /// Skip the pre-processing (histogram equalisation and bilateral filter) before the flow.
+    #[arg(long)]
+    pub no_preprocess: bool,
+}
+
+impl FlowArgs {
+    /// The thesis's flow through the derived cache (`--cache-dir`, `--no-cache` recomputes).
+    pub fn estimator<'a>(&self, cache: &CacheOpts, progress: &'a dyn surfcap_mesh::Progress) -> TextureFlow<'a> {
+        let dir = cache.dir();
+        let pre = if self.no_preprocess { PreprocessOptions::none() } else { PreprocessOptions::default() };
+        let options = FlowOptions { finest_scale: self.flow_scale, ..FlowOptions::default() };
+        TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options)
     }
 }
 

@@ -12,6 +12,9 @@ pub enum Error {
     /// Factorising a Poisson system (non-linear interpolation).
     #[error(transparent)]
     Poisson(#[from] surfcap_geometry::Error),
+    /// Texture maps, flows, warps and the appearance model (thesis chapter 4).
+    #[error(transparent)]
+    Appearance(#[from] surfcap_appearance::Error),
     /// A learning step failed; `context` says which (e.g. "fitting the GPDM").
     #[error("{context}")]
     Learn {

@@ -14,6 +14,7 @@
 //! Pairwise distances are passed as the condensed upper triangle of an N x N matrix
 //! (`i < j`, row by row), as in scipy's `squareform`.
 
+pub mod appearance_eval;
 pub mod correlation;
 pub mod error;
 pub mod gpdm_eval;
@@ -30,6 +31,7 @@ pub mod transfer_eval;
 pub mod transition_costs_eval;
 pub mod transition_measures;
 
+pub use appearance_eval::{AppearanceEval, AppearanceEvalOptions, appearance_eval};
 pub use error::{Error, Result};
 pub use gpdm_eval::{GpdmEval, GpdmEvalOptions, gpdm_eval};
 pub use graph_comparison_eval::{GraphComparisonEval, GraphComparisonOptions, graph_comparison_eval};

@@ -6,15 +6,13 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
 use surfcap_appearance::generated_frames::GeneratedFrames;
 use surfcap_appearance::texture_folder::{frame_name, list_textures, read_textures};
 use surfcap_appearance::{
-    AppearanceModel, AppearanceOptions, FlowOptions, PreprocessOptions, TexelMask, TextureImage, Warping,
-    build_appearance_model,
+    AppearanceModel, AppearanceOptions, TexelMask, TextureImage, Warping, build_appearance_model,
 };
 
-use crate::options::{CacheOpts, SourceOpts, open};
+use crate::options::{CacheOpts, FlowArgs, SourceOpts, open};
 
 /// Parses `poisson` or `direct`.
 pub fn parse_warping(s: &str) -> Result<Warping, String> {
@@ -22,27 +20,6 @@ pub fn parse_warping(s: &str) -> Result<Warping, String> {
         "poisson" => Ok(Warping::Poisson),
         "direct" => Ok(Warping::Direct),
         _ => Err(format!("{s}: expected poisson (thesis eq. 4.1-4.3) or direct")),
-    }
-}
-
-/// How the optical flow runs (thesis 4.4.1).
-#[derive(clap::Args, Debug, Clone)]
-pub struct FlowArgs {
-    /// Finest scale of the TV-L1 flow: 0 solves at full resolution, 1 stops at half
-    /// resolution and upsamples (4x faster; the flow between texture maps is smooth).
-    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 0, 4))]
-    pub flow_scale: usize,
-    /// Skip the pre-processing (histogram equalisation and bilateral filter) before the flow.
-    #[arg(long)]
-    pub no_preprocess: bool,
-}
-
-impl FlowArgs {
-    pub fn estimator<'a>(&self, cache: &CacheOpts, progress: &'a dyn surfcap_mesh::Progress) -> TextureFlow<'a> {
-        let dir = cache.dir();
-        let pre = if self.no_preprocess { PreprocessOptions::none() } else { PreprocessOptions::default() };
-        let options = FlowOptions { finest_scale: self.flow_scale, ..FlowOptions::default() };
-        TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options)
     }
 }
 
@@ -150,10 +127,7 @@ pub fn atlas_mask(
 }
 
 /// Splits `k` eigen maps two thirds textures, one third warps (thesis 4.5.1).
-pub fn split_components(k: usize) -> (usize, usize) {
-    let textures = (2 * k).div_ceil(3);
-    (textures, k - textures)
-}
+pub use surfcap_appearance::appearance_model::split_components;
 
 /// The mesh of a texture folder: `--mesh`, else the folder's `template.obj`.
 pub fn mesh_of(textures: &Path, mesh: Option<&Path>) -> anyhow::Result<PathBuf> {

@@ -12,6 +12,7 @@ use surfcap_geometry::root_motion_from_contacts::ContactParams;
 use crate::options::{CacheOpts, Positive, SourceOpts, TableOpts, open};
 use crate::output::write_json;
 
+mod appearance;
 mod gpdm;
 mod graphs;
 mod interchange;
@@ -257,6 +258,60 @@ pub enum What {
         #[arg(short, long, default_value = "smg-eval")]
         output: PathBuf,
     },
+    /// Eigen appearance maps on generated textures with ground truth (thesis 4.5-4.6, Fig.
+    /// 4.5-4.6, 4.9-4.12): flow end-point error, Poisson vs direct warping, compactness vs naive
+    /// PCA in the texture and image domains, generalisation with held-out frames, completion of
+    /// occlusion holes, an interpolation example; tables, plots and example images.
+    Appearance {
+        /// The shared data folder (its leeperrysmith_head: template.obj and Map-COL.jpg).
+        #[arg(long, default_value = "../shared/data")]
+        data: PathBuf,
+        /// Use this folder of `surfcap appearance generate` instead of generating one.
+        #[arg(long, conflicts_with_all = ["frames", "size"])]
+        frames_dir: Option<PathBuf>,
+        /// Frames to generate.
+        #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::options::at_least(s, 6))]
+        frames: usize,
+        /// Width of the generated textures in texels.
+        #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::options::whole_in(s, 16, 4096))]
+        size: usize,
+        /// Generate the frames without the moving light (constant shading): the flow then sees
+        /// only the drift (with the light, TV-L1 follows the shading and the model suffers).
+        #[arg(long, conflicts_with = "frames_dir")]
+        no_lighting: bool,
+        /// Seed of the generated frames and of the held-out split.
+        #[arg(long, default_value_t = 7)]
+        seed: u64,
+        /// Total eigen maps K of the compactness sweep (those of at least the training frames are
+        /// dropped; all the model has is always added).
+        #[arg(long, value_delimiter = ',', default_value = "3,6,12,24,48", value_parser = crate::options::count)]
+        components: Vec<usize>,
+        /// Fractions of the frames held out of training (generalisation).
+        #[arg(long, value_delimiter = ',', default_value = "0,0.2,0.4,0.6", value_parser = crate::options::fraction)]
+        held_out: Vec<f64>,
+        /// Frames rendered for the image domain (evenly spaced; per held-out fraction, the
+        /// first held-out ones); 0: texture domain only.
+        #[arg(long, default_value_t = 10)]
+        image_frames: usize,
+        /// Virtual cameras on a ring around the mesh.
+        #[arg(long, default_value_t = 8, value_parser = crate::options::count)]
+        views: usize,
+        /// Width and height of the renders, pixels.
+        #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::options::whole_in(s, 16, 4096))]
+        image_size: usize,
+        /// Frames whose forward flow is also estimated at full resolution for the end-point error
+        /// (with --flow-scale above 0).
+        #[arg(long, default_value_t = 0)]
+        full_resolution_flows: usize,
+        #[command(flatten)]
+        flow: crate::options::FlowArgs,
+        #[command(flatten)]
+        cache: CacheOpts,
+        /// Folder for appearance.json, the plots and the example images (and the generated
+        /// frames, in frames/).
+        #[arg(short, long, default_value = "appearance-eval")]
+        output: PathBuf,
+    },
     /// Round trips through Alembic and USD (issue 22): every sequence of the data folder
     /// imported, exported as .abc and .usda, imported back and compared (positions to the bit,
     /// topology and UVs, names, labels, rate, up axis, units), with sizes and times.
@@ -310,6 +365,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Interchange { data, output, .. } => {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-interchange")?;
+        }
+        What::Appearance { data, frames_dir, output, .. } => {
+            let mut inputs: Vec<&Path> = vec![data];
+            inputs.extend(frames_dir.as_deref());
+            surfcap_mesh::output_path::check_not_input(output, &inputs)?;
+            ctx.claim_dir(output, "eval-appearance")?;
         }
     }
     match a.what {
@@ -381,6 +442,38 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let opts =
                 smg::Options { vertices, remeshed, transitions, distances, seconds, pairs, compare: !no_compare };
             smg::run(ctx, &data, opts, input, &cache, &output)
+        }
+        What::Appearance {
+            data,
+            frames_dir,
+            frames,
+            size,
+            no_lighting,
+            seed,
+            components,
+            held_out,
+            image_frames,
+            views,
+            image_size,
+            full_resolution_flows,
+            flow,
+            cache,
+            output,
+        } => {
+            let source = match frames_dir {
+                Some(d) => appearance::Frames::Existing(d),
+                None => appearance::Frames::Generate { data, frames, size, seed, lighting: !no_lighting },
+            };
+            let opts = surfcap_eval::AppearanceEvalOptions {
+                components,
+                held_out,
+                seed,
+                image_frames,
+                views,
+                image_size,
+                ..Default::default()
+            };
+            appearance::run(ctx, source, &opts, &flow, full_resolution_flows, &cache, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)
