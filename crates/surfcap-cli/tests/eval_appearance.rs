@@ -1,5 +1,5 @@
 //! `surfcap eval appearance` on a tiny sequence generated from the real head scan (12 frames of
-//! 64x64): the report's structure and sane values (naive PCA exact with every component, our
+//! 64x64, no moving light): the report's structure and sane values (naive PCA exact with every component, our
 //! model far from the mean, completion better than the holed input, a row per warping and per
 //! held-out fraction), the plots and images written, and the same numbers on one thread.
 
@@ -21,6 +21,7 @@ fn run(data: &std::path::Path, out: &std::path::Path, cache: &std::path::Path, t
             "64",
             "--seed",
             "7",
+            "--no-lighting",
             "--components",
             "3,6",
             "--held-out",
@@ -71,14 +72,18 @@ fn the_appearance_evaluation_reports_every_part_with_sane_values() {
     let e = &r["flow"]["errors"];
     assert_eq!(e["frames"].as_u64().unwrap() as usize, n - 1);
     assert!(f(&e["mean"]).is_finite() && f(&e["mean"]) > 0.0 && f(&e["zero_flow_mean"]) > 0.0, "{e}");
+    // Without the moving light the flow sees the drift only: closer to the truth than no flow
+    // (measured 0.11 texels against 0.22).
+    assert!(f(&e["mean"]) < 0.8 * f(&e["zero_flow_mean"]), "{e}");
     // 2. Both warpings, every component.
     let w = r["warping"].as_array().unwrap();
     let kinds: Vec<&str> = w.iter().map(|x| x["warping"].as_str().unwrap()).collect();
-    assert_eq!(kinds, ["Poisson", "Direct"]);
+    assert_eq!(kinds, ["poisson", "direct"]);
     for x in w {
         assert_eq!(x["eigen_textures"].as_u64().unwrap() as usize, n - 1);
+        // Measured: SSIM 0.988 (Poisson) and 0.987 (direct) against the input frames.
         let s = f(&x["all_components"]["input"]["ssim"]);
-        assert!(s > 0.7 && s <= 1.0, "{x}");
+        assert!(s > 0.95 && s <= 1.0, "{x}");
     }
     // 3. Compactness: K = 3, 6 and every component (n - 1); naive PCA is exact with all of
     // them; ours with every component is at least as good as with 3 (within noise).

@@ -8,7 +8,8 @@
 //! returning a typed, serialisable result that carries everything a front end prints, writes or
 //! plots: [`interpolation_eval()`] (thesis 2.4, Fig. 2.8), [`pose_metric_eval()`] (2.3.2,
 //! Fig. 2.5-2.7), [`transition_costs_eval()`] (2.5.5, Fig. 2.15), [`graph_comparison_eval()`]
-//! (3.3.3, Fig. 3.2 and 3.8) and [`gpdm_eval()`] (6.4-6.5, Fig. 6.4). They never print, open
+//! (3.3.3, Fig. 3.2 and 3.8), [`gpdm_eval()`] (6.4-6.5, Fig. 6.4) and [`appearance_eval()`] (eigen
+//! appearance maps, 4.5-4.6, Fig. 4.5-4.12, on generated textures with ground truth). They never print, open
 //! files or draw.
 //!
 //! Pairwise distances are passed as the condensed upper triangle of an N x N matrix
