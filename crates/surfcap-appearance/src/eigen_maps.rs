@@ -15,7 +15,7 @@ use faer::Mat;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::medoid_shift_alignment::gram_matrix;
+use crate::medoid_shift_alignment::{BLOCK, gram_matrix};
 
 /// An orthonormal basis of the main modes of variation of a set of vectors.
 #[derive(Debug, Clone, PartialEq)]
@@ -85,41 +85,51 @@ impl EigenBasis {
         let keep: Vec<usize> =
             (0..f).rev().filter(|&i| alpha[i] > 1e-10 * alpha_max && alpha[i] > 0.0).take(max_components).collect();
         let k = keep.len();
-        // T_i = M V_i, texel by texel (each texel independent: thread-count independent).
+        // T_i = M V_i by blocks of texels: each block's centred data (F x B, f64) multiplied by
+        // the kept eigenvectors (k x F) with a sequential GEMM, blocks in parallel a group at a
+        // time and copied into the f32 rows, so at most a group's products are held beside the
+        // components (a first, block-wise f64 buffer of every component cost 2.3 GB at 100 maps
+        // of 1024 x 1024). The block partition is fixed and norms are summed in block order:
+        // the same bits whatever the thread count.
         let mut components = vec![0.0f32; k * n];
-        let vcols: Vec<Vec<f64>> = keep.iter().map(|&i| (0..f).map(|r| v[(r, i)]).collect()).collect();
-        let chunk = 4096;
-        let blocks: Vec<Vec<f64>> = (0..n.div_ceil(chunk))
-            .into_par_iter()
-            .map(|b| {
-                let (lo, hi) = (b * chunk, ((b + 1) * chunk).min(n));
-                let mut out = vec![0.0f64; k * (hi - lo)];
-                for j in lo..hi {
-                    for (fr, vec) in vectors.iter().enumerate() {
-                        let d = vec[j] as f64 - mean[j] as f64;
-                        for (c, vc) in vcols.iter().enumerate() {
-                            out[c * (hi - lo) + j - lo] += d * vc[fr];
-                        }
-                    }
-                }
-                out
-            })
-            .collect();
+        let vt = faer::Mat::<f64>::from_fn(k, f, |c, r| v[(r, keep[c])]);
+        let n_blocks = n.div_ceil(BLOCK);
         let mut norms = vec![0.0f64; k];
-        for (b, block) in blocks.iter().enumerate() {
-            let lo = b * chunk;
-            let len = block.len() / k.max(1);
-            for c in 0..k {
-                for (j, &x) in block[c * len..(c + 1) * len].iter().enumerate() {
-                    norms[c] += x * x;
-                    components[c * n + lo + j] = x as f32;
+        const GROUP: usize = 64;
+        for group in (0..n_blocks).step_by(GROUP) {
+            let products: Vec<(usize, faer::Mat<f64>)> = (group..(group + GROUP).min(n_blocks))
+                .into_par_iter()
+                .map(|b| {
+                    let (lo, hi) = (b * BLOCK, ((b + 1) * BLOCK).min(n));
+                    let m =
+                        faer::Mat::<f64>::from_fn(f, hi - lo, |r, j| vectors[r][lo + j] as f64 - mean[lo + j] as f64);
+                    let mut out = faer::Mat::<f64>::zeros(k, hi - lo);
+                    faer::linalg::matmul::matmul(
+                        out.as_mut(),
+                        faer::Accum::Replace,
+                        vt.as_ref(),
+                        m.as_ref(),
+                        1.0,
+                        faer::Par::Seq,
+                    );
+                    (lo, out)
+                })
+                .collect();
+            for (lo, out) in products {
+                for c in 0..k {
+                    let row = &mut components[c * n + lo..c * n + lo + out.ncols()];
+                    for (j, x) in row.iter_mut().enumerate() {
+                        let value = out[(c, j)];
+                        norms[c] += value * value;
+                        *x = value as f32;
+                    }
                 }
             }
         }
-        for c in 0..k {
-            let s = 1.0 / norms[c].sqrt();
-            components[c * n..(c + 1) * n].iter_mut().for_each(|x| *x = (*x as f64 * s) as f32);
-        }
+        components.par_chunks_mut(n.max(1)).zip(norms.par_iter()).for_each(|(row, &norm)| {
+            let s = 1.0 / norm.sqrt();
+            row.iter_mut().for_each(|x| *x = (*x as f64 * s) as f32);
+        });
         // c_k,i = (G V_i)_k / √α_i.
         let mut coefficients = vec![0.0f64; f * k];
         for (c, &i) in keep.iter().enumerate() {

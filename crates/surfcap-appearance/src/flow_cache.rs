@@ -116,7 +116,7 @@ pub fn pair_key(reference: &blake3::Hash, target: &blake3::Hash, mask: &TexelMas
 
 /// How many pre-processed maps [`TextureFlow`] keeps in memory (grey f32 planes: 4 MB each at
 /// 1024 x 1024).
-const PREPROCESSED_KEPT: usize = 160;
+const PREPROCESSED_KEPT: usize = 128;
 
 /// The thesis's flow (pre-processing, then TV-L1 on the grey images, 4.4.1) through a cache:
 /// the estimator every appearance command hands to the model. Each map is pre-processed once

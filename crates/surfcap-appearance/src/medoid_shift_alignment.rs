@@ -43,7 +43,7 @@ pub struct Alignment {
 
 /// Texels per block of the Gram accumulation (a fixed size, so the sums do not depend on the
 /// thread count).
-const BLOCK: usize = 8192;
+pub(crate) const BLOCK: usize = 8192;
 
 /// Gram matrix `G_kl = Σ_i (x_k,i - o_i)(x_l,i - o_i)` of vectors of equal length, in f64,
 /// where `o` is an optional offset (`None`: zero); row-major F x F.
