@@ -84,8 +84,11 @@ impl EigenBasis {
         // Descending; only eigenvalues clearly above round-off, and at most F - 1: the centring
         // removes one dimension exactly, though f32 data rounded about an f32 mean can leave an
         // eigenvalue just above the relative threshold there.
-        let keep: Vec<usize> =
-            (0..f).rev().filter(|&i| alpha[i] > 1e-10 * alpha_max && alpha[i] > 0.0).take(max_components.min(f - 1)).collect();
+        let keep: Vec<usize> = (0..f)
+            .rev()
+            .filter(|&i| alpha[i] > 1e-10 * alpha_max && alpha[i] > 0.0)
+            .take(max_components.min(f - 1))
+            .collect();
         let k = keep.len();
         // T_i = M V_i by blocks of texels: each block's centred data (F x B, f64) multiplied by
         // the kept eigenvectors (k x F) with a sequential GEMM, blocks in parallel a group at a

@@ -126,14 +126,8 @@ pub fn cameras_around(
 /// [`cameras_around`] a mesh: centred on its bounding box, at the distance where the bounding
 /// sphere fills the field of view with a 5% margin.
 pub fn cameras_around_mesh(positions: &[f32], up: [f64; 3], n: usize, elevation_deg: f64, lens: Lens) -> Vec<Camera> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions.chunks_exact(3) {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i] as f64);
-            hi[i] = hi[i].max(p[i] as f64);
-        }
-    }
+    let (lo, hi) = surfcap_mesh::bounding_box(positions);
+    let (lo, hi) = (lo.map(f64::from), hi.map(f64::from));
     let center: [f64; 3] = std::array::from_fn(|i| (lo[i] + hi[i]) / 2.0);
     let r = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt() / 2.0;
     let half_y = lens.fov_y_deg.to_radians() / 2.0;

@@ -256,15 +256,31 @@ impl PoissonTextureWarp {
                 column
             })
             .collect();
-        let mut rhs = Mat::<f64>::from_fn(n, c, |p, ch| columns[ch][p]);
+        let rhs = Mat::<f64>::from_fn(n, c, |p, ch| columns[ch][p]);
         drop(columns);
-        let scratch = self.symbolic.solve_in_place_scratch::<f64>(c, Par::Seq);
-        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric)
-            .solve_in_place_with_conj(Conj::No, rhs.as_mut(), Par::Seq, MemStack::new(&mut MemBuffer::new(scratch)));
+        // Two sequential solves side by side, the first channel alone and the others
+        // together: faer's parallel sparse solve was 40 times slower on 2 cores
+        // (ARCHITECTURE.md).
+        let llt = faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric);
+        let solve = |mut cols: Mat<f64>| {
+            let scratch = self.symbolic.solve_in_place_scratch::<f64>(cols.ncols(), Par::Seq);
+            llt.solve_in_place_with_conj(
+                Conj::No,
+                cols.as_mut(),
+                Par::Seq,
+                MemStack::new(&mut MemBuffer::new(scratch)),
+            );
+            cols
+        };
+        let split = 1.min(c);
+        let first = Mat::<f64>::from_fn(n, split, |p, ch| rhs[(p, ch)]);
+        let rest = Mat::<f64>::from_fn(n, c - split, |p, ch| rhs[(p, split + ch)]);
+        drop(rhs);
+        let (first, rest) = rayon::join(|| solve(first), || solve(rest));
         for ch in 0..c {
             let plane = out.plane_mut(ch);
             for (p, &t) in index.iter().enumerate() {
-                plane[t as usize] = rhs[(p, ch)] as f32;
+                plane[t as usize] = if ch < split { first[(p, ch)] } else { rest[(p, ch - split)] } as f32;
             }
         }
         Ok(out)

@@ -437,15 +437,8 @@ impl TextureGenerator {
 }
 
 fn bounding_box(positions: &[f32]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions.chunks_exact(3) {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i] as f64);
-            hi[i] = hi[i].max(p[i] as f64);
-        }
-    }
-    (lo, hi)
+    let (lo, hi) = surfcap_mesh::bounding_box(positions);
+    (lo.map(f64::from), hi.map(f64::from))
 }
 
 /// Reads a UV-mapped OBJ mesh: its topology (with the atlas) and positions; errors name the
