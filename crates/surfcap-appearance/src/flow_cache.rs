@@ -48,22 +48,10 @@ impl<'a> FlowCache<'a> {
         FlowCache { cache: dir.map(DerivedCache::new), refresh, progress }
     }
 
-    /// The flow from `reference` to `target` (reference(x) ~ target(x + w(x))) under `params`
-    /// (text naming every option `compute` uses), read from the cache or computed and stored.
+    /// The flow under `key` ([`pair_key`] of the two maps and the active texels) and `params`
+    /// (text naming every option `compute` uses), a `w x h` field read from the cache or
+    /// computed and stored.
     pub fn flow(
-        &self,
-        reference: &TextureImage,
-        target: &TextureImage,
-        mask: &TexelMask,
-        params: &str,
-        compute: impl Fn() -> Result<FlowField>,
-    ) -> Result<FlowField> {
-        let key = pair_key(&image_hash(reference), &image_hash(target), mask);
-        self.flow_keyed(&key, reference.width(), reference.height(), params, compute)
-    }
-
-    /// [`Self::flow`] under a key the caller computed with [`pair_key`].
-    fn flow_keyed(
         &self,
         key: &blake3::Hash,
         w: usize,
@@ -167,7 +155,7 @@ impl<'a> TextureFlow<'a> {
         mask.check_size(reference.width(), reference.height(), "the reference texture")?;
         let (hr, ht) = (image_hash(reference), image_hash(target));
         let (w, h) = (reference.width(), reference.height());
-        self.cache.flow_keyed(&pair_key(&hr, &ht, mask), w, h, &self.params(), || {
+        self.cache.flow(&pair_key(&hr, &ht, mask), w, h, &self.params(), || {
             let a = self.grey(reference, hr, mask)?;
             let b = self.grey(target, ht, mask)?;
             tv_l1_flow(&a, &b, w, h, Some(mask), &self.options)
@@ -195,13 +183,14 @@ mod tests {
             f.v[4] = -1.5;
             Ok(f)
         };
-        let first = cache.flow(&a, &b, &mask, "p", compute).unwrap();
-        let second = cache.flow(&a, &b, &mask, "p", compute).unwrap();
+        let key = |r: &TextureImage, t: &TextureImage| pair_key(&image_hash(r), &image_hash(t), &mask);
+        let first = cache.flow(&key(&a, &b), 3, 2, "p", compute).unwrap();
+        let second = cache.flow(&key(&a, &b), 3, 2, "p", compute).unwrap();
         assert_eq!(first, second);
         assert_eq!(calls.get(), 1);
         // Other options, or the pair the other way round, are other entries.
-        cache.flow(&a, &b, &mask, "q", compute).unwrap();
-        cache.flow(&b, &a, &mask, "p", compute).unwrap();
+        cache.flow(&key(&a, &b), 3, 2, "q", compute).unwrap();
+        cache.flow(&key(&b, &a), 3, 2, "p", compute).unwrap();
         assert_eq!(calls.get(), 3);
     }
 

@@ -238,15 +238,9 @@ pub(crate) fn head_crop(x0: usize, y0: usize, size: usize, factor: usize) -> Opt
     Some(TextureImage::from_planes(size, size, 3, out).unwrap())
 }
 
-/// Mean squared difference over the texels where `keep` is true, all channels.
+/// Mean squared difference over the texels where `keep` is true, all channels
+/// ([`crate::image_similarity::mse`] over that mask).
 pub(crate) fn mse(a: &TextureImage, b: &TextureImage, keep: impl Fn(usize) -> bool) -> f64 {
-    let n = a.texels();
-    let (mut s, mut m) = (0.0f64, 0usize);
-    for c in 0..a.channels() {
-        for i in (0..n).filter(|&i| keep(i)) {
-            s += (a.plane(c)[i] as f64 - b.plane(c)[i] as f64).powi(2);
-            m += 1;
-        }
-    }
-    s / m.max(1) as f64
+    let mask: Vec<bool> = (0..a.texels()).map(keep).collect();
+    crate::image_similarity::mse(a, b, &mask).expect("test maps of one shape and a non-empty mask")
 }
