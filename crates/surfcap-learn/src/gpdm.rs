@@ -429,6 +429,21 @@ impl Gpdm {
         Ok(Gpdm { spec, y_mean, a_y, ky_inv, x_in, x_in_norms, a_x, kx_inv })
     }
 
+    /// Number of training sequences.
+    pub fn sequence_count(&self) -> usize {
+        self.spec.sequence_lengths.len()
+    }
+
+    /// Values per frame (D).
+    pub fn output_dim(&self) -> usize {
+        self.spec.y.ncols()
+    }
+
+    /// The serialised form (latents, frames, kernels).
+    pub fn spec(&self) -> &GpdmSpec {
+        &self.spec
+    }
+
     /// Latent dimension d.
     pub fn latent_dim(&self) -> usize {
         self.spec.latent.ncols()

@@ -1,0 +1,295 @@
+//! Sampling variants of a learnt sequence (thesis 6.6, eq. 6.8-6.13).
+//!
+//! For every body part independently: the learnt sequence's first latent point `x_1`, the
+//! mean-prediction trajectory from it (eq. 6.8-6.10) as the start of a Hybrid Monte Carlo
+//! chain over whole trajectories (6.6.2), every `thin`-th sample after warm-up a variant. The
+//! part's pose at each latent point is the reconstruction GP's mean (eq. 6.12); the parts are
+//! stitched (6.6.2, the cheapest closed cut in every overlap and one Poisson merge, chapter 5's
+//! stitcher) and the frames moved by the displacements the torso's GP gives, from the
+//! sequence's first placement. The variant is finally brought back from the reference's
+//! frames to the sequence's own timing and frame count through its time map.
+//!
+//! Decisions where the thesis is loose:
+//! - **Pose noise**: eq. 6.11 samples `y ~ N(mu_Y, sigma_Y^2 I)`, an independent draw per
+//!   coordinate and frame: a rough surface that flickers from frame to frame. The mean
+//!   (eq. 6.12) is used; the variation comes from the sampled latent trajectories (and from
+//!   the parts being sampled independently), which is what Fig. 6.5 shows.
+//! - **Seeds**: each part's chain has its own stream, derived from the seed, the sequence's
+//!   name and the part's index, so a variant does not depend on the number of threads or on
+//!   which other sequences are sampled.
+//! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
+//!   variant can replace its source inside a longer animation.
+
+use rayon::prelude::*;
+use serde::Serialize;
+use surfcap_learn::Mat;
+use surfcap_learn::hybrid_monte_carlo::HmcOptions;
+use surfcap_transfer::pose_representation::Placement;
+
+use crate::error::{Error, Result};
+use crate::motion_preparation::poses_at;
+use crate::variation_model::VariationModel;
+
+/// Options of [`sample_variants`].
+#[derive(Debug, Clone, Copy)]
+pub struct SamplingOptions {
+    /// HMC warm-up iterations (step size and path length tuning).
+    pub warmup: usize,
+    /// Iterations between two variants (a larger value gives less correlated variants).
+    pub thin: usize,
+    /// Upper bound on leapfrog steps per HMC iteration.
+    pub max_leapfrog: usize,
+}
+
+impl Default for SamplingOptions {
+    fn default() -> Self {
+        SamplingOptions { warmup: 100, thin: 5, max_leapfrog: 30 }
+    }
+}
+
+/// The HMC chain of one part.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChainSummary {
+    pub part: String,
+    pub acceptance_rate: f64,
+    pub step_size: f64,
+    pub leapfrog_steps: usize,
+    pub divergences: usize,
+    pub seed: u64,
+    pub seconds: f64,
+}
+
+/// One variant: its latent trajectories, its aligned poses on the reference's frames and its
+/// world frames at the sequence's own timing.
+#[derive(Debug, Clone)]
+pub struct Variant {
+    /// Per part, the latent trajectory (reference frames x d).
+    pub latents: Vec<Mat<f64>>,
+    /// Per reference frame, the stitched pose in the body frame.
+    pub aligned: Vec<Vec<f32>>,
+    /// Per reference frame, the displacement from the previous one.
+    pub displacements: Vec<[f64; 6]>,
+    /// The frames in the world, at the sequence's own timing (its frame count).
+    pub world: Vec<Vec<f32>>,
+}
+
+/// A splitmix64 step: well-mixed seeds for independent streams.
+pub fn mix_seed(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The seed of part `k`'s chain for sequence `name` (FNV-1a of the name, mixed).
+pub fn chain_seed(seed: u64, name: &str, k: usize) -> u64 {
+    let h = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3));
+    mix_seed(mix_seed(seed ^ h).wrapping_add(k as u64))
+}
+
+/// `count` latent variants of learnt sequence `j`: `[variant][part]` trajectories, and each
+/// part's chain.
+pub fn sample_latent_variants(
+    model: &VariationModel,
+    j: usize,
+    count: usize,
+    seed: u64,
+    opts: &SamplingOptions,
+) -> Result<(Vec<Vec<Mat<f64>>>, Vec<ChainSummary>)> {
+    let seq = model.sequences.get(j).ok_or_else(|| Error::Invalid(format!("sequence {j}: the model has {}", model.sequences.len())))?;
+    if count == 0 {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    if opts.thin == 0 {
+        return Err(Error::Invalid("thin 0: expected at least 1 iteration between variants".into()));
+    }
+    let per_part: Vec<(Vec<Mat<f64>>, ChainSummary)> = model
+        .part_models
+        .par_iter()
+        .enumerate()
+        .map(|(k, g)| {
+            let t0 = std::time::Instant::now();
+            let learnt = g.sequence_latent(j).ok_or_else(|| Error::Invalid(format!("sequence {j} is not in part {k}'s model")))?;
+            let x1: Vec<f64> = (0..learnt.ncols()).map(|c| learnt[(0, c)]).collect();
+            let s = chain_seed(seed, &seq.name, k);
+            let hmc = HmcOptions {
+                warmup: opts.warmup,
+                samples: count,
+                thin: opts.thin,
+                max_leapfrog: opts.max_leapfrog,
+                seed: s,
+                ..HmcOptions::default()
+            };
+            let (trajs, chain) = g.sample_trajectories(&x1, learnt.nrows(), &hmc)?;
+            let summary = ChainSummary {
+                part: model.parts.parts[k].name.clone(),
+                acceptance_rate: chain.acceptance_rate,
+                step_size: chain.step_size,
+                leapfrog_steps: chain.leapfrog_steps,
+                divergences: chain.divergences,
+                seed: s,
+                seconds: t0.elapsed().as_secs_f64(),
+            };
+            Ok((trajs, summary))
+        })
+        .collect::<Result<_>>()?;
+    let mut variants: Vec<Vec<Mat<f64>>> = (0..count).map(|_| Vec::with_capacity(per_part.len())).collect();
+    let mut chains = Vec::with_capacity(per_part.len());
+    for (trajs, summary) in per_part {
+        if trajs.len() != count {
+            return Err(Error::Invalid(format!("part {:?}: {} trajectories sampled, expected {count}", summary.part, trajs.len())));
+        }
+        for (v, t) in variants.iter_mut().zip(trajs) {
+            v.push(t);
+        }
+        chains.push(summary);
+    }
+    Ok((variants, chains))
+}
+
+/// The stitched body-frame poses and displacements of per-part latent trajectories (one
+/// trajectory per part, all of one length): eq. 6.12 per part, then stitching.
+pub fn reconstruct_aligned(model: &VariationModel, latents: &[Mat<f64>]) -> Result<(Vec<Vec<f32>>, Vec<[f64; 6]>)> {
+    if latents.len() != model.part_models.len() {
+        return Err(Error::Invalid(format!(
+            "{} latent trajectories: expected one per body part ({})",
+            latents.len(),
+            model.part_models.len()
+        )));
+    }
+    let n = latents[0].nrows();
+    if latents.iter().any(|x| x.nrows() != n) || n == 0 {
+        return Err(Error::Invalid("latent trajectories of different or zero lengths: expected one length for every part".into()));
+    }
+    let root = model.parts.root();
+    let means: Vec<Mat<f64>> =
+        model.part_models.par_iter().zip(latents).map(|(g, x)| Ok(g.reconstruct(x.as_ref())?.0)).collect::<Result<_>>()?;
+    let sc = model.displacement_scales;
+    let displacements: Vec<[f64; 6]> = (0..n)
+        .map(|i| {
+            if i == 0 {
+                return [0.0; 6];
+            }
+            let m = &means[root];
+            let c0 = m.ncols() - 6;
+            std::array::from_fn(|c| m[(i, c0 + c)] / sc[c])
+        })
+        .collect();
+    let poses: Vec<Vec<f32>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let parts: Vec<Vec<f32>> = model
+                .parts
+                .parts
+                .iter()
+                .enumerate()
+                .map(|(k, p)| (0..3 * p.vertices.len()).map(|c| means[k][(i, c)] as f32).collect())
+                .collect();
+            Ok(model.stitcher().stitch(&parts)?.0)
+        })
+        .collect::<Result<_>>()?;
+    Ok((poses, displacements))
+}
+
+/// For every own frame `f` of a sequence of `own_frames`, the reference time at which it is
+/// reached: the inverse of the non-decreasing time map `times` (reference frame -> own time).
+pub fn inverse_times(times: &[f64], own_frames: usize) -> Vec<f64> {
+    let n = times.len();
+    (0..own_frames)
+        .map(|f| {
+            let f = f as f64;
+            match times.iter().position(|&t| t >= f) {
+                None => (n - 1) as f64,
+                Some(0) => 0.0,
+                Some(i) => {
+                    let (a, b) = (times[i - 1], times[i]);
+                    if b > a { (i - 1) as f64 + (f - a) / (b - a) } else { i as f64 }
+                }
+            }
+        })
+        .collect()
+}
+
+/// Body-frame poses moved into the world from `start` by the displacements, then re-timed from
+/// the reference's frames to `own_frames` frames through the time map `times`.
+pub fn place_and_retime(
+    aligned: &[Vec<f32>],
+    displacements: &[[f64; 6]],
+    start: &Placement,
+    times: &[f64],
+    own_frames: usize,
+) -> Vec<Vec<f32>> {
+    let mut placement = *start;
+    let world: Vec<Vec<f32>> = aligned
+        .iter()
+        .zip(displacements)
+        .enumerate()
+        .map(|(i, (pose, d))| {
+            if i > 0 {
+                placement = placement.moved_by(d);
+            }
+            placement.apply(pose)
+        })
+        .collect();
+    let refs: Vec<&[f32]> = world.iter().map(|p| p.as_slice()).collect();
+    poses_at(&refs, &inverse_times(times, own_frames))
+}
+
+/// `count` variants of the learnt sequence `name` for `seed` (6.6).
+pub fn sample_variants(
+    model: &VariationModel,
+    name: &str,
+    count: usize,
+    seed: u64,
+    opts: &SamplingOptions,
+) -> Result<(Vec<Variant>, Vec<ChainSummary>)> {
+    let j = model.sequence_index(name)?;
+    let (latents, chains) = sample_latent_variants(model, j, count, seed, opts)?;
+    let seq = &model.sequences[j];
+    let variants = latents
+        .into_iter()
+        .map(|lat| {
+            let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
+            let world = place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames);
+            Ok(Variant { latents: lat, aligned, displacements, world })
+        })
+        .collect::<Result<_>>()?;
+    Ok((variants, chains))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_times_undo_the_time_map() {
+        // Own sequence of 5 frames stretched onto 9 reference frames.
+        let times: Vec<f64> = (0..9).map(|i| i as f64 * 0.5).collect();
+        let inv = inverse_times(&times, 5);
+        assert_eq!(inv, vec![0.0, 2.0, 4.0, 6.0, 8.0]);
+        // A map with a pause (two reference frames at one own time).
+        let inv = inverse_times(&[0.0, 1.0, 1.0, 2.0], 3);
+        assert_eq!(inv, vec![0.0, 1.0, 3.0]);
+    }
+
+    #[test]
+    fn chain_seeds_differ_by_part_sequence_and_seed() {
+        let a = chain_seed(1, "walk", 0);
+        assert_ne!(a, chain_seed(1, "walk", 1));
+        assert_ne!(a, chain_seed(1, "jog", 0));
+        assert_ne!(a, chain_seed(2, "walk", 0));
+        assert_eq!(a, chain_seed(1, "walk", 0));
+    }
+
+    #[test]
+    fn placement_integrates_displacements_then_retimes() {
+        let aligned = vec![vec![0.0f32, 0.0, 0.0]; 3];
+        let d = [[0.0; 6], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]];
+        let w = place_and_retime(&aligned, &d, &Placement::identity(), &[0.0, 1.0, 2.0], 3);
+        assert_eq!(w, vec![vec![0.0, 0.0, 0.0], vec![1.0, 0.0, 0.0], vec![2.0, 0.0, 0.0]]);
+        // Own timing of 5 frames: every half reference frame.
+        let w = place_and_retime(&aligned, &d, &Placement::identity(), &[0.0, 2.0, 4.0], 5);
+        assert_eq!(w[1], vec![0.5, 0.0, 0.0]);
+        assert_eq!(w[4], vec![2.0, 0.0, 0.0]);
+    }
+}
