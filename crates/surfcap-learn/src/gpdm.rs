@@ -585,8 +585,22 @@ impl Gpdm {
     /// Carlo (thesis 6.6.2), starting the chain at the mean prediction. Each trajectory is
     /// n x d, `x1` first; `opts.samples` of them.
     pub fn sample_trajectories(&self, x1: &[f64], n: usize, opts: &HmcOptions) -> Result<(Vec<Mat<f64>>, HmcChain)> {
-        let density = self.trajectory_density(x1, n)?;
         let start = self.mean_trajectory(x1, n)?;
+        self.sample_trajectories_from(start.as_ref(), opts)
+    }
+
+    /// As [`Gpdm::sample_trajectories`], the chain started at `start` (n x d; its first row
+    /// is the fixed `x_1`) instead of the mean prediction: e.g. a learnt trajectory, when the
+    /// mean prediction drifts away from it (surfcap-variation's sampling).
+    pub fn sample_trajectories_from(
+        &self,
+        start: MatRef<'_, f64>,
+        opts: &HmcOptions,
+    ) -> Result<(Vec<Mat<f64>>, HmcChain)> {
+        self.check_latent(start)?;
+        let n = start.nrows();
+        let x1: Vec<f64> = (0..start.ncols()).map(|j| start[(0, j)]).collect();
+        let density = self.trajectory_density(&x1, n)?;
         let d = self.latent_dim();
         let z0: Vec<f64> = (1..n).flat_map(|i| (0..d).map(move |j| (i, j))).map(|(i, j)| start[(i, j)]).collect();
         let chain = crate::hybrid_monte_carlo::sample(&density, &z0, opts)?;

@@ -22,7 +22,9 @@ use surfcap_learn::Mat;
 use crate::error::{Error, Result};
 use crate::motion_preparation::SequenceOrigin;
 use crate::variation_model::VariationModel;
-use crate::variation_sampling::{ChainSummary, SamplingOptions, Variant, place_and_retime, reconstruct_aligned, sample_latent_variants};
+use crate::variation_sampling::{
+    ChainSummary, SamplingOptions, Variant, place_and_retime, reconstruct_aligned, sample_latent_variants,
+};
 
 /// A learnt trajectory on the blend ladder of a pair: its weight and sequence index.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

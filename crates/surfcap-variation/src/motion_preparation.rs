@@ -257,8 +257,12 @@ pub fn blend_sequences(
         .zip(&b.aligned)
         .map(|(pa, pb)| Ok(NonlinearInterpolator::new(topology, pa, pb, up)?.at(w, StretchInterpolation::Linear)))
         .collect::<Result<_>>()?;
-    let displacements =
-        a.displacements.iter().zip(&b.displacements).map(|(x, y)| std::array::from_fn(|k| (1.0 - w) * x[k] + w * y[k])).collect();
+    let displacements = a
+        .displacements
+        .iter()
+        .zip(&b.displacements)
+        .map(|(x, y)| std::array::from_fn(|k| (1.0 - w) * x[k] + w * y[k]))
+        .collect();
     let own_frames = (((1.0 - w) * a.own_frames as f64 + w * b.own_frames as f64).round() as usize).max(2);
     let span = |s: &TrainingSequence| (s.own_frames - 1).max(1) as f64;
     let times = a
@@ -354,7 +358,10 @@ mod tests {
         assert_eq!(p[2], vec![2.0, 4.0, 6.0]);
         assert_eq!(p[3], vec![2.0, 4.0, 6.0], "clamped to the last frame");
         let a = Placement::identity();
-        let b = Placement { rotation: exp_rotation(&Vector3::new(0.0, 0.0, 1.0)), translation: Vector3::new(2.0, 0.0, 0.0) };
+        let b = Placement {
+            rotation: exp_rotation(&Vector3::new(0.0, 0.0, 1.0)),
+            translation: Vector3::new(2.0, 0.0, 0.0),
+        };
         let m = placements_at(&[a, b], &[0.5])[0];
         assert!((log_rotation(&m.rotation) - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-12);
         assert!((m.translation - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12);

@@ -6,11 +6,11 @@
 //! Parts are fitted in parallel, each independently (the thesis's "independent models"); a
 //! fit is deterministic, so the model does not depend on the number of threads.
 
+use faer::MatRef;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use surfcap_learn::gpdm::{Gpdm, GpdmFitReport, GpdmOptions};
-use faer::MatRef;
 use surfcap_learn::Mat;
+use surfcap_learn::gpdm::{Gpdm, GpdmFitReport, GpdmOptions};
 use surfcap_mesh::{Progress, Subject, Topology, UpAxis};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::part_stitching::Stitcher;
@@ -139,14 +139,7 @@ impl VariationModel {
             .collect::<Result<_>>()?;
         progress.finish();
         let (part_models, fits): (Vec<Gpdm>, Vec<PartFit>) = fitted.into_iter().unzip();
-        VariationModel::assemble(
-            subject,
-            parts.clone(),
-            &prepared,
-            part_models,
-            scales,
-            fits,
-        )
+        VariationModel::assemble(subject, parts.clone(), &prepared, part_models, scales, fits)
     }
 
     fn assemble(
