@@ -283,3 +283,122 @@ fn split_rows<'a>(y: MatRef<'a, f64>, lengths: &[usize]) -> Vec<MatRef<'a, f64>>
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion_parametrisation::sample_blend_variants;
+    use crate::variation_sampling::{SamplingOptions, sample_variants};
+    use surfcap_mesh::NoProgress;
+    use surfcap_synth::{WormParams, worm_subject};
+    use surfcap_transfer::body_parts::Part;
+
+    fn worm() -> Subject {
+        worm_subject(&WormParams { rings: 8, segments: 6, frames: 16, ..WormParams::default() }).unwrap()
+    }
+
+    /// Head and tail halves overlapping over two rings.
+    fn halves(s: &Subject) -> BodyParts {
+        let n = s.topology().n_vertices() as u32;
+        let ring = 6u32;
+        let cut = n / 2;
+        let head: Vec<u32> = (0..(cut + ring).min(n)).collect();
+        let tail: Vec<u32> = (cut.saturating_sub(ring)..n).collect();
+        BodyParts::new(
+            n as usize,
+            vec![
+                Part { name: "head".into(), parent: None, vertices: head },
+                Part { name: "tail".into(), parent: Some("head".into()), vertices: tail },
+            ],
+        )
+        .unwrap()
+    }
+
+    fn quick() -> TrainOptions {
+        let mut o = TrainOptions::default();
+        o.gpdm.lbfgs.max_iters = 30;
+        o.gpdm.lbfgs.max_evals = 40;
+        o
+    }
+
+    fn sampling() -> SamplingOptions {
+        SamplingOptions { warmup: 20, thin: 2, ..SamplingOptions::default() }
+    }
+
+    #[test]
+    fn a_tiny_model_samples_variants_of_the_sequence_length_reproducibly() {
+        let s = worm();
+        let parts = halves(&s);
+        let m = VariationModel::train(&s, &[0, 1], &parts, &quick(), &NoProgress).unwrap();
+        assert_eq!(m.part_models.len(), 2);
+        assert_eq!(m.sequences.len(), 2);
+        assert_eq!(m.frames, s.sequences()[0].n_frames());
+        let name = s.sequences()[1].name.clone();
+        let (v, chains) = sample_variants(&m, &name, 2, 5, &sampling()).unwrap();
+        assert_eq!((v.len(), chains.len()), (2, 2));
+        for x in &v {
+            assert_eq!(x.world.len(), s.sequences()[1].n_frames());
+            assert!(x.world.iter().flatten().all(|c| c.is_finite()));
+        }
+        assert_ne!(v[0].world, v[1].world, "two variants of one seed are identical");
+        let (again, _) = sample_variants(&m, &name, 2, 5, &sampling()).unwrap();
+        assert_eq!(v[1].world, again[1].world, "same seed, different variants");
+        let (other, _) = sample_variants(&m, &name, 2, 6, &sampling()).unwrap();
+        assert_ne!(v[0].world, other[0].world, "another seed gave the same variant");
+        let e = sample_variants(&m, "nope", 1, 0, &sampling()).unwrap_err().to_string();
+        assert!(e.contains("nope") && e.contains(&name), "{e}");
+    }
+
+    #[test]
+    fn a_saved_model_loads_back_and_names_a_damaged_file() {
+        let s = worm();
+        let m = VariationModel::train(&s, &[0, 1], &halves(&s), &quick(), &NoProgress).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model");
+        m.save(&path, false).unwrap();
+        let back = VariationModel::load(&path).unwrap();
+        let name = &s.sequences()[0].name;
+        let (a, _) = sample_variants(&m, name, 1, 3, &sampling()).unwrap();
+        let (b, _) = sample_variants(&back, name, 1, 3, &sampling()).unwrap();
+        assert_eq!(a[0].world, b[0].world);
+        let npy = path.join("part_1_frames.npy");
+        let bytes = std::fs::read(&npy).unwrap();
+        std::fs::write(&npy, &bytes[..bytes.len() - 16]).unwrap();
+        let e = format!("{:#}", anyhow_chain(VariationModel::load(&path).err().unwrap()));
+        assert!(e.contains("part_1_frames.npy"), "{e}");
+        std::fs::write(&npy, &bytes).unwrap();
+        let json = path.join("model.json");
+        let text = std::fs::read_to_string(&json).unwrap().replace("surfcap-variation-model", "something-else");
+        std::fs::write(&json, text).unwrap();
+        let e = VariationModel::load(&path).err().unwrap().to_string();
+        assert!(e.contains("model.json") && e.contains("surfcap-variation-model"), "{e}");
+    }
+
+    fn anyhow_chain(e: Error) -> String {
+        let mut s = e.to_string();
+        let mut src = std::error::Error::source(&e);
+        while let Some(x) = src {
+            s.push_str(": ");
+            s.push_str(&x.to_string());
+            src = x.source();
+        }
+        s
+    }
+
+    #[test]
+    fn blends_join_training_and_give_variants_at_any_weight() {
+        let s = worm();
+        let mut o = quick();
+        o.preparation.blend_pairs = vec![(0, 1)];
+        o.preparation.blend_weights = vec![0.5];
+        let m = VariationModel::train(&s, &[0, 1], &halves(&s), &o, &NoProgress).unwrap();
+        assert_eq!(m.sequences.len(), 3);
+        let (a, b) = (&s.sequences()[0].name, &s.sequences()[1].name);
+        assert_eq!(m.sequences[2].name, format!("{a}+{b}@0.5"));
+        let (v, info) = sample_blend_variants(&m, a, b, 0.25, 2, 1, &sampling()).unwrap();
+        assert_eq!((info.lower.sequence, info.upper.sequence), (0, 2));
+        assert_eq!(v.len(), 2);
+        assert!(v[0].world.iter().flatten().all(|c| c.is_finite()));
+        assert!(sample_blend_variants(&m, a, b, 1.5, 1, 1, &sampling()).is_err());
+    }
+}
