@@ -345,6 +345,21 @@ mod tests {
         assert_eq!(v[1].world, again[1].world, "same seed, different variants");
         let (other, _) = sample_variants(&m, &name, 2, 6, &sampling()).unwrap();
         assert_ne!(v[0].world, other[0].world, "another seed gave the same variant");
+        // The learnt trajectory put on the source's path gives the source back.
+        let lat = m.learnt_latents(1).unwrap();
+        let (aligned, displacements) = crate::variation_sampling::reconstruct_aligned(&m, &lat).unwrap();
+        let learnt = crate::variation_sampling::Variant { latents: lat, aligned, displacements, world: Vec::new() };
+        let src = &s.sequences()[1];
+        let frames: Vec<&[f32]> = (0..src.n_frames()).map(|f| src.frame(f)).collect();
+        let on_path = crate::variation_sampling::variant_on_source_path(&m, 1, &learnt, &frames).unwrap();
+        let err = on_path
+            .iter()
+            .zip(&frames)
+            .flat_map(|(a, b)| a.iter().zip(b.iter()))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(err < 0.01, "the learnt trajectory on the source's path is {err} m from it");
+        assert!(crate::variation_sampling::variant_on_source_path(&m, 1, &learnt, &frames[1..]).is_err());
         let e = sample_variants(&m, "nope", 1, 0, &sampling()).unwrap_err().to_string();
         assert!(e.contains("nope") && e.contains(&name), "{e}");
     }

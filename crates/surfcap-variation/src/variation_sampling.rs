@@ -276,6 +276,48 @@ pub fn place_and_retime(
     poses_at(&refs, &inverse_times(times, own_frames))
 }
 
+/// A variant's poses put on its source's own path: every own frame `f` of the variant (its
+/// body-frame pose re-timed to the source's frames) placed where the source's frame `f` is,
+/// `world = R_f aligned + t_f` with the source frame's placement onto the model's reference
+/// pose. Only the body's poses vary, not the path: what synthesis uses (`synth --vary`), whose
+/// searches already placed every source frame on the path asked for. `source` holds the
+/// source sequence's frames (world positions; its own frame count).
+pub fn variant_on_source_path(
+    model: &VariationModel,
+    j: usize,
+    variant: &Variant,
+    source: &[&[f32]],
+) -> Result<Vec<Vec<f32>>> {
+    let seq = model
+        .sequences
+        .get(j)
+        .ok_or_else(|| Error::Invalid(format!("sequence {j}: the model has {}", model.sequences.len())))?;
+    if source.len() != seq.own_frames {
+        return Err(Error::Invalid(format!(
+            "{} source frames for {:?}: expected its {} frames",
+            source.len(),
+            seq.name,
+            seq.own_frames
+        )));
+    }
+    let n = model.reference_pose.len();
+    if let Some(f) = source.iter().position(|p| p.len() != n) {
+        return Err(Error::Invalid(format!(
+            "{}:{f} has {} vertices: expected {}",
+            seq.name,
+            source[f].len() / 3,
+            n / 3
+        )));
+    }
+    let placements: Vec<Placement> = source
+        .par_iter()
+        .map(|p| surfcap_transfer::pose_representation::align_to_reference(&model.reference_pose, p).1)
+        .collect();
+    let refs: Vec<&[f32]> = variant.aligned.iter().map(|p| p.as_slice()).collect();
+    let aligned = poses_at(&refs, &inverse_times(&seq.times, seq.own_frames));
+    Ok(aligned.iter().zip(&placements).map(|(p, pl)| pl.apply(p)).collect())
+}
+
 /// `count` variants of the learnt sequence `name` for `seed` (6.6).
 pub fn sample_variants(
     model: &VariationModel,
