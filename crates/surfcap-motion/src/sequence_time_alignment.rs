@@ -256,7 +256,7 @@ pub fn align_sequences(
 }
 
 /// The time map of a monotone path from (0, 0) to (n - 1, m - 1) (see the module doc).
-pub fn time_map_from_path(path: &[(usize, usize)], n: usize, m: usize, smoothing: usize) -> TimeMap {
+fn time_map_from_path(path: &[(usize, usize)], n: usize, m: usize, smoothing: usize) -> TimeMap {
     let mut sum = vec![0.0; n];
     let mut count = vec![0usize; n];
     for &(i, j) in path {
