@@ -18,6 +18,12 @@ pub enum Error {
     /// The numeric Cholesky factorisation of a pose's reduced Laplacian failed.
     #[error("Poisson system: numeric factorisation failed")]
     PoissonNumeric(#[source] LltError),
+    /// A foot's vertex set (foot contacts, foot sliding) names a vertex the mesh does not have.
+    #[error("foot {foot}: vertex {vertex} is not a vertex of the mesh (expected 0 to {})", .n_vertices.saturating_sub(1))]
+    FootVertex { foot: usize, vertex: u32, n_vertices: usize },
+    /// Ground contacts detected on a clip of `contacts` frames, used with one of `frames`.
+    #[error("ground contacts of {contacts} frames given for a clip of {frames} frames")]
+    ContactFrames { contacts: usize, frames: usize },
 }
 
 /// Result with the crate's [`Error`].
@@ -33,5 +39,7 @@ mod tests {
         assert_eq!(e.to_string(), "Poisson system: symbolic factorisation failed");
         let source = std::error::Error::source(&e).expect("faer's error is the source");
         assert_eq!(source.to_string(), "OutOfMemory");
+        let foot = Error::FootVertex { foot: 1, vertex: 40, n_vertices: 40 };
+        assert_eq!(foot.to_string(), "foot 1: vertex 40 is not a vertex of the mesh (expected 0 to 39)");
     }
 }

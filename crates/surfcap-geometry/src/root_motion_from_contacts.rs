@@ -7,16 +7,14 @@
 //! notes that mesh data comes without them (2.5.5, 3.2); like its contacts we take them from the
 //! feet's height and speed, here from the vertices themselves:
 //!
-//! 1. **Ground height**: the 20th percentile of the clip's per-frame lowest vertex height (along
-//!    the up axis). A percentile rather than the minimum, so one frame dipping below the floor
-//!    does not lift the ground; low enough that the flight phases of a run (a third of its
-//!    frames at most) do not raise it.
-//! 2. **Contact vertices of a step f -> f+1**: low at both frames (within
+//! 1. **Contacts** ([`crate::ground_contacts`], shared with the foot contacts and foot
+//!    sliding): the ground as the 20th percentile of the per-frame lowest vertex height; the
+//!    contact vertices of a step f -> f+1 low at both frames (within
 //!    [`ContactParams::height`] x the subject's height above the ground) and nearly still
 //!    vertically (moving less than [`ContactParams::vertical_speed`] x the subject's height
-//!    per second). Horizontal stillness cannot be asked of an in-place clip: there the planted foot
-//!    slides backwards at the walking speed; it is what we measure.
-//! 3. **The step's translation** is the one that keeps the planted vertices still: minus the
+//!    per second). Horizontal stillness cannot be asked of an in-place clip: there the planted
+//!    foot slides backwards at the walking speed; it is what we measure.
+//! 2. **The step's translation** is the one that keeps the planted vertices still: minus the
 //!    weighted mean horizontal displacement of a group of contact vertices moving together
 //!    (the least-squares translation of the ground-plane Procrustes problem over that group;
 //!    vertices weighted by how low they are, the sole more than the ankle). Groups form around
@@ -29,9 +27,9 @@
 //!    in units of the tolerance, plus one minus each group's share of the step's contact
 //!    weight). Tried first and dropped: the component-wise median of the contacts per step
 //!    (recovered 30% of a CMU walk's travel: the grazing foot won half the steps).
-//! 4. **Flight** (no contact vertex: the flight phase of a run, a jump) continues the last
+//! 3. **Flight** (no contact vertex: the flight phase of a run, a jump) continues the last
 //!    step's velocity; before any contact the clip stays put.
-//! 5. The steps are integrated into one horizontal offset per frame (frame 0 unmoved) and added
+//! 4. The steps are integrated into one horizontal offset per frame (frame 0 unmoved) and added
 //!    to every vertex of the frame ([`apply_root_motion`]).
 //!
 //! Only the translation is recovered, not a rotation about the up axis: in-place clips remove
@@ -41,33 +39,9 @@
 
 use surfcap_mesh::UpAxis;
 
+pub use crate::ground_contacts::ContactParams;
+use crate::ground_contacts::{GroundContact, GroundContacts, ground_contacts};
 use crate::motion_plane_alignment::plane_axes;
-
-/// Thresholds of the contact detection, as fractions of the subject's height so that one set
-/// works in any unit and for any body size.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactParams {
-    /// A contact vertex is at most this fraction of the subject's height above the ground
-    /// (0.04: 7 cm for a 1.75 m person, the height of a flat foot's sole and toes, not the
-    /// ankle; a heel rising by more leaves contact).
-    pub height: f64,
-    /// A planted foot's vertices agree with each other horizontally within this fraction of
-    /// the subject's height per second, and the planted group's step changes by about that
-    /// much from one frame to the next (0.25: 0.44 m/s for a 1.75 m person; a swinging foot
-    /// moves several metres per second).
-    pub speed: f64,
-    /// A contact vertex moves less than this fraction of the subject's height per second
-    /// vertically (0.5: 0.9 m/s for a 1.75 m person; a running foot lands and rolls faster
-    /// than the horizontal tolerance allows: at 0.25 the CMU jog kept contact at 15 of its 46
-    /// steps and lost 95% of its travel, at 0.5 it keeps it within 6.3%).
-    pub vertical_speed: f64,
-}
-
-impl Default for ContactParams {
-    fn default() -> Self {
-        ContactParams { height: 0.04, speed: 0.25, vertical_speed: 0.5 }
-    }
-}
 
 /// The recovered root motion of a clip.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,45 +71,9 @@ pub fn root_motion_from_contacts(
     up: UpAxis,
     params: &ContactParams,
 ) -> RootMotion {
-    let (u, v, w) = plane_axes(up);
-    let sign = up.axis_and_sign().1;
-    let per_frame = 3 * n_vertices;
-    let frames: Vec<&[f32]> = if per_frame == 0 { Vec::new() } else { positions.chunks_exact(per_frame).collect() };
-    let height = |f: &[f32], k: usize| sign * f[3 * k + w] as f64;
-    let mut lowest = Vec::with_capacity(frames.len());
-    let mut size = 0.0f64;
-    for f in &frames {
-        let (lo, hi) = (0..n_vertices).fold((f64::MAX, f64::MIN), |(lo, hi), k| {
-            let h = height(f, k);
-            (lo.min(h), hi.max(h))
-        });
-        lowest.push(lo);
-        size = size.max(hi - lo);
-    }
-    let mut sorted = lowest.clone();
-    sorted.sort_by(f64::total_cmp);
-    let ground = sorted.get(sorted.len() / 5).copied().unwrap_or(0.0);
-    let low = ground + params.height * size;
-    let still = params.speed * size / fps;
-    let rise = params.vertical_speed * size / fps;
-    // Contact vertices of every step: (horizontal displacement, weight).
-    let contacts: Vec<Vec<([f64; 2], f64)>> = frames
-        .windows(2)
-        .map(|pair| {
-            let (a, b) = (pair[0], pair[1]);
-            (0..n_vertices)
-                .filter_map(|k| {
-                    let (ha, hb) = (height(a, k), height(b, k));
-                    let planted = ha < low && hb < low && (hb - ha).abs() < rise;
-                    let d = [(b[3 * k + u] - a[3 * k + u]) as f64, (b[3 * k + v] - a[3 * k + v]) as f64];
-                    planted.then(|| (d, (low - ha.max(hb)) / (low - ground).max(f64::MIN_POSITIVE)))
-                })
-                .collect()
-        })
-        .collect();
-    let candidates: Vec<Vec<Candidate>> = contacts.iter().map(|c| clusters(c, still)).collect();
-    let chosen = smoothest_track(&candidates, still);
-    let mut offsets = vec![[0.0; 2]; frames.len()];
+    let found = ground_contacts(positions, n_vertices, fps, up, params);
+    let (candidates, chosen) = planted_track(positions, n_vertices, fps, up, &found, params);
+    let mut offsets = vec![[0.0; 2]; found.frames];
     let mut last = [0.0; 2];
     let mut contact_steps = 0;
     for (f, choice) in chosen.iter().enumerate() {
@@ -145,15 +83,77 @@ pub fn root_motion_from_contacts(
         }
         offsets[f + 1] = [offsets[f][0] + last[0], offsets[f][1] + last[1]];
     }
-    RootMotion { offsets, contact_steps, ground }
+    RootMotion { offsets, contact_steps, ground: found.ground }
+}
+
+/// The planted contacts of a clip: per frame step f -> f+1, the contact vertices of the group
+/// that root motion keeps still (steps 2-3 of the module doc), in increasing vertex order;
+/// empty for a step without contact. `contacts` are the clip's [`ground_contacts`]. A swinging
+/// foot grazing the ground is left out, a sliding planted foot is kept: what
+/// [`crate::foot_sliding`] measures.
+pub fn planted_contacts(
+    positions: &[f32],
+    n_vertices: usize,
+    fps: f64,
+    up: UpAxis,
+    contacts: &GroundContacts,
+    params: &ContactParams,
+) -> Vec<Vec<GroundContact>> {
+    let (candidates, chosen) = planted_track(positions, n_vertices, fps, up, contacts, params);
+    chosen
+        .iter()
+        .enumerate()
+        .map(|(f, choice)| {
+            let Some(k) = choice else { return Vec::new() };
+            let mut members: Vec<GroundContact> =
+                candidates[f][*k].members.iter().map(|&i| contacts.steps[f][i as usize]).collect();
+            members.sort_by_key(|c| c.vertex);
+            members
+        })
+        .collect()
+}
+
+/// The groups of every step and the planted one chosen (steps 2-3 of the module doc).
+fn planted_track(
+    positions: &[f32],
+    n_vertices: usize,
+    fps: f64,
+    up: UpAxis,
+    found: &GroundContacts,
+    params: &ContactParams,
+) -> (Vec<Vec<Candidate>>, Vec<Option<usize>>) {
+    let (u, v, _) = plane_axes(up);
+    let per_frame = 3 * n_vertices;
+    let frames: Vec<&[f32]> = if per_frame == 0 { Vec::new() } else { positions.chunks_exact(per_frame).collect() };
+    let still = params.speed * found.subject_height / fps;
+    // Contact vertices of every step: (horizontal displacement, weight).
+    let contacts: Vec<Vec<([f64; 2], f64)>> = found
+        .steps
+        .iter()
+        .zip(frames.windows(2))
+        .map(|(step, pair)| {
+            let (a, b) = (pair[0], pair[1]);
+            step.iter()
+                .map(|c| {
+                    let k = c.vertex as usize;
+                    ([(b[3 * k + u] - a[3 * k + u]) as f64, (b[3 * k + v] - a[3 * k + v]) as f64], c.weight)
+                })
+                .collect()
+        })
+        .collect();
+    let candidates: Vec<Vec<Candidate>> = contacts.iter().map(|c| clusters(c, still)).collect();
+    let chosen = smoothest_track(&candidates, still);
+    (candidates, chosen)
 }
 
 /// One group of contact vertices of a step moving together: the translation that keeps them
-/// still, and their share of the step's contact weight.
-#[derive(Debug, Clone, Copy)]
+/// still, their share of the step's contact weight, and their positions in the step's
+/// contact list.
+#[derive(Debug, Clone)]
 struct Candidate {
     step: [f64; 2],
     share: f64,
+    members: Vec<u32>,
 }
 
 /// Groups a step's contacts by displacement: the lowest ungrouped vertex (largest weight)
@@ -161,21 +161,23 @@ struct Candidate {
 /// minus its members' weighted mean displacement.
 fn clusters(contacts: &[([f64; 2], f64)], tolerance: f64) -> Vec<Candidate> {
     let total: f64 = contacts.iter().map(|c| c.1.max(1e-6)).sum();
-    let mut left: Vec<&([f64; 2], f64)> = contacts.iter().collect();
-    left.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let mut left: Vec<(u32, &([f64; 2], f64))> = contacts.iter().enumerate().map(|(i, c)| (i as u32, c)).collect();
+    left.sort_by(|a, b| b.1.1.total_cmp(&a.1.1));
     let mut out = Vec::new();
-    while let Some(seed) = left.first().map(|c| c.0) {
+    while let Some(seed) = left.first().map(|c| c.1.0) {
         let (mut sum, mut weight) = ([0.0; 2], 0.0);
-        left.retain(|(d, w)| {
+        let mut members = Vec::new();
+        left.retain(|&(i, (d, w))| {
             let near = (d[0] - seed[0]).hypot(d[1] - seed[1]) <= tolerance;
             if near {
                 let w = w.max(1e-6);
                 sum = [sum[0] + w * d[0], sum[1] + w * d[1]];
                 weight += w;
+                members.push(i);
             }
             !near
         });
-        out.push(Candidate { step: [-sum[0] / weight, -sum[1] / weight], share: weight / total });
+        out.push(Candidate { step: [-sum[0] / weight, -sum[1] / weight], share: weight / total, members });
     }
     out
 }

@@ -88,6 +88,32 @@ pub enum Error {
     #[error("{name} {value}: expected {expected}")]
     Parameter { name: &'static str, value: f64, expected: &'static str },
 
+    /// Time alignment: the `which` sequence ("reference" or "other") has no frames.
+    #[error("the {which} sequence has no frames")]
+    NoFrames { which: &'static str },
+    /// Time alignment or resampling: frame `frame` of the `which` sequence holds `len` numbers
+    /// where `expected` (those of the reference's first frame, a multiple of 3) were expected.
+    #[error("{which} frame {frame}: {len} numbers, expected {expected} (3 per vertex, as the reference's first frame)")]
+    PoseSize { which: &'static str, frame: usize, len: usize, expected: usize },
+    /// Time alignment: the contact vectors of the `which` sequence: `len` where `expected`
+    /// (one per frame, each with as many feet as the reference's first) were expected, at
+    /// `frame` (`None`: the count of vectors).
+    #[error("{which} contacts{}: {len} values, expected {expected}", .frame.map(|f| format!(" at frame {f}")).unwrap_or_default())]
+    ContactSize { which: &'static str, frame: Option<usize>, len: usize, expected: usize },
+    /// Time alignment: no warp of `reference` frames onto `other` frames satisfies the slope
+    /// constraint `slope`.
+    #[error(
+        "no time warp of the {reference} reference frames onto the {other} other frames keeps to the slope constraint p = {slope} (the lengths may differ by a factor of p at most)"
+    )]
+    NoWarp { reference: usize, other: usize, slope: usize },
+    /// A time map that is not one: `reason` says what is wrong.
+    #[error("time map: {reason}")]
+    TimeMap { reason: String },
+    /// Resampling at time `time` (entry `index` of the times), outside the `frames` frames
+    /// given (0 to frames - 1).
+    #[error("time {time} (entry {index}) is outside the {frames} frames given (expected 0 to {})", .frames.saturating_sub(1))]
+    TimeOutside { index: usize, time: f64, frames: usize },
+
     /// A timed-walk endpoint outside the graph's frames (0..`frames`).
     #[error("frame {frame} is not in the graph (expected 0 to {})", .frames.saturating_sub(1))]
     FrameNotInGraph { frame: u32, frames: usize },
