@@ -19,6 +19,9 @@ pub enum Error {
     /// A non-linear interpolation or Poisson system failed.
     #[error("geometry")]
     Geometry(#[from] surfcap_geometry::Error),
+    /// Temporal pre-alignment (DTW) of the sequences.
+    #[error("time alignment")]
+    Motion(#[from] surfcap_motion::Error),
     /// Mesh data or files.
     #[error("mesh data")]
     Mesh(#[from] surfcap_mesh::Error),

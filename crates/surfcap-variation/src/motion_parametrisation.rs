@@ -86,12 +86,13 @@ pub fn interpolated_timing(model: &VariationModel, r1: Rung, r2: Rung, w: f64) -
     let (s1, s2) = (&model.sequences[r1.sequence], &model.sequences[r2.sequence]);
     let own = ((c1 * s1.own_frames as f64 + c2 * s2.own_frames as f64).round() as usize).max(2);
     let span = |n: usize| (n - 1).max(1) as f64;
-    let times = s1
+    let mut times: Vec<f64> = s1
         .times
         .iter()
         .zip(&s2.times)
         .map(|(t1, t2)| (c1 * t1 / span(s1.own_frames) + c2 * t2 / span(s2.own_frames)) * (own - 1) as f64)
         .collect();
+    crate::motion_preparation::pin_ends(&mut times, own);
     (own, times)
 }
 
@@ -137,7 +138,7 @@ pub fn sample_blend_variants(
         .map(|(x1, &m)| {
             let lat = interpolate_latents(x1, &upper[m], r1, r2, w);
             let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = place_and_retime(&aligned, &displacements, &start, &times, own);
+            let world = place_and_retime(&aligned, &displacements, &start, &times, own)?;
             Ok(Variant { latents: lat, aligned, displacements, world })
         })
         .collect::<Result<_>>()?;

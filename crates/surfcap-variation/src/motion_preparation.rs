@@ -22,12 +22,17 @@
 //!   appended, each scaled to the torso's mean coordinate spread (see
 //!   [`displacement_scales`]).
 
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use surfcap_geometry::foot_contacts::foot_contacts;
+use surfcap_geometry::ground_contacts::{ContactParams, ground_contacts};
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_geometry::rotation_log_exp::{exp_rotation, log_rotation};
 use surfcap_learn::Mat;
 use surfcap_mesh::{Subject, Topology, UpAxis};
+use surfcap_motion::sequence_time_alignment::{
+    TimeAlignmentParams, align_sequences, resample_placements, resample_poses,
+};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::pose_representation::{Placement, align_motion};
 
@@ -40,6 +45,16 @@ pub enum TimeAlignment {
     /// Frame i of the reference is time `i (n - 1) / (N - 1)` of a sequence of n frames: the
     /// two are only stretched to one length.
     Uniform,
+    /// Slope-constrained DTW of the aligned poses (surfcap-motion's `sequence_time_alignment`,
+    /// thesis 6.5.2), guided by foot contacts when the body parts name legs (6.8: "dynamic
+    /// time warping guided with feet contact annotation"); `contact_weight` 0 ignores them.
+    Dtw { contact_weight: f64 },
+}
+
+impl Default for TimeAlignment {
+    fn default() -> Self {
+        TimeAlignment::Dtw { contact_weight: 1.0 }
+    }
 }
 
 /// Where a training sequence comes from.
@@ -97,7 +112,7 @@ impl Default for PreparationOptions {
     fn default() -> Self {
         PreparationOptions {
             reference: 0,
-            time_alignment: TimeAlignment::Uniform,
+            time_alignment: TimeAlignment::default(),
             blend_pairs: Vec::new(),
             blend_weights: vec![0.5],
         }
@@ -112,47 +127,43 @@ pub fn uniform_times(own: usize, n: usize) -> Vec<f64> {
     (0..n).map(|i| i as f64 * (own - 1) as f64 / (n - 1) as f64).collect()
 }
 
-/// Interpolated poses at fractional frame times (linear between the two neighbouring frames).
-pub fn poses_at(frames: &[&[f32]], times: &[f64]) -> Vec<Vec<f32>> {
-    times
-        .par_iter()
-        .map(|&t| {
-            let (f0, f1, s) = neighbours(frames.len(), t);
-            let (a, b) = (frames[f0], frames[f1]);
-            if s == 0.0 {
-                return a.to_vec();
-            }
-            a.iter().zip(b).map(|(&x, &y)| ((1.0 - s) * x as f64 + s * y as f64) as f32).collect()
-        })
-        .collect()
+/// Interpolated poses at fractional frame times (linear between the two neighbouring frames;
+/// surfcap-motion's `resample_poses`).
+pub fn poses_at(frames: &[&[f32]], times: &[f64]) -> Result<Vec<Vec<f32>>> {
+    Ok(resample_poses(frames, times)?)
 }
 
-/// Interpolated placements at fractional frame times: translation lerp, rotation slerp.
-pub fn placements_at(placements: &[Placement], times: &[f64]) -> Vec<Placement> {
-    times
+/// Interpolated placements at fractional frame times: translation lerp, rotation along the
+/// geodesic (surfcap-motion's `resample_placements`).
+pub fn placements_at(placements: &[Placement], times: &[f64]) -> Result<Vec<Placement>> {
+    let pairs: Vec<(Matrix3<f64>, Vector3<f64>)> = placements.iter().map(|p| (p.rotation, p.translation)).collect();
+    Ok(resample_placements(&pairs, times)?
+        .into_iter()
+        .map(|(rotation, translation)| Placement { rotation, translation })
+        .collect())
+}
+
+/// The vertices of the feet for contact detection: the parts named after a leg or a foot
+/// (`leg...`, `foot...`, any case), as `surfcap parts propose` names them. Other parts files
+/// give none: the time alignment then uses the poses alone.
+pub fn feet_of(parts: &BodyParts) -> Vec<Vec<u32>> {
+    parts
+        .parts
         .iter()
-        .map(|&t| {
-            let (f0, f1, s) = neighbours(placements.len(), t);
-            let (a, b) = (&placements[f0], &placements[f1]);
-            if s == 0.0 {
-                return *a;
-            }
-            let w = log_rotation(&(a.rotation.transpose() * b.rotation));
-            Placement {
-                rotation: a.rotation * exp_rotation(&(w * s)),
-                translation: a.translation * (1.0 - s) + b.translation * s,
-            }
+        .filter(|p| {
+            let n = p.name.to_ascii_lowercase();
+            n.starts_with("leg") || n.starts_with("foot")
         })
+        .map(|p| p.vertices.clone())
         .collect()
 }
 
-/// The two frames around time `t` (clamped to `[0, n - 1]`) and the weight of the second.
-fn neighbours(n: usize, t: f64) -> (usize, usize, f64) {
-    let t = t.clamp(0.0, (n.max(1) - 1) as f64);
-    let f0 = (t.floor() as usize).min(n - 1);
-    let f1 = (f0 + 1).min(n - 1);
-    let s = if f1 == f0 { 0.0 } else { t - f0 as f64 };
-    (f0, f1, s)
+/// Per-frame foot contact signals of one sequence (`[frame][foot]`), from its world frames.
+fn contact_signals(frames: &[&[f32]], fps: f64, up: UpAxis, feet: &[Vec<u32>]) -> Result<Vec<Vec<f64>>> {
+    let nv = frames[0].len() / 3;
+    let flat: Vec<f32> = frames.iter().flat_map(|f| f.iter().copied()).collect();
+    let contacts = ground_contacts(&flat, nv, fps, up, &ContactParams::default());
+    Ok(foot_contacts(&contacts, nv, feet)?.by_frame())
 }
 
 /// The displacement of each placement from the previous one (zero for the first), eq. 5.3.
@@ -164,7 +175,12 @@ pub fn displacements_of(placements: &[Placement]) -> Vec<[f64; 6]> {
 
 /// Prepares `sequences` (indices of the subject's sequences, at least one, each of at least
 /// two frames) for learning.
-pub fn prepare(subject: &Subject, sequences: &[usize], opts: &PreparationOptions) -> Result<PreparedMotions> {
+pub fn prepare(
+    subject: &Subject,
+    sequences: &[usize],
+    parts: &BodyParts,
+    opts: &PreparationOptions,
+) -> Result<PreparedMotions> {
     if sequences.is_empty() {
         return Err(Error::Invalid("no sequences to learn: expected at least one".into()));
     }
@@ -186,17 +202,45 @@ pub fn prepare(subject: &Subject, sequences: &[usize], opts: &PreparationOptions
     })?;
     let reference_pose = all[r].frame(0).to_vec();
     let n_ref = all[r].n_frames();
+    let frames_of = |q: usize| -> Vec<&[f32]> { (0..all[q].n_frames()).map(|f| all[q].frame(f)).collect() };
+    let motions: Vec<_> = sequences.iter().map(|&q| align_motion(&reference_pose, &frames_of(q))).collect();
+    let feet = feet_of(parts);
+    let contacts: Option<Vec<Vec<Vec<f64>>>> = match opts.time_alignment {
+        TimeAlignment::Dtw { contact_weight } if contact_weight > 0.0 && !feet.is_empty() => Some(
+            sequences
+                .iter()
+                .map(|&q| contact_signals(&frames_of(q), subject.fps, subject.up_axis, &feet))
+                .collect::<Result<_>>()?,
+        ),
+        _ => None,
+    };
+    let ri = opts.reference;
     let mut out: Vec<TrainingSequence> = Vec::with_capacity(sequences.len());
-    for &q in sequences {
+    for (k, &q) in sequences.iter().enumerate() {
         let s = &all[q];
-        let frames: Vec<&[f32]> = (0..s.n_frames()).map(|f| s.frame(f)).collect();
-        let motion = align_motion(&reference_pose, &frames);
+        let motion = &motions[k];
+        let aligned_refs: Vec<&[f32]> = motion.aligned.iter().map(|p| p.as_slice()).collect();
         let times = match opts.time_alignment {
             TimeAlignment::Uniform => uniform_times(s.n_frames(), n_ref),
+            TimeAlignment::Dtw { .. } if k == ri => uniform_times(s.n_frames(), n_ref),
+            TimeAlignment::Dtw { contact_weight } => {
+                let reference: Vec<&[f32]> = motions[ri].aligned.iter().map(|p| p.as_slice()).collect();
+                let pair = contacts.as_ref().map(|c| (c[ri].as_slice(), c[k].as_slice()));
+                let params = TimeAlignmentParams { contact_weight, ..TimeAlignmentParams::default() };
+                align_sequences(&reference, &aligned_refs, pair, &params)
+                    .map_err(|e| {
+                        Error::Invalid(format!(
+                            "{:?} cannot be aligned in time to the reference {:?}: {e}",
+                            s.name, all[r].name
+                        ))
+                    })?
+                    .time_map
+                    .times()
+                    .to_vec()
+            }
         };
-        let aligned_refs: Vec<&[f32]> = motion.aligned.iter().map(|p| p.as_slice()).collect();
-        let aligned = poses_at(&aligned_refs, &times);
-        let placements = placements_at(&motion.placements, &times);
+        let aligned = poses_at(&aligned_refs, &times)?;
+        let placements = placements_at(&motion.placements, &times)?;
         out.push(TrainingSequence {
             name: s.name.clone(),
             origin: SequenceOrigin::Captured { sequence: s.name.clone() },
@@ -265,12 +309,13 @@ pub fn blend_sequences(
         .collect();
     let own_frames = (((1.0 - w) * a.own_frames as f64 + w * b.own_frames as f64).round() as usize).max(2);
     let span = |s: &TrainingSequence| (s.own_frames - 1).max(1) as f64;
-    let times = a
+    let mut times: Vec<f64> = a
         .times
         .iter()
         .zip(&b.times)
         .map(|(ta, tb)| ((1.0 - w) * ta / span(a) + w * tb / span(b)) * (own_frames - 1) as f64)
         .collect();
+    pin_ends(&mut times, own_frames);
     Ok(TrainingSequence {
         name: blend_name(&a.name, &b.name, w),
         origin: SequenceOrigin::Blend { a: a.name.clone(), b: b.name.clone(), w },
@@ -280,6 +325,17 @@ pub fn blend_sequences(
         first_placement: a.first_placement,
         displacements,
     })
+}
+
+/// Pins a time map's first time at 0 and its last at `own_frames - 1` (round-off of an
+/// interpolated map).
+pub fn pin_ends(times: &mut [f64], own_frames: usize) {
+    if let Some(t) = times.first_mut() {
+        *t = 0.0;
+    }
+    if let Some(t) = times.last_mut() {
+        *t = (own_frames - 1) as f64;
+    }
 }
 
 /// Scales of the six displacement numbers appended to the torso's vector: each is multiplied
@@ -337,7 +393,7 @@ pub fn part_matrix(prepared: &PreparedMotions, parts: &BodyParts, k: usize, scal
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Vector3;
+    use surfcap_geometry::rotation_log_exp::{exp_rotation, log_rotation};
 
     #[test]
     fn uniform_times_span_the_own_frames() {
@@ -352,17 +408,17 @@ mod tests {
     fn poses_and_placements_interpolate_between_neighbours() {
         let f0 = [0.0f32, 0.0, 0.0];
         let f1 = [2.0f32, 4.0, 6.0];
-        let p = poses_at(&[&f0, &f1], &[0.0, 0.25, 1.0, 7.0]);
+        let p = poses_at(&[&f0, &f1], &[0.0, 0.25, 1.0]).unwrap();
+        assert!(poses_at(&[&f0, &f1], &[7.0]).is_err(), "a time after the last frame");
         assert_eq!(p[0], vec![0.0, 0.0, 0.0]);
         assert_eq!(p[1], vec![0.5, 1.0, 1.5]);
         assert_eq!(p[2], vec![2.0, 4.0, 6.0]);
-        assert_eq!(p[3], vec![2.0, 4.0, 6.0], "clamped to the last frame");
         let a = Placement::identity();
         let b = Placement {
             rotation: exp_rotation(&Vector3::new(0.0, 0.0, 1.0)),
             translation: Vector3::new(2.0, 0.0, 0.0),
         };
-        let m = placements_at(&[a, b], &[0.5])[0];
+        let m = placements_at(&[a, b], &[0.5]).unwrap()[0];
         assert!((log_rotation(&m.rotation) - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-12);
         assert!((m.translation - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12);
         let d = displacements_of(&[a, b]);

@@ -21,17 +21,11 @@ use crate::motion_preparation::{
 };
 
 /// Options of [`VariationModel::train`].
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct TrainOptions {
     pub preparation: PreparationOptions,
     /// The GPDM of every part (thesis: d = 3).
     pub gpdm: GpdmOptions,
-}
-
-impl Default for TrainOptions {
-    fn default() -> Self {
-        TrainOptions { preparation: PreparationOptions::default(), gpdm: GpdmOptions::default() }
-    }
 }
 
 /// What training did, per part.
@@ -105,7 +99,7 @@ impl VariationModel {
     ) -> Result<VariationModel> {
         parts.check_fits(subject.topology())?;
         progress.start("preparing the sequences", 1);
-        let prepared = prepare(subject, sequences, &opts.preparation)?;
+        let prepared = prepare(subject, sequences, parts, &opts.preparation)?;
         progress.finish();
         let root = parts.root();
         let torso: Vec<Vec<f64>> =

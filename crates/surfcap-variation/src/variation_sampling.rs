@@ -35,6 +35,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use surfcap_learn::Mat;
 use surfcap_learn::hybrid_monte_carlo::HmcOptions;
+use surfcap_motion::sequence_time_alignment::TimeMap;
 use surfcap_transfer::pose_representation::Placement;
 
 use crate::error::{Error, Result};
@@ -95,6 +96,12 @@ pub struct Variant {
     pub world: Vec<Vec<f32>>,
 }
 
+/// Per variant, one latent trajectory per part.
+pub type LatentVariants = Vec<Vec<Mat<f64>>>;
+
+/// Stitched body-frame poses and the displacements between them.
+pub type BodyMotion = (Vec<Vec<f32>>, Vec<[f64; 6]>);
+
 /// A splitmix64 step: well-mixed seeds for independent streams.
 pub fn mix_seed(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -117,7 +124,7 @@ pub fn sample_latent_variants(
     count: usize,
     seed: u64,
     opts: &SamplingOptions,
-) -> Result<(Vec<Vec<Mat<f64>>>, Vec<ChainSummary>)> {
+) -> Result<(LatentVariants, Vec<ChainSummary>)> {
     let seq = model
         .sequences
         .get(j)
@@ -184,7 +191,7 @@ pub fn sample_latent_variants(
 
 /// The stitched body-frame poses and displacements of per-part latent trajectories (one
 /// trajectory per part, all of one length): eq. 6.12 per part, then stitching.
-pub fn reconstruct_aligned(model: &VariationModel, latents: &[Mat<f64>]) -> Result<(Vec<Vec<f32>>, Vec<[f64; 6]>)> {
+pub fn reconstruct_aligned(model: &VariationModel, latents: &[Mat<f64>]) -> Result<BodyMotion> {
     if latents.len() != model.part_models.len() {
         return Err(Error::Invalid(format!(
             "{} latent trajectories: expected one per body part ({})",
@@ -232,23 +239,18 @@ pub fn reconstruct_aligned(model: &VariationModel, latents: &[Mat<f64>]) -> Resu
     Ok((poses, displacements))
 }
 
-/// For every own frame `f` of a sequence of `own_frames`, the reference time at which it is
-/// reached: the inverse of the non-decreasing time map `times` (reference frame -> own time).
-pub fn inverse_times(times: &[f64], own_frames: usize) -> Vec<f64> {
-    let n = times.len();
-    (0..own_frames)
-        .map(|f| {
-            let f = f as f64;
-            match times.iter().position(|&t| t >= f) {
-                None => (n - 1) as f64,
-                Some(0) => 0.0,
-                Some(i) => {
-                    let (a, b) = (times[i - 1], times[i]);
-                    if b > a { (i - 1) as f64 + (f - a) / (b - a) } else { i as f64 }
-                }
-            }
-        })
-        .collect()
+/// For every own frame of a sequence, the reference time at which it is reached: the inverse
+/// of its time map `times` (reference frame -> own time, first 0, last `own_frames - 1`).
+pub fn inverse_times(times: &[f64], own_frames: usize) -> Result<Vec<f64>> {
+    let map = TimeMap::new(times.to_vec())?;
+    if map.other_frames() != own_frames {
+        return Err(Error::Invalid(format!(
+            "a time map ending at frame {}: expected {} frames",
+            map.other_frames().saturating_sub(1),
+            own_frames
+        )));
+    }
+    Ok(map.inverse().times().to_vec())
 }
 
 /// Body-frame poses moved into the world from `start` by the displacements, then re-timed from
@@ -259,7 +261,7 @@ pub fn place_and_retime(
     start: &Placement,
     times: &[f64],
     own_frames: usize,
-) -> Vec<Vec<f32>> {
+) -> Result<Vec<Vec<f32>>> {
     let mut placement = *start;
     let world: Vec<Vec<f32>> = aligned
         .iter()
@@ -273,7 +275,7 @@ pub fn place_and_retime(
         })
         .collect();
     let refs: Vec<&[f32]> = world.iter().map(|p| p.as_slice()).collect();
-    poses_at(&refs, &inverse_times(times, own_frames))
+    poses_at(&refs, &inverse_times(times, own_frames)?)
 }
 
 /// A variant's poses put on its source's own path: every own frame `f` of the variant (its
@@ -314,7 +316,7 @@ pub fn variant_on_source_path(
         .map(|p| surfcap_transfer::pose_representation::align_to_reference(&model.reference_pose, p).1)
         .collect();
     let refs: Vec<&[f32]> = variant.aligned.iter().map(|p| p.as_slice()).collect();
-    let aligned = poses_at(&refs, &inverse_times(&seq.times, seq.own_frames));
+    let aligned = poses_at(&refs, &inverse_times(&seq.times, seq.own_frames)?)?;
     Ok(aligned.iter().zip(&placements).map(|(p, pl)| pl.apply(p)).collect())
 }
 
@@ -333,7 +335,7 @@ pub fn sample_variants(
         .into_iter()
         .map(|lat| {
             let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames);
+            let world = place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames)?;
             Ok(Variant { latents: lat, aligned, displacements, world })
         })
         .collect::<Result<_>>()?;
@@ -348,11 +350,9 @@ mod tests {
     fn inverse_times_undo_the_time_map() {
         // Own sequence of 5 frames stretched onto 9 reference frames.
         let times: Vec<f64> = (0..9).map(|i| i as f64 * 0.5).collect();
-        let inv = inverse_times(&times, 5);
+        let inv = inverse_times(&times, 5).unwrap();
         assert_eq!(inv, vec![0.0, 2.0, 4.0, 6.0, 8.0]);
-        // A map with a pause (two reference frames at one own time).
-        let inv = inverse_times(&[0.0, 1.0, 1.0, 2.0], 3);
-        assert_eq!(inv, vec![0.0, 1.0, 3.0]);
+        assert!(inverse_times(&times, 6).is_err(), "a map of 5 frames used for 6");
     }
 
     #[test]
@@ -368,10 +368,10 @@ mod tests {
     fn placement_integrates_displacements_then_retimes() {
         let aligned = vec![vec![0.0f32, 0.0, 0.0]; 3];
         let d = [[0.0; 6], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]];
-        let w = place_and_retime(&aligned, &d, &Placement::identity(), &[0.0, 1.0, 2.0], 3);
+        let w = place_and_retime(&aligned, &d, &Placement::identity(), &[0.0, 1.0, 2.0], 3).unwrap();
         assert_eq!(w, vec![vec![0.0, 0.0, 0.0], vec![1.0, 0.0, 0.0], vec![2.0, 0.0, 0.0]]);
         // Own timing of 5 frames: every half reference frame.
-        let w = place_and_retime(&aligned, &d, &Placement::identity(), &[0.0, 2.0, 4.0], 5);
+        let w = place_and_retime(&aligned, &d, &Placement::identity(), &[0.0, 2.0, 4.0], 5).unwrap();
         assert_eq!(w[1], vec![0.5, 0.0, 0.0]);
         assert_eq!(w[4], vec![2.0, 0.0, 0.0]);
     }
