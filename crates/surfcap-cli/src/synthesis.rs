@@ -1,7 +1,8 @@
 //! Constrained synthesis as the commands run it (thesis 3.5): a subject prepared with its graph
 //! and walk model from the pipeline, a search (path, key poses, distance and time), the walk
 //! played by the library and written with its JSON report. Shared by `synth path | keyposes |
-//! reach`, `demo` and `bench synth`.
+//! reach`, `demo` and `bench synth`. `--vary SEED --variation-model DIR` plays learned variants
+//! (thesis chapter 6) when the walk repeats frames (issue 19 item 6, [`VaryOpts`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -17,7 +18,8 @@ use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path
 use surfcap_motion::timed_walk::TimedGraph;
 use surfcap_motion::walk_sequence::WalkModel;
 use surfcap_pipeline::constraint_files::KeyPose;
-use surfcap_pipeline::walk_playback::play_walk;
+use surfcap_pipeline::frame_variants::FrameVariants;
+use surfcap_pipeline::walk_playback::{play_walk, play_walk_with, walk_passes};
 use surfcap_pipeline::{GraphParams, Pipeline};
 
 use crate::options::{ConstraintOpts, OutOpts};
@@ -181,6 +183,8 @@ pub struct Prepared {
     pub seconds: f64,
     /// Where every output frame's texture comes from (`--appearance`), if anywhere.
     pub appearance: Option<crate::frame_appearance::SubjectAppearance>,
+    /// Learned variants shown when the walk repeats frames (`--vary`), if asked.
+    pub vary: VaryOpts,
 }
 
 impl Prepared {
@@ -196,13 +200,29 @@ impl Prepared {
         let graph = pipe.graph(&params)?.value;
         let model = pipe.walk_model(&params, tracked)?.value;
         let tracked = tracked.map(<[usize]>::to_vec);
-        Ok(Prepared { pipe, params, graph, model, tracked, seconds: t0.elapsed().as_secs_f64(), appearance: None })
+        Ok(Prepared {
+            pipe,
+            params,
+            graph,
+            model,
+            tracked,
+            seconds: t0.elapsed().as_secs_f64(),
+            appearance: None,
+            vary: VaryOpts::default(),
+        })
     }
 
     /// The same, texturing every output frame from `appearance` (`--appearance`, opened and
     /// checked against the subject by [`crate::frame_appearance::AppearanceOpts::open`]).
     pub fn with_appearance(mut self, appearance: Option<crate::frame_appearance::SubjectAppearance>) -> Self {
         self.appearance = appearance;
+        self
+    }
+
+    /// The same, playing learned variants where the walk repeats frames (`--vary`, checked by
+    /// [`VaryOpts::check`]).
+    pub fn with_variation(mut self, vary: VaryOpts) -> Self {
+        self.vary = vary;
         self
     }
 
@@ -247,7 +267,16 @@ pub fn write_walk(
     mut report: serde_json::Value,
 ) -> anyhow::Result<Played> {
     let s = prep.subject();
-    let played = play_walk(&prep.pipe, &prep.params, prep.tracked.as_deref(), walk, start, name)?;
+    let tracked = prep.tracked.as_deref();
+    let variants = match (prep.vary.vary, &prep.vary.variation_model) {
+        (Some(seed), Some(model)) => Some(variants_for_walk(prep, seed, model, walk)?),
+        _ => None,
+    };
+    let played = match &variants {
+        Some(v) => play_walk_with(&prep.pipe, &prep.params, tracked, walk, start, name, v)?,
+        None => play_walk(&prep.pipe, &prep.params, tracked, walk, start, name)?,
+    };
+    let repeats = played.repeat_summary(s);
     let frames = played.frames();
     let result = s.derived(format!("{}-{name}", s.name), played.sequence)?;
     let (written, appearance) = match &prep.appearance {
@@ -271,6 +300,21 @@ pub fn write_walk(
     obj.insert("synthetic_frames".into(), json!(played.synthetic_frames));
     obj.insert("transitions".into(), json!(played.transitions));
     obj.insert("blend_seconds".into(), json!(played.blend_seconds));
+    obj.insert("repeated_frames".into(), json!(repeats.repeats));
+    if let (Some(seed), Some(model)) = (prep.vary.vary, &prep.vary.variation_model) {
+        // Issue 19 item 6: what the walk repeated and how much of it variants showed.
+        obj.insert(
+            "variation".into(),
+            json!({ "seed": seed, "model": model, "frames": repeats.frames, "repeats": repeats.repeats,
+                "played_as_variants": repeats.played_as_variants, "sequences": repeats.sequences }),
+        );
+        ctx.note(&format!(
+            "{} of {} were repeats; {} played as variants",
+            repeats.repeats,
+            count_of(frames, "frame"),
+            repeats.played_as_variants
+        ));
+    }
     obj.insert("walk".into(), json!(walk));
     obj.insert("segments".into(), json!(played.segments));
     obj.insert("outputs".into(), json!(written));
@@ -282,6 +326,57 @@ pub fn write_walk(
         output: result,
         transitions: played.transitions,
     })
+}
+
+/// `--vary SEED --variation-model DIR` of `synth path | keyposes | reach` (issue 19 item 6).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct VaryOpts {
+    /// Show learned variants of the captured motion (thesis chapter 6) each time the walk plays
+    /// frames it has already shown, instead of the same poses again (transitions still blended,
+    /// the walk placed as without); SEED seeds the variants' sampling (same seed, same
+    /// animation). Needs --variation-model.
+    #[arg(long, value_name = "SEED", requires = "variation_model")]
+    pub vary: Option<u64>,
+    /// The variation model the variants are sampled from (the folder `surfcap vary train
+    /// SUBJECT -o DIR` writes, trained on this subject's sequences).
+    #[arg(long, value_name = "DIR", requires = "vary")]
+    pub variation_model: Option<PathBuf>,
+}
+
+impl VaryOpts {
+    /// Refuses, before any search, a model folder that is not there or that is the output.
+    pub fn check(&self, output: &Path) -> anyhow::Result<()> {
+        let Some(model) = &self.variation_model else { return Ok(()) };
+        surfcap_mesh::output_path::check_not_input(output, &[model])?;
+        anyhow::ensure!(
+            model.is_dir(),
+            "--variation-model {}: expected the folder of a variation model (`surfcap vary train SUBJECT -o DIR`)",
+            model.display()
+        );
+        Ok(())
+    }
+}
+
+/// The variants `walk` shows where it repeats frames, sampled with `seed` from the variation
+/// model in `model`: for each sequence of the subject, as many variants as the walk's largest
+/// pass over its frames ([`walk_passes`]; none for a sequence the walk never repeats).
+///
+/// Branch-local placeholder until `surfcap-variation` (the model's loader and sampler, thesis
+/// 6.6) is merged: it says what the walk would need and refuses.
+pub fn variants_for_walk(prep: &Prepared, seed: u64, model: &Path, walk: &[u32]) -> anyhow::Result<FrameVariants> {
+    let s = prep.subject();
+    let needed = walk_passes(s, &prep.model, walk)?;
+    let wanted: Vec<String> = needed
+        .iter()
+        .zip(s.sequences())
+        .filter(|(n, _)| **n > 0)
+        .map(|(n, q)| format!("{} of {}", count_of(*n, "variant"), q.name))
+        .collect();
+    let wanted = if wanted.is_empty() { "none (it repeats no frame)".to_string() } else { wanted.join(", ") };
+    anyhow::bail!(
+        "--vary {seed} --variation-model {}: --vary needs surfcap-variation (not yet merged); the walk would play {wanted}",
+        model.display()
+    )
 }
 
 /// A synthesised animation to write: one topology (a subject's frames) or a frame set (every

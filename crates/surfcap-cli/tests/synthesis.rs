@@ -452,3 +452,51 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
         &path,
     );
 }
+
+/// Issue 19 item 6's plumbing: a walk that loops reports its repeated frames; `--vary` needs
+/// `--variation-model` and a model folder that is there, refused before any search (the cache
+/// folder stays absent) and before anything is written.
+#[test]
+fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
+    let tmp = tempfile::tempdir().unwrap();
+    let walker = tmp.path().join("walker.subject");
+    let o = surfcap!(&[
+        "synth",
+        "--procedural",
+        "walk,jog",
+        "--duration",
+        "2",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&walker),
+        "--quiet"
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line = tmp.path().join("line_20m.csv");
+    std::fs::write(&line, "0,0\n20,0\n").unwrap();
+    let cache = tmp.path().join("cache");
+    let out = tmp.path().join("line.glb");
+    let path = ["synth", "path", p(&walker), "--curve", p(&line), "-o", p(&out), "--cache-dir", p(&cache)];
+    for (extra, want) in [
+        (&["--vary", "3"][..], "--variation-model"),
+        (&["--variation-model", p(tmp.path())][..], "--vary"),
+        (
+            &["--vary", "3", "--variation-model", "no-such-model"][..],
+            "--variation-model no-such-model: expected the folder",
+        ),
+    ] {
+        let o = surfcap!(&[&path[..], extra].concat());
+        assert!(!o.status.success() && stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
+        assert!(!cache.exists() && !out.exists(), "{extra:?}: work was done before the refusal");
+    }
+    // 20 m from 2 s clips: the walk loops over the same frames.
+    let r = report(&surfcap!(&[&path[..], &["--json"]].concat()));
+    // Every node of the walk shown before is a repeat.
+    let walk: Vec<u64> = r["walk"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    let mut seen = std::collections::HashSet::new();
+    let expected = walk.iter().filter(|n| !seen.insert(**n)).count() as u64;
+    let repeats = r["repeated_frames"].as_u64().unwrap();
+    assert!(expected > 0 && repeats == expected, "{repeats} repeats reported, {expected} in the walk");
+    assert!(r.get("variation").is_none(), "no variation without --vary");
+}

@@ -151,11 +151,31 @@ pub fn blend(
     lambda: Lambda,
     mixing: Mixing,
 ) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
+    blend_substituted(topology, up, (source, destination), (source, destination), path, lambda, mixing)
+}
+
+/// Blend whose rigid part (every alignment and translation of Algorithm 2) is computed from the
+/// segments `placed` (source, destination: the captured frames) while the poses interpolated are
+/// `played` (frames of the same vertex count shown in their stead, e.g. learned variants of
+/// those frames, thesis 6.6, issue 19 item 6), each moved as its captured frame is. The
+/// transition's rigid track is then the captured one, which the walk model predicted and the
+/// constrained searches solved for; only the poses differ. With `played` = `placed` this is
+/// [`blend`], to the bit.
+pub fn blend_substituted(
+    topology: &Topology,
+    up: UpAxis,
+    placed: (&[&[f32]], &[&[f32]]),
+    played: (&[&[f32]], &[&[f32]]),
+    path: &[(usize, usize)],
+    lambda: Lambda,
+    mixing: Mixing,
+) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
     let pattern = match mixing {
         Mixing::Nonlinear => Some(Arc::new(PoissonPattern::new(topology)?)),
         Mixing::Linear => None,
     };
-    blend_placements(up, source, destination, path, lambda)
+    let (source, destination) = played;
+    blend_placements(up, placed.0, placed.1, path, lambda)
         .iter()
         .map(|st| {
             let (mut a, mut b) = (source[st.n].to_vec(), destination[st.m].to_vec());

@@ -15,6 +15,12 @@ pub enum Error {
         "step {at} of the walk, frame {from} -> {to}, is neither a successive-frame step nor a transition of the graph"
     )]
     NotAnEdge { at: usize, from: u32, to: u32 },
+    /// A substitute frame (a variant played in a captured frame's stead) whose size is not the
+    /// subject's.
+    #[error(
+        "variant {variant} of frame {frame} (played on pass {pass}) has {numbers} numbers, expected {expected} (3 per vertex of the subject)"
+    )]
+    SubstituteSize { frame: String, pass: usize, variant: u32, numbers: usize, expected: usize },
     /// The Blend of a transition failed (its Poisson system, the source: not repeated here, as
     /// error printers show the chain).
     #[error("blending a transition")]

@@ -15,6 +15,7 @@ pub mod graph;
 pub mod in_place_root_motion;
 pub mod motion_graph;
 pub mod path_following;
+pub mod repeat_passes;
 pub mod sequence_time_alignment;
 pub mod timed_walk;
 pub mod transition_frames;

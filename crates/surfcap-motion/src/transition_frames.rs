@@ -5,7 +5,7 @@
 
 use surfcap_mesh::Subject;
 
-use crate::blend::{Lambda, Mixing, blend};
+use crate::blend::{Lambda, Mixing, blend_substituted};
 use crate::dtw::{Slope, Warp, dtw_window};
 
 /// A transition's frames and its warp.
@@ -61,21 +61,59 @@ impl FrameMix {
 pub fn transition_frames(
     subject: &Subject,
     d: &[f64],
+    source: (usize, usize),
+    destination: (usize, usize),
+    slope: Slope,
+) -> Result<Option<TransitionFrames>, surfcap_geometry::Error> {
+    transition_frames_played(subject, d, source, destination, slope, |_, g| subject.frame(g))
+}
+
+/// Which segment of a transition a frame belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Segment {
+    Source,
+    Destination,
+}
+
+/// [`transition_frames`] whose poses are `played(segment, g)` for global frame `g` of either
+/// segment (the captured frame, or one of the same vertex count shown in its stead, e.g. a
+/// learned variant of it), while the warp and every rigid placement of Blend come from the
+/// captured frames ([`crate::blend::blend_substituted`]); `None` from `played` when `g` is not
+/// a frame. The warp is the captured transition's too: a substitute follows its frame closely
+/// enough that the same frames still match (issue 19 item 6).
+pub fn transition_frames_played<'a>(
+    subject: &'a Subject,
+    d: &[f64],
     (i, li): (usize, usize),
     (j, lj): (usize, usize),
     slope: Slope,
+    played: impl Fn(Segment, usize) -> Option<&'a [f32]>,
 ) -> Result<Option<TransitionFrames>, surfcap_geometry::Error> {
     let Some(warp) = dtw_window(d, subject.n_frames(), i, li, j, lj, slope) else {
         return Ok(None);
     };
     let d0 = j + 1 - lj;
-    let (Some(src), Some(dst)) = (
-        (i..i + li).map(|g| subject.frame(g)).collect::<Option<Vec<&[f32]>>>(),
-        (d0..=j).map(|g| subject.frame(g)).collect::<Option<Vec<&[f32]>>>(),
+    let frames = |seg: Segment, range: std::ops::Range<usize>, f: &dyn Fn(Segment, usize) -> Option<&'a [f32]>| {
+        range.map(|g| f(seg, g)).collect::<Option<Vec<&[f32]>>>()
+    };
+    let captured = |_: Segment, g: usize| subject.frame(g);
+    let (Some(src), Some(dst), Some(src_played), Some(dst_played)) = (
+        frames(Segment::Source, i..i + li, &captured),
+        frames(Segment::Destination, d0..j + 1, &captured),
+        frames(Segment::Source, i..i + li, &played),
+        frames(Segment::Destination, d0..j + 1, &played),
     ) else {
         return Ok(None);
     };
     let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(a, b)| (a - i, b - d0)).collect();
-    let frames = blend(subject.topology(), subject.up_axis, &src, &dst, &offsets, Lambda::Ramp, Mixing::Nonlinear)?;
+    let frames = blend_substituted(
+        subject.topology(),
+        subject.up_axis,
+        (&src, &dst),
+        (&src_played, &dst_played),
+        &offsets,
+        Lambda::Ramp,
+        Mixing::Nonlinear,
+    )?;
     Ok(Some(TransitionFrames { frames, warp }))
 }

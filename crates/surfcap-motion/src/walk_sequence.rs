@@ -27,7 +27,8 @@ use crate::blend::{Lambda, blend_placements_from, centre};
 use crate::dtw::{Slope, dtw_window};
 use crate::error::{Error, Result};
 use crate::graph::Graph;
-use crate::transition_frames::{FrameMix, transition_frames};
+use crate::repeat_passes::{Captured, FramePlay, FrameSource, earlier_plays, run_passes};
+use crate::transition_frames::{FrameMix, Segment, transition_frames_played};
 use crate::transition_table::TransitionTable;
 
 /// The rigid track of one transition edge u -> v, in the coordinates where frame u is unmoved.
@@ -318,6 +319,8 @@ pub struct WalkSequence {
     pub nodes: Vec<Option<u32>>,
     /// The captured frames each output frame is made from, with the blend weight.
     pub mix: Vec<FrameMix>,
+    /// How each output frame was played: a repeat of a frame shown before, from a substitute.
+    pub plays: Vec<FramePlay>,
     pub n_transitions: usize,
 }
 
@@ -337,42 +340,110 @@ pub fn walk_sequence(
     walk: &[u32],
     start: &PlaneMotion,
 ) -> Result<WalkSequence> {
+    walk_sequence_with(subject, model, d, walk, start, &Captured)
+}
+
+/// [`walk_sequence`] showing, on each run of original frames, what `source` gives for the run's
+/// pass ([`run_passes`]: 0 the first time the walk shows those frames, then one more per
+/// repetition) in the captured frames' stead (issue 19 item 6). Every rigid placement is the
+/// captured walk's: a substitute frame is moved as its captured frame is, and a transition is
+/// placed by Blend on the captured frames while interpolating the frames shown on either side
+/// ([`crate::transition_frames::transition_frames_played`]), so the junctions meet the poses
+/// actually played and the walk's centre track is the one the searches solved for, up to the
+/// substitutes' own deviation. With [`Captured`] (or any source that substitutes nothing) the
+/// output is [`walk_sequence`]'s to the bit.
+pub fn walk_sequence_with(
+    subject: &Subject,
+    model: &WalkModel,
+    d: &[f64],
+    walk: &[u32],
+    start: &PlaneMotion,
+    source: &dyn FrameSource,
+) -> Result<WalkSequence> {
     let first = *walk.first().ok_or(Error::EmptyWalk)?;
-    let frame = |g: u32| subject.frame(g as usize).expect("walk nodes are frames of the subject");
+    let mut steps = Vec::with_capacity(walk.len().saturating_sub(1));
+    for (at, w) in walk.windows(2).enumerate() {
+        steps.push(model.step(w[0], w[1]).ok_or(Error::NotAnEdge { at, from: w[0], to: w[1] })?);
+    }
+    let passes = run_passes(walk, |k| matches!(steps[k], Step::Transition(_)));
+    let earlier = earlier_plays(walk);
+    let expected = 3 * subject.topology().n_vertices();
+    // The frame shown for global frame g on `pass`, with its variant (`None`: as captured);
+    // `None` altogether when g is not a frame of the subject.
+    let shown = |pass: usize, g: usize| -> Result<Option<(Option<u32>, &[f32])>> {
+        let Some(captured) = subject.frame(g) else { return Ok(None) };
+        match source.substitute(pass, g as u32) {
+            None => Ok(Some((None, captured))),
+            Some(sub) if sub.positions.len() == expected => Ok(Some((Some(sub.variant), sub.positions))),
+            Some(sub) => Err(Error::SubstituteSize {
+                frame: subject.frame_index().label(g),
+                pass,
+                variant: sub.variant,
+                numbers: sub.positions.len(),
+                expected,
+            }),
+        }
+    };
+    let node = |k: usize| -> Result<(Option<u32>, &[f32])> {
+        Ok(shown(passes[k], walk[k] as usize)?.expect("walk nodes are frames of the subject"))
+    };
     let mut out = WalkSequence {
         positions: Vec::new(),
         labels: Vec::new(),
         nodes: Vec::new(),
         mix: Vec::new(),
+        plays: Vec::new(),
         n_transitions: 0,
     };
-    let push = |out: &mut WalkSequence, p: &[f32], g: &PlaneMotion, label, node: Option<u32>, mix: Option<FrameMix>| {
+    let push = |out: &mut WalkSequence, p: &[f32], g: &PlaneMotion, label, node: Option<u32>, mix: FrameMix, play| {
         let start = out.positions.len();
         out.positions.extend_from_slice(p);
         g.apply(&mut out.positions[start..]);
         out.labels.push(label);
         out.nodes.push(node);
-        out.mix.push(mix.or(node.map(FrameMix::original)).expect("a frame is a node or a mix"));
+        out.mix.push(mix);
+        out.plays.push(play);
     };
+    let original = |k: usize, variant: Option<u32>| FramePlay { earlier: earlier[k], from: variant, to: variant };
     let mut g = *start;
-    push(&mut out, frame(first), &g, FrameLabel::Original, Some(first), None);
-    for (at, w) in walk.windows(2).enumerate() {
+    let (variant, p) = node(0)?;
+    push(&mut out, p, &g, FrameLabel::Original, Some(first), FrameMix::original(first), original(0, variant));
+    for (at, (w, step)) in walk.windows(2).zip(&steps).enumerate() {
         let (u, v) = (w[0], w[1]);
-        match model.step(u, v).ok_or(Error::NotAnEdge { at, from: u, to: v })? {
-            Step::Original => push(&mut out, frame(v), &g, FrameLabel::Original, Some(v), None),
+        let (variant, p) = node(at + 1)?;
+        match step {
+            Step::Original => {
+                push(&mut out, p, &g, FrameLabel::Original, Some(v), FrameMix::original(v), original(at + 1, variant))
+            }
             Step::Transition(t) => {
+                let not_an_edge = Error::NotAnEdge { at, from: u, to: v };
+                // The frames shown on either side: the source segment from the pass of the run
+                // left, the destination segment from the pass of the run entered.
+                let (s0, d0) = (u as usize, (v + 1 - t.lj) as usize);
+                let segment = |pass: usize, range: std::ops::Range<usize>| {
+                    range
+                        .map(|g| shown(pass, g)?.ok_or(not_an_edge.clone()))
+                        .collect::<Result<Vec<(Option<u32>, &[f32])>>>()
+                };
+                let src = segment(passes[at], s0..s0 + t.li as usize)?;
+                let dst = segment(passes[at + 1], d0..v as usize + 1)?;
                 let ends = ((u as usize, t.li as usize), (v as usize, t.lj as usize));
-                let tf = transition_frames(subject, d, ends.0, ends.1, model.slope)?.ok_or(Error::NotAnEdge {
-                    at,
-                    from: u,
-                    to: v,
-                })?;
+                let tf = transition_frames_played(subject, d, ends.0, ends.1, model.slope, |seg, g| {
+                    match seg {
+                        Segment::Source => src.get(g.wrapping_sub(s0)),
+                        Segment::Destination => dst.get(g.wrapping_sub(d0)),
+                    }
+                    .map(|f| f.1)
+                })?
+                .ok_or(not_an_edge)?;
                 let (s, mix) = (&tf.frames, tf.mix());
                 for (f, m) in s.iter().zip(&mix).take(s.len().saturating_sub(1)).skip(1) {
-                    push(&mut out, f, &g, FrameLabel::Synthetic, None, Some(*m));
+                    let play =
+                        FramePlay { earlier: 0, from: src[m.from as usize - s0].0, to: dst[m.to as usize - d0].0 };
+                    push(&mut out, f, &g, FrameLabel::Synthetic, None, *m, play);
                 }
                 g = g.after(&t.end);
-                push(&mut out, frame(v), &g, FrameLabel::Original, Some(v), None);
+                push(&mut out, p, &g, FrameLabel::Original, Some(v), FrameMix::original(v), original(at + 1, variant));
                 out.n_transitions += 1;
             }
         }
@@ -487,6 +558,29 @@ pub(crate) mod tests {
         start.apply(&mut first);
         let d0 = first.iter().zip(&out.positions[..3 * nv]).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
         assert!(d0 < 1e-5);
+        // A source whose substitutes are the captured frames themselves plays the same walk to
+        // the bit (every placement is the captured frame's), and records them as variants.
+        struct Itself<'a>(&'a Subject);
+        impl FrameSource for Itself<'_> {
+            fn substitute(&self, pass: usize, frame: u32) -> Option<crate::repeat_passes::Substitute<'_>> {
+                let positions = self.0.frame(frame as usize)?;
+                Some(crate::repeat_passes::Substitute { variant: pass as u32 + 7, positions })
+            }
+        }
+        let same = walk_sequence_with(&s, &model, &d, &walk, &start, &Itself(&s)).unwrap();
+        assert_eq!(same.positions, out.positions);
+        assert!(same.plays.iter().all(|p| p.from == Some(7) && p.to == Some(7)));
+        assert!(out.plays.iter().all(|p| *p == FramePlay::default()), "no repeats in this walk");
+        // A substitute of the wrong size is refused, naming its frame.
+        struct Short<'a>(&'a Subject);
+        impl FrameSource for Short<'_> {
+            fn substitute(&self, _: usize, frame: u32) -> Option<crate::repeat_passes::Substitute<'_>> {
+                let positions = &self.0.frame(frame as usize)?[3..];
+                Some(crate::repeat_passes::Substitute { variant: 0, positions })
+            }
+        }
+        let e = walk_sequence_with(&s, &model, &d, &walk, &start, &Short(&s)).unwrap_err().to_string();
+        assert!(e.contains(&s.frame_index().label(walk[0] as usize)) && e.contains("expected"), "{e}");
         // A step that is not an edge is refused with its position.
         let bad = [walk[0], walk[0] + 5];
         assert!(matches!(walk_sequence(&s, &model, &d, &bad, &start), Err(Error::NotAnEdge { at: 0, .. })));

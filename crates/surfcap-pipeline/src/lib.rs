@@ -7,12 +7,13 @@
 //! motion graphs and the walk model. Each product's cache key is a typed struct
 //! ([`product_key`]) and its `.npy` layout is documented on the method that produces it.
 //! Beside the chain: the constraint files of synthesis (curves, key poses, tag restrictions)
-//! and walk playback.
+//! and walk playback, with learned variants shown when a walk repeats its frames.
 //!
 //! The chapters still to come (motion transfer, variation, appearance) add their products here.
 
 pub mod constraint_files;
 pub mod error;
+pub mod frame_variants;
 pub mod graph_kind;
 pub mod pipeline;
 pub mod product_key;

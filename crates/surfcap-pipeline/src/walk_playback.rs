@@ -1,14 +1,16 @@
 //! Plays a walk found in a graph into a mesh sequence (thesis Algorithm 3), with what the
 //! reports say about it: frame counts by label, transitions, the runs of original frames, and
-//! the tracked centre of every output frame.
+//! the tracked centre of every output frame; optionally with substitutes (learned variants,
+//! [`crate::frame_variants`]) shown when the walk repeats frames (issue 19 item 6).
 
 use std::time::Instant;
 
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_motion::repeat_passes::{Captured, FramePlay, FrameSource, run_passes};
 use surfcap_motion::transition_frames::FrameMix;
-use surfcap_motion::walk_sequence::{Step, WalkModel, tracked_centre, walk_sequence};
+use surfcap_motion::walk_sequence::{Step, WalkModel, tracked_centre, walk_sequence_with};
 
 use crate::error::{Error, Result};
 use crate::pipeline::{GraphParams, Pipeline};
@@ -36,6 +38,9 @@ pub struct PlayedWalk {
     /// The captured frames (global numbers) each output frame is made from, with the weight
     /// its transition blends them by: what a per-frame texture follows (issue 20 item 8).
     pub mix: Vec<FrameMix>,
+    /// How each output frame was played: a repeat of a captured frame shown before, the
+    /// variants it shows.
+    pub plays: Vec<FramePlay>,
     /// Time spent blending the transitions.
     pub blend_seconds: f64,
 }
@@ -58,11 +63,26 @@ pub fn play_walk(
     start: &PlaneMotion,
     name: &str,
 ) -> Result<PlayedWalk> {
+    play_walk_with(pipe, p, tracked, walk, start, name, &Captured)
+}
+
+/// [`play_walk`] showing what `source` gives in the captured frames' stead on each repetition
+/// of a run of frames (e.g. [`crate::frame_variants::FrameVariants`]), every frame placed as its
+/// captured frame is (`surfcap_motion::walk_sequence::walk_sequence_with`).
+pub fn play_walk_with(
+    pipe: &Pipeline,
+    p: &GraphParams,
+    tracked: Option<&[usize]>,
+    walk: &[u32],
+    start: &PlaneMotion,
+    name: &str,
+    source: &dyn FrameSource,
+) -> Result<PlayedWalk> {
     let s = pipe.subject();
     let model = pipe.walk_model(p, tracked)?;
     let d = pipe.chain_distances()?;
     let t0 = Instant::now();
-    let ws = walk_sequence(s, &model.value, &d.value.values, walk, start)?;
+    let ws = walk_sequence_with(s, &model.value, &d.value.values, walk, start, source)?;
     let blend_seconds = t0.elapsed().as_secs_f64();
     let nv = s.topology().n_vertices();
     let centres = ws.positions.chunks_exact(3 * nv).map(|f| tracked_centre(f, tracked)).collect();
@@ -77,8 +97,96 @@ pub fn play_walk(
         transitions: ws.n_transitions,
         segments: walk_segments(s, &model.value, walk)?,
         mix: ws.mix,
+        plays: ws.plays,
         blend_seconds,
     })
+}
+
+/// What a played walk repeated and how much of it variants showed (a report's `variation`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RepeatSummary {
+    /// Output frames.
+    pub frames: usize,
+    /// Original output frames showing a captured frame the walk had shown before.
+    pub repeats: usize,
+    /// Output frames made (at least in part) from a variant.
+    pub played_as_variants: usize,
+    /// Per sequence of the subject that a variant was shown for.
+    pub sequences: Vec<SequenceVariation>,
+}
+
+/// The variants shown for one sequence.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SequenceVariation {
+    pub sequence: String,
+    /// Output frames made (at least in part) from a variant of this sequence.
+    pub frames_as_variants: usize,
+    /// The distinct variants shown, in increasing order.
+    pub variants: Vec<u32>,
+}
+
+impl PlayedWalk {
+    /// The walk's repeats and the variants shown, per sequence of `subject` (the subject it
+    /// was played from).
+    pub fn repeat_summary(&self, subject: &Subject) -> RepeatSummary {
+        let nq = subject.sequences().len();
+        let mut frames = vec![0; nq];
+        let mut variants: Vec<Vec<u32>> = vec![Vec::new(); nq];
+        for (m, play) in self.mix.iter().zip(&self.plays) {
+            let mut shown = [None; 2];
+            for (k, (g, v)) in [(m.from, play.from), (m.to, play.to)].into_iter().enumerate() {
+                if let (Some(v), Some((q, _))) = (v, subject.frame_index().locate(g as usize)) {
+                    shown[k] = Some(q);
+                    if !variants[q].contains(&v) {
+                        variants[q].push(v);
+                    }
+                }
+            }
+            for (k, q) in shown.iter().enumerate() {
+                if let Some(q) = *q
+                    && (k == 0 || shown[0] != Some(q))
+                {
+                    frames[q] += 1;
+                }
+            }
+        }
+        RepeatSummary {
+            frames: self.plays.len(),
+            repeats: self.plays.iter().filter(|p| p.is_repeat()).count(),
+            played_as_variants: self.plays.iter().filter(|p| p.is_variant()).count(),
+            sequences: (0..nq)
+                .filter(|&q| frames[q] > 0)
+                .map(|q| {
+                    variants[q].sort_unstable();
+                    SequenceVariation {
+                        sequence: subject.sequences()[q].name.clone(),
+                        frames_as_variants: frames[q],
+                        variants: variants[q].clone(),
+                    }
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Per sequence of the subject, the largest pass (`surfcap_motion::repeat_passes::run_passes`)
+/// at which `walk` shows its frames: how many variants of it the walk can use before they come
+/// round again (0: the walk never repeats its frames).
+pub fn walk_passes(s: &Subject, model: &WalkModel, walk: &[u32]) -> Result<Vec<usize>> {
+    let mut transition = Vec::with_capacity(walk.len().saturating_sub(1));
+    for (at, w) in walk.windows(2).enumerate() {
+        let step = model.step(w[0], w[1]).ok_or(surfcap_motion::Error::NotAnEdge { at, from: w[0], to: w[1] })?;
+        transition.push(matches!(step, Step::Transition(_)));
+    }
+    let mut out = vec![0; s.sequences().len()];
+    for (&g, pass) in walk.iter().zip(run_passes(walk, |k| transition[k])) {
+        let (q, _) = s
+            .frame_index()
+            .locate(g as usize)
+            .ok_or_else(|| Error::Request(format!("walk node {g}: the subject has {} frames", s.n_frames())))?;
+        out[q] = out[q].max(pass);
+    }
+    Ok(out)
 }
 
 /// The walk as runs of original frames and the transitions between them.

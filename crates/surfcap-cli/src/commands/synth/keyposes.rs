@@ -25,6 +25,8 @@ pub struct Args {
     pub out: OutOpts,
     #[command(flatten)]
     pub appearance: crate::frame_appearance::AppearanceOpts,
+    #[command(flatten)]
+    pub vary: crate::synthesis::VaryOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -32,6 +34,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
+    a.vary.check(&a.out.output)?;
     let keys = read_key_poses(&a.keys, &s)?;
     let (first, last) = (keys[0].requested, keys[keys.len() - 1].requested);
     let longest = keys.windows(2).map(|p| (p[1].requested - p[0].requested) as usize).max().unwrap_or(0);
@@ -39,7 +42,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let frames = (last - first + 1) as f64;
     let search_bytes = search_table_bytes(s.n_frames(), longest);
     a.out.limits.check(&Request { what, frames, subject: &s, search_bytes, format: a.out.format() })?;
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?.with_appearance(appearance);
+    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?
+        .with_appearance(appearance)
+        .with_variation(a.vary.clone());
     let o = run_keyposes(ctx, &prep, &keys, &a.out)?;
     ctx.result(&o.played.report, || {
         // Thesis Fig. 3.18: input, requested and obtained times.

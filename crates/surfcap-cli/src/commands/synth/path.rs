@@ -50,6 +50,8 @@ pub struct Args {
     pub out: OutOpts,
     #[command(flatten)]
     pub appearance: crate::frame_appearance::AppearanceOpts,
+    #[command(flatten)]
+    pub vary: crate::synthesis::VaryOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -57,6 +59,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
+    a.vary.check(&a.out.output)?;
     let curve = read_curve(&a.curve, s.up_axis, a.planar)?;
     if let Some(speed) = fastest_speed(&s, curve.axes()) {
         let what = format!(
@@ -86,7 +89,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         ..PathSearch::for_fps(s.fps)
     };
     let tracked = (!a.track.is_empty()).then_some(a.track.as_slice());
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?.with_appearance(appearance);
+    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?
+        .with_appearance(appearance)
+        .with_variation(a.vary.clone());
     let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
     let units = &prep.subject().units;
     ctx.result(&o.played.report, || {

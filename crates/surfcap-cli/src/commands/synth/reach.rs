@@ -47,6 +47,8 @@ pub struct Args {
     pub out: OutOpts,
     #[command(flatten)]
     pub appearance: crate::frame_appearance::AppearanceOpts,
+    #[command(flatten)]
+    pub vary: crate::synthesis::VaryOpts,
 }
 
 impl Args {
@@ -64,6 +66,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
+    a.vary.check(&a.out.output)?;
     let (from, to) = (s.resolve_frame(&a.from)? as u32, s.resolve_frame(&a.to)? as u32);
     let frames = match a.time.frames(s.fps, TimeUnit::Seconds) {
         Some(f) if f >= 1 => f as usize,
@@ -81,7 +84,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         let travel = surfcap_motion::clip_travel::subject_travel(&s);
         crate::travel::require_travel(&s, &travel, &format!("--distance {}", a.distance), None)?;
     }
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?.with_appearance(appearance);
+    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?
+        .with_appearance(appearance)
+        .with_variation(a.vary.clone());
     let t0 = Instant::now();
     let tg = TimedGraph::new(&prep.graph, &prep.model);
     let scales = (a.distance_scale.0, a.time_scale.0);
