@@ -4,6 +4,7 @@
 //! reach`, `demo` and `bench synth`. `--vary SEED --variation-model DIR` plays learned variants
 //! (thesis chapter 6) when the walk repeats frames (issue 19 item 6, [`VaryOpts`]).
 
+use anyhow::Context;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -269,7 +270,7 @@ pub fn write_walk(
     let s = prep.subject();
     let tracked = prep.tracked.as_deref();
     let variants = match (prep.vary.vary, &prep.vary.variation_model) {
-        (Some(seed), Some(model)) => Some(variants_for_walk(prep, seed, model, walk)?),
+        (Some(seed), Some(model)) => Some(variants_for_walk(ctx, prep, seed, model, walk)?),
         _ => None,
     };
     let played = match &variants {
@@ -357,26 +358,84 @@ impl VaryOpts {
     }
 }
 
-/// The variants `walk` shows where it repeats frames, sampled with `seed` from the variation
-/// model in `model`: for each sequence of the subject, as many variants as the walk's largest
-/// pass over its frames ([`walk_passes`]; none for a sequence the walk never repeats).
-///
-/// Branch-local placeholder until `surfcap-variation` (the model's loader and sampler, thesis
-/// 6.6) is merged: it says what the walk would need and refuses.
-pub fn variants_for_walk(prep: &Prepared, seed: u64, model: &Path, walk: &[u32]) -> anyhow::Result<FrameVariants> {
+/// Most variants sampled per sequence for one walk: further repeats cycle through them
+/// ([`FrameVariants`] shows variant (p - 1) mod K on pass p), which keeps sampling time
+/// bounded (about 5 s a variant on 2 cores for a 117-frame walk of 1,500 vertices).
+pub const MAX_VARIANTS_PER_SEQUENCE: usize = 5;
+
+/// The learned variants `--vary SEED --variation-model DIR` shows on a walk's repeated runs:
+/// for each sequence of the subject the walk plays more than once, as many variants as its
+/// largest pass ([`walk_passes`]), at most [`MAX_VARIANTS_PER_SEQUENCE`], sampled from the
+/// model (thesis 6.6) with the seed and put on the sequence's own path
+/// (`variant_on_source_path`: only the body's poses vary, so the walk's placement, which the
+/// search solved, holds). A sequence the model has not learnt keeps its captured frames, with
+/// a note.
+pub fn variants_for_walk(
+    ctx: &crate::Ctx,
+    prep: &Prepared,
+    seed: u64,
+    model_dir: &Path,
+    walk: &[u32],
+) -> anyhow::Result<FrameVariants> {
     let s = prep.subject();
     let needed = walk_passes(s, &prep.model, walk)?;
-    let wanted: Vec<String> = needed
-        .iter()
-        .zip(s.sequences())
-        .filter(|(n, _)| **n > 0)
-        .map(|(n, q)| format!("{} of {}", count_of(*n, "variant"), q.name))
-        .collect();
-    let wanted = if wanted.is_empty() { "none (it repeats no frame)".to_string() } else { wanted.join(", ") };
-    anyhow::bail!(
-        "--vary {seed} --variation-model {}: --vary needs surfcap-variation (not yet merged); the walk would play {wanted}",
-        model.display()
-    )
+    let mut fv = FrameVariants::new(s);
+    if needed.iter().all(|&n| n == 0) {
+        return Ok(fv);
+    }
+    let model = surfcap_variation::VariationModel::load(model_dir)
+        .with_context(|| format!("--variation-model {}", model_dir.display()))?;
+    if model.topology.n_vertices() != s.topology().n_vertices() || model.topology.triangles() != s.topology().triangles() {
+        anyhow::bail!(
+            "--variation-model {}: trained on a mesh of {} vertices and {} triangles, but {:?} has {} and {}: expected a model trained on this subject (surfcap vary train)",
+            model_dir.display(),
+            model.topology.n_vertices(),
+            model.topology.triangles().len(),
+            s.name,
+            s.topology().n_vertices(),
+            s.topology().triangles().len()
+        );
+    }
+    let opts = surfcap_variation::variation_sampling::SamplingOptions::default();
+    for (q, seq) in s.sequences().iter().enumerate() {
+        if needed[q] == 0 {
+            continue;
+        }
+        let Ok(j) = model.sequence_index(&seq.name) else {
+            ctx.note(&format!(
+                "{:?} is not in the variation model {}: its {} repeated passes play the captured frames",
+                seq.name,
+                model_dir.display(),
+                needed[q]
+            ));
+            continue;
+        };
+        if model.sequences[j].own_frames != seq.n_frames() {
+            anyhow::bail!(
+                "--variation-model {}: its {:?} has {} frames, the subject's {}: expected a model trained on this subject",
+                model_dir.display(),
+                seq.name,
+                model.sequences[j].own_frames,
+                seq.n_frames()
+            );
+        }
+        let count = needed[q].min(MAX_VARIANTS_PER_SEQUENCE);
+        ctx.say(&format!("sampling {} of {} (seed {seed})", count_of(count, "variant"), seq.name));
+        let (variants, _) = surfcap_variation::variation_sampling::sample_variants(&model, &seq.name, count, seed, &opts)
+            .with_context(|| format!("sampling variants of {}", seq.name))?;
+        let source: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
+        let placed = variants
+            .iter()
+            .map(|v| {
+                Ok(surfcap_variation::variation_sampling::variant_on_source_path(&model, j, v, &source)?
+                    .into_iter()
+                    .flatten()
+                    .collect::<Vec<f32>>())
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        fv.add(&seq.name, placed)?;
+    }
+    Ok(fv)
 }
 
 /// A synthesised animation to write: one topology (a subject's frames) or a frame set (every
