@@ -359,6 +359,27 @@ mod tests {
     }
 
     #[test]
+    fn training_and_sampling_do_not_depend_on_the_thread_count() {
+        let s = worm();
+        let parts = halves(&s);
+        let name = s.sequences()[0].name.clone();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let m = VariationModel::train(&s, &[0, 1], &parts, &quick(), &NoProgress).unwrap();
+                let (v, _) = sample_variants(&m, &name, 2, 11, &sampling()).unwrap();
+                (m.part_models.iter().map(|g| g.latent().to_owned()).collect::<Vec<_>>(), v)
+            })
+        };
+        let (l1, v1) = run(1);
+        let (l2, v2) = run(2);
+        assert_eq!(l1, l2, "latents differ between 1 and 2 threads");
+        for (a, b) in v1.iter().zip(&v2) {
+            assert_eq!(a.world, b.world, "variants differ between 1 and 2 threads");
+        }
+    }
+
+    #[test]
     fn a_saved_model_loads_back_and_names_a_damaged_file() {
         let s = worm();
         let m = VariationModel::train(&s, &[0, 1], &halves(&s), &quick(), &NoProgress).unwrap();
