@@ -385,7 +385,9 @@ pub fn variants_for_walk(
     }
     let model = surfcap_variation::VariationModel::load(model_dir)
         .with_context(|| format!("--variation-model {}", model_dir.display()))?;
-    if model.topology.n_vertices() != s.topology().n_vertices() || model.topology.triangles() != s.topology().triangles() {
+    if model.topology.n_vertices() != s.topology().n_vertices()
+        || model.topology.triangles() != s.topology().triangles()
+    {
         anyhow::bail!(
             "--variation-model {}: trained on a mesh of {} vertices and {} triangles, but {:?} has {} and {}: expected a model trained on this subject (surfcap vary train)",
             model_dir.display(),
@@ -421,8 +423,9 @@ pub fn variants_for_walk(
         }
         let count = needed[q].min(MAX_VARIANTS_PER_SEQUENCE);
         ctx.say(&format!("sampling {} of {} (seed {seed})", count_of(count, "variant"), seq.name));
-        let (variants, _) = surfcap_variation::variation_sampling::sample_variants(&model, &seq.name, count, seed, &opts)
-            .with_context(|| format!("sampling variants of {}", seq.name))?;
+        let (variants, _) =
+            surfcap_variation::variation_sampling::sample_variants(&model, &seq.name, count, seed, &opts)
+                .with_context(|| format!("sampling variants of {}", seq.name))?;
         let source: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
         let placed = variants
             .iter()
