@@ -21,17 +21,11 @@ use crate::motion_preparation::{
 };
 
 /// Options of [`VariationModel::train`].
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct TrainOptions {
     pub preparation: PreparationOptions,
     /// The GPDM of every part (thesis: d = 3).
     pub gpdm: GpdmOptions,
-}
-
-impl Default for TrainOptions {
-    fn default() -> Self {
-        TrainOptions { preparation: PreparationOptions::default(), gpdm: GpdmOptions::default() }
-    }
 }
 
 /// What training did, per part.

@@ -95,6 +95,12 @@ pub struct Variant {
     pub world: Vec<Vec<f32>>,
 }
 
+/// Latent variants: per variant, one latent trajectory per part.
+pub type LatentVariants = Vec<Vec<Mat<f64>>>;
+
+/// Per reference frame, the stitched body-frame pose and the displacement from the previous frame.
+pub type AlignedMotion = (Vec<Vec<f32>>, Vec<[f64; 6]>);
+
 /// A splitmix64 step: well-mixed seeds for independent streams.
 pub fn mix_seed(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -117,7 +123,7 @@ pub fn sample_latent_variants(
     count: usize,
     seed: u64,
     opts: &SamplingOptions,
-) -> Result<(Vec<Vec<Mat<f64>>>, Vec<ChainSummary>)> {
+) -> Result<(LatentVariants, Vec<ChainSummary>)> {
     let seq = model
         .sequences
         .get(j)
@@ -184,7 +190,7 @@ pub fn sample_latent_variants(
 
 /// The stitched body-frame poses and displacements of per-part latent trajectories (one
 /// trajectory per part, all of one length): eq. 6.12 per part, then stitching.
-pub fn reconstruct_aligned(model: &VariationModel, latents: &[Mat<f64>]) -> Result<(Vec<Vec<f32>>, Vec<[f64; 6]>)> {
+pub fn reconstruct_aligned(model: &VariationModel, latents: &[Mat<f64>]) -> Result<AlignedMotion> {
     if latents.len() != model.part_models.len() {
         return Err(Error::Invalid(format!(
             "{} latent trajectories: expected one per body part ({})",
