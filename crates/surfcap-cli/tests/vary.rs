@@ -124,9 +124,15 @@ fn train_then_sample_variants_and_blends_read_back_and_repeat_by_seed() {
     assert!(view.starts_with("surfcap view ") && view.contains("--sequences 16_15,16_15~1,16_15~2"), "{view}");
     assert!(view.contains(p(&std::fs::canonicalize(&subject).unwrap())), "{view}");
 
-    // The same seed gives the same files; another seed other variants.
+    // The same seed gives the same files, on one thread too; another seed other variants.
     let again = d.path().join("again");
-    sample(&model, &again, &["--sequence", "16_15"], "3");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .env("RAYON_NUM_THREADS", "1")
+        .args(["--quiet", "vary", "sample", p(&model), "--sequence", "16_15", "--count", "2", "--seed", "3"])
+        .args(["--warmup", "20", "--thin", "2", "-o", p(&again)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
     let other = d.path().join("other");
     sample(&model, &other, &["--sequence", "16_15"], "4");
     for k in 1..=2 {
@@ -205,6 +211,7 @@ fn bad_requests_are_refused_before_any_work() {
     refused(train(&["--sequences", "16_15,16_36", "--blend", "16_15:16_36", "--blend-weights", "1"]), "strictly");
     refused(train(&["--blend", "16_15"]), "expected A:B");
     refused(train(&["--latent-dim", "0"]), "--latent-dim");
+    refused(train(&["--blend-weights", "0.25"]), "--blend");
     assert!(!out.join("model.json").exists(), "no model from a refused request");
     // Sampling: a blend weight outside [0, 1], a missing model, both kinds of request.
     let model = d.path().join("missing-model");

@@ -64,7 +64,7 @@ pub struct TrainArgs {
     pub blend: Vec<BlendPair>,
     /// Weights of the blends of every --blend pair, comma-separated, each strictly between 0
     /// and 1 (thesis 6.7: W = {0.5}).
-    #[arg(long, value_delimiter = ',', default_value = "0.5", value_parser = inner_weight)]
+    #[arg(long, value_delimiter = ',', default_value = "0.5", value_parser = inner_weight, requires = "blend")]
     pub blend_weights: Vec<f64>,
     /// Latent dimension of every part's GPDM (thesis: 3).
     #[arg(long, default_value_t = 3, value_parser = |s: &str| whole_in(s, 1, 10))]
