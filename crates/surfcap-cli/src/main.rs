@@ -8,6 +8,7 @@
 //! failure prints exactly one JSON object on stderr, `{"error", "causes", "exit_code"}`, and
 //! nothing else there; results stay on stdout.
 
+mod body_parts;
 mod commands;
 mod files;
 mod frame_appearance;
@@ -104,6 +105,10 @@ enum Command {
     /// truth (known drift, moving light, blur, noise, occlusion holes).
     #[command(subcommand)]
     Appearance(commands::appearance::AppearanceCmd),
+    /// Motion variation (thesis ch. 6): learn a GPDM per body part from a few sequences of one
+    /// motion type, then sample endless slightly different versions of them and of their blends.
+    #[command(subcommand)]
+    Vary(commands::vary::Cmd),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -223,6 +228,7 @@ fn main() -> ExitCode {
             Command::RemeshFrames(a) => commands::remesh_frames::run(&ctx, a),
             Command::Smg(c) => commands::smg::run(&ctx, c),
             Command::Appearance(c) => commands::appearance::run(&ctx, c),
+            Command::Vary(c) => commands::vary::run(&ctx, c),
         }
     });
     match result {

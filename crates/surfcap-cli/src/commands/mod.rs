@@ -19,4 +19,5 @@ pub mod synth;
 pub mod transfer;
 pub mod transition;
 pub mod transitions;
+pub mod vary;
 pub mod view;

@@ -7,9 +7,6 @@ use std::time::Instant;
 use serde_json::json;
 use surfcap_mesh::export::export;
 use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
-use surfcap_transfer::BodyParts;
-use surfcap_transfer::body_parts_file::{DEFAULT_OVERLAP_RINGS, read_parts_file};
-use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::TrainOptions;
 use surfcap_transfer::pairs_file::parse_pairs;
@@ -19,6 +16,7 @@ use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, mesh_fingerprint, read_model, write_model};
 use surfcap_transfer::transfer_training::{TrainingRequest, train_cached};
 
+use crate::body_parts::parts_of;
 use crate::limits::Request;
 use crate::options::{CacheOpts, OutOpts, SourceOpts, open};
 
@@ -135,37 +133,6 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     }
 }
 
-/// A subject's body parts: the user's file (any form README "Body parts" describes), one part
-/// with `--whole-body`, else five parts proposed from the subject (thesis 5.4.2: N = 5).
-fn parts_of(
-    ctx: &crate::Ctx,
-    path: Option<&Path>,
-    whole_body: bool,
-    s: &Subject,
-    who: &str,
-) -> anyhow::Result<BodyParts> {
-    let parts = match path {
-        Some(p) => read_parts_file(p, s.topology(), s.frame(0).unwrap_or_default())
-            .map_err(|e| anyhow::anyhow!("{e} (the {who} subject {:?})", s.name))?,
-        None if whole_body => BodyParts::whole_body(s.topology().n_vertices()),
-        None => {
-            let (parts, report) = propose(s, ProposalMethod::Auto, 5, DEFAULT_OVERLAP_RINGS)?;
-            ctx.note(&format!(
-                "{who} {:?}: no --{who}-parts given, so 5 parts were proposed from its {} ({}); `surfcap parts propose` writes them to a file you can edit",
-                s.name,
-                report.method.as_str(),
-                parts.names().join(", ")
-            ));
-            parts
-        }
-    };
-    parts.check_fits(s.topology()).map_err(|e| {
-        let file = path.map_or_else(|| "the parts".to_string(), |p| p.display().to_string());
-        anyhow::anyhow!("{file} for the {who} subject {:?}: {e}", s.name)
-    })?;
-    Ok(parts)
-}
-
 fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.source, &a.target, &a.pairs];
     inputs.extend(a.source_parts.as_deref());
@@ -178,8 +145,8 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let text = String::from_utf8(surfcap_mesh::read_regular_file(&a.pairs)?)
         .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a CSV of frame pairs", a.pairs.display()))?;
     let keys = parse_pairs(&text, &a.pairs.display().to_string(), &source, &target)?;
-    let source_parts = parts_of(ctx, a.source_parts.as_deref(), a.whole_body, &source, "source")?;
-    let target_parts = parts_of(ctx, a.target_parts.as_deref(), a.whole_body, &target, "target")?;
+    let source_parts = parts_of(ctx, a.source_parts.as_deref(), a.whole_body, &source, "source", "--source-parts")?;
+    let target_parts = parts_of(ctx, a.target_parts.as_deref(), a.whole_body, &target, "target", "--target-parts")?;
 
     let key_pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
     let mut options = TrainOptions { components: a.components, ..TrainOptions::default() };

@@ -18,6 +18,7 @@ mod smg;
 mod synth;
 mod transfer;
 mod transitions;
+mod vary;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -111,6 +112,10 @@ pub enum What {
     /// components, hyper-parameters fitted (< 10 s), and a 100-frame transfer onto a
     /// 10,000-vertex mannequin with part correction and stitching (< 10 s).
     Transfer(transfer::TransferArgs),
+    /// Motion variation's speed targets (issue 19 item 7): training on 4 sequences of about 100
+    /// frames (the CMU-driven mannequin's walk, turns and jog; 5 parts) under 2 minutes, and
+    /// sampling 5 variants under 30 s.
+    Vary(vary::VaryArgs),
     /// Write long animations as .glb, .abc or .usda (default: glb, 10 minutes at 30 fps of a
     /// 10,000-vertex tube, 18,000 frames): file size, time and the memory the write adds, for
     /// each length (`--frames 1800,3600,9000,18000` shows that both grow linearly).
@@ -172,6 +177,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Export { format, frames, vertices, output } => export::run(ctx, format, &frames, vertices, output),
         What::Learn(l) => learn::run(ctx, &l),
         What::Transfer(t) => transfer::run(ctx, &t),
+        What::Vary(v) => vary::run(ctx, &v),
         What::Synth(b) => synth::run(ctx, b),
         What::Smg(b) => smg::run(ctx, &b),
         What::Appearance(b) => appearance::run(ctx, &b),

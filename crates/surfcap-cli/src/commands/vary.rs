@@ -1,0 +1,602 @@
+//! `surfcap vary train | sample`: motion variation synthesis (thesis chapter 6;
+//! `surfcap-variation`). `train` learns one GPDM per body part over a few sequences of one
+//! motion type of a subject (6.4-6.5, optionally with non-linear blends of pairs, 6.7) and
+//! writes the model folder; `sample` draws variants of a learnt sequence or of a blend at any
+//! weight (6.6-6.7) by Hybrid Monte Carlo, one glb per variant, with a report measuring each
+//! against the learnt motion it varies.
+
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::time::Instant;
+
+use serde_json::json;
+use surfcap_learn::gpdm::GpdmOptions;
+use surfcap_mesh::export::{ExportFormat, export};
+use surfcap_mesh::{FrameLabel, Sequence, Subject};
+use surfcap_variation::VariationModel;
+use surfcap_variation::motion_parametrisation::{
+    blend_ladder, bounding_rungs, interpolate_latents, interpolated_timing, sample_blend_variants,
+};
+use surfcap_variation::motion_preparation::{PreparationOptions, TimeAlignment};
+use surfcap_variation::variation_model::TrainOptions;
+use surfcap_variation::variation_model_file::KIND;
+use surfcap_variation::variation_sampling::{
+    ChainStart, SamplingOptions, place_and_retime, reconstruct_aligned, sample_variants,
+};
+
+use crate::body_parts::parts_of;
+use crate::options::{SourceOpts, count, open, whole_in};
+use crate::output::count_of;
+
+/// The folder kind of `vary sample`'s output (its marker).
+pub const SAMPLES_KIND: &str = "variation-samples";
+
+#[derive(clap::Subcommand, Debug)]
+pub enum Cmd {
+    /// Learn a variation model from sequences of one motion type of a subject (thesis 6.4-6.5:
+    /// one GPDM per body part, the sequences sharing one latent space), saved as a folder.
+    Train(TrainArgs),
+    /// Sample variants of a learnt sequence (thesis 6.6) or of a blend of two at any weight
+    /// (6.7): one glb per variant and `report.json` in the output folder.
+    Sample(SampleArgs),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct TrainArgs {
+    /// The subject (a subject cache or any source `surfcap import` reads).
+    pub subject: PathBuf,
+    /// The sequences to learn, comma-separated (one motion type: walks and turns, or jumps;
+    /// default: every sequence of the subject).
+    #[arg(long, value_delimiter = ',')]
+    pub sequences: Vec<String>,
+    /// The sequence every other is re-timed onto (thesis 6.5.2; default: the first of
+    /// --sequences). Its frame count is every learnt trajectory's.
+    #[arg(long)]
+    pub reference: Option<String>,
+    /// Body parts (a parts file, see README "Body parts"); default: five parts proposed from the
+    /// subject, as `surfcap parts propose` does (thesis 6.4.2: P = 5).
+    #[arg(long)]
+    pub parts: Option<PathBuf>,
+    /// Pairs of --sequences blended non-linearly and added to training (thesis 6.7), `A:B`,
+    /// comma-separated or repeated: `vary sample --blend A:B:W` then interpolates between
+    /// learnt trajectories W apart.
+    #[arg(long, value_delimiter = ',')]
+    pub blend: Vec<BlendPair>,
+    /// Weights of the blends of every --blend pair, comma-separated, each strictly between 0
+    /// and 1 (thesis 6.7: W = {0.5}).
+    #[arg(long, value_delimiter = ',', default_value = "0.5", value_parser = inner_weight, requires = "blend")]
+    pub blend_weights: Vec<f64>,
+    /// Latent dimension of every part's GPDM (thesis: 3).
+    #[arg(long, default_value_t = 3, value_parser = |s: &str| whole_in(s, 1, 10))]
+    pub latent_dim: usize,
+    /// Most L-BFGS iterations of every part's GPDM fit.
+    #[arg(long, default_value_t = 400, value_parser = count)]
+    pub iterations: usize,
+    /// The model folder to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub source_opts: SourceOpts,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct SampleArgs {
+    /// A model folder written by `surfcap vary train`.
+    pub model: PathBuf,
+    /// The learnt sequence to vary.
+    #[arg(long, required_unless_present = "blend", conflicts_with = "blend")]
+    pub sequence: Option<String>,
+    /// Variants of the blend of two learnt sequences at a weight in [0, 1], `A:B:W` (thesis
+    /// 6.7: variants of the two nearest learnt trajectories interpolated in the latent space).
+    #[arg(long)]
+    pub blend: Option<BlendAt>,
+    /// Variants to sample.
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| whole_in(s, 1, 1000))]
+    pub count: usize,
+    /// Seed of the HMC chains (the same seed gives the same files, whatever the thread count).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Where each part's chain starts: learnt (the learnt trajectory; surfcap's default) or mean
+    /// (the dynamics' mean prediction from its first point, thesis 6.6.1).
+    #[arg(long, default_value = "learnt")]
+    pub start: StartArg,
+    /// HMC warm-up iterations (step size and path length tuning).
+    #[arg(long, default_value_t = 100, value_parser = |s: &str| whole_in(s, 1, 100_000))]
+    pub warmup: usize,
+    /// HMC iterations between two variants (more: less correlated variants).
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| whole_in(s, 1, 10_000))]
+    pub thin: usize,
+    /// Most leapfrog steps per HMC iteration.
+    #[arg(long, default_value_t = 30, value_parser = |s: &str| whole_in(s, 1, 10_000))]
+    pub max_leapfrog: usize,
+    /// The output folder: `<name>-variant-<k>.glb` per variant and `report.json`.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Value parser: a blend weight strictly between 0 and 1 (0 and 1 are the sequences).
+fn inner_weight(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(w) if w > 0.0 && w < 1.0 => Ok(w),
+        _ => Err("expected a number strictly between 0 and 1 (0 and 1 are the two sequences themselves)".into()),
+    }
+}
+
+/// `A:B`: two sequences to blend.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BlendPair {
+    pub a: String,
+    pub b: String,
+}
+
+impl FromStr for BlendPair {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.split_once(':') {
+            Some((a, b)) if !a.is_empty() && !b.is_empty() && !b.contains(':') => {
+                Ok(BlendPair { a: a.into(), b: b.into() })
+            }
+            _ => Err(format!("{s:?}: expected A:B, two sequence names")),
+        }
+    }
+}
+
+/// `A:B:W`: the blend of two learnt sequences at weight W in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlendAt {
+    pub a: String,
+    pub b: String,
+    pub w: f64,
+}
+
+impl FromStr for BlendAt {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("{s:?}: expected A:B:W, two learnt sequences and a weight in [0, 1]");
+        let (pair, w) = s.rsplit_once(':').ok_or_else(bad)?;
+        let pair: BlendPair = pair.parse().map_err(|_| bad())?;
+        let w = crate::options::fraction(w).map_err(|e| format!("{s:?}: the weight {w:?}: {e}"))?;
+        Ok(BlendAt { a: pair.a, b: pair.b, w })
+    }
+}
+
+/// See [`SampleArgs::start`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StartArg(pub ChainStart);
+
+impl FromStr for StartArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "learnt" | "learned" => Ok(StartArg(ChainStart::Learnt)),
+            "mean" => Ok(StartArg(ChainStart::MeanPrediction)),
+            _ => Err(format!("{s:?}: expected learnt or mean")),
+        }
+    }
+}
+
+pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
+    match cmd {
+        Cmd::Train(a) => train(ctx, a),
+        Cmd::Sample(a) => sample(ctx, a),
+    }
+}
+
+/// The indices of `names` in `subject`, or an error listing its sequences.
+fn sequence_indices(subject: &Subject, path: &Path, names: &[String]) -> anyhow::Result<Vec<usize>> {
+    let known = || subject.sequences().iter().map(|q| q.name.as_str()).collect::<Vec<_>>().join(", ");
+    let mut out = Vec::with_capacity(names.len());
+    for n in names {
+        let (k, _) = subject.sequence(n).ok_or_else(|| {
+            anyhow::anyhow!("--sequences: {} has no sequence {n:?}; it has {}", path.display(), known())
+        })?;
+        anyhow::ensure!(!out.contains(&k), "--sequences: {n:?} is given twice: expected each sequence once");
+        out.push(k);
+    }
+    Ok(out)
+}
+
+fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
+    let mut inputs: Vec<&Path> = vec![&a.subject];
+    inputs.extend(a.parts.as_deref());
+    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
+    ctx.claim_dir(&a.output, KIND)?;
+    let t0 = Instant::now();
+    let subject = open(ctx, &a.subject, &a.source_opts)?;
+    let names: Vec<String> = if a.sequences.is_empty() {
+        let all: Vec<String> = subject.sequences().iter().map(|q| q.name.clone()).collect();
+        ctx.note(&format!(
+            "no --sequences given, so every sequence of {} is learnt ({}); a variation model is meant for one motion type",
+            subject.name,
+            all.join(", ")
+        ));
+        all
+    } else {
+        a.sequences.clone()
+    };
+    let chosen = sequence_indices(&subject, &a.subject, &names)?;
+    let position = |n: &str, what: &str| {
+        names
+            .iter()
+            .position(|x| x == n)
+            .ok_or_else(|| anyhow::anyhow!("{what}: {n:?} is not one of the learnt sequences ({})", names.join(", ")))
+    };
+    let reference = match &a.reference {
+        Some(r) => position(r, "--reference")?,
+        None => 0,
+    };
+    let mut blend_pairs = Vec::with_capacity(a.blend.len());
+    for p in &a.blend {
+        let pair = (position(&p.a, "--blend")?, position(&p.b, "--blend")?);
+        anyhow::ensure!(pair.0 != pair.1, "--blend {}:{}: expected two different sequences", p.a, p.b);
+        blend_pairs.push(pair);
+    }
+    let parts = parts_of(ctx, a.parts.as_deref(), false, &subject, "", "--parts")?;
+    let mut gpdm = GpdmOptions { latent_dim: a.latent_dim, ..GpdmOptions::default() };
+    gpdm.lbfgs.max_iters = a.iterations;
+    gpdm.lbfgs.max_evals = gpdm.lbfgs.max_evals.max(a.iterations + a.iterations / 4);
+    let options = TrainOptions {
+        preparation: PreparationOptions {
+            reference,
+            time_alignment: TimeAlignment::Uniform,
+            blend_pairs,
+            blend_weights: a.blend_weights.clone(),
+        },
+        gpdm,
+    };
+    ctx.say(&format!(
+        "learning {} of {} (+ {}), {} parts, d = {}, reference {}",
+        count_of(names.len(), "sequence"),
+        subject.name,
+        count_of(if a.blend.is_empty() { 0 } else { a.blend.len() * a.blend_weights.len() }, "blend"),
+        parts.len(),
+        a.latent_dim,
+        names[reference]
+    ));
+    let bar = crate::progress::Bar::new(ctx);
+    let t_train = Instant::now();
+    let model = VariationModel::train(&subject, &chosen, &parts, &options, &bar)?;
+    let train_seconds = t_train.elapsed().as_secs_f64();
+    drop(bar);
+    model.save(&a.output, ctx.force)?;
+    let sequences: Vec<serde_json::Value> =
+        model.sequences.iter().map(|s| json!({ "name": s.name, "origin": s.origin, "frames": s.own_frames })).collect();
+    let fits: Vec<serde_json::Value> = model
+        .fits
+        .iter()
+        .map(|f| {
+            json!({
+                "part": f.part, "vertices": f.vertices, "dimensions": f.dimensions,
+                "iterations": f.fit.iters, "evaluations": f.fit.evals, "converged": f.fit.converged,
+                "objective_start": f.fit.initial_objective, "objective": f.fit.objective,
+                "alpha": f.alpha, "beta": f.beta, "seconds": f.seconds,
+            })
+        })
+        .collect();
+    let subject_path = std::fs::canonicalize(&a.subject).unwrap_or_else(|_| a.subject.clone());
+    let result = json!({
+        "model": a.output, "subject": model.subject, "subject_path": subject_path,
+        "vertices": model.topology.n_vertices(), "reference": model.reference, "frames": model.frames,
+        "latent_dim": a.latent_dim, "max_iterations": a.iterations,
+        "sequences": sequences, "parts": fits,
+        "train_seconds": train_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
+        "threads": rayon::current_num_threads(),
+    });
+    crate::output::write_json(&a.output.join("report.json"), &result)?;
+    ctx.result(&result, || print_trained(&result));
+    Ok(())
+}
+
+/// The human summary of a training, from its report.
+fn print_trained(r: &serde_json::Value) {
+    let seqs = r["sequences"].as_array().cloned().unwrap_or_default();
+    let parts = r["parts"].as_array().cloned().unwrap_or_default();
+    println!(
+        "{}: {} of {} reference frames ({}), {} parts, d = {}: learnt in {:.1} s -> {}",
+        r["subject"].as_str().unwrap_or_default(),
+        count_of(seqs.len(), "sequence"),
+        r["frames"],
+        r["reference"].as_str().unwrap_or_default(),
+        parts.len(),
+        r["latent_dim"],
+        r["train_seconds"].as_f64().unwrap_or(0.0),
+        r["model"].as_str().unwrap_or_default()
+    );
+    for s in &seqs {
+        let origin = match s["origin"]["kind"].as_str() {
+            Some("blend") => format!(
+                "blend of {} and {} at {}",
+                s["origin"]["a"].as_str().unwrap_or_default(),
+                s["origin"]["b"].as_str().unwrap_or_default(),
+                s["origin"]["w"]
+            ),
+            _ => "captured".into(),
+        };
+        println!(
+            "  sequence {:<24} {:>5} frames  {origin}",
+            s["name"].as_str().unwrap_or_default(),
+            s["frames"].as_u64().unwrap_or(0)
+        );
+    }
+    println!(
+        "  {:<12} {:>8} {:>6} {:>11} {:>14} {:>14}  {:<27} {:<35} {:>7}",
+        "part",
+        "vertices",
+        "dims",
+        "iterations",
+        "objective",
+        "(start)",
+        "alpha (eq. 6.4)",
+        "beta (eq. 6.6)",
+        "seconds"
+    );
+    for p in &parts {
+        let list = |v: &serde_json::Value| -> String {
+            v.as_array()
+                .into_iter()
+                .flatten()
+                .map(|x| format!("{:.2e}", x.as_f64().unwrap_or(0.0)))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        println!(
+            "  {:<12} {:>8} {:>6} {:>5}{} {:>14.1} {:>14.1}  {:<27} {:<35} {:>7.1}",
+            p["part"].as_str().unwrap_or_default(),
+            p["vertices"].as_u64().unwrap_or(0),
+            p["dimensions"].as_u64().unwrap_or(0),
+            p["iterations"].as_u64().unwrap_or(0),
+            if p["converged"] == true { " conv." } else { "      " },
+            p["objective"].as_f64().unwrap_or(0.0),
+            p["objective_start"].as_f64().unwrap_or(0.0),
+            list(&p["alpha"]),
+            list(&p["beta"]),
+            p["seconds"].as_f64().unwrap_or(0.0)
+        );
+    }
+}
+
+/// A file-name-safe form of a name (letters, digits, `.`, `_`, `-`; anything else `_`).
+fn file_safe(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || "._-".contains(c) { c } else { '_' }).collect()
+}
+
+/// Centroid of a pose.
+fn centroid(p: &[f32]) -> [f64; 3] {
+    let n = (p.len() / 3).max(1) as f64;
+    std::array::from_fn(|k| p.chunks_exact(3).map(|v| v[k] as f64).sum::<f64>() / n)
+}
+
+fn distance3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// Mean per-vertex distance between two motions of one frame count and vertex count.
+fn mean_vertex_distance(a: &[Vec<f32>], b: &[Vec<f32>]) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for (x, y) in a.iter().zip(b) {
+        for (p, q) in x.chunks_exact(3).zip(y.chunks_exact(3)) {
+            s += (0..3).map(|k| ((p[k] - q[k]) as f64).powi(2)).sum::<f64>().sqrt();
+            n += 1;
+        }
+    }
+    if n == 0 { 0.0 } else { s / n as f64 }
+}
+
+/// Length of the path of the centroids of `frames`.
+fn path_length(frames: &[Vec<f32>]) -> f64 {
+    frames.windows(2).map(|w| distance3(centroid(&w[0]), centroid(&w[1]))).sum()
+}
+
+/// The motion the variants vary, without sampling: the learnt trajectory's reconstruction (a
+/// sequence) or the latent interpolation of the two learnt trajectories around the weight (a
+/// blend); its body-frame poses on the reference's frames and its world frames.
+struct Learnt {
+    aligned: Vec<Vec<f32>>,
+    world: Vec<Vec<f32>>,
+}
+
+fn learnt_sequence(model: &VariationModel, name: &str) -> anyhow::Result<Learnt> {
+    let j = model.sequence_index(name)?;
+    let (aligned, disp) = reconstruct_aligned(model, &model.learnt_latents(j)?)?;
+    let s = &model.sequences[j];
+    let world = place_and_retime(&aligned, &disp, &s.first_placement, &s.times, s.own_frames)?;
+    Ok(Learnt { aligned, world })
+}
+
+fn learnt_blend(model: &VariationModel, b: &BlendAt) -> anyhow::Result<Learnt> {
+    let ladder = blend_ladder(model, &b.a, &b.b)?;
+    let (r1, r2) = bounding_rungs(&ladder, b.w)?;
+    let lat =
+        interpolate_latents(&model.learnt_latents(r1.sequence)?, &model.learnt_latents(r2.sequence)?, r1, r2, b.w);
+    let (aligned, disp) = reconstruct_aligned(model, &lat)?;
+    let (own, times) = interpolated_timing(model, r1, r2, b.w);
+    let start = model.sequences[model.sequence_index(&b.a)?].first_placement;
+    let world = place_and_retime(&aligned, &disp, &start, &times, own)?;
+    Ok(Learnt { aligned, world })
+}
+
+/// The subject path `vary train` recorded in the model folder's `report.json`, if any.
+fn trained_subject_path(model: &Path) -> Option<PathBuf> {
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(model.join("report.json")).ok()?).ok()?;
+    v["subject_path"].as_str().map(PathBuf::from)
+}
+
+/// A shell word for `p` (quoted when it holds anything but plain path characters).
+fn shell_word(p: &str) -> String {
+    if !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || "/._-~+@:=,".contains(c)) {
+        p.to_string()
+    } else {
+        format!("'{}'", p.replace('\'', "'\\''"))
+    }
+}
+
+/// What `vary sample` varies.
+#[derive(Clone, Copy)]
+enum Request<'a> {
+    Sequence(&'a str),
+    Blend(&'a BlendAt),
+}
+
+fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.model])?;
+    let t0 = Instant::now();
+    let model = VariationModel::load(&a.model)?;
+    let load_seconds = t0.elapsed().as_secs_f64();
+    let opts = SamplingOptions { start: a.start.0, warmup: a.warmup, thin: a.thin, max_leapfrog: a.max_leapfrog };
+    let what = match (&a.sequence, &a.blend) {
+        (Some(name), _) => Request::Sequence(name),
+        (None, Some(b)) => Request::Blend(b),
+        (None, None) => anyhow::bail!("expected --sequence NAME or --blend A:B:W"),
+    };
+    // The request checked against the model before the output is claimed or anything sampled.
+    let (stem, sequence_stem, sources) = match what {
+        Request::Sequence(name) => {
+            model.sequence_index(name)?;
+            (file_safe(name), name.to_string(), vec![name.to_string()])
+        }
+        Request::Blend(b) => {
+            let ladder = blend_ladder(&model, &b.a, &b.b)?;
+            bounding_rungs(&ladder, b.w)?;
+            if ladder.len() == 2 && b.w > 0.0 && b.w < 1.0 {
+                ctx.note(&format!(
+                    "the model learnt no blend of {} and {}: variants of the two are interpolated directly (train with --blend {}:{} for the thesis's learnt blends)",
+                    b.a, b.b, b.a, b.b
+                ));
+            }
+            (
+                file_safe(&format!("{}-{}-{}", b.a, b.b, b.w)),
+                format!("{}+{}@{}", b.a, b.b, b.w),
+                vec![b.a.clone(), b.b.clone()],
+            )
+        }
+    };
+    let out_dir = ctx.claim_dir(&a.output, SAMPLES_KIND)?;
+    ctx.say(&format!(
+        "sampling {} of {} (seed {}, warm-up {}, thin {}) ...",
+        count_of(a.count, "variant"),
+        sequence_stem,
+        a.seed,
+        a.warmup,
+        a.thin
+    ));
+    let t_sample = Instant::now();
+    let (variants, chains, blend, learnt) = match what {
+        Request::Sequence(name) => {
+            let (v, c) = sample_variants(&model, name, a.count, a.seed, &opts)?;
+            (v, c, None, learnt_sequence(&model, name)?)
+        }
+        Request::Blend(b) => {
+            let (v, s) = sample_blend_variants(&model, &b.a, &b.b, b.w, a.count, a.seed, &opts)?;
+            let chains = s.chains.clone();
+            (v, chains, Some(s), learnt_blend(&model, b)?)
+        }
+    };
+    let sample_seconds = t_sample.elapsed().as_secs_f64();
+
+    let t_write = Instant::now();
+    let nv = model.topology.n_vertices();
+    let learnt_end = learnt.world.last().map(|p| centroid(p)).unwrap_or_default();
+    let mut files = Vec::new();
+    let mut per_variant = Vec::new();
+    let mut names = sources.clone();
+    let bar = crate::progress::Bar::new(ctx);
+    for (k, v) in variants.iter().enumerate() {
+        let name = format!("{sequence_stem}~{}", k + 1);
+        let file = out_dir.join(format!("{stem}-variant-{}.glb", k + 1));
+        let frames = v.world.len();
+        let positions: Vec<f32> = v.world.iter().flatten().copied().collect();
+        let seq = Sequence::new(name.clone(), nv, positions)?
+            .with_labels(vec![FrameLabel::Synthetic; frames])?
+            .with_tags(vec!["variation".into()]);
+        let s = Subject::new(
+            name.clone(),
+            model.topology.clone(),
+            vec![seq],
+            model.fps,
+            model.up_axis,
+            model.units.clone(),
+        )?;
+        files.extend(export(&s, ExportFormat::Glb, &file, ctx.export_options(), &bar)?);
+        let end = v.world.last().map(|p| centroid(p)).unwrap_or_default();
+        per_variant.push(json!({
+            "file": file, "sequence": name, "frames": frames,
+            "body_frame_distance": mean_vertex_distance(&v.aligned, &learnt.aligned),
+            "end_distance": distance3(end, learnt_end),
+            "path_length": path_length(&v.world),
+        }));
+        names.push(name);
+    }
+    drop(bar);
+    let write_seconds = t_write.elapsed().as_secs_f64();
+    let subject_path =
+        trained_subject_path(&a.model).map_or_else(|| "SUBJECT".to_string(), |p| p.display().to_string());
+    let mut view = vec!["surfcap".to_string(), "view".into(), shell_word(&subject_path)];
+    view.extend(
+        files
+            .iter()
+            .filter(|f| f.extension().is_some_and(|x| x == "glb"))
+            .map(|f| shell_word(&f.display().to_string())),
+    );
+    view.push("--sequences".into());
+    view.push(shell_word(&names.join(",")));
+    let view = view.join(" ");
+    let start = match a.start.0 {
+        ChainStart::Learnt => "learnt",
+        ChainStart::MeanPrediction => "mean",
+    };
+    let report = json!({
+        "model": a.model, "subject": model.subject, "units": model.units.name,
+        "sequence": a.sequence,
+        "blend": blend.as_ref().map(|b| json!({
+            "a": b.a, "b": b.b, "w": b.w, "lower": b.lower, "upper": b.upper, "pairing": b.pairing,
+            "lower_sequence": model.sequences[b.lower.sequence].name,
+            "upper_sequence": model.sequences[b.upper.sequence].name,
+        })),
+        "seed": a.seed, "count": a.count,
+        "options": {
+            "start": start,
+            "warmup": a.warmup, "thin": a.thin, "max_leapfrog": a.max_leapfrog,
+        },
+        "chains": chains,
+        "learnt": {
+            "frames": learnt.world.len(), "path_length": path_length(&learnt.world),
+            "what": if blend.is_some() {
+                "the latent interpolation of the two learnt trajectories around the weight, reconstructed"
+            } else {
+                "the learnt trajectory, reconstructed"
+            },
+        },
+        "variants": per_variant,
+        "load_seconds": load_seconds, "sample_seconds": sample_seconds, "write_seconds": write_seconds,
+        "total_seconds": t0.elapsed().as_secs_f64(),
+        "view": view,
+    });
+    crate::output::write_json(&out_dir.join("report.json"), &report)?;
+    ctx.result(&report, || {
+        println!(
+            "{} of {} sampled in {sample_seconds:.1} s (seed {}) -> {}",
+            count_of(a.count, "variant"),
+            sequence_stem,
+            a.seed,
+            a.output.display()
+        );
+        let unit = crate::output::unit_name(&model.units);
+        for v in report["variants"].as_array().into_iter().flatten() {
+            println!(
+                "  {:<28} {:>4} frames: {:.4} {unit} per vertex from the learnt motion (body frame), ends {:.3} {unit} from its end",
+                v["sequence"].as_str().unwrap_or_default(),
+                v["frames"].as_u64().unwrap_or(0),
+                v["body_frame_distance"].as_f64().unwrap_or(0.0),
+                v["end_distance"].as_f64().unwrap_or(0.0)
+            );
+        }
+        for c in &chains {
+            println!(
+                "  chain {:<12} acceptance {:.2}, step {:.2e}, {} leapfrog steps, {} divergences, {:.1} s",
+                c.part, c.acceptance_rate, c.step_size, c.leapfrog_steps, c.divergences, c.seconds
+            );
+        }
+        println!("view them next to the source: {view}");
+    });
+    Ok(())
+}
