@@ -169,10 +169,10 @@ pub struct Criteria {
     /// (iv) likewise foot sliding ([`foot_sliding`]).
     pub tolerance: f64,
     /// Contact thresholds of [`foot_sliding`], fractions of H: the root-motion detector's
-    /// vertical speed (0.5 H/s), and a contact height of 0.01 H (1.6 cm on the mannequin)
+    /// vertical speed (0.5 H/s), and a contact height of 0.02 H (3 cm on the mannequin)
     /// instead of its 0.04 H: that one is for groups of vertices among which the detector then
-    /// picks the planted foot; per vertex, a swinging foot passing 2 cm above the ground was
-    /// counted as sliding at walking speed.
+    /// picks the planted foot; per vertex, a swinging foot passing a few cm above the ground
+    /// counts as sliding at walking speed.
     pub contact_height: f64,
     pub contact_vertical_speed: f64,
     /// Fraction of each leg part's vertices (lowest in the reference pose) that are its sole.
@@ -185,7 +185,7 @@ impl Default for Criteria {
             floor_factor: 2.0,
             min_floor: 0.001,
             tolerance: 0.1,
-            contact_height: 0.01,
+            contact_height: 0.02,
             contact_vertical_speed: ContactParams::default().vertical_speed,
             sole_fraction: 0.02,
         }
@@ -439,8 +439,8 @@ pub fn sole_vertices(parts: &BodyParts, rest: &[f32], up: UpAxis, fraction: f64)
 /// Foot sliding of a motion in the world: the mean horizontal speed of the sole vertices
 /// while they are in contact. A sole vertex is in contact over the step from frame f to f + 1
 /// when it is at most `contact.height x H` above the ground at both frames and moves
-/// vertically slower than `contact.vertical_speed x H` per second; the ground is the lowest
-/// sole height of the motion. The thresholds are those of the root-motion contact detector
+/// vertically slower than `contact.vertical_speed x H` per second; the ground is the median
+/// over frames of the lowest sole's height. The thresholds are those of the root-motion contact detector
 /// (`root_motion_from_contacts`: `contact.speed` is not used), applied per vertex; the shared
 /// contact detection of issue 19 item 1 will replace this function.
 pub fn foot_sliding(
@@ -452,7 +452,13 @@ pub fn foot_sliding(
     contact: &ContactParams,
 ) -> FootSliding {
     let (a0, a1, _) = plane_axes(up);
-    let ground = frames.iter().flat_map(|p| soles.iter().map(|&v| height_of(p, up)(v))).fold(f64::MAX, f64::min);
+    // The ground: the median over frames of the lowest sole (some foot is down at most frames;
+    // the lowest sole over the whole motion was one outlier dip, below which almost nothing
+    // counted as in contact).
+    let mut lowest: Vec<f64> =
+        frames.iter().map(|p| soles.iter().map(|&v| height_of(p, up)(v)).fold(f64::MAX, f64::min)).collect();
+    lowest.sort_by(f64::total_cmp);
+    let ground = lowest.get(lowest.len() / 2).copied().unwrap_or(0.0);
     let (near, vmax) = (contact.height * height, contact.vertical_speed * height);
     let (mut speed, mut n) = (0.0, 0usize);
     for w in frames.windows(2) {
@@ -550,6 +556,12 @@ fn stitched_error(stitcher: &Stitcher, parts: &BodyParts, per_part: &[Mat<f64>],
     Ok(errs.iter().sum::<f64>() / errs.len().max(1) as f64)
 }
 
+/// One part's held-out errors (GPDM, PCA), reconstructions (GPDM, PCA) and fit.
+type HeldOutPart = (f64, f64, Mat<f64>, Mat<f64>, FitSummary);
+
+/// A stitched body-frame motion and its displacements.
+type AlignedMotion = (Vec<Vec<f32>>, Vec<[f64; 6]>);
+
 /// Fig. 6.4 on training frames (the model's own) and held-out frames (a model of the even
 /// frames).
 fn reconstruction(
@@ -589,7 +601,7 @@ fn reconstruction(
     let scales = displacement_scales(&torso, &disp);
     let lengths: Vec<usize> = even.sequences.iter().map(|s| s.aligned.len()).collect();
     let gopts = gpdm_options(o);
-    let held: Vec<(f64, f64, Mat<f64>, Mat<f64>, FitSummary)> = (0..parts.len())
+    let held: Vec<HeldOutPart> = (0..parts.len())
         .into_par_iter()
         .map(|k| {
             let t0 = Instant::now();
@@ -727,7 +739,7 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
     let height = subject_height(rest, up);
     let stitcher = Stitcher::new(topology, rest, &case.parts).map_err(stitch_error)?;
     // Every learnt sequence's reconstruction at its learnt latents (body frame).
-    let learnt: Vec<(Vec<Vec<f32>>, Vec<[f64; 6]>)> = (0..model.sequences.len())
+    let learnt: Vec<AlignedMotion> = (0..model.sequences.len())
         .map(|j| reconstruct_aligned(&model, &model.learnt_latents(j)?))
         .collect::<Result<_, surfcap_variation::Error>>()?;
     let learnt_poses: Vec<Vec<Vec<f32>>> = learnt.iter().map(|l| l.0.clone()).collect();
@@ -894,9 +906,8 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
     if o.iterations == Some(0) {
         return Err(Error::parameter("--iterations", Some("0".into()), "expected at least 1"));
     }
-    if !(o.blend_weight > 0.0 && o.blend_weight < 1.0)
-        || !(o.trained_blend_weight > 0.0 && o.trained_blend_weight < 1.0)
-    {
+    let inside = |w: f64| w > 0.0 && w < 1.0;
+    if !inside(o.blend_weight) || !inside(o.trained_blend_weight) {
         return Err(Error::parameter("--blend-weight", Some(o.blend_weight.to_string()), "expected a value in (0, 1)"));
     }
     let cases = cases.iter().map(|c| case_eval(c, o)).collect::<Result<Vec<_>>>()?;
