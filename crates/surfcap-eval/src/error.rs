@@ -15,6 +15,9 @@ pub enum Error {
     /// Texture maps, flows, warps and the appearance model (thesis chapter 4).
     #[error(transparent)]
     Appearance(#[from] surfcap_appearance::Error),
+    /// Motion variation (thesis chapter 6): preparation, training, sampling.
+    #[error(transparent)]
+    Variation(#[from] surfcap_variation::Error),
     /// A learning step failed; `context` says which (e.g. "fitting the GPDM").
     #[error("{context}")]
     Learn {

@@ -8,7 +8,7 @@
 //! returning a typed, serialisable result that carries everything a front end prints, writes or
 //! plots: [`interpolation_eval()`] (thesis 2.4, Fig. 2.8), [`pose_metric_eval()`] (2.3.2,
 //! Fig. 2.5-2.7), [`transition_costs_eval()`] (2.5.5, Fig. 2.15), [`graph_comparison_eval()`]
-//! (3.3.3, Fig. 3.2 and 3.8), [`gpdm_eval()`] (6.4-6.5, Fig. 6.4) and [`appearance_eval()`] (eigen
+//! (3.3.3, Fig. 3.2 and 3.8), [`gpdm_eval()`] (6.4-6.5, Fig. 6.4), [`variation_eval()`] (motion variation, 6.5-6.8, Fig. 6.4 and 6.7 and variation statistics) and [`appearance_eval()`] (eigen
 //! appearance maps, 4.5-4.6, Fig. 4.5-4.12, on generated textures with ground truth). They never print, open
 //! files or draw.
 //!
@@ -31,6 +31,7 @@ pub mod smg_eval;
 pub mod transfer_eval;
 pub mod transition_costs_eval;
 pub mod transition_measures;
+pub mod variation_eval;
 
 pub use appearance_eval::{AppearanceEval, AppearanceEvalOptions, appearance_eval};
 pub use error::{Error, Result};
@@ -41,6 +42,7 @@ pub use interpolation_eval::{InterpolationEval, InterpolationOptions, interpolat
 pub use pose_metric_eval::{PoseMetricEval, PoseMetricOptions, pose_metric_eval};
 pub use root_motion_eval::{RootMotionEval, RootMotionOptions, root_motion_eval};
 pub use transition_costs_eval::{TransitionCostsEval, TransitionCostsOptions, transition_costs_eval};
+pub use variation_eval::{VariationEval, VariationEvalOptions, variation_eval};
 
 /// The condensed upper triangle (i < j, row-major) of a row-major N x N matrix.
 pub fn condensed(n: usize, full: &[f64]) -> Vec<f64> {

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use surfcap_eval::{
     GpdmEvalOptions, GraphComparisonOptions, InterpolationOptions, PoseMetricOptions, RootMotionOptions,
-    TransitionCostsOptions, transfer_eval::TransferEvalOptions,
+    TransitionCostsOptions, VariationEvalOptions, transfer_eval::TransferEvalOptions,
 };
 use surfcap_geometry::pose_interpolation::StretchInterpolation;
 use surfcap_geometry::root_motion_from_contacts::ContactParams;
@@ -22,6 +22,7 @@ mod root_motion;
 mod smg;
 mod transfer;
 mod transitions;
+mod vary;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -312,6 +313,42 @@ pub enum What {
         #[arg(short, long, default_value = "appearance-eval")]
         output: PathBuf,
     },
+    /// Motion variation (thesis chapter 6, issue 19): one variation model per case (a GPDM per
+    /// body part, the first two clips blended at w = 0.5 and learnt too): reconstruction error
+    /// of training and held-out frames against PCA (Fig. 6.4), guided vs direct latent
+    /// interpolation against the mesh blend at w = 0.25 (Fig. 6.7), and per captured sequence
+    /// seeded variants checked against five criteria; exits 1 when one is missed.
+    Vary {
+        /// The shared data folder (CMU clips and the KayKit knight).
+        #[arg(long, default_value = "../shared/data")]
+        data: PathBuf,
+        /// Only one case: cmu (the mannequin driven by CMU clips) or kaykit (the knight).
+        #[arg(long)]
+        only: Option<String>,
+        /// CMU clips of the cmu case (in cmu_bvh; the first is the reference, the first two
+        /// are blended).
+        #[arg(long, value_delimiter = ',', default_value = "16_15,16_36,16_17,16_19,16_07")]
+        cmu_clips: Vec<String>,
+        /// KayKit knight clips of the kaykit case (the first is the reference, the first two
+        /// are blended).
+        #[arg(long, value_delimiter = ',', default_value = "Walking_A,Running_A,Walking_B,Walking_C,Running_B")]
+        kaykit_clips: Vec<String>,
+        /// Target vertex count of the mannequin (1000 to 20000).
+        #[arg(long, default_value_t = 1500, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
+        vertices: usize,
+        /// Variants per captured sequence.
+        #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::at_least(s, 2))]
+        variants: usize,
+        /// Seed of the variants.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// L-BFGS iterations at most of every GPDM (default 400).
+        #[arg(long, value_parser = crate::options::count)]
+        iterations: Option<usize>,
+        /// Folder for vary.json and the plots.
+        #[arg(short, long, default_value = "vary-eval")]
+        output: PathBuf,
+    },
     /// Round trips through Alembic and USD (issue 22): every sequence of the data folder
     /// imported, exported as .abc and .usda, imported back and compared (positions to the bit,
     /// topology and UVs, names, labels, rate, up axis, units), with sizes and times.
@@ -365,6 +402,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Interchange { data, output, .. } => {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-interchange")?;
+        }
+        What::Vary { data, output, .. } => {
+            surfcap_mesh::output_path::check_not_input(output, &[data])?;
+            ctx.claim_dir(output, "eval-vary")?;
         }
         What::Appearance { data, frames_dir, output, .. } => {
             let mut inputs: Vec<&Path> = vec![data];
@@ -474,6 +515,24 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 ..Default::default()
             };
             appearance::run(ctx, source, &opts, &flow, full_resolution_flows, &cache, &output)
+        }
+        What::Vary { data, only, cmu_clips, kaykit_clips, vertices, variants, seed, iterations, output } => {
+            use surfcap_eval::variation_eval::{cmu_case, kaykit_case};
+            let (cmu, kaykit) = match only.as_deref() {
+                None => (true, true),
+                Some("cmu") => (true, false),
+                Some("kaykit") => (false, true),
+                Some(other) => anyhow::bail!("--only {other}: expected cmu or kaykit"),
+            };
+            let mut cases = Vec::new();
+            if cmu {
+                cases.push(cmu_case(&data, vertices, &cmu_clips)?);
+            }
+            if kaykit {
+                cases.push(kaykit_case(&data, &kaykit_clips)?);
+            }
+            let opts = VariationEvalOptions { variants, seed, iterations, ..Default::default() };
+            vary::run(ctx, cases, &opts, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)

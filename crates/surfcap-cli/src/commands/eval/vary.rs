@@ -1,0 +1,214 @@
+//! `surfcap eval vary`: motion variation synthesis evaluated (thesis chapter 6, issue 19 item
+//! 5; `surfcap_eval::variation_eval` computes it). Writes `vary.json`, per case the
+//! reconstruction errors of Fig. 6.4, the interpolation curves of Fig. 6.7 and each part's
+//! latent trajectories with the reference sequence's variants (Fig. 6.5), prints the tables,
+//! and fails (exit 1, after writing everything) when a variation criterion is missed.
+
+use std::path::{Path, PathBuf};
+
+use surfcap_eval::variation_eval::{CaseEval, VariationCase, VariationEvalOptions, variation_eval};
+use surfcap_plot::{LineChart, Series, write_line_chart};
+
+const PALETTE: [(u8, u8, u8); 6] =
+    [(31, 95, 191), (208, 48, 48), (46, 158, 68), (224, 138, 0), (120, 60, 170), (90, 90, 90)];
+
+fn series(name: &str, points: Vec<(f64, f64)>, color: (u8, u8, u8), dashed: bool, markers: bool) -> Series {
+    Series { name: name.into(), points, color, dashed, markers }
+}
+
+/// Fig. 6.4 (x: part, the last the stitched mesh), Fig. 6.7b, and the latent trajectories.
+fn plots(dir: &Path, c: &CaseEval) -> anyhow::Result<Vec<PathBuf>> {
+    let r = &c.reconstruction;
+    let rows: Vec<_> = r.parts.iter().chain(std::iter::once(&r.overall)).collect();
+    let pts = |f: &dyn Fn(&surfcap_eval::variation_eval::ReconstructionErrors) -> f64| -> Vec<(f64, f64)> {
+        rows.iter().enumerate().map(|(k, e)| (k as f64, f(e))).collect()
+    };
+    let labels: Vec<String> = rows.iter().enumerate().map(|(k, e)| format!("{k} {}", e.part)).collect();
+    let fig64 = LineChart {
+        title: format!(
+            "{}: mean per-vertex reconstruction error, GPDM vs PCA (d = {}), Fig. 6.4",
+            c.name, r.latent_dim
+        ),
+        x_label: format!("part: {}", labels.join(", ")),
+        y_label: format!("mean vertex error ({})", c.units),
+        series: vec![
+            series("GPDM, training frames", pts(&|e| e.gpdm_training), PALETTE[0], false, true),
+            series("PCA, training frames", pts(&|e| e.pca_training), PALETTE[1], false, true),
+            series("GPDM, held-out frames", pts(&|e| e.gpdm_held_out), PALETTE[0], true, true),
+            series("PCA, held-out frames", pts(&|e| e.pca_held_out), PALETTE[1], true, true),
+        ],
+    };
+    let mut written = write_line_chart(&dir.join(format!("{}_fig6_4", c.name)), &fig64)?;
+    let b = &c.blend;
+    let curve = |v: &[f64]| v.iter().enumerate().map(|(i, &d)| (i as f64, d)).collect();
+    let fig67 = LineChart {
+        title: format!(
+            "{}: latent interpolation of {} and {} at w = {} vs the mesh blend, Fig. 6.7",
+            c.name, b.a, b.b, b.w
+        ),
+        x_label: "frame (reference timing)".into(),
+        y_label: format!("mean vertex distance ({})", c.units),
+        series: vec![
+            series(&format!("direct ({} - {})", b.a, b.b), curve(&b.direct), PALETTE[1], false, false),
+            series(
+                &format!("guided ({} - {})", b.guided_between[0].0, b.guided_between[1].0),
+                curve(&b.guided),
+                PALETTE[2],
+                false,
+                false,
+            ),
+        ],
+    };
+    written.extend(write_line_chart(&dir.join(format!("{}_fig6_7", c.name)), &fig67)?);
+    for p in &c.latents {
+        let two = |m: &surfcap_learn::Mat<f64>| -> Vec<(f64, f64)> {
+            (0..m.nrows()).map(|i| (m[(i, 0)], if m.ncols() > 1 { m[(i, 1)] } else { i as f64 })).collect()
+        };
+        let mut s: Vec<Series> = p
+            .learnt
+            .iter()
+            .enumerate()
+            .map(|(k, (n, x))| series(n, two(x), PALETTE[k % PALETTE.len()], false, false))
+            .collect();
+        for (k, v) in p.variants.iter().enumerate() {
+            let name = if k == 0 { format!("variants of {}", p.learnt[0].0) } else { String::new() };
+            s.push(series(&name, two(v), (150, 150, 150), true, false));
+        }
+        let chart = LineChart {
+            title: format!("{}: {} latent trajectories (dimensions 1 and 2) and variants, Fig. 6.5", c.name, p.part),
+            x_label: "x1".into(),
+            y_label: "x2".into(),
+            series: s,
+        };
+        written.extend(write_line_chart(&dir.join(format!("{}_latent_{}", c.name, p.part)), &chart)?);
+    }
+    Ok(written)
+}
+
+fn print_case(c: &CaseEval, tolerance: f64) {
+    let u = &c.units;
+    println!(
+        "== {} ({}: {} vertices, height {:.3} {u}; {} learnt sequences of {} frames; parts {}); trained in {:.1} s",
+        c.name,
+        c.subject,
+        c.vertices,
+        c.height,
+        c.sequences.len(),
+        c.reference_frames,
+        c.parts.join(", "),
+        c.train_seconds
+    );
+    let r = &c.reconstruction;
+    println!(
+        "Fig. 6.4: mean per-vertex error ({u}), d = {}; training {} frames; held out {} frames (model of {} frames, latent = {})",
+        r.latent_dim, r.training_frames, r.held_out_frames, r.held_out_training_frames, r.held_out_latent
+    );
+    println!("{:<20} {:>10} {:>10} {:>10} {:>10}", "part", "GPDM train", "PCA train", "GPDM held", "PCA held");
+    for e in r.parts.iter().chain(std::iter::once(&r.overall)) {
+        println!(
+            "{:<20} {:>10.5} {:>10.5} {:>10.5} {:>10.5}",
+            e.part, e.gpdm_training, e.pca_training, e.gpdm_held_out, e.pca_held_out
+        );
+    }
+    let b = &c.blend;
+    println!(
+        "Fig. 6.7: {} - {} at w = {} against the mesh blend: direct {:.5} {u}, guided by {}@{} - {}@{}: {:.5} {u} ({})",
+        b.a,
+        b.b,
+        b.w,
+        b.direct_mean,
+        b.guided_between[0].0,
+        b.guided_between[0].1,
+        b.guided_between[1].0,
+        b.guided_between[1].1,
+        b.guided_mean,
+        if b.guided_mean < b.direct_mean { "guided closer, as in Fig. 6.7" } else { "direct closer" }
+    );
+    println!(
+        "variation ({} variants each; distances mean per vertex in {u}; sliding in {u}/s; edge distortion mean |l/l0 - 1|; tolerance +{:.0}%)",
+        c.variation.first().map_or(0, |v| v.variants),
+        100.0 * tolerance
+    );
+    println!(
+        "{:<18} {:>7} {:>7} {:>7} {:>7} {:>7} {:>16} {:>7} {:>7} {:>7} {:>7} {:>7}  verdict",
+        "sequence",
+        "floorB",
+        "minB",
+        "floorW",
+        "minW",
+        "ownL",
+        "nearest other",
+        "edgeIn",
+        "edgeMax",
+        "slideIn",
+        "slideMx",
+        "minPair"
+    );
+    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    for v in &c.variation {
+        let near = v.nearest_other.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("a variant");
+        let p = &v.passes;
+        let failed: Vec<&str> = [
+            (p.differs, "(i) differs"),
+            (p.closest_to_source, "(ii) closest to source"),
+            (p.edge_distortion, "(iii) edge distortion"),
+            (p.foot_sliding, "(iv) foot sliding"),
+            (p.distinct, "(v) distinct"),
+        ]
+        .iter()
+        .filter(|x| !x.0)
+        .map(|x| x.1)
+        .collect();
+        let short: String = near.0.chars().take(9).collect();
+        println!(
+            "{:<18} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>9} {:>6.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4}  {}",
+            v.sequence,
+            v.floor_body,
+            min(&v.distance_body),
+            v.floor_world,
+            min(&v.distance_world),
+            max(&v.distance_learnt),
+            short,
+            near.1,
+            v.edge_distortion_input,
+            max(&v.edge_distortion),
+            v.sliding_input.speed,
+            max(&v.sliding.iter().map(|s| s.speed).collect::<Vec<_>>()),
+            v.min_pair_distance,
+            if failed.is_empty() { "pass".to_string() } else { format!("MISSED: {}", failed.join(", ")) }
+        );
+    }
+}
+
+pub fn run(
+    ctx: &crate::Ctx,
+    cases: Vec<VariationCase>,
+    opts: &VariationEvalOptions,
+    output: &Path,
+) -> anyhow::Result<()> {
+    let r = variation_eval(&cases, opts)?;
+    std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
+    let mut written = Vec::new();
+    for c in &r.cases {
+        written.extend(plots(output, c)?);
+    }
+    let (report, path) = super::save_report(output, "vary.json", &r, "written", &written)?;
+    ctx.result(&report, || {
+        for c in &r.cases {
+            print_case(c, r.criteria.tolerance);
+        }
+        println!(
+            "columns: floorB/floorW the floors of (i) (max({} x the learnt reconstruction error, {} x height)), minB/minW the \
+             smallest variant-source distance (body frame, world), ownL the largest distance to the source's learnt \
+             reconstruction, nearest other (ii), edgeIn/edgeMax the source's and the worst variant's edge distortion (iii), \
+             slideIn/slideMx foot sliding (iv), minPair the closest two variants (v, floor {} x height)",
+            r.criteria.floor_factor, r.criteria.min_floor, r.criteria.min_floor
+        );
+        println!("wrote {} and {} plots in {:.1} s", path.display(), written.len(), r.seconds);
+    });
+    if r.missed > 0 {
+        anyhow::bail!("{} variation criteria MISSED (see {})", r.missed, path.display());
+    }
+    Ok(())
+}
