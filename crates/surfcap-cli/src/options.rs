@@ -302,3 +302,19 @@ pub fn open(ctx: &crate::Ctx, path: &Path, opts: &SourceOpts) -> anyhow::Result<
     }
     Ok(imported.subject)
 }
+
+/// `--path source|sampled` of `vary sample` and `eval vary`: where a variant goes in the world
+/// (surfcap_variation's `VariantPath`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PathArg(pub surfcap_variation::variation_sampling::VariantPath);
+
+impl FromStr for PathArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "source" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Source)),
+            "sampled" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Sampled)),
+            _ => Err(format!("{s:?}: expected source or sampled")),
+        }
+    }
+}

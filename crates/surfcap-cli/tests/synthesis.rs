@@ -500,3 +500,88 @@ fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
     assert!(expected > 0 && repeats == expected, "{repeats} repeats reported, {expected} in the walk");
     assert!(r.get("variation").is_none(), "no variation without --vary");
 }
+
+/// Issue 19 item 6 end to end: a path that loops over a procedural walker's frames, played with
+/// variants from a variation model of that walker: the repeated runs show variants (the output
+/// differs from the plain walk there, not in the first pass), the same seed gives the same
+/// bytes, and a model of another mesh is refused.
+#[test]
+fn vary_plays_learned_variants_on_the_repeats_of_a_looping_walk() {
+    let tmp = tempfile::tempdir().unwrap();
+    let walker = tmp.path().join("walker.subject");
+    let o = surfcap!(&[
+        "synth",
+        "--procedural",
+        "walk,jog",
+        "--duration",
+        "2",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&walker),
+        "--quiet"
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let model = tmp.path().join("model");
+    let o = surfcap!(&["vary", "train", p(&walker), "--iterations", "40", "-o", p(&model), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line = tmp.path().join("line_20m.csv");
+    std::fs::write(&line, "0,0\n20,0\n").unwrap();
+    let cache = tmp.path().join("cache");
+    let run = |name: &str, vary: &[&str]| {
+        let out = tmp.path().join(format!("{name}.npy"));
+        let mut args = vec!["synth", "path", p(&walker), "--curve", p(&line), "-o", p(&out), "--cache-dir", p(&cache)];
+        args.extend_from_slice(&["--format", "npy", "--json"]);
+        args.extend_from_slice(vary);
+        let r = report(&surfcap!(&args));
+        let bytes = std::fs::read(out.join("positions_0.npy")).unwrap();
+        (r, bytes)
+    };
+    let (plain, plain_bytes) = run("plain", &[]);
+    let (r, bytes) = run("varied", &["--vary", "3", "--variation-model", p(&model)]);
+    let v = &r["variation"];
+    assert!(v["played_as_variants"].as_u64().unwrap() > 0, "{v}");
+    assert_eq!(r["walk"], plain["walk"], "--vary changed the walk the search found");
+    assert_eq!(bytes.len(), plain_bytes.len());
+    assert_ne!(bytes, plain_bytes, "the varied walk shows the same poses");
+    let (_, again) = run("again", &["--vary", "3", "--variation-model", p(&model)]);
+    assert_eq!(bytes, again, "same seed, different animation");
+    let (_, other) = run("other", &["--vary", "4", "--variation-model", p(&model)]);
+    assert_ne!(bytes, other, "another seed gave the same animation");
+    // A model of another mesh is refused, naming the folder.
+    let small = tmp.path().join("small.subject");
+    let o = surfcap!(&[
+        "synth",
+        "--procedural",
+        "walk",
+        "--duration",
+        "2",
+        "--vertices",
+        "1500",
+        "-o",
+        p(&small),
+        "--quiet"
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m2 = tmp.path().join("model2");
+    let o = surfcap!(&["vary", "train", p(&small), "--iterations", "10", "-o", p(&m2), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = tmp.path().join("bad.glb");
+    let o = surfcap!(&[
+        "synth",
+        "path",
+        p(&walker),
+        "--curve",
+        p(&line),
+        "-o",
+        p(&out),
+        "--cache-dir",
+        p(&cache),
+        "--vary",
+        "3",
+        "--variation-model",
+        p(&m2)
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("trained on a mesh of"), "{}", stderr(&o));
+    assert!(!out.exists());
+}

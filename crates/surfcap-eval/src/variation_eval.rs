@@ -57,7 +57,7 @@ use surfcap_variation::motion_preparation::{
 };
 use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_sampling::{
-    ChainSummary, SamplingOptions, place_and_retime, reconstruct_aligned, sample_variants,
+    ChainStart, ChainSummary, SamplingOptions, VariantPath, place_and_retime, reconstruct_aligned, sample_variants,
 };
 
 use crate::error::{Error, Result};
@@ -335,6 +335,9 @@ pub struct CaseEval {
 /// The sampling options as reported.
 #[derive(Debug, Clone, Serialize)]
 pub struct SamplingSettings {
+    /// Where the variants go in the world (the world criteria are judged there).
+    pub path: VariantPath,
+    pub start: ChainStart,
     pub warmup: usize,
     pub thin: usize,
     pub max_leapfrog: usize,
@@ -466,6 +469,7 @@ fn select_frames(prepared: &PreparedMotions, keep: impl Fn(usize, usize) -> bool
                 own_frames: s.own_frames,
                 times: idx.iter().map(|&i| s.times[i]).collect(),
                 aligned: idx.iter().map(|&i| s.aligned[i].clone()).collect(),
+                path: idx.iter().map(|&i| s.path[i]).collect(),
                 first_placement: s.first_placement,
                 displacements: idx.iter().map(|&i| s.displacements[i]).collect(),
             }
@@ -862,6 +866,8 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
         trained_blend_weight: o.trained_blend_weight,
         blend_weight: o.blend_weight,
         sampling: SamplingSettings {
+            path: o.sampling.path,
+            start: o.sampling.start,
             warmup: o.sampling.warmup,
             thin: o.sampling.thin,
             max_leapfrog: o.sampling.max_leapfrog,

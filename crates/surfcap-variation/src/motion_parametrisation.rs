@@ -17,13 +17,16 @@
 
 use rand_free::pick;
 use serde::Serialize;
+use surfcap_geometry::rotation_log_exp::{exp_rotation, log_rotation};
 use surfcap_learn::Mat;
+use surfcap_transfer::pose_representation::Placement;
 
 use crate::error::{Error, Result};
 use crate::motion_preparation::SequenceOrigin;
 use crate::variation_model::VariationModel;
 use crate::variation_sampling::{
-    ChainSummary, SamplingOptions, Variant, place_and_retime, reconstruct_aligned, sample_latent_variants,
+    ChainSummary, SamplingOptions, Variant, VariantPath, place_and_retime, place_on_path, reconstruct_aligned,
+    sample_latent_variants,
 };
 
 /// A learnt trajectory on the blend ladder of a pair: its weight and sequence index.
@@ -96,6 +99,21 @@ pub fn interpolated_timing(model: &VariationModel, r1: Rung, r2: Rung, w: f64) -
     (own, times)
 }
 
+/// The path of the blend at `w` between two rungs: per reference frame the two rungs'
+/// placements interpolated with the rungs' weights (translation lerp, rotation along the
+/// geodesic).
+pub fn interpolated_path(model: &VariationModel, r1: Rung, r2: Rung, w: f64) -> Vec<Placement> {
+    let (_, c2) = rung_weights(r1, r2, w);
+    let (p1, p2) = (&model.sequences[r1.sequence].path, &model.sequences[r2.sequence].path);
+    p1.iter()
+        .zip(p2)
+        .map(|(a, b)| Placement {
+            rotation: a.rotation * exp_rotation(&(log_rotation(&(a.rotation.transpose() * b.rotation)) * c2)),
+            translation: a.translation * (1.0 - c2) + b.translation * c2,
+        })
+        .collect()
+}
+
 /// What [`sample_blend_variants`] did.
 #[derive(Debug, Clone, Serialize)]
 pub struct BlendSampling {
@@ -132,13 +150,17 @@ pub fn sample_blend_variants(
     };
     let (own, times) = interpolated_timing(model, r1, r2, w);
     let start = model.sequences[model.sequence_index(a)?].first_placement;
+    let path = interpolated_path(model, r1, r2, w);
     let variants = lower
         .iter()
         .zip(&pairing)
         .map(|(x1, &m)| {
             let lat = interpolate_latents(x1, &upper[m], r1, r2, w);
             let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = place_and_retime(&aligned, &displacements, &start, &times, own)?;
+            let world = match opts.path {
+                VariantPath::Sampled => place_and_retime(&aligned, &displacements, &start, &times, own)?,
+                VariantPath::Source => place_on_path(&aligned, &path, &times, own)?,
+            };
             Ok(Variant { latents: lat, aligned, displacements, world })
         })
         .collect::<Result<_>>()?;

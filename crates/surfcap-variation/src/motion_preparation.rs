@@ -82,6 +82,9 @@ pub struct TrainingSequence {
     pub aligned: Vec<Vec<f32>>,
     /// Where its first frame is in the world.
     pub first_placement: Placement,
+    /// Per reference frame, where the frame is in the world (the path a variant can be put
+    /// on, `VariantPath::Source`).
+    pub path: Vec<Placement>,
     /// Per reference frame, the rigid displacement from the previous one (zero for the first).
     pub displacements: Vec<[f64; 6]>,
 }
@@ -247,6 +250,7 @@ pub fn prepare(
             own_frames: s.n_frames(),
             displacements: displacements_of(&placements),
             first_placement: placements[0],
+            path: placements,
             times,
             aligned,
         });
@@ -301,7 +305,7 @@ pub fn blend_sequences(
         .zip(&b.aligned)
         .map(|(pa, pb)| Ok(NonlinearInterpolator::new(topology, pa, pb, up)?.at(w, StretchInterpolation::Linear)))
         .collect::<Result<_>>()?;
-    let displacements = a
+    let displacements: Vec<[f64; 6]> = a
         .displacements
         .iter()
         .zip(&b.displacements)
@@ -323,8 +327,24 @@ pub fn blend_sequences(
         times,
         aligned,
         first_placement: a.first_placement,
+        path: integrate(&a.first_placement, &displacements),
         displacements,
     })
+}
+
+/// The placements reached from `start` by the displacements (the first one is `start`).
+pub fn integrate(start: &Placement, displacements: &[[f64; 6]]) -> Vec<Placement> {
+    let mut p = *start;
+    displacements
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            if i > 0 {
+                p = p.moved_by(d);
+            }
+            p
+        })
+        .collect()
 }
 
 /// Pins a time map's first time at 0 and its last at `own_frames - 1` (round-off of an

@@ -52,6 +52,8 @@ pub struct LearntSequence {
     /// Per reference frame, the time in its own frames.
     pub times: Vec<f64>,
     pub first_placement: surfcap_transfer::pose_representation::Placement,
+    /// Per reference frame, where the sequence's frame is in the world.
+    pub path: Vec<surfcap_transfer::pose_representation::Placement>,
 }
 
 impl From<&TrainingSequence> for LearntSequence {
@@ -62,6 +64,7 @@ impl From<&TrainingSequence> for LearntSequence {
             own_frames: s.own_frames,
             times: s.times.clone(),
             first_placement: s.first_placement,
+            path: s.path.clone(),
         }
     }
 }
@@ -193,12 +196,13 @@ impl VariationModel {
             }
             for (j, s) in m.sequences.iter().enumerate() {
                 let len = g.sequence_latent(j).map_or(0, |x| x.nrows());
-                if len != frames || s.times.len() != frames {
+                if len != frames || s.times.len() != frames || s.path.len() != frames {
                     return Err(Error::Model(format!(
-                        "sequence {:?}: {len} latent points of part {:?} and {} times: expected {frames} (the reference's frames)",
+                        "sequence {:?}: {len} latent points of part {:?}, {} times and {} placements: expected {frames} (the reference's frames)",
                         s.name,
                         m.parts.parts[k].name,
-                        s.times.len()
+                        s.times.len(),
+                        s.path.len()
                     )));
                 }
             }

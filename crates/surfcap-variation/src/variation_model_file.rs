@@ -63,6 +63,8 @@ struct SequenceRecord {
     /// Row-major 3x3.
     first_rotation: [f64; 9],
     first_translation: [f64; 3],
+    /// Per reference frame, the placement: row-major rotation then translation.
+    path: Vec<[f64; 12]>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -109,6 +111,15 @@ impl VariationModel {
                         times: s.times.clone(),
                         first_rotation: std::array::from_fn(|k| r[(k / 3, k % 3)]),
                         first_translation: [t.x, t.y, t.z],
+                        path: s
+                            .path
+                            .iter()
+                            .map(|p| {
+                                std::array::from_fn(|k| {
+                                    if k < 9 { p.rotation[(k / 3, k % 3)] } else { p.translation[k - 9] }
+                                })
+                            })
+                            .collect(),
                     }
                 })
                 .collect(),
@@ -223,6 +234,14 @@ impl VariationModel {
                         rotation: Matrix3::from_row_slice(&r),
                         translation: Vector3::from(s.first_translation),
                     },
+                    path: s
+                        .path
+                        .iter()
+                        .map(|q| Placement {
+                            rotation: Matrix3::from_row_slice(&q[..9]),
+                            translation: Vector3::new(q[9], q[10], q[11]),
+                        })
+                        .collect(),
                 }
             })
             .collect();

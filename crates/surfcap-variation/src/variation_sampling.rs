@@ -28,6 +28,13 @@
 //!   dynamics by D / d (Wang et al. 2008's balanced GPDM) was tried against the drift and
 //!   collapsed the latent trajectories (step size 1e-18, identical variants, reconstruction
 //!   9.4 cm): the thesis's weight stays.
+//! - **Where a variant goes** ([`VariantPath`]): 6.6.2 moves every frame by the displacement
+//!   the torso's GP gives and integrates them. Measured with `surfcap eval vary`, that path
+//!   drifts (0.3-0.5 m over 4 m CMU walks and turns) and the feet slide: the planted vertices of
+//!   the variants moved 1.3-2.9 m/s against 0.09-0.29 m/s for the captures (the shared contact
+//!   detection). By default a variant's pose of reference frame i is therefore placed where the
+//!   source's frame i is ([`VariantPath::Source`]): the body varies, the path is the
+//!   captured one. [`VariantPath::Sampled`] keeps the thesis's placement.
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
 //!   variant can replace its source inside a longer animation.
 
@@ -52,10 +59,23 @@ pub enum ChainStart {
     MeanPrediction,
 }
 
+/// Where a variant's frames go in the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VariantPath {
+    /// Each body-frame pose placed where the source's frame of the same reference frame is:
+    /// the body varies, the path is the source's (surfcap's default, see the module doc).
+    Source,
+    /// The displacements the torso's GP gives, integrated from the source's first placement
+    /// (thesis 6.6.2).
+    Sampled,
+}
+
 /// Options of [`sample_variants`].
 #[derive(Debug, Clone, Copy)]
 pub struct SamplingOptions {
     pub start: ChainStart,
+    pub path: VariantPath,
     /// HMC warm-up iterations (step size and path length tuning).
     pub warmup: usize,
     /// Iterations between two variants (a larger value gives less correlated variants).
@@ -66,7 +86,7 @@ pub struct SamplingOptions {
 
 impl Default for SamplingOptions {
     fn default() -> Self {
-        SamplingOptions { start: ChainStart::Learnt, warmup: 100, thin: 5, max_leapfrog: 30 }
+        SamplingOptions { start: ChainStart::Learnt, path: VariantPath::Source, warmup: 100, thin: 5, max_leapfrog: 30 }
     }
 }
 
@@ -320,6 +340,26 @@ pub fn variant_on_source_path(
     Ok(aligned.iter().zip(&placements).map(|(p, pl)| pl.apply(p)).collect())
 }
 
+/// Body-frame poses (reference frames) each placed by the placement of its frame, then re-timed
+/// to `own_frames` frames through the time map `times`.
+pub fn place_on_path(
+    aligned: &[Vec<f32>],
+    path: &[Placement],
+    times: &[f64],
+    own_frames: usize,
+) -> Result<Vec<Vec<f32>>> {
+    if path.len() != aligned.len() {
+        return Err(Error::Invalid(format!(
+            "{} placements for {} poses: expected one per pose",
+            path.len(),
+            aligned.len()
+        )));
+    }
+    let world: Vec<Vec<f32>> = aligned.iter().zip(path).map(|(p, pl)| pl.apply(p)).collect();
+    let refs: Vec<&[f32]> = world.iter().map(|p| p.as_slice()).collect();
+    poses_at(&refs, &inverse_times(times, own_frames)?)
+}
+
 /// `count` variants of the learnt sequence `name` for `seed` (6.6).
 pub fn sample_variants(
     model: &VariationModel,
@@ -335,7 +375,12 @@ pub fn sample_variants(
         .into_iter()
         .map(|lat| {
             let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames)?;
+            let world = match opts.path {
+                VariantPath::Sampled => {
+                    place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames)?
+                }
+                VariantPath::Source => place_on_path(&aligned, &seq.path, &seq.times, seq.own_frames)?,
+            };
             Ok(Variant { latents: lat, aligned, displacements, world })
         })
         .collect::<Result<_>>()?;

@@ -21,7 +21,7 @@ use surfcap_variation::motion_preparation::{PreparationOptions, TimeAlignment};
 use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_model_file::KIND;
 use surfcap_variation::variation_sampling::{
-    ChainStart, SamplingOptions, place_and_retime, reconstruct_aligned, sample_variants,
+    ChainStart, SamplingOptions, VariantPath, place_and_retime, reconstruct_aligned, sample_variants,
 };
 
 use crate::body_parts::parts_of;
@@ -100,6 +100,12 @@ pub struct SampleArgs {
     /// (the dynamics' mean prediction from its first point, thesis 6.6.1).
     #[arg(long, default_value = "learnt")]
     pub start: StartArg,
+    /// Where the variants go in the world: source (each pose placed where the source's frame
+    /// is: the body varies, the path is the captured one; surfcap's default, the sampled
+    /// displacements made the feet slide) or sampled (the torso GP's displacements integrated,
+    /// thesis 6.6.2).
+    #[arg(long, default_value = "source")]
+    pub path: crate::options::PathArg,
     /// HMC warm-up iterations (step size and path length tuning).
     #[arg(long, default_value_t = 100, value_parser = |s: &str| whole_in(s, 1, 100_000))]
     pub warmup: usize,
@@ -442,7 +448,13 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let model = VariationModel::load(&a.model)?;
     let load_seconds = t0.elapsed().as_secs_f64();
-    let opts = SamplingOptions { start: a.start.0, warmup: a.warmup, thin: a.thin, max_leapfrog: a.max_leapfrog };
+    let opts = SamplingOptions {
+        start: a.start.0,
+        path: a.path.0,
+        warmup: a.warmup,
+        thin: a.thin,
+        max_leapfrog: a.max_leapfrog,
+    };
     let what = match (&a.sequence, &a.blend) {
         (Some(name), _) => Request::Sequence(name),
         (None, Some(b)) => Request::Blend(b),
@@ -555,6 +567,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
         "seed": a.seed, "count": a.count,
         "options": {
             "start": start,
+            "path": match a.path.0 { VariantPath::Source => "source", VariantPath::Sampled => "sampled" },
             "warmup": a.warmup, "thin": a.thin, "max_leapfrog": a.max_leapfrog,
         },
         "chains": chains,

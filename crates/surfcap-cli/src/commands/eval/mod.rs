@@ -345,6 +345,11 @@ pub enum What {
         /// L-BFGS iterations at most of every GPDM (default 400).
         #[arg(long, value_parser = crate::options::count)]
         iterations: Option<usize>,
+        /// Where the variants go in the world, the world criteria judged there: source (the
+        /// source's path, `vary sample`'s default) or sampled (the torso GP's displacements,
+        /// thesis 6.6.2).
+        #[arg(long, default_value = "source")]
+        path: crate::options::PathArg,
         /// Folder for vary.json and the plots.
         #[arg(short, long, default_value = "vary-eval")]
         output: PathBuf,
@@ -516,7 +521,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             appearance::run(ctx, source, &opts, &flow, full_resolution_flows, &cache, &output)
         }
-        What::Vary { data, only, cmu_clips, kaykit_clips, vertices, variants, seed, iterations, output } => {
+        What::Vary { data, only, cmu_clips, kaykit_clips, vertices, variants, seed, iterations, path, output } => {
             use surfcap_eval::variation_eval::{cmu_case, kaykit_case};
             let (cmu, kaykit) = match only.as_deref() {
                 None => (true, true),
@@ -531,7 +536,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             if kaykit {
                 cases.push(kaykit_case(&data, &kaykit_clips)?);
             }
-            let opts = VariationEvalOptions { variants, seed, iterations, ..Default::default() };
+            let mut opts = VariationEvalOptions { variants, seed, iterations, ..Default::default() };
+            opts.sampling.path = path.0;
             vary::run(ctx, cases, &opts, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
