@@ -314,7 +314,8 @@ impl FromStr for PathArg {
         match s {
             "source" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Source)),
             "sampled" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Sampled)),
-            _ => Err(format!("{s:?}: expected source or sampled")),
+            "contacts" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Contacts)),
+            _ => Err(format!("{s:?}: expected source, contacts or sampled")),
         }
     }
 }

@@ -338,6 +338,7 @@ pub struct SamplingSettings {
     /// Where the variants go in the world (the world criteria are judged there).
     pub path: VariantPath,
     pub start: ChainStart,
+    pub smoothing: usize,
     pub warmup: usize,
     pub thin: usize,
     pub max_leapfrog: usize,
@@ -868,6 +869,7 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
         sampling: SamplingSettings {
             path: o.sampling.path,
             start: o.sampling.start,
+            smoothing: o.sampling.smoothing,
             warmup: o.sampling.warmup,
             thin: o.sampling.thin,
             max_leapfrog: o.sampling.max_leapfrog,

@@ -25,8 +25,8 @@ use crate::error::{Error, Result};
 use crate::motion_preparation::SequenceOrigin;
 use crate::variation_model::VariationModel;
 use crate::variation_sampling::{
-    ChainSummary, SamplingOptions, Variant, VariantPath, place_and_retime, place_on_path, reconstruct_aligned,
-    sample_latent_variants,
+    ChainSummary, SamplingOptions, Variant, VariantPath, place_and_retime, place_by_contacts, place_on_path,
+    reconstruct_aligned, sample_latent_variants,
 };
 
 /// A learnt trajectory on the blend ladder of a pair: its weight and sequence index.
@@ -160,6 +160,7 @@ pub fn sample_blend_variants(
             let world = match opts.path {
                 VariantPath::Sampled => place_and_retime(&aligned, &displacements, &start, &times, own)?,
                 VariantPath::Source => place_on_path(&aligned, &path, &times, own)?,
+                VariantPath::Contacts => place_by_contacts(model, &aligned, &path, &times, own)?,
             };
             Ok(Variant { latents: lat, aligned, displacements, world })
         })

@@ -35,6 +35,11 @@
 //!   detection). By default a variant's pose of reference frame i is therefore placed where the
 //!   source's frame i is ([`VariantPath::Source`]): the body varies, the path is the
 //!   captured one. [`VariantPath::Sampled`] keeps the thesis's placement.
+//! - **Smoothing**: the chain samples the product of one-step predictives, so each sampled
+//!   point carries its own dynamics noise and the poses jitter from frame to frame (the
+//!   learnt trajectories do not). A triangular moving average of radius 2 frames is applied
+//!   to each sampled trajectory (`smoothing`, 0 turns it off; measured with `surfcap eval
+//!   vary`, see the README).
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
 //!   variant can replace its source inside a longer animation.
 
@@ -69,6 +74,10 @@ pub enum VariantPath {
     /// The displacements the torso's GP gives, integrated from the source's first placement
     /// (thesis 6.6.2).
     Sampled,
+    /// The source's rotations and height, the travel along the ground recovered from the
+    /// variant's own foot contacts (surfcap-geometry's `root_motion_from_contacts`), so that
+    /// its planted feet stay put.
+    Contacts,
 }
 
 /// Options of [`sample_variants`].
@@ -76,6 +85,9 @@ pub enum VariantPath {
 pub struct SamplingOptions {
     pub start: ChainStart,
     pub path: VariantPath,
+    /// Radius (frames) of the triangular moving average applied to each sampled latent
+    /// trajectory, its first point kept (0: none); see the module doc.
+    pub smoothing: usize,
     /// HMC warm-up iterations (step size and path length tuning).
     pub warmup: usize,
     /// Iterations between two variants (a larger value gives less correlated variants).
@@ -86,7 +98,14 @@ pub struct SamplingOptions {
 
 impl Default for SamplingOptions {
     fn default() -> Self {
-        SamplingOptions { start: ChainStart::Learnt, path: VariantPath::Source, warmup: 100, thin: 5, max_leapfrog: 30 }
+        SamplingOptions {
+            start: ChainStart::Learnt,
+            path: VariantPath::Source,
+            smoothing: 2,
+            warmup: 100,
+            thin: 5,
+            max_leapfrog: 30,
+        }
     }
 }
 
@@ -136,6 +155,27 @@ pub fn chain_seed(seed: u64, name: &str, k: usize) -> u64 {
     mix_seed(mix_seed(seed ^ h).wrapping_add(k as u64))
 }
 
+/// `x` with every column averaged over `2 r + 1` frames with triangular weights (the ends
+/// renormalised), its first row (the fixed `x_1`) kept.
+pub fn smoothed(x: &Mat<f64>, r: usize) -> Mat<f64> {
+    let n = x.nrows();
+    if r == 0 || n < 3 {
+        return x.clone();
+    }
+    Mat::from_fn(n, x.ncols(), |i, j| {
+        if i == 0 {
+            return x[(0, j)];
+        }
+        let (mut s, mut w) = (0.0, 0.0);
+        for k in i.saturating_sub(r)..=(i + r).min(n - 1) {
+            let wk = (r + 1 - k.abs_diff(i)) as f64;
+            s += wk * x[(k, j)];
+            w += wk;
+        }
+        s / w
+    })
+}
+
 /// `count` latent variants of learnt sequence `j`: `[variant][part]` trajectories, and each
 /// part's chain.
 pub fn sample_latent_variants(
@@ -178,7 +218,10 @@ pub fn sample_latent_variants(
                 ChainStart::Learnt => learnt.to_owned(),
                 ChainStart::MeanPrediction => g.mean_trajectory(&x1, learnt.nrows())?,
             };
-            let (trajs, chain) = g.sample_trajectories_from(start.as_ref(), &hmc)?;
+            let (mut trajs, chain) = g.sample_trajectories_from(start.as_ref(), &hmc)?;
+            for t in &mut trajs {
+                *t = smoothed(t, opts.smoothing);
+            }
             let summary = ChainSummary {
                 part: model.parts.parts[k].name.clone(),
                 acceptance_rate: chain.acceptance_rate,
@@ -360,6 +403,41 @@ pub fn place_on_path(
     poses_at(&refs, &inverse_times(times, own_frames)?)
 }
 
+/// Body-frame poses placed with the path's rotations and heights only (the ground position of
+/// the path's first frame), re-timed to `own_frames`, then moved along the ground by the root
+/// motion their own foot contacts give ([`VariantPath::Contacts`]).
+pub fn place_by_contacts(
+    model: &VariationModel,
+    aligned: &[Vec<f32>],
+    path: &[Placement],
+    times: &[f64],
+    own_frames: usize,
+) -> Result<Vec<Vec<f32>>> {
+    let Some(first) = path.first() else { return Err(Error::Invalid("an empty path".into())) };
+    let (_, _, w) = surfcap_geometry::motion_plane_alignment::plane_axes(model.up_axis);
+    let lifted: Vec<Placement> = path
+        .iter()
+        .map(|p| {
+            let mut t = first.translation;
+            t[w] = p.translation[w];
+            Placement { rotation: p.rotation, translation: t }
+        })
+        .collect();
+    let in_place = place_on_path(aligned, &lifted, times, own_frames)?;
+    let nv = model.reference_pose.len() / 3;
+    let mut flat: Vec<f32> = in_place.into_iter().flatten().collect();
+    let params = surfcap_geometry::ground_contacts::ContactParams::default();
+    let motion = surfcap_geometry::root_motion_from_contacts::root_motion_from_contacts(
+        &flat,
+        nv,
+        model.fps,
+        model.up_axis,
+        &params,
+    );
+    surfcap_geometry::root_motion_from_contacts::apply_root_motion(&mut flat, nv, model.up_axis, &motion);
+    Ok(flat.chunks_exact(3 * nv).map(<[f32]>::to_vec).collect())
+}
+
 /// `count` variants of the learnt sequence `name` for `seed` (6.6).
 pub fn sample_variants(
     model: &VariationModel,
@@ -380,6 +458,7 @@ pub fn sample_variants(
                     place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames)?
                 }
                 VariantPath::Source => place_on_path(&aligned, &seq.path, &seq.times, seq.own_frames)?,
+                VariantPath::Contacts => place_by_contacts(model, &aligned, &seq.path, &seq.times, seq.own_frames)?,
             };
             Ok(Variant { latents: lat, aligned, displacements, world })
         })

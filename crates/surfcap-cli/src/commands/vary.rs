@@ -106,6 +106,10 @@ pub struct SampleArgs {
     /// thesis 6.6.2).
     #[arg(long, default_value = "source")]
     pub path: crate::options::PathArg,
+    /// Radius in frames of the moving average over each sampled latent trajectory (0: none;
+    /// the one-step HMC samples jitter from frame to frame).
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| whole_in(s, 0, 1000))]
+    pub smoothing: usize,
     /// HMC warm-up iterations (step size and path length tuning).
     #[arg(long, default_value_t = 100, value_parser = |s: &str| whole_in(s, 1, 100_000))]
     pub warmup: usize,
@@ -451,6 +455,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
     let opts = SamplingOptions {
         start: a.start.0,
         path: a.path.0,
+        smoothing: a.smoothing,
         warmup: a.warmup,
         thin: a.thin,
         max_leapfrog: a.max_leapfrog,
@@ -567,7 +572,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
         "seed": a.seed, "count": a.count,
         "options": {
             "start": start,
-            "path": match a.path.0 { VariantPath::Source => "source", VariantPath::Sampled => "sampled" },
+            "path": match a.path.0 { VariantPath::Source => "source", VariantPath::Sampled => "sampled", VariantPath::Contacts => "contacts" },
             "warmup": a.warmup, "thin": a.thin, "max_leapfrog": a.max_leapfrog,
         },
         "chains": chains,

@@ -350,6 +350,10 @@ pub enum What {
         /// thesis 6.6.2).
         #[arg(long, default_value = "source")]
         path: crate::options::PathArg,
+        /// Radius of the moving average over sampled latent trajectories (`vary sample
+        /// --smoothing`).
+        #[arg(long, default_value_t = 2)]
+        smoothing: usize,
         /// Folder for vary.json and the plots.
         #[arg(short, long, default_value = "vary-eval")]
         output: PathBuf,
@@ -521,7 +525,19 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             };
             appearance::run(ctx, source, &opts, &flow, full_resolution_flows, &cache, &output)
         }
-        What::Vary { data, only, cmu_clips, kaykit_clips, vertices, variants, seed, iterations, path, output } => {
+        What::Vary {
+            data,
+            only,
+            cmu_clips,
+            kaykit_clips,
+            vertices,
+            variants,
+            seed,
+            iterations,
+            path,
+            smoothing,
+            output,
+        } => {
             use surfcap_eval::variation_eval::{cmu_case, kaykit_case};
             let (cmu, kaykit) = match only.as_deref() {
                 None => (true, true),
@@ -538,6 +554,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             }
             let mut opts = VariationEvalOptions { variants, seed, iterations, ..Default::default() };
             opts.sampling.path = path.0;
+            opts.sampling.smoothing = smoothing;
             vary::run(ctx, cases, &opts, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
