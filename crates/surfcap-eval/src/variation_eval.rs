@@ -57,7 +57,8 @@ use surfcap_variation::motion_preparation::{
 };
 use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_sampling::{
-    ChainStart, ChainSummary, SamplingOptions, VariantPath, place_and_retime, reconstruct_aligned, sample_variants,
+    ChainStart, ChainSummary, SamplingOptions, VariantPath, place_and_retime, place_by_contacts, place_on_path,
+    reconstruct_aligned, sample_variants,
 };
 
 use crate::error::{Error, Result};
@@ -737,7 +738,13 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
         let world_src: Vec<&[f32]> = (0..captured.n_frames()).map(|f| captured.frame(f)).collect();
         let body_src = refs(&prepared.sequences[j].aligned);
         let (lp, ld) = &learnt[j];
-        let learnt_world = place_and_retime(lp, ld, &q.first_placement, &q.times, q.own_frames)?;
+        // The learnt motion placed as the variants are, so the world floor of (i) compares like
+        // with like.
+        let learnt_world = match o.sampling.path {
+            VariantPath::Sampled => place_and_retime(lp, ld, &q.first_placement, &q.times, q.own_frames)?,
+            VariantPath::Source => place_on_path(lp, &q.path, &q.times, q.own_frames)?,
+            VariantPath::Contacts => place_by_contacts(&model, lp, &q.path, &q.times, q.own_frames)?,
+        };
         let learnt_error_body = motion_distance(lp, &body_src);
         let learnt_error_world = motion_distance(&learnt_world, &world_src);
         let floor_body = (c.floor_factor * learnt_error_body).max(min_floor);
