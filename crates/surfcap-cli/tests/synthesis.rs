@@ -453,13 +453,10 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
     );
 }
 
-/// Issue 19 item 6's plumbing: a walk that loops reports its repeated frames; `--vary` needs
-/// `--variation-model` and a model folder that is there, refused before any search (the cache
-/// folder stays absent) and before anything is written.
-#[test]
-fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
-    let tmp = tempfile::tempdir().unwrap();
-    let walker = tmp.path().join("walker.subject");
+/// A procedural walker (walk and jog of 2 s, 1,000 vertices) in `dir`: 20 m of path loop over
+/// its frames.
+fn procedural_walker(dir: &Path) -> PathBuf {
+    let walker = dir.join("walker.subject");
     let o = surfcap!(&[
         "synth",
         "--procedural",
@@ -473,6 +470,16 @@ fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
         "--quiet"
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    walker
+}
+
+/// Issue 19 item 6's plumbing: a walk that loops reports its repeated frames; `--vary` needs
+/// `--variation-model` and a model folder that is there, refused before any search (the cache
+/// folder stays absent) and before anything is written.
+#[test]
+fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
+    let tmp = tempfile::tempdir().unwrap();
+    let walker = procedural_walker(tmp.path());
     let line = tmp.path().join("line_20m.csv");
     std::fs::write(&line, "0,0\n20,0\n").unwrap();
     let cache = tmp.path().join("cache");
@@ -508,20 +515,7 @@ fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
 #[test]
 fn vary_plays_learned_variants_on_the_repeats_of_a_looping_walk() {
     let tmp = tempfile::tempdir().unwrap();
-    let walker = tmp.path().join("walker.subject");
-    let o = surfcap!(&[
-        "synth",
-        "--procedural",
-        "walk,jog",
-        "--duration",
-        "2",
-        "--vertices",
-        "1000",
-        "-o",
-        p(&walker),
-        "--quiet"
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let walker = procedural_walker(tmp.path());
     let model = tmp.path().join("model");
     let o = surfcap!(&["vary", "train", p(&walker), "--iterations", "40", "-o", p(&model), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
