@@ -1,31 +1,30 @@
-//! All-pairs pose distance matrix of a subject (thesis 2.3.2), computed in parallel.
+//! All-pairs pose distance matrix of a subject (thesis 2.3.2), computed in parallel, tile by
+//! tile (`distance_tiles.rs`: the same tiles a cluster computes one job each, issue 21).
 //!
-//! The motion-plane alignment of every pair (eq. 2.3) needs only weighted inner products of the
-//! frames' centred horizontal coordinates, so they come from three dense matrix products (faer)
-//! instead of F^2 passes over the vertices. The deformation distances then cost one pass over
-//! the triangles per pair, with per-frame triangle frames precomputed once per triangle.
+//! Every pair (i, j) is aligned about the up axis (eq. 2.3) from the pair's own weighted inner
+//! products of centred horizontal coordinates, then its deformation distance costs one pass over
+//! the triangles, with per-frame triangle frames precomputed once per tile and slab.
+//! [`alignment_gram`] keeps the all-frames Gram matrices (three dense products) for callers that
+//! want every pair's alignment at once (walk playback).
 //!
 //! Memory: those triangle frames are 120 bytes per triangle and frame (f64, needed for exact
 //! small angles), 1.8 GB for 547 frames of 28,000 triangles if held for the whole mesh. They are
-//! held one slab of triangles at a time instead (all frames, [`SLAB_BYTES`]); each pair's sum
-//! still takes the triangle chunks in mesh order, so the matrix is the same to the bit.
+//! held one slab of triangles at a time instead (all the tile's frames, [`SLAB_BYTES`]); each
+//! pair's sum still takes the triangle chunks in mesh order, so the matrix is the same to the bit.
 //!
 //! The matrix is symmetric by construction: d(i, j) is computed for i < j (deforming i into j)
 //! and mirrored, as the thesis treats the distance as symmetric ("to deform pose i into j or
 //! vice versa"); the two directions differ only in the stretch term's ||S - I|| vs ||S^-1 - I||.
-//! Every entry is computed independently in a fixed order: the result does not depend on the
-//! number of threads.
+//! Every entry is computed independently in a fixed order: the result depends neither on the
+//! number of threads nor on the tiling.
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat};
-use nalgebra::Matrix3;
-use rayon::prelude::*;
 use surfcap_mesh::{Progress, Subject};
 
-use crate::motion_plane_alignment::{plane_axes, rotation_about_up};
-use crate::pose_distance::{
-    BLOCK, FRAME_FLOATS, PoseMetric, deformation_distance, degenerate_triangles, triangle_frames, union_count,
-};
+use crate::distance_tiles::{DistanceTile, TRIANGLE_CHUNK, distance_tile, plan_distance_tiles};
+use crate::motion_plane_alignment::plane_axes;
+use crate::pose_distance::{FRAME_FLOATS, PoseMetric};
 
 /// Parameters of a distance matrix.
 #[derive(Debug, Clone, PartialEq)]
@@ -83,62 +82,20 @@ impl AlignmentGram {
     }
 }
 
-/// Frames whose rows are computed together: each chunk of frame j's triangle data is loaded
-/// once and used for all of them (the data of one frame is 120 bytes per triangle, so without
-/// this blocking the all-pairs loop is bound by memory bandwidth, not arithmetic).
-const ROW_BLOCK: usize = 8;
-/// Triangles per chunk: a block of frames' chunks stays in the L2 cache.
-const TRIANGLE_CHUNK: usize = 4 * BLOCK;
 /// Memory for the triangle data of all frames over one slab of triangles. Holding every frame's
 /// whole data at once cost 120 bytes per triangle and frame (1.8 GB for 547 frames of 28,000
 /// triangles); a slab of this size keeps the peak near the subject's own size.
 pub const SLAB_BYTES: usize = 64 << 20;
 
+/// Frames per side of a tile of the matrix, on one machine and by default on a cluster
+/// (`surfcap tiles plan --tile`): a tile of 1,024 x 1,024 frames of 10,000 triangles holds about
+/// 0.5 GB and takes about a minute on 2 cores.
+pub const DISTANCE_TILE: usize = 1024;
+
 /// Triangles per slab for `n` frames within `budget` bytes: whole chunks, at least one.
 pub fn slab_triangles(n: usize, budget: usize) -> usize {
     let per_triangle = n.max(1) * FRAME_FLOATS * std::mem::size_of::<f64>();
     (budget / per_triangle / TRIANGLE_CHUNK).max(1) * TRIANGLE_CHUNK
-}
-
-/// Rows `i0..i0 + ROW_BLOCK` of the matrix: the up-axis rotations of their pairs (j > i) and the
-/// running sums of their distances.
-struct RowBlock {
-    i0: usize,
-    rot: Vec<Vec<Matrix3<f64>>>,
-    acc: Vec<Vec<f64>>,
-}
-
-impl RowBlock {
-    fn new(subject: &Subject, gram: &AlignmentGram, i0: usize) -> Self {
-        let n = gram.n;
-        let rows = i0..(i0 + ROW_BLOCK).min(n);
-        let rot = rows
-            .clone()
-            .map(|i| (i + 1..n).map(|j| rotation_about_up(subject.up_axis, gram.theta(i, j))).collect())
-            .collect();
-        RowBlock { i0, rot, acc: rows.map(|i| vec![0.0; n - i - 1]).collect() }
-    }
-
-    /// Adds the distances over one slab's triangles, chunk by chunk. Every pair's sum takes the
-    /// chunks in mesh order whatever the slab size (slabs are whole chunks), so the sums depend
-    /// neither on the slabs nor on the thread count.
-    fn add_slab(&mut self, frames: &[Vec<f64>], w: f64, log_s: bool) {
-        let (n, i0) = (frames.len(), self.i0);
-        let i1 = (i0 + ROW_BLOCK).min(n);
-        let len = frames.first().map_or(0, Vec::len);
-        // Whole storage blocks per chunk (TRIANGLE_CHUNK is a multiple of BLOCK).
-        let step = TRIANGLE_CHUNK * FRAME_FLOATS;
-        for start in (0..len).step_by(step) {
-            let end = (start + step).min(len);
-            for j in i0 + 1..n {
-                let fj = &frames[j][start..end];
-                for (r, fi) in frames[i0..i1.min(j)].iter().enumerate() {
-                    let k = j - (i0 + r) - 1;
-                    self.acc[r][k] += deformation_distance(&fi[start..end], fj, &self.rot[r][k], w, log_s);
-                }
-            }
-        }
-    }
 }
 
 /// Builds the alignment Gram matrices of all frames.
@@ -196,64 +153,39 @@ pub fn distance_matrix_in_slabs(
     progress: &dyn Progress,
     slab_bytes: usize,
 ) -> DistanceMatrix {
+    distance_matrix_in_tiles(subject, params, progress, slab_bytes, DISTANCE_TILE)
+}
+
+/// The matrix assembled from the tiles of [`plan_distance_tiles`]`(n, tile)`, each computed by
+/// [`distance_tile`], the same function a cluster's tile jobs run: bit-identical for every tile
+/// size and slab budget.
+pub fn distance_matrix_in_tiles(
+    subject: &Subject,
+    params: &DistanceParams,
+    progress: &dyn Progress,
+    slab_bytes: usize,
+    tile: usize,
+) -> DistanceMatrix {
     let n = subject.n_frames();
-    let gram = alignment_gram(subject, params.vertex_weights.as_deref());
     let mut values = vec![0.0f64; n * n];
     let mut max_skipped = 0usize;
-    match params.metric {
-        PoseMetric::Euclidean => {
-            for i in 0..n {
-                for j in 0..n {
-                    values[i * n + j] = if i == j { 0.0 } else { gram.euclidean(i.min(j), i.max(j)) };
-                }
-            }
-        }
-        PoseMetric::Deformation | PoseMetric::DeformationLog => {
-            let log_s = params.metric == PoseMetric::DeformationLog;
-            let triangles = subject.topology().triangles();
-            let slab = slab_triangles(n, slab_bytes);
-            let blocks: Vec<usize> = (0..n).step_by(ROW_BLOCK).collect();
-            let mut work: Vec<RowBlock> = blocks.par_iter().map(|&i0| RowBlock::new(subject, &gram, i0)).collect();
-            let mut degenerate: Vec<Vec<u32>> = vec![Vec::new(); n];
-            let n_slabs = triangles.len().div_ceil(slab).max(1);
-            progress.start("pose distances", (n_slabs * n * n.saturating_sub(1) / 2) as u64);
-            for t0 in (0..triangles.len()).step_by(slab) {
-                let part = &triangles[t0..(t0 + slab).min(triangles.len())];
-                let frames: Vec<Vec<f64>> = (0..n)
-                    .into_par_iter()
-                    .map(|g| {
-                        let mut out = Vec::new();
-                        triangle_frames(part, subject.frame(g).expect("in range"), &mut out);
-                        out
-                    })
-                    .collect();
-                for (list, f) in degenerate.iter_mut().zip(&frames) {
-                    list.extend(degenerate_triangles(f, part.len()).into_iter().map(|k| k + t0 as u32));
-                }
-                work.par_iter_mut().for_each(|block| {
-                    block.add_slab(&frames, params.w, log_s);
-                    progress.advance(block.acc.iter().map(Vec::len).sum::<usize>() as u64);
-                });
-            }
-            progress.finish();
-            if degenerate.iter().any(|d| !d.is_empty()) {
-                for i in 0..n {
-                    for j in i + 1..n {
-                        max_skipped = max_skipped.max(union_count(&degenerate[i], &degenerate[j]));
-                    }
-                }
-            }
-            for block in work {
-                for (r, row) in block.acc.into_iter().enumerate() {
-                    let i = block.i0 + r;
-                    for (k, d) in row.into_iter().enumerate() {
-                        let j = i + 1 + k;
-                        values[i * n + j] = d;
-                        values[j * n + i] = d;
-                    }
-                }
-            }
-        }
+    let triangles = subject.topology().triangles();
+    for span in plan_distance_tiles(n, tile) {
+        let t = distance_tile(subject, triangles, subject.up_axis, &span, params, slab_bytes, progress);
+        max_skipped = max_skipped.max(t.max_skipped_triangles);
+        place_tile(&mut values, n, &t);
     }
     DistanceMatrix { n, values, max_skipped_triangles: max_skipped }
+}
+
+/// Writes a tile and its mirror image into the row-major n x n `values`.
+pub fn place_tile(values: &mut [f64], n: usize, t: &DistanceTile) {
+    let nc = t.span.cols.len();
+    for (r, i) in t.span.rows.clone().enumerate() {
+        for (c, j) in t.span.cols.clone().enumerate() {
+            let d = t.values[r * nc + c];
+            values[i * n + j] = d;
+            values[j * n + i] = d;
+        }
+    }
 }

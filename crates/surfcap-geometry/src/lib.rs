@@ -10,6 +10,7 @@
 
 pub mod deformation_gradient;
 pub mod distance_matrix;
+pub mod distance_tiles;
 pub mod error;
 pub mod foot_contacts;
 pub mod foot_sliding;

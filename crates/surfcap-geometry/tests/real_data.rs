@@ -203,3 +203,36 @@ fn distance_matrix_in_slabs_equals_the_whole_mesh_computation_to_the_bit() {
     // The issue's subject: 547 frames of 28,000 triangles fit the slab budget.
     assert!(slab_triangles(547, SLAB_BYTES) * 547 * 120 <= SLAB_BYTES);
 }
+
+/// Issue 21 item 1: tiles are the unit of work and an entry does not depend on the tiling. The
+/// matrix assembled from tiles of 1, 7 and 13 frames (diagonal and off-diagonal tiles, ragged
+/// edges) equals the one-tile matrix to the bit for every metric, with and without vertex
+/// weights, and the skipped-triangle count is gathered across tiles.
+#[test]
+fn distance_tiles_give_the_matrix_of_one_tile_to_the_bit() {
+    use surfcap_geometry::distance_matrix::distance_matrix_in_tiles;
+    use surfcap_geometry::distance_tiles::plan_distance_tiles;
+    let Some(barbarian) = subject(&["kaykit_adventurers/barbarian_Running_A"]) else { return };
+    let nv = barbarian.topology().n_vertices();
+    let weights: Vec<f64> = (0..nv).map(|k| 0.5 + (k % 3) as f64).collect();
+    for (metric, vertex_weights) in [
+        (PoseMetric::Deformation, None),
+        (PoseMetric::DeformationLog, None),
+        (PoseMetric::Euclidean, Some(weights.clone())),
+        (PoseMetric::Deformation, Some(weights)),
+    ] {
+        let params = DistanceParams { metric, vertex_weights, ..Default::default() };
+        let whole = distance_matrix_in_tiles(&barbarian, &params, &NoProgress, SLAB_BYTES, 0);
+        assert!(whole.values.iter().any(|&d| d > 0.0));
+        for tile in [1, 7, 13] {
+            let tiled = distance_matrix_in_tiles(&barbarian, &params, &NoProgress, 1 << 20, tile);
+            let differ = tiled.values.iter().zip(&whole.values).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+            assert_eq!(differ, 0, "{metric:?}, tiles of {tile}");
+            assert_eq!(tiled.max_skipped_triangles, whole.max_skipped_triangles);
+        }
+    }
+    let n = barbarian.n_frames();
+    let spans = plan_distance_tiles(n, 7);
+    assert_eq!(spans.iter().map(|s| s.pairs()).sum::<usize>(), n * (n - 1) / 2, "the tiles cover the upper triangle");
+    assert!(spans.iter().all(|s| s.rows.start <= s.cols.start));
+}
