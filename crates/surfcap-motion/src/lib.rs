@@ -20,6 +20,7 @@ pub mod sequence_time_alignment;
 pub mod timed_walk;
 pub mod transition_frames;
 pub mod transition_table;
+pub mod transition_tiles;
 pub mod walk_sequence;
 
 pub use error::{Error, Result};

@@ -15,11 +15,11 @@
 //! Ties are broken by the first minimum in a fixed scan order, so the table does not depend on
 //! the number of threads.
 
-use rayon::prelude::*;
 use surfcap_mesh::{FrameIndex, Progress};
 
 use crate::dtw::{DtwTables, Slope, dtw_fill};
 use crate::error::{Error, Result};
+use crate::transition_tiles::{DistanceBlock, TABLE_TILE, TableTile, plan_table_tiles, transition_tile};
 
 /// Parameters of a transition table.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -144,22 +144,26 @@ impl SegmentRoom {
     }
 }
 
-/// Best (normalised cost, length, l^i, l^j) for source i over a DTW table started at (i, j'),
-/// updating the row's entries for every end frame j = j' + l^j - 1.
-struct RowBest<'a> {
-    cost: &'a mut [f64],
-    len: &'a mut [u32],
-    li: &'a mut [u32],
-    lj: &'a mut [u32],
-}
-
 /// The table with shared dynamic programming over the distance matrix `d` (checked first: a
-/// matrix of another size or with NaN is an error, not a panic or a table of NaN).
+/// matrix of another size or with NaN is an error, not a panic or a table of NaN), assembled
+/// from the tiles of [`plan_table_tiles`] computed by [`transition_tile`], the function a
+/// cluster's tile jobs run: bit-identical for every tiling.
 pub fn transition_table(
     d: &[f64],
     index: &FrameIndex,
     p: &TableParams,
     progress: &dyn Progress,
+) -> Result<TransitionTable> {
+    transition_table_in_tiles(d, index, p, progress, TABLE_TILE)
+}
+
+/// [`transition_table`] with tiles of `tile` frames (0: one tile).
+pub fn transition_table_in_tiles(
+    d: &[f64],
+    index: &FrameIndex,
+    p: &TableParams,
+    progress: &dyn Progress,
+    tile: usize,
 ) -> Result<TransitionTable> {
     check_distances(d, index)?;
     if p.l_min < 1 || p.l_min > p.l_max {
@@ -167,50 +171,31 @@ pub fn transition_table(
     }
     let n = index.len();
     let after = SegmentRoom::new(index).after;
-    let mut cost = vec![f64::INFINITY; n * n];
-    let mut len = vec![0u32; n * n];
-    let mut li = vec![0u32; n * n];
-    let mut lj = vec![0u32; n * n];
-    progress.start("transition table", n as u64);
-    cost.par_chunks_mut(n)
-        .zip(len.par_chunks_mut(n))
-        .zip(li.par_chunks_mut(n).zip(lj.par_chunks_mut(n)))
-        .enumerate()
-        .for_each_init(DtwTables::default, |t, (i, ((c, l), (a, b)))| {
-            let mut row = RowBest { cost: c, len: l, li: a, lj: b };
-            source_row(d, n, i, &after, p, t, &mut row);
-            progress.advance(1);
-        });
-    progress.finish();
-    Ok(TransitionTable { n, cost, len, li, lj })
+    let block = DistanceBlock::whole(n, d);
+    let mut table = TransitionTable {
+        n,
+        cost: vec![f64::INFINITY; n * n],
+        len: vec![0; n * n],
+        li: vec![0; n * n],
+        lj: vec![0; n * n],
+    };
+    for span in plan_table_tiles(n, tile) {
+        let t = transition_tile(&block, &after, p, &span, progress)?;
+        table.place_tile(&t);
+    }
+    Ok(table)
 }
 
-fn source_row(d: &[f64], n: usize, i: usize, after: &[usize], p: &TableParams, t: &mut DtwTables, row: &mut RowBest) {
-    let rows = after[i].min(p.l_max);
-    if rows < p.l_min {
-        return;
-    }
-    for js in 0..n {
-        let cols = after[js].min(p.l_max);
-        if cols < p.l_min {
-            continue;
-        }
-        dtw_fill(rows, cols, |k, l| d[(i + k) * n + js + l], p.slope, t);
-        for l in p.l_min - 1..cols {
-            let j = js + l;
-            for k in p.l_min - 1..rows {
-                let (c, len) = t.at(k, l);
-                if !c.is_finite() {
-                    continue;
-                }
-                let norm = c / len as f64;
-                if norm < row.cost[j] {
-                    row.cost[j] = norm;
-                    row.len[j] = len;
-                    row.li[j] = k as u32 + 1;
-                    row.lj[j] = l as u32 + 1;
-                }
-            }
+impl TransitionTable {
+    /// Copies a tile into the table.
+    pub fn place_tile(&mut self, t: &TableTile) {
+        let (n, nc) = (self.n, t.span.cols.len());
+        for (r, i) in t.span.rows.clone().enumerate() {
+            let (dst, src) = (i * self.n + t.span.cols.start..i * n + t.span.cols.end, r * nc..(r + 1) * nc);
+            self.cost[dst.clone()].copy_from_slice(&t.cost[src.clone()]);
+            self.len[dst.clone()].copy_from_slice(&t.len[src.clone()]);
+            self.li[dst.clone()].copy_from_slice(&t.li[src.clone()]);
+            self.lj[dst].copy_from_slice(&t.lj[src]);
         }
     }
 }

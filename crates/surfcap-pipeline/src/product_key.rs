@@ -39,11 +39,19 @@ pub struct DistanceKey {
     pub w: f64,
     /// The per-vertex alignment weights, `None` for all ones.
     pub vertex_weights: Option<Vec<f64>>,
+    /// The matrix's [`ProductKey::VERSION`], part of the key so that every product computed from
+    /// the matrix (table, graphs, walk model: their keys hold this one) changes with it.
+    pub layout: u32,
 }
 
 impl DistanceKey {
     pub fn new(p: &DistanceParams) -> Self {
-        DistanceKey { metric: p.metric.name(), w: p.w, vertex_weights: p.vertex_weights.clone() }
+        DistanceKey {
+            metric: p.metric.name(),
+            w: p.w,
+            vertex_weights: p.vertex_weights.clone(),
+            layout: <DistanceKey as ProductKey>::VERSION,
+        }
     }
 }
 
