@@ -569,3 +569,185 @@ fn slurm_submit_arrays_match_the_real_plan() {
         assert_eq!(ok(&o, "tiles count").trim(), jobs.to_string(), "{stage}");
     }
 }
+
+/// A single-node Slurm cluster of Debian's packages (slurmctld, slurmd, slurm-client; installed
+/// by scripts/setup) in a temporary folder: its own configuration (`SLURM_CONF`), ports, state,
+/// spool and logs, no authentication daemon (`auth/none`, `cred/none`: one machine, one user),
+/// processes tracked by process group. Drop cancels its jobs and stops both daemons (SIGTERM,
+/// then SIGKILL to their process groups, each started in a group of its own).
+struct LocalSlurm {
+    dir: tempfile::TempDir,
+    daemons: Vec<std::process::Child>,
+}
+
+impl LocalSlurm {
+    fn conf(&self) -> PathBuf {
+        self.dir.path().join("slurm.conf")
+    }
+
+    fn command(&self, program: &str) -> Command {
+        let mut c = Command::new(program);
+        c.env("SLURM_CONF", self.conf()).stdin(Stdio::null());
+        c
+    }
+
+    fn start() -> LocalSlurm {
+        for program in ["slurmctld", "slurmd", "sbatch", "squeue", "sinfo", "scontrol", "scancel"] {
+            let found = std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+                .chain(["/usr/sbin".into(), "/sbin".into()])
+                .any(|d| d.join(program).is_file());
+            assert!(
+                found,
+                "{program} is missing: run scripts/setup (it installs Debian's slurmctld, slurmd, slurm-client)"
+            );
+        }
+        let dir = tempfile::Builder::new().prefix("slurm").tempdir_in("/tmp").unwrap();
+        let d = dir.path();
+        for sub in ["state", "spool"] {
+            std::fs::create_dir(d.join(sub)).unwrap();
+        }
+        let mut name = [0u8; 256];
+        assert_eq!(unsafe { libc::gethostname(name.as_mut_ptr().cast(), name.len()) }, 0);
+        let host = String::from_utf8_lossy(&name[..name.iter().position(|&b| b == 0).unwrap()]).into_owned();
+        let host = host.split('.').next().unwrap().to_string();
+        let user =
+            String::from_utf8(Command::new("id").arg("-un").output().unwrap().stdout).unwrap().trim().to_string();
+        let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap();
+        let mem_mb = meminfo.split_whitespace().nth(1).unwrap().parse::<u64>().unwrap() / 1024;
+        let dir_text = p(d);
+        let conf = format!(
+            "ClusterName=surfcaptest\nSlurmctldHost={host}(127.0.0.1)\nSlurmctldPort={ctld}\nSlurmdPort={slurmd}\n\
+             AuthType=auth/none\nCredType=cred/none\nSlurmUser={user}\nSlurmdUser={user}\n\
+             StateSaveLocation={dir_text}/state\nSlurmdSpoolDir={dir_text}/spool\n\
+             SlurmctldPidFile={dir_text}/slurmctld.pid\nSlurmdPidFile={dir_text}/slurmd.pid\n\
+             SlurmctldLogFile={dir_text}/slurmctld.log\nSlurmdLogFile={dir_text}/slurmd.log\n\
+             ProctrackType=proctrack/pgid\nTaskPlugin=task/none\nSelectType=select/cons_tres\n\
+             SelectTypeParameters=CR_Core\nSchedulerType=sched/backfill\nReturnToService=2\nMpiDefault=none\n\
+             JobCompType=jobcomp/none\nAccountingStorageType=accounting_storage/none\n\
+             JobAcctGatherType=jobacct_gather/none\nSwitchType=switch/none\nMinJobAge=600\n\
+             NodeName={host} NodeAddr=127.0.0.1 CPUs=2 RealMemory={mem_mb} State=UNKNOWN\n\
+             PartitionName=debug Nodes={host} Default=YES MaxTime=INFINITE State=UP\n",
+            ctld = free_port(),
+            slurmd = free_port(),
+        );
+        std::fs::write(d.join("slurm.conf"), conf).unwrap();
+        let mut slurm = LocalSlurm { dir, daemons: Vec::new() };
+        for daemon in ["slurmctld", "slurmd"] {
+            let out = std::fs::File::create(slurm.dir.path().join(format!("{daemon}.out"))).unwrap();
+            let child = slurm
+                .command(daemon)
+                .args(["-D", "-f", p(&slurm.conf())])
+                .current_dir(slurm.dir.path())
+                .stdout(out.try_clone().unwrap())
+                .stderr(out)
+                .process_group(0)
+                .spawn()
+                .unwrap_or_else(|e| panic!("{daemon} starts: {e}"));
+            slurm.daemons.push(child);
+        }
+        let t0 = Instant::now();
+        loop {
+            let o = slurm.command("sinfo").args(["-h", "-o", "%T"]).output().unwrap();
+            if String::from_utf8_lossy(&o.stdout).trim() == "idle" {
+                return slurm;
+            }
+            for (daemon, child) in ["slurmctld", "slurmd"].iter().zip(&mut slurm.daemons) {
+                if let Some(status) = child.try_wait().unwrap() {
+                    panic!("{daemon} exited ({status}):\n{}", slurm.log(&format!("{daemon}.out")));
+                }
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(60),
+                "the Slurm node is not idle after 60 s:\n{}",
+                slurm.log("slurmctld.log")
+            );
+            std::thread::sleep(Duration::from_millis(300));
+        }
+    }
+
+    fn log(&self, name: &str) -> String {
+        std::fs::read_to_string(self.dir.path().join(name)).unwrap_or_default()
+    }
+
+    /// Waits until no job is pending or running.
+    fn wait_idle(&self, timeout: Duration) {
+        let t0 = Instant::now();
+        loop {
+            let o = self.command("squeue").args(["-h", "-o", "%i %T %r"]).output().unwrap();
+            let queue = String::from_utf8_lossy(&o.stdout).into_owned();
+            if o.status.success() && queue.trim().is_empty() {
+                return;
+            }
+            assert!(
+                t0.elapsed() < timeout,
+                "jobs still queued after {timeout:?}:\n{queue}\n{}",
+                self.log("slurmctld.log")
+            );
+            std::thread::sleep(Duration::from_millis(300));
+        }
+    }
+
+    /// The states of a job's tasks (every task of an array), from `scontrol show job`.
+    fn job_states(&self, id: &str) -> Vec<String> {
+        let o = self.command("scontrol").args(["show", "job", id]).output().unwrap();
+        ok(&o, &format!("scontrol show job {id}"))
+            .split_whitespace()
+            .filter_map(|w| w.strip_prefix("JobState=").map(String::from))
+            .collect()
+    }
+}
+
+impl Drop for LocalSlurm {
+    fn drop(&mut self) {
+        // Only this cluster's jobs: the command reads this cluster's SLURM_CONF.
+        let user =
+            Command::new("id").arg("-un").output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+        if let Ok(user) = user {
+            let _ = self.command("scancel").args(["--quiet", "--user", &user]).output();
+        }
+        for child in self.daemons.iter_mut().rev() {
+            let pid = child.id() as i32;
+            unsafe { libc::kill(pid, libc::SIGTERM) };
+            let t0 = Instant::now();
+            while t0.elapsed() < Duration::from_secs(10) && !matches!(child.try_wait(), Ok(Some(_))) {
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            unsafe { libc::kill(-pid, libc::SIGKILL) };
+            let _ = child.wait();
+        }
+    }
+}
+
+#[test]
+fn slurm_for_real_on_a_single_node_cluster_gives_the_one_process_bytes() {
+    let d = tempfile::tempdir().unwrap();
+    let subject = tiny_subject(d.path(), "worm.subject");
+    let reference = one_process(&subject, d.path());
+    let work = d.path().join("slurm.tiles");
+    plan(&subject, &work);
+    let slurm = LocalSlurm::start();
+    let t0 = Instant::now();
+    // --mem below the template's 2 GB so the test runs on small machines too.
+    let o = slurm
+        .command("bash")
+        .arg(slurm_script("submit.sh"))
+        .args([p(&work), "--mem=500M"])
+        .env("SURFCAP", SURFCAP)
+        .env_remove("MAX_ARRAY")
+        .env_remove("STAGES")
+        .output()
+        .unwrap();
+    let out = ok(&o, "submit.sh");
+    slurm.wait_idle(Duration::from_secs(180));
+    let ids: Vec<&str> = out.lines().map(|l| l.rsplit(' ').next().unwrap()).collect();
+    let want: Vec<(String, usize)> = stages(&work).into_iter().filter(|s| s.1 > 0).collect();
+    assert_eq!(ids.len(), want.len() + 1, "one array per stage and the merge:\n{out}");
+    for ((stage, jobs), id) in want.iter().zip(&ids) {
+        let states = slurm.job_states(id);
+        assert_eq!(states, vec!["COMPLETED".to_string(); *jobs], "{stage} (array {id})");
+    }
+    assert_eq!(slurm.job_states(ids.last().unwrap()), ["COMPLETED"], "the merge job");
+    eprintln!("real Slurm: submitted to merged in {:.1} s", t0.elapsed().as_secs_f64());
+    assert_same_products(&work, &reference, "Slurm");
+    drop(slurm);
+}
