@@ -622,7 +622,8 @@ impl LocalSlurm {
              SlurmctldPidFile={dir_text}/slurmctld.pid\nSlurmdPidFile={dir_text}/slurmd.pid\n\
              SlurmctldLogFile={dir_text}/slurmctld.log\nSlurmdLogFile={dir_text}/slurmd.log\n\
              ProctrackType=proctrack/pgid\nTaskPlugin=task/none\nSelectType=select/cons_tres\n\
-             SelectTypeParameters=CR_Core\nSchedulerType=sched/backfill\nReturnToService=2\nMpiDefault=none\n\
+             SelectTypeParameters=CR_Core\nSchedulerType=sched/builtin\n\
+             SchedulerParameters=sched_interval=1,sched_min_interval=200000\nReturnToService=2\nMpiDefault=none\n\
              JobCompType=jobcomp/none\nAccountingStorageType=accounting_storage/none\n\
              JobAcctGatherType=jobacct_gather/none\nSwitchType=switch/none\nMinJobAge=600\n\
              NodeName={host} NodeAddr=127.0.0.1 CPUs=2 RealMemory={mem_mb} State=UNKNOWN\n\
@@ -718,36 +719,65 @@ impl Drop for LocalSlurm {
     }
 }
 
-#[test]
-fn slurm_for_real_on_a_single_node_cluster_gives_the_one_process_bytes() {
-    let d = tempfile::tempdir().unwrap();
-    let subject = tiny_subject(d.path(), "worm.subject");
-    let reference = one_process(&subject, d.path());
-    let work = d.path().join("slurm.tiles");
-    plan(&subject, &work);
-    let slurm = LocalSlurm::start();
-    let t0 = Instant::now();
+/// Submits WORK with `submit.sh` to the local cluster, waits for every job to leave the queue;
+/// returns (stage, jobs, array id) per submitted stage and the merge job's id.
+fn submit_and_wait(slurm: &LocalSlurm, work: &Path, surfcap: &Path) -> (Vec<(String, usize, String)>, String) {
     // --mem below the template's 2 GB so the test runs on small machines too.
     let o = slurm
         .command("bash")
         .arg(slurm_script("submit.sh"))
-        .args([p(&work), "--mem=500M"])
-        .env("SURFCAP", SURFCAP)
+        .args([p(work), "--mem=500M"])
+        .env("SURFCAP", surfcap)
         .env_remove("MAX_ARRAY")
         .env_remove("STAGES")
         .output()
         .unwrap();
     let out = ok(&o, "submit.sh");
     slurm.wait_idle(Duration::from_secs(180));
-    let ids: Vec<&str> = out.lines().map(|l| l.rsplit(' ').next().unwrap()).collect();
-    let want: Vec<(String, usize)> = stages(&work).into_iter().filter(|s| s.1 > 0).collect();
+    let ids: Vec<String> = out.lines().map(|l| l.rsplit(' ').next().unwrap().to_string()).collect();
+    let want: Vec<(String, usize)> = stages(work).into_iter().filter(|s| s.1 > 0).collect();
     assert_eq!(ids.len(), want.len() + 1, "one array per stage and the merge:\n{out}");
-    for ((stage, jobs), id) in want.iter().zip(&ids) {
+    let arrays = want.into_iter().zip(&ids).map(|((stage, jobs), id)| (stage, jobs, id.clone())).collect();
+    (arrays, ids.last().unwrap().clone())
+}
+
+#[test]
+fn slurm_for_real_on_a_single_node_cluster_stops_at_a_failed_job_then_resumes_to_the_one_process_bytes() {
+    let d = tempfile::tempdir().unwrap();
+    let subject = tiny_subject(d.path(), "worm.subject");
+    let reference = one_process(&subject, d.path());
+    let work = d.path().join("slurm.tiles");
+    plan(&subject, &work);
+    let slurm = LocalSlurm::start();
+
+    // Job 0 of the second stage fails: its array fails, every later stage and the merge are
+    // cancelled (afterok never satisfied), nothing is merged.
+    let (table, _) = stages(&work)[1].clone();
+    let (wrapper, attempts) = failing_wrapper(d.path(), &table, 0, false);
+    let t0 = Instant::now();
+    let (arrays, merge) = submit_and_wait(&slurm, &work, &wrapper);
+    let failing = format!("{table} job 0 failed");
+    assert_eq!(std::fs::read_to_string(&attempts).unwrap().lines().count(), 1, "{failing} once");
+    for (k, (stage, jobs, id)) in arrays.iter().enumerate() {
         let states = slurm.job_states(id);
-        assert_eq!(states, vec!["COMPLETED".to_string(); *jobs], "{stage} (array {id})");
+        match k {
+            0 => assert_eq!(states, vec!["COMPLETED".to_string(); *jobs], "{stage} before the failure"),
+            1 => assert!(states.contains(&"FAILED".to_string()), "{stage}: {states:?}"),
+            _ => assert!(!states.is_empty() && states.iter().all(|s| s == "CANCELLED"), "{stage} after {failing}: {states:?}"),
+        }
     }
-    assert_eq!(slurm.job_states(ids.last().unwrap()), ["COMPLETED"], "the merge job");
-    eprintln!("real Slurm: submitted to merged in {:.1} s", t0.elapsed().as_secs_f64());
+    assert_eq!(slurm.job_states(&merge), ["CANCELLED"], "the merge after {failing}");
+    assert!(!work.join("merge.json").exists(), "nothing merged");
+    let failed_run = t0.elapsed().as_secs_f64();
+
+    // Submitted again with the real binary: the done jobs exit at once, the rest run, merged.
+    let t0 = Instant::now();
+    let (arrays, merge) = submit_and_wait(&slurm, &work, Path::new(SURFCAP));
+    for (stage, jobs, id) in &arrays {
+        assert_eq!(slurm.job_states(id), vec!["COMPLETED".to_string(); *jobs], "{stage} (array {id})");
+    }
+    assert_eq!(slurm.job_states(&merge), ["COMPLETED"], "the merge job");
+    eprintln!("real Slurm: failed run {failed_run:.1} s, resumed run {:.1} s", t0.elapsed().as_secs_f64());
     assert_same_products(&work, &reference, "Slurm");
     drop(slurm);
 }
