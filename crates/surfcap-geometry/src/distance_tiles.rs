@@ -239,7 +239,10 @@ pub fn distance_tile(
                     let rot = rows
                         .clone()
                         .map(|i| {
-                            alignments[i - span.rows.start].iter().map(|&(theta, _)| rotation_about_up(up, theta)).collect()
+                            alignments[i - span.rows.start]
+                                .iter()
+                                .map(|&(theta, _)| rotation_about_up(up, theta))
+                                .collect()
                         })
                         .collect();
                     let acc = first.iter().map(|&f| vec![0.0; nc - f]).collect();

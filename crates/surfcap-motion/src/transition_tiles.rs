@@ -230,7 +230,8 @@ mod tests {
             let after = SegmentRoom::new(&index).after;
             for span in plan_table_tiles(n, 8) {
                 let (hr, hc) = span.halo(n, p.l_max);
-                let values: Vec<f64> = hr.clone().flat_map(|i| hc.clone().map(move |j| (i, j))).map(|(i, j)| d[i * n + j]).collect();
+                let values: Vec<f64> =
+                    hr.clone().flat_map(|i| hc.clone().map(move |j| (i, j))).map(|(i, j)| d[i * n + j]).collect();
                 let halo = DistanceBlock { rows: hr, cols: hc, values: &values };
                 let from_halo = transition_tile(&halo, &after, &p, &span, &NoProgress).unwrap();
                 let from_whole = transition_tile(&DistanceBlock::whole(n, &d), &after, &p, &span, &NoProgress).unwrap();
