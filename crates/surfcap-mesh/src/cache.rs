@@ -230,6 +230,7 @@ pub struct CachedFrames {
     pub index: crate::FrameIndex,
     pub up_axis: UpAxis,
     pub units: Units,
+    pub fps: f64,
 }
 
 impl CachedFrames {
@@ -255,7 +256,15 @@ impl CachedFrames {
         let topology = Topology::new(h.vertices, triangles, None).map_err(|e| e.in_file(&fp))?;
         let index = crate::FrameIndex::new(h.sequences.iter().map(|s| s.frames))
             .with_names(h.sequences.iter().map(|s| s.name.clone()).collect());
-        Ok(CachedFrames { path: path.to_path_buf(), name: h.name, topology, index, up_axis: h.up_axis, units: h.units })
+        Ok(CachedFrames {
+            path: path.to_path_buf(),
+            name: h.name,
+            topology,
+            index,
+            up_axis: h.up_axis,
+            units: h.units,
+            fps: h.fps,
+        })
     }
 
     /// The positions of the global frames `frames` (any order, repeats allowed), each run of
