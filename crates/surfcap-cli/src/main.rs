@@ -109,6 +109,10 @@ enum Command {
     /// motion type, then sample endless slightly different versions of them and of their blends.
     #[command(subcommand)]
     Vary(commands::vary::Cmd),
+    /// The all-pairs work (distances, transition table, sparse essential graph) as tile jobs in
+    /// a work folder, for clusters: plan, run jobs (one, a stage, or all), status, merge.
+    #[command(subcommand)]
+    Tiles(commands::tiles::Cmd),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -229,6 +233,7 @@ fn main() -> ExitCode {
             Command::Smg(c) => commands::smg::run(&ctx, c),
             Command::Appearance(c) => commands::appearance::run(&ctx, c),
             Command::Vary(c) => commands::vary::run(&ctx, c),
+            Command::Tiles(c) => commands::tiles::run(&ctx, c),
         }
     });
     match result {

@@ -230,6 +230,18 @@ pub fn acos_branchless(c: f64) -> f64 {
     }
 }
 
+/// The name of the kernel [`deformation_distance`] runs on this CPU: results of different kernels
+/// differ in the last bits, so tiled work records it and refuses to mix them.
+pub fn kernel_name() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            return "avx2";
+        }
+    }
+    "scalar"
+}
+
 /// Sum over triangles of the per-triangle deformation cost from frame i to frame j, where `g`
 /// is the rotation about the up axis that aligns pose j onto pose i. `fi`, `fj` are whole
 /// storage blocks of [`triangle_frames`] (the same blocks of both frames); zero-area triangles

@@ -219,3 +219,90 @@ pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
     progress.finish();
     Subject::new(h.name, topology, sequences, h.fps, h.up_axis, h.units).map_err(|e| e.in_file(&hp))
 }
+
+/// A subject cache opened to read some of its frames only: a tile job of the all-pairs work
+/// (issue 21) holds the frames of its tile, not the subject. The description and the topology
+/// are read and checked on opening; frames are read on demand, seeking in `positions_<k>.npy`.
+pub struct CachedFrames {
+    path: std::path::PathBuf,
+    pub name: String,
+    pub topology: Topology,
+    pub index: crate::FrameIndex,
+    pub up_axis: UpAxis,
+    pub units: Units,
+    pub fps: f64,
+}
+
+impl CachedFrames {
+    /// Opens the cache at `path` (its `subject.json` and `faces.npy`).
+    pub fn open(path: &Path) -> Result<Self> {
+        let hp = path.join("subject.json");
+        let text = std::fs::read(&hp).map_err(|e| Error::io(&hp, "read", e))?;
+        let h: Header = serde_json::from_slice(&text)
+            .map_err(|e| err!(Syntax, "not a surfcap subject description: {e}").in_file(&hp).at_line(e.line()))?;
+        if h.format != FORMAT || h.version != VERSION {
+            return Err(err!(
+                Unsupported,
+                "format {:?} version {}: expected {FORMAT:?} version {VERSION} (re-import the data with this surfcap)",
+                h.format,
+                h.version
+            )
+            .in_file(&hp));
+        }
+        let fp = path.join("faces.npy");
+        let faces = read_npy::<u32>(&fp)?;
+        expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
+        let triangles: Vec<[u32; 3]> = faces.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let topology = Topology::new(h.vertices, triangles, None).map_err(|e| e.in_file(&fp))?;
+        let index = crate::FrameIndex::new(h.sequences.iter().map(|s| s.frames))
+            .with_names(h.sequences.iter().map(|s| s.name.clone()).collect());
+        Ok(CachedFrames {
+            path: path.to_path_buf(),
+            name: h.name,
+            topology,
+            index,
+            up_axis: h.up_axis,
+            units: h.units,
+            fps: h.fps,
+        })
+    }
+
+    /// The positions of the global frames `frames` (any order, repeats allowed), each run of
+    /// consecutive frames of one sequence read with one seek; checked against the description.
+    pub fn read(&self, frames: &[usize]) -> Result<Vec<(usize, Vec<f32>)>> {
+        let nv = self.topology.n_vertices();
+        let mut sorted = frames.to_vec();
+        sorted.sort_unstable();
+        sorted.dedup();
+        let mut out = Vec::with_capacity(sorted.len());
+        let mut k = 0;
+        while k < sorted.len() {
+            let g = sorted[k];
+            let (s, f) = self.index.locate(g).ok_or_else(|| {
+                err!(Shape, "frame {g}: the subject has {} frames", self.index.len()).in_file(&self.path)
+            })?;
+            let mut end = k + 1;
+            while end < sorted.len()
+                && sorted[end] == sorted[end - 1] + 1
+                && self.index.locate(sorted[end]).map(|l| l.0) == Some(s)
+            {
+                end += 1;
+            }
+            let pp = self.path.join(format!("positions_{s}.npy"));
+            let (shape, data) = crate::io::npy::read_npy_rows::<f32>(&pp, f..f + (end - k))?;
+            if shape != [self.index.range(s).len(), nv, 3] {
+                return Err(err!(
+                    Shape,
+                    "shape {shape:?}: expected positions of shape [{}, {nv}, 3]",
+                    self.index.range(s).len()
+                )
+                .in_file(&pp));
+            }
+            for (r, chunk) in data.chunks_exact(3 * nv).enumerate() {
+                out.push((sorted[k + r], chunk.to_vec()));
+            }
+            k = end;
+        }
+        Ok(out)
+    }
+}

@@ -62,7 +62,6 @@ pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> 
         let (row, col, value) = (k / n, k % n, table.cost[k]);
         return Err(Error::MatrixEntry { what: "transition costs", row, col, value, expected: "a cost >= 0 or inf" });
     }
-    let seq: Vec<usize> = (0..n).map(|g| index.locate(g).expect("frame in range").0).collect();
     let mut finite: Vec<f64> = table.cost.iter().copied().filter(|c| c.is_finite()).collect();
     let d_scale = if finite.is_empty() {
         1.0
@@ -73,23 +72,49 @@ pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> 
     // All-identical poses (median 0) keep D as it is.
     let d_scale = if d_scale > 0.0 { d_scale } else { 1.0 };
     let mut weight = vec![f64::INFINITY; n * n];
-    for i in 0..n {
-        for j in 0..n {
-            if i == j {
-                continue;
-            }
-            let k = i * n + j;
-            let transition = table.cost[k] / d_scale + alpha * table.len[k] as f64;
-            weight[k] = if seq[i] == seq[j] && j == i + 1 {
-                alpha
-            } else if seq[i] == seq[j] && j > i {
-                if transition < alpha * (j - i) as f64 { transition } else { f64::INFINITY }
-            } else {
-                transition
-            };
-        }
+    for (i, out) in weight.chunks_exact_mut(n.max(1)).enumerate().take(n) {
+        let row = i * n..(i + 1) * n;
+        edge_weight_row(&table.cost[row.clone()], &table.len[row], i, index, alpha, d_scale, out);
     }
     Ok(EdgeWeights { n, alpha, d_scale, weight })
+}
+
+/// Row `i` of Algorithm 1's weights (the one definition: [`edge_weights`] calls it for every
+/// row), from row `i` of the transition table's costs and durations, into `out` (N entries,
+/// `f64::INFINITY` where there is no edge). `d_scale` is the median finite cost of the whole
+/// table ([`EdgeWeights::d_scale`]); a caller reading the table a block of rows at a time finds
+/// it first. The row is not checked (see [`edge_weights`] for a checked table).
+///
+/// # Panics
+/// When `cost_row`, `len_row` and `out` are not all `index.len()` long or `i` is not a frame of
+/// `index` (a caller's mistake, not bad data).
+pub fn edge_weight_row(
+    cost_row: &[f64],
+    len_row: &[u32],
+    i: usize,
+    index: &FrameIndex,
+    alpha: f64,
+    d_scale: f64,
+    out: &mut [f64],
+) {
+    let n = index.len();
+    assert!(cost_row.len() == n && len_row.len() == n && out.len() == n, "rows of {n} frames");
+    let (s, _) = index.locate(i).expect("row of a frame of the index");
+    let same = index.range(s);
+    for (j, w) in out.iter_mut().enumerate() {
+        if i == j {
+            *w = f64::INFINITY;
+            continue;
+        }
+        let transition = cost_row[j] / d_scale + alpha * len_row[j] as f64;
+        *w = if same.contains(&j) && j == i + 1 {
+            alpha
+        } else if same.contains(&j) && j > i {
+            if transition < alpha * (j - i) as f64 { transition } else { f64::INFINITY }
+        } else {
+            transition
+        };
+    }
 }
 
 #[cfg(test)]
@@ -115,5 +140,19 @@ mod tests {
         let e = edge_weights(&t, &index, 1.0).unwrap();
         assert!(e.at(0, 2).is_infinite(), "3 > 2");
         assert!(EdgeWeights::is_original(&index, 1, 2) && !EdgeWeights::is_original(&index, 2, 3));
+        // Row by row, the same numbers.
+        let mut out = vec![0.0; n];
+        for i in 0..n {
+            edge_weight_row(
+                &t.cost[i * n..(i + 1) * n],
+                &t.len[i * n..(i + 1) * n],
+                i,
+                &index,
+                1.0,
+                e.d_scale,
+                &mut out,
+            );
+            assert_eq!(out.as_slice(), &e.weight[i * n..(i + 1) * n]);
+        }
     }
 }

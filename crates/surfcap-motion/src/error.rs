@@ -134,6 +134,16 @@ pub enum Error {
     /// `to` cannot be reached from `from` at all (both `sequence:frame`), whatever the duration.
     #[error("no walk leads from {from} to {to} in the graph, whatever its duration{why}")]
     Unreachable { from: String, to: String, why: String },
+
+    /// A shortest-path tree (row `root`) names `pred` as the predecessor of `node`, but the
+    /// sparse graph has no edge `pred` -> `node` (rows from another graph, or damaged).
+    #[error(
+        "tree of source frame {root}: frame {pred} -> {node} is not an edge of the sparse graph (rows from another graph?)"
+    )]
+    TreeEdgeMissing { root: usize, pred: u32, node: usize },
+    /// A shortest-path tree row (of `root`) with `len` entries where the graph has `frames`.
+    #[error("tree of source frame {root}: {len} predecessors, expected {frames} (one per frame of the graph)")]
+    TreeRowSize { root: usize, len: usize, frames: usize },
 }
 
 /// Result with the crate's [`Error`].

@@ -16,7 +16,7 @@ use surfcap_mesh::Progress;
 use crate::edge_weights::EdgeWeights;
 use crate::graph::{Edge, Graph};
 
-const NO_PRED: u32 = u32::MAX;
+const NO_PRED: u32 = crate::sparse_essential_graph::NO_PRED;
 
 /// The essential graph and the all-pairs shortest-path costs of the complete digraph.
 #[derive(Debug, Clone)]

@@ -24,7 +24,7 @@ pub struct Graph {
 
 /// A totally ordered f64 for the heap (weights are finite and non-negative).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Cost(f64);
+pub(crate) struct Cost(pub(crate) f64);
 
 impl Eq for Cost {}
 
@@ -61,6 +61,15 @@ impl Graph {
 
     pub fn out(&self, i: usize) -> &[Edge] {
         &self.edges[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    /// The position in [`Graph::edges`] of the edge `from` -> `to`, if there is one (binary
+    /// search among `from`'s edges, which are sorted by destination).
+    pub fn find(&self, from: usize, to: usize) -> Option<usize> {
+        if from >= self.n {
+            return None;
+        }
+        self.out(from).binary_search_by(|e| (e.to as usize).cmp(&to)).ok().map(|k| self.offsets[from] + k)
     }
 
     /// Thesis eq. 3.4: |E| / (|V| (|V| - 1)).

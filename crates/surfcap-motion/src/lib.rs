@@ -17,6 +17,7 @@ pub mod motion_graph;
 pub mod path_following;
 pub mod repeat_passes;
 pub mod sequence_time_alignment;
+pub mod sparse_essential_graph;
 pub mod timed_walk;
 pub mod transition_frames;
 pub mod transition_table;

@@ -16,6 +16,7 @@ pub mod remesh_frames;
 pub mod report;
 pub mod smg;
 pub mod synth;
+pub mod tiles;
 pub mod transfer;
 pub mod transition;
 pub mod transitions;

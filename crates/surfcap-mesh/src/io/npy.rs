@@ -120,17 +120,65 @@ const MAX_HEADER: u64 = 65_535;
 /// Deepest bracket nesting accepted in a header.
 const MAX_NESTING: usize = 4;
 
+/// Where and how an array's data is stored, from its checked header.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NpyLayout {
+    pub shape: Vec<usize>,
+    /// Byte offset of the first element.
+    pub data_start: u64,
+    /// Bytes per element.
+    pub item: usize,
+    kind: TypeChar,
+    swap: bool,
+}
+
 /// Reads an array from `reader`, whose total length is `total_len` bytes.
 pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<NpyArray<T>> {
+    let mut r = Counting { inner: reader, count: 0 };
+    let layout = npy_layout::<T, _>(&mut r, total_len)?;
+    let n = layout.shape.iter().product::<usize>();
+    let data = decode_elements::<T>(&mut r, &layout, n, 0)?;
+    Ok(NpyArray { shape: layout.shape, data })
+}
+
+/// Decodes `n` elements from `r` (positioned at element `first`) as stored per `layout`.
+fn decode_elements<T: NpyElement>(r: &mut impl Read, layout: &NpyLayout, n: usize, first: usize) -> Result<Vec<T>> {
+    let item = layout.item;
+    let mut data = Vec::with_capacity(n);
+    let mut chunk = vec![0u8; item * n.min(65536)];
+    let mut done = 0usize;
+    while done < n {
+        let m = (n - done).min(65536);
+        let buf = &mut chunk[..m * item];
+        r.read_exact(buf).map_err(|e| {
+            err!(Truncated, "cannot read array data: {e}")
+                .at(Location::Byte(layout.data_start + ((first + done) * item) as u64))
+        })?;
+        for (k, b) in buf.chunks_exact_mut(item).enumerate() {
+            if layout.swap {
+                b.reverse();
+            }
+            let v = T::decode(layout.kind, b)
+                .ok_or_else(|| err!(DType, "element {} does not fit: expected {}", first + done + k, T::EXPECTED))?;
+            data.push(v);
+        }
+        done += m;
+    }
+    Ok(data)
+}
+
+/// Reads and checks the header of an array whose total length is `total_len` bytes, leaving
+/// `reader` at the first element: shape, dtype accepted as `T`, C order, data size matching.
+fn npy_layout<T: NpyElement, R: Read>(reader: &mut Counting<R>, total_len: u64) -> Result<NpyLayout> {
     if total_len == 0 {
         return Err(err!(Empty, "empty file: expected a .npy array"));
     }
     // Check the declared header length against the file size before npyz allocates a buffer
     // of that length (a damaged length field would otherwise ask for gigabytes; found by the
     // fuzzer, see fuzz/FINDINGS.md).
-    let mut reader = reader;
+    let start = reader.count;
     let mut prefix = [0u8; 12];
-    let got = read_up_to(&mut reader, &mut prefix).map_err(|e| err!(Io, "cannot read: {e}"))?;
+    let got = read_up_to(reader, &mut prefix).map_err(|e| err!(Io, "cannot read: {e}"))?;
     const MAGIC: &[u8; 6] = b"\x93NUMPY";
     if got < 10 || &prefix[..6] != MAGIC {
         return Err(if got < 10 && prefix[..got.min(6)] == MAGIC[..got.min(6)] {
@@ -165,7 +213,7 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
     // The prefix may already hold more than a (tiny) header: those bytes are data, kept in order.
     let mut head = prefix[..got].to_vec();
     head.resize(((8 + len_bytes + header_len) as usize).max(got), 0);
-    read_up_to(&mut reader, &mut head[got..]).map_err(|e| err!(Io, "cannot read: {e}")).and_then(|n| {
+    read_up_to(reader, &mut head[got..]).map_err(|e| err!(Io, "cannot read: {e}")).and_then(|n| {
         if got + n < head.len() { Err(err!(Truncated, "file ends inside the .npy header")) } else { Ok(()) }
     })?;
     let mut depth = 0usize;
@@ -180,12 +228,12 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
                 .at(Location::Byte(k as u64)));
         }
     }
-    let mut r = Counting { inner: std::io::Cursor::new(head).chain(reader), count: 0 };
+    let mut r = Counting { inner: std::io::Cursor::new(head).chain(&mut *reader), count: 0 };
     let header = npyz::NpyHeader::from_reader(&mut r).map_err(|e| match e.kind() {
         std::io::ErrorKind::UnexpectedEof => err!(Truncated, "file ends inside the .npy header"),
         _ => err!(Syntax, "not a valid .npy header: {e}"),
     })?;
-    let data_start = r.count;
+    let data_start = start + r.count;
     let DType::Plain(ts) = header.dtype() else {
         return Err(err!(DType, "structured dtype {}: expected {}", header.dtype().descr(), T::EXPECTED));
     };
@@ -219,27 +267,8 @@ pub fn parse_npy<T: NpyElement>(reader: impl Read, total_len: u64) -> Result<Npy
         )
         .at(Location::Byte(data_start + bytes_needed)));
     }
-    let n = (bytes_needed / item as u64) as usize;
-    let mut data = Vec::with_capacity(n);
-    let mut chunk = vec![0u8; item * n.min(65536)];
-    let kind = ts.type_char();
-    let swap = ts.endianness() == Endianness::Big && item > 1;
-    let mut done = 0usize;
-    while done < n {
-        let m = (n - done).min(65536);
-        let buf = &mut chunk[..m * item];
-        r.read_exact(buf).map_err(|e| err!(Truncated, "cannot read array data: {e}").at(Location::Byte(r.count)))?;
-        for (k, b) in buf.chunks_exact_mut(item).enumerate() {
-            if swap {
-                b.reverse();
-            }
-            let v = T::decode(kind, b)
-                .ok_or_else(|| err!(DType, "element {} does not fit: expected {}", done + k, T::EXPECTED))?;
-            data.push(v);
-        }
-        done += m;
-    }
-    Ok(NpyArray { shape, data })
+    let (kind, swap) = (ts.type_char(), ts.endianness() == Endianness::Big && item > 1);
+    Ok(NpyLayout { shape, data_start, item, kind, swap })
 }
 
 /// Reads a `.npy` file; errors name the file.
@@ -247,6 +276,31 @@ pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
     let f = crate::io::regular_file::open_regular_file(path)?;
     let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
     parse_npy(std::io::BufReader::with_capacity(1 << 16, f), len).map_err(|e| e.in_file(path))
+}
+
+/// Reads only rows `rows` of the first axis of a `.npy` file (each row the product of the other
+/// axes), seeking to them: memory is that of the rows, not the file. Returns the file's whole
+/// shape and the rows' elements; errors name the file.
+pub fn read_npy_rows<T: NpyElement>(path: &Path, rows: std::ops::Range<usize>) -> Result<(Vec<usize>, Vec<T>)> {
+    use std::io::{Seek, SeekFrom};
+    let f = crate::io::regular_file::open_regular_file(path)?;
+    let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
+    let mut r = Counting { inner: std::io::BufReader::with_capacity(1 << 16, f), count: 0 };
+    let layout = npy_layout::<T, _>(&mut r, len).map_err(|e| e.in_file(path))?;
+    let first_axis = layout.shape.first().copied().unwrap_or(1);
+    if rows.start > rows.end || rows.end > first_axis {
+        return Err(
+            err!(Shape, "rows {}..{} of an array of {first_axis}: out of range", rows.start, rows.end).in_file(path)
+        );
+    }
+    let row_len: usize = layout.shape.iter().skip(1).product();
+    let first = rows.start * row_len;
+    let mut inner = r.inner;
+    inner
+        .seek(SeekFrom::Start(layout.data_start + (first * layout.item) as u64))
+        .map_err(|e| Error::io(path, "seek in .npy file", e))?;
+    let data = decode_elements::<T>(&mut inner, &layout, rows.len() * row_len, first).map_err(|e| e.in_file(path))?;
+    Ok((layout.shape, data))
 }
 
 /// Checks an array's shape against a pattern where `None` means any length.

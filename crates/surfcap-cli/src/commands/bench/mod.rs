@@ -14,6 +14,7 @@ mod graph;
 mod interpolate;
 mod learn;
 mod load;
+mod scale;
 mod smg;
 mod synth;
 mod transfer;
@@ -116,6 +117,9 @@ pub enum What {
     /// frames (the CMU-driven mannequin's walk, turns and jog; 5 parts) under 2 minutes, and
     /// sampling 5 variants under 30 s.
     Vary(vary::VaryArgs),
+    /// The tiled all-pairs work at 20,000 frames: sampled tile jobs, the projection on N
+    /// workers, and a 5,000-frame run end to end (issue 21).
+    Scale(scale::ScaleArgs),
     /// Write long animations as .glb, .abc or .usda (default: glb, 10 minutes at 30 fps of a
     /// 10,000-vertex tube, 18,000 frames): file size, time and the memory the write adds, for
     /// each length (`--frames 1800,3600,9000,18000` shows that both grow linearly).
@@ -178,6 +182,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Learn(l) => learn::run(ctx, &l),
         What::Transfer(t) => transfer::run(ctx, &t),
         What::Vary(v) => vary::run(ctx, &v),
+        What::Scale(s) => scale::run(ctx, s),
         What::Synth(b) => synth::run(ctx, b),
         What::Smg(b) => smg::run(ctx, &b),
         What::Appearance(b) => appearance::run(ctx, &b),

@@ -1,0 +1,28 @@
+//! Errors of the tiled work: each names the work folder's file, the stage and job.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Mesh(#[from] surfcap_mesh::Error),
+    #[error(transparent)]
+    Motion(#[from] surfcap_motion::Error),
+    /// A Zarr array that cannot be created, read or written.
+    #[error("{path}: {message}")]
+    Zarr { path: PathBuf, message: String },
+    /// A plan that cannot be used.
+    #[error("{path}: {message}")]
+    Plan { path: PathBuf, message: String },
+    /// A job index outside its stage, or a stage name that is not one.
+    #[error("{0}")]
+    Job(String),
+    /// Jobs whose results are missing.
+    #[error("stage {stage}: {count} of {jobs} jobs not done (first: {first}); run them, then merge again")]
+    Missing { stage: &'static str, count: usize, jobs: usize, first: String },
+    /// Results made by different distance kernels (they differ in the last bits).
+    #[error("{0}")]
+    Mixed(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,209 @@
+//! One job of one stage of a work folder (see `tile_plan.rs` for the stages). A job reads only
+//! what its tile needs (its frames from the subject cache, its halo of distances, its rows of
+//! the table), writes its results atomically and then its record; a job whose record is present
+//! is skipped, so rerunning a stage after an interruption or a failure computes only what is
+//! missing, and computing a job twice writes the same bytes.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use surfcap_geometry::distance_matrix::{DistanceParams, SLAB_BYTES};
+use surfcap_geometry::distance_tiles::{PoseFrames, distance_tile};
+use surfcap_geometry::pose_distance::PoseMetric;
+use surfcap_mesh::Progress;
+use surfcap_mesh::cache::CachedFrames;
+use surfcap_motion::transition_table::{SegmentRoom, TableParams};
+use surfcap_motion::transition_tiles::{DistanceBlock, transition_tile};
+
+use crate::cost_median::finite_cost_median;
+use crate::error::{Error, Result};
+use crate::tile_plan::{Plan, Stage};
+use crate::tile_store::{JobRecord, Matrix, Store};
+
+/// What running a job did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum JobOutcome {
+    /// Its record was already there: nothing was computed.
+    Skipped,
+    /// Computed now.
+    Done(JobRecord),
+}
+
+/// The frames of a tile, read from the subject cache.
+struct LoadedFrames {
+    ids: Vec<usize>,
+    data: Vec<Vec<f32>>,
+}
+
+impl PoseFrames for LoadedFrames {
+    fn pose(&self, g: usize) -> &[f32] {
+        &self.data[self.ids.binary_search(&g).expect("a frame of the tile")]
+    }
+}
+
+/// The median written by the `scale` stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Scale {
+    /// The median of the finite transition costs (1 when there are none or it is 0).
+    pub d_scale: f64,
+}
+
+/// Peak resident memory of this process so far (Linux `VmHWM`), bytes; 0 where unknown.
+pub fn peak_resident_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// The name of the pose-distance kernel this process uses.
+pub fn kernel_name() -> String {
+    surfcap_geometry::pose_distance::kernel_name().to_string()
+}
+
+/// The distance parameters of a plan.
+pub fn distance_params(plan: &Plan) -> Result<DistanceParams> {
+    let metric = PoseMetric::parse(&plan.params.metric).ok_or_else(|| {
+        Error::Job(format!(
+            "metric {:?} in the plan: expected deformation, deformation-log or euclidean",
+            plan.params.metric
+        ))
+    })?;
+    Ok(DistanceParams { metric, w: plan.params.w, vertex_weights: None })
+}
+
+/// The table parameters of a plan.
+pub fn table_params(plan: &Plan) -> TableParams {
+    TableParams { l_min: plan.params.l_min, l_max: plan.params.l_max, slope: plan.params.slope }
+}
+
+/// Runs job `index` of `stage` unless its record is present.
+pub fn run_job(
+    store: &Store,
+    plan: &Plan,
+    subject: &CachedFrames,
+    stage: Stage,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<JobOutcome> {
+    plan.check_job(stage, index)?;
+    if store.record(stage, index)?.is_some() {
+        return Ok(JobOutcome::Skipped);
+    }
+    let start = Instant::now();
+    let (span, kernel, details) = match stage {
+        Stage::Distances => distances_job(store, plan, subject, index, progress)?,
+        Stage::Table => table_job(store, plan, subject, index, progress)?,
+        Stage::Scale => scale_job(store, plan)?,
+        Stage::Candidates | Stage::Paths => {
+            return Err(Error::Job(format!("stage {}: not in this build yet", stage.name())));
+        }
+    };
+    let record = JobRecord {
+        stage,
+        index,
+        span,
+        kernel,
+        seconds: start.elapsed().as_secs_f64(),
+        peak_bytes: peak_resident_bytes(),
+        details,
+    };
+    store.write_record(&record)?;
+    Ok(JobOutcome::Done(record))
+}
+
+type JobResult = (String, String, serde_json::Value);
+
+fn frames_text(subject: &CachedFrames, r: &std::ops::Range<usize>) -> String {
+    if r.is_empty() {
+        return "no frames".into();
+    }
+    format!("{} .. {}", subject.index.label(r.start), subject.index.label(r.end - 1))
+}
+
+fn distances_job(
+    store: &Store,
+    plan: &Plan,
+    subject: &CachedFrames,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<JobResult> {
+    let span = plan.distance_span(index);
+    let params = distance_params(plan)?;
+    let ids = span.frames();
+    let (ids, data): (Vec<usize>, Vec<Vec<f32>>) = subject.read(&ids)?.into_iter().unzip();
+    let frames = LoadedFrames { ids, data };
+    let t = distance_tile(&frames, subject.topology.triangles(), subject.up_axis, &span, &params, SLAB_BYTES, progress);
+    let (ci, cj) = (span.rows.start / plan.tile, span.cols.start / plan.tile);
+    let (nr, nc) = (span.rows.len(), span.cols.len());
+    store.write_chunk_f64(Matrix::Distances, ci, cj, nr, nc, &t.values)?;
+    if ci != cj {
+        let mut mirror = vec![0.0; nr * nc];
+        for r in 0..nr {
+            for c in 0..nc {
+                mirror[c * nr + r] = t.values[r * nc + c];
+            }
+        }
+        store.write_chunk_f64(Matrix::Distances, cj, ci, nc, nr, &mirror)?;
+    }
+    let text = format!("rows {} x columns {}", frames_text(subject, &span.rows), frames_text(subject, &span.cols));
+    let details = serde_json::json!({
+        "pairs": span.pairs(),
+        "triangle_pairs": span.pairs() * subject.topology.n_triangles(),
+        "max_skipped_triangles": t.max_skipped_triangles,
+    });
+    Ok((text, kernel_name(), details))
+}
+
+fn table_job(
+    store: &Store,
+    plan: &Plan,
+    subject: &CachedFrames,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<JobResult> {
+    let span = plan.table_span(index);
+    let p = table_params(plan);
+    let n = plan.frames();
+    let (hr, hc) = span.halo(n, p.l_max);
+    let values = store.read_f64(Matrix::Distances, hr.clone(), hc.clone())?;
+    let block = DistanceBlock { rows: hr, cols: hc, values: &values };
+    block.check()?;
+    let after = SegmentRoom::new(&subject.index).after;
+    let t = transition_tile(&block, &after, &p, &span, progress)?;
+    let (ci, cj) = (span.rows.start / plan.tile, span.cols.start / plan.tile);
+    let (nr, nc) = (span.rows.len(), span.cols.len());
+    store.write_chunk_u32(Matrix::TableLen, ci, cj, nr, nc, &t.len)?;
+    store.write_chunk_u32(Matrix::TableLi, ci, cj, nr, nc, &t.li)?;
+    store.write_chunk_u32(Matrix::TableLj, ci, cj, nr, nc, &t.lj)?;
+    store.write_chunk_f64(Matrix::TableCost, ci, cj, nr, nc, &t.cost)?;
+    let text = format!("sources {} x ends {}", frames_text(subject, &span.rows), frames_text(subject, &span.cols));
+    let finite = t.cost.iter().filter(|c| c.is_finite()).count();
+    Ok((text, String::new(), serde_json::json!({ "pairs": nr * nc, "finite": finite })))
+}
+
+fn scale_job(store: &Store, plan: &Plan) -> Result<JobResult> {
+    let n = plan.frames();
+    let blocks: Vec<std::ops::Range<usize>> = (0..plan.jobs(Stage::Candidates)).map(|k| plan.row_block(k)).collect();
+    let d_scale = finite_cost_median(|visit| {
+        for rows in &blocks {
+            let v = store.read_f64(Matrix::TableCost, rows.clone(), 0..n)?;
+            visit(&v);
+        }
+        Ok::<(), Error>(())
+    })?;
+    let scale = Scale { d_scale };
+    let bytes = serde_json::to_vec_pretty(&scale).expect("plain data");
+    surfcap_mesh::atomic::write_file(&store.file("scale.json"), |w| w.write_all(&bytes))?;
+    Ok(("the whole table".into(), String::new(), serde_json::json!({ "d_scale": d_scale })))
+}
+
+/// Reads the `scale` stage's result.
+pub fn read_scale(store: &Store) -> Result<Scale> {
+    let p = store.file("scale.json");
+    let bytes =
+        std::fs::read(&p).map_err(|e| Error::Job(format!("{}: {e}: run the scale stage first", p.display())))?;
+    serde_json::from_slice(&bytes).map_err(|e| Error::Plan { path: p, message: format!("damaged ({e})") })
+}

@@ -1,0 +1,119 @@
+//! The status of a work folder and its merge: once every job of every stage is done, the
+//! records are checked (one distance kernel throughout: kernels differ in the last bits) and the
+//! merged products written: `merge.json` (per stage the jobs' time and peak memory, the kernel,
+//! the median scale) and the sparse essential graph's edges, the union of the trees of the
+//! `paths` stage (`graph_edges.npy`). The distance matrix, the table and the path costs stay
+//! in their Zarr arrays, whose chunks are already the merged matrices.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::tile_plan::{Plan, Stage};
+use crate::tile_store::{JobRecord, Store};
+
+/// Done and missing jobs of one stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageStatus {
+    pub stage: Stage,
+    pub jobs: usize,
+    pub done: usize,
+    pub missing: Vec<usize>,
+}
+
+/// The status of every stage of the plan.
+pub fn status(store: &Store, plan: &Plan) -> Result<Vec<StageStatus>> {
+    plan.stages
+        .iter()
+        .map(|s| {
+            let mut missing = Vec::new();
+            for k in 0..s.jobs {
+                if store.record(s.name, k)?.is_none() {
+                    missing.push(k);
+                }
+            }
+            Ok(StageStatus { stage: s.name, jobs: s.jobs, done: s.jobs - missing.len(), missing })
+        })
+        .collect()
+}
+
+/// Per stage, what its jobs cost.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageCost {
+    pub stage: Stage,
+    pub jobs: usize,
+    /// Sum of the jobs' wall times, seconds.
+    pub seconds: f64,
+    pub slowest_job_seconds: f64,
+    /// Largest peak resident memory of a process that ran one of its jobs, bytes.
+    pub peak_bytes: u64,
+}
+
+/// What `merge` wrote (`merge.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MergeReport {
+    pub frames: usize,
+    pub tile: usize,
+    pub kernel: String,
+    pub d_scale: f64,
+    pub stages: Vec<StageCost>,
+    /// Edges of the sparse essential graph (0 before the graph stages exist in the plan).
+    pub graph_edges: usize,
+}
+
+/// Reads every record of a stage, refusing missing jobs by name.
+pub fn records(store: &Store, plan: &Plan, stage: Stage) -> Result<Vec<JobRecord>> {
+    let jobs = plan.jobs(stage);
+    let mut out = Vec::with_capacity(jobs);
+    let mut missing = Vec::new();
+    for k in 0..jobs {
+        match store.record(stage, k)? {
+            Some(r) => out.push(r),
+            None => missing.push(k),
+        }
+    }
+    if let Some(&first) = missing.first() {
+        return Err(Error::Missing { stage: stage.name(), count: missing.len(), jobs, first: format!("job {first}") });
+    }
+    Ok(out)
+}
+
+/// Checks that every job is done and writes the merged products.
+pub fn merge(store: &Store, plan: &Plan) -> Result<MergeReport> {
+    let mut stages = Vec::new();
+    let mut kernel = String::new();
+    for s in &plan.stages {
+        let recs = records(store, plan, s.name)?;
+        if s.name == Stage::Distances {
+            let mut kernels: Vec<&str> = recs.iter().map(|r| r.kernel.as_str()).collect();
+            kernels.sort_unstable();
+            kernels.dedup();
+            if kernels.len() > 1 {
+                let by: Vec<String> = kernels
+                    .iter()
+                    .map(|k| {
+                        let first = recs.iter().find(|r| r.kernel == *k).map_or(0, |r| r.index);
+                        format!("{k} (job {first}...)")
+                    })
+                    .collect();
+                return Err(Error::Mixed(format!(
+                    "distance tiles were computed by different kernels: {}; results differ in the last bits: rerun the jobs of one kernel on machines of the other (delete their records in jobs/distances/)",
+                    by.join(", ")
+                )));
+            }
+            kernel = kernels.first().map_or(String::new(), |k| k.to_string());
+        }
+        stages.push(StageCost {
+            stage: s.name,
+            jobs: recs.len(),
+            seconds: recs.iter().map(|r| r.seconds).sum(),
+            slowest_job_seconds: recs.iter().map(|r| r.seconds).fold(0.0, f64::max),
+            peak_bytes: recs.iter().map(|r| r.peak_bytes).max().unwrap_or(0),
+        });
+    }
+    let d_scale = crate::tile_jobs::read_scale(store)?.d_scale;
+    let graph_edges = 0;
+    let report = MergeReport { frames: plan.frames(), tile: plan.tile, kernel, d_scale, stages, graph_edges };
+    let bytes = serde_json::to_vec_pretty(&report).expect("plain data");
+    surfcap_mesh::atomic::write_file(&store.file("merge.json"), |w| w.write_all(&bytes))?;
+    Ok(report)
+}

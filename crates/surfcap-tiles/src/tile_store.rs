@@ -1,0 +1,292 @@
+//! The on-disk store of a work folder: Zarr v3 arrays whose chunks are the tiles, for the large
+//! products (numpy/xarray users open them with `zarr.open` without loading everything), and
+//! small `.npy`/JSON files for the rest:
+//!
+//! ```text
+//! plan.json                    the plan (tile_plan.rs)
+//! distances.zarr               f64 [n, n], chunks [tile, tile]: the symmetric pose distances
+//!                              (each upper tile written with its mirror image)
+//! table/cost.zarr              f64 [n, n]: the transition costs D (eq. 2.55; inf: no windows fit)
+//! table/len.zarr, li.zarr, lj.zarr   u32 [n, n]: L, l^i, l^j
+//! scale.json                   the median of the finite D (Algorithm 1's scale)
+//! candidates/edges_<k>.npy     f64 [m, 3]: (from, to, weight) kept for source rows block k
+//! paths/costs.zarr             f64 [n, n]: shortest-path costs on the sparse graph
+//! paths/tree_<k>.npy           u32 [m, 2]: (predecessor, node) edges of block k's trees
+//! jobs/<stage>/<index>.json    a job's record, written last: the job is done when it is there
+//! ```
+//!
+//! Every chunk and file is written atomically (temporary + rename, `surfcap_mesh::atomic`): a
+//! chunk is encoded by zarrs into memory and its bytes renamed into place, so a killed job never
+//! leaves a half-written chunk, and a job rerun rewrites identical bytes. Chunks are stored
+//! uncompressed (the `bytes` codec, little endian): distances do not compress well and the
+//! chunk's size is then known from the tile alone.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use zarrs::array::{Array, ArrayBuilder, CodecOptions, DataType, data_type};
+use zarrs::filesystem::FilesystemStore;
+use zarrs::storage::store::MemoryStore;
+use zarrs::storage::{ReadableStorageTraits, ReadableWritableListableStorage};
+
+use crate::error::{Error, Result};
+use crate::tile_plan::{Plan, Stage};
+
+/// An n x n array of the store.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Matrix {
+    Distances,
+    TableCost,
+    TableLen,
+    TableLi,
+    TableLj,
+    PathCosts,
+}
+
+impl Matrix {
+    pub const ALL: [Matrix; 6] =
+        [Matrix::Distances, Matrix::TableCost, Matrix::TableLen, Matrix::TableLi, Matrix::TableLj, Matrix::PathCosts];
+
+    /// Folder of the array inside the work folder.
+    pub fn dir(self) -> &'static str {
+        match self {
+            Matrix::Distances => "distances.zarr",
+            Matrix::TableCost => "table/cost.zarr",
+            Matrix::TableLen => "table/len.zarr",
+            Matrix::TableLi => "table/li.zarr",
+            Matrix::TableLj => "table/lj.zarr",
+            Matrix::PathCosts => "paths/costs.zarr",
+        }
+    }
+
+    fn is_float(self) -> bool {
+        matches!(self, Matrix::Distances | Matrix::TableCost | Matrix::PathCosts)
+    }
+
+    fn data_type(self) -> DataType {
+        if self.is_float() { data_type::float64() } else { data_type::uint32() }
+    }
+}
+
+/// A job's record: written last, so its presence means the job's results are all in place.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JobRecord {
+    pub stage: Stage,
+    pub index: usize,
+    /// What the job covered, in the user's terms (frames of the tile).
+    pub span: String,
+    /// The pose-distance kernel that computed distances (`distances` stage), else empty.
+    pub kernel: String,
+    pub seconds: f64,
+    /// Peak resident memory of the process that ran the job, bytes (0 where unknown).
+    pub peak_bytes: u64,
+    /// Stage-specific numbers (skipped triangles, edges kept...).
+    pub details: serde_json::Value,
+}
+
+/// A work folder's store.
+pub struct Store {
+    root: PathBuf,
+    n: usize,
+    tile: usize,
+    fs: ReadableWritableListableStorage,
+}
+
+fn zarr_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Zarr { path: path.to_path_buf(), message: e.to_string() }
+}
+
+impl Store {
+    /// Opens the store of the work folder `root` planned by `plan`.
+    pub fn open(root: &Path, plan: &Plan) -> Result<Store> {
+        let fs = FilesystemStore::new(root).map_err(|e| zarr_err(root, e))?;
+        Ok(Store { root: root.to_path_buf(), n: plan.frames(), tile: plan.tile, fs: Arc::new(fs) })
+    }
+
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn builder(&self, m: Matrix) -> ArrayBuilder {
+        let (n, t) = (self.n as u64, self.tile.min(self.n.max(1)) as u64);
+        let mut b = if m.is_float() {
+            // NaN marks a chunk never written (a missing tile reads as NaN, never as a distance).
+            ArrayBuilder::new(vec![n, n], vec![t, t], m.data_type(), f64::NAN)
+        } else {
+            ArrayBuilder::new(vec![n, n], vec![t, t], m.data_type(), 0u32)
+        };
+        b.dimension_names(["row_frame", "col_frame"].into());
+        b
+    }
+
+    fn array(&self, m: Matrix) -> Result<Array<dyn zarrs::storage::ReadableWritableListableStorageTraits>> {
+        self.builder(m)
+            .build(self.fs.clone(), &format!("/{}", m.dir()))
+            .map_err(|e| zarr_err(&self.root.join(m.dir()), e))
+    }
+
+    /// Writes every array's metadata (`zarr.json`), at planning.
+    pub fn create_arrays(&self) -> Result<()> {
+        for m in Matrix::ALL {
+            let a = self.array(m)?;
+            let bytes = serde_json::to_vec_pretty(a.metadata()).map_err(|e| zarr_err(&self.root, e))?;
+            let path = self.root.join(m.dir()).join("zarr.json");
+            surfcap_mesh::atomic::write_file(&path, |w| w.write_all(&bytes))?;
+        }
+        // The groups above the arrays, so `zarr.open(work)` lists them.
+        for group in ["", "table", "paths"] {
+            let path = self.root.join(group).join("zarr.json");
+            let text = br#"{"zarr_format": 3, "node_type": "group", "attributes": {}}"#;
+            surfcap_mesh::atomic::write_file(&path, |w| w.write_all(text))?;
+        }
+        Ok(())
+    }
+
+    /// The file of chunk (ci, cj) of `m`.
+    pub fn chunk_path(&self, m: Matrix, ci: usize, cj: usize) -> Result<PathBuf> {
+        let a = self.array(m)?;
+        let key = a.chunk_key(&[ci as u64, cj as u64]);
+        Ok(self.root.join(key.as_str()))
+    }
+
+    /// Writes chunk (ci, cj) of `m` from a rows x cols block (padded to the chunk shape with the
+    /// fill value), atomically.
+    pub fn write_chunk_f64(
+        &self,
+        m: Matrix,
+        ci: usize,
+        cj: usize,
+        rows: usize,
+        cols: usize,
+        values: &[f64],
+    ) -> Result<()> {
+        let t = self.tile.min(self.n.max(1));
+        let mut chunk = vec![f64::NAN; t * t];
+        for r in 0..rows {
+            chunk[r * t..r * t + cols].copy_from_slice(&values[r * cols..(r + 1) * cols]);
+        }
+        self.write_encoded(m, ci, cj, |a| a.store_chunk_opt(&[ci as u64, cj as u64], chunk.as_slice(), &keep_all()))
+    }
+
+    /// [`Store::write_chunk_f64`] for the u32 arrays.
+    pub fn write_chunk_u32(
+        &self,
+        m: Matrix,
+        ci: usize,
+        cj: usize,
+        rows: usize,
+        cols: usize,
+        values: &[u32],
+    ) -> Result<()> {
+        let t = self.tile.min(self.n.max(1));
+        let mut chunk = vec![0u32; t * t];
+        for r in 0..rows {
+            chunk[r * t..r * t + cols].copy_from_slice(&values[r * cols..(r + 1) * cols]);
+        }
+        self.write_encoded(m, ci, cj, |a| a.store_chunk_opt(&[ci as u64, cj as u64], chunk.as_slice(), &keep_all()))
+    }
+
+    /// Encodes a chunk with zarrs into memory, then renames its bytes into place.
+    fn write_encoded(
+        &self,
+        m: Matrix,
+        ci: usize,
+        cj: usize,
+        store: impl FnOnce(&Array<MemoryStore>) -> std::result::Result<(), zarrs::array::ArrayError>,
+    ) -> Result<()> {
+        let dir = self.root.join(m.dir());
+        let mem = Arc::new(MemoryStore::new());
+        let a = self.builder(m).build(mem.clone(), "/").map_err(|e| zarr_err(&dir, e))?;
+        store(&a).map_err(|e| zarr_err(&dir, e))?;
+        let key = a.chunk_key(&[ci as u64, cj as u64]);
+        let bytes = mem.get(&key).map_err(|e| zarr_err(&dir, e))?.ok_or_else(|| zarr_err(&dir, "chunk not encoded"))?;
+        surfcap_mesh::atomic::write_file(&dir.join(key.as_str()), |w| w.write_all(&bytes))?;
+        Ok(())
+    }
+
+    /// Whether every chunk covering rows x cols of `m` has been written.
+    pub fn has_region(&self, m: Matrix, rows: &std::ops::Range<usize>, cols: &std::ops::Range<usize>) -> Result<bool> {
+        let t = self.tile;
+        for ci in rows.start / t..rows.end.div_ceil(t) {
+            for cj in cols.start / t..cols.end.div_ceil(t) {
+                if !self.chunk_path(m, ci, cj)?.is_file() {
+                    return Ok(false);
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// Reads rows x cols of a float array, refusing a region with chunks never written.
+    pub fn read_f64(&self, m: Matrix, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> Result<Vec<f64>> {
+        self.require(m, &rows, &cols)?;
+        let a = self.array(m)?;
+        a.retrieve_array_subset_opt::<Vec<f64>>(
+            &[rows.start as u64..rows.end as u64, cols.start as u64..cols.end as u64],
+            &CodecOptions::default(),
+        )
+        .map_err(|e| zarr_err(&self.root.join(m.dir()), e))
+    }
+
+    /// Reads rows x cols of a u32 array, refusing a region with chunks never written.
+    pub fn read_u32(&self, m: Matrix, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> Result<Vec<u32>> {
+        self.require(m, &rows, &cols)?;
+        let a = self.array(m)?;
+        a.retrieve_array_subset_opt::<Vec<u32>>(
+            &[rows.start as u64..rows.end as u64, cols.start as u64..cols.end as u64],
+            &CodecOptions::default(),
+        )
+        .map_err(|e| zarr_err(&self.root.join(m.dir()), e))
+    }
+
+    fn require(&self, m: Matrix, rows: &std::ops::Range<usize>, cols: &std::ops::Range<usize>) -> Result<()> {
+        if !self.has_region(m, rows, cols)? {
+            return Err(Error::Job(format!(
+                "{}: frames {}..{} x {}..{} are not all computed yet: run the earlier stage's jobs first",
+                self.root.join(m.dir()).display(),
+                rows.start,
+                rows.end,
+                cols.start,
+                cols.end
+            )));
+        }
+        Ok(())
+    }
+
+    /// The record file of a job.
+    pub fn record_path(&self, stage: Stage, index: usize) -> PathBuf {
+        self.root.join("jobs").join(stage.name()).join(format!("{index}.json"))
+    }
+
+    /// The job's record if it is done.
+    pub fn record(&self, stage: Stage, index: usize) -> Result<Option<JobRecord>> {
+        let p = self.record_path(stage, index);
+        match std::fs::read(&p) {
+            Ok(bytes) => serde_json::from_slice(&bytes).map(Some).map_err(|e| Error::Plan {
+                path: p,
+                message: format!("damaged job record ({e}): delete it to run the job again"),
+            }),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(surfcap_mesh::Error::io(&p, "read", e).into()),
+        }
+    }
+
+    /// Writes a job's record (last, atomically).
+    pub fn write_record(&self, r: &JobRecord) -> Result<()> {
+        let bytes = serde_json::to_vec_pretty(r).expect("records are plain data");
+        surfcap_mesh::atomic::write_file(&self.record_path(r.stage, r.index), |w| w.write_all(&bytes))?;
+        Ok(())
+    }
+
+    /// Path of a small file of the store.
+    pub fn file(&self, relative: &str) -> PathBuf {
+        self.root.join(relative)
+    }
+}
+
+/// Codec options that write a chunk even when it holds only the fill value (zarrs skips those
+/// by default; a tile of the table where no windows fit would then look missing).
+fn keep_all() -> CodecOptions {
+    CodecOptions::default().with_store_empty_chunks(true)
+}

@@ -1,0 +1,87 @@
+//! The tiled work on a tiny two-sequence tube: every stage run job by job through the store gives
+//! the one-machine products to the bit, a job is skipped once done, a lost job is recomputed to
+//! the same bytes, and bad requests are errors naming what was expected.
+
+use std::path::Path;
+
+use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+use surfcap_mesh::{NoProgress, Sequence, Subject};
+use surfcap_motion::transition_table::{TableParams, transition_table};
+use surfcap_synth::{WormParams, worm_subject};
+use surfcap_tiles::tile_jobs::{JobOutcome, read_scale, run_job};
+use surfcap_tiles::tile_merge::{merge, status};
+use surfcap_tiles::tile_plan::{Stage, WorkParams, create_work, open_work};
+use surfcap_tiles::tile_store::Matrix;
+
+fn tube() -> Subject {
+    let a = worm_subject(&WormParams { rings: 8, segments: 6, frames: 23, seed: 1, ..Default::default() }).unwrap();
+    let b = worm_subject(&WormParams { rings: 8, segments: 6, frames: 17, seed: 2, ..Default::default() }).unwrap();
+    let nv = a.topology().n_vertices();
+    let seqs = vec![
+        Sequence::new("wave", nv, a.sequences()[0].positions().to_vec()).unwrap(),
+        Sequence::new("coil", nv, b.sequences()[0].positions().to_vec()).unwrap(),
+    ];
+    Subject::new("tube", a.topology().clone(), seqs, 30.0, a.up_axis, a.units.clone()).unwrap()
+}
+
+fn params() -> WorkParams {
+    WorkParams { metric: "deformation".into(), w: 0.01, l_min: 2, l_max: 5, slope: Some(3), alpha: 0.05, k: 4 }
+}
+
+fn run_stage(work: &Path, stage: Stage) -> Vec<JobOutcome> {
+    let (plan, store, frames) = open_work(work).unwrap();
+    (0..plan.jobs(stage)).map(|k| run_job(&store, &plan, &frames, stage, k, &NoProgress).unwrap()).collect()
+}
+
+#[test]
+fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let subject = tube();
+    let cache = dir.path().join("tube.subject");
+    surfcap_mesh::cache::write_cache(&cache, &subject, false, &NoProgress).unwrap();
+    let work = dir.path().join("work");
+    let plan = create_work(&cache, &work, 7, params()).unwrap();
+    let n = subject.n_frames();
+    assert_eq!(plan.jobs(Stage::Distances), 21, "6 blocks of 7 frames: 6 * 7 / 2 upper tiles");
+    assert_eq!(plan.jobs(Stage::Table), 36);
+    for stage in [Stage::Distances, Stage::Table, Stage::Scale] {
+        let outcomes = run_stage(&work, stage);
+        assert!(outcomes.iter().all(|o| matches!(o, JobOutcome::Done(_))), "{stage:?}");
+    }
+    let (plan, store, _) = open_work(&work).unwrap();
+    let d = distance_matrix(&subject, &DistanceParams::default(), &NoProgress);
+    let tiled = store.read_f64(Matrix::Distances, 0..n, 0..n).unwrap();
+    assert!(tiled.iter().zip(&d.values).all(|(a, b)| a.to_bits() == b.to_bits()), "distances");
+    let p = TableParams { l_min: 2, l_max: 5, slope: Some(3) };
+    let t = transition_table(&d.values, subject.frame_index(), &p, &NoProgress).unwrap();
+    let cost = store.read_f64(Matrix::TableCost, 0..n, 0..n).unwrap();
+    assert!(cost.iter().zip(&t.cost).all(|(a, b)| a.to_bits() == b.to_bits()), "table costs");
+    assert_eq!(store.read_u32(Matrix::TableLen, 0..n, 0..n).unwrap(), t.len);
+    assert_eq!(store.read_u32(Matrix::TableLi, 0..n, 0..n).unwrap(), t.li);
+    assert_eq!(store.read_u32(Matrix::TableLj, 0..n, 0..n).unwrap(), t.lj);
+    let w = surfcap_motion::edge_weights::edge_weights(&t, subject.frame_index(), 0.05).unwrap();
+    assert_eq!(read_scale(&store).unwrap().d_scale.to_bits(), w.d_scale.to_bits(), "Algorithm 1's median");
+
+    // Done jobs are skipped; a lost job (record and chunk gone) is recomputed to the same bytes.
+    assert!(run_stage(&work, Stage::Distances).iter().all(|o| *o == JobOutcome::Skipped));
+    let chunk = store.chunk_path(Matrix::Distances, 1, 3).unwrap();
+    let before = std::fs::read(&chunk).unwrap();
+    std::fs::remove_file(&chunk).unwrap();
+    std::fs::remove_file(store.record_path(Stage::Distances, 8)).unwrap();
+    let st = status(&store, &plan).unwrap();
+    assert_eq!(st[0].missing, vec![8], "tile (1, 3) is job 8: six tiles in row 0, then (1, 1), (1, 2)");
+    assert!(store.read_f64(Matrix::Distances, 0..n, 0..n).is_err(), "a region with a missing chunk is refused");
+    let again = run_stage(&work, Stage::Distances);
+    assert_eq!(again.iter().filter(|o| matches!(o, JobOutcome::Done(_))).count(), 1);
+    assert_eq!(std::fs::read(&chunk).unwrap(), before);
+
+    // Bad requests.
+    let (plan, store, frames) = open_work(&work).unwrap();
+    let e = run_job(&store, &plan, &frames, Stage::Table, 36, &NoProgress).unwrap_err().to_string();
+    assert!(e.contains("36") && e.contains("0..35"), "{e}");
+    let other = WorkParams { k: 8, ..params() };
+    let e = create_work(&cache, &work, 7, other).unwrap_err().to_string();
+    assert!(e.contains("another subject or other parameters"), "{e}");
+    assert!(create_work(&cache, &cache.join("inside"), 7, params()).is_err(), "never inside an input");
+    let _ = merge;
+}
