@@ -763,7 +763,10 @@ fn slurm_for_real_on_a_single_node_cluster_stops_at_a_failed_job_then_resumes_to
         match k {
             0 => assert_eq!(states, vec!["COMPLETED".to_string(); *jobs], "{stage} before the failure"),
             1 => assert!(states.contains(&"FAILED".to_string()), "{stage}: {states:?}"),
-            _ => assert!(!states.is_empty() && states.iter().all(|s| s == "CANCELLED"), "{stage} after {failing}: {states:?}"),
+            _ => assert!(
+                !states.is_empty() && states.iter().all(|s| s == "CANCELLED"),
+                "{stage} after {failing}: {states:?}"
+            ),
         }
     }
     assert_eq!(slurm.job_states(&merge), ["CANCELLED"], "the merge after {failing}");
