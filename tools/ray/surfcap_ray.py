@@ -93,6 +93,13 @@ def main(argv):
     except ImportError:
         fail("the ray package is missing: run scripts/setup (it installs tools/requirements.txt into tools/venv) and use tools/venv/bin/python")
 
+    # stdout carries only the summary: Ray prints its own messages (e.g. "Task run_job failed ...
+    # will be retried") to the driver's stdout, so everything else goes to stderr.
+    summary_out = os.fdopen(os.dup(sys.stdout.fileno()), "w")
+    sys.stdout.flush()
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+    sys.stdout = sys.stderr
+
     # Silences a FutureWarning of Ray 2.52 about GPU variables; surfcap uses no GPU.
     os.environ.setdefault("RAY_ACCEL_ENV_VAR_OVERRIDE_ON_ZERO", "0")
     started = time.monotonic()
@@ -169,7 +176,7 @@ def main(argv):
     if failed_jobs:
         summary["failed_jobs"] = failed_jobs
         summary["wall_seconds"] = round(time.monotonic() - started, 3)
-        print(json.dumps(summary, indent=2))
+        print(json.dumps(summary, indent=2), file=summary_out, flush=True)
         names = ", ".join(f"{j['stage']} {j['index']}" for j in failed_jobs)
         fail(f"{len(failed_jobs)} job(s) still failed after {args.retries} retries: {names}; "
              f"not merged. Last error: {failed_jobs[-1]['error']}")
@@ -180,7 +187,7 @@ def main(argv):
         fail(f"`{surfcap} tiles merge {work}` failed (exit {m.returncode}): {m.stderr.strip()}")
     summary["merge_seconds"] = round(time.monotonic() - t0, 3)
     summary["wall_seconds"] = round(time.monotonic() - started, 3)
-    print(json.dumps(summary, indent=2))
+    print(json.dumps(summary, indent=2), file=summary_out, flush=True)
 
 
 if __name__ == "__main__":
