@@ -111,10 +111,22 @@ pub(super) fn run(ctx: &crate::Ctx, a: ScaleArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let t0 = Instant::now();
     let big = make_subject(&dir, &format!("tube{}x{}.subject", a.frames, a.triangles), a.frames, a.triangles)?;
-    ctx.say(&format!("built the {}-frame tube of {} triangles ({:.0} s)", a.frames, a.triangles, t0.elapsed().as_secs_f64()));
+    ctx.say(&format!(
+        "built the {}-frame tube of {} triangles ({:.0} s)",
+        a.frames,
+        a.triangles,
+        t0.elapsed().as_secs_f64()
+    ));
     let work = dir.join(format!("work{}", a.frames));
     let tile = a.tile.to_string();
-    surfcap_tiles(&["plan", big.to_str().context("a UTF-8 path")?, "-o", work.to_str().context("a UTF-8 path")?, "--tile", &tile])?;
+    surfcap_tiles(&[
+        "plan",
+        big.to_str().context("a UTF-8 path")?,
+        "-o",
+        work.to_str().context("a UTF-8 path")?,
+        "--tile",
+        &tile,
+    ])?;
     let (plan, _, _) = open_work(&work)?;
     // Sample: the diagonal tile (0, 0), the off-diagonal tile (0, 1), then the table tile (0, 0),
     // whose halo lies in those two.
@@ -131,11 +143,19 @@ pub(super) fn run(ctx: &crate::Ctx, a: ScaleArgs) -> anyhow::Result<()> {
         samples.push(r);
     }
     let e2e = if a.e2e_frames > 0 {
-        let small = make_subject(&dir, &format!("tube{}x{}.subject", a.e2e_frames, a.e2e_triangles), a.e2e_frames, a.e2e_triangles)?;
+        let small = make_subject(
+            &dir,
+            &format!("tube{}x{}.subject", a.e2e_frames, a.e2e_triangles),
+            a.e2e_frames,
+            a.e2e_triangles,
+        )?;
         let work5 = dir.join(format!("work{}", a.e2e_frames));
         let w5 = work5.to_str().context("a UTF-8 path")?;
         surfcap_tiles(&["plan", small.to_str().context("a UTF-8 path")?, "-o", w5, "--tile", &tile])?;
-        ctx.say(&format!("end to end: {} frames of {} triangles, every stage in one process ...", a.e2e_frames, a.e2e_triangles));
+        ctx.say(&format!(
+            "end to end: {} frames of {} triangles, every stage in one process ...",
+            a.e2e_frames, a.e2e_triangles
+        ));
         let t = Instant::now();
         surfcap_tiles(&["run", w5, "--all"])?;
         surfcap_tiles(&["merge", w5])?;
@@ -199,7 +219,11 @@ pub(super) fn run(ctx: &crate::Ctx, a: ScaleArgs) -> anyhow::Result<()> {
 }
 
 /// Per stage: (jobs, seconds per job, bytes per job) at the projected size.
-fn stage_costs(plan: &Plan, samples: &[JobRecord], e2e: Option<(&Plan, &MergeReport)>) -> Vec<(Stage, usize, f64, u64)> {
+fn stage_costs(
+    plan: &Plan,
+    samples: &[JobRecord],
+    e2e: Option<(&Plan, &MergeReport)>,
+) -> Vec<(Stage, usize, f64, u64)> {
     let n = plan.frames() as f64;
     let mut out = Vec::new();
     let sample = |stage: Stage, index: usize| samples.iter().find(|r| r.stage == stage && r.index == index);
@@ -230,7 +254,12 @@ fn stage_costs(plan: &Plan, samples: &[JobRecord], e2e: Option<(&Plan, &MergeRep
     out
 }
 
-fn project(plan: &Plan, samples: &[JobRecord], e2e: Option<(&Plan, &MergeReport)>, workers: &[usize]) -> Vec<serde_json::Value> {
+fn project(
+    plan: &Plan,
+    samples: &[JobRecord],
+    e2e: Option<(&Plan, &MergeReport)>,
+    workers: &[usize],
+) -> Vec<serde_json::Value> {
     let costs = stage_costs(plan, samples, e2e);
     workers
         .iter()
