@@ -29,7 +29,11 @@ fn sparse_costs_rise_with_fewer_transitions_and_all_of_them_give_the_exact_graph
     for pair in r.rows.windows(2) {
         let (a, b) = (&pair[0], &pair[1]);
         assert!(a.within_tolerance <= b.within_tolerance, "k {} -> {}", a.k, b.k);
-        assert!(a.mean_ratio >= b.mean_ratio && a.unreachable >= b.unreachable, "k {} -> {}", a.k, b.k);
+        assert!(a.unreachable >= b.unreachable, "k {} -> {}", a.k, b.k);
+        // The mean is over the pairs both graphs connect: comparable when those are the same.
+        if a.unreachable == b.unreachable {
+            assert!(a.mean_ratio >= b.mean_ratio, "k {} -> {}", a.k, b.k);
+        }
         assert!(a.sparse_edges < b.sparse_edges);
     }
     assert!(r.rows[0].mean_ratio > 1.0, "two transitions per frame lose some shortest paths");
@@ -40,7 +44,7 @@ fn sparse_costs_rise_with_fewer_transitions_and_all_of_them_give_the_exact_graph
     let all = r.rows.last().unwrap();
     assert_eq!((all.within_tolerance, all.mean_ratio, all.max_ratio, all.unreachable), (1.0, 1.0, 1.0, 0));
     assert_eq!((all.edges, all.transitions), (r.exact.edges, r.exact.transitions));
-    assert!(all.acceptable && r.chosen_k.is_some_and(|k| k <= n - 1));
+    assert!(all.acceptable && r.chosen_k.is_some_and(|k| k < n));
     assert_eq!(all.queries.len(), r.exact.queries.len());
     assert_eq!(all.queries.len(), 6, "two paths and four key poses");
     for (q, (name, _, e)) in all.queries.iter().zip(&r.exact.queries) {
