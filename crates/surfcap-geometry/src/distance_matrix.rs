@@ -85,10 +85,13 @@ impl AlignmentGram {
 
 /// Frames whose rows are computed together: each chunk of frame j's triangle data is loaded
 /// once and used for all of them (the data of one frame is 120 bytes per triangle, so without
-/// this blocking the all-pairs loop is bound by memory bandwidth, not arithmetic).
-const ROW_BLOCK: usize = 8;
-/// Triangles per chunk: a block of frames' chunks stays in the L2 cache.
-const TRIANGLE_CHUNK: usize = 4 * BLOCK;
+/// this blocking the all-pairs loop is bound by memory bandwidth, not arithmetic). Measured with
+/// the AVX-512 kernel on the crane (one thread's CPU time, issue 21 item 5): 8 rows x 256
+/// triangles 120-138 M triangle pairs/s, 16 x 64 156-167, 32 x 64 167-187, 64 x 64 180-195;
+/// 16 keeps enough row blocks to share 175 frames evenly between 2 threads.
+const ROW_BLOCK: usize = 16;
+/// Triangles per chunk: a block of frames' chunks stays in the L2 cache (16 x 7.5 KB).
+const TRIANGLE_CHUNK: usize = BLOCK;
 /// Memory for the triangle data of all frames over one slab of triangles. Holding every frame's
 /// whole data at once cost 120 bytes per triangle and frame (1.8 GB for 547 frames of 28,000
 /// triangles); a slab of this size keeps the peak near the subject's own size.
