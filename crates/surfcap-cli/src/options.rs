@@ -212,9 +212,15 @@ impl TableOpts {
 /// Which graph to search, and how it is built.
 #[derive(clap::Args, Debug, Clone)]
 pub struct GraphOpts {
-    /// essential (union of all shortest-path trees) or motion (Kovar's baseline).
+    /// essential (union of all shortest-path trees, O(N^3)), sparse-essential (the same on every
+    /// frame's --k cheapest transitions plus the original edges: for long captures, issue 21)
+    /// or motion (Kovar's baseline).
     #[arg(long, default_value = "essential")]
     pub kind: GraphKind,
+    /// Transitions kept per frame by --kind sparse-essential (default 64, chosen by `surfcap
+    /// eval sparse-graph`).
+    #[arg(long, value_parser = count)]
+    pub k: Option<usize>,
     /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
     #[arg(long, default_value = "0.05")]
     pub alpha: Positive,
@@ -228,7 +234,18 @@ pub struct GraphOpts {
 
 impl GraphOpts {
     pub fn params(&self, fps: f64) -> anyhow::Result<GraphParams> {
-        Ok(GraphParams { table: self.table.params(fps)?, kind: self.kind, alpha: self.alpha.0 })
+        let kind = match (self.kind, self.k) {
+            (kind, None) => kind,
+            (GraphKind::SparseEssential { k }, Some(given)) => {
+                let named = self.kind != GraphKind::sparse_essential() && k != given;
+                anyhow::ensure!(!named, "--k {given}: the graph kind already says k = {k}");
+                GraphKind::SparseEssential { k: given }
+            }
+            (kind, Some(given)) => {
+                anyhow::bail!("--k {given}: only with --kind sparse-essential (the graph is {kind})")
+            }
+        };
+        Ok(GraphParams { table: self.table.params(fps)?, kind, alpha: self.alpha.0 })
     }
 }
 

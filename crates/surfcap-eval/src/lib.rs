@@ -28,6 +28,7 @@ pub mod root_motion_eval;
 pub mod skeleton_distance;
 pub mod smg_comparison;
 pub mod smg_eval;
+pub mod sparse_graph_eval;
 pub mod transfer_eval;
 pub mod transition_costs_eval;
 pub mod transition_measures;

@@ -13,6 +13,7 @@ use surfcap_motion::edge_weights::{EdgeWeights, edge_weights};
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::motion_graph::motion_graph;
+use surfcap_motion::sparse_essential_graph::sparse_essential_graph;
 use surfcap_motion::transition_table::{TableParams, TransitionTable, check_distances, transition_table};
 use surfcap_motion::walk_sequence::WalkModel;
 
@@ -272,7 +273,8 @@ impl Pipeline {
         GraphKey { table: TableKey::new(&self.chain_distance, &p.table), kind: p.kind, alpha: p.alpha }
     }
 
-    /// The essential graph or the motion graph (thesis 3.3) over all frames.
+    /// The essential graph, the sparse essential graph or the motion graph (thesis 3.3, issue 21
+    /// item 4) over all frames.
     ///
     /// On disk: `graph-<key>.npy`, f64 `[E, 3]`: from, to, weight of every edge.
     pub fn graph(&self, p: &GraphParams) -> Result<Fetched<Graph>> {
@@ -288,6 +290,9 @@ impl Pipeline {
                     let g = match p.kind {
                         GraphKind::Essential => essential_graph(&w, &*self.progress).graph,
                         GraphKind::Motion => motion_graph(&w, self.subject.frame_index()).graph,
+                        GraphKind::SparseEssential { k } => {
+                            sparse_essential_graph(&w, self.subject.frame_index(), k, &*self.progress).graph
+                        }
                     };
                     let data = g.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
                     Ok(NpyArray { shape: vec![g.edges().len(), 3], data })
@@ -437,6 +442,29 @@ mod tests {
         // Refresh recomputes what is on disk.
         let refresh = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), true), Box::new(NoProgress));
         assert!(!refresh.chain_distances().unwrap().from_cache);
+    }
+
+    /// The sparse essential graph is a product of its own, keyed by k: with every transition
+    /// kept it is the exact essential graph, with few it has other edges, and both are cached.
+    #[test]
+    fn the_sparse_essential_graph_is_cached_per_k() {
+        let dir = tempfile::tempdir().unwrap();
+        let pipe = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), false), Box::new(NoProgress));
+        let n = pipe.subject().n_frames();
+        let with = |kind| GraphParams { kind, ..params() };
+        let exact = pipe.graph(&params()).unwrap().value;
+        let all = pipe.graph(&with(GraphKind::SparseEssential { k: n })).unwrap().value;
+        let few = pipe.graph(&with(GraphKind::SparseEssential { k: 1 })).unwrap().value;
+        assert_eq!(all.edges(), exact.edges());
+        assert_ne!(few.edges(), exact.edges());
+        let graphs = std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("graph-"));
+        assert_eq!(graphs.count(), 3);
+        let again = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), false), Box::new(NoProgress));
+        let cached = again.graph(&with(GraphKind::SparseEssential { k: 1 })).unwrap();
+        assert!(cached.from_cache);
+        assert_eq!(cached.value.edges(), few.edges());
     }
 
     #[test]

@@ -140,6 +140,11 @@ mod tests {
         let g = |kind, alpha| GraphKey { table: table.clone(), kind, alpha }.path(&cache, &h);
         assert_ne!(g(GraphKind::Essential, 0.05), g(GraphKind::Motion, 0.05));
         assert_ne!(g(GraphKind::Essential, 0.05), g(GraphKind::Essential, 0.1));
+        // The sparse essential graph's k is part of the key.
+        let sparse = |k| g(GraphKind::SparseEssential { k }, 0.05);
+        assert_ne!(sparse(8), sparse(16));
+        assert_ne!(sparse(16), g(GraphKind::Essential, 0.05));
+        assert_eq!(sparse(16), sparse(16));
         let graph = GraphKey { table, kind: GraphKind::Essential, alpha: 0.05 };
         let w = |tracked| WalkModelKey { graph: graph.clone(), tracked }.path(&cache, &h);
         assert_ne!(w(None), w(Some(vec![1, 2])));

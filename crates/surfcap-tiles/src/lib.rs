@@ -7,7 +7,7 @@
 //! - `tile_plan.rs`: the work folder's plan: stages, their jobs, the parameters;
 //! - `tile_store.rs`: the Zarr arrays (chunks = tiles) and small `.npy` files of a work folder;
 //! - `cost_median.rs`: the exact median of the table's finite costs, streamed over its tiles;
-//! - `tile_jobs.rs`: one job of one stage;
+//! - `tile_jobs.rs`: one job of one stage; `graph_jobs.rs`: those of the graph's stages;
 //! - `tile_merge.rs`: the merged products, once every job is done.
 //!
 //! The tile functions themselves live with their algorithms (`surfcap_geometry::distance_tiles`,
@@ -16,6 +16,7 @@
 
 pub mod cost_median;
 pub mod error;
+pub mod graph_jobs;
 pub mod tile_jobs;
 pub mod tile_merge;
 pub mod tile_plan;

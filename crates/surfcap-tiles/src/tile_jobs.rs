@@ -97,9 +97,7 @@ pub fn run_job(
         Stage::Distances => distances_job(store, plan, subject, index, progress)?,
         Stage::Table => table_job(store, plan, subject, index, progress)?,
         Stage::Scale => scale_job(store, plan)?,
-        Stage::Candidates | Stage::Paths => {
-            return Err(Error::Job(format!("stage {}: not in this build yet", stage.name())));
-        }
+        Stage::Candidates | Stage::Paths => crate::graph_jobs::run(store, plan, subject, stage, index, progress)?,
     };
     let record = JobRecord {
         stage,

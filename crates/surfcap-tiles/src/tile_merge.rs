@@ -56,7 +56,7 @@ pub struct MergeReport {
     pub kernel: String,
     pub d_scale: f64,
     pub stages: Vec<StageCost>,
-    /// Edges of the sparse essential graph (0 before the graph stages exist in the plan).
+    /// Edges of the sparse essential graph (`graph_edges.npy`: from, to, weight).
     pub graph_edges: usize,
 }
 
@@ -111,7 +111,12 @@ pub fn merge(store: &Store, plan: &Plan) -> Result<MergeReport> {
         });
     }
     let d_scale = crate::tile_jobs::read_scale(store)?.d_scale;
-    let graph_edges = 0;
+    let graph = crate::graph_jobs::merged_graph(store, plan)?;
+    let flat: Vec<f64> = graph.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
+    let graph_edges = graph.edges().len();
+    surfcap_mesh::atomic::write_file(&store.file("graph_edges.npy"), |w| {
+        surfcap_mesh::io::npy::write_npy(w, &[graph_edges, 3], &flat)
+    })?;
     let report = MergeReport { frames: plan.frames(), tile: plan.tile, kernel, d_scale, stages, graph_edges };
     let bytes = serde_json::to_vec_pretty(&report).expect("plain data");
     surfcap_mesh::atomic::write_file(&store.file("merge.json"), |w| w.write_all(&bytes))?;

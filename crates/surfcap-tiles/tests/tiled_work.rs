@@ -61,6 +61,19 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
     assert_eq!(store.read_u32(Matrix::TableLj, 0..n, 0..n).unwrap(), t.lj);
     let w = surfcap_motion::edge_weights::edge_weights(&t, subject.frame_index(), 0.05).unwrap();
     assert_eq!(read_scale(&store).unwrap().d_scale.to_bits(), w.d_scale.to_bits(), "Algorithm 1's median");
+    for stage in [Stage::Candidates, Stage::Paths] {
+        run_stage(&work, stage);
+    }
+    let report = merge(&store, &plan).unwrap();
+    let sparse =
+        surfcap_motion::sparse_essential_graph::sparse_essential_graph(&w, subject.frame_index(), 4, &NoProgress);
+    let costs = store.read_f64(Matrix::PathCosts, 0..n, 0..n).unwrap();
+    assert!(costs.iter().zip(&sparse.costs).all(|(a, b)| a.to_bits() == b.to_bits()), "path costs");
+    let edges = surfcap_mesh::io::npy::read_npy::<f64>(&work.join("graph_edges.npy")).unwrap();
+    let expected: Vec<f64> = sparse.graph.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
+    assert_eq!(edges.data, expected, "the sparse essential graph");
+    assert_eq!(report.graph_edges, sparse.graph.edges().len());
+    assert!(report.graph_edges > 0);
 
     // Done jobs are skipped; a lost job (record and chunk gone) is recomputed to the same bytes.
     assert!(run_stage(&work, Stage::Distances).iter().all(|o| *o == JobOutcome::Skipped));
@@ -74,6 +87,10 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
     let again = run_stage(&work, Stage::Distances);
     assert_eq!(again.iter().filter(|o| matches!(o, JobOutcome::Done(_))).count(), 1);
     assert_eq!(std::fs::read(&chunk).unwrap(), before);
+    // A missing job is named by the merge.
+    std::fs::remove_file(store.record_path(Stage::Paths, 2)).unwrap();
+    let e = merge(&store, &plan).unwrap_err().to_string();
+    assert!(e.contains("stage paths") && e.contains("job 2"), "{e}");
 
     // Bad requests.
     let (plan, store, frames) = open_work(&work).unwrap();
@@ -83,5 +100,4 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
     let e = create_work(&cache, &work, 7, other).unwrap_err().to_string();
     assert!(e.contains("another subject or other parameters"), "{e}");
     assert!(create_work(&cache, &cache.join("inside"), 7, params()).is_err(), "never inside an input");
-    let _ = merge;
 }

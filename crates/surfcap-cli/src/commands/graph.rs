@@ -1,4 +1,4 @@
-//! `surfcap graph build <subject> --kind essential|motion --alpha A`: the essential graph or
+//! `surfcap graph build <subject> --kind essential|sparse-essential|motion --alpha A`: the essential graph (exact or sparse) or
 //! the motion-graph baseline over a subject's frames (thesis 3.3), cached.
 
 use std::path::PathBuf;

@@ -49,8 +49,9 @@ pub struct PlanArgs {
     /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3).
     #[arg(long, default_value = "0.05")]
     pub alpha: Positive,
-    /// Transitions kept per frame by the sparse essential graph.
-    #[arg(long, default_value_t = 16, value_parser = crate::options::count)]
+    /// Transitions kept per frame by the sparse essential graph (the default is the k chosen by
+    /// `surfcap eval sparse-graph`).
+    #[arg(long, default_value_t = surfcap_motion::sparse_essential_graph::DEFAULT_K, value_parser = crate::options::count)]
     pub k: usize,
     #[command(flatten)]
     pub table: TableOpts,

@@ -20,6 +20,7 @@ mod interpolation;
 mod pose_metric;
 mod root_motion;
 mod smg;
+mod sparse_graph;
 mod transfer;
 mod transitions;
 mod vary;
@@ -259,6 +260,35 @@ pub enum What {
         #[arg(short, long, default_value = "smg-eval")]
         output: PathBuf,
     },
+    /// The sparse essential graph against the exact one (issue 21 item 4) on the mannequin
+    /// moved by every CMU clip (about 1,900 frames at 50 fps): per k, the all-pairs
+    /// shortest-path costs within 1% of the exact ones, the mean cost ratio, pairs made
+    /// unreachable, edges and build times; path-following and key-pose queries on both graphs;
+    /// the smallest k meeting the rule (sparse-graph.json, plots).
+    SparseGraph {
+        /// The shared data folder (CMU clips).
+        #[arg(long, default_value = "../shared/data")]
+        data: PathBuf,
+        /// Vertices of the mannequin (1000 to 20000).
+        #[arg(long, default_value_t = 1000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
+        vertices: usize,
+        /// Frame rate the clips are resampled to (50: about 1,900 frames).
+        #[arg(long, default_value_t = 50.0, value_parser = crate::options::positive)]
+        fps: f64,
+        /// Values of k (transitions kept per frame).
+        #[arg(long = "k", value_delimiter = ',', default_value = "2,4,8,16,32,64", value_parser = crate::options::count)]
+        ks: Vec<usize>,
+        /// Tolerance alpha of the edge weights.
+        #[arg(long, default_value = "0.05")]
+        alpha: Positive,
+        #[command(flatten)]
+        table: TableOpts,
+        #[command(flatten)]
+        cache: CacheOpts,
+        /// Folder for the report (sparse-graph.json) and the plots.
+        #[arg(short, long, default_value = "sparse-graph-eval")]
+        output: PathBuf,
+    },
     /// Eigen appearance maps on generated textures with ground truth (thesis 4.5-4.6, Fig.
     /// 4.5-4.6, 4.9-4.12): flow end-point error, Poisson vs direct warping, compactness vs naive
     /// PCA in the texture and image domains, generalisation with held-out frames, completion of
@@ -412,6 +442,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-interchange")?;
         }
+        What::SparseGraph { data, output, .. } => {
+            surfcap_mesh::output_path::check_not_input(output, &[data])?;
+            ctx.claim_dir(output, "eval-sparse-graph")?;
+        }
         What::Vary { data, output, .. } => {
             surfcap_mesh::output_path::check_not_input(output, &[data])?;
             ctx.claim_dir(output, "eval-vary")?;
@@ -556,6 +590,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             opts.sampling.path = path.0;
             opts.sampling.smoothing = smoothing;
             vary::run(ctx, cases, &opts, &output)
+        }
+        What::SparseGraph { data, vertices, fps, ks, alpha, table, cache, output } => {
+            let opts = sparse_graph::Options { vertices, fps, ks, alpha: alpha.0, table };
+            sparse_graph::run(ctx, &data, opts, &cache, &output)
         }
         What::Interchange { data, datasets, formats, output } => {
             interchange::run(ctx, data, datasets, formats, &output)

@@ -1,0 +1,159 @@
+//! The jobs of the sparse essential graph's stages (issue 21 item 4,
+//! `surfcap_motion::sparse_essential_graph`), by blocks of source rows:
+//! - `candidates`: rows i of Algorithm 1's weights made from rows of the table (D / median + alpha
+//!   L), each frame's k cheapest transitions plus its original edge (`candidates/edges_<b>.npy`);
+//! - `paths`: the sparse graph assembled from every block's candidates (E <= N (k + 1) edges),
+//!   one Dijkstra per source of the block; the costs into `paths/costs.zarr`, the trees' edges
+//!   into `paths/tree_<b>.npy`.
+//!
+//! The merge takes the union of the trees: the graph equals the in-memory
+//! `sparse_essential_graph` of the same weights (same rows, same ties).
+
+use surfcap_mesh::Progress;
+use surfcap_mesh::cache::CachedFrames;
+use surfcap_mesh::io::npy::{read_npy, write_npy};
+use surfcap_motion::edge_weights::edge_weight_row;
+use surfcap_motion::graph::{Edge, Graph};
+use surfcap_motion::sparse_essential_graph::{NO_PRED, cheapest_transitions, sparse_shortest_paths};
+
+use crate::error::{Error, Result};
+use crate::tile_jobs::read_scale;
+use crate::tile_plan::{Plan, Stage};
+use crate::tile_store::{Matrix, Store};
+
+type JobResult = (String, String, serde_json::Value);
+
+fn edges_file(block: usize) -> String {
+    format!("candidates/edges_{block}.npy")
+}
+
+fn tree_file(block: usize) -> String {
+    format!("paths/tree_{block}.npy")
+}
+
+/// Runs job `index` of the `candidates` or `paths` stage.
+pub fn run(
+    store: &Store,
+    plan: &Plan,
+    subject: &CachedFrames,
+    stage: Stage,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<JobResult> {
+    let rows = plan.row_block(index);
+    let text = if rows.is_empty() {
+        "no frames".into()
+    } else {
+        format!("sources {} .. {}", subject.index.label(rows.start), subject.index.label(rows.end - 1))
+    };
+    let details = match stage {
+        Stage::Candidates => candidates(store, plan, subject, index)?,
+        Stage::Paths => paths(store, plan, index, progress)?,
+        _ => unreachable!("graph stages only"),
+    };
+    Ok((text, String::new(), details))
+}
+
+fn candidates(store: &Store, plan: &Plan, subject: &CachedFrames, block: usize) -> Result<serde_json::Value> {
+    let n = plan.frames();
+    let rows = plan.row_block(block);
+    let scale = read_scale(store)?;
+    let cost = store.read_f64(Matrix::TableCost, rows.clone(), 0..n)?;
+    let len = store.read_u32(Matrix::TableLen, rows.clone(), 0..n)?;
+    let mut w = vec![0.0; n];
+    let mut flat = Vec::new();
+    let mut edges = 0usize;
+    for (r, i) in rows.enumerate() {
+        let (c, l) = (&cost[r * n..(r + 1) * n], &len[r * n..(r + 1) * n]);
+        if let Some(j) = c.iter().position(|x| x.is_nan() || *x < 0.0) {
+            return Err(Error::Job(format!(
+                "transition cost ({}, {}) is {}: expected a cost >= 0 or inf",
+                subject.index.label(i),
+                subject.index.label(j),
+                c[j]
+            )));
+        }
+        edge_weight_row(c, l, i, &subject.index, plan.params.alpha, scale.d_scale, &mut w);
+        for e in cheapest_transitions(&w, i, &subject.index, plan.params.k) {
+            flat.extend([e.from as f64, e.to as f64, e.weight]);
+            edges += 1;
+        }
+    }
+    surfcap_mesh::atomic::write_file(&store.file(&edges_file(block)), |f| write_npy(f, &[edges, 3], &flat))?;
+    Ok(serde_json::json!({ "edges": edges }))
+}
+
+/// The sparse graph from every block's candidates.
+pub fn sparse_graph(store: &Store, plan: &Plan) -> Result<Graph> {
+    let n = plan.frames();
+    let mut edges = Vec::new();
+    for b in 0..plan.jobs(Stage::Candidates) {
+        let p = store.file(&edges_file(b));
+        if !p.is_file() {
+            return Err(Error::Job(format!("{}: missing: run the candidates stage's job {b} first", p.display())));
+        }
+        let a = read_npy::<f64>(&p)?;
+        for e in a.data.chunks_exact(3) {
+            let (from, to) = (e[0] as usize, e[1] as usize);
+            if from >= n || to >= n || !(e[2] >= 0.0) {
+                return Err(Error::Job(format!(
+                    "{}: edge {from} -> {to} of weight {}: expected frames below {n} and a weight >= 0",
+                    p.display(),
+                    e[2]
+                )));
+            }
+            edges.push(Edge { from: from as u32, to: to as u32, weight: e[2] });
+        }
+    }
+    Ok(Graph::new(n, edges))
+}
+
+fn paths(store: &Store, plan: &Plan, block: usize, progress: &dyn Progress) -> Result<serde_json::Value> {
+    let n = plan.frames();
+    let graph = sparse_graph(store, plan)?;
+    let rows = plan.row_block(block);
+    let sp = sparse_shortest_paths(&graph, rows.clone(), progress);
+    let t = plan.tile;
+    for cj in 0..n.div_ceil(t) {
+        let cols = cj * t..((cj + 1) * t).min(n);
+        let values: Vec<f64> =
+            (0..rows.len()).flat_map(|r| sp.costs[r * n + cols.start..r * n + cols.end].iter().copied()).collect();
+        store.write_chunk_f64(Matrix::PathCosts, block, cj, rows.len(), cols.len(), &values)?;
+    }
+    let mut tree: Vec<(u32, u32)> = sp
+        .pred_rows()
+        .flat_map(|(_, pred)| pred.iter().enumerate().filter(|(_, p)| **p != NO_PRED).map(|(v, &p)| (p, v as u32)))
+        .collect();
+    tree.sort_unstable();
+    tree.dedup();
+    let flat: Vec<u32> = tree.iter().flat_map(|&(a, b)| [a, b]).collect();
+    surfcap_mesh::atomic::write_file(&store.file(&tree_file(block)), |f| write_npy(f, &[tree.len(), 2], &flat))?;
+    let unreachable = sp.costs.iter().filter(|c| c.is_infinite()).count();
+    Ok(
+        serde_json::json!({ "graph_edges": graph.edges().len(), "tree_edges": tree.len(), "unreachable_pairs": unreachable }),
+    )
+}
+
+/// The sparse essential graph: the union of every block's tree edges, weighted as in the sparse
+/// graph.
+pub fn merged_graph(store: &Store, plan: &Plan) -> Result<Graph> {
+    let graph = sparse_graph(store, plan)?;
+    let mut kept = vec![false; graph.edges().len()];
+    for b in 0..plan.jobs(Stage::Paths) {
+        let p = store.file(&tree_file(b));
+        let a = read_npy::<u32>(&p)?;
+        for e in a.data.chunks_exact(2) {
+            let k = graph.find(e[0] as usize, e[1] as usize).ok_or_else(|| {
+                Error::Job(format!(
+                    "{}: tree edge {} -> {} is not an edge of the sparse graph",
+                    p.display(),
+                    e[0],
+                    e[1]
+                ))
+            })?;
+            kept[k] = true;
+        }
+    }
+    let edges = graph.edges().iter().zip(&kept).filter(|(_, k)| **k).map(|(e, _)| *e).collect();
+    Ok(Graph::new(plan.frames(), edges))
+}
