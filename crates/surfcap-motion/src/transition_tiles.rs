@@ -170,9 +170,10 @@ fn source_row(
     if rows < p.l_min {
         return;
     }
-    for js in cols.start.saturating_sub(p.l_max - 1)..cols.end {
+    let first = cols.start.saturating_sub(p.l_max - 1);
+    for (js, &room) in after.iter().enumerate().take(cols.end).skip(first) {
         // Only the columns ending inside the tile: j = js + l < cols.end.
-        let width = after[js].min(p.l_max).min(cols.end - js);
+        let width = room.min(p.l_max).min(cols.end - js);
         if width < p.l_min {
             continue;
         }

@@ -94,14 +94,16 @@ pub fn sparse_graph(store: &Store, plan: &Plan) -> Result<Graph> {
         }
         let a = read_npy::<f64>(&p)?;
         for e in a.data.chunks_exact(3) {
-            let (from, to) = (e[0] as usize, e[1] as usize);
-            if from >= n || to >= n || !(e[2] >= 0.0) {
+            let frame = |x: f64| (x >= 0.0 && x.fract() == 0.0 && x < n as f64).then_some(x as usize);
+            let (Some(from), Some(to), true) = (frame(e[0]), frame(e[1]), e[2] >= 0.0) else {
                 return Err(Error::Job(format!(
-                    "{}: edge {from} -> {to} of weight {}: expected frames below {n} and a weight >= 0",
+                    "{}: edge {} -> {} of weight {}: expected frames 0..{n} and a weight >= 0",
                     p.display(),
+                    e[0],
+                    e[1],
                     e[2]
                 )));
-            }
+            };
             edges.push(Edge { from: from as u32, to: to as u32, weight: e[2] });
         }
     }
