@@ -17,7 +17,9 @@
 //!   x n / n_e2e, the log factor ignored) and by their job counts.
 //!
 //! On N workers a stage takes ceil(jobs / N) times its slowest job kind; the wall time is the sum
-//! over stages. Memory per job is the largest peak measured for its kind.
+//! over stages. Memory per job: the peak measured in the sampled job's own process (distances,
+//! table), else the plan's estimate from the job's inputs (the end-to-end run is one process,
+//! whose peak covers every stage before).
 
 use std::path::Path;
 use std::process::Command;
@@ -244,10 +246,13 @@ fn stage_costs(
                 continue;
             }
             let per_job = s.seconds / s.jobs.max(1) as f64;
-            let (seconds, bytes) = match s.stage {
-                Stage::Scale => (per_job * ratio * ratio, s.peak_bytes),
-                _ => (per_job * ratio, (s.peak_bytes as f64 * ratio) as u64),
+            let seconds = match s.stage {
+                Stage::Scale => per_job * ratio * ratio,
+                _ => per_job * ratio,
             };
+            // The end-to-end run is one process: its peak is that of every stage so far, so
+            // these stages' memory is the plan's estimate from their inputs at this size.
+            let bytes = plan.job_memory_bytes.iter().find(|(st, _)| *st == s.stage).map_or(0, |b| b.1 as u64);
             out.push((s.stage, plan.jobs(s.stage), seconds, bytes));
         }
     }
