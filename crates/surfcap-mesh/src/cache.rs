@@ -143,8 +143,9 @@ pub fn write_cache(path: &Path, subject: &Subject, force: bool, progress: &dyn P
     Ok(())
 }
 
-/// Reads a cache folder, checking every array against `subject.json`.
-pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
+/// Reads and checks `subject.json` and `faces.npy` of a cache folder: the description, its path
+/// and the triangles.
+fn read_header_and_faces(path: &Path) -> Result<(Header, std::path::PathBuf, Vec<[u32; 3]>)> {
     let hp = path.join("subject.json");
     let text = std::fs::read(&hp).map_err(|e| Error::io(&hp, "read", e))?;
     let h: Header = serde_json::from_slice(&text)
@@ -162,6 +163,13 @@ pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
     let faces = read_npy::<u32>(&fp)?;
     expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
     let triangles: Vec<[u32; 3]> = faces.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Ok((h, hp, triangles))
+}
+
+/// Reads a cache folder, checking every array against `subject.json`.
+pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
+    let (h, hp, triangles) = read_header_and_faces(path)?;
+    let fp = path.join("faces.npy");
     let uv = if path.join("uv.npy").is_file() {
         let (up, ufp) = (path.join("uv.npy"), path.join("uv_faces.npy"));
         let c = read_npy::<f32>(&up)?;
@@ -236,23 +244,8 @@ pub struct CachedFrames {
 impl CachedFrames {
     /// Opens the cache at `path` (its `subject.json` and `faces.npy`).
     pub fn open(path: &Path) -> Result<Self> {
-        let hp = path.join("subject.json");
-        let text = std::fs::read(&hp).map_err(|e| Error::io(&hp, "read", e))?;
-        let h: Header = serde_json::from_slice(&text)
-            .map_err(|e| err!(Syntax, "not a surfcap subject description: {e}").in_file(&hp).at_line(e.line()))?;
-        if h.format != FORMAT || h.version != VERSION {
-            return Err(err!(
-                Unsupported,
-                "format {:?} version {}: expected {FORMAT:?} version {VERSION} (re-import the data with this surfcap)",
-                h.format,
-                h.version
-            )
-            .in_file(&hp));
-        }
+        let (h, _, triangles) = read_header_and_faces(path)?;
         let fp = path.join("faces.npy");
-        let faces = read_npy::<u32>(&fp)?;
-        expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
-        let triangles: Vec<[u32; 3]> = faces.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         let topology = Topology::new(h.vertices, triangles, None).map_err(|e| e.in_file(&fp))?;
         let index = crate::FrameIndex::new(h.sequences.iter().map(|s| s.frames))
             .with_names(h.sequences.iter().map(|s| s.name.clone()).collect());

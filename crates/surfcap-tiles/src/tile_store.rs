@@ -150,8 +150,8 @@ impl Store {
         Ok(self.root.join(key.as_str()))
     }
 
-    /// Writes chunk (ci, cj) of `m` from a rows x cols block (padded to the chunk shape with the
-    /// fill value), atomically.
+    /// Writes chunk (ci, cj) of a float array from a rows x cols block (padded to the chunk shape
+    /// with the fill value), atomically.
     pub fn write_chunk_f64(
         &self,
         m: Matrix,
@@ -161,12 +161,7 @@ impl Store {
         cols: usize,
         values: &[f64],
     ) -> Result<()> {
-        let t = self.tile.min(self.n.max(1));
-        let mut chunk = vec![f64::NAN; t * t];
-        for r in 0..rows {
-            chunk[r * t..r * t + cols].copy_from_slice(&values[r * cols..(r + 1) * cols]);
-        }
-        self.write_encoded(m, ci, cj, |a| a.store_chunk_opt(&[ci as u64, cj as u64], chunk.as_slice(), &keep_all()))
+        self.write_chunk(m, ci, cj, rows, cols, values, f64::NAN)
     }
 
     /// [`Store::write_chunk_f64`] for the u32 arrays.
@@ -179,8 +174,22 @@ impl Store {
         cols: usize,
         values: &[u32],
     ) -> Result<()> {
+        self.write_chunk(m, ci, cj, rows, cols, values, 0)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn write_chunk<T: zarrs::array::Element + Copy>(
+        &self,
+        m: Matrix,
+        ci: usize,
+        cj: usize,
+        rows: usize,
+        cols: usize,
+        values: &[T],
+        fill: T,
+    ) -> Result<()> {
         let t = self.tile.min(self.n.max(1));
-        let mut chunk = vec![0u32; t * t];
+        let mut chunk = vec![fill; t * t];
         for r in 0..rows {
             chunk[r * t..r * t + cols].copy_from_slice(&values[r * cols..(r + 1) * cols]);
         }
@@ -220,24 +229,25 @@ impl Store {
 
     /// Reads rows x cols of a float array, refusing a region with chunks never written.
     pub fn read_f64(&self, m: Matrix, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> Result<Vec<f64>> {
-        self.require(m, &rows, &cols)?;
-        let a = self.array(m)?;
-        a.retrieve_array_subset_opt::<Vec<f64>>(
-            &[rows.start as u64..rows.end as u64, cols.start as u64..cols.end as u64],
-            &CodecOptions::default(),
-        )
-        .map_err(|e| zarr_err(&self.root.join(m.dir()), e))
+        self.read(m, rows, cols)
     }
 
     /// Reads rows x cols of a u32 array, refusing a region with chunks never written.
     pub fn read_u32(&self, m: Matrix, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> Result<Vec<u32>> {
+        self.read(m, rows, cols)
+    }
+
+    fn read<T: zarrs::array::ElementOwned>(
+        &self,
+        m: Matrix,
+        rows: std::ops::Range<usize>,
+        cols: std::ops::Range<usize>,
+    ) -> Result<Vec<T>> {
         self.require(m, &rows, &cols)?;
         let a = self.array(m)?;
-        a.retrieve_array_subset_opt::<Vec<u32>>(
-            &[rows.start as u64..rows.end as u64, cols.start as u64..cols.end as u64],
-            &CodecOptions::default(),
-        )
-        .map_err(|e| zarr_err(&self.root.join(m.dir()), e))
+        let subset = [rows.start as u64..rows.end as u64, cols.start as u64..cols.end as u64];
+        a.retrieve_array_subset_opt::<Vec<T>>(&subset, &CodecOptions::default())
+            .map_err(|e| zarr_err(&self.root.join(m.dir()), e))
     }
 
     fn require(&self, m: Matrix, rows: &std::ops::Range<usize>, cols: &std::ops::Range<usize>) -> Result<()> {
