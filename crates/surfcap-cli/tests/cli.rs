@@ -566,7 +566,9 @@ fn essential_graph_beats_the_motion_graph_on_real_captures() {
     for f in ["edges.npy", "weights.npy", "graph.json"] {
         assert!(out.join(f).is_file());
     }
-    for (args, want) in [(vec!["--alpha", "0"], "--alpha"), (vec!["--kind", "kovar"], "expected essential, sparse-essential")] {
+    for (args, want) in
+        [(vec!["--alpha", "0"], "--alpha"), (vec!["--kind", "kovar"], "expected essential, sparse-essential")]
+    {
         let o = surfcap!(&[&["graph", "build", p(&crane), "-o", p(&out)][..], &args[..]].concat());
         assert_eq!(o.status.code(), Some(1));
         assert!(stderr(&o).contains(want), "{}", stderr(&o));
