@@ -261,11 +261,12 @@ pub fn fixed_length_dtw(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use surfcap_mesh::NoProgress;
 
-    fn toy(n: usize) -> Vec<f64> {
+    /// A distance matrix for tests (also the tiles' tests).
+    pub(crate) fn toy(n: usize) -> Vec<f64> {
         // A distance between frames on two sequences of a 1D "pose" that moves at varying speed.
         let pose = |g: usize| (g as f64 * 0.37).sin() * 3.0 + (g as f64 * 0.11).cos();
         (0..n * n).map(|k| (pose(k / n) - pose(k % n)).abs() + 0.01).collect()

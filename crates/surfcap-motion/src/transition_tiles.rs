@@ -204,13 +204,9 @@ fn source_row(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::transition_table::tests::toy;
     use crate::transition_table::{SegmentRoom, transition_table_in_tiles};
     use surfcap_mesh::{FrameIndex, NoProgress};
-
-    fn toy(n: usize) -> Vec<f64> {
-        let pose = |g: usize| (g as f64 * 0.37).sin() * 3.0 + (g as f64 * 0.11).cos();
-        (0..n * n).map(|k| (pose(k / n) - pose(k % n)).abs() + 0.01).collect()
-    }
 
     /// Tiles of 1, 5 and 7 frames (windows crossing tile edges and sequence ends) give the
     /// one-tile table to the bit, and a tile computed from only its halo equals the same tile

@@ -17,11 +17,9 @@ use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::sparse_essential_graph::{NO_PRED, cheapest_transitions, sparse_shortest_paths};
 
 use crate::error::{Error, Result};
-use crate::tile_jobs::read_scale;
+use crate::tile_jobs::{JobResult, frames_text, read_scale};
 use crate::tile_plan::{Plan, Stage};
 use crate::tile_store::{Matrix, Store};
-
-type JobResult = (String, String, serde_json::Value);
 
 fn edges_file(block: usize) -> String {
     format!("candidates/edges_{block}.npy")
@@ -40,12 +38,7 @@ pub fn run(
     index: usize,
     progress: &dyn Progress,
 ) -> Result<JobResult> {
-    let rows = plan.row_block(index);
-    let text = if rows.is_empty() {
-        "no frames".into()
-    } else {
-        format!("sources {} .. {}", subject.index.label(rows.start), subject.index.label(rows.end - 1))
-    };
+    let text = format!("sources {}", frames_text(subject, &plan.row_block(index)));
     let details = match stage {
         Stage::Candidates => candidates(store, plan, subject, index)?,
         Stage::Paths => paths(store, plan, index, progress)?,

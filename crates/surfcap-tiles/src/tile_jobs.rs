@@ -112,9 +112,11 @@ pub fn run_job(
     Ok(JobOutcome::Done(record))
 }
 
-type JobResult = (String, String, serde_json::Value);
+/// What a job reports: its span in the user's terms, the distance kernel (or empty), details.
+pub(crate) type JobResult = (String, String, serde_json::Value);
 
-fn frames_text(subject: &CachedFrames, r: &std::ops::Range<usize>) -> String {
+/// Frames `r` as `sequence:frame .. sequence:frame`.
+pub(crate) fn frames_text(subject: &CachedFrames, r: &std::ops::Range<usize>) -> String {
     if r.is_empty() {
         return "no frames".into();
     }
