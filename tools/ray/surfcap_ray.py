@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Runs a tiled surfcap work folder on a Ray cluster (issue 21 item 3).
+"""Runs a tiled surfcap work folder on a Ray cluster.
 
     tools/venv/bin/python tools/ray/surfcap_ray.py WORK --surfcap PATH [--address ADDR]
         [--retries 3] [--cpus-per-job 1]

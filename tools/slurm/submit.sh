@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Submits a tiled surfcap run to Slurm (issue 21 item 3): one job array per stage of
+# Submits a tiled surfcap run to Slurm: one job array per stage of
 # WORK/plan.json, each stage depending (afterok) on every array of the previous one, then the
 # merge depending on the last. Prints the job ids, one line per submitted job.
 #

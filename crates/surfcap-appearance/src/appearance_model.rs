@@ -777,7 +777,7 @@ mod tests {
     #[test]
     fn completion_fills_a_hole_closer_to_the_truth_than_the_holed_input() {
         // Frame 3 of the training set seen with a hole (an unseen frame generalises poorly
-        // from 8 tiny frames: see the report of issue 20).
+        // from 8 tiny frames: see `surfcap eval appearance`).
         let (mask, _, model, _) = synthetic_model(&[0, 1, 2, 3, 4, 5, 6, 7]);
         let truth = synthetic_frame(&mask, 3, 1.2);
         let hole = |i: usize| (10..18).contains(&(i % 32)) && (12..20).contains(&(i / 32));

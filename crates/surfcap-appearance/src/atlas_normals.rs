@@ -1,7 +1,7 @@
 //! The surface carried into texture space: per-texel unit normal and 3-D position, from the
 //! mesh's area-weighted vertex normals and its positions interpolated with the barycentrics of
 //! the [`AtlasRaster`]. The texture generator shades texels by these normals (low-frequency
-//! illumination, issue 20 item 7b) and cuts occlusion holes by these positions.
+//! illumination) and cuts occlusion holes by these positions.
 //!
 //! Texels just outside the charts (the rings a [`crate::TexelMask`] dilation adds, which a
 //! renderer's bilinear lookup reads) get the mean of their already-defined 8-neighbours, one

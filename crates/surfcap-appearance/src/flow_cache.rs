@@ -1,5 +1,5 @@
-//! Optical flows between texture maps cached on disk (issue 20: "products (flows, warps, the
-//! eigen model) are cached"). A flow is the most expensive per-pair product of the appearance
+//! Optical flows between texture maps cached on disk (like every
+//! product of the appearance model: flows, warps, the eigen model). A flow is the most expensive per-pair product of the appearance
 //! pipeline (thesis 4.4.1: forward and backward warps for every frame, again at every medoid
 //! shift), and a rebuilt model with other component counts or a re-run evaluation asks for the
 //! same pairs again.

@@ -1,5 +1,5 @@
 //! A texture painted from 3D positions: the base appearance of a subject that has an atlas but
-//! no texture (the built-in mannequin, issue 20 item 8). Every texel takes the colour of the
+//! no texture (the built-in mannequin). Every texel takes the colour of the
 //! rest-pose surface point it shows (through [`AtlasRaster`]'s barycentrics), so the pattern is
 //! continuous across the atlas's seams, as a painted body would be: horizontal bands of three
 //! garment colours along the up axis, a coarse 3D checker, and two octaves of 3D value noise

@@ -1,4 +1,4 @@
-//! Simulated tracking drift of the benchmark textures (issue 20 item 7a): a smooth tangential
+//! Simulated tracking drift of the benchmark textures: a smooth tangential
 //! warp of the atlas per frame, known exactly, so the optical flow's end-point error can be
 //! measured and aligned textures compared with the truth.
 //!

@@ -1,4 +1,4 @@
-//! Benchmark texture sequences with ground truth (issue 20 item 7): there is no public
+//! Benchmark texture sequences with ground truth: there is no public
 //! multi-view texture capture here, so per-frame texture maps are made from a real UV-mapped
 //! mesh and its real texture, with every degradation the thesis's method must cope with known
 //! exactly. Frame k, on the content texels `C` (the atlas's covered texels grown by
@@ -38,7 +38,7 @@ use crate::flow_field::warp_direct;
 use crate::texture_drift::DriftModel;
 use crate::texture_image::TextureImage;
 
-/// The generator's parameters (defaults: issue 20 item 7 and the brief's values).
+/// The generator's parameters (defaults: a drift, light change, blur, noise and holes of the size real captures show).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GeneratorOptions {
     /// Frames to generate.

@@ -1,4 +1,4 @@
-//! Root motion from ground contacts against ground truth (issue 16): BVH clips with real root
+//! Root motion from ground contacts against ground truth: BVH clips with real root
 //! travel drive the built-in mannequin; the clip's horizontal travel is stripped (every joint
 //! moved back by the root's horizontal displacement since frame 0, the pelvis keeping its
 //! height and the body its heading), as an in-place game clip is authored; the travel is then

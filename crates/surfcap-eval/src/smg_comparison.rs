@@ -1,5 +1,5 @@
 //! The surface motion graph (Huang et al. 2009) side by side with the essential graph (thesis
-//! 3.3) on data with a shared topology (issue 17 item 7): the same key frames as start and end
+//! 3.3) on data with a shared topology: the same key frames as start and end
 //! frames, the same (distance, time) targets, one row per key pair and engine.
 //!
 //! - The essential graph answers each target with its own distance-and-time search

@@ -6,7 +6,7 @@
 //! match of the switch) and the CPU time of a query (mean and standard deviation).
 //!
 //! The subject is the built-in mannequin driven by CMU locomotion (stand, walk, jog, jump, stop:
-//! real root travel, which the distance constraint needs), in either form the issue asks for:
+//! real root travel, which the distance constraint needs), in either form:
 //! shared topology, or every frame re-meshed on its own (`MotionFrames` with per-frame
 //! triangles; the similarity needs no correspondence). The paper's own figures: distance error
 //! RMS 0.17-0.47 m and max below 1 m, time error max 22-25 frames, 5.7-15.0 s per query in Matlab.
@@ -148,7 +148,7 @@ pub struct KeyPairRow {
     pub plan_seconds: f64,
     /// ILP sub-problems given up because their feedback cuts did not settle.
     pub unconverged_subproblems: usize,
-    /// The same targets with the tolerance of issue 17's goal (beyond the paper).
+    /// The same targets with our tolerance of 1% and 1 frame (beyond the paper).
     pub goal: GoalRow,
     /// Each query's outcome, in the order of the targets.
     #[serde(skip)]

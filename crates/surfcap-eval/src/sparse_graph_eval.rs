@@ -1,4 +1,4 @@
-//! What the sparse essential graph (issue 21 item 4, `surfcap_motion::sparse_essential_graph`)
+//! What the sparse essential graph (`surfcap_motion::sparse_essential_graph`)
 //! loses against the exact one (thesis 3.3.1) on a subject where the exact one is feasible:
 //! for each k, the fraction of all-pairs shortest-path costs within 1% of the exact ones, the
 //! mean cost ratio sparse / exact over the pairs both connect, the pairs that became

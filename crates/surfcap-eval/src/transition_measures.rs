@@ -1,6 +1,5 @@
 //! Two measures of one transition, applied alike to the surface motion graph (Huang et al.
-//! 2009) and the essential graph (thesis 3.3) so that their outputs can be compared (issue 17
-//! item 7).
+//! 2009) and the essential graph (thesis 3.3) so that their outputs can be compared.
 //!
 //! A transition is seen as the frame pairs it matches, in order, each with the rigid ground
 //! motion its engine applies to the destination frame of the pair ([`MatchedTransition`]):

@@ -1,4 +1,4 @@
-//! Motion variation synthesis evaluated (thesis chapter 6, 6.5-6.8; issue 19 item 5), on a
+//! Motion variation synthesis evaluated (thesis chapter 6, 6.5-6.8), on a
 //! subject's sequences of one motion type with one [`VariationModel`] (a GPDM per body part,
 //! the first two sequences blended at w = 0.5 and added to training, 6.7):
 //!
@@ -6,7 +6,7 @@
 //!    the training frames (aligned body-frame poses, re-timed onto the reference) and the GPDM's
 //!    reconstruction GP mean at the learnt latents (eq. 6.12), against PCA of each part's
 //!    training rows with as many components as latent dimensions (d = 3). The reconstruction GP
-//!    nearly interpolates its training frames (the note on issue 7), so the same comparison is
+//!    nearly interpolates its training frames (as the transfer evaluation found), so the same comparison is
 //!    made on **held-out frames**: a second set of GPDMs learns only the even frames of every
 //!    prepared sequence (its own displacement scales, eq. 6.1-6.7 unchanged) and the odd frames
 //!    with two neighbours are reconstructed. A held-out frame needs a latent point: it is the
@@ -849,7 +849,7 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
     })
 }
 
-/// Checks the options, then evaluates every case (issue 19 item 5).
+/// Checks the options, then evaluates every case.
 pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Result<VariationEval> {
     let t0 = Instant::now();
     if o.variants < 2 {

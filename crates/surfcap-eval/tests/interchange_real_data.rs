@@ -1,5 +1,4 @@
-//! Every sequence of `../shared/data` through USD text and Alembic and back, exactly (issue 22
-//! item 4): positions to the bit, topology with UVs, names, labels, rate, up axis, units.
+//! Every sequence of `../shared/data` through USD text and Alembic and back, exactly: positions to the bit, topology with UVs, names, labels, rate, up axis, units.
 
 use surfcap_eval::{InterchangeOptions, interchange_eval};
 use surfcap_mesh::export::ExportFormat;

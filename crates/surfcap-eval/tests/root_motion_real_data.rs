@@ -1,4 +1,4 @@
-//! Root motion recovered from ground contacts on the CMU clips (issue 16's targets): the
+//! Root motion recovered from ground contacts on the CMU clips (against our targets): the
 //! mannequin driven by real motion capture with its horizontal travel stripped.
 
 use surfcap_eval::{RootMotionOptions, root_motion_eval};

@@ -1,4 +1,4 @@
-//! The sparse essential graph against the exact one (issue 21 item 4) on a small subset of the
+//! The sparse essential graph against the exact one on a small subset of the
 //! evaluation's subject: the mannequin moved by every CMU clip, resampled to 10 fps (about 380
 //! frames instead of the evaluation's 1,900 at 50 fps), so the test runs in seconds.
 

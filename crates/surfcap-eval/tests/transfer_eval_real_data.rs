@@ -1,5 +1,5 @@
 //! The transfer evaluation on the KayKit knight and barbarian (same clips, two bodies): the
-//! issue's goal (GP-NN below Baran et al. on cross-validation error at every training size)
+//! goal (GP-NN below Baran et al. on cross-validation error at every training size)
 //! and seamless stitching (edges at part boundaries change less than with averaged overlaps).
 
 use surfcap_eval::transfer_eval::{CaseParts, TransferEvalOptions, kaykit_case, transfer_case_eval};

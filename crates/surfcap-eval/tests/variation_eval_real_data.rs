@@ -1,4 +1,4 @@
-//! Motion variation evaluated on real motion (issue 19 item 5): the 1,000-vertex mannequin
+//! Motion variation evaluated on real motion: the 1,000-vertex mannequin
 //! driven by CMU subject 16's walk, jog and left turn, GPDMs of 50 iterations, 3 variants.
 
 use surfcap_eval::variation_eval::{VariationEvalOptions, cmu_case, variation_eval};

@@ -1,5 +1,5 @@
 //! All-pairs pose distance matrix of a subject (thesis 2.3.2), computed in parallel, tile by
-//! tile (`distance_tiles.rs`: the same tiles a cluster computes one job each, issue 21).
+//! tile (`distance_tiles.rs`: the same tiles a cluster computes one job each).
 //!
 //! Every pair (i, j) is aligned about the up axis (eq. 2.3) from the pair's own weighted inner
 //! products of centred horizontal coordinates, then its deformation distance costs one pass over

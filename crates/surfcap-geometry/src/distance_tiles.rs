@@ -1,5 +1,5 @@
 //! One rectangular tile of the all-pairs pose distance matrix (thesis 2.3.2, eq. 2.2-2.5 and
-//! 2.13-2.14): the unit of work of the distance matrix on one machine and on a cluster (issue 21).
+//! 2.13-2.14): the unit of work of the distance matrix on one machine and on a cluster (`surfcap tiles`).
 //!
 //! A tile is the block rows x cols of the matrix with `rows` before or equal to `cols` (the
 //! upper triangle: the matrix is symmetric, see `distance_matrix.rs`). A diagonal tile computes
@@ -169,7 +169,7 @@ fn pair_alignment(ci: &PlaneCoords, cj: &PlaneCoords) -> (f64, f64) {
 /// Rows computed together: each chunk of frame j's triangle data is loaded once and used for all
 /// of them (one frame's data is 120 bytes per triangle: without this blocking the loop is bound
 /// by memory bandwidth, not arithmetic). Measured with the AVX-512 kernel on the crane (one
-/// thread's CPU time, issue 21 item 5): 8 rows x 256 triangles 120-138 M triangle pairs/s,
+/// thread's CPU time): 8 rows x 256 triangles 120-138 M triangle pairs/s,
 /// 16 x 64 156-167, 32 x 64 167-187, 64 x 64 180-195. The whole crane matrix on 2 idle cores
 /// (`surfcap bench distance`, wall time): 16 rows 217 M/s, 32 rows 250 M/s, 64 rows 201-216 M/s
 /// (three row blocks for 175 frames: one thread idles); a 1,024-frame tile has 32 blocks of 32.

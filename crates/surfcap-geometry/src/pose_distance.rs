@@ -96,7 +96,7 @@ pub const BLOCK: usize = 64;
 pub const BLOCK_FLOATS: usize = BLOCK * FRAME_FLOATS;
 
 /// Per-frame precomputation for the deformation distances (the expensive part is per pair).
-/// Stored in f64 (issue 21 item 5 asked for f32 where the matrix stays within 1e-6 relative;
+/// Stored in f64 (f32 storage was measured: acceptable only where the matrix stays within 1e-6 relative;
 /// measured with `surfcap bench distance`, the values rounded to f32 as storage would hold them,
 /// 175 x 175 matrices, max / median relative error over the 15,225 pairs):
 ///

@@ -108,8 +108,8 @@ fn interpolation_reproduces_both_ends() {
 
 #[test]
 fn nonlinear_interpolation_distorts_less_than_linear_on_far_pairs() {
-    // The horse's collapse sequence has another vertex order than its gallop (see the foundation
-    // issue's note), so the far horse pair is a gallop frame and one of the 10 key poses.
+    // The horse's collapse sequence has another vertex order than its gallop (its import
+    // notes say so), so the far horse pair is a gallop frame and one of the 10 key poses.
     let cases: &[(&[&str], &str, &str)] = &[
         (&["vlasic2008/crane"], "crane:0", "crane:120"),
         (&["vlasic2008/samba"], "samba:0", "samba:90"),
@@ -173,7 +173,7 @@ fn deformation_distance_matches_the_svd_route_and_ignores_ground_plane_motion() 
     assert!((d.get(0, 1) - reference).abs() < 1e-8 * reference, "{} vs {reference}", d.get(0, 1));
 }
 
-/// The triangle data held one slab at a time (issue 16 item 6: 1.9 GB for 547 frames of 14,000
+/// The triangle data held one slab at a time (the memory target: 1.9 GB for 547 frames of 14,000
 /// vertices when held whole) gives the matrix of the whole-mesh computation to the bit: one slab
 /// of every triangle is the previous algorithm; one chunk per slab and a middle size are the most
 /// and a typical number of slab boundaries. The barbarian has zero-area triangles (frame 0), so
@@ -202,11 +202,11 @@ fn distance_matrix_in_slabs_equals_the_whole_mesh_computation_to_the_bit() {
         assert_eq!(distance_matrix(s, &params, &NoProgress), whole);
     }
     assert!(distance_matrix(&barbarian, &DistanceParams::default(), &NoProgress).max_skipped_triangles > 0);
-    // The issue's subject: 547 frames of 28,000 triangles fit the slab budget.
+    // The target's subject: 547 frames of 28,000 triangles fit the slab budget.
     assert!(slab_triangles(547, SLAB_BYTES) * 547 * 120 <= SLAB_BYTES);
 }
 
-/// Issue 21 item 1: tiles are the unit of work and an entry does not depend on the tiling. The
+/// Tiles are the unit of work and an entry does not depend on the tiling. The
 /// matrix assembled from tiles of 1, 7 and 13 frames (diagonal and off-diagonal tiles, ragged
 /// edges) equals the one-tile matrix to the bit for every metric, with and without vertex
 /// weights, and the skipped-triangle count is gathered across tiles.
@@ -239,7 +239,7 @@ fn distance_tiles_give_the_matrix_of_one_tile_to_the_bit() {
     assert!(spans.iter().all(|s| s.rows.start <= s.cols.start));
 }
 
-/// The matrix does not depend on the thread count (issue 21 item 5: identical on 1 and 2
+/// The matrix does not depend on the thread count (identical on 1 and 2
 /// threads) with the kernel this CPU runs, for both deformation metrics; and on real triangle
 /// data every kernel this CPU has agrees with the scalar loop to 1e-12 relative, the SIMD ones
 /// with each other to the bit (the test prints which kernels it ran).

@@ -14,7 +14,7 @@
 //!
 //! with analytic gradients (kernel derivatives from [`crate::kernels`]) and L-BFGS.
 //!
-//! Choices where the thesis is silent or loose (documented in the issue note too):
+//! Choices where the thesis is silent or loose (each said where it is made):
 //! - **Centring**: Y is centred by its mean frame (the reconstruction GP has a zero mean).
 //! - **Units**: the thesis initialises alpha, beta to 1 and the noise variances to 0.1. Here the
 //!   output variance alpha_1 starts at the mean per-coordinate variance of Y and the noise

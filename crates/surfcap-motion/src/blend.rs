@@ -157,7 +157,7 @@ pub fn blend(
 /// Blend whose rigid part (every alignment and translation of Algorithm 2) is computed from the
 /// segments `placed` (source, destination: the captured frames) while the poses interpolated are
 /// `played` (frames of the same vertex count shown in their stead, e.g. learned variants of
-/// those frames, thesis 6.6, issue 19 item 6), each moved as its captured frame is. The
+/// those frames, thesis 6.6), each moved as its captured frame is. The
 /// transition's rigid track is then the captured one, which the walk model predicted and the
 /// constrained searches solved for; only the poses differ. With `played` = `placed` this is
 /// [`blend`], to the bit.

@@ -1,4 +1,4 @@
-//! The frames from which a walk can go on for as long as needed (issue 16: no dead ends).
+//! The frames from which a walk can go on for as long as needed (no dead ends).
 //!
 //! The last frame of every sequence has no successive frame, and a frame near it whose only
 //! transitions lead to such frames is as bad: a search that enters one is stuck a few frames

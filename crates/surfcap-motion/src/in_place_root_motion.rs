@@ -1,5 +1,5 @@
 //! A subject whose in-place clips get their travel back from the feet's ground contacts
-//! (`surfcap import --root-motion contacts`, issue 16): each sequence that
+//! (`surfcap import --root-motion contacts`): each sequence that
 //! [`clip_travel`](crate::clip_travel) finds in place is moved by the root motion
 //! [`root_motion_from_contacts`] recovers, its vertices and its joint matrices alike, and is
 //! tagged [`RECOVERED_TAG`] so the subject says which clips were changed. Clips that already

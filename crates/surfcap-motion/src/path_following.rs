@@ -9,7 +9,7 @@
 //! transition's inner frames too keeps a long transition from cutting corners unseen. Halting:
 //! the walk's travelled length reaches the curve's length.
 //!
-//! Search (our decision, documented in the issue note): an exhaustive depth-first search over
+//! Search (our decision): an exhaustive depth-first search over
 //! walks of a whole curve is exponential in its length (a 15 m path is some 400 frames), so the
 //! branch-and-bound runs over a receding window, as Kovar et al. 2002 did for their path
 //! synthesis: from the current state, every walk that covers the next `window` of arc length
@@ -561,7 +561,7 @@ mod tests {
         assert!(checked >= 3, "{checked}");
     }
 
-    /// The search never enters a frame from which the walk cannot go on (issue 16: "the walk is
+    /// The search never enters a frame from which the walk cannot go on ("the walk is
     /// stuck at frame 463"), and a given start that is such a frame is refused by name.
     #[test]
     fn walks_avoid_dead_ends_and_a_dead_start_is_refused() {

@@ -1,4 +1,4 @@
-//! Repeats in a walk (issue 19 item 6; thesis 6.1: endless motion that does not repeat itself):
+//! Repeats in a walk (thesis 6.1: endless motion that does not repeat itself):
 //! which play of its frames each run of original frames is, so that a walk looping over the
 //! same captured frames can show a substitute (a learned variant of those frames, thesis 6.6)
 //! on each repetition instead of the same poses again.

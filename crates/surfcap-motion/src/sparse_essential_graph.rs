@@ -1,4 +1,4 @@
-//! The sparse essential graph (issue 21 item 4): thesis 3.3.1's essential graph (the union of
+//! The sparse essential graph: thesis 3.3.1's essential graph (the union of
 //! the shortest-path trees of every node) built on a sparse digraph instead of the complete
 //! one, so that it scales to hours of capture.
 //!
@@ -39,7 +39,7 @@ pub const NO_PRED: u32 = u32::MAX;
 
 /// The k the CLI and the pipeline use by default, chosen by `surfcap eval sparse-graph` (issue
 /// 21 item 4) on the mannequin moved by every CMU clip at 50 fps (1,878 frames, alpha 0.05).
-/// The issue's rule (the smallest k with at least 99% of the all-pairs shortest-path costs
+/// Our rule (the smallest k with at least 99% of the all-pairs shortest-path costs
 /// within 1% of the exact graph's and no query more than 1% worse) is met by no k up to 512:
 /// there the exact graph keeps about 300 transitions per frame, as most pairs' cheapest path is
 /// their own direct transition, so dropping transitions raises most pair costs (within 1%: 16%

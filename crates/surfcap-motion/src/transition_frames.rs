@@ -80,7 +80,7 @@ pub enum Segment {
 /// learned variant of it), while the warp and every rigid placement of Blend come from the
 /// captured frames ([`crate::blend::blend_substituted`]); `None` from `played` when `g` is not
 /// a frame. The warp is the captured transition's too: a substitute follows its frame closely
-/// enough that the same frames still match (issue 19 item 6).
+/// enough that the same frames still match (thesis 6.6).
 pub fn transition_frames_played<'a>(
     subject: &'a Subject,
     d: &[f64],

@@ -1,5 +1,5 @@
 //! One rectangular tile of the all-pairs transition table (thesis 2.5.3-2.5.4, eq. 2.55-2.57):
-//! the unit of work of the table on one machine and on a cluster (issue 21).
+//! the unit of work of the table on one machine and on a cluster (`surfcap tiles`).
 //!
 //! A tile is the block of source frames `rows` x end frames `cols` (the table is not symmetric:
 //! its tiles cover the whole matrix). Entry (i, j) is the best of the shared DTW tables started

@@ -345,7 +345,7 @@ pub fn walk_sequence(
 
 /// [`walk_sequence`] showing, on each run of original frames, what `source` gives for the run's
 /// pass ([`run_passes`]: 0 the first time the walk shows those frames, then one more per
-/// repetition) in the captured frames' stead (issue 19 item 6). Every rigid placement is the
+/// repetition) in the captured frames' stead (thesis 6.6). Every rigid placement is the
 /// captured walk's: a substitute frame is moved as its captured frame is, and a transition is
 /// placed by Blend on the captured frames while interpolating the frames shown on either side
 /// ([`crate::transition_frames::transition_frames_played`]), so the junctions meet the poses

@@ -1,5 +1,5 @@
 //! Learned variants of a subject's sequences played in the captured frames' stead when a walk
-//! repeats them (issue 19 item 6; thesis 6.1's motivation: endless motion that does not repeat
+//! repeats them (thesis 6.1's motivation: endless motion that does not repeat
 //! itself). A variant of a sequence has exactly its frame count, frame f standing for captured
 //! frame f in the same world coordinates (thesis 6.6: sampled from the GPDM and placed by the
 //! source's global displacement); the walk places it as it places the captured frame

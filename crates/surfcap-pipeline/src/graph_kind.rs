@@ -8,7 +8,7 @@ use surfcap_motion::sparse_essential_graph::DEFAULT_K;
 
 /// The essential graph (union of all shortest-path trees, thesis 3.3.2), the sparse essential
 /// graph (the same union on the graph of every frame's `k` cheapest transitions plus the
-/// original edges, issue 21 item 4: scales to tens of thousands of frames) or Kovar's motion
+/// original edges: scales to tens of thousands of frames) or Kovar's motion
 /// graph (local minima of the transition cost, the baseline of 3.3.3).
 ///
 /// Written (in reports, cache keys) and read as `essential`, `motion` and

@@ -273,8 +273,8 @@ impl Pipeline {
         GraphKey { table: TableKey::new(&self.chain_distance, &p.table), kind: p.kind, alpha: p.alpha }
     }
 
-    /// The essential graph, the sparse essential graph or the motion graph (thesis 3.3, issue 21
-    /// item 4) over all frames.
+    /// The essential graph, the sparse essential graph or the motion graph (thesis 3.3)
+    /// over all frames.
     ///
     /// On disk: `graph-<key>.npy`, f64 `[E, 3]`: from, to, weight of every edge.
     pub fn graph(&self, p: &GraphParams) -> Result<Fetched<Graph>> {

@@ -59,7 +59,7 @@ impl ProductKey for DistanceKey {
     fn kind(&self) -> String {
         format!("distance-{}", self.metric)
     }
-    /// 3: each pair aligned from its own inner products (tiles, issue 21), not the all-frames
+    /// 3: each pair aligned from its own inner products (tiles), not the all-frames
     /// Gram matrices: the values moved in the last bits.
     const VERSION: u32 = 3;
 }

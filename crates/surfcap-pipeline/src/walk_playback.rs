@@ -1,7 +1,7 @@
 //! Plays a walk found in a graph into a mesh sequence (thesis Algorithm 3), with what the
 //! reports say about it: frame counts by label, transitions, the runs of original frames, and
 //! the tracked centre of every output frame; optionally with substitutes (learned variants,
-//! [`crate::frame_variants`]) shown when the walk repeats frames (issue 19 item 6).
+//! [`crate::frame_variants`]) shown when the walk repeats frames (thesis 6.1: endless motion that does not repeat itself).
 
 use std::time::Instant;
 
@@ -36,7 +36,7 @@ pub struct PlayedWalk {
     pub transitions: usize,
     pub segments: Vec<WalkSegment>,
     /// The captured frames (global numbers) each output frame is made from, with the weight
-    /// its transition blends them by: what a per-frame texture follows (issue 20 item 8).
+    /// its transition blends them by: what a per-frame texture follows (thesis 4: textures of synthesised frames).
     pub mix: Vec<FrameMix>,
     /// How each output frame was played: a repeat of a captured frame shown before, the
     /// variants it shows.

@@ -76,7 +76,7 @@ pub struct Tolerance {
 }
 
 impl Default for Tolerance {
-    /// 1% of the distance and 1 frame (issue 17's goal).
+    /// 1% of the distance and 1 frame (our goal for this engine, beyond the paper's).
     fn default() -> Self {
         Tolerance { distance_relative: 0.01, frames: 1.0 }
     }

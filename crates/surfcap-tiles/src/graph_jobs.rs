@@ -1,5 +1,5 @@
-//! The jobs of the sparse essential graph's stages (issue 21 item 4,
-//! `surfcap_motion::sparse_essential_graph`), by blocks of source rows:
+//! The jobs of the sparse essential graph's stages
+//! (`surfcap_motion::sparse_essential_graph`), by blocks of source rows:
 //! - `candidates`: rows i of Algorithm 1's weights made from rows of the table (D / median + alpha
 //!   L), each frame's k cheapest transitions plus its original edge (`candidates/edges_<b>.npy`);
 //! - `paths`: the sparse graph assembled from every block's candidates (E <= N (k + 1) edges),

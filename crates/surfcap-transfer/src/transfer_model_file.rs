@@ -1,5 +1,5 @@
-//! A trained transfer on disk, so it is trained once and applied many times (the issue's
-//! "the trained model is a derived product, cached and reloadable").
+//! A trained transfer on disk, so it is trained once and applied many times (the
+//! trained model is a derived product, cached and reloadable).
 //!
 //! A folder (surfcap's marked folder output of kind [`KIND`]) holding:
 //! - `model.json`: [`MotionTransfer`] (both subjects' references, parts and per-part PCA, the
