@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use surfcap_mesh::import::{ImportOptions, ImportedData, open_any};
 use surfcap_mesh::{FrameSet, NoProgress, Subject};
-use surfcap_synth::frame_remeshing::{
+use surfcap_builtin::frame_remeshing::{
     RemeshFramesOptions, distances_to_surface, mean_edge_length, remesh_subject_frames, vertex_neighbours,
 };
 use surfcap_testkit::{p, stderr, surfcap};

@@ -117,7 +117,7 @@ mod tests {
     use surfcap_motion::blend::centre;
     use surfcap_motion::transition_table::TableParams;
     use surfcap_motion::walk_sequence::Step;
-    use surfcap_synth::{WormParams, worm_subject};
+    use surfcap_builtin::{WormParams, worm_subject};
 
     fn pipeline() -> (Pipeline, GraphParams) {
         let s = worm_subject(&WormParams { rings: 8, segments: 6, frames: 24, ..Default::default() }).unwrap();

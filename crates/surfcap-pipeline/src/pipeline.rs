@@ -401,7 +401,7 @@ fn check_table(p: &TableParams) -> Result<()> {
 mod tests {
     use super::*;
     use surfcap_mesh::NoProgress;
-    use surfcap_synth::{WormParams, worm_subject};
+    use surfcap_builtin::{WormParams, worm_subject};
 
     fn worm() -> Subject {
         worm_subject(&WormParams { rings: 8, segments: 6, frames: 24, ..Default::default() }).unwrap()

@@ -224,7 +224,7 @@ mod tests {
     use crate::pipeline::CacheStore;
     use surfcap_mesh::NoProgress;
     use surfcap_motion::transition_table::TableParams;
-    use surfcap_synth::{WormParams, worm_subject};
+    use surfcap_builtin::{WormParams, worm_subject};
 
     #[test]
     fn a_walk_with_one_transition_plays_with_its_labels_and_segments() {

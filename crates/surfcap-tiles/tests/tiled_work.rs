@@ -7,7 +7,7 @@ use std::path::Path;
 use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
 use surfcap_motion::transition_table::{TableParams, transition_table};
-use surfcap_synth::{WormParams, worm_subject};
+use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_tiles::tile_jobs::{JobOutcome, read_scale, run_job};
 use surfcap_tiles::tile_merge::{merge, status};
 use surfcap_tiles::tile_plan::{Stage, WorkParams, create_work, open_work};

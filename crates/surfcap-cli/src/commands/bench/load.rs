@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use serde_json::json;
 use surfcap_mesh::{NoProgress, Sequence, Subject};
-use surfcap_synth::{WormParams, worm_subject};
+use surfcap_builtin::{WormParams, worm_subject};
 
 use super::peak_rss;
 use crate::output::print_json;

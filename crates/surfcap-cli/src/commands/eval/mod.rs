@@ -601,7 +601,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Transfer { data, cases, sizes, components, seed, whole_body, overlap_rings, output } => {
             use surfcap_eval::transfer_eval::{CaseParts, kaykit_case, mannequin_case};
             let parts = if whole_body { CaseParts::WholeBody } else { CaseParts::Proposed { overlap_rings } };
-            use surfcap_synth::mannequin::BodyShape;
+            use surfcap_builtin::mannequin::BodyShape;
             let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
             let mut built = Vec::new();
             let mut catlion = None;

@@ -70,8 +70,8 @@ pub fn run(
             (MotionFrames::from_subject(&s.subject), "shared topology".to_string(), Some(s.subject))
         }
         (ImportedData::Subject(s), Some(seed)) => {
-            let opts = surfcap_synth::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
-            let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&s.subject, &opts, &bar)?;
+            let opts = surfcap_builtin::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
+            let set = surfcap_builtin::frame_remeshing::remesh_subject_frames(&s.subject, &opts, &bar)?;
             (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"), None)
         }
     };

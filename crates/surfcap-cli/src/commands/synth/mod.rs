@@ -2,7 +2,7 @@
 //! mannequin moved by motion capture or by procedural locomotion, written as a subject cache
 //! with per-sequence tags and ground-truth joints (`--uv-atlas`: with a UV atlas).
 //! `surfcap synth --head ../shared/data/leeperrysmith_head -o head.subject`: the head scan
-//! bent into three sequences (nod, turn, tilt; `surfcap_synth::head_motion`), keeping its UV
+//! bent into three sequences (nod, turn, tilt; `surfcap_builtin::head_motion`), keeping its UV
 //! atlas, the textured subject of thesis Fig. 7.1.
 
 use std::path::Path;
@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use serde_json::json;
 use surfcap_mesh::Subject;
-use surfcap_synth::head_motion::head_motion_subject;
+use surfcap_builtin::head_motion::head_motion_subject;
 
 use crate::mannequin_spec::{MannequinArgs, build};
 

@@ -3,8 +3,8 @@
 mod common;
 
 use common::assert_clean_skinning;
-use surfcap_synth::locomotion::{Gait, locomotion};
-use surfcap_synth::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::locomotion::{Gait, locomotion};
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
 
 #[test]
 fn every_gait_skins_without_folds_on_both_shapes() {

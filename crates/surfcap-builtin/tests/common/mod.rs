@@ -1,7 +1,7 @@
 //! Checks shared by the mannequin's tests: folds and edge stretch.
 
 use nalgebra::{Isometry3, Vector3};
-use surfcap_synth::mannequin::Mannequin;
+use surfcap_builtin::mannequin::Mannequin;
 
 fn point(s: &[f32], i: u32) -> Vector3<f64> {
     let k = 3 * i as usize;

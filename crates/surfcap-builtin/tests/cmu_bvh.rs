@@ -5,7 +5,7 @@
 mod common;
 
 use common::assert_clean_skinning;
-use surfcap_synth::bvh::read_bvh;
+use surfcap_builtin::bvh::read_bvh;
 
 #[test]
 fn every_cmu_clip_matches_its_metadata() {
@@ -73,8 +73,8 @@ fn heading_change(path: &[[f64; 2]]) -> f64 {
 /// within 2.5x their rest length.
 #[test]
 fn the_mannequin_follows_each_cmu_clip_with_its_real_travel() {
-    use surfcap_synth::mannequin::{BodyShape, mannequin};
-    use surfcap_synth::retarget::retarget;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::retarget::retarget;
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let dir = data.join("cmu_bvh");
     let meta = surfcap_testkit::meta(&dir);
@@ -103,7 +103,7 @@ fn the_mannequin_follows_each_cmu_clip_with_its_real_travel() {
                 assert!((got - h).abs() <= (0.01 * h.abs()).max(0.5), "{name}: heading change {got} vs {h}");
             }
             let [p999, largest, smallest] = assert_clean_skinning(name, &m, &poses);
-            let tags = surfcap_synth::mannequin_subject::motion_tags(&poses, b.fps());
+            let tags = surfcap_builtin::mannequin_subject::motion_tags(&poses, b.fps());
             eprintln!(
                 "{name} ({} vertices): travel {t_root:.3} m (BVH {want:.3}), heading change {:.1} deg; edge length ratio 99.9th percentile {p999:.2}, largest {largest:.2}, smallest {smallest:.2}; tags {tags:?}",
                 m.topology.n_vertices(),
