@@ -454,7 +454,7 @@ mod tests {
         assert_eq!(parse_bvh(&SMALL[..SMALL.find("JOINT").unwrap()]).unwrap_err().kind, ErrorKind::Truncated);
     }
 
-    /// Issue 15 case 8: 100,000 nested joints parse without recursion (this overflowed the stack),
+    /// 100,000 nested joints parse without recursion (this overflowed the stack),
     /// and forward kinematics and the unit guess walk them in order.
     #[test]
     fn deep_nesting_parses_without_recursion() {

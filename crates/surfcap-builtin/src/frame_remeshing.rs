@@ -1,5 +1,5 @@
 //! Isotropic re-meshing of a triangle surface, and the frame sets with known answers built from
-//! it (issue 17 item 1): every frame of a shared-topology subject re-meshed on its own, so each
+//! it: every frame of a shared-topology subject re-meshed on its own, so each
 //! frame has its own vertex count and connectivity, as the per-frame reconstructions of Huang et
 //! al. 2009 ("Human motion synthesis from 3D video", section 5: "unstructured meshes with unknown
 //! temporal correspondence and different mesh connectivity at each time-frame"), while where each

@@ -1,5 +1,5 @@
-//! A moving head from one static scan: the subject behind issue 20's "textured subject built
-//! from the head scan" (thesis Fig. 7.1, shape and appearance animated together). The scan
+//! A moving head from one static scan: a textured subject built from the head scan (thesis
+//! Fig. 7.1, shape and appearance animated together). The scan
 //! (`../shared/data/leeperrysmith_head`, one mesh) is bent about a pivot below it: each vertex
 //! turns by the frame's angles times a weight rising smoothly with its height, so the neck bends
 //! while the skull turns whole. The motion is therefore not rigid, the pose distance of

@@ -1,5 +1,5 @@
-//! A UV atlas for the built-in mannequin, so it can carry a texture per frame (issue 20 item 8:
-//! "the built-in mannequin with a generated texture per frame"). The mannequin is a union of
+//! A UV atlas for the built-in mannequin, so it can carry a texture per frame (the built-in
+//! mannequin with a generated texture per frame). The mannequin is a union of
 //! capsules, so each bone gets a cylindrical chart: a triangle belongs to the bone nearest its
 //! centroid (distance to the bone's segment minus its radius), and its corners are mapped to
 //! (angle around the bone's axis, position along it). A triangle straddling the chart's angular

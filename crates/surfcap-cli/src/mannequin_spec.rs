@@ -3,11 +3,11 @@
 
 use std::path::PathBuf;
 
-use surfcap_mesh::Subject;
 use surfcap_builtin::bvh::read_bvh;
 use surfcap_builtin::locomotion::Gait;
 use surfcap_builtin::mannequin::{BodyShape, mannequin};
 use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
+use surfcap_mesh::Subject;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct MannequinArgs {

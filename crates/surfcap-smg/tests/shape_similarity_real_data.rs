@@ -1,7 +1,7 @@
 //! Eq. 2-5 on real captures: the Vlasic crane (10,002 vertices, loose clothing) and cyclic
 //! animations.
 
-use surfcap_mesh::import::{ImportOptions, import};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_mesh::{Subject, UpAxis};
 use surfcap_smg::shape_similarity::{FrameMesh, HistogramParams, frame_histograms, shape_similarity_matrix};
 use surfcap_smg::temporal_shape_similarity::optimal_transition;

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use surfcap_mesh::import::{ImportOptions, import};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_proposal::{HUMANOID_NAMES, Method, agreement, propose};

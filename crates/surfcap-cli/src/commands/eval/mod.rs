@@ -400,7 +400,7 @@ pub enum What {
         datasets: Vec<String>,
         /// Formats to go through.
         #[arg(long, value_delimiter = ',', default_value = "abc,usda")]
-        formats: Vec<surfcap_mesh::export::ExportFormat>,
+        formats: Vec<surfcap_formats::export::ExportFormat>,
         /// Folder for the report (interchange.json); the exported files go to a temporary
         /// folder and are removed once read back.
         #[arg(short, long, default_value = "interchange-eval")]

@@ -9,8 +9,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_mesh::Subject;
 use surfcap_builtin::head_motion::head_motion_subject;
+use surfcap_mesh::Subject;
 
 use crate::mannequin_spec::{MannequinArgs, build};
 
@@ -65,7 +65,7 @@ pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
 /// The head scan of `head` (a folder's `template.obj`, or an OBJ) bent into its sequences.
 fn head_subject(head: &Path, frames_per_sequence: usize, name: Option<&str>) -> anyhow::Result<Subject> {
     let obj = if head.is_dir() { head.join("template.obj") } else { head.to_path_buf() };
-    let mesh = surfcap_mesh::io::obj::read_obj(&obj)?;
+    let mesh = surfcap_formats::obj::read_obj(&obj)?;
     let topology = mesh.topology().map_err(|e| e.in_file(&obj))?;
     anyhow::ensure!(
         topology.uv().is_some(),

@@ -1,4 +1,4 @@
-//! A texture per frame in a glb (issue 20 item 8) on the real head scan: its UV atlas and its
+//! A texture per frame in a glb on the real head scan: its UV atlas and its
 //! real colour texture (downsampled to 128 x 128 for speed), three textures (the scan's
 //! colours, a red and a blue tint) over four frames of a moving head, the first texture shown
 //! twice. The file passes the Khronos validator, reads back with every frame's texture and UVs,
@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use surfcap_mesh::io::glb_frame_set::{parse_glb_frame_set_textured, write_glb_subject_textured};
+use surfcap_formats::glb_frame_set::{parse_glb_frame_set_textured, write_glb_subject_textured};
 use surfcap_mesh::{FrameTextures, Sequence, Subject, Units, UpAxis};
 
 /// The head's colour texture at 128 x 128, each channel scaled by `tint`, as a PNG.
@@ -29,7 +29,7 @@ fn texture(path: &Path, tint: [f32; 3]) -> Vec<u8> {
 fn the_head_scan_plays_a_texture_per_frame() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let head = data.join("leeperrysmith_head");
-    let obj = surfcap_mesh::io::obj::read_obj(&head.join("template.obj")).unwrap();
+    let obj = surfcap_formats::obj::read_obj(&head.join("template.obj")).unwrap();
     let topology = obj.topology().unwrap();
     assert!(topology.uv().is_some(), "the head scan has a UV atlas");
     // Four frames: the head nodding a little (a rotation about x).

@@ -11,8 +11,8 @@
 use std::io::Write;
 use std::path::Path;
 
-use crate::error::{Result, err};
-use crate::topology::{Topology, UvAtlas, check_triangle};
+use surfcap_mesh::error::{Result, err};
+use surfcap_mesh::topology::{Topology, UvAtlas, check_triangle};
 
 /// The content of one OBJ file.
 #[derive(Debug, Clone, PartialEq)]
@@ -179,7 +179,7 @@ fn parse_corner(tok: &str, nv: usize, nvt: usize, nvn: usize) -> Result<(u32, Op
 
 /// Reads and parses an OBJ file; errors name the file.
 pub fn read_obj(path: &Path) -> Result<ObjMesh> {
-    let bytes = crate::io::regular_file::read_regular_file(path)?;
+    let bytes = surfcap_mesh::regular_file::read_regular_file(path)?;
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(err!(Empty, "empty file: expected an OBJ mesh").in_file(path));
     }
@@ -217,7 +217,7 @@ pub fn write_obj(w: &mut (impl Write + ?Sized), topology: &Topology, positions: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::{ErrorKind, Location};
+    use surfcap_mesh::error::{ErrorKind, Location};
 
     #[test]
     fn reads_the_usual_statements() {
@@ -265,7 +265,7 @@ mod tests {
         }
     }
 
-    /// Issue 15's "494 vertexs": counts name their items in the plural (or singular).
+    /// Not "494 vertexs": counts name their items in the plural (or singular).
     #[test]
     fn out_of_range_indices_count_what_is_defined() {
         let msg = |t: &[u8]| parse_obj(t).unwrap_err().to_string();

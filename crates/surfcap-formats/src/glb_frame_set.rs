@@ -1,7 +1,7 @@
 //! A frame set (every frame its own vertices and triangles, Huang et al. 2009's input and the
 //! surface motion graph's output) as a glTF 2.0 binary that plays in three.js and Blender.
 //!
-//! Morph targets, which [`super::glb`] uses for a subject, need one vertex count and one index
+//! Morph targets, which [`crate::glb`] uses for a subject, need one vertex count and one index
 //! buffer for every frame, which a frame set does not have. Here every frame is its own mesh on
 //! its own node, and each sequence's animation shows exactly one of them at a time by animating
 //! the nodes' `scale` between (0, 0, 0) and (1, 1, 1) with `STEP` interpolation:
@@ -34,7 +34,7 @@
 //! not kept).
 //!
 //! Texture coordinates: a frame with a UV atlas gets `TEXCOORD_0`, its vertices split along the
-//! atlas's seams ([`crate::UvVertices`]: the frame's own vertices first, in order, then the
+//! atlas's seams ([`surfcap_mesh::UvVertices`]: the frame's own vertices first, in order, then the
 //! seam copies); the mesh's `extras.surfcap` holds `vertices` (the frame's own count) and
 //! `copies`, an accessor of the vertex each copy repeats (read by surfcap only, so the
 //! validator lists it as unused, an info), from which the reader restores the frame's
@@ -56,16 +56,16 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use serde_json::{Value, json};
 
-use super::glb::{
+use crate::glb::{
     GLB_MAX_BYTES, HEADERS, Layout, accessor, check_container, finish_json, new_root, open_checked, raw, up_to_y,
     vec3_bounds, write_container,
 };
-use crate::error::{Result, err};
-use crate::frame_set::{Frame, FrameSet, FrameSetSequence};
-use crate::frame_textures::FrameTextures;
-use crate::subject::{FrameLabel, Subject, Units, UpAxis};
-use crate::topology::{Topology, UvAtlas};
-use crate::uv_vertices::UvVertices;
+use surfcap_mesh::error::{Result, err};
+use surfcap_mesh::frame_set::{Frame, FrameSet, FrameSetSequence};
+use surfcap_mesh::frame_textures::FrameTextures;
+use surfcap_mesh::subject::{FrameLabel, Subject, Units, UpAxis};
+use surfcap_mesh::topology::{Topology, UvAtlas};
+use surfcap_mesh::uv_vertices::UvVertices;
 
 /// The value of `extras.surfcap.kind` that marks a frame-set glb.
 pub const FRAME_SET_KIND: &str = "frame-set";
@@ -460,7 +460,7 @@ pub fn write_glb_frame_set_textured(
 }
 
 /// Writes a subject's animation (one topology, with a UV atlas) as one `.glb` in which every
-/// frame shows its texture. Morph targets, which [`super::glb`] writes for a subject, animate
+/// frame shows its texture. Morph targets, which [`crate::glb`] writes for a subject, animate
 /// one mesh with one material, and core glTF cannot switch a material's texture over time, so
 /// the subject is written as a frame set ([`FrameSet::from_subject`]): a mesh per frame, each
 /// with the material of its texture.
@@ -526,14 +526,14 @@ fn image_bytes<'b>(g: &gltf::Gltf, blob: &'b [u8], k: usize) -> Result<&'b [u8]>
         .checked_add(view.length())
         .and_then(|end| blob.get(view.offset()..end))
         .ok_or_else(|| err!(Truncated, "image {k} does not fit in the binary chunk"))?;
-    crate::frame_textures::png_size(png, &format!("image {k}"))?;
+    surfcap_mesh::frame_textures::png_size(png, &format!("image {k}"))?;
     Ok(png)
 }
 
 /// A frame's vertices and triangles from its split ones (see the module documentation): the
 /// first `n` split vertices are the frame's own, each later one repeats `copies[j]`.
 fn unsplit(what: &str, mesh: &gltf::Mesh, count: usize, g: &gltf::Gltf, blob: &[u8]) -> Result<(usize, Vec<u32>)> {
-    let Some(m) = super::glb::extras_surfcap(mesh.extras()) else { return Ok((count, Vec::new())) };
+    let Some(m) = crate::glb::extras_surfcap(mesh.extras()) else { return Ok((count, Vec::new())) };
     let n =
         m["vertices"].as_u64().map(|n| n as usize).filter(|&n| n > 0 && n <= count).ok_or_else(|| {
             err!(Metadata, "{what}: extras.surfcap.vertices is not a vertex count between 1 and {count}")
@@ -755,7 +755,7 @@ mod tests {
         let back = parse_glb_frame_set(&buf, "ignored").unwrap();
         assert_eq!(back, s);
         // A subject's glb is not one; the subject reader refuses this one by what it is.
-        let e = super::super::glb::parse_glb(&buf).unwrap_err();
+        let e = crate::glb::parse_glb(&buf).unwrap_err();
         assert!(e.message.contains("frame set"), "{e}");
     }
 
@@ -778,7 +778,7 @@ mod tests {
 
     /// Red, blue, then red again for sequence a; green for b.
     fn uv_textures() -> FrameTextures {
-        use crate::frame_textures::tests::png_1x1;
+        use surfcap_testkit::png_1x1;
         let (red, blue, green) = (png_1x1([255, 0, 0]), png_1x1([0, 0, 255]), png_1x1([0, 255, 0]));
         FrameTextures::one_per_frame(vec![vec![red.clone(), blue, red], vec![green]]).unwrap()
     }
@@ -851,7 +851,7 @@ mod tests {
         let s = uv_set();
         let q = &s.sequences()[0];
         let positions: Vec<f32> = q.frames().iter().flat_map(|f| f.positions().iter().copied()).collect();
-        let seq = crate::subject::Sequence::new("a", 4, positions).unwrap();
+        let seq = surfcap_mesh::subject::Sequence::new("a", 4, positions).unwrap();
         let subject =
             Subject::new("quad", q.frames()[0].topology().clone(), vec![seq], 25.0, UpAxis::PosY, Units::metres())
                 .unwrap();

@@ -4,7 +4,7 @@
 
 use std::io::Write;
 
-use crate::error::{Location, Result, err};
+use surfcap_mesh::error::{Location, Result, err};
 
 const SIGNATURE: &[u8; 12] = b"POINTCACHE2\0";
 
@@ -88,7 +88,7 @@ pub fn parse_pc2(b: &[u8]) -> Result<PointCache> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::ErrorKind;
+    use surfcap_mesh::error::ErrorKind;
 
     #[test]
     fn round_trip_and_errors() {

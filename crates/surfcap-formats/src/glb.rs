@@ -19,9 +19,9 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use serde_json::{Value, json};
 
-use crate::error::{Result, err};
-use crate::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
-use crate::topology::Topology;
+use surfcap_mesh::error::{Result, err};
+use surfcap_mesh::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
+use surfcap_mesh::topology::Topology;
 
 /// Positions and labels read back from a `.glb` file.
 #[derive(Debug, Clone)]
@@ -156,7 +156,7 @@ pub(super) fn accessor(
 }
 
 pub(super) fn vec3_bounds(p: &[f32]) -> (Value, Value) {
-    let (lo, hi) = crate::bounding_box(p);
+    let (lo, hi) = surfcap_mesh::bounding_box(p);
     (json!(lo), json!(hi))
 }
 
@@ -692,7 +692,7 @@ impl Target<'_> {
 }
 
 fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
-    if let Some(m) = super::glb_frame_set::frame_set_meta(bytes) {
+    if let Some(m) = crate::glb_frame_set::frame_set_meta(bytes) {
         let frames: u64 = m["sequences"].as_array().into_iter().flatten().filter_map(|q| q["frames"].as_u64()).sum();
         return Err(err!(
             TopologyMismatch,
@@ -810,7 +810,7 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
+    use surfcap_mesh::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
 
     fn subject() -> Subject {
         let t = Topology::new(4, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], None).unwrap();
@@ -986,7 +986,7 @@ mod tests {
     fn damaged_files_are_errors_not_crashes() {
         let mut buf = Vec::new();
         write_glb(&mut buf, &subject()).unwrap();
-        assert_eq!(parse_glb(&[]).unwrap_err().kind, crate::ErrorKind::Empty);
+        assert_eq!(parse_glb(&[]).unwrap_err().kind, surfcap_mesh::ErrorKind::Empty);
         for cut in [12, 40, buf.len() / 2, buf.len() - 8] {
             let e = parse_glb(&buf[..cut]).unwrap_err();
             assert!(!e.message.contains("malformed"), "cut at {cut}: a panic was caught: {e}");

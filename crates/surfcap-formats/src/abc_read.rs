@@ -1,12 +1,12 @@
-//! Alembic import (issue 22 item 3, the `.abc` part): the Abc layer of an Ogawa archive
-//! (`io/ogawa_read.rs`) read as animated meshes. Not from the thesis: its captures are per-frame
+//! Alembic import (`.abc`): the Abc layer of an Ogawa archive
+//! (`ogawa_read.rs`) read as animated meshes. Not from the thesis: its captures are per-frame
 //! meshes of one topology, which an Alembic `PolyMesh` with homogeneous topology holds directly.
 //!
 //! Written from the format as the reference library reads it (github.com/alembic/alembic:
 //! `AbcCoreOgawa/ArImpl.cpp`, `OrData.cpp`, `CprData.cpp`, `AprImpl.cpp`, `ReadUtil.cpp`;
 //! `AbcGeom/IPolyMesh.cpp`, `IXform.cpp`, `GeometryScope.cpp`) and checked against files written
 //! by it (PyPI `alembic3d`, the PyAlembic bindings, in `crates/surfcap-cli/tests/abc_import.rs`).
-//! The crate `ogawa-rs` was tried first (issue 22 says use it only if it reads PolyMesh samples
+//! The crate `ogawa-rs` was tried first (to be used only if it read PolyMesh samples
 //! correctly): version 0.4.0 read the archive and object tree of a 3-sample quad + triangle
 //! mesh under an Xform written by alembic3d 1.8.12.1, then panicked ("attempt to subtract with
 //! overflow" in `DataChunk::read_pod_array`) reading its first `P` sample; its source also
@@ -63,10 +63,10 @@
 use std::collections::HashSet;
 use std::path::Path;
 
-use crate::error::{Error, Location, Result, err};
-use crate::io::ogawa_read::{Child, Ogawa};
-use crate::subject::{FrameLabel, Units, UpAxis};
-use crate::topology::{Topology, UvAtlas};
+use crate::ogawa_read::{Child, Ogawa};
+use surfcap_mesh::error::{Error, Location, Result, err};
+use surfcap_mesh::subject::{FrameLabel, Units, UpAxis};
+use surfcap_mesh::topology::{Topology, UvAtlas};
 
 /// The frames of one mesh: one topology for all, or each its own.
 #[derive(Debug, Clone)]
@@ -134,7 +134,7 @@ pub struct AbcArchive {
 
 /// Reads an `.abc` file (errors name the file).
 pub fn read_abc(path: &Path) -> Result<AbcArchive> {
-    let bytes = crate::io::regular_file::read_regular_file(path)?;
+    let bytes = surfcap_mesh::regular_file::read_regular_file(path)?;
     parse_abc(&bytes).map_err(|e| e.in_file(path))
 }
 
@@ -663,7 +663,7 @@ struct Walk {
     xforms: Vec<String>,
 }
 
-/// The inverse of surfcap's `io::abc::metadata_value`: `%3B`, `%3D` and `%25` back to `;`, `=`
+/// The inverse of surfcap's `abc::metadata_value`: `%3B`, `%3D` and `%25` back to `;`, `=`
 /// and `%` (anything else is kept as written).
 pub fn metadata_unescape(s: &str) -> String {
     s.replace("%3B", ";").replace("%3D", "=").replace("%25", "%")
@@ -1175,8 +1175,8 @@ fn read_mesh(r: &Reader, path: &str, geom: &Prop, depth: usize, notes: &mut Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::ErrorKind;
-    use crate::io::ogawa_read::tests::Builder;
+    use crate::ogawa_read::tests::Builder;
+    use surfcap_mesh::error::ErrorKind;
 
     const DATA: u64 = 1 << 63;
 

@@ -273,7 +273,7 @@ fn npy_layout<T: NpyElement, R: Read>(reader: &mut Counting<R>, total_len: u64) 
 
 /// Reads a `.npy` file; errors name the file.
 pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
-    let f = crate::io::regular_file::open_regular_file(path)?;
+    let f = crate::regular_file::open_regular_file(path)?;
     let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
     parse_npy(std::io::BufReader::with_capacity(1 << 16, f), len).map_err(|e| e.in_file(path))
 }
@@ -283,7 +283,7 @@ pub fn read_npy<T: NpyElement>(path: &Path) -> Result<NpyArray<T>> {
 /// shape and the rows' elements; errors name the file.
 pub fn read_npy_rows<T: NpyElement>(path: &Path, rows: std::ops::Range<usize>) -> Result<(Vec<usize>, Vec<T>)> {
     use std::io::{Seek, SeekFrom};
-    let f = crate::io::regular_file::open_regular_file(path)?;
+    let f = crate::regular_file::open_regular_file(path)?;
     let len = f.metadata().map_err(|e| Error::io(path, "read .npy file size", e))?.len();
     let mut r = Counting { inner: std::io::BufReader::with_capacity(1 << 16, f), count: 0 };
     let layout = npy_layout::<T, _>(&mut r, len).map_err(|e| e.in_file(path))?;

@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::error::{Error, Result, err};
-use crate::io::npy::{expect_shape, read_npy};
-use crate::io::obj::read_obj;
-use crate::io::regular_file::{check_regular_file, exists_at, read_regular_file};
-use crate::subject::{FrameLabel, JointTrack, Units, UpAxis};
-use crate::topology::Topology;
+use crate::obj::read_obj;
+use surfcap_mesh::error::{Error, Result, err};
+use surfcap_mesh::npy::{expect_shape, read_npy};
+use surfcap_mesh::regular_file::{check_regular_file, exists_at, read_regular_file};
+use surfcap_mesh::subject::{FrameLabel, JointTrack, Units, UpAxis};
+use surfcap_mesh::topology::Topology;
 
 /// What a dataset's `meta.json` says about one sequence.
 #[derive(Debug, Clone, Default)]
@@ -64,7 +64,7 @@ pub fn dataset_sequences(dir: &Path) -> Result<Vec<PathBuf>> {
             v.push(p);
         }
     }
-    v.sort_by(|a, b| crate::natural_order::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+    v.sort_by(|a, b| surfcap_mesh::natural_order::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     Ok(v)
 }
 
@@ -143,7 +143,7 @@ pub fn read_layout_sequence(dir: &Path) -> Result<LayoutSequence> {
     let joints_path = dir.join("joints.npy");
     // Optional, but something of that name that is not a regular file is refused (by the
     // reader), not silently ignored.
-    let joints = if crate::io::regular_file::exists_at(&joints_path) {
+    let joints = if surfcap_mesh::regular_file::exists_at(&joints_path) {
         let j = read_npy::<f32>(&joints_path)?;
         expect_shape(&j, &[Some(frames), None, Some(4), Some(4)], "joint world matrices [frames, joints, 4, 4]")
             .map_err(|e| e.in_file(&joints_path))?;
@@ -176,15 +176,15 @@ pub fn write_layout_sequence(
 ) -> Result<()> {
     let nv = topology.n_vertices();
     let frames = positions.len() / (3 * nv);
-    crate::atomic::write_file(&dir.join("template.obj"), |w| {
-        crate::io::obj::write_obj(w, topology, &positions[..3 * nv])
+    surfcap_mesh::atomic::write_file(&dir.join("template.obj"), |w| {
+        crate::obj::write_obj(w, topology, &positions[..3 * nv])
     })?;
-    crate::atomic::write_file(&dir.join("positions.npy"), |w| {
-        crate::io::npy::write_npy(w, &[frames, nv, 3], positions)
+    surfcap_mesh::atomic::write_file(&dir.join("positions.npy"), |w| {
+        surfcap_mesh::npy::write_npy(w, &[frames, nv, 3], positions)
     })?;
     if let Some(j) = joints {
-        crate::atomic::write_file(&dir.join("joints.npy"), |w| {
-            crate::io::npy::write_npy(w, &[frames, j.n_joints(), 4, 4], &j.matrices)
+        surfcap_mesh::atomic::write_file(&dir.join("joints.npy"), |w| {
+            surfcap_mesh::npy::write_npy(w, &[frames, j.n_joints(), 4, 4], &j.matrices)
         })?;
     }
     Ok(())

@@ -1,5 +1,5 @@
 //! Alembic export (issue "Alembic and USD" item 1): a subject as an Alembic archive in the
-//! Ogawa container (`io/ogawa_write.rs`), the format the studios' tools (Maya, Houdini, Blender,
+//! Ogawa container (`ogawa_write.rs`), the format the studios' tools (Maya, Houdini, Blender,
 //! Nuke, Unreal, volumetric-capture editors) exchange animated meshes in. No Rust crate writes
 //! Alembic, so the layers above Ogawa (AbcCoreOgawa's objects and properties, AbcGeom's
 //! `Xform` and `PolyMesh` schemas) are written here, as the reference library (Alembic 1.8)
@@ -45,10 +45,10 @@
 
 use std::io::{self, Write};
 
-use super::ogawa_write::{Child, OgawaWriter, write_ogawa};
-use crate::frame_set::FrameSet;
-use crate::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
-use crate::topology::Topology;
+use crate::ogawa_write::{Child, OgawaWriter, write_ogawa};
+use surfcap_mesh::frame_set::FrameSet;
+use surfcap_mesh::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
+use surfcap_mesh::topology::Topology;
 
 /// The plain-old-data types of Alembic's `PlainOldDataType` that surfcap writes.
 #[derive(Clone, Copy)]
@@ -298,11 +298,11 @@ fn object_name(name: &str, taken: &mut Vec<String>) -> String {
     if s.is_empty() {
         s.push('_');
     }
-    super::unique_name(s, taken)
+    crate::unique_name(s, taken)
 }
 
 /// Metadata values cannot hold Alembic's separators `;` and `=`: they are percent-encoded (with
-/// `%` itself), as `io::abc_read::metadata_unescape` reads them back.
+/// `%` itself), as `abc_read::metadata_unescape` reads them back.
 pub fn metadata_value(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
@@ -702,7 +702,7 @@ pub fn write_abc_frame_set(w: &mut dyn Write, set: &FrameSet) -> io::Result<()> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::subject::{Units, UpAxis};
+    use surfcap_mesh::subject::{Units, UpAxis};
 
     fn tetra_subject(up: UpAxis) -> Subject {
         let topo = Topology::new(4, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], None).unwrap();
@@ -767,7 +767,7 @@ mod tests {
         for v in ["plain", "a;b=c", "100%", "%3B literal; and %25", "model units (not meters; ~200 tall)"] {
             let e = metadata_value(v);
             assert!(!e.contains(';') && !e.contains('='), "{e}");
-            assert_eq!(crate::io::abc_read::metadata_unescape(&e), v);
+            assert_eq!(crate::abc_read::metadata_unescape(&e), v);
         }
     }
 

@@ -1,5 +1,5 @@
-//! The Ogawa container of Alembic files (issue 22 item 3, `.abc` import): the binary layer under
-//! `io/abc_read.rs`. Not from the thesis. Written from the format as the reference library
+//! The Ogawa container of Alembic files (for `.abc` import): the binary layer under
+//! `abc_read.rs`. Not from the thesis. Written from the format as the reference library
 //! (github.com/alembic/alembic, `lib/Alembic/Ogawa/IArchive.cpp`, `IGroup.cpp`, `IData.cpp`,
 //! `IStreams.cpp`) reads it, and checked against files that library writes (PyPI `alembic3d`).
 //!
@@ -31,7 +31,7 @@
 use std::cell::{Cell, RefCell};
 use std::collections::HashSet;
 
-use crate::error::{Location, Result, err};
+use surfcap_mesh::error::{Location, Result, err};
 
 /// Deepest group nesting the Abc layer may walk (objects and compound properties). Real files
 /// nest a few levels per object; 256 leaves room for deep scene hierarchies.
@@ -231,7 +231,7 @@ impl<'a> Ogawa<'a> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::error::ErrorKind;
+    use surfcap_mesh::error::ErrorKind;
 
     /// Builds Ogawa files by hand: a header, then blocks appended in order.
     pub(crate) struct Builder {
@@ -273,7 +273,7 @@ pub(crate) mod tests {
         }
     }
 
-    fn open_err(bytes: &[u8]) -> crate::error::Error {
+    fn open_err(bytes: &[u8]) -> surfcap_mesh::error::Error {
         match Ogawa::open(bytes) {
             Ok(_) => panic!("expected an error"),
             Err(e) => e,

@@ -5,12 +5,12 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
-use crate::atomic::{write_dir, write_file};
-use crate::error::Result;
-use crate::frame_set::FrameSet;
-use crate::io::{glb, obj, pc2, ply, shared_layout};
-use crate::progress::Progress;
-use crate::subject::Subject;
+use crate::{glb, obj, pc2, ply, shared_layout};
+use surfcap_mesh::atomic::{write_dir, write_file};
+use surfcap_mesh::error::Result;
+use surfcap_mesh::frame_set::FrameSet;
+use surfcap_mesh::progress::Progress;
+use surfcap_mesh::subject::Subject;
 
 /// Output formats of `surfcap export`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,14 +26,14 @@ pub enum ExportFormat {
     /// A folder in the shared-data layout: `<sequence>/template.obj + positions.npy (+ joints.npy)`
     /// and `meta.json`; `surfcap import` reads it back as is.
     Npy,
-    /// One `.usda` file (USD text): a time-sampled mesh per sequence (`io::usda`).
+    /// One `.usda` file (USD text): a time-sampled mesh per sequence (`usda`).
     Usda,
-    /// One `.abc` file (Alembic, Ogawa): an `Xform` + `PolyMesh` per sequence (`io::abc`).
+    /// One `.abc` file (Alembic, Ogawa): an `Xform` + `PolyMesh` per sequence (`abc`).
     Abc,
 }
 
 impl ExportFormat {
-    /// The kind of output a folder of this format is, in its marker (`crate::output_path`).
+    /// The kind of output a folder of this format is, in its marker (`surfcap_mesh::output_path`).
     pub fn output_kind(self) -> &'static str {
         match self {
             ExportFormat::Glb => "export-glb",
@@ -61,11 +61,11 @@ impl ExportFormat {
 }
 
 impl std::str::FromStr for ExportFormat {
-    type Err = crate::Error;
-    fn from_str(s: &str) -> crate::Result<Self> {
+    type Err = surfcap_mesh::Error;
+    fn from_str(s: &str) -> surfcap_mesh::Result<Self> {
         ExportFormat::parse(s).ok_or_else(|| {
-            crate::Error::new(
-                crate::ErrorKind::Unsupported,
+            surfcap_mesh::Error::new(
+                surfcap_mesh::ErrorKind::Unsupported,
                 format!("{s:?}: expected glb, obj, ply, pc2, npy, usda or abc"),
             )
         })
@@ -139,7 +139,7 @@ pub fn frame_set_sidecar(set: &FrameSet) -> serde_json::Value {
 }
 
 /// Writes a frame set (every frame its own topology) to `out`: `.glb` (a mesh per frame, shown
-/// one at a time: `io::glb_frame_set`), `.abc` (a `PolyMesh` of
+/// one at a time: `glb_frame_set`), `.abc` (a `PolyMesh` of
 /// heterogeneous topology per sequence) or `obj` (a folder per sequence of `frame_NNNNN.obj`,
 /// as per-frame reconstructions are exchanged); the other formats hold one topology and refuse
 /// it. Returns the paths written.
@@ -155,9 +155,9 @@ pub fn export_frame_set(
         ExportFormat::Glb | ExportFormat::Abc => {
             progress.start(if format == ExportFormat::Glb { "writing glb" } else { "writing abc" }, 1);
             if format == ExportFormat::Glb {
-                write_file(out, |w| crate::io::glb_frame_set::write_glb_frame_set(w, set))?;
+                write_file(out, |w| crate::glb_frame_set::write_glb_frame_set(w, set))?;
             } else {
-                write_file(out, |w| crate::io::abc::write_abc_frame_set(w, set))?;
+                write_file(out, |w| crate::abc::write_abc_frame_set(w, set))?;
             }
             let side = glb_sidecar_path(out);
             write_json(&side, &meta)?;
@@ -180,8 +180,8 @@ pub fn export_frame_set(
             progress.finish();
             Ok(vec![out.to_path_buf()])
         }
-        other => Err(crate::Error::new(
-            crate::ErrorKind::Unsupported,
+        other => Err(surfcap_mesh::Error::new(
+            surfcap_mesh::ErrorKind::Unsupported,
             format!(
                 "a frame set (every frame its own topology) cannot be written as {other:?}, which holds one topology: expected glb, abc or obj"
             ),
@@ -190,13 +190,13 @@ pub fn export_frame_set(
 }
 
 /// Writes an animation with a texture per frame to `out` as one `.glb` (a mesh per frame, each
-/// with the material of its texture: `io::glb_frame_set`) and its sidecar, which lists the
+/// with the material of its texture: `glb_frame_set`) and its sidecar, which lists the
 /// number of distinct textures and each sequence's texture per frame; returns the paths
 /// written. A subject's animation goes through [`FrameSet::from_subject`] first (see
-/// `io::glb_frame_set::write_glb_subject_textured` for why and what it costs).
+/// `glb_frame_set::write_glb_subject_textured` for why and what it costs).
 pub fn export_textured_glb(
     set: &FrameSet,
-    textures: &crate::FrameTextures,
+    textures: &surfcap_mesh::FrameTextures,
     out: &Path,
     progress: &dyn Progress,
 ) -> Result<Vec<PathBuf>> {
@@ -204,7 +204,7 @@ pub fn export_textured_glb(
     meta["textures"] = textures.images().len().into();
     meta["frame_textures"] = serde_json::json!(textures.frames());
     progress.start("writing glb", 1);
-    write_file(out, |w| crate::io::glb_frame_set::write_glb_frame_set_textured(w, set, textures))?;
+    write_file(out, |w| crate::glb_frame_set::write_glb_frame_set_textured(w, set, textures))?;
     let side = glb_sidecar_path(out);
     write_json(&side, &meta)?;
     progress.finish();
@@ -233,9 +233,9 @@ pub fn export(
         ExportFormat::Usda | ExportFormat::Abc => {
             type Writer = fn(&mut dyn std::io::Write, &Subject) -> std::io::Result<()>;
             let (what, write): (&str, Writer) = if format == ExportFormat::Usda {
-                ("writing usda", crate::io::usda::write_usda)
+                ("writing usda", crate::usda::write_usda)
             } else {
-                ("writing abc", crate::io::abc::write_abc)
+                ("writing abc", crate::abc::write_abc)
             };
             progress.start(what, 1);
             write_file(out, |w| write(w, subject))?;

@@ -8,9 +8,9 @@
 
 use std::path::{Path, PathBuf};
 
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export, safe_name};
-use surfcap_mesh::import::{ImportOptions, import};
-use surfcap_mesh::io::shared_layout::dataset_sequences;
+use surfcap_formats::export::{ExportFormat, ExportOptions, export, safe_name};
+use surfcap_formats::import::{ImportOptions, import};
+use surfcap_formats::shared_layout::dataset_sequences;
 use surfcap_mesh::{ErrorKind, NoProgress, Subject};
 
 fn open(paths: &[PathBuf], fps: Option<f64>) -> Subject {

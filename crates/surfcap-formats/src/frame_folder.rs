@@ -8,13 +8,13 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use crate::error::{Error, Location, Result, err};
-use crate::natural_order::natural_cmp;
-use crate::progress::Progress;
-use crate::topology::{Topology, first_triangle_difference};
+use surfcap_mesh::error::{Error, Location, Result, err};
+use surfcap_mesh::natural_order::natural_cmp;
+use surfcap_mesh::progress::Progress;
+use surfcap_mesh::topology::{Topology, first_triangle_difference};
 
-use super::obj::read_obj;
-use super::ply::read_ply;
+use crate::obj::read_obj;
+use crate::ply::read_ply;
 
 /// Frame file format, chosen by extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -20,10 +20,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::error::{Error, Result, err};
 use crate::import::{ImportOptions, SourceSequence, read_source};
-use crate::progress::Progress;
-use crate::subject::{Units, UpAxis};
+use surfcap_mesh::error::{Error, Result, err};
+use surfcap_mesh::progress::Progress;
+use surfcap_mesh::subject::{Units, UpAxis};
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -55,7 +55,7 @@ pub fn find_manifest(path: &Path) -> Option<PathBuf> {
     // Anything named surfcap.toml counts (a FIFO or folder there is then refused by name when
     // read, rather than silently ignored).
     let inside = path.join("surfcap.toml");
-    crate::io::regular_file::exists_at(&inside).then_some(inside)
+    surfcap_mesh::regular_file::exists_at(&inside).then_some(inside)
 }
 
 fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usize> {
@@ -64,7 +64,7 @@ fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usize> {
 
 /// Reads the manifest and every sequence it lists.
 pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOptions, Vec<SourceSequence>)> {
-    crate::io::regular_file::check_regular_file(path)?;
+    surfcap_mesh::regular_file::check_regular_file(path)?;
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read manifest", e))?;
     let m: Manifest = toml::from_str(&text).map_err(|e| {
         let mut er = err!(Syntax, "{}", e.message()).in_file(path);
@@ -110,16 +110,16 @@ pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOpti
             if seqs.len() != 1 {
                 return Err(at(err!(Metadata, "'joints' needs a source with exactly one sequence"), &needle));
             }
-            let arr = crate::io::npy::read_npy::<f32>(&jp)?;
+            let arr = surfcap_mesh::npy::read_npy::<f32>(&jp)?;
             let frames = seqs[0].positions.len() / (3 * seqs[0].topology.n_vertices());
-            crate::io::npy::expect_shape(
+            surfcap_mesh::npy::expect_shape(
                 &arr,
                 &[Some(frames), None, Some(4), Some(4)],
                 "joint world matrices [frames, joints, 4, 4]",
             )
             .map_err(|er| er.in_file(&jp))?;
             let nj = arr.shape[1];
-            seqs[0].joints = Some(crate::subject::JointTrack {
+            seqs[0].joints = Some(surfcap_mesh::subject::JointTrack {
                 names: (0..nj).map(|i| format!("joint_{i}")).collect(),
                 parents: vec![None; nj],
                 matrices: arr.data,
@@ -144,14 +144,14 @@ pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOpti
 
 /// A PC2 point cache or a bare `[frames, vertices, 3]` positions `.npy`, with a template mesh.
 fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
-    let t = crate::io::obj::read_obj(template)?;
+    let t = crate::obj::read_obj(template)?;
     let topology = t.topology().map_err(|e| e.in_file(template))?;
     let nv = topology.n_vertices();
     let ext = src.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     let positions = match ext.as_str() {
         "pc2" => {
-            let b = crate::io::regular_file::read_regular_file(src)?;
-            let c = crate::io::pc2::parse_pc2(&b).map_err(|e| e.in_file(src))?;
+            let b = surfcap_mesh::regular_file::read_regular_file(src)?;
+            let c = crate::pc2::parse_pc2(&b).map_err(|e| e.in_file(src))?;
             if c.n_points != nv {
                 return Err(err!(
                     TopologyMismatch,
@@ -160,13 +160,13 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
                     template.display()
                 )
                 .in_file(src)
-                .at(crate::error::Location::Byte(16)));
+                .at(surfcap_mesh::error::Location::Byte(16)));
             }
             c.positions
         }
         "npy" => {
-            let a = crate::io::npy::read_npy::<f32>(src)?;
-            crate::io::npy::expect_shape(
+            let a = surfcap_mesh::npy::read_npy::<f32>(src)?;
+            surfcap_mesh::npy::expect_shape(
                 &a,
                 &[None, Some(nv), Some(3)],
                 &format!("positions of the template's {nv} vertices"),
@@ -185,9 +185,9 @@ fn read_with_template(src: &Path, template: &Path) -> Result<SourceSequence> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::progress::NoProgress;
+    use surfcap_mesh::progress::NoProgress;
 
-    /// Issue 15: a PC2 whose point count differs from its template was reported at "line 3" of
+    /// A PC2 whose point count differs from its template was reported at "line 3" of
     /// the binary PC2 (the manifest's line). Now: the PC2 and its byte, then the manifest line.
     #[test]
     fn a_point_count_mismatch_names_the_pc2_byte_and_the_manifest_line() {
@@ -198,7 +198,7 @@ mod tests {
         )
         .unwrap();
         let mut pc2 = Vec::new();
-        crate::io::pc2::write_pc2(&mut pc2, 3, &[0.0; 18]).unwrap();
+        crate::pc2::write_pc2(&mut pc2, 3, &[0.0; 18]).unwrap();
         std::fs::write(d.path().join("c.pc2"), pc2).unwrap();
         let m = d.path().join("surfcap.toml");
         std::fs::write(&m, "fps = 30\n[[sequence]]\nsource = \"c.pc2\"\ntemplate = \"t.obj\"\n").unwrap();

@@ -12,8 +12,8 @@
 use std::io::Write;
 use std::path::Path;
 
-use crate::error::{Error, Location, Result, err};
-use crate::topology::{Topology, check_triangle};
+use surfcap_mesh::error::{Error, Location, Result, err};
+use surfcap_mesh::topology::{Topology, check_triangle};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Format {
@@ -460,7 +460,7 @@ fn read_binary_instance(el: &Element, k: u64, c: &mut Cursor, inst: &mut Instanc
 
 /// Reads and parses a PLY file; errors name the file.
 pub fn read_ply(path: &Path) -> Result<PlyMesh> {
-    let bytes = crate::io::regular_file::read_regular_file(path)?;
+    let bytes = surfcap_mesh::regular_file::read_regular_file(path)?;
     parse_ply(&bytes).map_err(|e| e.in_file(path))
 }
 
@@ -504,7 +504,7 @@ pub fn write_ply(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::ErrorKind;
+    use surfcap_mesh::error::ErrorKind;
 
     fn tetra() -> (Topology, Vec<f32>) {
         let t = Topology::new(4, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], None).unwrap();
@@ -546,7 +546,7 @@ element edge 1\r\nproperty int a\r\nend_header\r\n"
         assert_eq!(m.positions[6..9], [1., 1., 0.]);
     }
 
-    /// Issue 15 case 12: a header that declares fewer faces than the file holds is an error at
+    /// A header that declares fewer faces than the file holds is an error at
     /// the first byte (binary) or line (ascii) past the declared data; a final newline is fine.
     #[test]
     fn data_after_the_declared_elements_is_an_error() {
@@ -579,7 +579,7 @@ element edge 1\r\nproperty int a\r\nend_header\r\n"
         );
     }
 
-    /// Issue 15: "expected 0..494 (0-based)" for 494 vertices; the last valid index is 493.
+    /// "expected 0..494 (0-based)" for 494 vertices; the last valid index is 493.
     #[test]
     fn out_of_range_face_indices_name_the_last_valid_one() {
         let ply = |nv: usize, face: &str| {

@@ -16,7 +16,7 @@
 
 use std::io::Write;
 
-use crate::subject::{FrameLabel, Subject, UpAxis};
+use surfcap_mesh::subject::{FrameLabel, Subject, UpAxis};
 
 /// A valid, unique USD prim name for `name` among `taken`.
 fn prim_name(name: &str, taken: &mut Vec<String>) -> String {
@@ -24,7 +24,7 @@ fn prim_name(name: &str, taken: &mut Vec<String>) -> String {
     if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
         s.insert(0, '_');
     }
-    super::unique_name(s, taken)
+    crate::unique_name(s, taken)
 }
 
 /// The rotation (column-vector convention, rows) that turns `up` onto +Y, or `None` when USD
@@ -119,7 +119,7 @@ pub fn write_usda(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
         writeln!(w, "            }}")?;
         writeln!(w, "            float3[] extent.timeSamples = {{")?;
         for f in 0..s.n_frames() {
-            let (lo, hi) = crate::bounding_box(s.frame(f));
+            let (lo, hi) = surfcap_mesh::bounding_box(s.frame(f));
             write!(w, "                {f}: [")?;
             point(w, &lo)?;
             write!(w, ", ")?;
@@ -153,8 +153,8 @@ pub fn write_usda(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::subject::{Sequence, Units};
-    use crate::topology::Topology;
+    use surfcap_mesh::subject::{Sequence, Units};
+    use surfcap_mesh::topology::Topology;
 
     #[test]
     fn a_tiny_subject_as_usda() {

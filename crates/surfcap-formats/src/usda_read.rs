@@ -1,5 +1,5 @@
-//! USD import from `.usda` text (issue 22 item 3): the subset of the USDA grammar that DCC tools
-//! and surfcap's own writer (`io/usda.rs`) use for animated meshes. Not from the thesis: the
+//! USD import from `.usda` text: the subset of the USDA grammar that DCC tools
+//! and surfcap's own writer (`usda.rs`) use for animated meshes. Not from the thesis: the
 //! thesis's captures (chapter 5's data included) are per-frame meshes of one topology, which a
 //! time-sampled USD `Mesh` holds directly, one sequence per mesh.
 //!
@@ -48,9 +48,9 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result, err};
-use crate::subject::{FrameLabel, Units, UpAxis};
-use crate::topology::{Topology, UvAtlas};
+use surfcap_mesh::error::{Error, Result, err};
+use surfcap_mesh::subject::{FrameLabel, Units, UpAxis};
+use surfcap_mesh::topology::{Topology, UvAtlas};
 
 /// One `Mesh` prim read from a stage: one sequence of the subject.
 #[derive(Debug, Clone)]
@@ -111,7 +111,7 @@ pub struct UsdaStage {
 
 /// Reads a `.usda` file (errors name the file).
 pub fn read_usda(path: &Path) -> Result<UsdaStage> {
-    let bytes = crate::io::regular_file::read_regular_file(path)?;
+    let bytes = surfcap_mesh::regular_file::read_regular_file(path)?;
     parse_usda(&bytes).map_err(|e| e.in_file(path))
 }
 
@@ -576,7 +576,7 @@ struct Prim {
     mesh: Option<MeshAcc>,
 }
 
-/// Column-vector rotations surfcap writes for up axes USD cannot state (see `io/usda.rs`),
+/// Column-vector rotations surfcap writes for up axes USD cannot state (see `usda.rs`),
 /// as the row-vector matrix USD stores (the transpose).
 fn surfcap_up_rotation(m: &[f64; 16]) -> Option<UpAxis> {
     let table: [(UpAxis, [[i8; 3]; 3]); 4] = [
@@ -1310,8 +1310,8 @@ fn varying_mesh(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::{ErrorKind, Location};
-    use crate::subject::{Sequence, Subject};
+    use surfcap_mesh::error::{ErrorKind, Location};
+    use surfcap_mesh::subject::{Sequence, Subject};
 
     /// The units' name comes back from `customLayerData` with the layer's scale, escapes and
     /// all; a stage without it keeps the name `metersPerUnit` gives.
@@ -1326,7 +1326,7 @@ mod tests {
         ] {
             let s = Subject::new("t", topo.clone(), vec![seq.clone()], 30.0, UpAxis::PosY, units.clone()).unwrap();
             let mut text = Vec::new();
-            crate::io::usda::write_usda(&mut text, &s).unwrap();
+            crate::usda::write_usda(&mut text, &s).unwrap();
             assert_eq!(parse_usda(&text).unwrap().units, Some(units));
         }
         let plain =
@@ -1426,7 +1426,7 @@ def Xform "root" (
             let s =
                 Subject::new("knight", topo.clone(), vec![a.clone(), b.clone()], 30.0, up, Units::parse("mm")).unwrap();
             let mut out = Vec::new();
-            crate::io::usda::write_usda(&mut out, &s).unwrap();
+            crate::usda::write_usda(&mut out, &s).unwrap();
             let r = parse_usda(&out).unwrap();
             assert_eq!((r.fps, r.up_axis), (Some(30.0), Some(up)));
             assert_eq!(r.units, Some(Units::parse("mm")));
