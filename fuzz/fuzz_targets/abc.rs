@@ -3,7 +3,7 @@
 //! has meshes whose positions fit their topology, one frame per sample time, all finite.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use surfcap_mesh::io::abc_read::{AbcFrames, parse_abc};
+use surfcap_formats::abc_read::{AbcFrames, parse_abc};
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(a) = parse_abc(data) {

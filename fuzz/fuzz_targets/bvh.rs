@@ -6,7 +6,7 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };
-    if let Ok(b) = surfcap_synth::bvh::parse_bvh(text) {
+    if let Ok(b) = surfcap_builtin::bvh::parse_bvh(text) {
         let _ = b.world(0);
         let _ = b.world(b.n_frames() - 1);
         let _ = (b.fps(), b.guess_metres_per_unit());

@@ -13,8 +13,8 @@ use surfcap_pipeline::constraint_files::{parse_curve, parse_key_poses, parse_res
 fn subject() -> &'static Subject {
     static S: OnceLock<Subject> = OnceLock::new();
     S.get_or_init(|| {
-        let p = surfcap_synth::WormParams { rings: 4, segments: 4, frames: 8, ..Default::default() };
-        surfcap_synth::worm_subject(&p).expect("the built-in worm")
+        let p = surfcap_builtin::WormParams { rings: 4, segments: 4, frames: 8, ..Default::default() };
+        surfcap_builtin::worm_subject(&p).expect("the built-in worm")
     })
 }
 

@@ -1,7 +1,7 @@
 //! Any bytes: the npy reader returns an array or an error for every element type.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use surfcap_mesh::io::npy::parse_npy;
+use surfcap_mesh::npy::parse_npy;
 
 fuzz_target!(|data: &[u8]| {
     let n = data.len() as u64;

@@ -4,7 +4,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(m) = surfcap_mesh::io::obj::parse_obj(data) {
+    if let Ok(m) = surfcap_formats::obj::parse_obj(data) {
         let _ = m.topology();
     }
 });

@@ -3,6 +3,6 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = surfcap_mesh::io::pc2::parse_pc2(data);
-    let _ = surfcap_mesh::io::glb::parse_glb(data);
+    let _ = surfcap_formats::pc2::parse_pc2(data);
+    let _ = surfcap_formats::glb::parse_glb(data);
 });

@@ -4,7 +4,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(m) = surfcap_mesh::io::ply::parse_ply(data) {
+    if let Ok(m) = surfcap_formats::ply::parse_ply(data) {
         let _ = m.topology();
     }
 });

@@ -5,7 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(s) = surfcap_mesh::io::usda_read::parse_usda(data) {
+    if let Ok(s) = surfcap_formats::usda_read::parse_usda(data) {
         for m in &s.meshes {
             let v = m.topology.n_vertices() * 3;
             assert!(v > 0 && m.positions.len() == v * m.times.len());

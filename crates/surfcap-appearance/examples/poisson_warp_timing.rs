@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let data = args.next().map(PathBuf::from).unwrap_or_else(|| PathBuf::from("../shared/data"));
     let size: usize = args.next().map_or(Ok(1024), |s| s.parse())?;
     let head = data.join("leeperrysmith_head");
-    let obj = surfcap_mesh::io::obj::read_obj(&head.join("template.obj"))?;
+    let obj = surfcap_formats::obj::read_obj(&head.join("template.obj"))?;
     let topology = obj.topology()?;
     let atlas = topology.uv().ok_or("template.obj has no texture coordinates")?;
     let t = Instant::now();

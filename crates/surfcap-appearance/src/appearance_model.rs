@@ -27,7 +27,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use surfcap_mesh::Progress;
-use surfcap_mesh::io::npy::{NpyElement, expect_shape, read_npy, write_npy};
+use surfcap_mesh::npy::{NpyElement, expect_shape, read_npy, write_npy};
 
 use crate::eigen_maps::EigenBasis;
 use crate::error::{Error, Result};

@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex};
 
 use surfcap_mesh::Progress;
 use surfcap_mesh::derived_cache::DerivedCache;
-use surfcap_mesh::io::npy::NpyArray;
+use surfcap_mesh::npy::NpyArray;
 
 use crate::error::{Error, Result};
 use crate::flow_field::FlowField;

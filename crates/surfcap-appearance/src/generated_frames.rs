@@ -23,7 +23,7 @@ use npyz::WriterBuilder;
 use rayon::prelude::*;
 use surfcap_mesh::Progress;
 use surfcap_mesh::atomic::{write_dir, write_file};
-use surfcap_mesh::io::npy::{read_npy, write_npy};
+use surfcap_mesh::npy::{read_npy, write_npy};
 
 use crate::error::{Error, Result};
 use crate::flow_field::FlowField;

@@ -27,22 +27,19 @@
 //! `d = I(x + w)` is read the same way from the valid texels only (plain bilinear where none is).
 //!
 //! `Lᵀ L + λ² I` depends only on the mask and λ: it is assembled (a 13-point stencil) and
-//! factorised once by sparse Cholesky (faer, sequential, as
-//! `surfcap_geometry::poisson_reconstruction`: its parallel sparse solve was much slower on 2
-//! cores) and every frame and channel is two triangular solves. The factorisation is not
+//! factorised once by sparse Cholesky (`surfcap_linalg::sparse_cholesky`, sequential: faer's
+//! parallel sparse solve was much slower on 2 cores) and every frame and channel is two triangular solves. The factorisation is not
 //! stored on disk: it is rebuilt from the mask (see the measured times in
 //! `examples/poisson_warp_timing.rs` and ARCHITECTURE.md).
 //!
 //! Inactive texels of the output are the direct warp (`warp_direct`), so the output is a
 //! complete image; every per-texel vector of the model ignores them.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::Mat;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Mat, Par, Side};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use surfcap_linalg::{NumericLlt, SymbolicLlt};
 
 use crate::error::{Error, Result};
 use crate::flow_field::{FlowField, sample_bilinear, warp_direct};
@@ -67,8 +64,8 @@ pub struct PoissonTextureWarp {
     lambda: f64,
     /// Active neighbours of each active texel: left, right, up, down (or [`INACTIVE`]).
     neighbours: Vec<[u32; 4]>,
-    symbolic: SymbolicCholesky<usize>,
-    numeric: Vec<f64>,
+    symbolic: SymbolicLlt,
+    numeric: NumericLlt,
 }
 
 impl std::fmt::Debug for PoissonTextureWarp {
@@ -152,21 +149,9 @@ impl PoissonTextureWarp {
         let mat =
             SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).map_err(|e| solver(format!("{e:?}")))?;
         drop(trip);
-        let symbolic = factorize_symbolic_cholesky(mat.symbolic(), Side::Lower, Default::default(), Default::default())
-            .map_err(|e| solver(format!("symbolic factorisation: {e:?}")))?;
-        let mut numeric = vec![0.0f64; symbolic.len_val()];
-        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
-        symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut numeric,
-                mat.as_ref(),
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut MemBuffer::new(scratch)),
-                Default::default(),
-            )
-            .map_err(|e| solver(format!("numeric factorisation: {e:?}")))?;
+        let symbolic =
+            SymbolicLlt::new(mat.symbolic()).map_err(|e| solver(format!("symbolic factorisation: {e:?}")))?;
+        let numeric = symbolic.factorize(mat.as_ref()).map_err(|e| solver(format!("numeric factorisation: {e:?}")))?;
         Ok(PoissonTextureWarp { mask: mask.clone(), lambda, neighbours, symbolic, numeric })
     }
 
@@ -261,15 +246,8 @@ impl PoissonTextureWarp {
         // Two sequential solves side by side, the first channel alone and the others
         // together: faer's parallel sparse solve was 40 times slower on 2 cores
         // (ARCHITECTURE.md).
-        let llt = faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric);
         let solve = |mut cols: Mat<f64>| {
-            let scratch = self.symbolic.solve_in_place_scratch::<f64>(cols.ncols(), Par::Seq);
-            llt.solve_in_place_with_conj(
-                Conj::No,
-                cols.as_mut(),
-                Par::Seq,
-                MemStack::new(&mut MemBuffer::new(scratch)),
-            );
+            self.symbolic.solve_in_place(&self.numeric, cols.as_mut());
             cols
         };
         let split = 1.min(c);

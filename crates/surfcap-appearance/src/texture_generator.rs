@@ -444,7 +444,7 @@ fn bounding_box(positions: &[f32]) -> ([f64; 3], [f64; 3]) {
 /// Reads a UV-mapped OBJ mesh: its topology (with the atlas) and positions; errors name the
 /// file, and a mesh without texture coordinates is refused as such.
 pub fn read_uv_mesh(path: &Path) -> Result<(Topology, Vec<f32>)> {
-    let obj = surfcap_mesh::io::obj::read_obj(path)?;
+    let obj = surfcap_formats::obj::read_obj(path)?;
     let topology = obj.topology().map_err(|e| e.in_file(path))?;
     if topology.uv().is_none() {
         return Err(Error::Invalid(format!(

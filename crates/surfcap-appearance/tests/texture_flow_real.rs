@@ -69,7 +69,7 @@ fn case(data: &Path) -> Case {
             truth.v[y * SIZE + x] = v;
         }
     }
-    let topology = surfcap_mesh::io::obj::read_obj(&dir.join("template.obj")).unwrap().topology().unwrap();
+    let topology = surfcap_formats::obj::read_obj(&dir.join("template.obj")).unwrap().topology().unwrap();
     let mask = TexelMask::from_atlas(topology.uv().expect("the head template has UVs"), SIZE, SIZE, 1).unwrap();
     Case { reference, target, truth, mask }
 }

@@ -13,7 +13,7 @@ use anyhow::Context;
 use serde_json::json;
 use surfcap_appearance::AppearanceModel;
 use surfcap_appearance::blended_frame_textures::{TextureMix, blended_frame_textures};
-use surfcap_mesh::export::{ExportFormat, export_textured_glb};
+use surfcap_formats::export::{ExportFormat, export_textured_glb};
 use surfcap_mesh::frame_set::FrameSet;
 use surfcap_mesh::{FrameTextures, Subject};
 use surfcap_motion::transition_frames::FrameMix;

@@ -186,7 +186,7 @@ pub fn write_report(
     // The cached distance matrix, if any.
     body += "<h2>Pose distances (thesis eq. 2.13)</h2>\n";
     let dpath = pipe.cache_file(&DistanceKey::new(&DistanceParams::default())).unwrap_or_default();
-    match surfcap_mesh::io::npy::read_npy::<f64>(&dpath) {
+    match surfcap_mesh::npy::read_npy::<f64>(&dpath) {
         Ok(d)
             if d.shape == [s.n_frames(), s.n_frames()]
                 && surfcap_motion::transition_table::check_distances(&d.data, s.frame_index()).is_ok() =>

@@ -7,9 +7,9 @@
 use std::str::FromStr;
 
 use anyhow::bail;
+use surfcap_formats::export::ExportFormat;
+use surfcap_formats::glb::{GLB_MAX_BYTES, estimated_glb_bytes};
 use surfcap_mesh::Subject;
-use surfcap_mesh::export::ExportFormat;
-use surfcap_mesh::io::glb::{GLB_MAX_BYTES, estimated_glb_bytes};
 
 /// Frames an animation may have unless raised: 10 minutes at 30 fps.
 pub const DEFAULT_MAX_FRAMES: usize = 18_000;

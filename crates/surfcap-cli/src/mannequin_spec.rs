@@ -3,11 +3,11 @@
 
 use std::path::PathBuf;
 
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::locomotion::Gait;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_mesh::Subject;
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::locomotion::Gait;
-use surfcap_synth::mannequin::{BodyShape, mannequin};
-use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct MannequinArgs {
@@ -37,7 +37,7 @@ pub struct MannequinArgs {
     #[arg(long, value_parser = crate::options::positive)]
     pub bvh_units: Option<f64>,
     /// Keep a UV atlas in the mannequin's topology (a cylindrical chart per bone,
-    /// `surfcap_synth::mannequin_atlas`), so it can carry a texture per frame (`surfcap
+    /// `surfcap_builtin::mannequin_atlas`), so it can carry a texture per frame (`surfcap
     /// appearance paint | generate | build`, then `synth ... --appearance`).
     #[arg(long)]
     pub uv_atlas: bool,
@@ -58,7 +58,7 @@ pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     let shape = BodyShape::parse(&a.shape)?;
     let mut m = mannequin(&shape, a.vertices)?;
     if a.uv_atlas {
-        let atlas = surfcap_synth::mannequin_atlas::mannequin_uv_atlas(&m);
+        let atlas = surfcap_builtin::mannequin_atlas::mannequin_uv_atlas(&m);
         m.topology =
             surfcap_mesh::Topology::new(m.topology.n_vertices(), m.topology.triangles().to_vec(), Some(atlas))?;
     }

@@ -18,8 +18,8 @@ use std::str::FromStr;
 
 use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
 use surfcap_appearance::{FlowOptions, PreprocessOptions};
-use surfcap_mesh::export::ExportFormat;
-use surfcap_mesh::import::ImportOptions;
+use surfcap_formats::export::ExportFormat;
+use surfcap_formats::import::ImportOptions;
 use surfcap_mesh::{Subject, Units, UpAxis};
 use surfcap_motion::dtw::Slope;
 use surfcap_motion::segment_bounds;
@@ -313,7 +313,7 @@ pub fn output_format(format: Option<ExportFormat>, output: &Path) -> ExportForma
 /// Opens a subject (cache or any importable source) with a progress bar and shows the notes.
 pub fn open(ctx: &crate::Ctx, path: &Path, opts: &SourceOpts) -> anyhow::Result<Subject> {
     let bar = crate::progress::Bar::new(ctx);
-    let imported = surfcap_mesh::import::open_subject(path, &opts.to_import(None)?, &bar)?;
+    let imported = surfcap_formats::import::open_subject(path, &opts.to_import(None)?, &bar)?;
     for n in &imported.notes {
         ctx.note(n);
     }

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
-use surfcap_mesh::export::ExportOptions;
+use surfcap_formats::export::ExportOptions;
 
 /// What every command gets: how to report.
 pub struct Ctx {

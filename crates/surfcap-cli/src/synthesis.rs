@@ -10,8 +10,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use serde_json::json;
+use surfcap_formats::export::{ExportFormat, export, export_frame_set};
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
-use surfcap_mesh::export::{ExportFormat, export, export_frame_set};
 use surfcap_mesh::frame_set::FrameSet;
 use surfcap_mesh::{Subject, UpAxis};
 use surfcap_motion::graph::Graph;
@@ -451,7 +451,7 @@ pub enum Animation<'a> {
 /// Writes a synthesised animation to `output` and returns the paths written. An output ending
 /// in `.frames` (with no `--format`) is a frame-set folder, lossless and surfcap's own; anything
 /// else goes through the exporters in `format` (`--format`, else the extension, else glb: a
-/// frame set's glb holds a mesh per frame, see `surfcap_mesh::io::glb_frame_set`).
+/// frame set's glb holds a mesh per frame, see `surfcap_formats::glb_frame_set`).
 pub fn write_animation(
     ctx: &crate::Ctx,
     animation: Animation,

@@ -103,8 +103,8 @@ fn abc_export_reads_back_exactly_in_the_reference_alembic_library() {
     let out = d.path().join("head.abc");
     let o = surfcap!(&["--quiet", "export", p(&head), "--fps", "25", "--format", "abc", "-o", p(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let opts = surfcap_mesh::import::ImportOptions { fps: Some(25.0), ..Default::default() };
-    let s = surfcap_mesh::import::import(&[head], &opts, &surfcap_mesh::NoProgress).unwrap().subject;
+    let opts = surfcap_formats::import::ImportOptions { fps: Some(25.0), ..Default::default() };
+    let s = surfcap_formats::import::import(&[head], &opts, &surfcap_mesh::NoProgress).unwrap().subject;
     assert!(s.topology().uv().is_some(), "the head scan has UVs: the test checks them");
     check_meshes(&surfcap_testkit::read_abc(&out), &s);
 }

@@ -261,8 +261,8 @@ fn varying_topology_irregular_times_and_hdf5_are_refused_by_name() {
     // A command that needs one topology, given the .abc itself: it says what the file is.
     let o = surfcap!(&["export", p(&abc), "--format", "glb", "-o", p(&d.path().join("v.glb"))]);
     assert!(!o.status.success() && stderr(&o).contains("is a frame set"), "{}", stderr(&o));
-    let a = surfcap_mesh::io::abc_read::read_abc(&abc).unwrap();
-    let surfcap_mesh::io::abc_read::AbcFrames::Varying { frames } = &a.meshes[0].frames else {
+    let a = surfcap_formats::abc_read::read_abc(&abc).unwrap();
+    let surfcap_formats::abc_read::AbcFrames::Varying { frames } = &a.meshes[0].frames else {
         panic!("expected varying frames")
     };
     let tris: Vec<usize> = frames.iter().map(|f| f.topology.n_triangles()).collect();
@@ -299,7 +299,7 @@ fn a_real_kaykit_clip_written_by_alembic_imports_back_exactly() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let d = tempfile::tempdir().unwrap();
     let walk: PathBuf = data.join("kaykit_adventurers/knight_Walking_A");
-    let src = surfcap_mesh::import::import(&[walk], &Default::default(), &NoProgress).unwrap().subject;
+    let src = surfcap_formats::import::import(&[walk], &Default::default(), &NoProgress).unwrap().subject;
     let t = src.topology();
     let nv = t.n_vertices();
     let frames = 10;

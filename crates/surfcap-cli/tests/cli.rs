@@ -950,7 +950,7 @@ fn misfitting_or_nan_cache_entries_are_recomputed_with_a_note() {
         return;
     };
     use surfcap_mesh::atomic::write_file;
-    use surfcap_mesh::io::npy::{read_npy, write_npy};
+    use surfcap_mesh::npy::{read_npy, write_npy};
     let tmp = tempfile::tempdir().unwrap();
     let cache = tmp.path().join("cache");
     let cat = data.join("walking_cat_depraz/walk");

@@ -9,11 +9,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use surfcap_mesh::import::{ImportOptions, ImportedData, open_any};
-use surfcap_mesh::{FrameSet, NoProgress, Subject};
-use surfcap_synth::frame_remeshing::{
+use surfcap_builtin::frame_remeshing::{
     RemeshFramesOptions, distances_to_surface, mean_edge_length, remesh_subject_frames, vertex_neighbours,
 };
+use surfcap_formats::import::{ImportOptions, ImportedData, open_any};
+use surfcap_mesh::{FrameSet, NoProgress, Subject};
 use surfcap_testkit::{p, stderr, surfcap};
 
 const TETRA: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
@@ -202,7 +202,7 @@ fn vlasic_crane_frames_remeshed_on_their_own_stay_on_the_capture() {
         r["source_vertices"].as_u64().unwrap()
     );
     let set = read_frames(&out);
-    let source = surfcap_mesh::import::open_subject(&crane, &ImportOptions::default(), &NoProgress).unwrap().subject;
+    let source = surfcap_formats::import::open_subject(&crane, &ImportOptions::default(), &NoProgress).unwrap().subject;
     assert_eq!(set.frame_count(), 6);
     assert_eq!(set.frame_index().label(5), "crane:5");
     let m = check_against_source(&set, &source);

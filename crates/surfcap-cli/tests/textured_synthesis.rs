@@ -25,7 +25,7 @@ fn rgb8(png: &[u8]) -> Vec<u8> {
 fn textures_of(glb: &Path) -> (FrameTextures, usize) {
     surfcap_testkit::validate_glb(&[glb.to_path_buf()]);
     let bytes = std::fs::read(glb).unwrap();
-    let (set, textures) = surfcap_mesh::io::glb_frame_set::parse_glb_frame_set_textured(&bytes, "out").unwrap();
+    let (set, textures) = surfcap_formats::glb_frame_set::parse_glb_frame_set_textured(&bytes, "out").unwrap();
     let textures = textures.expect("a texture per frame");
     assert!(set.sequences()[0].frames().iter().all(|f| f.topology().uv().is_some()), "every frame keeps its UVs");
     (textures, set.frame_count())

@@ -57,7 +57,7 @@ fn tiled_work_on_real_data_equals_the_one_machine_matrix_and_opens_in_zarr_pytho
     let npy = d.path().join("d.npy");
     let o = surfcap!(&["--quiet", "distance", p(&subject), "-o", p(&npy), "--cache-dir", p(&d.path().join("cache"))]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let expected = surfcap_mesh::io::npy::read_npy::<f64>(&npy).unwrap();
+    let expected = surfcap_mesh::npy::read_npy::<f64>(&npy).unwrap();
 
     let python = surfcap_testkit::workspace_root().join("tools/venv/bin/python");
     assert!(python.is_file(), "{} is missing: run scripts/test (it installs zarr)", python.display());
@@ -73,11 +73,11 @@ fn tiled_work_on_real_data_equals_the_one_machine_matrix_and_opens_in_zarr_pytho
     assert_eq!(summary["distances.zarr"]["shape"], serde_json::json!([n, n]));
     assert_eq!(summary["distances.zarr"]["chunks"], serde_json::json!([16, 16]), "chunks are the tiles");
     assert_eq!(summary["table/len.zarr"]["dtype"], "uint32");
-    let read = surfcap_mesh::io::npy::read_npy::<f64>(&out.join("distances.npy")).unwrap();
+    let read = surfcap_mesh::npy::read_npy::<f64>(&out.join("distances.npy")).unwrap();
     assert_eq!(read.shape, expected.shape);
     let differ = read.data.iter().zip(&expected.data).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
     assert_eq!(differ, 0, "tiled distances read by zarr-python vs `surfcap distance`");
-    let costs = surfcap_mesh::io::npy::read_npy::<f64>(&out.join("paths_costs.npy")).unwrap();
+    let costs = surfcap_mesh::npy::read_npy::<f64>(&out.join("paths_costs.npy")).unwrap();
     assert!(costs.data.iter().all(|c| !c.is_nan()), "every path cost written");
 }
 

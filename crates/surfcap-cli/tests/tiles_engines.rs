@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_mesh::NoProgress;
-use surfcap_synth::{WormParams, worm_subject};
 use surfcap_testkit::{p, stderr, surfcap, workspace_root};
 
 const SURFCAP: &str = env!("CARGO_BIN_EXE_surfcap");

@@ -21,7 +21,7 @@ fn import(data: &Path, dir: &Path, character: &str, clips: &[&str]) -> PathBuf {
 
 /// Reads a glb's positions back through surfcap's importer (all frames of its one sequence).
 fn glb_frames(glb: &Path) -> Vec<Vec<f32>> {
-    let s = surfcap_mesh::import::import(&[glb.to_path_buf()], &Default::default(), &surfcap_mesh::NoProgress)
+    let s = surfcap_formats::import::import(&[glb.to_path_buf()], &Default::default(), &surfcap_mesh::NoProgress)
         .unwrap()
         .subject;
     let q = &s.sequences()[0];
@@ -94,7 +94,7 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     assert_eq!(rep["frames"], 49);
     surfcap_testkit::validate_glb(std::slice::from_ref(&out));
     let got = glb_frames(&out);
-    let truth = surfcap_mesh::import::import(
+    let truth = surfcap_formats::import::import(
         &[data.join("kaykit_adventurers/barbarian_Walking_C")],
         &Default::default(),
         &surfcap_mesh::NoProgress,

@@ -21,7 +21,8 @@ fn usda_export_reads_back_exactly_in_pixars_usd() {
     assert_eq!(u["frames_per_second"], 30.0);
     assert_eq!(u["up_axis"], "Y");
     assert_eq!(u["meters_per_unit"], 1.0);
-    let s = surfcap_mesh::import::import(&[walk, run], &Default::default(), &surfcap_mesh::NoProgress).unwrap().subject;
+    let s =
+        surfcap_formats::import::import(&[walk, run], &Default::default(), &surfcap_mesh::NoProgress).unwrap().subject;
     let meshes = u["meshes"].as_array().unwrap();
     assert_eq!(meshes.len(), 2);
     let tris: Vec<u64> = s.topology().triangles().iter().flatten().map(|&v| v as u64).collect();

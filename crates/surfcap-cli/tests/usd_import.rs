@@ -83,7 +83,7 @@ fn surfcaps_usda_imports_back_exactly_kaykit_and_vlasic_crane() {
     assert_eq!(synthetic, [false, true, true, true, false]);
 
     // Vlasic crane cut to 10 frames, written as a small subject.
-    let crane = surfcap_mesh::import::import(&[data.join("vlasic2008/crane")], &Default::default(), &NoProgress)
+    let crane = surfcap_formats::import::import(&[data.join("vlasic2008/crane")], &Default::default(), &NoProgress)
         .unwrap()
         .subject;
     let v = crane.topology().n_vertices();

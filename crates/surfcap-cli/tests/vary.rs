@@ -24,7 +24,7 @@ fn json_of(o: &std::process::Output) -> serde_json::Value {
 /// Sequences of a glb read back through surfcap's importer: (name, frames, vertices, labels
 /// synthetic).
 fn glb_sequences(glb: &Path) -> (Vec<(String, usize)>, usize, Vec<Vec<f32>>) {
-    let s = surfcap_mesh::import::import(&[glb.to_path_buf()], &Default::default(), &surfcap_mesh::NoProgress)
+    let s = surfcap_formats::import::import(&[glb.to_path_buf()], &Default::default(), &surfcap_mesh::NoProgress)
         .unwrap()
         .subject;
     let seqs = s.sequences().iter().map(|q| (q.name.clone(), q.n_frames())).collect();

@@ -257,7 +257,7 @@ fn the_viewer_plays_a_texture_per_frame() {
     use surfcap_mesh::{FrameTextures, Sequence, Subject, Units, UpAxis};
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let head = data.join("leeperrysmith_head");
-    let obj = surfcap_mesh::io::obj::read_obj(&head.join("template.obj")).unwrap();
+    let obj = surfcap_formats::obj::read_obj(&head.join("template.obj")).unwrap();
     let topology = obj.topology().unwrap();
     let nv = topology.n_vertices();
     let mut positions = Vec::with_capacity(6 * 3 * nv);
@@ -275,7 +275,7 @@ fn the_viewer_plays_a_texture_per_frame() {
     let tmp = tempfile::tempdir().unwrap();
     let glb = tmp.path().join("head.glb");
     let set = surfcap_mesh::FrameSet::from_subject(&subject);
-    surfcap_mesh::export::export_textured_glb(&set, &textures, &glb, &surfcap_mesh::NoProgress).unwrap();
+    surfcap_formats::export::export_textured_glb(&set, &textures, &glb, &surfcap_mesh::NoProgress).unwrap();
 
     let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&glb)]);
     let (status, items) = server.get("/api/items");

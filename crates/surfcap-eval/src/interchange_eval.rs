@@ -19,9 +19,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
-use surfcap_mesh::import::{ImportOptions, import};
-use surfcap_mesh::io::shared_layout::dataset_sequences;
+use surfcap_formats::export::{ExportFormat, ExportOptions, export};
+use surfcap_formats::import::{ImportOptions, import};
+use surfcap_formats::shared_layout::dataset_sequences;
 use surfcap_mesh::{Progress, Subject};
 
 use crate::error::{Error, Result};

@@ -85,9 +85,9 @@ pub fn mean_std(v: &[f64]) -> (f64, f64) {
 
 #[cfg(test)]
 pub(crate) mod test_subjects {
+    use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_mesh::{NoProgress, Subject};
     use surfcap_pipeline::{CacheStore, Pipeline};
-    use surfcap_synth::{WormParams, worm_subject};
 
     /// The procedural tube: 8 rings of 6 vertices, 24 frames at `fps`.
     pub fn worm(fps: f64) -> Subject {

@@ -162,10 +162,10 @@ pub fn pose_metric_eval(
 #[cfg(test)]
 mod tests {
     use serde_json::json;
+    use surfcap_builtin::locomotion::Gait;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
     use surfcap_mesh::NoProgress;
-    use surfcap_synth::locomotion::Gait;
-    use surfcap_synth::mannequin::{BodyShape, mannequin};
-    use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
     use super::*;
     use crate::test_subjects::worm;

@@ -10,12 +10,12 @@ use std::time::Instant;
 
 use nalgebra::{Isometry3, Vector3};
 use serde::Serialize;
+use surfcap_builtin::bvh::{Bvh, read_bvh};
+use surfcap_builtin::mannequin::{BodyShape, mannequin, skeleton};
+use surfcap_builtin::mannequin_subject::Clip;
+use surfcap_builtin::retarget::joint_map;
 use surfcap_geometry::root_motion_from_contacts::{ContactParams, root_motion_from_contacts};
 use surfcap_mesh::UpAxis;
-use surfcap_synth::bvh::{Bvh, read_bvh};
-use surfcap_synth::mannequin::{BodyShape, mannequin, skeleton};
-use surfcap_synth::mannequin_subject::Clip;
-use surfcap_synth::retarget::joint_map;
 
 use crate::error::{Error, Result};
 

@@ -15,15 +15,15 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::Subject;
 use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths};
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::mannequin::{BodyShape, mannequin};
-use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
 use crate::MeanStd;
 use crate::error::{Error, Result};

@@ -25,6 +25,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_mesh::{Progress, Subject};
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
@@ -33,9 +36,6 @@ use surfcap_motion::sparse_essential_graph::{sparse_essential_graph, sparse_tran
 use surfcap_motion::timed_walk::TimedGraph;
 use surfcap_motion::walk_sequence::{Step, WalkModel};
 use surfcap_pipeline::{GraphParams, Pipeline};
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::mannequin::{BodyShape, mannequin};
-use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 
 use crate::error::{Error, Result};
 

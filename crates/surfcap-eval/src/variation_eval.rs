@@ -37,15 +37,15 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_geometry::root_motion_from_contacts::ContactParams;
 use surfcap_geometry::shape_distortion::edge_length_distortion;
 use surfcap_learn::Mat;
 use surfcap_learn::gpdm::{Gpdm, GpdmOptions};
 use surfcap_learn::pca::{Pca, PcaMethod};
 use surfcap_mesh::{NoProgress, Subject, Topology, UpAxis};
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::mannequin::{BodyShape, mannequin};
-use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::part_stitching::Stitcher;

@@ -1,7 +1,7 @@
 //! Every sequence of `../shared/data` through USD text and Alembic and back, exactly: positions to the bit, topology with UVs, names, labels, rate, up axis, units.
 
 use surfcap_eval::{InterchangeOptions, interchange_eval};
-use surfcap_mesh::export::ExportFormat;
+use surfcap_formats::export::ExportFormat;
 
 #[test]
 fn every_sequence_of_the_shared_data_round_trips_exactly_through_usda_and_abc() {

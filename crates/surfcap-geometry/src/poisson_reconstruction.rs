@@ -3,8 +3,8 @@
 //!
 //! The system is singular: X + a constant per connected component solves it too. We remove that
 //! null space by pinning the first vertex of every component to 0, factor the reduced matrix
-//! once (sparse Cholesky, faer, sequential: the solve of a 2-core rayon run was 40 times slower,
-//! see DEPENDENCIES.md), and after each solve translate every component so its vertex mean is
+//! once (sparse Cholesky, `surfcap_linalg::sparse_cholesky`, sequential: the solve of a 2-core
+//! rayon run was 40 times slower, see DEPENDENCIES.md), and after each solve translate every component so its vertex mean is
 //! where the caller wants it (eq. 2.49 needs each one-sided solution pinned to the linearly
 //! interpolated centroid, PAPER-NOTES). A tiny diagonal shift (1e-10 of the mean diagonal)
 //! keeps the factorisation defined when some vertex touches only zero-area triangles.
@@ -14,12 +14,10 @@
 
 use std::sync::Arc;
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::Mat;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Mat, Par, Side};
 use nalgebra::{Matrix3, Vector3};
+use surfcap_linalg::{NumericLlt, SymbolicLlt};
 use surfcap_mesh::{Components, Topology, connected_components};
 
 use crate::error::{Error, Result};
@@ -33,14 +31,14 @@ pub struct PoissonPattern {
     /// Reduced unknown index of each vertex; `None` for the pinned ones.
     reduced: Vec<Option<usize>>,
     n_reduced: usize,
-    symbolic: SymbolicCholesky<usize>,
+    symbolic: SymbolicLlt,
 }
 
 /// A factorised Poisson system for one pose of a mesh.
 pub struct PoissonSolver {
     op: GradientOperator,
     pattern: Arc<PoissonPattern>,
-    numeric: Vec<f64>,
+    numeric: NumericLlt,
 }
 
 /// Lower-triangle triplets of the reduced Laplacian (values from `op`, or 1 for the pattern)
@@ -91,8 +89,7 @@ impl PoissonPattern {
         let trip = reduced_triplets(topology, None, &reduced, next);
         let mat =
             SparseColMat::<usize, f64>::try_new_from_triplets(next, next, &trip).map_err(Error::PoissonAssemble)?;
-        let symbolic = factorize_symbolic_cholesky(mat.symbolic(), Side::Lower, Default::default(), Default::default())
-            .map_err(Error::PoissonSymbolic)?;
+        let symbolic = SymbolicLlt::new(mat.symbolic()).map_err(Error::PoissonSymbolic)?;
         Ok(PoissonPattern { components, reduced, n_reduced: next, symbolic })
     }
 }
@@ -110,20 +107,7 @@ impl PoissonSolver {
         let trip = reduced_triplets(topology, Some(&op), &pattern.reduced, pattern.n_reduced);
         let n = pattern.n_reduced;
         let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).map_err(Error::PoissonAssemble)?;
-        let symbolic = &pattern.symbolic;
-        let mut numeric = vec![0.0f64; symbolic.len_val()];
-        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
-        symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut numeric,
-                mat.as_ref(),
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut MemBuffer::new(scratch)),
-                Default::default(),
-            )
-            .map_err(Error::PoissonNumeric)?;
+        let numeric = pattern.symbolic.factorize(mat.as_ref()).map_err(Error::PoissonNumeric)?;
         Ok(PoissonSolver { op, pattern, numeric })
     }
 
@@ -160,9 +144,7 @@ impl PoissonSolver {
                 }
             }
         }
-        let scratch = self.pattern.symbolic.solve_in_place_scratch::<f64>(3, Par::Seq);
-        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(&self.pattern.symbolic, &self.numeric)
-            .solve_in_place_with_conj(Conj::No, rhs.as_mut(), Par::Seq, MemStack::new(&mut MemBuffer::new(scratch)));
+        self.pattern.symbolic.solve_in_place(&self.numeric, rhs.as_mut());
         let n = self.pattern.reduced.len();
         let mut x = vec![Vector3::zeros(); n];
         for (v, r) in self.pattern.reduced.iter().enumerate() {

@@ -96,7 +96,7 @@ pub const BLOCK: usize = 64;
 pub const BLOCK_FLOATS: usize = BLOCK * FRAME_FLOATS;
 
 /// Per-frame precomputation for the deformation distances (the expensive part is per pair).
-/// Stored in f64 (f32 storage was measured: acceptable only where the matrix stays within 1e-6 relative;
+/// Stored in f64 (f32 would do only where the matrix stays within 1e-6 relative;
 /// measured with `surfcap bench distance`, the values rounded to f32 as storage would hold them,
 /// 175 x 175 matrices, max / median relative error over the 15,225 pairs):
 ///
@@ -167,29 +167,6 @@ pub fn union_count(a: &[u32], b: &[u32]) -> usize {
         n += 1;
     }
     n
-}
-
-/// Clears the upper halves of the vector registers (`vzeroupper`) when the CPU has AVX.
-///
-/// The portable loop is SSE code that calls libm (`acos`, `ln`), which is VEX-encoded on FMA
-/// machines. Measured on this project's 2-core Xeon: after wide AVX-512 kernels (faer's GEMM)
-/// had run on a thread, that loop ran 5-6 times slower on that thread (the penalty showed at the
-/// libm call and return), and clearing the state first restored the speed.
-#[inline]
-fn clear_upper_vector_state() {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: `vzeroupper` only requires AVX, checked at run time just above.
-            unsafe { zeroupper() }
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-unsafe fn zeroupper() {
-    std::arch::x86_64::_mm256_zeroupper();
 }
 
 /// Terms of the arcsine series used by [`acos_branchless`].
@@ -356,7 +333,7 @@ unsafe fn run_kernel(kernel: DistanceKernel, fi: &[f64], fj: &[f64], g: &Matrix3
         // SAFETY: as above.
         DistanceKernel::Avx2 => unsafe { deformation_distance_avx2(fi, fj, g, w, log_s) },
         _ => {
-            clear_upper_vector_state();
+            surfcap_linalg::clear_upper_vector_state();
             deformation_distance_body(fi, fj, g, w, log_s)
         }
     }

@@ -4,13 +4,13 @@
 //! values are printed (`--nocapture`).
 
 use nalgebra::{Isometry3, Vector3};
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::mannequin::{BodyShape, Mannequin, mannequin};
+use surfcap_builtin::mannequin_subject::Clip;
 use surfcap_geometry::foot_contacts::foot_contacts;
 use surfcap_geometry::foot_sliding::foot_sliding;
 use surfcap_geometry::ground_contacts::{ContactParams, ground_contacts};
 use surfcap_mesh::UpAxis;
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::mannequin::{BodyShape, Mannequin, mannequin};
-use surfcap_synth::mannequin_subject::Clip;
 
 /// The walk's vertex positions `[frames][vertices][3]` as captured and with the root's
 /// horizontal travel stripped (an in-place clip), the mannequin, and the fps.

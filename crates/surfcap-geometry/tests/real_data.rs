@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use faer::sparse::SparseColMat;
 use nalgebra::{Matrix3, Vector3};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_geometry::deformation_gradient::{deformation_gradients, vertex};
 use surfcap_geometry::distance_matrix::{
     DistanceParams, SLAB_BYTES, distance_matrix, distance_matrix_in_slabs, slab_triangles,
@@ -18,7 +19,6 @@ use surfcap_geometry::pose_distance::{
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_geometry::rotation_log_exp::rotation_angle;
 use surfcap_geometry::shape_distortion::{edge_length_distortion, volume_change};
-use surfcap_mesh::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
 
 fn subject(rel: &[&str]) -> Option<Subject> {

@@ -650,7 +650,7 @@ impl LogDensity for TrajectoryDensity<'_> {
         let mut em = vec![0.0; steps * m];
         let mut mu = vec![0.0; steps * d];
         let mut pn = vec![0.0; steps];
-        crate::matrix::clear_upper_vector_state();
+        surfcap_linalg::clear_upper_vector_state();
         for i in 0..steps {
             let xi = &prev[i * d..(i + 1) * d];
             pn[i] = xi.iter().map(|v| v * v).sum();
@@ -673,7 +673,7 @@ impl LogDensity for TrajectoryDensity<'_> {
         let mut u = vec![0.0; steps * d];
         let mut gamma = vec![0.0; steps];
         grad.iter_mut().for_each(|v| *v = 0.0);
-        crate::matrix::clear_upper_vector_state();
+        surfcap_linalg::clear_upper_vector_state();
         for i in 0..steps {
             let q: f64 = (0..m).map(|j| kc[(j, i)] * v[(j, i)]).sum();
             let s2 = (pk.value(pn[i], pn[i], pn[i]) + white - q).max(1e-3 * white);

@@ -106,7 +106,7 @@ fn transition(
 ) -> (f64, bool) {
     let n = s.x.len();
     // The target may run faer's AVX-512 code; the scalar code below calls libm.
-    crate::matrix::clear_upper_vector_state();
+    surfcap_linalg::clear_upper_vector_state();
     let p0: Vec<f64> = (0..n).map(|_| standard_normal(rng)).collect();
     let h0 = -s.logp + 0.5 * p0.iter().map(|v| v * v).sum::<f64>();
     let mut x = s.x.clone();
@@ -122,7 +122,7 @@ fn transition(
         }
         logp = target.log_density(&x, &mut g);
         *evals += 1;
-        crate::matrix::clear_upper_vector_state();
+        surfcap_linalg::clear_upper_vector_state();
         if !logp.is_finite() || g.iter().any(|v| !v.is_finite()) {
             return (0.0, true);
         }

@@ -416,7 +416,7 @@ impl Kernel {
         let white = pk.white_variance();
         let mut k = Mat::zeros(n, n);
         k.par_col_iter_mut().enumerate().for_each(|(j, mut col)| {
-            crate::matrix::clear_upper_vector_state();
+            surfcap_linalg::clear_upper_vector_state();
             for i in 0..n {
                 col[i] = pk.value(p.dot[(i, j)], p.norms[i], p.norms[j]);
             }
@@ -433,7 +433,7 @@ impl Kernel {
         let dot = a * b.transpose();
         let (na, nb) = (row_norms(a), row_norms(b));
         let pk = self.prepare();
-        crate::matrix::clear_upper_vector_state();
+        surfcap_linalg::clear_upper_vector_state();
         Ok(Mat::from_fn(a.nrows(), b.nrows(), |i, j| pk.value(dot[(i, j)], na[i], nb[j])))
     }
 
@@ -456,7 +456,7 @@ impl Kernel {
         let partial: Vec<Vec<f64>> = (0..n)
             .into_par_iter()
             .map(|j| {
-                crate::matrix::clear_upper_vector_state();
+                surfcap_linalg::clear_upper_vector_state();
                 let mut g = vec![0.0; np];
                 for i in j..n {
                     let wij = if i == j { w[(i, i)] } else { w[(i, j)] + w[(j, i)] };
@@ -481,7 +481,7 @@ impl Kernel {
     /// the index, not the position, and contributes nothing.
     pub fn input_gradient(&self, x: MatRef<'_, f64>, p: &Pairwise, w: MatRef<'_, f64>) -> Mat<f64> {
         let pk = self.prepare();
-        crate::matrix::clear_upper_vector_state();
+        surfcap_linalg::clear_upper_vector_state();
         let n = p.len();
         // dk(x_i,x_j)/dx_i = c_ij x_j + 2 e_ij x_i with (c, e) the product derivatives.
         let mut cw = Mat::<f64>::zeros(n, n);

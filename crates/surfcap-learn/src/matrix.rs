@@ -218,26 +218,6 @@ pub fn cholesky_jitter(k: MatRef<'_, f64>, what: &str) -> Result<Factor> {
     )))
 }
 
-/// Clears the upper halves of the AVX registers. faer's AVX-512 kernels leave them dirty, and
-/// scalar SSE code calling libm (`exp`, `asin`) afterwards on the same thread ran 5-6x slower
-/// here (see ARCHITECTURE.md, performance notes). Called before the kernel-evaluation loops.
-#[inline]
-pub fn clear_upper_vector_state() {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: `vzeroupper` only requires AVX, checked at run time just above.
-            unsafe { zeroupper() }
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-unsafe fn zeroupper() {
-    std::arch::x86_64::_mm256_zeroupper();
-}
-
 /// `a * b` on the calling thread: for the small products of per-step work (HMC), where
 /// spreading a few-hundred-row product over threads costs more than it saves.
 pub fn matmul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {

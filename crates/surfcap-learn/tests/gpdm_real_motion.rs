@@ -5,12 +5,12 @@
 //! into poses.
 
 use faer::{Mat, MatRef};
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::retarget::retarget;
 use surfcap_learn::gpdm::{Gpdm, GpdmOptions};
 use surfcap_learn::hybrid_monte_carlo::HmcOptions;
 use surfcap_learn::pca::{Pca, PcaMethod};
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::mannequin::{BodyShape, mannequin};
-use surfcap_synth::retarget::retarget;
 
 /// Mean per-vertex Euclidean error between two frame matrices (frames x 3V).
 fn vertex_error(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {

@@ -17,8 +17,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::{write_dir, write_file};
-use crate::error::{Error, Result, err};
-use crate::io::npy::{expect_shape, read_npy, write_npy};
+use crate::cache_description::read_description;
+use crate::error::{Result, err};
+use crate::npy::{expect_shape, read_npy, write_npy};
 use crate::progress::Progress;
 use crate::subject::{FrameLabel, JointTrack, Sequence, Subject, Units, UpAxis};
 use crate::topology::{Topology, UvAtlas};
@@ -147,18 +148,8 @@ pub fn write_cache(path: &Path, subject: &Subject, force: bool, progress: &dyn P
 /// and the triangles.
 fn read_header_and_faces(path: &Path) -> Result<(Header, std::path::PathBuf, Vec<[u32; 3]>)> {
     let hp = path.join("subject.json");
-    let text = std::fs::read(&hp).map_err(|e| Error::io(&hp, "read", e))?;
-    let h: Header = serde_json::from_slice(&text)
-        .map_err(|e| err!(Syntax, "not a surfcap subject description: {e}").in_file(&hp).at_line(e.line()))?;
-    if h.format != FORMAT || h.version != VERSION {
-        return Err(err!(
-            Unsupported,
-            "format {:?} version {}: expected {FORMAT:?} version {VERSION} (re-import the data with this surfcap)",
-            h.format,
-            h.version
-        )
-        .in_file(&hp));
-    }
+    let h: Header =
+        read_description(&hp, "subject description", (FORMAT, VERSION), |h: &Header| (h.format.as_str(), h.version))?;
     let fp = path.join("faces.npy");
     let faces = read_npy::<u32>(&fp)?;
     expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
@@ -229,8 +220,9 @@ pub fn read_cache(path: &Path, progress: &dyn Progress) -> Result<Subject> {
 }
 
 /// A subject cache opened to read some of its frames only: a tile job of the all-pairs work
-/// (issue 21) holds the frames of its tile, not the subject. The description and the topology
-/// are read and checked on opening; frames are read on demand, seeking in `positions_<k>.npy`.
+/// (the distance matrix cut into tiles) holds the frames of its tile, not the subject. The
+/// description and the topology are read and checked on opening; frames are read on demand,
+/// seeking in `positions_<k>.npy`.
 pub struct CachedFrames {
     path: std::path::PathBuf,
     pub name: String,
@@ -282,7 +274,7 @@ impl CachedFrames {
                 end += 1;
             }
             let pp = self.path.join(format!("positions_{s}.npy"));
-            let (shape, data) = crate::io::npy::read_npy_rows::<f32>(&pp, f..f + (end - k))?;
+            let (shape, data) = crate::npy::read_npy_rows::<f32>(&pp, f..f + (end - k))?;
             if shape != [self.index.range(s).len(), nv, 3] {
                 return Err(err!(
                     Shape,

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use crate::atomic::write_file;
 use crate::error::Result;
-use crate::io::npy::{NpyArray, NpyElement, read_npy, write_npy};
+use crate::npy::{NpyArray, NpyElement, read_npy, write_npy};
 use crate::progress::Progress;
 use crate::subject::Subject;
 

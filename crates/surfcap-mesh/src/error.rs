@@ -138,10 +138,12 @@ impl std::error::Error for Error {
     }
 }
 
-/// Shorthand for building an error of a given kind with a formatted message.
+/// Shorthand for building an error of a given kind with a formatted message
+/// (`err!(Syntax, "line {n}: ...")`); the format readers of `surfcap-formats` use it too.
+#[macro_export]
 macro_rules! err {
     ($kind:ident, $($arg:tt)*) => {
         $crate::error::Error::new($crate::error::ErrorKind::$kind, format!($($arg)*))
     };
 }
-pub(crate) use err;
+pub use crate::err;

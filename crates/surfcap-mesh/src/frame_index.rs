@@ -1,6 +1,8 @@
 //! Global frame index <-> (sequence, frame) mapping, used by every algorithm that treats the
 //! frames of all sequences as one set (distance matrices, transition tables, graphs).
 
+use crate::error::{Result, err};
+
 /// Prefix sums of the sequences' frame counts, and the sequences' names when known (a
 /// subject's index has them), so that every layer can name a frame as the user does.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -75,6 +77,35 @@ impl FrameIndex {
         Some((s, global - self.offsets[s]))
     }
 
+    /// The global frame a user wrote: `sequence:frame` (the sequence by its name) or a global
+    /// frame number; an error says what is wrong and what `owner` ("subject", "frame set") has.
+    /// Needs the index's names ([`FrameIndex::with_names`]) to find a sequence by name.
+    pub fn resolve(&self, spec: &str, owner: &str) -> Result<usize> {
+        let bad = |why: String| err!(Metadata, "frame {spec:?}: {why}");
+        match spec.rsplit_once(':') {
+            Some((name, f)) => {
+                let k =
+                    self.names.iter().position(|n| n == name).ok_or_else(|| {
+                        bad(format!("no sequence {name:?}; the {owner} has {}", self.names.join(", ")))
+                    })?;
+                let f: usize = f.parse().map_err(|_| bad(format!("{f:?} is not a frame number")))?;
+                let frames = self.range(k).len();
+                if f >= frames {
+                    return Err(bad(format!("sequence {name:?} has frames 0 to {}", frames - 1)));
+                }
+                Ok(self.global(k, f).expect("checked above"))
+            }
+            None => {
+                let g: usize =
+                    spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
+                if g >= self.len() {
+                    return Err(bad(format!("the {owner} has global frames 0 to {}", self.len() - 1)));
+                }
+                Ok(g)
+            }
+        }
+    }
+
     /// Global range of a sequence's frames.
     pub fn range(&self, sequence: usize) -> std::ops::Range<usize> {
         self.offsets[sequence]..self.offsets[sequence + 1]
@@ -104,5 +135,18 @@ mod tests {
         );
         assert_eq!(ix.global(0, 3), None);
         assert_eq!(ix.range(3), 5..10);
+    }
+
+    #[test]
+    fn frames_written_by_users_resolve_or_say_what_is_wrong() {
+        let ix = FrameIndex::new([3, 2]).with_names(vec!["walk".into(), "run".into()]);
+        assert_eq!(ix.resolve("run:1", "subject").unwrap(), 4);
+        assert_eq!(ix.resolve("2", "subject").unwrap(), 2);
+        let e = |spec: &str| ix.resolve(spec, "frame set").unwrap_err().to_string();
+        assert_eq!(e("jump:0"), r#"frame "jump:0": no sequence "jump"; the frame set has walk, run"#);
+        assert_eq!(e("run:2"), r#"frame "run:2": sequence "run" has frames 0 to 1"#);
+        assert_eq!(e("run:x"), r#"frame "run:x": "x" is not a frame number"#);
+        assert_eq!(e("5"), r#"frame "5": the frame set has global frames 0 to 4"#);
+        assert_eq!(e("walk"), r#"frame "walk": expected sequence:frame or a global frame number"#);
     }
 }

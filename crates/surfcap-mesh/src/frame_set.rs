@@ -3,7 +3,7 @@
 //! graph works on raw per-frame reconstructions, "an unstructured volumetric or mesh
 //! approximation of the surface shape at each frame without temporal correspondence" (section
 //! 1), "different mesh connectivity at each time-frame" (section 5): every frame has its own
-//! vertices and triangles (issue 17, item 1).
+//! vertices and triangles.
 //!
 //! A [`FrameSet`] is the counterpart of a [`Subject`] without the shared [`Topology`]: named
 //! sequences of [`Frame`]s (each its own topology and f32 positions), frame labels, tags, fps, up
@@ -383,28 +383,7 @@ impl FrameSet {
     /// Global index of a frame written `sequence:frame` (0-based frame), or a bare global
     /// index, as [`Subject::resolve_frame`].
     pub fn resolve_frame(&self, spec: &str) -> Result<usize> {
-        let bad = |why: String| err!(Metadata, "frame {spec:?}: {why}");
-        match spec.rsplit_once(':') {
-            Some((name, f)) => {
-                let (k, seq) = self.sequence(name).ok_or_else(|| {
-                    let known: Vec<&str> = self.sequences.iter().map(|s| s.name.as_str()).collect();
-                    bad(format!("no sequence {name:?}; the frame set has {}", known.join(", ")))
-                })?;
-                let f: usize = f.parse().map_err(|_| bad(format!("{f:?} is not a frame number")))?;
-                if f >= seq.n_frames() {
-                    return Err(bad(format!("sequence {name:?} has frames 0 to {}", seq.n_frames() - 1)));
-                }
-                Ok(self.index.global(k, f).expect("checked above"))
-            }
-            None => {
-                let g: usize =
-                    spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
-                if g >= self.frame_count() {
-                    return Err(bad(format!("the frame set has global frames 0 to {}", self.frame_count() - 1)));
-                }
-                Ok(g)
-            }
-        }
+        self.index.resolve(spec, "frame set")
     }
 }
 

@@ -1,5 +1,4 @@
-//! The on-disk form of a [`FrameSet`] (issue 17 item 1; Huang et al. 2009's per-frame
-//! reconstructions): a folder `x.frames` of `.npy` arrays numpy opens directly, written and read
+//! The on-disk form of a [`FrameSet`] (Huang et al. 2009's per-frame reconstructions): a folder `x.frames` of `.npy` arrays numpy opens directly, written and read
 //! with the discipline of the subject cache (`cache.rs`): built under a temporary sibling and
 //! renamed into place (`atomic.rs`), marked with `.surfcap-output.json` of kind `frame-set`, and
 //! never replacing a folder surfcap did not write (`output_path.rs`).
@@ -36,9 +35,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::{write_dir, write_file};
+use crate::cache_description::read_description;
 use crate::error::{Location, Result, err};
 use crate::frame_set::{Correspondence, FrameSet, FrameSetSequence, frame_error};
-use crate::io::npy::{NpyElement, expect_shape, read_npy, write_npy};
+use crate::npy::{NpyElement, expect_shape, read_npy, write_npy};
 use crate::progress::Progress;
 use crate::subject::{FrameLabel, Units, UpAxis};
 use crate::topology::{Topology, UvAtlas};
@@ -150,18 +150,8 @@ pub fn write_frame_set(path: &Path, set: &FrameSet, force: bool, progress: &dyn 
 
 fn read_header(path: &Path) -> Result<Header> {
     let hp = path.join(HEADER_FILE);
-    let text = crate::io::regular_file::read_regular_file(&hp)?;
-    let h: Header = serde_json::from_slice(&text)
-        .map_err(|e| err!(Syntax, "not a surfcap frame set description: {e}").in_file(&hp).at_line(e.line()))?;
-    if h.format != FORMAT || h.version != VERSION {
-        return Err(err!(
-            Unsupported,
-            "format {:?} version {}: expected {FORMAT:?} version {VERSION} (re-import the data with this surfcap)",
-            h.format,
-            h.version
-        )
-        .in_file(&hp));
-    }
+    let h: Header =
+        read_description(&hp, "frame set description", (FORMAT, VERSION), |h: &Header| (h.format.as_str(), h.version))?;
     let counted: usize = h.sequences.iter().map(|s| s.frames).sum();
     if counted != h.frames {
         return Err(err!(Metadata, "{} frames in all, but the sequences have {counted}", h.frames).in_file(&hp));

@@ -337,28 +337,7 @@ impl Subject {
 
     /// Global index of a frame written `sequence:frame` (0-based frame), or a bare global index.
     pub fn resolve_frame(&self, spec: &str) -> Result<usize> {
-        let bad = |why: String| err!(Metadata, "frame {spec:?}: {why}");
-        match spec.rsplit_once(':') {
-            Some((name, f)) => {
-                let (k, seq) = self.sequence(name).ok_or_else(|| {
-                    let known: Vec<&str> = self.sequences.iter().map(|s| s.name.as_str()).collect();
-                    bad(format!("no sequence {name:?}; the subject has {}", known.join(", ")))
-                })?;
-                let f: usize = f.parse().map_err(|_| bad(format!("{f:?} is not a frame number")))?;
-                if f >= seq.n_frames() {
-                    return Err(bad(format!("sequence {name:?} has frames 0 to {}", seq.n_frames() - 1)));
-                }
-                Ok(self.index.global(k, f).expect("checked above"))
-            }
-            None => {
-                let g: usize =
-                    spec.parse().map_err(|_| bad("expected sequence:frame or a global frame number".into()))?;
-                if g >= self.n_frames() {
-                    return Err(bad(format!("the subject has global frames 0 to {}", self.n_frames() - 1)));
-                }
-                Ok(g)
-            }
-        }
+        self.index.resolve(spec, "subject")
     }
 
     /// Keeps only the named sequences, in the given order.

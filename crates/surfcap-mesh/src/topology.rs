@@ -122,7 +122,7 @@ impl Topology {
 }
 
 /// Check one triangle's indices against the vertex count.
-pub(crate) fn check_triangle(t: &[u32; 3], n_vertices: usize) -> Result<()> {
+pub fn check_triangle(t: &[u32; 3], n_vertices: usize) -> Result<()> {
     if let Some(&bad) = t.iter().find(|&&k| k as usize >= n_vertices) {
         return Err(err!(
             IndexOutOfRange,
@@ -145,7 +145,9 @@ pub(crate) fn check_triangle(t: &[u32; 3], n_vertices: usize) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn first_triangle_difference(expected: &[[u32; 3]], got: &[[u32; 3]]) -> Option<String> {
+/// Where two triangle lists first differ, in words (`None` when they are equal): the first
+/// triangle that differs, else the counts.
+pub fn first_triangle_difference(expected: &[[u32; 3]], got: &[[u32; 3]]) -> Option<String> {
     if let Some(i) = expected.iter().zip(got).position(|(a, b)| a != b) {
         let (a, b) = (expected[i], got[i]);
         return Some(format!(

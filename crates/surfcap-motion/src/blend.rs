@@ -205,7 +205,7 @@ pub fn centre_path_length(frames: &[Vec<f32>], up: UpAxis) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use surfcap_synth::{WormParams, worm_subject};
+    use surfcap_builtin::{WormParams, worm_subject};
 
     /// The built-in tube's straight crawl bent onto a circle of radius 1 (left for `sign` = 1,
     /// right for -1): each frame's body is turned to the circle's tangent and placed at the arc

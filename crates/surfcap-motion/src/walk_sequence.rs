@@ -457,9 +457,9 @@ pub(crate) mod tests {
     use crate::edge_weights::edge_weights;
     use crate::essential_graph::essential_graph;
     use crate::transition_table::{TableParams, transition_table};
+    use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
     use surfcap_mesh::NoProgress;
-    use surfcap_synth::{WormParams, worm_subject};
 
     /// The built-in tube (two crawling sequences), its essential graph and walk model.
     pub(crate) fn setup() -> (Subject, Graph, WalkModel, Vec<f64>) {

@@ -5,9 +5,9 @@
 //! `--nocapture`): dance 0-40 + 40-80: inputs 1.229 and 1.364 m, Blend 0.832, linear 0.209;
 //! crane 40-80 + 100-140: inputs 0.919 and 0.880, Blend 0.881, linear 0.347.
 
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_geometry::pose_interpolation::linear_interpolation;
 use surfcap_mesh::NoProgress;
-use surfcap_mesh::import::{ImportOptions, import};
 use surfcap_motion::blend::{Lambda, Mixing, blend, centre_path_length};
 
 fn check(rel: &str, a: std::ops::Range<usize>, b: std::ops::Range<usize>) {

@@ -3,9 +3,9 @@
 //! `knight_Running_A` (25 frames), the feet being the two leg meshes (the lowest connected
 //! components). Measured values are printed (`--nocapture`).
 
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_geometry::foot_contacts::{FootContacts, foot_contacts};
 use surfcap_geometry::ground_contacts::{ContactParams, ground_contacts};
-use surfcap_mesh::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject, connected_components};
 use surfcap_motion::sequence_time_alignment::{TimeAlignmentParams, align_sequences, resample_poses};
 

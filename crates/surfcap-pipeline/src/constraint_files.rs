@@ -237,7 +237,7 @@ pub fn parse_restriction(s: &Subject, text: &str) -> Result<Restriction> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use surfcap_synth::{WormParams, worm_subject};
+    use surfcap_builtin::{WormParams, worm_subject};
 
     fn file(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
         let d = tempfile::tempdir().unwrap();

@@ -112,12 +112,12 @@ mod tests {
     use crate::graph_kind::GraphKind;
     use crate::pipeline::{CacheStore, GraphParams, Pipeline};
     use crate::walk_playback::{play_walk, play_walk_with, walk_passes};
+    use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
     use surfcap_mesh::NoProgress;
     use surfcap_motion::blend::centre;
     use surfcap_motion::transition_table::TableParams;
     use surfcap_motion::walk_sequence::Step;
-    use surfcap_synth::{WormParams, worm_subject};
 
     fn pipeline() -> (Pipeline, GraphParams) {
         let s = worm_subject(&WormParams { rings: 8, segments: 6, frames: 24, ..Default::default() }).unwrap();

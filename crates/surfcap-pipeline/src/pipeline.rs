@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_mesh::derived_cache::{DerivedCache, subject_hash};
-use surfcap_mesh::io::npy::NpyArray;
+use surfcap_mesh::npy::NpyArray;
 use surfcap_mesh::{Progress, Subject};
 use surfcap_motion::edge_weights::{EdgeWeights, edge_weights};
 use surfcap_motion::essential_graph::essential_graph;
@@ -170,7 +170,7 @@ impl Pipeline {
         decode: impl Fn(NpyArray<T>) -> Result<V>,
     ) -> Result<Fetched<V>>
     where
-        T: surfcap_mesh::io::npy::NpyElement + npyz::AutoSerialize,
+        T: surfcap_mesh::npy::NpyElement + npyz::AutoSerialize,
     {
         match (&self.store.cache, self.cache_file(key)) {
             (Some(cache), Some(file)) => {
@@ -400,8 +400,8 @@ fn check_table(p: &TableParams) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_mesh::NoProgress;
-    use surfcap_synth::{WormParams, worm_subject};
 
     fn worm() -> Subject {
         worm_subject(&WormParams { rings: 8, segments: 6, frames: 24, ..Default::default() }).unwrap()
@@ -474,7 +474,7 @@ mod tests {
         let pipe = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), false), Box::new(NoProgress));
         let table = pipe.table(&p.table).unwrap();
         let file = table.file.clone().unwrap();
-        surfcap_mesh::atomic::write_file(&file, |w| surfcap_mesh::io::npy::write_npy(w, &[2], &[1.0f64, 2.0])).unwrap();
+        surfcap_mesh::atomic::write_file(&file, |w| surfcap_mesh::npy::write_npy(w, &[2], &[1.0f64, 2.0])).unwrap();
         let fresh = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), false), Box::new(NoProgress));
         let again = fresh.table(&p.table).unwrap();
         assert!(!again.from_cache);

@@ -222,9 +222,9 @@ mod tests {
     use super::*;
     use crate::graph_kind::GraphKind;
     use crate::pipeline::CacheStore;
+    use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_mesh::NoProgress;
     use surfcap_motion::transition_table::TableParams;
-    use surfcap_synth::{WormParams, worm_subject};
 
     #[test]
     fn a_walk_with_one_transition_plays_with_its_labels_and_segments() {

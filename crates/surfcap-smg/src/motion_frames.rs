@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use surfcap_mesh::derived_cache::DerivedCache;
 use surfcap_mesh::frame_set::FrameSet;
-use surfcap_mesh::io::npy::NpyArray;
+use surfcap_mesh::npy::NpyArray;
 use surfcap_mesh::{Progress, Subject, UpAxis};
 
 use crate::error::{Error, Result};

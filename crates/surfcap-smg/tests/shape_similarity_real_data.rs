@@ -1,7 +1,7 @@
 //! Eq. 2-5 on real captures: the Vlasic crane (10,002 vertices, loose clothing) and cyclic
 //! animations.
 
-use surfcap_mesh::import::{ImportOptions, import};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_mesh::{Subject, UpAxis};
 use surfcap_smg::shape_similarity::{FrameMesh, HistogramParams, frame_histograms, shape_similarity_matrix};
 use surfcap_smg::temporal_shape_similarity::optimal_transition;
@@ -100,13 +100,13 @@ fn the_similarity_matrix_does_not_depend_on_the_thread_count() {
 fn re_meshed_frames_give_the_same_similarities() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let s = load(data.join("vlasic2008/crane"));
-    let opts = surfcap_synth::frame_remeshing::RemeshFramesOptions {
+    let opts = surfcap_builtin::frame_remeshing::RemeshFramesOptions {
         seed: 3,
         frames: Some(12),
         target_vertices: Some(4000),
         ..Default::default()
     };
-    let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&s, &opts, &surfcap_mesh::NoProgress).unwrap();
+    let set = surfcap_builtin::frame_remeshing::remesh_subject_frames(&s, &opts, &surfcap_mesh::NoProgress).unwrap();
     let remeshed = surfcap_smg::motion_frames::MotionFrames::from_frame_set(&set);
     assert!(remeshed.positions.windows(2).any(|w| w[0].len() != w[1].len()), "frames differ in vertex count");
     let shared = frames(&s);

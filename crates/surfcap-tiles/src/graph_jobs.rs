@@ -11,7 +11,7 @@
 
 use surfcap_mesh::Progress;
 use surfcap_mesh::cache::CachedFrames;
-use surfcap_mesh::io::npy::{read_npy, write_npy};
+use surfcap_mesh::npy::{read_npy, write_npy};
 use surfcap_motion::edge_weights::edge_weight_row;
 use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::sparse_essential_graph::{NO_PRED, cheapest_transitions, sparse_shortest_paths};

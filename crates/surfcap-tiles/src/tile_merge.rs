@@ -115,7 +115,7 @@ pub fn merge(store: &Store, plan: &Plan) -> Result<MergeReport> {
     let flat: Vec<f64> = graph.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
     let graph_edges = graph.edges().len();
     surfcap_mesh::atomic::write_file(&store.file("graph_edges.npy"), |w| {
-        surfcap_mesh::io::npy::write_npy(w, &[graph_edges, 3], &flat)
+        surfcap_mesh::npy::write_npy(w, &[graph_edges, 3], &flat)
     })?;
     let report = MergeReport { frames: plan.frames(), tile: plan.tile, kernel, d_scale, stages, graph_edges };
     let bytes = serde_json::to_vec_pretty(&report).expect("plain data");

@@ -4,10 +4,10 @@
 
 use std::path::Path;
 
+use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
 use surfcap_motion::transition_table::{TableParams, transition_table};
-use surfcap_synth::{WormParams, worm_subject};
 use surfcap_tiles::tile_jobs::{JobOutcome, read_scale, run_job};
 use surfcap_tiles::tile_merge::{merge, status};
 use surfcap_tiles::tile_plan::{Stage, WorkParams, create_work, open_work};
@@ -69,7 +69,7 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
         surfcap_motion::sparse_essential_graph::sparse_essential_graph(&w, subject.frame_index(), 4, &NoProgress);
     let costs = store.read_f64(Matrix::PathCosts, 0..n, 0..n).unwrap();
     assert!(costs.iter().zip(&sparse.costs).all(|(a, b)| a.to_bits() == b.to_bits()), "path costs");
-    let edges = surfcap_mesh::io::npy::read_npy::<f64>(&work.join("graph_edges.npy")).unwrap();
+    let edges = surfcap_mesh::npy::read_npy::<f64>(&work.join("graph_edges.npy")).unwrap();
     let expected: Vec<f64> = sparse.graph.edges().iter().flat_map(|e| [e.from as f64, e.to as f64, e.weight]).collect();
     assert_eq!(edges.data, expected, "the sparse essential graph");
     assert_eq!(report.graph_edges, sparse.graph.edges().len());

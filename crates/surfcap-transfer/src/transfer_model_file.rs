@@ -11,7 +11,7 @@
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
-use surfcap_mesh::io::npy::{expect_shape, read_npy, write_npy};
+use surfcap_mesh::npy::{expect_shape, read_npy, write_npy};
 
 use crate::error::{Error, Result};
 use crate::motion_transfer::MotionTransfer;

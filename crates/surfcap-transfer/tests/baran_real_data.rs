@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use nalgebra::Vector3;
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_geometry::motion_plane_alignment::procrustes;
-use surfcap_mesh::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject};
 use surfcap_transfer::semantic_deformation_transfer::SemanticDeformationTransfer;
 

@@ -5,8 +5,8 @@
 //! legs), and the densified map is compared with the truth frame by frame.
 
 use faer::Mat;
+use surfcap_formats::shared_layout::read_layout_sequence;
 use surfcap_learn::pca::{Pca, PcaMethod};
-use surfcap_mesh::io::shared_layout::read_layout_sequence;
 use surfcap_transfer::correspondence_densification::{DensifyOptions, Span, constrained_path, densify};
 
 /// A sequence's frames (f64, F x 3N) and its vertices cut into the thesis's N = 5 parts

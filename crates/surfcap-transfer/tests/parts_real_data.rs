@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use surfcap_mesh::import::{ImportOptions, import};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_proposal::{HUMANOID_NAMES, Method, agreement, propose};
@@ -102,9 +102,9 @@ fn knight_by_components_and_by_joints_gives_five_parts_on_the_right_sides() {
 
 #[test]
 fn mannequin_joints_and_rigidity_agree() {
-    use surfcap_synth::locomotion::Gait;
-    use surfcap_synth::mannequin::{BodyShape, mannequin};
-    use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
+    use surfcap_builtin::locomotion::Gait;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
     let m = mannequin(&BodyShape::average(), 3000).unwrap();
     let clips: Vec<Clip> = [Gait::Walk, Gait::Jog, Gait::Jump]
         .into_iter()

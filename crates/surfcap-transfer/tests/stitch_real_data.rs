@@ -7,8 +7,8 @@
 use std::path::PathBuf;
 
 use nalgebra::{Matrix3, Vector3};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_geometry::rotation_log_exp::exp_rotation;
-use surfcap_mesh::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject, Topology};
 use surfcap_transfer::body_parts::{BodyParts, Part};
 use surfcap_transfer::part_correction::{DEFAULT_M_NEAREST, PartCorrector};

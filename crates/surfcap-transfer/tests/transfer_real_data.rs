@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use surfcap_mesh::import::{ImportOptions, import};
+use surfcap_formats::import::{ImportOptions, import};
 use surfcap_mesh::{NoProgress, Subject};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};

@@ -287,8 +287,8 @@ mod tests {
     use super::*;
     use crate::motion_parametrisation::sample_blend_variants;
     use crate::variation_sampling::{SamplingOptions, sample_variants};
+    use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_mesh::NoProgress;
-    use surfcap_synth::{WormParams, worm_subject};
     use surfcap_transfer::body_parts::Part;
 
     fn worm() -> Subject {

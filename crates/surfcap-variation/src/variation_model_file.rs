@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use surfcap_learn::Mat;
 use surfcap_learn::gpdm::{Gpdm, GpdmSpec};
 use surfcap_learn::kernels::Kernel;
-use surfcap_mesh::io::npy::{NpyElement, expect_shape, read_npy, write_npy};
+use surfcap_mesh::npy::{NpyElement, expect_shape, read_npy, write_npy};
 use surfcap_mesh::{Topology, Units, UpAxis};
 use surfcap_transfer::BodyParts;
 use surfcap_transfer::pose_representation::Placement;

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
+use surfcap_builtin::bvh::read_bvh;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_mesh::{NoProgress, Subject};
-use surfcap_synth::bvh::read_bvh;
-use surfcap_synth::mannequin::{BodyShape, mannequin};
-use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_transfer::body_parts_proposal::{Method, propose};
 use surfcap_variation::VariationModel;
 use surfcap_variation::variation_model::TrainOptions;

@@ -7,10 +7,10 @@
 use std::path::PathBuf;
 
 use serde_json::json;
+use surfcap_formats::export::{ExportFormat, export};
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_mesh::export::{ExportFormat, export};
-use surfcap_mesh::io::npy::write_npy;
+use surfcap_mesh::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::path_following::PathSearch;
 
@@ -77,8 +77,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let source = a.output.join("source");
     export(&built, ExportFormat::Npy, &source, ctx.export_options(), &bar)?;
     say(&format!("2. wrote it as source files (template.obj + positions.npy) in {}", source.display()));
-    let opts = surfcap_mesh::import::ImportOptions { name: Some(built.name.clone()), ..Default::default() };
-    let imported = surfcap_mesh::import::import(std::slice::from_ref(&source), &opts, &bar)?;
+    let opts = surfcap_formats::import::ImportOptions { name: Some(built.name.clone()), ..Default::default() };
+    let imported = surfcap_formats::import::import(std::slice::from_ref(&source), &opts, &bar)?;
     let subject = imported.subject;
     anyhow::ensure!(
         built.sequences().iter().all(|b| subject.sequence(&b.name).is_some_and(|(_, a)| a == b)),

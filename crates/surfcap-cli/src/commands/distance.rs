@@ -7,7 +7,7 @@ use anyhow::Context;
 use serde_json::json;
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_distance::PoseMetric;
-use surfcap_mesh::io::npy::write_npy;
+use surfcap_mesh::npy::write_npy;
 
 use crate::options::{CacheOpts, SourceOpts, open};
 

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_formats::export::{ExportFormat, ExportOptions, export};
 
 use crate::options::{SourceOpts, open};
 
@@ -40,7 +40,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         let bar = crate::progress::Bar::new(ctx);
         let set = surfcap_mesh::frame_set_cache::read_frame_set(&a.subject, &bar)?;
-        let written = surfcap_mesh::export::export_frame_set(&set, a.format, &a.output, ctx.export_options(), &bar)
+        let written = surfcap_formats::export::export_frame_set(&set, a.format, &a.output, ctx.export_options(), &bar)
             .with_context(|| format!("exporting {:?}", set.name))?;
         ctx.result(
             &json!({ "written": written, "frames": set.frame_count(), "sequences": set.sequences().len() }),

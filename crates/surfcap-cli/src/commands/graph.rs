@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use serde_json::json;
 use surfcap_mesh::Subject;
-use surfcap_mesh::io::npy::write_npy;
+use surfcap_mesh::npy::write_npy;
 use surfcap_motion::edge_weights::EdgeWeights;
 use surfcap_motion::graph::Graph;
 

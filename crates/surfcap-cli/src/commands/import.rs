@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use serde_json::json;
 
+use surfcap_formats::import::{ImportedData, ImportedFrames};
 use surfcap_mesh::FrameSet;
-use surfcap_mesh::import::{ImportedData, ImportedFrames};
 
 use crate::options::SourceOpts;
 
@@ -54,7 +54,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
     let opts = a.source.to_import(a.name.clone())?;
-    let imported = match surfcap_mesh::import::import_any(&a.sources, &opts, &bar)? {
+    let imported = match surfcap_formats::import::import_any(&a.sources, &opts, &bar)? {
         ImportedData::Subject(i) => i,
         ImportedData::FrameSet(f) => return write_frame_set(ctx, &a, f, t0),
     };

@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use serde_json::json;
+use surfcap_formats::import::ImportedData;
 use surfcap_mesh::FrameSet;
-use surfcap_mesh::import::ImportedData;
 
 use crate::options::SourceOpts;
 use crate::subject_summary::{describe, print_summary};
@@ -20,7 +20,7 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
-    match surfcap_mesh::import::open_any(&a.subject, &a.source.to_import(None)?, &bar)? {
+    match surfcap_formats::import::open_any(&a.subject, &a.source.to_import(None)?, &bar)? {
         ImportedData::Subject(i) => {
             for n in &i.notes {
                 ctx.note(n);

@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use serde_json::json;
+use surfcap_formats::export::{ExportFormat, export};
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::transition_frames::FrameMix;
 

@@ -1,7 +1,7 @@
 //! `surfcap remesh-frames <subject> -o out.frames --seed S [--vertices N] [--sequences a,b]
 //! [--frames K]`: a frame set with known answers (issue 17 item 1): every frame of a
 //! shared-topology subject re-meshed on its own (Botsch-Kobbelt isotropic re-meshing onto the
-//! frame's surface, `surfcap_synth::frame_remeshing`), so each frame has its own vertices and
+//! frame's surface, `surfcap_builtin::frame_remeshing`), so each frame has its own vertices and
 //! triangles, as the per-frame reconstructions of Huang et al. 2009; each new vertex's source
 //! triangle and barycentric coordinates are written as `correspondence_<k>.npy`.
 
@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_synth::frame_remeshing::{RemeshFramesOptions, remesh_subject_frames};
+use surfcap_builtin::frame_remeshing::{RemeshFramesOptions, remesh_subject_frames};
 
 use crate::options::{SourceOpts, open};
 

@@ -14,8 +14,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
+use surfcap_formats::import::{ImportedData, open_any};
 use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
-use surfcap_mesh::import::{ImportedData, open_any};
 use surfcap_mesh::{Sequence, Subject, Topology, Units};
 use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::path_optimisation::{
@@ -115,7 +115,7 @@ pub struct QueryArgs {
     /// glb, obj, ply, pc2, npy, usda or abc (default: from the extension, else glb); a frame
     /// set's output (every frame its own mesh) is glb, abc or obj.
     #[arg(long)]
-    pub format: Option<surfcap_mesh::export::ExportFormat>,
+    pub format: Option<surfcap_formats::export::ExportFormat>,
     #[command(flatten)]
     pub constraints: ConstraintOpts,
 }

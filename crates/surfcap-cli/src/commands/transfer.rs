@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_mesh::export::export;
+use surfcap_formats::export::export;
 use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::TrainOptions;

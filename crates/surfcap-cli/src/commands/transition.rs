@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_mesh::export::{ExportFormat, export};
+use surfcap_formats::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::transition_frames::transition_frames;
 

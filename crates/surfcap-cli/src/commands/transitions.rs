@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_mesh::io::npy::write_npy;
+use surfcap_mesh::npy::write_npy;
 
 use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
 

@@ -10,8 +10,8 @@ use std::str::FromStr;
 use std::time::Instant;
 
 use serde_json::json;
+use surfcap_formats::export::{ExportFormat, export};
 use surfcap_learn::gpdm::GpdmOptions;
-use surfcap_mesh::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence, Subject};
 use surfcap_variation::VariationModel;
 use surfcap_variation::motion_parametrisation::{

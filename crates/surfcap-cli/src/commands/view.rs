@@ -7,7 +7,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use surfcap_mesh::import::ImportedData;
+use surfcap_formats::import::ImportedData;
 use surfcap_view::server::{ServeOptions, serve};
 use surfcap_view::{Overlay, ViewItem};
 
@@ -61,7 +61,7 @@ fn is_output(p: &Path) -> bool {
 }
 
 /// The frames' textures of a frame-set glb with a texture per frame (written by
-/// `surfcap_mesh::io::glb_frame_set::write_glb_frame_set_textured`, which counts them in the
+/// `surfcap_formats::glb_frame_set::write_glb_frame_set_textured`, which counts them in the
 /// root's `extras.surfcap.textures`); `None` for anything else. The file is read a second time
 /// only when it has textures.
 fn glb_textures(p: &Path) -> anyhow::Result<Option<surfcap_mesh::FrameTextures>> {
@@ -69,13 +69,13 @@ fn glb_textures(p: &Path) -> anyhow::Result<Option<surfcap_mesh::FrameTextures>>
         return Ok(None);
     }
     let bytes = surfcap_mesh::read_regular_file(p)?;
-    let textured = surfcap_mesh::io::glb_frame_set::frame_set_meta(&bytes)
+    let textured = surfcap_formats::glb_frame_set::frame_set_meta(&bytes)
         .is_some_and(|m| m["textures"].as_u64().is_some_and(|n| n > 0));
     if !textured {
         return Ok(None);
     }
     let (_, textures) =
-        surfcap_mesh::io::glb_frame_set::parse_glb_frame_set_textured(&bytes, "").map_err(|e| e.in_file(p))?;
+        surfcap_formats::glb_frame_set::parse_glb_frame_set_textured(&bytes, "").map_err(|e| e.in_file(p))?;
     Ok(textures)
 }
 
@@ -83,7 +83,7 @@ fn glb_textures(p: &Path) -> anyhow::Result<Option<surfcap_mesh::FrameTextures>>
 /// beside `output` when it has one sequence.
 fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> anyhow::Result<Vec<ViewItem>> {
     let bar = crate::progress::Bar::new(ctx);
-    let mut items = match surfcap_mesh::import::open_any(p, &a.source.to_import(None)?, &bar)? {
+    let mut items = match surfcap_formats::import::open_any(p, &a.source.to_import(None)?, &bar)? {
         ImportedData::Subject(i) => {
             for n in &i.notes {
                 ctx.note(n);

@@ -157,7 +157,7 @@ fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
                 mesh.display()
             );
             let mut obj = Vec::new();
-            surfcap_mesh::io::obj::write_obj(&mut obj, topology, positions)?;
+            surfcap_formats::obj::write_obj(&mut obj, topology, positions)?;
             let source = GeneratorSource {
                 topology,
                 positions,
@@ -229,7 +229,7 @@ fn paint(ctx: &crate::Ctx, a: &PaintArgs) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.mesh])?;
     let t0 = Instant::now();
     let (topology, positions, up) = if is_obj(&a.mesh) {
-        let obj = surfcap_mesh::io::obj::read_obj(&a.mesh)?;
+        let obj = surfcap_formats::obj::read_obj(&a.mesh)?;
         (obj.topology().map_err(|e| e.in_file(&a.mesh))?, obj.positions, 1)
     } else {
         let s = open(ctx, &a.mesh, &SourceOpts::default())?;

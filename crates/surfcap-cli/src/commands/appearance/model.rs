@@ -111,7 +111,7 @@ pub fn atlas_mask(
     // A single OBJ is a mesh, not a subject (no frame rate to ask for); anything else is
     // opened as a subject, whose frames may name the maps.
     let (topology, names) = if mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
-        (surfcap_mesh::io::obj::read_obj(mesh)?.topology()?, None)
+        (surfcap_formats::obj::read_obj(mesh)?.topology()?, None)
     } else {
         let s = open(ctx, mesh, source)?;
         let names =

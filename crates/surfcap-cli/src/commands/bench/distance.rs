@@ -7,13 +7,13 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde_json::json;
+use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_geometry::distance_matrix::{DistanceMatrix, SLAB_BYTES, alignment_gram, slab_triangles};
 use surfcap_geometry::motion_plane_alignment::rotation_about_up;
 use surfcap_geometry::pose_distance::{
     BLOCK, BLOCK_FLOATS, DistanceKernel, FRAME_FLOATS, deformation_distance_with, kernel_name, triangle_frames,
 };
 use surfcap_mesh::{NoProgress, Sequence, Subject};
-use surfcap_synth::{WormParams, worm_subject};
 
 use super::{open_quietly, peak_rss};
 

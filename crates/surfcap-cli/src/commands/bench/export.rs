@@ -14,9 +14,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_mesh::export::{ExportFormat, ExportOptions, export};
+use surfcap_builtin::{WormParams, worm_subject};
+use surfcap_formats::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
-use surfcap_synth::{WormParams, worm_subject};
 
 use super::peak_rss;
 

@@ -91,9 +91,9 @@ pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
     };
 
     // 2. GPDM on the procedural mannequin (walk + jog), each frame centred on its centroid.
-    use surfcap_synth::locomotion::Gait;
-    use surfcap_synth::mannequin::{BodyShape, mannequin};
-    use surfcap_synth::mannequin_subject::Clip;
+    use surfcap_builtin::locomotion::Gait;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::mannequin_subject::Clip;
     let m = mannequin(&BodyShape::average(), a.vertices)?;
     let fps = 30.0;
     let halves = [a.frames / 2, a.frames - a.frames / 2];

@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
+use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
-use surfcap_synth::{WormParams, worm_subject};
 
 use super::peak_rss;
 use crate::output::print_json;
@@ -23,9 +23,9 @@ pub(super) fn run(
 ) -> anyhow::Result<()> {
     if in_process {
         let path = subject.context("--in-process needs --subject")?;
-        let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
+        let opts = surfcap_formats::import::ImportOptions { fps, ..Default::default() };
         let t0 = Instant::now();
-        let s = surfcap_mesh::import::open_subject(&path, &opts, &NoProgress)?.subject;
+        let s = surfcap_formats::import::open_subject(&path, &opts, &NoProgress)?.subject;
         let secs = t0.elapsed().as_secs_f64();
         let bytes = s.sequences().iter().map(|q| std::mem::size_of_val(q.positions())).sum::<usize>();
         print_json(&json!({

@@ -127,7 +127,7 @@ pub enum What {
     Export {
         /// glb, abc or usda.
         #[arg(long, default_value = "glb")]
-        format: surfcap_mesh::export::ExportFormat,
+        format: surfcap_formats::export::ExportFormat,
         /// Lengths in frames (at 30 fps), comma-separated.
         #[arg(long, default_value = "18000", value_delimiter = ',', value_parser = crate::options::count)]
         frames: Vec<usize>,
@@ -155,8 +155,8 @@ pub enum What {
 
 /// Opens a benchmark's subject without progress output (the timings are printed instead).
 pub(super) fn open_quietly(path: &std::path::Path, fps: Option<f64>) -> anyhow::Result<Subject> {
-    let opts = surfcap_mesh::import::ImportOptions { fps, ..Default::default() };
-    Ok(surfcap_mesh::import::open_subject(path, &opts, &NoProgress)?.subject)
+    let opts = surfcap_formats::import::ImportOptions { fps, ..Default::default() };
+    Ok(surfcap_formats::import::open_subject(path, &opts, &NoProgress)?.subject)
 }
 
 /// Peak resident set size of this process (Linux `VmHWM`), in bytes.

@@ -27,8 +27,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
+use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
-use surfcap_synth::{WormParams, worm_subject};
 use surfcap_tiles::tile_merge::MergeReport;
 use surfcap_tiles::tile_plan::{Plan, Stage, open_work};
 use surfcap_tiles::tile_store::JobRecord;

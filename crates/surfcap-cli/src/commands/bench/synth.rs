@@ -31,11 +31,11 @@ pub struct SynthBench {
 pub(super) fn run(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
     let SynthBench { frames, vertices, alpha, seed, cache_dir, branching } = b;
     use rand::{Rng, SeedableRng};
+    use surfcap_builtin::locomotion::Gait;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
     use surfcap_motion::path_following::{Curve, PathSearch, follow_path};
     use surfcap_motion::timed_walk::TimedGraph;
-    use surfcap_synth::locomotion::Gait;
-    use surfcap_synth::mannequin::{BodyShape, mannequin};
-    use surfcap_synth::mannequin_subject::{Clip, mannequin_subject};
     anyhow::ensure!(frames >= 200, "--frames {frames}: expected at least 200");
     let t0 = Instant::now();
     let m = mannequin(&BodyShape::average(), vertices)?;

@@ -8,8 +8,8 @@
 use std::time::Instant;
 
 use serde_json::json;
+use surfcap_builtin::mannequin::BodyShape;
 use surfcap_eval::transfer_eval::{CMU_TRAIN, mannequin_cmu_subject};
-use surfcap_synth::mannequin::BodyShape;
 use surfcap_transfer::body_parts_proposal::{Method, propose};
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_synth::{WormParams, worm_subject};
+use surfcap_builtin::{WormParams, worm_subject};
 
 use super::open_quietly;
 use crate::options::TableOpts;

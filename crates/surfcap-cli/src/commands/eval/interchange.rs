@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use surfcap_eval::interchange_eval::{InterchangeOptions, interchange_eval};
-use surfcap_mesh::export::ExportFormat;
+use surfcap_formats::export::ExportFormat;
 
 pub fn run(
     ctx: &crate::Ctx,

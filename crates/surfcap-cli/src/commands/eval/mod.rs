@@ -400,7 +400,7 @@ pub enum What {
         datasets: Vec<String>,
         /// Formats to go through.
         #[arg(long, value_delimiter = ',', default_value = "abc,usda")]
-        formats: Vec<surfcap_mesh::export::ExportFormat>,
+        formats: Vec<surfcap_formats::export::ExportFormat>,
         /// Folder for the report (interchange.json); the exported files go to a temporary
         /// folder and are removed once read back.
         #[arg(short, long, default_value = "interchange-eval")]
@@ -601,7 +601,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Transfer { data, cases, sizes, components, seed, whole_body, overlap_rings, output } => {
             use surfcap_eval::transfer_eval::{CaseParts, kaykit_case, mannequin_case};
             let parts = if whole_body { CaseParts::WholeBody } else { CaseParts::Proposed { overlap_rings } };
-            use surfcap_synth::mannequin::BodyShape;
+            use surfcap_builtin::mannequin::BodyShape;
             let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
             let mut built = Vec::new();
             let mut catlion = None;

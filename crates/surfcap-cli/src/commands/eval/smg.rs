@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use surfcap_mesh::import::{ImportedData, open_any};
+use surfcap_formats::import::{ImportedData, open_any};
 
 use surfcap_eval::smg_comparison::{ESSENTIAL_GRAPH, SmgComparison, default_graph_params, smg_comparison};
 use surfcap_eval::smg_eval::{
@@ -54,7 +54,7 @@ pub fn run(
     let bar = crate::progress::Bar::new(ctx);
     // The subject: the CMU mannequin, or the user's; a frame set is used as it is.
     let data = match &input {
-        None => ImportedData::Subject(surfcap_mesh::import::Imported {
+        None => ImportedData::Subject(surfcap_formats::import::Imported {
             subject: locomotion_subject(data, vertices)?,
             notes: Vec::new(),
             sources: Vec::new(),
@@ -70,8 +70,8 @@ pub fn run(
             (MotionFrames::from_subject(&s.subject), "shared topology".to_string(), Some(s.subject))
         }
         (ImportedData::Subject(s), Some(seed)) => {
-            let opts = surfcap_synth::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
-            let set = surfcap_synth::frame_remeshing::remesh_subject_frames(&s.subject, &opts, &bar)?;
+            let opts = surfcap_builtin::frame_remeshing::RemeshFramesOptions { seed, ..Default::default() };
+            let set = surfcap_builtin::frame_remeshing::remesh_subject_frames(&s.subject, &opts, &bar)?;
             (MotionFrames::from_frame_set(&set), format!("every frame re-meshed (seed {seed})"), None)
         }
     };

@@ -2,15 +2,15 @@
 //! mannequin moved by motion capture or by procedural locomotion, written as a subject cache
 //! with per-sequence tags and ground-truth joints (`--uv-atlas`: with a UV atlas).
 //! `surfcap synth --head ../shared/data/leeperrysmith_head -o head.subject`: the head scan
-//! bent into three sequences (nod, turn, tilt; `surfcap_synth::head_motion`), keeping its UV
+//! bent into three sequences (nod, turn, tilt; `surfcap_builtin::head_motion`), keeping its UV
 //! atlas, the textured subject of thesis Fig. 7.1.
 
 use std::path::Path;
 use std::time::Instant;
 
 use serde_json::json;
+use surfcap_builtin::head_motion::head_motion_subject;
 use surfcap_mesh::Subject;
-use surfcap_synth::head_motion::head_motion_subject;
 
 use crate::mannequin_spec::{MannequinArgs, build};
 
@@ -65,7 +65,7 @@ pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
 /// The head scan of `head` (a folder's `template.obj`, or an OBJ) bent into its sequences.
 fn head_subject(head: &Path, frames_per_sequence: usize, name: Option<&str>) -> anyhow::Result<Subject> {
     let obj = if head.is_dir() { head.join("template.obj") } else { head.to_path_buf() };
-    let mesh = surfcap_mesh::io::obj::read_obj(&obj)?;
+    let mesh = surfcap_formats::obj::read_obj(&obj)?;
     let topology = mesh.topology().map_err(|e| e.in_file(&obj))?;
     anyhow::ensure!(
         topology.uv().is_some(),
