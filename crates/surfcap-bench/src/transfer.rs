@@ -1,4 +1,4 @@
-//! `surfcap bench transfer`: the speed targets of motion transfer (issue 18 item 8) on 2 cores:
+//! `surfcap-bench transfer`: the speed targets of motion transfer (thesis chapter 5) on 2 cores:
 //! training with 350 pairs, 5 body parts, 20 components per part and fitted hyper-parameters
 //! under 10 s; the transfer of a 100-frame motion to a 10,000-vertex target, part correction
 //! and stitching included, under 10 s. The subjects are two built-in mannequins (an average
@@ -14,8 +14,10 @@ use surfcap_transfer::body_parts_proposal::{Method, propose};
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 
+use crate::measure::verdict;
+
 #[derive(clap::Args, Debug)]
-pub struct TransferArgs {
+pub struct Args {
     /// The shared data folder (the CMU clips).
     #[arg(long, default_value = "../shared/data")]
     pub data: std::path::PathBuf,
@@ -42,11 +44,7 @@ pub struct TransferArgs {
     pub seed: u64,
 }
 
-fn verdict(secs: f64, target: f64) -> &'static str {
-    if secs < target { "met" } else { "NOT met" }
-}
-
-pub fn run(ctx: &crate::Ctx, a: &TransferArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     ctx.say("building the two mannequins and their CMU clips (not timed) ...");
     let source = mannequin_cmu_subject(&a.data, "average", &BodyShape::average(), a.source_vertices)?;
     let target = mannequin_cmu_subject(&a.data, "heavy", &BodyShape::heavy(), a.target_vertices)?;

@@ -1,4 +1,4 @@
-//! `surfcap bench learn`: the speed targets of the learning toolkit (surfcap-learn, thesis
+//! `surfcap-bench learn`: the speed targets of the learning toolkit (surfcap-learn, thesis
 //! chapters 5-6) on 2 cores: GP regression with fitted hyper-parameters plus prediction on
 //! 2,000 points of 20 dimensions (target < 5 s; the fit starts from the median-distance guess,
 //! whose cost is included), one GPDM fit on 400 frames of ~3,000
@@ -16,8 +16,10 @@ use surfcap_learn::hybrid_monte_carlo::{HmcOptions, standard_normal};
 use surfcap_learn::kernels::Kernel;
 use surfcap_learn::pca::{Pca, PcaMethod};
 
+use crate::measure::verdict;
+
 #[derive(clap::Args, Debug)]
-pub struct LearnArgs {
+pub struct Args {
     /// GP training points.
     #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
     pub gp_points: usize,
@@ -44,11 +46,7 @@ pub struct LearnArgs {
     pub seed: u64,
 }
 
-fn verdict(secs: f64, target: f64) -> &'static str {
-    if secs < target { "met" } else { "NOT met" }
-}
-
-pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.gp_points >= 10 && a.gp_dims >= 1, "--gp-points >= 10 and --gp-dims >= 1 expected");
     anyhow::ensure!(a.frames >= 20 && a.hmc_frames >= 2 && a.hmc_samples >= 1, "--frames >= 20, --hmc-frames >= 2");
     // 1. GP regression: y = sin(x . w1) + 0.5 cos(x . w2) + noise (sd 0.1), inputs in [-1, 1]^d.
