@@ -15,6 +15,7 @@ use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOp
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 
 use crate::measure::verdict;
+use crate::options::SeedOpt;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -40,8 +41,8 @@ pub struct Args {
     /// gives just over 10,000).
     #[arg(long, default_value_t = 10800, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub target_vertices: usize,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub seed: SeedOpt,
 }
 
 pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
@@ -66,7 +67,7 @@ pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     let src = PreparedSubject::new(&source, &train_seqs)?;
     let tgt = PreparedSubject::new(&target, &train_seqs)?;
     let mut opts = TrainOptions { components: a.components, ..TrainOptions::default() };
-    opts.mapping.fit.seed = a.seed;
+    opts.mapping.fit.seed = a.seed.seed;
     let (model, report) = MotionTransfer::train(&src, &sp, &pca, &tgt, &tp, &pca, &pairs, &opts)?;
     let train_seconds = t_train.elapsed().as_secs_f64();
 

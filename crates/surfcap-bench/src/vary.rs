@@ -24,6 +24,7 @@ use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_sampling::{SamplingOptions, sample_variants};
 
 use crate::measure::{cpu_seconds, load_average, verdict};
+use crate::options::SeedOpt;
 
 /// The CMU clips of the benchmark: walk, turn left, turn right, jog.
 pub const CLIPS: [&str; 4] = ["16_15", "16_17", "16_19", "16_36"];
@@ -42,8 +43,8 @@ pub struct Args {
     /// Most L-BFGS iterations of every part's GPDM fit (`vary train --iterations`).
     #[arg(long, default_value_t = 400, value_parser = crate::options::count)]
     pub iterations: usize,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub seed: SeedOpt,
 }
 
 /// The mannequin of about `vertices` vertices moved by [`CLIPS`] (30 fps, metres).
@@ -82,7 +83,7 @@ pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     let walk = subject.sequences()[0].name.clone();
     ctx.say(&format!("sampling {} variants of {walk} ...", a.count));
     let (t, c) = (Instant::now(), cpu_seconds());
-    let (variants, chains) = sample_variants(&model, &walk, a.count, a.seed, &SamplingOptions::default())?;
+    let (variants, chains) = sample_variants(&model, &walk, a.count, a.seed.seed, &SamplingOptions::default())?;
     let sample_seconds = t.elapsed().as_secs_f64();
     let sample_cpu = cpu_seconds() - c;
     let load_after = load_average();

@@ -8,7 +8,7 @@ use surfcap_eval::sparse_graph_eval::{SparseGraphEval, SparseGraphEvalOptions, c
 use surfcap_pipeline::{GraphKind, GraphParams};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use crate::options::{CacheOpts, Positive, TableOpts};
+use crate::options::{AlphaOpt, CacheOpts, TableOpts};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -24,9 +24,8 @@ pub struct Args {
     /// Values of k (transitions kept per frame).
     #[arg(long = "k", value_delimiter = ',', default_value = "2,4,8,16,32,64", value_parser = crate::options::count)]
     pub ks: Vec<usize>,
-    /// Tolerance alpha of the edge weights.
-    #[arg(long, default_value = "0.05")]
-    pub alpha: Positive,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
     #[command(flatten)]
     pub table: TableOpts,
     #[command(flatten)]
@@ -48,7 +47,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         a.fps,
         subject.n_frames()
     ));
-    let graph = GraphParams { table: a.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: a.alpha.0 };
+    let graph = GraphParams { table: a.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
     let mut opts = SparseGraphEvalOptions::cmu(graph);
     opts.ks.clone_from(&a.ks);
     let bar = crate::progress::Bar::new(ctx);
