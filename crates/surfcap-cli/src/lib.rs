@@ -10,18 +10,18 @@
 //! nothing else there; results stay on stdout.
 
 mod body_parts;
-mod commands;
+pub mod commands;
 mod files;
 mod frame_appearance;
 mod html_report;
 mod limits;
 mod mannequin_spec;
-mod options;
-mod output;
-mod progress;
+pub mod options;
+pub mod output;
+pub mod progress;
 mod signals;
 mod subject_summary;
-mod synthesis;
+pub mod synthesis;
 mod travel;
 mod view_items;
 
@@ -35,6 +35,16 @@ use clap::{Parser, Subcommand};
 #[derive(Parser, Debug)]
 #[command(name = "surfcap", version, about, long_about = None)]
 pub struct Cli {
+    #[command(flatten)]
+    globals: GlobalOpts,
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The options of every command of a front end (`surfcap`, `surfcap-bench`): how results are
+/// reported and whether folder outputs may replace what surfcap did not write.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct GlobalOpts {
     /// No progress bars and no notes; only results and errors.
     #[arg(long, global = true)]
     quiet: bool,
@@ -45,8 +55,49 @@ pub struct Cli {
     /// only an empty folder or surfcap's own earlier output of the same kind is replaced).
     #[arg(long, global = true)]
     force: bool,
-    #[command(subcommand)]
-    command: Command,
+}
+
+/// A command-line program run by [`run_front`]: its parsed command line.
+pub trait Front: Parser {
+    /// The program's name, in its error messages (`<NAME>: error: ...`).
+    const NAME: &'static str;
+    /// Its global options.
+    fn globals(&self) -> &GlobalOpts;
+    /// Runs the parsed command.
+    fn run(self, ctx: &Ctx) -> anyhow::Result<()>;
+}
+
+impl Front for Cli {
+    const NAME: &'static str = "surfcap";
+
+    fn globals(&self) -> &GlobalOpts {
+        &self.globals
+    }
+
+    fn run(self, ctx: &Ctx) -> anyhow::Result<()> {
+        match self.command {
+            Command::Import(a) => commands::import::run(ctx, a),
+            Command::Info(a) => commands::info::run(ctx, a),
+            Command::Export(a) => commands::export::run(ctx, a),
+            Command::Distance(a) => commands::distance::run(ctx, a),
+            Command::Interpolate(a) => commands::interpolate::run(ctx, a),
+            Command::Eval(a) => commands::eval::run(ctx, a),
+            Command::Transitions(a) => commands::transitions::run(ctx, a),
+            Command::Transition(a) => commands::transition::run(ctx, a),
+            Command::Synth(a) => commands::synth::run(ctx, *a),
+            Command::Graph(a) => commands::graph::run(ctx, a),
+            Command::Demo(a) => commands::demo::run(ctx, a),
+            Command::View(a) => commands::view::run(ctx, a),
+            Command::Report(a) => commands::report::run(ctx, a),
+            Command::Transfer(c) => commands::transfer::run(ctx, c),
+            Command::Parts(a) => commands::parts::run(ctx, a),
+            Command::RemeshFrames(a) => commands::remesh_frames::run(ctx, a),
+            Command::Smg(c) => commands::smg::run(ctx, c),
+            Command::Appearance(c) => commands::appearance::run(ctx, c),
+            Command::Vary(c) => commands::vary::run(ctx, c),
+            Command::Tiles(c) => commands::tiles::run(ctx, c),
+        }
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -78,8 +129,6 @@ enum Command {
     /// exported, its pose distances, an interpolation, its essential graph and a path-following
     /// animation.
     Demo(commands::demo::Args),
-    /// Measure speed and memory (loading a subject).
-    Bench(commands::bench::Args),
     /// Play sequences in the browser: a local server (127.0.0.1) with a three.js page; original
     /// frames green, synthetic red, paths and centre trajectories overlaid, side by side.
     View(commands::view::Args),
@@ -146,21 +195,28 @@ fn messages(e: &anyhow::Error) -> Vec<String> {
 }
 
 /// Prints a failure: under `--json` one JSON object on stderr (`error`, `causes`, `exit_code`,
-/// and `help` for argument errors; stdout stays for results), else `surfcap: error: ...` and
+/// and `help` for argument errors; stdout stays for results), else `<program>: error: ...` and
 /// one `caused by` line per cause.
-fn report_failure(json: bool, error: &str, causes: &[String], code: u8) {
+fn report_failure(program: &str, json: bool, error: &str, causes: &[String], code: u8) {
     if json {
         eprintln!("{}", serde_json::json!({ "error": error, "causes": causes, "exit_code": code }));
     } else {
-        eprintln!("surfcap: error: {error}");
+        eprintln!("{program}: error: {error}");
         for c in causes {
             eprintln!("  caused by: {c}");
         }
     }
 }
 
-/// Runs the program on the process's arguments and returns its exit code.
+/// Runs the `surfcap` program on the process's arguments and returns its exit code.
 pub fn main() -> ExitCode {
+    run_front::<Cli>()
+}
+
+/// Runs a front-end program `F` on the process's arguments and returns its exit code (see the
+/// crate's documentation): parses the command line, reports argument errors, failures and
+/// panics (as JSON under `--json`), and removes live temporaries on SIGINT/SIGTERM.
+pub fn run_front<F: Front>() -> ExitCode {
     restore_default_sigpipe();
     let json = json_requested();
     let default_hook = std::panic::take_hook();
@@ -179,13 +235,13 @@ pub fn main() -> ExitCode {
                 .or_else(|| info.payload().downcast_ref::<String>().cloned())
                 .unwrap_or_default();
             let at = info.location().map(|l| format!("{}:{}", l.file(), l.line())).unwrap_or_default();
-            report_failure(true, bug, &[format!("panicked at {at}: {what}")], 2);
+            report_failure(F::NAME, true, bug, &[format!("panicked at {at}: {what}")], 2);
         } else {
             default_hook(info);
-            eprintln!("surfcap: {bug}");
+            eprintln!("{}: {bug}", F::NAME);
         }
     }));
-    let cli = match Cli::try_parse() {
+    let cli = match F::try_parse() {
         Ok(c) => c,
         Err(e) => {
             let done = matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion);
@@ -206,44 +262,24 @@ pub fn main() -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let ctx = Ctx { quiet: cli.quiet, json: cli.json, force: cli.force };
+    let g = *cli.globals();
+    let ctx = Ctx { quiet: g.quiet, json: g.json, force: g.force };
     signals::remove_temporaries_on_signals();
-    let result = std::panic::catch_unwind(|| {
+    // Unwind-safe enough: after a panic nothing of the run is used again (the program exits).
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         // The tests' way to reach the internal-error path (no input is known to panic): an
         // environment variable no user sets by accident.
         if std::env::var_os("SURFCAP_TEST_INTERNAL_ERROR").is_some() {
             panic!("SURFCAP_TEST_INTERNAL_ERROR is set");
         }
-        match cli.command {
-            Command::Import(a) => commands::import::run(&ctx, a),
-            Command::Info(a) => commands::info::run(&ctx, a),
-            Command::Export(a) => commands::export::run(&ctx, a),
-            Command::Distance(a) => commands::distance::run(&ctx, a),
-            Command::Interpolate(a) => commands::interpolate::run(&ctx, a),
-            Command::Eval(a) => commands::eval::run(&ctx, a),
-            Command::Transitions(a) => commands::transitions::run(&ctx, a),
-            Command::Transition(a) => commands::transition::run(&ctx, a),
-            Command::Synth(a) => commands::synth::run(&ctx, *a),
-            Command::Graph(a) => commands::graph::run(&ctx, a),
-            Command::Demo(a) => commands::demo::run(&ctx, a),
-            Command::Bench(a) => commands::bench::run(&ctx, a),
-            Command::View(a) => commands::view::run(&ctx, a),
-            Command::Report(a) => commands::report::run(&ctx, a),
-            Command::Transfer(c) => commands::transfer::run(&ctx, c),
-            Command::Parts(a) => commands::parts::run(&ctx, a),
-            Command::RemeshFrames(a) => commands::remesh_frames::run(&ctx, a),
-            Command::Smg(c) => commands::smg::run(&ctx, c),
-            Command::Appearance(c) => commands::appearance::run(&ctx, c),
-            Command::Vary(c) => commands::vary::run(&ctx, c),
-            Command::Tiles(c) => commands::tiles::run(&ctx, c),
-        }
-    });
+        cli.run(&ctx)
+    }));
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
             let code = if e.is::<synthesis::ConstraintsMissed>() { 3 } else { 1 };
             let m = messages(&e);
-            report_failure(json, &m[0], &m[1..], code);
+            report_failure(F::NAME, json, &m[0], &m[1..], code);
             ExitCode::from(code)
         }
         Err(_) => ExitCode::from(2),

@@ -1,8 +1,11 @@
-//! The options several commands share, in one place: what the sources do not say
-//! ([`SourceOpts`]), where derived products are cached ([`CacheOpts`]), how the flow between
-//! texture maps runs ([`FlowArgs`]), the transition table
-//! ([`TableOpts`]), the graph ([`GraphOpts`]), where an animation goes ([`OutOpts`]) and when
-//! its constraints count as missed ([`ConstraintOpts`]).
+//! The options several commands share, each group defined once and flattened
+//! (`#[command(flatten)]`) into the commands that take it: the subject a command reads
+//! ([`SubjectArgs`]) and what its sources do not say ([`SourceOpts`]), where derived products are
+//! cached ([`CacheOpts`]), the pose distance ([`DistanceOpts`]), how the flow between texture
+//! maps runs ([`FlowArgs`]), the transition table ([`TableOpts`]), the edge weights'
+//! tolerance ([`AlphaOpt`]), the graph ([`GraphOpts`]), where an animation goes ([`OutOpts`]),
+//! when its constraints count as missed ([`ConstraintOpts`]), a plain seed ([`SeedOpt`]) and
+//! the viewer's port ([`PortOpt`]).
 //!
 //! Option values are parsed by `FromStr` (clap calls it): library types implement it
 //! (`UpAxis`, `ExportFormat`, `PoseMetric`, `StretchInterpolation`, `GraphKind`), and the few
@@ -18,6 +21,8 @@ use std::str::FromStr;
 
 use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
 use surfcap_appearance::{FlowOptions, PreprocessOptions};
+use surfcap_geometry::distance_matrix::DistanceParams;
+use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_formats::export::ExportFormat;
 use surfcap_formats::import::ImportOptions;
 use surfcap_mesh::{Subject, Units, UpAxis};
@@ -44,6 +49,72 @@ impl SourceOpts {
     pub fn to_import(&self, name: Option<String>) -> anyhow::Result<ImportOptions> {
         Ok(ImportOptions { name, fps: self.fps, up_axis: self.up_axis, units: self.units.as_deref().map(Units::parse) })
     }
+}
+
+/// The subject a command reads: its path (a positional argument) and what its sources do not
+/// say.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SubjectArgs {
+    /// A subject cache, or any source `surfcap import` reads.
+    #[arg(id = "subject", value_name = "SUBJECT")]
+    pub path: PathBuf,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+impl SubjectArgs {
+    /// Opens the subject (see [`open`]).
+    pub fn open(&self, ctx: &crate::Ctx) -> anyhow::Result<Subject> {
+        open(ctx, &self.path, &self.source)
+    }
+}
+
+/// The seed of a command's random choices (for commands whose seed has no more to say).
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct SeedOpt {
+    /// Seed of every random choice: the same seed gives the same result.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// The pose distance: which metric, and the weight of its stretch term.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DistanceOpts {
+    /// deformation (thesis eq. 2.13), deformation-log (eq. 2.14) or euclidean (eq. 2.2).
+    #[arg(long, default_value = "deformation")]
+    pub metric: PoseMetric,
+    /// Weight of the stretch term (eq. 2.13).
+    #[arg(long, default_value_t = 0.01, value_parser = non_negative)]
+    pub w: f64,
+}
+
+impl DistanceOpts {
+    /// The distance matrix's parameters (every vertex weighted alike).
+    pub fn params(&self) -> DistanceParams {
+        DistanceParams { metric: self.metric, w: self.w, vertex_weights: None }
+    }
+}
+
+/// The tolerance of the edge weights of a graph.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct AlphaOpt {
+    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
+    #[arg(long, default_value = "0.05")]
+    pub alpha: Positive,
+}
+
+impl AlphaOpt {
+    pub fn value(&self) -> f64 {
+        self.alpha.0
+    }
+}
+
+/// The port of the local viewer server.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct PortOpt {
+    /// Port on 127.0.0.1 (default: any free one; the URL is printed).
+    #[arg(long, default_value_t = 0)]
+    pub port: u16,
 }
 
 /// Where derived matrices are cached.
@@ -213,7 +284,7 @@ impl TableOpts {
 #[derive(clap::Args, Debug, Clone)]
 pub struct GraphOpts {
     /// essential (union of all shortest-path trees, O(N^3)), sparse-essential (the same on every
-    /// frame's --k cheapest transitions plus the original edges: for long captures, issue 21)
+    /// frame's --k cheapest transitions plus the original edges: for long captures)
     /// or motion (Kovar's baseline).
     #[arg(long, default_value = "essential")]
     pub kind: GraphKind,
@@ -221,9 +292,8 @@ pub struct GraphOpts {
     /// eval sparse-graph`).
     #[arg(long, value_parser = count)]
     pub k: Option<usize>,
-    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
-    #[arg(long, default_value = "0.05")]
-    pub alpha: Positive,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
     #[command(flatten)]
     pub table: TableOpts,
     #[command(flatten)]
@@ -245,7 +315,7 @@ impl GraphOpts {
                 anyhow::bail!("--k {given}: only with --kind sparse-essential (the graph is {kind})")
             }
         };
-        Ok(GraphParams { table: self.table.params(fps)?, kind, alpha: self.alpha.0 })
+        Ok(GraphParams { table: self.table.params(fps)?, kind, alpha: self.alpha.value() })
     }
 }
 

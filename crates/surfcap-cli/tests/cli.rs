@@ -201,9 +201,9 @@ fn bad_npy_and_ply_are_reported_with_what_was_expected() {
     assert!(stderr(&o).contains("x.ply") && stderr(&o).contains("file ends"), "{}", stderr(&o));
 }
 
-/// Issue 15 case 11: import narrates what each source was read as; a lone template.obj is one
+/// Import narrates what each source was read as; a lone template.obj is one
 /// OBJ frame and says why; a positions.npy that is a FIFO is refused by name, without blocking.
-/// Case 12: a binary PLY holding more faces than its header declares is an error at a byte.
+/// A binary PLY holding more faces than its header declares is an error at a byte.
 #[test]
 fn import_says_what_it_detected_and_refuses_a_fifo_or_trailing_data() {
     let tmp = tempfile::tempdir().unwrap();
@@ -260,7 +260,7 @@ property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_he
     assert!(stderr(&o).contains(&want), "{}", stderr(&o));
 }
 
-/// Issue 15 case 5: `Frames: 0` panicked (exit 101); case 8: 100,000 nested joints overflowed
+/// A BVH with `Frames: 0` panicked (exit 101); 100,000 nested joints overflowed
 /// the stack (abort). Both are now errors naming the file (and the line of `Frames:`).
 #[test]
 fn bvh_without_frames_or_nested_deeply_is_an_error_not_a_crash() {
@@ -700,7 +700,7 @@ fn files_starting(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
     v
 }
 
-/// Issue 15, case 1: a folder output replaces only an empty folder or surfcap's own earlier
+/// A folder output replaces only an empty folder or surfcap's own earlier
 /// output of the same kind; a folder holding anything else is refused (its files untouched)
 /// unless --force.
 #[test]
@@ -758,7 +758,7 @@ fn folder_outputs_never_replace_folders_surfcap_did_not_write() {
     assert!(keep.join("subject.json").is_file() && !keep.join("notes.txt").exists());
 }
 
-/// Issue 15, cases 2 and 3: an output that is, contains or lies inside an input is refused
+/// An output that is, contains or lies inside an input is refused
 /// before anything is written (`import src -o src` deleted the sources; `export dataset
 /// --format npy -o dataset` deleted its licence).
 #[test]
@@ -796,7 +796,7 @@ fn an_output_overlapping_an_input_is_refused() {
     assert_eq!(names(&seq), ["positions.npy", "template.obj"]);
 }
 
-/// Issue 15, case 4: a file output replaces only a regular file: a device, a FIFO or a folder
+/// A file output replaces only a regular file: a device, a FIFO or a folder
 /// is an error (and stays what it was); a symlink is written through to its target.
 #[cfg(unix)]
 #[test]
@@ -864,7 +864,7 @@ fn interrupt(args: &[&str], output: &Path, signal: i32) -> Option<i32> {
     status.code().filter(|&c| c != 0)
 }
 
-/// Issue 15, case 9: SIGINT or SIGTERM during `export` removes the temporaries, keeps the
+/// SIGINT or SIGTERM during `export` removes the temporaries, keeps the
 /// previous output and exits 130 or 143; a temporary of a killed run is swept by the next run.
 #[cfg(unix)]
 #[test]
@@ -915,7 +915,7 @@ fn an_interrupted_export_leaves_no_temporary_and_keeps_the_previous_output() {
     assert_eq!(names(tmp.path()), expected);
 }
 
-/// Issue 15, case 10: `cd dir; surfcap import x -o .` is a clear error (the output folder is the
+/// `cd dir; surfcap import x -o .` is a clear error (the output folder is the
 /// current folder, or contains the input), with no `.out.tmp-PID` left; a relative output with
 /// `..` is written where it points.
 #[test]
@@ -1041,7 +1041,6 @@ fn numeric_options_are_checked_when_parsed() {
         (vec!["transitions", s, "-o", out, "--l-min", "0"], "--l-min", ">= 1"),
         (vec!["graph", "build", s, "--alpha=-0.1"], "--alpha", "> 0"),
         (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", out], "--vertices", "from 1000 to 20000"),
-        (vec!["bench", "graph", "--frames", "0"], "--frames", ">= 1"),
     ] {
         let o = surfcap!(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
@@ -1126,7 +1125,7 @@ fn messages_pluralise_and_never_print_negative_zero() {
     assert!(text.contains("mean 0.0000") && !text.contains("-0.0"), "{text}");
 }
 
-/// Issue 15 case 7: a glb grows linearly with its frame count (its morph weights are sparse, one
+/// A glb grows linearly with its frame count (its morph weights are sparse, one
 /// per key; they were keys x targets floats, 40 GB for 100,000 frames), stays valid for the
 /// Khronos validator, and three.js's GLTFLoader reads the sparse weights: every key shows its own
 /// frame.
@@ -1153,23 +1152,7 @@ fn glb_size_is_linear_in_frames_and_three_js_reads_its_sparse_weights() {
     assert_eq!(three[0]["targets"], 2000);
 }
 
-/// Issue 16 item 6: `bench distance` reports the peak memory before and after the matrix, and
-/// the matrix's own working memory stays near one slab of triangle data plus the alignment's
-/// matrices: 200 frames of 20,000 triangles held whole were 480 MB of triangle frames (the
-/// previous computation), held a slab at a time they add well under 250 MB. Memory only: the
-/// benchmark's speed is not asserted.
-#[test]
-fn bench_distance_reports_peak_memory_and_streams_the_triangle_data() {
-    let o = surfcap!(&["bench", "distance", "--frames", "200", "--triangles", "20000", "--json"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!((v["frames"].as_u64(), v["triangles"].as_u64()), (Some(200), Some(20000)), "{v}");
-    let (before, peak) = (v["peak_rss_bytes_before_matrix"].as_u64().unwrap(), v["peak_rss_bytes"].as_u64().unwrap());
-    assert!(before > 0 && before <= peak, "{v}");
-    assert!(peak - before < 250 << 20, "the matrix took {} MB: {v}", (peak - before) >> 20);
-}
-
-/// Issue 16 item 3: `distance` says what its values mean (per-triangle radians), and a motion
+/// `distance` says what its values mean (per-triangle radians), and a motion
 /// restriction on a subject without tags says so and how to add them.
 #[test]
 fn distance_scale_is_explained_and_an_untagged_subject_says_how_to_tag() {

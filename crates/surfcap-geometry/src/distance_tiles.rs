@@ -171,7 +171,7 @@ fn pair_alignment(ci: &PlaneCoords, cj: &PlaneCoords) -> (f64, f64) {
 /// by memory bandwidth, not arithmetic). Measured with the AVX-512 kernel on the crane (one
 /// thread's CPU time): 8 rows x 256 triangles 120-138 M triangle pairs/s,
 /// 16 x 64 156-167, 32 x 64 167-187, 64 x 64 180-195. The whole crane matrix on 2 idle cores
-/// (`surfcap bench distance`, wall time): 16 rows 217 M/s, 32 rows 250 M/s, 64 rows 201-216 M/s
+/// (`surfcap-bench distance`, wall time): 16 rows 217 M/s, 32 rows 250 M/s, 64 rows 201-216 M/s
 /// (three row blocks for 175 frames: one thread idles); a 1,024-frame tile has 32 blocks of 32.
 const ROW_BLOCK: usize = 32;
 /// Triangles per chunk: a block of frames' chunks stays in the L2 cache (16 x 7.5 KB).

@@ -97,7 +97,7 @@ pub const BLOCK_FLOATS: usize = BLOCK * FRAME_FLOATS;
 
 /// Per-frame precomputation for the deformation distances (the expensive part is per pair).
 /// Stored in f64 (f32 would do only where the matrix stays within 1e-6 relative;
-/// measured with `surfcap bench distance`, the values rounded to f32 as storage would hold them,
+/// measured with `surfcap-bench distance`, the values rounded to f32 as storage would hold them,
 /// 175 x 175 matrices, max / median relative error over the 15,225 pairs):
 ///
 /// | fields in f32 | crane | samba |

@@ -37,7 +37,7 @@
 //!   point of each sequence and `K_X` is built on all but the last one of each sequence.
 //! - **Speed**: `Y Y^T` (N x N) is computed once, so an evaluation costs O(N^3), independent of
 //!   D (400 frames of 3,186 coordinates: about 25 ms per evaluation on 2 busy cores, 400
-//!   L-BFGS iterations in about 11 s; `surfcap bench learn`).
+//!   L-BFGS iterations in about 11 s; `surfcap-bench learn`).
 //! - **Trajectory density for HMC** (6.6.2): `P(X~ | x_1, X, Y, alpha, beta)` is taken as the
 //!   product of the one-step predictive densities of eq. 6.8-6.10 (each new point given the
 //!   previous one, the dynamics GP conditioned on the training pairs). The exact joint would also

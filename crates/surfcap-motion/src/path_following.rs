@@ -134,7 +134,7 @@ impl PathSearch {
     /// transitions each, the 8 cheapest (round robin over destination sequences) tried per
     /// frame, and a walker must cover a window within 6 seconds. Branching is the speed knob:
     /// on the 2,000-frame bench graph (~337 transitions per frame) a 15 m path took 3.6 s with
-    /// 16, 0.7 s with 10 and 0.4 s with 8, mean errors 0.012, 0.015 and 0.018 m (`surfcap bench
+    /// 16, 0.7 s with 10 and 0.4 s with 8, mean errors 0.012, 0.015 and 0.018 m (`surfcap-bench
     /// synth --branching B`); on the CMU-16 subject 8 and 10 both give 0.08 m.
     pub fn for_fps(fps: f64) -> Self {
         PathSearch {

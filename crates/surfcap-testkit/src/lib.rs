@@ -16,8 +16,9 @@
 //!
 //! # The `surfcap` program
 //!
-//! [`surfcap!`] runs the program under test (in surfcap-cli's integration tests), [`p`] and
-//! [`stderr`] shorten what those tests write around it.
+//! [`surfcap!`] runs the program under test (in surfcap-cli's integration tests),
+//! [`surfcap_bench!`] the benchmarks' program (in surfcap-bench's), [`p`] and [`stderr`]
+//! shorten what those tests write around it.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -99,6 +100,18 @@ fn real_data(dir: &Path, from_env: bool, found: bool, skip: bool, ci: bool) -> R
 macro_rules! surfcap {
     ($args:expr $(,)?) => {
         $crate::run(env!("CARGO_BIN_EXE_surfcap"), $args)
+    };
+}
+
+/// Runs the `surfcap-bench` program (the benchmarks) with the given arguments, as [`surfcap!`]
+/// runs `surfcap`.
+///
+/// Usable only in surfcap-bench's integration tests, where cargo sets
+/// `CARGO_BIN_EXE_surfcap-bench`.
+#[macro_export]
+macro_rules! surfcap_bench {
+    ($args:expr $(,)?) => {
+        $crate::run(env!("CARGO_BIN_EXE_surfcap-bench"), $args)
     };
 }
 

@@ -5,35 +5,28 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_mesh::npy::write_npy;
 
-use crate::options::{CacheOpts, SourceOpts, open};
+use crate::options::{CacheOpts, DistanceOpts, SubjectArgs};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A subject cache, or any source `surfcap import` reads.
-    pub subject: PathBuf,
-    /// deformation (thesis eq. 2.13), deformation-log (eq. 2.14) or euclidean (eq. 2.2).
-    #[arg(long, default_value = "deformation")]
-    pub metric: PoseMetric,
-    /// Weight of the stretch term (eq. 2.13).
-    #[arg(long, default_value_t = 0.01, value_parser = crate::options::non_negative)]
-    pub w: f64,
+    #[command(flatten)]
+    pub distance: DistanceOpts,
     /// The .npy file to write (F x F float64, global frame order; see `surfcap info`).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
     pub cache: CacheOpts,
     #[command(flatten)]
-    pub source: SourceOpts,
+    pub subject: SubjectArgs,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
-    let subject = open(ctx, &a.subject, &a.source)?;
-    let params = DistanceParams { metric: a.metric, w: a.w, vertex_weights: None };
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
+    let subject = a.subject.open(ctx)?;
+    let params = a.distance.params();
     let pipe = a.cache.pipeline(ctx, subject);
     let t0 = Instant::now();
     let d = pipe.distances(&params)?;

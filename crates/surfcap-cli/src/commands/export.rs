@@ -6,12 +6,10 @@ use anyhow::Context;
 use serde_json::json;
 use surfcap_formats::export::{ExportFormat, ExportOptions, export};
 
-use crate::options::{SourceOpts, open};
+use crate::options::SubjectArgs;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A subject cache, or any source `surfcap import` reads.
-    pub subject: PathBuf,
     /// glb (one file), obj or ply (a folder of frames per sequence), pc2 (a point cache per
     /// sequence + template.obj), npy (the shared-data layout, re-importable), usda (one USD
     /// text file: a time-sampled mesh per sequence), abc (one Alembic archive: an Xform and a
@@ -28,18 +26,18 @@ pub struct Args {
     #[arg(long)]
     pub ascii: bool,
     #[command(flatten)]
-    pub source: SourceOpts,
+    pub subject: SubjectArgs,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
     // A frame set (every frame its own topology) goes to the formats that hold that: abc, obj.
-    if surfcap_mesh::frame_set_cache::is_frame_set(&a.subject) {
+    if surfcap_mesh::frame_set_cache::is_frame_set(&a.subject.path) {
         if !a.sequences.is_empty() {
             anyhow::bail!("--sequence: a frame set is exported whole");
         }
         let bar = crate::progress::Bar::new(ctx);
-        let set = surfcap_mesh::frame_set_cache::read_frame_set(&a.subject, &bar)?;
+        let set = surfcap_mesh::frame_set_cache::read_frame_set(&a.subject.path, &bar)?;
         let written = surfcap_formats::export::export_frame_set(&set, a.format, &a.output, ctx.export_options(), &bar)
             .with_context(|| format!("exporting {:?}", set.name))?;
         ctx.result(
@@ -48,7 +46,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let s = open(ctx, &a.subject, &a.source)?.select(&a.sequences)?;
+    let s = a.subject.open(ctx)?.select(&a.sequences)?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&s, a.format, &a.output, ExportOptions { ply_ascii: a.ascii, ..ctx.export_options() }, &bar)
         .with_context(|| format!("exporting {:?}", s.name))?;

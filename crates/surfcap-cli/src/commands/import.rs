@@ -1,5 +1,5 @@
 //! `surfcap import <sources...> -o <subject>`: a subject cache, or a `.frames` folder when the
-//! sources are a frame set (every frame its own vertices and triangles: issue 17, Huang et al.
+//! sources are a frame set (every frame its own vertices and triangles, as in Huang et al.
 //! 2009) or `--as-frame-set` is given.
 
 use std::path::PathBuf;

@@ -1,5 +1,5 @@
 //! `surfcap info <subject | frame set>`: a subject's summary, or a frame set's (sequences,
-//! frames, the range of vertex and triangle counts per frame: issue 17, frames of their own).
+//! frames, the range of vertex and triangle counts per frame: every frame its own mesh).
 
 use std::path::PathBuf;
 

@@ -2,7 +2,6 @@
 //! (`crate::options`, `crate::output`, `crate::synthesis`, ...), never each other.
 
 pub mod appearance;
-pub mod bench;
 pub mod demo;
 pub mod distance;
 pub mod eval;

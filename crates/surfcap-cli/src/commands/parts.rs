@@ -17,7 +17,7 @@ use surfcap_transfer::body_parts_proposal::{Method, propose};
 use surfcap_view::ViewItem;
 use surfcap_view::server::{ServeOptions, serve};
 
-use crate::options::{SourceOpts, count, open};
+use crate::options::{PortOpt, SubjectArgs, count};
 use crate::output::{count_of, print_json};
 
 #[derive(clap::Args, Debug)]
@@ -31,8 +31,6 @@ pub enum What {
     /// Propose parts (torso, arm_left, arm_right, leg_left, leg_right for 5) and write them as
     /// the canonical parts file.
     Propose {
-        /// A subject cache, or any source `surfcap import` reads.
-        subject: PathBuf,
         /// auto (joints if the sequences have them, else components if there are enough, else
         /// rigidity), joints, components or rigidity.
         #[arg(long, default_value = "auto", value_parser = parse_method)]
@@ -47,30 +45,25 @@ pub enum What {
         #[arg(short, long)]
         output: PathBuf,
         #[command(flatten)]
-        source: SourceOpts,
+        subject: SubjectArgs,
     },
     /// Check a parts file against a subject and print each part's vertices and overlap.
     Check {
-        /// A subject cache, or any source `surfcap import` reads.
-        subject: PathBuf,
         /// The parts file: canonical JSON, labels (JSON or one per line), planes or loops.
         #[arg(long)]
         parts: PathBuf,
         #[command(flatten)]
-        source: SourceOpts,
+        subject: SubjectArgs,
     },
     /// Play the subject in the browser with one colour per part, overlaps darker.
     Show {
-        /// A subject cache, or any source `surfcap import` reads.
-        subject: PathBuf,
         /// The parts file (any form `check` reads).
         #[arg(long)]
         parts: PathBuf,
-        /// Port on 127.0.0.1 (default: any free one; the URL is printed).
-        #[arg(long, default_value_t = 0)]
-        port: u16,
         #[command(flatten)]
-        source: SourceOpts,
+        port: PortOpt,
+        #[command(flatten)]
+        subject: SubjectArgs,
     },
 }
 
@@ -122,11 +115,11 @@ fn read(s: &Subject, path: &std::path::Path) -> anyhow::Result<BodyParts> {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     match a.what {
-        What::Propose { subject, method, parts, overlap_rings, output, source } => {
-            surfcap_mesh::output_path::check_not_input(&output, &[&subject])?;
-            let s = open(ctx, &subject, &source)?;
+        What::Propose { method, parts, overlap_rings, output, subject } => {
+            surfcap_mesh::output_path::check_not_input(&output, &[&subject.path])?;
+            let s = subject.open(ctx)?;
             let (b, report) = propose(&s, method, parts, overlap_rings)
-                .with_context(|| format!("proposing {parts} parts for {}", subject.display()))?;
+                .with_context(|| format!("proposing {parts} parts for {}", subject.path.display()))?;
             let text = b.to_json();
             surfcap_mesh::atomic::write_file(&output, |w| {
                 w.write_all(text.as_bytes())?;
@@ -147,8 +140,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 print_rows(&rows);
             });
         }
-        What::Check { subject, parts, source } => {
-            let s = open(ctx, &subject, &source)?;
+        What::Check { parts, subject } => {
+            let s = subject.open(ctx)?;
             let b = read(&s, &parts)?;
             let rows = rows(&b, &s);
             let shared = b.multiplicity().iter().filter(|&&m| m > 1).count();
@@ -167,13 +160,13 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 print_rows(&rows);
             });
         }
-        What::Show { subject, parts, port, source } => {
-            let s = open(ctx, &subject, &source)?;
+        What::Show { parts, port, subject } => {
+            let s = subject.open(ctx)?;
             let b = read(&s, &parts)?;
             let items = items(&s, &b);
             let n = items.len();
             let json = ctx.json;
-            serve(items, ServeOptions { port, report: None }, |addr| {
+            serve(items, ServeOptions { port: port.port, report: None }, |addr| {
                 let url = format!("http://{addr}/");
                 if json {
                     print_json(&serde_json::json!({ "url": url, "sequences": n, "parts": b.len() }));

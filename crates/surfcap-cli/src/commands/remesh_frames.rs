@@ -1,5 +1,5 @@
 //! `surfcap remesh-frames <subject> -o out.frames --seed S [--vertices N] [--sequences a,b]
-//! [--frames K]`: a frame set with known answers (issue 17 item 1): every frame of a
+//! [--frames K]`: a frame set with known answers: every frame of a
 //! shared-topology subject re-meshed on its own (Botsch-Kobbelt isotropic re-meshing onto the
 //! frame's surface, `surfcap_builtin::frame_remeshing`), so each frame has its own vertices and
 //! triangles, as the per-frame reconstructions of Huang et al. 2009; each new vertex's source

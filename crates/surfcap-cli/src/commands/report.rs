@@ -6,12 +6,10 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use crate::html_report::write_report;
-use crate::options::{CacheOpts, SourceOpts, open};
+use crate::options::{CacheOpts, SubjectArgs};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A subject cache, or any source `surfcap import` reads.
-    pub subject: PathBuf,
     /// Output folder (index.html, plots/, anim/, data/).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -22,16 +20,16 @@ pub struct Args {
     #[command(flatten)]
     pub cache: CacheOpts,
     #[command(flatten)]
-    pub source: SourceOpts,
+    pub subject: SubjectArgs,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let mut inputs = vec![a.subject.as_path()];
+    let mut inputs = vec![a.subject.path.as_path()];
     inputs.extend(a.include.iter().map(|p| p.as_path()));
     surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
-    let s = open(ctx, &a.subject, &a.source)?;
+    let s = a.subject.open(ctx)?;
     let pipe = a.cache.pipeline(ctx, s);
-    let w = write_report(&pipe, &a.subject, &a.output, &a.include, ctx.force)?;
+    let w = write_report(&pipe, &a.subject.path, &a.output, &a.include, ctx.force)?;
     let result = json!({ "index": w.index, "plots": w.plots, "animations": w.animations, "tables": w.tables });
     ctx.result(&result, || {
         println!(

@@ -1,17 +1,16 @@
 //! `surfcap tiles plan | count | run | status | merge`: the all-pairs work of a subject (pose
 //! distances, transition table, sparse essential graph) as tile jobs in a work folder, for a
-//! shell's `xargs -P`, Ray (tools/ray) or Slurm job arrays (tools/slurm) to run (issue 21).
+//! shell's `xargs -P`, Ray (tools/ray) or Slurm job arrays (tools/slurm) to run.
 
 use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_tiles::tile_jobs::{JobOutcome, run_job};
 use surfcap_tiles::tile_merge::{merge, status};
 use surfcap_tiles::tile_plan::{Stage, WorkParams, create_work, open_work};
 
-use crate::options::{Positive, TableOpts};
+use crate::options::{AlphaOpt, DistanceOpts, TableOpts};
 
 #[derive(clap::Subcommand, Debug)]
 pub enum Cmd {
@@ -40,15 +39,10 @@ pub struct PlanArgs {
     /// Frames per side of a tile (and per block of source rows).
     #[arg(long, default_value_t = surfcap_geometry::distance_matrix::DISTANCE_TILE, value_parser = crate::options::count)]
     pub tile: usize,
-    /// deformation (thesis eq. 2.13), deformation-log (eq. 2.14) or euclidean (eq. 2.2).
-    #[arg(long, default_value = "deformation")]
-    pub metric: PoseMetric,
-    /// Weight of the stretch term (eq. 2.13).
-    #[arg(long, default_value_t = 0.01, value_parser = crate::options::non_negative)]
-    pub w: f64,
-    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3).
-    #[arg(long, default_value = "0.05")]
-    pub alpha: Positive,
+    #[command(flatten)]
+    pub distance: DistanceOpts,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
     /// Transitions kept per frame by the sparse essential graph (the default is the k chosen by
     /// `surfcap eval sparse-graph`).
     #[arg(long, default_value_t = surfcap_motion::sparse_essential_graph::DEFAULT_K, value_parser = crate::options::count)]
@@ -65,8 +59,8 @@ pub struct WorkArgs {
 
 #[derive(clap::Args, Debug)]
 pub struct CountArgs {
-    /// A work folder made by `surfcap tiles plan`.
-    pub work: PathBuf,
+    #[command(flatten)]
+    pub work: WorkArgs,
     /// distances, table, scale, candidates or paths.
     #[arg(long)]
     pub stage: String,
@@ -74,8 +68,8 @@ pub struct CountArgs {
 
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// A work folder made by `surfcap tiles plan`.
-    pub work: PathBuf,
+    #[command(flatten)]
+    pub work: WorkArgs,
     /// distances, table, scale, candidates or paths.
     #[arg(long)]
     pub stage: Option<String>,
@@ -91,7 +85,7 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     match cmd {
         Cmd::Plan(a) => plan(ctx, a),
         Cmd::Count(a) => {
-            let (plan, _, _) = open_work(&a.work)?;
+            let (plan, _, _) = open_work(&a.work.work)?;
             let stage = Stage::parse(&a.stage)?;
             let jobs = plan.jobs(stage);
             ctx.result(&json!({ "stage": stage.name(), "jobs": jobs }), || println!("{jobs}"));
@@ -151,12 +145,12 @@ fn plan(ctx: &crate::Ctx, a: PlanArgs) -> anyhow::Result<()> {
     let frames = surfcap_mesh::cache::CachedFrames::open(&a.subject)?;
     let table = a.table.params(frames.fps)?;
     let params = WorkParams {
-        metric: a.metric.name().into(),
-        w: a.w,
+        metric: a.distance.metric.name().into(),
+        w: a.distance.w,
         l_min: table.l_min,
         l_max: table.l_max,
         slope: table.slope,
-        alpha: a.alpha.0,
+        alpha: a.alpha.value(),
         k: a.k,
     };
     let plan = create_work(&a.subject, &a.output, a.tile, params)
@@ -179,7 +173,7 @@ fn plan(ctx: &crate::Ctx, a: PlanArgs) -> anyhow::Result<()> {
 }
 
 fn run_jobs(ctx: &crate::Ctx, a: RunArgs) -> anyhow::Result<()> {
-    let (plan, store, frames) = open_work(&a.work)?;
+    let (plan, store, frames) = open_work(&a.work.work)?;
     let stages: Vec<Stage> = match (&a.stage, a.all) {
         (Some(s), _) => vec![Stage::parse(s)?],
         (None, true) => plan.stages.iter().map(|s| s.name).collect(),
@@ -195,7 +189,7 @@ fn run_jobs(ctx: &crate::Ctx, a: RunArgs) -> anyhow::Result<()> {
         };
         for k in jobs {
             let outcome = run_job(&store, &plan, &frames, stage, k, &bar)
-                .with_context(|| format!("{}: stage {}, job {k}", a.work.display(), stage.name()))?;
+                .with_context(|| format!("{}: stage {}, job {k}", a.work.work.display(), stage.name()))?;
             let (skipped, record) = match outcome {
                 JobOutcome::Skipped => (true, None),
                 JobOutcome::Done(r) => (false, Some(r)),
@@ -214,6 +208,6 @@ fn run_jobs(ctx: &crate::Ctx, a: RunArgs) -> anyhow::Result<()> {
             done.push(json!({ "stage": stage.name(), "index": k, "skipped": skipped, "record": record }));
         }
     }
-    ctx.result(&json!({ "work": a.work, "jobs": done }), || {});
+    ctx.result(&json!({ "work": a.work.work, "jobs": done }), || {});
     Ok(())
 }

@@ -9,13 +9,11 @@ use surfcap_formats::export::{ExportFormat, export};
 use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::transition_frames::transition_frames;
 
-use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
+use crate::options::{CacheOpts, SubjectArgs, TableOpts};
 use crate::output::write_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A subject cache, or any source `surfcap import` reads.
-    pub subject: PathBuf,
     /// Source frame i (sequence:frame or a global frame): the source segment starts there.
     #[arg(long)]
     pub from: String,
@@ -30,12 +28,12 @@ pub struct Args {
     #[command(flatten)]
     pub cache: CacheOpts,
     #[command(flatten)]
-    pub source: SourceOpts,
+    pub subject: SubjectArgs,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
-    let s = open(ctx, &a.subject, &a.source)?;
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
+    let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let pipe = a.cache.pipeline(ctx, s);

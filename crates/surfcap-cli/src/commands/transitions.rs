@@ -6,12 +6,10 @@ use std::time::Instant;
 use serde_json::json;
 use surfcap_mesh::npy::write_npy;
 
-use crate::options::{CacheOpts, SourceOpts, TableOpts, open};
+use crate::options::{CacheOpts, SubjectArgs, TableOpts};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A subject cache, or any source `surfcap import` reads.
-    pub subject: PathBuf,
     /// Folder for D.npy (normalised costs), L.npy (durations), li.npy, lj.npy (segment lengths).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -20,13 +18,13 @@ pub struct Args {
     #[command(flatten)]
     pub cache: CacheOpts,
     #[command(flatten)]
-    pub source: SourceOpts,
+    pub subject: SubjectArgs,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
+    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
     ctx.claim_dir(&a.output, "transitions")?;
-    let s = open(ctx, &a.subject, &a.source)?;
+    let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
     let pipe = a.cache.pipeline(ctx, s);
     let t0 = Instant::now();

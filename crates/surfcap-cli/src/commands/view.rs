@@ -11,7 +11,7 @@ use surfcap_formats::import::ImportedData;
 use surfcap_view::server::{ServeOptions, serve};
 use surfcap_view::{Overlay, ViewItem};
 
-use crate::options::SourceOpts;
+use crate::options::{PortOpt, SourceOpts};
 use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
@@ -19,9 +19,8 @@ pub struct Args {
     /// What to play: .glb files, subject caches, frame sets (.frames), capture folders, or a report folder.
     #[arg(required = true)]
     pub paths: Vec<PathBuf>,
-    /// Port on 127.0.0.1 (default: any free one; the URL is printed).
-    #[arg(long, default_value_t = 0)]
-    pub port: u16,
+    #[command(flatten)]
+    pub port: PortOpt,
     /// Only these sequences (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     pub sequences: Vec<String>,
@@ -130,7 +129,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     anyhow::ensure!(!items.is_empty(), "view: no sequence named {} in what was given", a.sequences.join(", "));
     let n = items.len();
     let json = ctx.json;
-    serve(items, ServeOptions { port: a.port, report }, |addr| {
+    serve(items, ServeOptions { port: a.port.port, report }, |addr| {
         let url = format!("http://{addr}/");
         if json {
             print_json(&serde_json::json!({ "url": url, "sequences": n }));

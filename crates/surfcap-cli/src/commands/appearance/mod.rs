@@ -1,8 +1,8 @@
-//! `surfcap appearance ...`: eigen appearance maps (thesis chapter 4, issue 20).
+//! `surfcap appearance ...`: eigen appearance maps (thesis chapter 4).
 //!
 //! `surfcap appearance generate [--data ../shared/data | --mesh M --texture T] --frames 100
-//! --seed 7 [--size 1024] -o out/`: benchmark texture sequences with ground truth (issue 20
-//! item 7, `surfcap_appearance::texture_generator`): per-frame textures of a real UV-mapped
+//! --seed 7 [--size 1024] -o out/`: benchmark texture sequences with ground truth
+//! (`surfcap_appearance::texture_generator`): per-frame textures of a real UV-mapped
 //! mesh drifting by known smooth warps, lit by a moving light, blurred, noisy and with
 //! occlusion holes in some frames, with the clean frames, the hole masks and the known drift
 //! (the folder's layout: `surfcap_appearance::generated_frames`). `--mesh` may be a subject

@@ -20,7 +20,7 @@ use crate::options::{CacheOpts, FlowArgs};
 
 /// Where the frames come from: generated from the shared data's head scan, or an existing
 /// folder of `surfcap appearance generate`.
-pub enum Frames {
+enum Frames {
     Generate { data: PathBuf, frames: usize, size: usize, seed: u64, lighting: bool },
     Existing(PathBuf),
 }
@@ -208,8 +208,81 @@ fn print_tables(r: &AppearanceEval) {
     );
 }
 
-#[allow(clippy::too_many_arguments)]
-pub fn run(
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The shared data folder (its leeperrysmith_head: template.obj and Map-COL.jpg).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Use this folder of `surfcap appearance generate` instead of generating one.
+    #[arg(long, conflicts_with_all = ["frames", "size"])]
+    pub frames_dir: Option<PathBuf>,
+    /// Frames to generate.
+    #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::options::at_least(s, 6))]
+    pub frames: usize,
+    /// Width of the generated textures in texels.
+    #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::options::whole_in(s, 16, 4096))]
+    pub size: usize,
+    /// Generate the frames without the moving light (constant shading): the flow then sees
+    /// only the drift (with the light, TV-L1 follows the shading and the model suffers).
+    #[arg(long, conflicts_with = "frames_dir")]
+    pub no_lighting: bool,
+    /// Seed of the generated frames and of the held-out split.
+    #[arg(long, default_value_t = 7)]
+    pub seed: u64,
+    /// Total eigen maps K of the compactness sweep (those of at least the training frames are
+    /// dropped; all the model has is always added).
+    #[arg(long, value_delimiter = ',', default_value = "3,6,12,24,48", value_parser = crate::options::count)]
+    pub components: Vec<usize>,
+    /// Fractions of the frames held out of training (generalisation).
+    #[arg(long, value_delimiter = ',', default_value = "0,0.2,0.4,0.6", value_parser = crate::options::fraction)]
+    pub held_out: Vec<f64>,
+    /// Frames rendered for the image domain (evenly spaced; per held-out fraction, the
+    /// first held-out ones); 0: texture domain only.
+    #[arg(long, default_value_t = 10)]
+    pub image_frames: usize,
+    /// Virtual cameras on a ring around the mesh.
+    #[arg(long, default_value_t = 8, value_parser = crate::options::count)]
+    pub views: usize,
+    /// Width and height of the renders, pixels.
+    #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::options::whole_in(s, 16, 4096))]
+    pub image_size: usize,
+    /// Frames whose forward flow is also estimated at full resolution for the end-point error
+    /// (with --flow-scale above 0).
+    #[arg(long, default_value_t = 0)]
+    pub full_resolution_flows: usize,
+    #[command(flatten)]
+    pub flow: FlowArgs,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    /// Folder for appearance.json, the plots and the example images (and the generated
+    /// frames, in frames/).
+    #[arg(short, long, default_value = "appearance-eval")]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let mut inputs: Vec<&Path> = vec![&a.data];
+    inputs.extend(a.frames_dir.as_deref());
+    super::folder::claim(ctx, &a.output, &inputs, "eval-appearance")?;
+    let source = match a.frames_dir {
+        Some(d) => Frames::Existing(d),
+        None => {
+            Frames::Generate { data: a.data, frames: a.frames, size: a.size, seed: a.seed, lighting: !a.no_lighting }
+        }
+    };
+    let opts = AppearanceEvalOptions {
+        components: a.components,
+        held_out: a.held_out,
+        seed: a.seed,
+        image_frames: a.image_frames,
+        views: a.views,
+        image_size: a.image_size,
+        ..Default::default()
+    };
+    evaluate(ctx, source, &opts, &a.flow, a.full_resolution_flows, &a.cache, &a.output)
+}
+
+fn evaluate(
     ctx: &crate::Ctx,
     frames: Frames,
     opts: &AppearanceEvalOptions,
@@ -285,7 +358,7 @@ pub fn run(
     crate::output::write_json(&path, &report)?;
     ctx.result(&report, || {
         print_tables(&r);
-        super::print_wrote(&path, &written);
+        super::folder::print_wrote(&path, &written);
     });
     Ok(())
 }

@@ -11,6 +11,7 @@ use surfcap_learn::Mat;
 use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
+use crate::options::{SeedOpt, SubjectArgs};
 use crate::output::write_json;
 
 /// The learning curve and the latent trajectories (dimensions 1 and 2) with the HMC variations.
@@ -68,7 +69,43 @@ fn plots(
     Ok(written)
 }
 
-pub fn run(ctx: &crate::Ctx, s: &Subject, opts: &GpdmEvalOptions, output: &Path) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Sequences to learn (comma-separated; default: all, sharing one latent space, 6.5.2).
+    #[arg(long, value_delimiter = ',')]
+    pub sequences: Vec<String>,
+    /// Vertices describing a frame (evenly spaced over the mesh).
+    #[arg(long, default_value_t = 300, value_parser = crate::options::count)]
+    pub vertices: usize,
+    /// Frames at most (longer subjects are subsampled in time by one stride).
+    #[arg(long, default_value_t = 400, value_parser = |s: &str| crate::options::at_least(s, 4))]
+    pub max_frames: usize,
+    /// Latent dimension d.
+    #[arg(long, default_value_t = 3, value_parser = crate::options::count)]
+    pub latent_dim: usize,
+    /// HMC latent trajectories to sample (0: none).
+    #[arg(long, default_value_t = 3)]
+    pub samples: usize,
+    /// L-BFGS iterations at most (default 400).
+    #[arg(long, value_parser = crate::options::count)]
+    pub iterations: Option<usize>,
+    #[command(flatten)]
+    pub seed: SeedOpt,
+    /// Folder for gpdm.json, the plots, latent.npy and the model.
+    #[arg(short, long, default_value = "gpdm-eval")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub subject: SubjectArgs,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-gpdm")?;
+    let Args { sequences, vertices, max_frames, latent_dim, samples, iterations, seed, output, subject } = a;
+    let opts = GpdmEvalOptions { sequences, vertices, max_frames, latent_dim, samples, seed: seed.seed, iterations };
+    evaluate(ctx, &subject.open(ctx)?, &opts, &output)
+}
+
+fn evaluate(ctx: &crate::Ctx, s: &Subject, opts: &GpdmEvalOptions, output: &Path) -> anyhow::Result<()> {
     let r = gpdm_eval(s, opts)?;
     std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("creating {}: {e}", output.display()))?;
     let latents: Vec<(String, &Mat<f64>)> = r.sequences.iter().map(|q| q.name.clone()).zip(r.latents.iter()).collect();
@@ -79,7 +116,7 @@ pub fn run(ctx: &crate::Ctx, s: &Subject, opts: &GpdmEvalOptions, output: &Path)
     let model_path = output.join("gpdm.model.json");
     write_json(&model_path, &r.model)?;
     written.push(model_path);
-    let (report, rp) = super::save_report(output, "gpdm.json", &r, "written", &written)?;
+    let (report, rp) = super::folder::save_report(output, "gpdm.json", &r, "written", &written)?;
     ctx.result(&report, || {
         let (fit, e) = (&r.fit, &r.training_mean_vertex_error);
         let n: usize = r.sequences.iter().map(|q| q.frames).sum();

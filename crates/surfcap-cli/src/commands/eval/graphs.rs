@@ -2,14 +2,41 @@
 //! 3.3.3, Fig. 3.2 and 3.8; `surfcap_eval::graph_comparison_eval` computes it; this command
 //! writes the report and plots and prints the table).
 
-use std::path::Path;
+use std::path::PathBuf;
 
 use surfcap_eval::graph_comparison_eval::{AlphaRow, GraphComparisonOptions, graph_comparison_eval};
-use surfcap_pipeline::Pipeline;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-pub fn run(ctx: &crate::Ctx, pipe: Pipeline, opts: &GraphComparisonOptions, output: &Path) -> anyhow::Result<()> {
-    let r = graph_comparison_eval(&pipe, opts)?;
+use crate::options::{CacheOpts, Positive, SubjectArgs, TableOpts};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Values of alpha.
+    #[arg(long = "alpha", value_delimiter = ',', default_value = "0.01,0.02,0.03,0.05,0.1,0.2")]
+    pub alphas: Vec<Positive>,
+    /// Frame pairs in the shortest-path plots.
+    #[arg(long, default_value_t = 200, value_parser = crate::options::count)]
+    pub plot_pairs: usize,
+    /// Folder for the report (graphs.json) and the plots.
+    #[arg(short, long, default_value = "graphs-eval")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub subject: SubjectArgs,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-graphs")?;
+    anyhow::ensure!(!a.alphas.is_empty(), "--alpha: expected at least one value");
+    let s = a.subject.open(ctx)?;
+    let alphas = a.alphas.iter().map(|a| a.0).collect();
+    let opts = GraphComparisonOptions { alphas, plot_pairs: a.plot_pairs, table: a.table.params(s.fps)? };
+    let pipe = a.cache.pipeline(ctx, s);
+    let output = a.output.as_path();
+    let r = graph_comparison_eval(&pipe, &opts)?;
     std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
     let (blue, red) = ((31, 119, 180), (214, 39, 40));
     let series = |name: &str, points: Vec<(f64, f64)>, color, markers| Series {
@@ -49,7 +76,7 @@ pub fn run(ctx: &crate::Ctx, pipe: Pipeline, opts: &GraphComparisonOptions, outp
         let stem = format!("paths_alpha_{}", c.alpha.to_string().replace('.', "_"));
         plots.extend(write_line_chart(&output.join(stem), &chart)?);
     }
-    let (report, rp) = super::save_report(output, "graphs.json", &r, "plots", &plots)?;
+    let (report, rp) = super::folder::save_report(output, "graphs.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
             "subject {} ({} frames); shortest-path costs over the pairs the motion graph connects (thesis Fig. 3.8)",

@@ -1,27 +1,41 @@
 //! `surfcap eval interchange`: every sequence of the data folder through Alembic and USD and back
-//! (issue 22 item 4; `surfcap_eval::interchange_eval` does it; this command writes
+//! (`surfcap_eval::interchange_eval` does it; this command writes
 //! `interchange.json`, prints one line per dataset and format and every round trip that was not
 //! exact, and fails when any was not).
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
 use surfcap_eval::interchange_eval::{InterchangeOptions, interchange_eval};
 use surfcap_formats::export::ExportFormat;
 
-pub fn run(
-    ctx: &crate::Ctx,
-    data: PathBuf,
-    datasets: Vec<String>,
-    formats: Vec<ExportFormat>,
-    output: &Path,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The data folder (datasets as sub-folders).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Only these datasets (folder names, comma-separated; default: all).
+    #[arg(long, value_delimiter = ',')]
+    pub datasets: Vec<String>,
+    /// Formats to go through.
+    #[arg(long, value_delimiter = ',', default_value = "abc,usda")]
+    pub formats: Vec<ExportFormat>,
+    /// Folder for the report (interchange.json); the exported files go to a temporary
+    /// folder and are removed once read back.
+    #[arg(short, long, default_value = "interchange-eval")]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    super::folder::claim(ctx, &a.output, &[&a.data], "eval-interchange")?;
+    let Args { data, datasets, formats, output } = a;
+    let output = output.as_path();
     let scratch = tempfile::tempdir().context("creating a temporary folder")?;
     let opts = InterchangeOptions { data, datasets, formats, scratch: scratch.path().to_path_buf(), default_fps: 30.0 };
     let bar = crate::progress::Bar::new(ctx);
     let r = interchange_eval(&opts, &bar)?;
-    let (report, path) = super::save_report(output, "interchange.json", &r, "written", &[])?;
+    let (report, path) = super::folder::save_report(output, "interchange.json", &r, "written", &[])?;
     ctx.result(&report, || {
         // Per dataset and format: sequences, frames, exact ones, bytes, write and read time.
         // (sequences, frames, exact, bytes, write seconds, read seconds)

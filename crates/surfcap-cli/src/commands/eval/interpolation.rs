@@ -2,20 +2,44 @@
 //! `surfcap_eval::interpolation_eval` computes it; this command prints the table and, with
 //! `-o`, writes interpolation.json and the curves over lambda).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use serde_json::json;
 use surfcap_eval::interpolation_eval::{InterpolationEval, InterpolationOptions, interpolation_eval};
-use surfcap_mesh::Subject;
+use surfcap_geometry::pose_interpolation::StretchInterpolation;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
+use crate::options::SubjectArgs;
 use crate::output::write_json;
 
-pub fn run(ctx: &crate::Ctx, s: &Subject, opts: &InterpolationOptions, output: Option<&Path>) -> anyhow::Result<()> {
-    let lambda = opts.lambda;
-    let r = interpolation_eval(s, opts)?;
-    if let Some(dir) = output {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Pose pairs as FROM,TO (each sequence:frame or a global frame), repeatable.
+    #[arg(long = "pair", required = true)]
+    pub pairs: Vec<String>,
+    /// Interpolation parameter.
+    #[arg(long, default_value_t = 0.5, value_parser = crate::options::fraction)]
+    pub lambda: f64,
+    /// Stretch interpolation: linear (eq. 2.45) or log (eq. 2.46).
+    #[arg(long, default_value = "linear")]
+    pub stretch: StretchInterpolation,
+    /// Also write interpolation.json and distortion.svg/png (both measures over lambda in
+    /// 0, 0.1, ..., 1, linear dashed, non-linear solid) into this folder.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub subject: SubjectArgs,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    if let Some(o) = &a.output {
+        super::folder::claim(ctx, o, &[&a.subject.path], "eval-interpolation")?;
+    }
+    let Args { pairs, lambda, stretch, output, subject } = a;
+    let opts = InterpolationOptions { pairs, lambda, stretch, sweeps: output.is_some() };
+    let r = interpolation_eval(&subject.open(ctx)?, &opts)?;
+    if let Some(dir) = &output {
         write_plots(dir, &r)?;
     }
     ctx.result(&json!({ "subject": r.subject, "rows": r.rows }), || {

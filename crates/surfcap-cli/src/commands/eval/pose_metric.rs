@@ -2,25 +2,48 @@
 //! ground truth (thesis 2.3.2, Fig. 2.5-2.7; `surfcap_eval::pose_metric_eval` computes it; this
 //! command writes the report and the correlogram plot and prints the table).
 
-use std::path::Path;
+use std::path::PathBuf;
 
 use surfcap_eval::mantel_test::CorrelogramClass;
 use surfcap_eval::pose_metric_eval::{MetricAgreement, PoseMetricOptions, pose_metric_eval};
-use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use super::{print_wrote, save_report};
-use crate::options::CacheOpts;
+use super::folder::{claim, print_wrote, save_report};
+use crate::options::{CacheOpts, SourceOpts, open};
 
-pub fn run(
-    ctx: &crate::Ctx,
-    s: &Subject,
-    cache: &CacheOpts,
-    opts: &PoseMetricOptions,
-    output: &Path,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A subject whose sequences carry ground-truth joint matrices.
+    pub subject: PathBuf,
+    /// Frames used (evenly spaced over the global index when the subject has more).
+    #[arg(long, default_value_t = 200, value_parser = |s: &str| crate::options::at_least(s, 2))]
+    pub max_frames: usize,
+    /// Permutations of the Mantel test.
+    #[arg(long, default_value_t = 10000, value_parser = crate::options::count)]
+    pub permutations: usize,
+    /// Distance classes of the correlogram.
+    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
+    pub classes: usize,
+    /// Seed of the permutations.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Folder for the report (JSON) and the correlogram plot (SVG, PNG).
+    #[arg(short, long, default_value = "pose-metric")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub source: SourceOpts,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    claim(ctx, &a.output, &[&a.subject], "eval-pose-metric")?;
+    let opts =
+        PoseMetricOptions { max_frames: a.max_frames, permutations: a.permutations, classes: a.classes, seed: a.seed };
+    let s = open(ctx, &a.subject, &a.source)?;
+    let (cache, output) = (&a.cache, a.output.as_path());
     let progress = Box::new(crate::progress::Bar::new(ctx));
-    let r = pose_metric_eval(s, &cache.store(), progress, opts)?;
+    let r = pose_metric_eval(&s, &cache.store(), progress, &opts)?;
     let mid = |c: &CorrelogramClass| 0.5 * (c.lo + c.hi);
     let line = |name: &str, points: Vec<(f64, f64)>, color, dashed, markers| Series {
         name: name.into(),

@@ -1,15 +1,45 @@
 //! `surfcap eval root-motion`: root motion recovered from ground contacts against the real
-//! travel of BVH clips (issue 16; `surfcap_eval::root_motion_eval` computes it; this command
+//! travel of BVH clips (`surfcap_eval::root_motion_eval` computes it; this command
 //! writes `root-motion.json` and prints the table per clip).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use surfcap_eval::root_motion_eval::{RootMotionOptions, root_motion_eval};
+use surfcap_geometry::root_motion_from_contacts::ContactParams;
 
-pub fn run(ctx: &crate::Ctx, opts: &RootMotionOptions, output: &Path) -> anyhow::Result<()> {
-    let r = root_motion_eval(opts)?;
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// BVH files with real root travel (CMU joint names), e.g. ../shared/data/cmu_bvh/16_*.bvh.
+    #[arg(long, num_args = 1.., required = true)]
+    pub bvh: Vec<PathBuf>,
+    /// Target vertex count of the mannequin (1000 to 20000).
+    #[arg(long, default_value_t = 2000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
+    pub vertices: usize,
+    /// Contact height, as a fraction of the subject's height above the ground.
+    #[arg(long, default_value_t = ContactParams::default().height, value_parser = crate::options::positive)]
+    pub contact_height: f64,
+    /// Contact stillness, as a fraction of the subject's height per second: how closely the
+    /// planted vertices move together.
+    #[arg(long, default_value_t = ContactParams::default().speed, value_parser = crate::options::positive)]
+    pub contact_speed: f64,
+    /// Largest vertical speed of a contact vertex, as a fraction of the subject's height per
+    /// second.
+    #[arg(long, default_value_t = ContactParams::default().vertical_speed, value_parser = crate::options::positive)]
+    pub contact_vertical_speed: f64,
+    /// Folder for the report (root-motion.json).
+    #[arg(short, long, default_value = "root-motion-eval")]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let bvh: Vec<&Path> = a.bvh.iter().map(PathBuf::as_path).collect();
+    super::folder::claim(ctx, &a.output, &bvh, "eval-root-motion")?;
+    let contacts =
+        ContactParams { height: a.contact_height, speed: a.contact_speed, vertical_speed: a.contact_vertical_speed };
+    let output = a.output.as_path();
+    let r = root_motion_eval(&RootMotionOptions { bvh: a.bvh, vertices: a.vertices, contacts })?;
     std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
-    let (report, path) = super::save_report(output, "root-motion.json", &r, "written", &[])?;
+    let (report, path) = super::folder::save_report(output, "root-motion.json", &r, "written", &[])?;
     ctx.result(&report, || {
         println!(
             "root motion from ground contacts vs the real root travel (mannequin of {} vertices, legs as long as each \

@@ -12,13 +12,7 @@ use surfcap_eval::smg_eval::{
 };
 use surfcap_smg::motion_frames::MotionFrames;
 
-/// A user's subject or frame set to evaluate instead of the mannequin.
-pub struct Input {
-    pub path: PathBuf,
-    pub connect: Vec<String>,
-    pub pairs: Vec<String>,
-    pub source: crate::options::SourceOpts,
-}
+use crate::options::{CacheOpts, SourceOpts};
 
 /// `A<sep>B` split at its last `sep`.
 fn split_pair(text: &str, sep: char, option: &str, expected: &str) -> anyhow::Result<(String, String)> {
@@ -28,29 +22,86 @@ fn split_pair(text: &str, sep: char, option: &str, expected: &str) -> anyhow::Re
         .ok_or_else(|| anyhow::anyhow!("{option} {text:?}: expected {expected}"))
 }
 
-/// The evaluation's choices: the mannequin's vertices, re-meshing, transitions per connection,
-/// the target grid, key pairs replacing the mannequin's, and whether the essential graph runs
-/// beside the surface motion graph.
-pub struct Options {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The shared data folder (CMU clips).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Vertices of the mannequin (1000 to 20000).
+    #[arg(long, default_value_t = 2000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
+    /// Re-mesh every frame on its own first (seeded), so no two frames share vertices or
+    /// triangles: the input Huang et al.'s engine is made for.
+    #[arg(long, value_name = "SEED")]
     pub remeshed: Option<u64>,
+    /// Transitions per connection: 1 is the paper's; more adds the next best windows whose
+    /// switches lie at least 15 frames apart (an extension).
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
     pub transitions: usize,
-    /// Target distances (subject units) and times (seconds): every combination is a query.
-    pub distances: Vec<f64>,
-    pub seconds: Vec<f64>,
-    /// `--pair` on the mannequin (with `--input` the pairs are in `Input`).
+    /// Evaluate this subject or frame set instead of the CMU mannequin (with --connect and
+    /// --pair).
+    #[arg(long)]
+    pub input: Option<PathBuf>,
+    /// The higher-level graph of --input: FROM:TO sequence pairs.
+    #[arg(long = "connect", value_delimiter = ',')]
+    pub connect: Vec<String>,
+    /// Key-frame pairs: FROM,TO as sequence:frame (repeatable); needed with --input, and on
+    /// the mannequin they replace its four.
+    #[arg(long = "pair")]
     pub pairs: Vec<String>,
-    pub compare: bool,
+    /// Target distances, subject units (Huang et al.: 1 to 20 m).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20", value_parser = crate::options::non_negative)]
+    pub distances: Vec<f64>,
+    /// Target times, seconds (Huang et al.: 1 to 40 s); every distance with every time is a
+    /// query.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,25,26,27,28,29,30,31,32,33,34,35,36,37,38,39,40", value_parser = crate::options::positive)]
+    pub seconds: Vec<f64>,
+    /// Skip the essential graph's run beside the surface motion graph (on by default when
+    /// the frames share one topology).
+    #[arg(long)]
+    pub no_compare: bool,
+    #[command(flatten)]
+    pub source: SourceOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    /// Folder for the report (smg.json).
+    #[arg(short, long, default_value = "smg-eval")]
+    pub output: PathBuf,
 }
 
-pub fn run(
-    ctx: &crate::Ctx,
-    data: &Path,
-    Options { vertices, remeshed, transitions, distances, seconds, pairs: mannequin_pairs, compare }: Options,
-    input: Option<Input>,
-    cache: &crate::options::CacheOpts,
-    output: &Path,
-) -> anyhow::Result<()> {
+/// A user's subject or frame set to evaluate instead of the mannequin.
+struct Input {
+    path: PathBuf,
+    connect: Vec<String>,
+    pairs: Vec<String>,
+    source: SourceOpts,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let mut inputs: Vec<&Path> = vec![&a.data];
+    inputs.extend(a.input.as_deref());
+    super::folder::claim(ctx, &a.output, &inputs, "eval-smg")?;
+    let Args {
+        data,
+        vertices,
+        remeshed,
+        transitions,
+        input,
+        connect,
+        pairs,
+        distances,
+        seconds,
+        no_compare,
+        source,
+        cache,
+        output,
+    } = a;
+    let compare = !no_compare;
+    let (input, mannequin_pairs) = match input {
+        Some(path) => (Some(Input { path, connect, pairs, source }), Vec::new()),
+        None => (None, pairs),
+    };
+    let (data, cache, output) = (data.as_path(), &cache, output.as_path());
     let bar = crate::progress::Bar::new(ctx);
     // The subject: the CMU mannequin, or the user's; a frame set is used as it is.
     let data = match &input {
@@ -61,7 +112,7 @@ pub fn run(
         }),
         Some(i) => open_any(&i.path, &i.source.to_import(None)?, &bar)?,
     };
-    // Either the shared topology, or every frame re-meshed on its own (issue 17 item 1): the
+    // Either the shared topology, or every frame re-meshed on its own (`surfcap remesh-frames`): the
     // same motion without any correspondence between frames.
     // The subject stays for the essential graph when its topology is shared.
     let (frames, form, subject) = match (data, remeshed) {

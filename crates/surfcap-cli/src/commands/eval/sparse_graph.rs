@@ -1,47 +1,61 @@
-//! `surfcap eval sparse-graph`: the sparse essential graph against the exact one (issue 21 item
-//! 4; `surfcap_eval::sparse_graph_eval` computes it; this command writes sparse-graph.json and
+//! `surfcap eval sparse-graph`: the sparse essential graph against the exact one
+//! (`surfcap_eval::sparse_graph_eval` computes it; this command writes sparse-graph.json and
 //! the plots and prints the table).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use surfcap_eval::sparse_graph_eval::{SparseGraphEval, SparseGraphEvalOptions, cmu_subject, sparse_graph_eval};
 use surfcap_pipeline::{GraphKind, GraphParams};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-/// The evaluation's subject and parameters.
-pub struct Options {
+use crate::options::{AlphaOpt, CacheOpts, TableOpts};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The shared data folder (CMU clips).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Vertices of the mannequin (1000 to 20000).
+    #[arg(long, default_value_t = 1000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
+    /// Frame rate the clips are resampled to (50: about 1,900 frames).
+    #[arg(long, default_value_t = 50.0, value_parser = crate::options::positive)]
     pub fps: f64,
+    /// Values of k (transitions kept per frame).
+    #[arg(long = "k", value_delimiter = ',', default_value = "2,4,8,16,32,64", value_parser = crate::options::count)]
     pub ks: Vec<usize>,
-    pub alpha: f64,
-    pub table: crate::options::TableOpts,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    /// Folder for the report (sparse-graph.json) and the plots.
+    #[arg(short, long, default_value = "sparse-graph-eval")]
+    pub output: PathBuf,
 }
 
-pub fn run(
-    ctx: &crate::Ctx,
-    data: &Path,
-    o: Options,
-    cache: &crate::options::CacheOpts,
-    output: &Path,
-) -> anyhow::Result<()> {
-    let subject = cmu_subject(data, o.vertices, o.fps)?;
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    super::folder::claim(ctx, &a.output, &[&a.data], "eval-sparse-graph")?;
+    let (data, cache, output) = (a.data.as_path(), &a.cache, a.output.as_path());
+    let subject = cmu_subject(data, a.vertices, a.fps)?;
     ctx.note(&format!(
         "subject: the mannequin ({} vertices, {} triangles) moved by every CMU clip of {} at {} fps: {} frames",
         subject.topology().n_vertices(),
         subject.topology().n_triangles(),
         data.join("cmu_bvh").display(),
-        o.fps,
+        a.fps,
         subject.n_frames()
     ));
-    let graph = GraphParams { table: o.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: o.alpha };
+    let graph = GraphParams { table: a.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
     let mut opts = SparseGraphEvalOptions::cmu(graph);
-    opts.ks = o.ks;
+    opts.ks.clone_from(&a.ks);
     let bar = crate::progress::Bar::new(ctx);
     let pipe = cache.pipeline(ctx, subject);
     let r = sparse_graph_eval(&pipe, &opts, &bar)?;
     drop(bar);
     let plots = plot(&r, output)?;
-    let (report, rp) = super::save_report(output, "sparse-graph.json", &r, "plots", &plots)?;
+    let (report, rp) = super::folder::save_report(output, "sparse-graph.json", &r, "plots", &plots)?;
     ctx.result(&report, || print_table(&r, &rp, &plots, output));
     Ok(())
 }

@@ -5,10 +5,12 @@
 use std::path::{Path, PathBuf};
 
 use surfcap_eval::transfer_eval::{
-    CaseEval, TransferCase, TransferEvalOptions, leave_one_out_eval, transfer_case_eval,
+    CaseEval, CaseParts, TransferCase, TransferEvalOptions, catlion_subjects, kaykit_case, leave_one_out_eval,
+    mannequin_case, transfer_case_eval,
 };
 use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
+use surfcap_builtin::mannequin::BodyShape;
 
 const PALETTE: [(u8, u8, u8); 6] =
     [(31, 95, 191), (208, 48, 48), (46, 158, 68), (224, 138, 0), (120, 60, 170), (90, 90, 90)];
@@ -48,7 +50,63 @@ fn curve_plot(dir: &Path, c: &CaseEval, variants: &[&str], stem: &str, title: &s
     Ok(write_line_chart(&dir.join(format!("{slug}_{stem}")), &chart)?)
 }
 
-pub fn run(
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The shared data folder (KayKit characters and CMU clips).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Cases: barbarian, mage, rogue (the KayKit knight to each), mannequins (an average
+    /// mannequin of 3,000 vertices to a heavy one of 5,000) and catlion (Sumner's 9 cat and
+    /// lion poses, leave-one-out).
+    #[arg(long, value_delimiter = ',', default_value = "barbarian,mage,rogue,mannequins,catlion")]
+    pub cases: Vec<String>,
+    /// Training-set sizes of the learning curves (pairs).
+    #[arg(long, value_delimiter = ',', default_value = "10,25,50,100,200,350", value_parser = |s: &str| crate::options::at_least(s, 2))]
+    pub sizes: Vec<usize>,
+    /// PCA components per part.
+    #[arg(long, default_value_t = 20, value_parser = |s: &str| crate::options::at_least(s, 1))]
+    pub components: usize,
+    /// Seed of the 70/30 split and the fits' restarts.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Evaluate on the whole body only (one part), instead of five proposed parts (plus the
+    /// whole-body comparison curve).
+    #[arg(long)]
+    pub whole_body: bool,
+    /// Overlap of the proposed parts, in edge rings.
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::at_least(s, 1))]
+    pub overlap_rings: usize,
+    #[arg(short, long, default_value = "transfer-eval")]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    super::folder::claim(ctx, &a.output, &[&a.data], "eval-transfer")?;
+    let Args { data, cases, sizes, components, seed, whole_body, overlap_rings, output } = a;
+    let parts = if whole_body { CaseParts::WholeBody } else { CaseParts::Proposed { overlap_rings } };
+    let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
+    let mut built = Vec::new();
+    let mut catlion = None;
+    for c in &cases {
+        if c == "catlion" {
+            catlion = Some(catlion_subjects(&data)?);
+            continue;
+        }
+        built.push(match c.as_str() {
+            "barbarian" | "mage" | "rogue" => kaykit_case(&data, c, parts)?,
+            "mannequins" => mannequin_case(
+                &data,
+                ("mannequin-average-3k", &BodyShape::average(), 3000),
+                ("mannequin-heavy-5k", &BodyShape::heavy(), 5000),
+                parts,
+            )?,
+            other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue, mannequins or catlion"),
+        });
+    }
+    evaluate(ctx, built, catlion, &opts, &output)
+}
+
+fn evaluate(
     ctx: &crate::Ctx,
     cases: Vec<TransferCase>,
     catlion: Option<(Subject, Subject)>,
@@ -103,7 +161,7 @@ pub fn run(
         None => None,
     };
     let report = serde_json::json!({ "cases": results, "leave_one_out": loo, "seconds": t0.elapsed().as_secs_f64() });
-    let (report, path) = super::save_report(output, "transfer.json", &report, "plots", &plots)?;
+    let (report, path) = super::folder::save_report(output, "transfer.json", &report, "plots", &plots)?;
     ctx.result(&report, || {
         for r in &results {
             println!(
@@ -153,7 +211,7 @@ pub fn run(
                 println!("  {m:<8} mean {e:>6.2}%");
             }
         }
-        super::print_wrote(&path, &plots);
+        super::folder::print_wrote(&path, &plots);
     });
     Ok(())
 }

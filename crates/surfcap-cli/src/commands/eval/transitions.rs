@@ -2,16 +2,40 @@
 //! transition_costs_eval` computes it; this command writes the report and plots and prints
 //! the table).
 
-use std::path::Path;
+use std::path::PathBuf;
 
 use surfcap_eval::transition_costs_eval::{TransitionCostsOptions, transition_costs_eval};
-use surfcap_pipeline::Pipeline;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use super::{print_wrote, save_report};
+use super::folder::{claim, print_wrote, save_report};
+use crate::options::{CacheOpts, SubjectArgs};
 
-pub fn run(ctx: &crate::Ctx, pipe: Pipeline, opts: &TransitionCostsOptions, output: &Path) -> anyhow::Result<()> {
-    let r = transition_costs_eval(&pipe, opts)?;
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Slope constraints to compare.
+    #[arg(long, value_delimiter = ',', default_value = "2,3,4,5", value_parser = crate::options::count)]
+    pub slopes: Vec<usize>,
+    /// Fixed segment length of the standard and DTW-only transitions (default: one second).
+    #[arg(long, value_parser = crate::options::count)]
+    pub fixed: Option<usize>,
+    /// Frame pairs in the plots.
+    #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
+    pub plot_pairs: usize,
+    /// Folder for the report and the plots.
+    #[arg(short, long, default_value = "transitions-eval")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    #[command(flatten)]
+    pub subject: SubjectArgs,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    claim(ctx, &a.output, &[&a.subject.path], "eval-transitions")?;
+    let opts = TransitionCostsOptions { slopes: a.slopes, fixed: a.fixed, plot_pairs: a.plot_pairs };
+    let pipe = a.cache.pipeline(ctx, a.subject.open(ctx)?);
+    let output = a.output.as_path();
+    let r = transition_costs_eval(&pipe, &opts)?;
     let (name, fixed, p_plot, sample) = (&r.subject, r.fixed_length, r.plot.slope, &r.plot.sample);
     let xs = |f: &dyn Fn(usize) -> f64| (0..sample.len()).map(|x| (x as f64, f(x))).collect::<Vec<_>>();
     let series = |name: String, points, color| Series { name, points, color, dashed: false, markers: false };

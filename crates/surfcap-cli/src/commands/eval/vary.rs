@@ -1,12 +1,14 @@
-//! `surfcap eval vary`: motion variation synthesis evaluated (thesis chapter 6, issue 19 item
-//! 5; `surfcap_eval::variation_eval` computes it). Writes `vary.json`, per case the
+//! `surfcap eval vary`: motion variation synthesis evaluated (thesis chapter 6;
+//! `surfcap_eval::variation_eval` computes it). Writes `vary.json`, per case the
 //! reconstruction errors of Fig. 6.4, the interpolation curves of Fig. 6.7 and each part's
 //! latent trajectories with the reference sequence's variants (Fig. 6.5), prints the tables,
 //! and fails (exit 1, after writing everything) when a variation criterion is missed.
 
 use std::path::{Path, PathBuf};
 
-use surfcap_eval::variation_eval::{CaseEval, VariationCase, VariationEvalOptions, variation_eval};
+use surfcap_eval::variation_eval::{
+    CaseEval, VariationCase, VariationEvalOptions, cmu_case, kaykit_case, variation_eval,
+};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 const PALETTE: [(u8, u8, u8); 6] =
@@ -181,7 +183,71 @@ fn print_case(c: &CaseEval, tolerance: f64) {
     }
 }
 
-pub fn run(
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The shared data folder (CMU clips and the KayKit knight).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Only one case: cmu (the mannequin driven by CMU clips) or kaykit (the knight).
+    #[arg(long)]
+    pub only: Option<String>,
+    /// CMU clips of the cmu case (in cmu_bvh; the first is the reference, the first two
+    /// are blended).
+    #[arg(long, value_delimiter = ',', default_value = "16_15,16_36,16_17,16_19,16_07")]
+    pub cmu_clips: Vec<String>,
+    /// KayKit knight clips of the kaykit case (the first is the reference, the first two
+    /// are blended).
+    #[arg(long, value_delimiter = ',', default_value = "Walking_A,Running_A,Walking_B,Walking_C,Running_B")]
+    pub kaykit_clips: Vec<String>,
+    /// Target vertex count of the mannequin (1000 to 20000).
+    #[arg(long, default_value_t = 1500, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
+    pub vertices: usize,
+    /// Variants per captured sequence.
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::at_least(s, 2))]
+    pub variants: usize,
+    /// Seed of the variants.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// L-BFGS iterations at most of every GPDM (default 400).
+    #[arg(long, value_parser = crate::options::count)]
+    pub iterations: Option<usize>,
+    /// Where the variants go in the world, the world criteria judged there: source (the
+    /// source's path, `vary sample`'s default) or sampled (the torso GP's displacements,
+    /// thesis 6.6.2).
+    #[arg(long, default_value = "source")]
+    pub path: crate::options::PathArg,
+    /// Radius of the moving average over sampled latent trajectories (`vary sample
+    /// --smoothing`).
+    #[arg(long, default_value_t = 2)]
+    pub smoothing: usize,
+    /// Folder for vary.json and the plots.
+    #[arg(short, long, default_value = "vary-eval")]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    super::folder::claim(ctx, &a.output, &[&a.data], "eval-vary")?;
+    let (cmu, kaykit) = match a.only.as_deref() {
+        None => (true, true),
+        Some("cmu") => (true, false),
+        Some("kaykit") => (false, true),
+        Some(other) => anyhow::bail!("--only {other}: expected cmu or kaykit"),
+    };
+    let mut cases = Vec::new();
+    if cmu {
+        cases.push(cmu_case(&a.data, a.vertices, &a.cmu_clips)?);
+    }
+    if kaykit {
+        cases.push(kaykit_case(&a.data, &a.kaykit_clips)?);
+    }
+    let mut opts =
+        VariationEvalOptions { variants: a.variants, seed: a.seed, iterations: a.iterations, ..Default::default() };
+    opts.sampling.path = a.path.0;
+    opts.sampling.smoothing = a.smoothing;
+    evaluate(ctx, cases, &opts, &a.output)
+}
+
+fn evaluate(
     ctx: &crate::Ctx,
     cases: Vec<VariationCase>,
     opts: &VariationEvalOptions,
@@ -193,7 +259,7 @@ pub fn run(
     for c in &r.cases {
         written.extend(plots(output, c)?);
     }
-    let (report, path) = super::save_report(output, "vary.json", &r, "written", &written)?;
+    let (report, path) = super::folder::save_report(output, "vary.json", &r, "written", &written)?;
     ctx.result(&report, || {
         for c in &r.cases {
             print_case(c, r.criteria.tolerance);

@@ -1,10 +1,10 @@
-//! `surfcap bench export` (alias `bench glb`): writes long animations as `.glb`, `.abc` or
+//! `surfcap-bench export` (alias `surfcap-bench glb`): writes long animations as `.glb`, `.abc` or
 //! `.usda` (default: glb, 10 minutes at 30 fps of a 10,000-vertex subject, 18,000 frames) and
 //! reports for each length the file size, the time and the memory the write added above the
 //! subject's own positions (the peak resident memory during the write, reset before it through
 //! `/proc/self/clear_refs`, minus the resident memory before it). Several lengths
-//! (`--frames 1800,3600,9000,18000`) show whether time and memory grow linearly with the length
-//! (issue "Alembic and USD" item 4): the writers stream, so the added memory should stay small
+//! (`--frames 1800,3600,9000,18000`) show whether time and memory grow linearly with the length:
+//! the writers stream, so the added memory should stay small
 //! and the time per frame constant. Both the wall time and the CPU time of the write are given:
 //! the wall time includes the final sync to disk, which on a shared machine varies with what
 //! else writes.
@@ -18,7 +18,7 @@ use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_formats::export::{ExportFormat, ExportOptions, export};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
 
-use super::peak_rss;
+use crate::measure::{cpu_seconds, peak_rss};
 
 /// The resident memory now, from `/proc/self/status`.
 fn rss() -> Option<u64> {
@@ -26,19 +26,6 @@ fn rss() -> Option<u64> {
     let line = s.lines().find(|l| l.starts_with("VmRSS:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
-}
-
-/// CPU seconds (user + system) this process has used so far: unlike the wall time, it leaves
-/// out the wait for the disk at the final sync, which dominates the wall time of large files on
-/// a shared machine.
-fn cpu_seconds() -> f64 {
-    // SAFETY: getrusage writes into the zeroed struct it is given.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
-        return f64::NAN;
-    }
-    let t = |v: libc::timeval| v.tv_sec as f64 + v.tv_usec as f64 * 1e-6;
-    t(u.ru_utime) + t(u.ru_stime)
 }
 
 /// Resets the peak resident memory to the current one (Linux 4.0+); false where it cannot.
@@ -62,13 +49,23 @@ fn long_subject(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
     Ok(Subject::new("bench", g.topology().clone(), vec![seq], 30.0, g.up_axis, g.units.clone())?)
 }
 
-pub(super) fn run(
-    ctx: &crate::Ctx,
-    format: ExportFormat,
-    lengths: &[usize],
-    vertices: usize,
-    output: Option<PathBuf>,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// glb, abc or usda.
+    #[arg(long, default_value = "glb")]
+    pub format: ExportFormat,
+    /// Lengths in frames (at 30 fps), comma-separated.
+    #[arg(long, default_value = "18000", value_delimiter = ',', value_parser = crate::options::count)]
+    pub frames: Vec<usize>,
+    #[arg(long, default_value_t = 10_000, value_parser = crate::options::count)]
+    pub vertices: usize,
+    /// Keep the file here (one length only; default: a temporary folder, removed afterwards).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let Args { format, frames: lengths, vertices, output } = a;
     let ext = match format {
         ExportFormat::Glb => "glb",
         ExportFormat::Abc => "abc",
@@ -80,7 +77,7 @@ pub(super) fn run(
     }
     let tmp = tempfile::tempdir().context("creating a temporary folder")?;
     let mut runs = Vec::new();
-    for &frames in lengths {
+    for &frames in &lengths {
         let s = long_subject(frames, vertices)?;
         let nv = s.topology().n_vertices();
         let out = output.clone().unwrap_or_else(|| tmp.path().join(format!("long.{ext}")));

@@ -1,6 +1,6 @@
-//! `surfcap bench distance`: the all-pairs deformation distance matrix against the machine's
+//! `surfcap-bench distance`: the all-pairs deformation distance matrix against the machine's
 //! dense f64 GEMM rate; the rate of every distance kernel this CPU has on 2 threads and 1; and
-//! what storing the per-frame triangle data in f32 would do to the matrix (issue 21 item 5).
+//! what storing the per-frame triangle data in f32 would do to the matrix.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -15,11 +15,11 @@ use surfcap_geometry::pose_distance::{
 };
 use surfcap_mesh::{NoProgress, Sequence, Subject};
 
-use super::{open_quietly, peak_rss};
+use crate::measure::{FpsOpt, cpu_seconds, load_average, peak_rss};
 
 /// Rate of a 1000 x 1000 f64 matrix product on all cores (faer), in FLOP/s: the reference
 /// "peak" that the distance benchmark's arithmetic rate is compared with.
-pub(super) fn gemm_rate() -> f64 {
+fn gemm_rate() -> f64 {
     let n = 1000;
     let a = faer::Mat::<f64>::from_fn(n, n, |i, j| ((i * 31 + j * 17) % 101) as f64 / 101.0);
     let b = a.clone();
@@ -38,16 +38,24 @@ pub(super) fn gemm_rate() -> f64 {
 /// each. An estimate for the "fraction of peak" figure, not a measurement.
 const FLOPS_PER_TRIANGLE_PAIR: f64 = 100.0;
 
-pub(super) fn run(
-    ctx: &crate::Ctx,
-    subject: Option<PathBuf>,
-    frames: usize,
-    triangles: usize,
-    fps: Option<f64>,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A subject; default: the built-in tube with --frames frames of about --triangles triangles.
+    #[arg(long)]
+    pub subject: Option<PathBuf>,
+    #[arg(long, default_value_t = 175, value_parser = crate::options::count)]
+    pub frames: usize,
+    #[arg(long, default_value_t = 20000, value_parser = crate::options::count)]
+    pub triangles: usize,
+    #[command(flatten)]
+    pub fps: FpsOpt,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
+    let Args { subject, frames, triangles, fps } = a;
     let s = match subject {
-        Some(p) => open_quietly(&p, fps)?,
+        Some(p) => fps.open_quietly(&p)?,
         None => {
             let segments = 25usize;
             let rings = (triangles / (2 * segments)).max(2);
@@ -153,30 +161,9 @@ pub(super) fn run(
     Ok(())
 }
 
-/// CPU time of the process so far (user + system, all threads). On a shared machine the wall
-/// time of a run includes the time other processes held the cores; pairs per CPU second is the
-/// rate while running (times the thread count: the rate the cores would give alone, when the
-/// threads are evenly loaded).
-fn cpu_seconds() -> f64 {
-    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
-    // SAFETY: getrusage writes a `rusage` into the pointer it is given.
-    let usage = unsafe {
-        libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr());
-        usage.assume_init()
-    };
-    let t = |v: libc::timeval| v.tv_sec as f64 + v.tv_usec as f64 * 1e-6;
-    t(usage.ru_utime) + t(usage.ru_stime)
-}
-
-/// Thread counts the kernels are timed on: 2 and 1 (the issue's target is for 2 cores).
+/// Thread counts the kernels are timed on: 2 and 1 (the targets are for 2 cores).
 fn thread_counts() -> Vec<usize> {
     vec![2, 1]
-}
-
-/// The 1-minute load average (`/proc/loadavg`): the machine is shared, so rates are reported
-/// with it.
-fn load_average() -> Option<f64> {
-    std::fs::read_to_string("/proc/loadavg").ok()?.split_whitespace().next()?.parse().ok()
 }
 
 /// Rows and triangles taken together by the pair loop, as `distance_matrix.rs` takes them.

@@ -1,4 +1,4 @@
-//! `surfcap bench synth`: constrained synthesis on a real-geometry graph: build times and query
+//! `surfcap-bench synth`: constrained synthesis on a real-geometry graph: build times and query
 //! latencies.
 
 use std::path::PathBuf;
@@ -6,19 +6,19 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use crate::options::{CacheOpts, TableOpts};
+use crate::options::{AlphaOpt, CacheOpts, SeedOpt, TableOpts};
 
-/// `bench synth`: graph build and query latency on a procedural subject.
+/// `surfcap-bench synth`: graph build and query latency on a procedural subject.
 #[derive(clap::Args, Debug)]
-pub struct SynthBench {
+pub struct Args {
     #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
     frames: usize,
     #[arg(long, default_value_t = 1000, value_parser = crate::options::count)]
     vertices: usize,
-    #[arg(long, default_value_t = 0.05, value_parser = crate::options::positive)]
-    alpha: f64,
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    #[command(flatten)]
+    alpha: AlphaOpt,
+    #[command(flatten)]
+    seed: SeedOpt,
     /// Cache folder for the distance matrix and transition table (default: a temporary one,
     /// so every phase is measured).
     #[arg(long)]
@@ -28,8 +28,9 @@ pub struct SynthBench {
     branching: Option<usize>,
 }
 
-pub(super) fn run(ctx: &crate::Ctx, b: SynthBench) -> anyhow::Result<()> {
-    let SynthBench { frames, vertices, alpha, seed, cache_dir, branching } = b;
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let Args { frames, vertices, alpha, seed, cache_dir, branching } = a;
+    let (alpha, seed) = (alpha.value(), seed.seed);
     use rand::{Rng, SeedableRng};
     use surfcap_builtin::locomotion::Gait;
     use surfcap_builtin::mannequin::{BodyShape, mannequin};

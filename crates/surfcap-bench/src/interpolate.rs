@@ -1,23 +1,31 @@
-//! `surfcap bench interpolate`: one non-linear interpolation, set-up and per-lambda times.
+//! `surfcap-bench interpolate`: one non-linear interpolation, set-up and per-lambda times.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
 
-use super::open_quietly;
+use crate::measure::FpsOpt;
 
-pub(super) fn run(
-    ctx: &crate::Ctx,
-    subject: PathBuf,
-    from: &str,
-    to: &str,
-    repeat: usize,
-    fps: Option<f64>,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A subject cache or source.
+    pub subject: PathBuf,
+    #[arg(long)]
+    pub from: String,
+    #[arg(long)]
+    pub to: String,
+    #[arg(long, default_value_t = 5, value_parser = crate::options::count)]
+    pub repeat: usize,
+    #[command(flatten)]
+    pub fps: FpsOpt,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-    let s = open_quietly(&subject, fps)?;
-    let (gi, gj) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
+    let Args { subject, from, to, repeat, fps } = a;
+    let s = fps.open_quietly(&subject)?;
+    let (gi, gj) = (s.resolve_frame(&from)?, s.resolve_frame(&to)?);
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let mut setup = Vec::new();
     let mut solve = Vec::new();

@@ -1,8 +1,8 @@
-//! `surfcap bench learn` at a small size: its plumbing (it runs, reports every phase with its
+//! `surfcap-bench learn` at a small size: its plumbing (it runs, reports every phase with its
 //! target, rejects sizes it cannot use), not its speed: speed targets are never asserted in
 //! tests on these shared machines.
 
-use surfcap_testkit::surfcap;
+use surfcap_testkit::surfcap_bench;
 
 /// A test of the benchmark's plumbing, not of its speed target: every phase reports its time
 /// and its target, and whether the target was "met" or "NOT met" (either is accepted: the
@@ -12,7 +12,6 @@ use surfcap_testkit::surfcap;
 fn bench_learn_plumbing_reports_each_phase_and_its_target() {
     let small = [
         "--json",
-        "bench",
         "learn",
         "--gp-points",
         "60",
@@ -25,7 +24,7 @@ fn bench_learn_plumbing_reports_each_phase_and_its_target() {
         "--hmc-frames",
         "6",
     ];
-    let o = surfcap!(&small);
+    let o = surfcap_bench!(&small);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for (phase, target) in [("gp", 5.0), ("gpdm", 60.0), ("hmc", 30.0)] {
@@ -39,6 +38,6 @@ fn bench_learn_plumbing_reports_each_phase_and_its_target() {
     assert!(
         v["gpdm"]["mean_vertex_error_m"].as_f64().unwrap() < v["gpdm"]["pca3_mean_vertex_error_m"].as_f64().unwrap()
     );
-    let bad = surfcap!(&["bench", "learn", "--frames", "4"]);
+    let bad = surfcap_bench!(&["learn", "--frames", "4"]);
     assert_eq!(bad.status.code(), Some(1), "{}", String::from_utf8_lossy(&bad.stderr));
 }

@@ -1,4 +1,4 @@
-//! `surfcap bench learn`: the speed targets of the learning toolkit (surfcap-learn, thesis
+//! `surfcap-bench learn`: the speed targets of the learning toolkit (surfcap-learn, thesis
 //! chapters 5-6) on 2 cores: GP regression with fitted hyper-parameters plus prediction on
 //! 2,000 points of 20 dimensions (target < 5 s; the fit starts from the median-distance guess,
 //! whose cost is included), one GPDM fit on 400 frames of ~3,000
@@ -16,8 +16,11 @@ use surfcap_learn::hybrid_monte_carlo::{HmcOptions, standard_normal};
 use surfcap_learn::kernels::Kernel;
 use surfcap_learn::pca::{Pca, PcaMethod};
 
+use crate::measure::verdict;
+use crate::options::SeedOpt;
+
 #[derive(clap::Args, Debug)]
-pub struct LearnArgs {
+pub struct Args {
     /// GP training points.
     #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
     pub gp_points: usize,
@@ -40,19 +43,15 @@ pub struct LearnArgs {
     /// Frames per sampled trajectory.
     #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
     pub hmc_frames: usize,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub seed: SeedOpt,
 }
 
-fn verdict(secs: f64, target: f64) -> &'static str {
-    if secs < target { "met" } else { "NOT met" }
-}
-
-pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.gp_points >= 10 && a.gp_dims >= 1, "--gp-points >= 10 and --gp-dims >= 1 expected");
     anyhow::ensure!(a.frames >= 20 && a.hmc_frames >= 2 && a.hmc_samples >= 1, "--frames >= 20, --hmc-frames >= 2");
     // 1. GP regression: y = sin(x . w1) + 0.5 cos(x . w2) + noise (sd 0.1), inputs in [-1, 1]^d.
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed.seed);
     let (n, d) = (a.gp_points, a.gp_dims);
     let w1: Vec<f64> = (0..d).map(|_| rng.random_range(-1.0..1.0) / (d as f64).sqrt()).collect();
     let w2: Vec<f64> = (0..d).map(|_| rng.random_range(-1.0..1.0) / (d as f64).sqrt()).collect();
@@ -68,7 +67,7 @@ pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
     });
     let xt = Mat::from_fn(1000, d, |_, _| rng.random_range(-1.0..1.0));
     let t0 = Instant::now();
-    let opts = GpFitOptions { restarts: a.gp_restarts, seed: a.seed, ..Default::default() };
+    let opts = GpFitOptions { restarts: a.gp_restarts, seed: a.seed.seed, ..Default::default() };
     let (k0, noise0) = squared_exponential_guess(x.as_ref(), y.as_ref())?;
     let (gp, rep) = GpRegression::fit(k0, noise0, x, y, &opts)?;
     let t_fit = t0.elapsed().as_secs_f64();
@@ -99,7 +98,7 @@ pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
     let halves = [a.frames / 2, a.frames - a.frames / 2];
     let mut seqs = Vec::new();
     for (k, (gait, frames)) in [Gait::Walk, Gait::Jog].into_iter().zip(halves).enumerate() {
-        let clip = Clip::procedural(&m, gait, fps, frames as f64 / fps + 0.5, a.seed + k as u64)?;
+        let clip = Clip::procedural(&m, gait, fps, frames as f64 / fps + 0.5, a.seed.seed + k as u64)?;
         anyhow::ensure!(clip.poses.len() >= frames, "procedural clip shorter than {frames} frames");
         let nv = m.topology.n_vertices();
         let mut y = Mat::zeros(frames, 3 * nv);
@@ -148,7 +147,7 @@ pub fn run(ctx: &crate::Ctx, a: &LearnArgs) -> anyhow::Result<()> {
 
     // 3. HMC: whole trajectories conditioned on the first latent point of the walk.
     let x1: Vec<f64> = (0..gpdm.latent_dim()).map(|j| gpdm.latent()[(0, j)]).collect();
-    let hopts = HmcOptions { warmup: 100, samples: a.hmc_samples, thin: 3, seed: a.seed, ..Default::default() };
+    let hopts = HmcOptions { warmup: 100, samples: a.hmc_samples, thin: 3, seed: a.seed.seed, ..Default::default() };
     let t3 = Instant::now();
     let (trajs, chain) = gpdm.sample_trajectories(&x1, a.hmc_frames, &hopts)?;
     let hmc_secs = t3.elapsed().as_secs_f64();

@@ -1,4 +1,4 @@
-//! `surfcap bench smg`: the surface motion graph's speed targets (issue 17 item 8) on 2 cores:
+//! `surfcap-bench smg`: the surface motion graph's speed targets on 2 cores:
 //! the shape histograms (Huang et al. 2009, 3.1) of 2,000 frames of 10,000 vertices under
 //! 2 minutes, and a path query (4.1-4.2) under 50 ms (the paper: 5.7-15 s in Matlab).
 //!
@@ -20,10 +20,10 @@ use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, pla
 use surfcap_smg::shape_similarity::{FrameHistograms, HistogramParams, frame_histograms, shape_similarity_matrix};
 use surfcap_smg::surface_motion_graph::{GraphInput, build_graph};
 
-use super::peak_rss;
+use crate::measure::{peak_rss, verdict};
 
 #[derive(clap::Args, Debug)]
-pub struct SmgArgs {
+pub struct Args {
     /// The shared data folder (the CMU clips).
     #[arg(long, default_value = "../shared/data")]
     pub data: std::path::PathBuf,
@@ -42,10 +42,6 @@ pub struct SmgArgs {
     pub transitions: Vec<usize>,
 }
 
-fn verdict(secs: f64, target: f64) -> &'static str {
-    if secs < target { "met" } else { "NOT met" }
-}
-
 /// Mean, 95th percentile and maximum.
 fn summary(v: &mut [f64]) -> serde_json::Value {
     v.sort_by(f64::total_cmp);
@@ -54,7 +50,7 @@ fn summary(v: &mut [f64]) -> serde_json::Value {
     json!({"mean": mean, "p95": p95, "max": v.last().copied().unwrap_or(0.0), "count": v.len()})
 }
 
-pub fn run(ctx: &crate::Ctx, a: &SmgArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     ctx.say("building the mannequin and its CMU clips (not timed) ...");
     let subject = locomotion_subject(&a.data, a.vertices)?;
     let frames = MotionFrames::from_subject(&subject);

@@ -1,4 +1,4 @@
-//! `surfcap bench load`: time and peak resident memory of loading a subject. The load runs in a
+//! `surfcap-bench load`: time and peak resident memory of loading a subject. The load runs in a
 //! child process so that its peak memory is its own (not that of generating the test data).
 
 use std::path::PathBuf;
@@ -6,26 +6,37 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
+use surfcap_builtin::{WormParams, worm_subject};
 
-use super::peak_rss;
+use crate::measure::{FpsOpt, peak_rss};
 use crate::output::print_json;
 
-pub(super) fn run(
-    ctx: &crate::Ctx,
-    subject: Option<PathBuf>,
-    frames: usize,
-    vertices: usize,
-    repeat: usize,
-    in_process: bool,
-    fps: Option<f64>,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A subject cache or source to load; default: a generated subject of the given size.
+    #[arg(long)]
+    pub subject: Option<PathBuf>,
+    #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
+    pub frames: usize,
+    #[arg(long, default_value_t = 10000, value_parser = crate::options::count)]
+    pub vertices: usize,
+    /// Repetitions (the best and the median are reported).
+    #[arg(long, default_value_t = 3, value_parser = crate::options::count)]
+    pub repeat: usize,
+    /// Measure in this process (used by the parent run).
+    #[arg(long, hide = true)]
+    pub in_process: bool,
+    #[command(flatten)]
+    pub fps: FpsOpt,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let Args { subject, frames, vertices, repeat, in_process, fps } = a;
     if in_process {
         let path = subject.context("--in-process needs --subject")?;
-        let opts = surfcap_formats::import::ImportOptions { fps, ..Default::default() };
         let t0 = Instant::now();
-        let s = surfcap_formats::import::open_subject(&path, &opts, &NoProgress)?.subject;
+        let s = fps.open_quietly(&path)?;
         let secs = t0.elapsed().as_secs_f64();
         let bytes = s.sequences().iter().map(|q| std::mem::size_of_val(q.positions())).sum::<usize>();
         print_json(&json!({
@@ -48,12 +59,12 @@ pub(super) fn run(
             p
         }
     };
-    let exe = std::env::current_exe().context("finding the surfcap executable")?;
+    let exe = std::env::current_exe().context("finding the surfcap-bench executable")?;
     let mut runs = Vec::new();
     for _ in 0..repeat.max(1) {
         let mut cmd = std::process::Command::new(&exe);
-        cmd.args(["bench", "load", "--in-process", "--subject"]).arg(&path);
-        if let Some(f) = fps {
+        cmd.args(["load", "--in-process", "--subject"]).arg(&path);
+        if let Some(f) = fps.fps {
             cmd.arg("--fps").arg(f.to_string());
         }
         let out = cmd.output().context("running the measuring child process")?;
@@ -92,7 +103,7 @@ pub(super) fn run(
 }
 
 /// A subject of `frames` frames (split in sequences of 500) with about `vertices` vertices.
-pub(super) fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
+fn generated(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
     let segments = 25usize;
     let rings = vertices.saturating_sub(2).div_ceil(segments).max(2);
     let per_seq = 500usize.min(frames.max(1));

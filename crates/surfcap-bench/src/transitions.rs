@@ -1,4 +1,4 @@
-//! `surfcap bench transitions`: the transition table and its speed-up over naive DTW.
+//! `surfcap-bench transitions`: the transition table and its speed-up over naive DTW.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -6,21 +6,31 @@ use std::time::Instant;
 use serde_json::json;
 use surfcap_builtin::{WormParams, worm_subject};
 
-use super::open_quietly;
+use crate::measure::FpsOpt;
 use crate::options::TableOpts;
 
-pub(super) fn run(
-    ctx: &crate::Ctx,
-    subject: Option<PathBuf>,
-    frames: usize,
-    sample: usize,
-    table: &TableOpts,
-    fps: Option<f64>,
-) -> anyhow::Result<()> {
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A subject; default: the built-in tube, two sequences, --frames frames in all.
+    #[arg(long)]
+    pub subject: Option<PathBuf>,
+    #[arg(long, default_value_t = 350, value_parser = crate::options::count)]
+    pub frames: usize,
+    /// Frame pairs timed with the naive loop.
+    #[arg(long, default_value_t = 12, value_parser = crate::options::count)]
+    pub sample: usize,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub fps: FpsOpt,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
     use surfcap_motion::transition_table::{SegmentRoom, naive_transition, transition_table};
+    let Args { subject, frames, sample, table, fps } = a;
     let s = match subject {
-        Some(p) => open_quietly(&p, fps)?,
+        Some(p) => fps.open_quietly(&p)?,
         None => worm_subject(&WormParams { frames: frames.div_ceil(2), ..Default::default() })?,
     };
     let p = table.params(s.fps)?;

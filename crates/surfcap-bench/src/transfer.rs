@@ -1,4 +1,4 @@
-//! `surfcap bench transfer`: the speed targets of motion transfer (issue 18 item 8) on 2 cores:
+//! `surfcap-bench transfer`: the speed targets of motion transfer (thesis chapter 5) on 2 cores:
 //! training with 350 pairs, 5 body parts, 20 components per part and fitted hyper-parameters
 //! under 10 s; the transfer of a 100-frame motion to a 10,000-vertex target, part correction
 //! and stitching included, under 10 s. The subjects are two built-in mannequins (an average
@@ -14,8 +14,11 @@ use surfcap_transfer::body_parts_proposal::{Method, propose};
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 
+use crate::measure::verdict;
+use crate::options::SeedOpt;
+
 #[derive(clap::Args, Debug)]
-pub struct TransferArgs {
+pub struct Args {
     /// The shared data folder (the CMU clips).
     #[arg(long, default_value = "../shared/data")]
     pub data: std::path::PathBuf,
@@ -38,15 +41,11 @@ pub struct TransferArgs {
     /// gives just over 10,000).
     #[arg(long, default_value_t = 10800, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub target_vertices: usize,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub seed: SeedOpt,
 }
 
-fn verdict(secs: f64, target: f64) -> &'static str {
-    if secs < target { "met" } else { "NOT met" }
-}
-
-pub fn run(ctx: &crate::Ctx, a: &TransferArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     ctx.say("building the two mannequins and their CMU clips (not timed) ...");
     let source = mannequin_cmu_subject(&a.data, "average", &BodyShape::average(), a.source_vertices)?;
     let target = mannequin_cmu_subject(&a.data, "heavy", &BodyShape::heavy(), a.target_vertices)?;
@@ -68,7 +67,7 @@ pub fn run(ctx: &crate::Ctx, a: &TransferArgs) -> anyhow::Result<()> {
     let src = PreparedSubject::new(&source, &train_seqs)?;
     let tgt = PreparedSubject::new(&target, &train_seqs)?;
     let mut opts = TrainOptions { components: a.components, ..TrainOptions::default() };
-    opts.mapping.fit.seed = a.seed;
+    opts.mapping.fit.seed = a.seed.seed;
     let (model, report) = MotionTransfer::train(&src, &sp, &pca, &tgt, &tp, &pca, &pairs, &opts)?;
     let train_seconds = t_train.elapsed().as_secs_f64();
 

@@ -1,10 +1,26 @@
-//! `surfcap bench graph`: essential and motion graph build times on a seeded random table.
+//! `surfcap-bench graph`: essential and motion graph build times on a seeded random table.
 
 use std::time::Instant;
 
 use serde_json::json;
 
-pub(super) fn run(ctx: &crate::Ctx, frames: usize, sequences: usize, alpha: f64, seed: u64) -> anyhow::Result<()> {
+use crate::options::{AlphaOpt, SeedOpt};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[arg(long, default_value_t = 2000, value_parser = crate::options::count)]
+    pub frames: usize,
+    /// Sequences the frames are split into.
+    #[arg(long, default_value_t = 20, value_parser = crate::options::count)]
+    pub sequences: usize,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
+    #[command(flatten)]
+    pub seed: SeedOpt,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let (frames, sequences, alpha, seed) = (a.frames, a.sequences, a.alpha.value(), a.seed.seed);
     use surfcap_motion::edge_weights::edge_weights;
     use surfcap_motion::essential_graph::essential_graph;
     use surfcap_motion::motion_graph::motion_graph;

@@ -1,4 +1,4 @@
-//! `surfcap bench scale` (issue 21 item 6): the tiled all-pairs work at the size of a capture
+//! `surfcap-bench scale`: the tiled all-pairs work at the size of a capture
 //! day. Builds a 20,000-frame built-in tube of 10,000 triangles (ten sequences of 2,000 frames,
 //! each its own seeded motion), plans it in tiles, runs a sample of real tile jobs in child
 //! processes (`surfcap tiles run`, so each job's peak memory is its own process's), and projects
@@ -34,7 +34,7 @@ use surfcap_tiles::tile_plan::{Plan, Stage, open_work};
 use surfcap_tiles::tile_store::JobRecord;
 
 #[derive(clap::Args, Debug)]
-pub struct ScaleArgs {
+pub struct Args {
     /// Frames of the projected subject.
     #[arg(long, default_value_t = 20_000, value_parser = crate::options::count)]
     pub frames: usize,
@@ -80,9 +80,10 @@ fn tube(frames: usize, triangles: usize) -> anyhow::Result<Subject> {
     Ok(Subject::new("tube", topo.expect("a topology"), seqs, 30.0, w.up_axis, w.units.clone())?)
 }
 
-/// Runs `surfcap tiles ...` in a child process; its stderr is passed through on failure.
+/// Runs `surfcap tiles ...` in a child process (this program's hidden `tiles`, the same
+/// command); its stderr is passed through on failure.
 fn surfcap_tiles(args: &[&str]) -> anyhow::Result<()> {
-    let exe = std::env::current_exe().context("finding the surfcap executable")?;
+    let exe = std::env::current_exe().context("finding the surfcap-bench executable")?;
     let out = Command::new(&exe).arg("--quiet").arg("tiles").args(args).output().context("running surfcap tiles")?;
     anyhow::ensure!(
         out.status.success(),
@@ -107,7 +108,7 @@ fn make_subject(dir: &Path, name: &str, frames: usize, triangles: usize) -> anyh
     Ok(path)
 }
 
-pub(super) fn run(ctx: &crate::Ctx, a: ScaleArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let tmp = tempfile::tempdir()?;
     let dir = a.keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -1,4 +1,4 @@
-//! `surfcap bench vary`: the speed targets of motion variation (issue 19 item 7) on 2 cores:
+//! `surfcap-bench vary`: the speed targets of motion variation (thesis chapter 6) on 2 cores:
 //! training on 4 sequences of about 100 frames each under 2 minutes, sampling 5 variants under
 //! 30 s. The subject is the built-in mannequin of `--vertices` vertices moved by four CMU
 //! clips of subject 16 (16_15 walk 117 frames, 16_17 turn left 129, 16_19 turn right 102,
@@ -23,11 +23,14 @@ use surfcap_variation::VariationModel;
 use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_sampling::{SamplingOptions, sample_variants};
 
+use crate::measure::{cpu_seconds, load_average, verdict};
+use crate::options::SeedOpt;
+
 /// The CMU clips of the benchmark: walk, turn left, turn right, jog.
 pub const CLIPS: [&str; 4] = ["16_15", "16_17", "16_19", "16_36"];
 
 #[derive(clap::Args, Debug)]
-pub struct VaryArgs {
+pub struct Args {
     /// The shared data folder (the CMU clips).
     #[arg(long, default_value = "../shared/data")]
     pub data: std::path::PathBuf,
@@ -40,29 +43,8 @@ pub struct VaryArgs {
     /// Most L-BFGS iterations of every part's GPDM fit (`vary train --iterations`).
     #[arg(long, default_value_t = 400, value_parser = crate::options::count)]
     pub iterations: usize,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-}
-
-/// CPU time of this process so far (user + system, every thread), seconds: the machine is
-/// shared, so the wall time is given with the CPU time it took.
-fn cpu_seconds() -> f64 {
-    // SAFETY: getrusage fills the zeroed struct it is given; RUSAGE_SELF is always valid.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
-        return f64::NAN;
-    }
-    let t = |v: libc::timeval| v.tv_sec as f64 + v.tv_usec as f64 * 1e-6;
-    t(u.ru_utime) + t(u.ru_stime)
-}
-
-/// The 1-minute load average (Linux `/proc/loadavg`), to judge how shared the machine was.
-fn load_average() -> Option<f64> {
-    std::fs::read_to_string("/proc/loadavg").ok()?.split_whitespace().next()?.parse().ok()
-}
-
-fn verdict(secs: f64, target: f64) -> &'static str {
-    if secs < target { "met" } else { "NOT met" }
+    #[command(flatten)]
+    pub seed: SeedOpt,
 }
 
 /// The mannequin of about `vertices` vertices moved by [`CLIPS`] (30 fps, metres).
@@ -77,7 +59,7 @@ fn cmu_subject(data: &Path, vertices: usize) -> anyhow::Result<Subject> {
     Ok(mannequin_subject("cmu-locomotion", &m, &clips, 30.0)?)
 }
 
-pub fn run(ctx: &crate::Ctx, a: &VaryArgs) -> anyhow::Result<()> {
+pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     ctx.say("building the mannequin and its CMU clips, proposing its parts (not timed) ...");
     let subject = cmu_subject(&a.data, a.vertices)?;
     let (parts, _) = propose(&subject, Method::Joints, 5, DEFAULT_OVERLAP_RINGS)?;
@@ -101,7 +83,7 @@ pub fn run(ctx: &crate::Ctx, a: &VaryArgs) -> anyhow::Result<()> {
     let walk = subject.sequences()[0].name.clone();
     ctx.say(&format!("sampling {} variants of {walk} ...", a.count));
     let (t, c) = (Instant::now(), cpu_seconds());
-    let (variants, chains) = sample_variants(&model, &walk, a.count, a.seed, &SamplingOptions::default())?;
+    let (variants, chains) = sample_variants(&model, &walk, a.count, a.seed.seed, &SamplingOptions::default())?;
     let sample_seconds = t.elapsed().as_secs_f64();
     let sample_cpu = cpu_seconds() - c;
     let load_after = load_average();
