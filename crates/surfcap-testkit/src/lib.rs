@@ -17,10 +17,27 @@
 //! # The `surfcap` program
 //!
 //! [`surfcap!`] runs the program under test (in surfcap-cli's integration tests), [`p`] and
-//! [`stderr`] shorten what those tests write around it.
+//! [`stderr`] shorten what those tests write around it. [`meta`] reads a dataset's `meta.json`.
+//!
+//! # Checks with outside tools
+//!
+//! [`validate_glb`] runs the Khronos glTF validator and [`three_load_glb`] /
+//! [`three_play_textured_glb`] three.js's GLTFLoader (Node.js tools in `tools/`, installed by
+//! `scripts/setup`); [`read_usd`] and [`read_abc`] read files back with Pixar's USD and the
+//! reference Alembic library (Python in `tools/venv`). [`ViewServer`] starts `surfcap view`, and
+//! [`http_request`] sends raw HTTP requests (no URL normalisation, so traversal attempts reach the
+//! server).
+//!
+//! # Documentation examples
+//!
+//! [`doc_examples()`] lists every command example of `README.md` and `docs/src/**/*.md` with its
+//! file, line and words, so a test can parse each against the program's command line.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
+
+pub mod doc_examples;
+pub use doc_examples::{doc_examples, DocExample};
 
 /// The workspace root (two levels above a crate's manifest).
 pub fn workspace_root() -> PathBuf {
