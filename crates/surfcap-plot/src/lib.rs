@@ -177,7 +177,7 @@ mod tests {
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 2, "no temporaries left");
     }
 
-    /// Issue 15 case 4 for plots: a FIFO (or a folder) where a figure goes is refused, not
+    /// Output safety for plots: a FIFO (or a folder) where a figure goes is refused, not
     /// replaced by a regular file.
     #[test]
     fn a_fifo_or_folder_in_the_way_is_refused() {

@@ -1,5 +1,6 @@
-//! The command examples of the user guide (`docs/src/**/*.md`) and of `README.md`, as words, so
-//! a test can parse each one against the program's argument parser.
+//! The command examples of `README.md` and of every Markdown file under `docs/` (the user guide in
+//! `docs/src/`, and `docs/formats.md`, `docs/development.md` and `docs/results/`, which the guide
+//! includes), as words, so a test can parse each one against the program's argument parser.
 //!
 //! An example is a line of a fenced ```` ```sh ````, ```` ```bash ```` or ```` ```console ````
 //! block whose first word is the program's name (`surfcap`, `surfcap-bench`). In a `console`
@@ -31,8 +32,8 @@ impl std::fmt::Display for DocExample {
     }
 }
 
-/// Every example of `program` in `root/README.md` and `root/docs/src/**/*.md` (files in name
-/// order, examples in file order).
+/// Every example of `program` in `root/README.md` and `root/docs/**/*.md` (files in name order,
+/// examples in file order).
 ///
 /// # Errors
 /// When a file or folder cannot be read, or a command has an unterminated quote (the error
@@ -43,7 +44,7 @@ pub fn doc_examples(root: &Path, program: &str) -> std::io::Result<Vec<DocExampl
     if readme.is_file() {
         files.push(readme);
     }
-    let guide = root.join("docs/src");
+    let guide = root.join("docs");
     if guide.is_dir() {
         markdown_files(&guide, &mut files)?;
     }
@@ -51,11 +52,14 @@ pub fn doc_examples(root: &Path, program: &str) -> std::io::Result<Vec<DocExampl
     for file in files {
         let text = std::fs::read_to_string(&file)?;
         let rel = file.strip_prefix(root).unwrap_or(&file).to_path_buf();
-        out.extend(examples_in(&text, program).map_err(|(line, e)| {
-            std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{}:{line}: {e}", rel.display()))
-        })?
-        .into_iter()
-        .map(|(line, words)| DocExample { file: rel.clone(), line, words }));
+        out.extend(
+            examples_in(&text, program)
+                .map_err(|(line, e)| {
+                    std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{}:{line}: {e}", rel.display()))
+                })?
+                .into_iter()
+                .map(|(line, words)| DocExample { file: rel.clone(), line, words }),
+        );
     }
     Ok(out)
 }
@@ -261,9 +265,10 @@ mod tests {
 
     #[test]
     fn quotes_escapes_and_comments_split_as_a_shell_does() {
-        assert_eq!(words(r#"surfcap a 'b c' "d \"e\" \$f" g\ h # comment"#), vec![vec![
-            "surfcap", "a", "b c", "d \"e\" $f", "g h"
-        ]]);
+        assert_eq!(
+            words(r#"surfcap a 'b c' "d \"e\" \$f" g\ h # comment"#),
+            vec![vec!["surfcap", "a", "b c", "d \"e\" $f", "g h"]]
+        );
         assert_eq!(words("surfcap x '' y"), vec![vec!["surfcap", "x", "", "y"]]);
         assert_eq!(words("surfcap a#b"), vec![vec!["surfcap", "a#b"]]);
         assert_eq!(words("surfcap $WORK *.glb {a,b}"), vec![vec!["surfcap", "$WORK", "*.glb", "{a,b}"]]);
@@ -271,12 +276,10 @@ mod tests {
 
     #[test]
     fn operators_split_commands_and_redirections_are_dropped() {
-        assert_eq!(words("surfcap a && surfcap b | head; x &"), vec![
-            vec!["surfcap", "a"],
-            vec!["surfcap", "b"],
-            vec!["head"],
-            vec!["x"]
-        ]);
+        assert_eq!(
+            words("surfcap a && surfcap b | head; x &"),
+            vec![vec!["surfcap", "a"], vec!["surfcap", "b"], vec!["head"], vec!["x"]]
+        );
         assert_eq!(words("surfcap a > out.txt 2>&1 b"), vec![vec!["surfcap", "a", "b"]]);
         assert_eq!(words("surfcap a 2> err.txt"), vec![vec!["surfcap", "a"]]);
     }
@@ -286,12 +289,15 @@ mod tests {
         let md = "text surfcap no\n\n```sh\nsurfcap a \\\n  --b 'c d'\nls\n```\n\n```toml\nsurfcap = 1\n```\n\
                   ```console\n$ surfcap info x\nsurfcap not a command\n```\n````bash\nsurfcap-bench synth\n````\n";
         let found = examples_in(md, "surfcap").unwrap();
-        assert_eq!(found, vec![(4, vec!["surfcap".into(), "a".into(), "--b".into(), "c d".into()]), (
-            13,
-            vec!["surfcap".into(), "info".into(), "x".into()]
-        )]);
+        assert_eq!(
+            found,
+            vec![
+                (4, vec!["surfcap".into(), "a".into(), "--b".into(), "c d".into()]),
+                (13, vec!["surfcap".into(), "info".into(), "x".into()])
+            ]
+        );
         let bench = examples_in(md, "surfcap-bench").unwrap();
-        assert_eq!(bench, vec![(16, vec!["surfcap-bench".to_string(), "synth".to_string()])]);
+        assert_eq!(bench, vec![(17, vec!["surfcap-bench".to_string(), "synth".to_string()])]);
     }
 
     #[test]

@@ -30,14 +30,14 @@
 //!
 //! # Documentation examples
 //!
-//! [`doc_examples()`] lists every command example of `README.md` and `docs/src/**/*.md` with its
+//! [`doc_examples()`] lists every command example of `README.md` and `docs/**/*.md` with its
 //! file, line and words, so a test can parse each against the program's command line.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 pub mod doc_examples;
-pub use doc_examples::{doc_examples, DocExample};
+pub use doc_examples::{DocExample, doc_examples};
 
 /// The workspace root (two levels above a crate's manifest).
 pub fn workspace_root() -> PathBuf {
