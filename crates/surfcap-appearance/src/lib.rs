@@ -12,7 +12,7 @@
 //!   range levels every sigma/3 on a grid of cells, within 0.63 grey levels of brute force),
 //!   [`texture_preprocessing`] (both, then [`shading_removal`]: not in the thesis, a high-pass of
 //!   the log image without which TV-L1 drifted 20-28 texels under a moving light).
-//! - Flow: [`tv_l1_flow`] (Sanchez Perez et al., IPOL 2013, coarse to fine with IPOL's defaults,
+//! - Flow: [`tv_l1_flow`](mod@tv_l1_flow) (Sanchez Perez et al., IPOL 2013, coarse to fine with IPOL's defaults,
 //!   data term on active texels only, optionally stopping at half resolution), [`image_pyramid`]
 //!   (Gaussian, bicubic zoom as IPOL), [`inactive_fill`] (push-pull over inactive texels),
 //!   [`flow_cache`] (flows on disk as `texture-flow-<16 hex>.npy`, f32 [2, H, W], keyed by both

@@ -2,7 +2,7 @@
 //! behind `surfcap eval ...`, one file each, each a function returning a typed `Serialize` result
 //! whose JSON is the front end's report minus the files it writes, plus the data it prints and
 //! plots (sampled curves, matrices, warps, fitted models) in `#[serde(skip)]` fields. They never
-//! print, open files (except [`interchange_eval`], which writes into the scratch folder it is
+//! print, open files (except [`interchange_eval()`], which writes into the scratch folder it is
 //! given) or draw.
 //!
 //! Statistics (thesis 2.3.2): the skeleton ground-truth pose distance ([`skeleton_distance`], eq.

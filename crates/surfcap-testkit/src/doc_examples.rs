@@ -89,8 +89,14 @@ enum BlockKind {
     Other,
 }
 
-/// The examples of `program` in one Markdown text: (1-based line, words). Errors carry the line.
-pub fn examples_in(text: &str, program: &str) -> Result<Vec<(usize, Vec<String>)>, (usize, String)> {
+/// A command example found in a text: its first line (1-based) and its words.
+pub type LineWords = (usize, Vec<String>);
+
+/// What is wrong with a command example: its first line (1-based) and the message.
+pub type LineError = (usize, String);
+
+/// The examples of `program` in one Markdown text. Errors carry the line.
+pub fn examples_in(text: &str, program: &str) -> Result<Vec<LineWords>, LineError> {
     let mut out = Vec::new();
     // The fence of the open block and what it holds; None outside blocks.
     let mut block: Option<(String, BlockKind)> = None;

@@ -7,7 +7,7 @@
 //! embedded assets ([`assets`]), the items' positions, faces, optional per-vertex colours (body
 //! parts), UVs and textures as little-endian binary (`/api/...`), and the files of one report folder
 //! (`/report/...`, paths confined to it); anything else is 404. A `Host` header other than
-//! 127.0.0.1, localhost or [::1] with its port gets 403, against DNS rebinding.
+//! `127.0.0.1`, `localhost` or `[::1]` with its port gets 403, against DNS rebinding.
 //!
 //! The page (`web/`): play/pause, speed, arrow-key stepping, a timeline of original and synthetic
 //! spans with transition marks, path and centre overlays and the constraints' lines from a
