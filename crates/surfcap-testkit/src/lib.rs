@@ -143,8 +143,8 @@ pub fn meta(dataset: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("meta.json is JSON")
 }
 
-/// Reads a `.usda` file back with Pixar's USD (usd-core, in `tools/venv`, installed by the
-/// README's test command) through `tools/usd-read.py`; returns what it read as JSON.
+/// Reads a `.usda` file back with Pixar's USD (usd-core, in `tools/venv`, installed by
+/// `scripts/setup`) through `tools/usd-read.py`; returns what it read as JSON.
 ///
 /// # Panics
 /// When the virtual environment is missing or USD cannot read the file.
@@ -184,7 +184,7 @@ pub fn read_abc(file: &Path) -> serde_json::Value {
 /// Runs the Khronos glTF validator on `.glb` files; returns its per-file JSON reports.
 ///
 /// # Panics
-/// When node or `tools/node_modules/gltf-validator` is missing (the README's test command
+/// When node or `tools/node_modules/gltf-validator` is missing (`scripts/setup`
 /// installs it), or when the validator reports an error or a warning.
 pub fn validate_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
     let root = workspace_root();
