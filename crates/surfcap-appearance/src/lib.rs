@@ -1,25 +1,45 @@
-//! Eigen appearance maps (thesis chapter 4, Boukhayma 2017): a subject's per-frame texture
-//! maps aligned to a reference by optical flow and Poisson warping, then reduced to eigen
-//! textures and eigen warps.
+//! Eigen appearance maps (thesis chapter 4, Boukhayma 2017): a subject's per-frame texture maps
+//! aligned to a reference by optical flow and Poisson warping, then reduced to eigen textures and
+//! eigen warps. One algorithm per file:
 //!
-//! Layout, one algorithm per file: [`texture_image`] (the texture map and its files),
-//! [`atlas_raster`] and [`texel_mask`] (the active texels of a UV atlas), [`flow_field`] (a
-//! dense warp and bilinear sampling), [`histogram_equalisation`], [`bilateral_filter`] and
-//! [`texture_preprocessing`] (4.4.1: the pre-processing before flow, with [`shading_removal`]), [`image_pyramid`] and
-//! [`inactive_fill`] (the flow's resampling and its extension of active texels), [`tv_l1_flow`]
-//! (4.4.1: TV-L1 flow between texture maps), [`flow_cache`] (flows kept on disk),
-//! [`poisson_texture_warp`] (eq. 4.1-4.3), [`medoid_shift_alignment`] (Algorithm 4),
-//! [`eigen_maps`] (PCA through the Gram matrix, eq. 4.4-4.11), [`appearance_model`] (eigen
-//! textures and eigen warps: build, instantiate, interpolate, complete, save/load),
-//! [`naive_texture_pca`] (the baseline of 4.5), [`solid_texture`] (a base texture painted from
-//! 3D positions); benchmark data with ground truth (issue 20 item 7):
-//! [`texture_generator`] (per-frame textures from a real mesh and texture: drift,
-//! illumination, blur, noise, holes), [`texture_drift`] (the known drift and the true flow),
-//! [`atlas_normals`] (normals and positions in texture space), [`generated_frames`] (the folder
-//! and its reader); evaluation (4.5): [`mesh_rasteriser`] (textured renders from virtual
-//! cameras), [`image_similarity`] (masked MSE and SSIM); shape and appearance together (Fig.
-//! 7.1): [`blended_frame_textures`] (a texture for every frame of a synthesised animation, with
-//! the weights Blend gives the geometry).
+//! - Texture space: [`texture_image`] (planar f32 channels on the 8-bit scale, PNG/JPEG read with
+//!   the file named, PNG written atomically), [`atlas_raster`] (covering triangle and barycentrics
+//!   per texel, the lowest triangle where charts overlap), [`texel_mask`] (covered texels grown by
+//!   one ring, numbered row-major: the order of every per-texel vector), [`flow_field`] (dense
+//!   warps and bilinear resampling: direct warping, the baseline of Fig. 4.5).
+//! - Pre-processing before flow (4.4.1): [`histogram_equalisation`] (OpenCV's equalizeHist over the
+//!   active texels), [`bilateral_filter`] (diameter 80, sigma colour 15, sigma space 80; exact
+//!   range levels every sigma/3 on a grid of cells, within 0.63 grey levels of brute force),
+//!   [`texture_preprocessing`] (both, then [`shading_removal`]: not in the thesis, a high-pass of
+//!   the log image without which TV-L1 drifted 20-28 texels under a moving light).
+//! - Flow: [`tv_l1_flow`](mod@tv_l1_flow) (Sanchez Perez et al., IPOL 2013, coarse to fine with IPOL's defaults,
+//!   data term on active texels only, optionally stopping at half resolution), [`image_pyramid`]
+//!   (Gaussian, bicubic zoom as IPOL), [`inactive_fill`] (push-pull over inactive texels),
+//!   [`flow_cache`] (flows on disk as `texture-flow-<16 hex>.npy`, f32 [2, H, W], keyed by both
+//!   textures, the active texels and every option; `TextureFlow` is the estimator every command
+//!   passes to the model, which does not depend on it: flows are passed in as functions).
+//! - The model: [`poisson_texture_warp`] (eq. 4.1-4.3, Neumann at the charts' borders; `LᵀL + λ²I`
+//!   factorised once per mask by faer's sequential sparse Cholesky and shared by every frame and
+//!   channel: 13.5 s and 1.8 GB for the 968k active texels of a 1024² head atlas, then 0.4 s per
+//!   channel solve), [`medoid_shift_alignment`] (Algorithm 4), [`eigen_maps`] (PCA through the
+//!   F x F Gram matrix, eq. 4.4-4.11, f32 data, f64 fixed-order sums), [`appearance_model`] (build
+//!   with per-stage timings, instantiate 4.4.3, interpolate 4.6.1, complete 4.6.2; the
+//!   `appearance-model` folder numpy opens), [`naive_texture_pca`] (the baseline of 4.5),
+//!   [`texture_folder`] (a folder of per-frame maps), [`solid_texture`] (a base texture painted
+//!   from 3D rest positions).
+//! - Benchmark data with ground truth: [`texture_generator`] (per-frame textures of a real mesh:
+//!   known drift, shading under a moving light, blur, seeded noise, occlusion holes; clean frames
+//!   kept), [`texture_drift`] (seeded sinusoids and the true flow between two frames),
+//!   [`atlas_normals`] (normals and positions carried into the atlas), [`generated_frames`] (the
+//!   `appearance-frames` folder and its reader).
+//! - Evaluation (4.5): [`mesh_rasteriser`] (z-buffer, perspective-correct UVs, cameras on a ring),
+//!   [`image_similarity`] (masked MSE and SSIM).
+//! - Shape and appearance together (Fig. 7.1): [`blended_frame_textures`]: a texture for every
+//!   frame of a synthesised animation, a captured frame's reconstruction or two frames interpolated
+//!   with the weight Blend gives the geometry; each distinct texture made once, in parallel, and
+//!   encoded to PNG as soon as made, so one float texture per thread is alive.
+//!
+//! `image` 0.24 with only PNG and JPEG: the version plotters already builds.
 
 pub mod appearance_model;
 pub mod atlas_normals;

@@ -1,6 +1,6 @@
-//! Issue 21 item 3: a tiled run (`surfcap tiles`) on the engines users already have, each
-//! giving the same bytes as one process (`tiles run WORK --all` + `tiles merge`): the README's
-//! `xargs -P` route, the Ray driver `tools/ray/surfcap_ray.py` on a local Ray instance started
+//! Scale-out on existing engines: a tiled run (`surfcap tiles`) on the engines users already have,
+//! each giving the same bytes as one process (`tiles run WORK --all` + `tiles merge`): the user
+//! guide's `xargs -P` route (`docs/src/tiles.md`), the Ray driver `tools/ray/surfcap_ray.py` on a local Ray instance started
 //! and stopped here (a job made to fail once is retried; a job that keeps failing is named and
 //! nothing is merged), and the Slurm scripts of `tools/slurm/` run as Slurm runs an array's
 //! tasks, plus `submit.sh` against a fake `sbatch` (array ranges and the `afterok` chain).
@@ -102,10 +102,11 @@ fn assert_same_products(work: &Path, reference: &Path, route: &str) {
     }
 }
 
-/// A fenced `sh` block of README.md: the first one after the line holding `marker`.
-fn readme_block(marker: &str) -> String {
-    let readme = std::fs::read_to_string(workspace_root().join("README.md")).unwrap();
-    let after = &readme[readme.find(marker).unwrap_or_else(|| panic!("README.md has no {marker}"))..];
+/// A fenced `sh` block of the user guide's tiles chapter: the first one after the line holding
+/// `marker`.
+fn guide_block(marker: &str) -> String {
+    let guide = std::fs::read_to_string(workspace_root().join("docs/src/tiles.md")).unwrap();
+    let after = &guide[guide.find(marker).unwrap_or_else(|| panic!("docs/src/tiles.md has no {marker}"))..];
     let start = after.find("```sh\n").expect("a sh block follows the marker") + "```sh\n".len();
     let len = after[start..].find("```").expect("the block ends");
     after[start..start + len].to_string()
@@ -128,21 +129,21 @@ fn write_script(path: &Path, text: &str) {
 }
 
 #[test]
-fn xargs_route_of_the_readme_gives_the_one_process_bytes() {
+fn xargs_route_of_the_guide_gives_the_one_process_bytes() {
     let d = tempfile::tempdir().unwrap();
     let subject = tiny_subject(d.path(), "walker.subject");
     let reference = one_process(&subject, d.path());
     let work = d.path().join("walker.tiles");
     plan(&subject, &work);
-    let block = readme_block("<!-- tiles_engines.rs runs this block: xargs -->");
-    assert!(block.contains("xargs -P"), "the README block is the xargs route:\n{block}");
+    let block = guide_block("<!-- tiles_engines.rs runs this block: xargs -->");
+    assert!(block.contains("xargs -P"), "the guide's block is the xargs route:\n{block}");
     let o = Command::new("bash")
         .args(["-euo", "pipefail", "-c", &block])
         .current_dir(d.path())
         .env("PATH", path_with(&[&binary_dir()]))
         .output()
         .unwrap();
-    ok(&o, "the README's xargs route");
+    ok(&o, "the guide's xargs route");
     assert_same_products(&work, &reference, "xargs");
 }
 

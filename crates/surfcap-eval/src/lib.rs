@@ -1,19 +1,49 @@
-//! Evaluations of surfcap's algorithms against ground truth and baselines.
+//! Evaluations of surfcap's algorithms against ground truth and baselines: the computations
+//! behind `surfcap eval ...`, one file each, each a function returning a typed `Serialize` result
+//! whose JSON is the front end's report minus the files it writes, plus the data it prints and
+//! plots (sampled curves, matrices, warps, fitted models) in `#[serde(skip)]` fields. They never
+//! print, open files (except [`interchange_eval()`], which writes into the scratch folder it is
+//! given) or draw.
 //!
-//! Statistics (thesis 2.3.2, Evaluation): the skeleton ground-truth pose distance
-//! (eq. 2.15-2.16), Pearson correlation (eq. 2.18), the Mantel permutation test and correlogram,
-//! and distance correlation (eq. 2.19-2.22).
+//! Statistics (thesis 2.3.2): the skeleton ground-truth pose distance ([`skeleton_distance`], eq.
+//! 2.15-2.16), Pearson correlation (eq. 2.18) and distance correlation (eq. 2.19-2.22, O(P log P)
+//! row means plus one O(P^2) pass, no P x P matrix) in [`correlation`], the Mantel permutation
+//! test and correlogram ([`mantel_test`], per-permutation seeded streams). Pairwise distances are
+//! passed as the condensed upper triangle of an N x N matrix (`i < j`, row by row), as in scipy's
+//! `squareform`.
 //!
-//! Experiments (the computations behind `surfcap eval ...`), one file each, each a function
-//! returning a typed, serialisable result that carries everything a front end prints, writes or
-//! plots: [`interpolation_eval()`] (thesis 2.4, Fig. 2.8), [`pose_metric_eval()`] (2.3.2,
-//! Fig. 2.5-2.7), [`transition_costs_eval()`] (2.5.5, Fig. 2.15), [`graph_comparison_eval()`]
-//! (3.3.3, Fig. 3.2 and 3.8), [`gpdm_eval()`] (6.4-6.5, Fig. 6.4), [`variation_eval()`] (motion variation, 6.5-6.8, Fig. 6.4 and 6.7 and variation statistics) and [`appearance_eval()`] (eigen
-//! appearance maps, 4.5-4.6, Fig. 4.5-4.12, on generated textures with ground truth). They never print, open
-//! files or draw.
+//! Experiments:
+//! - [`interpolation_eval()`]: linear vs non-linear interpolation (2.4, Fig. 2.8);
+//! - [`pose_metric_eval()`]: our and the Euclidean distance against the skeleton (2.3.2, Fig.
+//!   2.5-2.7);
+//! - [`transition_costs_eval()`]: standard vs DTW vs DTW + variable lengths (2.5.5, Fig. 2.15);
+//! - [`graph_comparison_eval()`]: essential vs motion graph (3.3.3, Fig. 3.2 and 3.8);
+//! - [`sparse_graph_eval`]: the sparse essential graph against the exact one per k (pair costs,
+//!   unreachable pairs, build times, path and key-pose queries), on the CMU-driven mannequin;
+//! - [`root_motion_eval()`]: root motion from ground contacts against the real travel of BVH clips
+//!   on the mannequin;
+//! - [`transfer_eval`]: motion transfer against ground truth (5.7, Fig. 5.8-5.10: learning curves of
+//!   GP-NN/SE/linear and Baran et al., whole body vs parts, unseen motions, seams, cat/lion);
+//! - [`interchange_eval()`]: every sequence of a data folder through Alembic and USD and back,
+//!   compared to the bit;
+//! - [`smg_eval`]: Huang et al. 2009's Table 1 (per key pair distance/time errors, smoothness, CPU
+//!   time) on the CMU-driven mannequin, shared topology or re-meshed; [`smg_comparison`]: the
+//!   essential graph's distance-and-time search on the same key frames and targets;
+//!   [`transition_measures`]: the two measures both engines' transitions get (triangularly weighted
+//!   Hausdorff distance and deformation distance eq. 2.13 over the frame pairs a transition
+//!   matches);
+//! - [`appearance_eval()`]: eigen appearance maps on generated textures with ground truth (4.5-4.6:
+//!   flow error, Poisson vs direct warping, compactness and generalisation against naive PCA in the
+//!   texture and image domains, completion of occlusion holes); the flow estimator is passed in;
+//! - [`gpdm_eval()`]: GPDM vs PCA, HMC trajectories (6.4-6.5, Fig. 6.4);
+//! - [`variation_eval()`]: motion variation (6.5-6.8): Fig. 6.4 per part and stitched, on training
+//!   and held-out frames; Fig. 6.7 guided vs direct latent interpolation; seeded variants against
+//!   five criteria (distance to the source, nearest to its source, edge distortion, foot sliding, no
+//!   two alike).
 //!
-//! Pairwise distances are passed as the condensed upper triangle of an N x N matrix
-//! (`i < j`, row by row), as in scipy's `squareform`.
+//! Randomness comes from ChaCha8 streams, so a seed gives the same permutations on every platform
+//! and thread count. One [`Error`] (thiserror); option errors are worded as the command line's
+//! `--option value: expected ...`.
 
 pub mod appearance_eval;
 pub mod correlation;

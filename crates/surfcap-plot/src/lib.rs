@@ -1,6 +1,10 @@
-//! Line charts and heat maps written as SVG and PNG (plotters), with an embedded font (DejaVu Sans) so that
-//! text renders on machines without system fonts. Files are written under a temporary name and
-//! renamed into place.
+//! Line charts and heat maps written as SVG and PNG (plotters), with an embedded font (DejaVu Sans)
+//! so that text renders on machines without system fonts: no fontconfig or freetype at build time,
+//! so a fresh machine needs no system packages for plots. Heat maps are block-averaged to 200 x 200
+//! cells, may carry a path drawn on top (a DTW warp) and an optional fixed colour range, so two maps
+//! compare by colour. Both formats are drawn in memory and written through surfcap-mesh's atomic
+//! writer, so a figure, like every output, replaces only a regular file and its temporary is
+//! cleaned on a signal.
 
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -173,7 +177,7 @@ mod tests {
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 2, "no temporaries left");
     }
 
-    /// Issue 15 case 4 for plots: a FIFO (or a folder) where a figure goes is refused, not
+    /// Output safety for plots: a FIFO (or a folder) where a figure goes is refused, not
     /// replaced by a regular file.
     #[test]
     fn a_fifo_or_folder_in_the_way_is_refused() {

@@ -1,19 +1,27 @@
 //! Huang, Hilton and Starck 2009, "Human motion synthesis from 3D video" (CVPR): the surface
 //! motion graph, surfcap's second synthesis engine, which needs no shared topology (every frame
 //! may have its own vertices and triangles). One algorithm per file:
-//! - [`motion_frames`]: the input (named sequences of frames, each with its own triangles), the
-//!   ground centroids and the cached similarity matrix;
-//! - [`volume_voxelisation`]: the voxels inside a mesh (3.1 step 1);
-//! - [`shape_histogram`]: the volume-sampling spherical shape histogram (3.1 steps 2-4);
-//! - [`shape_similarity`]: frame-to-frame shape similarity, the minimum over 360 rotations about
-//!   the vertical axis (eq. 2), for all pairs of a frame set;
-//! - [`temporal_shape_similarity`]: the similarity over a triangular temporal window (eq. 3-4) and
-//!   the optimal transition between two sequences (eq. 5);
-//! - [`surface_motion_graph`]: the two-level graph, the lower level built from the user's higher
-//!   level and key frames (3.3);
-//! - [`path_optimisation`]: walks and loops by depth-first search (Algorithm 1), the repetitions
-//!   by four integer linear programs per walk (eq. 6-20) with the feedback cuts of Algorithm 2,
-//!   and the composition of the path (4.2.3).
+//! - [`motion_frames`]: the input (named sequences of per-frame meshes from a `Subject` or a
+//!   `FrameSet`), area-weighted ground centroids, and the similarity matrix cached as
+//!   `smg-similarity-<16 hex>.npy` in the derived cache;
+//! - [`volume_voxelisation`]: the voxels inside a mesh (3.1 step 1): winding numbers along rays
+//!   through voxel centres with a 2-of-3 axis vote, so holes and interpenetrating parts do not
+//!   leak; one global lattice;
+//! - [`shape_histogram`]: the volume-sampling spherical shape histogram (3.1 steps 2-4): bins
+//!   10 x 20 x 360 at 1 degree, one `r_max` for the frame set;
+//! - [`shape_similarity`]: eq. 2 for all pairs, the minimum over 360 rotations about the vertical
+//!   through one real FFT cross-correlation per pair (one multiply-add per ring and frequency
+//!   instead of 360 histogram distances), rows in parallel, thread-count independent;
+//! - [`temporal_shape_similarity`]: triangular windows (eq. 3-4) and the optimal transition (eq.
+//!   5); self-transitions jump back; the K best per connection as an opt-in extension;
+//! - [`surface_motion_graph`]: the two-level graph (3.3), sequences split at transitions and key
+//!   frames;
+//! - [`path_optimisation`]: walks and elementary loops by depth-first search, planned once per key
+//!   pair (`plan_paths`) and shared by every target, four ILPs per walk (eq. 6-20; `good_lp` with
+//!   the pure-Rust `microlp`, which solves these models in under a millisecond), walks pruned by a
+//!   cost lower bound and ILPs capped by the best cost known, Algorithm 2's feedback as cuts, an
+//!   optional tolerance with the reason a target is unreachable, and the composition of the path
+//!   (4.2.3) with centroids matched at each switch.
 
 pub mod error;
 pub mod motion_frames;

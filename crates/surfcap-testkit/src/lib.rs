@@ -18,10 +18,27 @@
 //!
 //! [`surfcap!`] runs the program under test (in surfcap-cli's integration tests),
 //! [`surfcap_bench!`] the benchmarks' program (in surfcap-bench's), [`p`] and [`stderr`]
-//! shorten what those tests write around it.
+//! shorten what those tests write around it. [`meta`] reads a dataset's `meta.json`.
+//!
+//! # Checks with outside tools
+//!
+//! [`validate_glb`] runs the Khronos glTF validator and [`three_load_glb`] /
+//! [`three_play_textured_glb`] three.js's GLTFLoader (Node.js tools in `tools/`, installed by
+//! `scripts/setup`); [`read_usd`] and [`read_abc`] read files back with Pixar's USD and the
+//! reference Alembic library (Python in `tools/venv`). [`ViewServer`] starts `surfcap view`, and
+//! [`http_request`] sends raw HTTP requests (no URL normalisation, so traversal attempts reach the
+//! server).
+//!
+//! # Documentation examples
+//!
+//! [`doc_examples()`] lists every command example of `README.md` and `docs/**/*.md` with its
+//! file, line and words, so a test can parse each against the program's command line.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
+
+pub mod doc_examples;
+pub use doc_examples::{DocExample, doc_examples};
 
 /// The workspace root (two levels above a crate's manifest).
 pub fn workspace_root() -> PathBuf {
@@ -139,8 +156,8 @@ pub fn meta(dataset: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("meta.json is JSON")
 }
 
-/// Reads a `.usda` file back with Pixar's USD (usd-core, in `tools/venv`, installed by the
-/// README's test command) through `tools/usd-read.py`; returns what it read as JSON.
+/// Reads a `.usda` file back with Pixar's USD (usd-core, in `tools/venv`, installed by
+/// `scripts/setup`) through `tools/usd-read.py`; returns what it read as JSON.
 ///
 /// # Panics
 /// When the virtual environment is missing or USD cannot read the file.
@@ -180,7 +197,7 @@ pub fn read_abc(file: &Path) -> serde_json::Value {
 /// Runs the Khronos glTF validator on `.glb` files; returns its per-file JSON reports.
 ///
 /// # Panics
-/// When node or `tools/node_modules/gltf-validator` is missing (the README's test command
+/// When node or `tools/node_modules/gltf-validator` is missing (`scripts/setup`
 /// installs it), or when the validator reports an error or a warning.
 pub fn validate_glb(files: &[PathBuf]) -> Vec<serde_json::Value> {
     let root = workspace_root();

@@ -1,18 +1,33 @@
-//! surfcap scale-out (issue 21): the all-pairs work of a subject (pose distances, the transition
-//! table, the sparse essential graph) cut into tiles, each an independent, idempotent job that
-//! reads only what it needs, writes its result atomically and is skipped when already present,
-//! so any engine that can run a command many times (a shell's `xargs -P`, Ray, Slurm job arrays)
-//! can run it and an interrupted run resumes.
+//! surfcap scale-out: the all-pairs work of a subject (pose distances, the transition table, the
+//! sparse essential graph) cut into tiles, each an independent, idempotent job that reads only
+//! what it needs, writes its result atomically and is skipped when already present, so any engine
+//! that can run a command many times (a shell's `xargs -P`, Ray, Slurm job arrays) can run it and
+//! an interrupted run resumes. The work folder's layout is in `docs/formats.md`.
 //!
-//! - `tile_plan.rs`: the work folder's plan: stages, their jobs, the parameters;
-//! - `tile_store.rs`: the Zarr arrays (chunks = tiles) and small `.npy` files of a work folder;
-//! - `cost_median.rs`: the exact median of the table's finite costs, streamed over its tiles;
-//! - `tile_jobs.rs`: one job of one stage; `graph_jobs.rs`: those of the graph's stages;
-//! - `tile_merge.rs`: the merged products, once every job is done.
+//! - [`tile_plan`]: `plan.json`: the subject's stamp (path, counts, BLAKE3 of its description and
+//!   faces, position file sizes: a changed subject is refused), the parameters, the stages
+//!   distances -> table -> scale -> candidates -> paths with their job counts and per-job memory
+//!   estimates; a job's span derived from (frames, tile) by the functions the one-machine code uses;
+//! - [`tile_store`]: Zarr v3 arrays whose chunks are the tiles (f64 distances, each upper tile
+//!   written with its mirror; table costs and path costs with NaN fill, so a chunk never written
+//!   is never read as a number; u32 L, l^i, l^j), chunks encoded into memory then renamed into
+//!   place; regions read only when every chunk is there; a job's record written last marks it done;
+//! - [`cost_median`]: the exact median of the table's finite costs streamed in two radix passes
+//!   (Algorithm 1's scale, the same bits as the in-memory selection);
+//! - [`tile_jobs`]: distance jobs read only their frames from the subject cache, table jobs their
+//!   halo; the kernel and the process's peak memory recorded; [`graph_jobs`]: each frame's k
+//!   cheapest transitions from rows of the table, then Dijkstra per block of sources;
+//! - [`tile_merge`]: missing jobs named, distance kernels never mixed, `merge.json`,
+//!   `graph_edges.npy`.
 //!
 //! The tile functions themselves live with their algorithms (`surfcap_geometry::distance_tiles`,
 //! `surfcap_motion::transition_tiles`, `surfcap_motion::sparse_essential_graph`), where the
-//! one-machine pipeline calls them too: one code path.
+//! one-machine pipeline calls them too: one code path, the same bits.
+//!
+//! zarrs (the maintained Rust Zarr, conformant with Zarr 3.1, only its `filesystem` feature) turns
+//! on serde_json's `preserve_order` for the whole workspace: JSON objects keep insertion order
+//! (struct-serialised cache keys are unaffected; tests compare objects as maps or sort keys).
+//! Chunks are uncompressed: distances do not compress, and a chunk's size then follows from its tile.
 
 pub mod cost_median;
 pub mod error;

@@ -2,19 +2,28 @@
 //!
 //! A few sequences of one motion type (walk, jog, turns; or jumps) of one subject become an
 //! endless supply of slightly different versions of each of them, and of any blend of two:
-//! - **preparation** (6.4, [`motion_preparation`]): every frame rigidly aligned to the
-//!   reference pose with its rigid displacement from the previous frame, every sequence
-//!   re-timed onto the reference sequence's frames, cut into overlapping body parts (P = 5);
-//!   pairs blended non-linearly at a few weights (6.7) join the training set;
-//! - **learning** (6.5, [`variation_model`]): one GPDM per part over all sequences, sharing one
-//!   latent space, the torso's vector carrying the 6-D displacement;
-//! - **sampling** (6.6, [`variation_sampling`]): whole latent trajectories drawn by HMC from
-//!   the mean prediction of a learned sequence, poses from the reconstruction GP, the parts
-//!   stitched and moved by the sampled displacements, then brought back to the sequence's own
-//!   timing;
-//! - **parametrisation** (6.7, [`motion_parametrisation`]): a variant of the blend at any
-//!   weight by interpolating variants of the two nearest learned trajectories;
-//! - the model folder on disk ([`variation_model_file`]).
+//! - **preparation** (6.4 and 6.5.2, [`motion_preparation`]): every frame Procrustes-aligned onto
+//!   the reference pose with its rigid displacement from the previous frame (dT, exact log dR),
+//!   every sequence re-timed onto the reference sequence's frames by surfcap-motion's
+//!   contact-guided DTW (the feet are the parts named `leg*`) with its time map kept, pairs blended
+//!   non-linearly (eq. 2.45-2.49) at a few weights (6.7) joining the training set; per-part
+//!   vectors, the torso's carrying the 6 scaled displacement numbers;
+//! - **learning** (6.5, [`variation_model`]): one GPDM per body part over all sequences, sharing
+//!   one latent space, parts fitted in parallel, each deterministic; the stitching factorised once
+//!   on the reference pose;
+//! - **sampling** (6.6, [`variation_sampling`]): a seeded HMC chain over whole latent trajectories
+//!   per part, started at the learnt trajectory (or the mean prediction of 6.6.1); each sampled
+//!   trajectory smoothed (triangular, radius 2), poses from the reconstruction GP's mean, parts
+//!   stitched (chapter 5's cheapest cuts and Poisson merge), placed by a `VariantPath` (the
+//!   source's path by default; the integrated sampled displacements of 6.6.2; or travel from the
+//!   variant's own foot contacts) and re-timed to the sequence's own frames. A chain's seed is
+//!   derived from the seed, the sequence's name and the part, so variants do not depend on the
+//!   thread count; `variant_on_source_path` serves synthesis;
+//! - **parametrisation** (6.7, [`motion_parametrisation`]): variants of the two learnt
+//!   trajectories around a weight, interpolated in the latent space, with their timing;
+//! - the model folder on disk ([`variation_model_file`]: `model.json`, `faces.npy`,
+//!   `reference_pose.npy`, per part its latent positions and training vectors as `.npy`, every
+//!   shape checked on load and the file at fault named; factorisations recomputed on load).
 
 pub mod error;
 pub mod motion_parametrisation;

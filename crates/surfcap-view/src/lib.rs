@@ -1,12 +1,25 @@
-//! surfcap's viewer: a local web server (bound to 127.0.0.1) serving a three.js page that plays
-//! mesh sequences, colours original frames green and synthetic frames red (as the thesis's
-//! figures do), overlays a user's path and the achieved centre-of-mass trajectory, and plays
-//! several sequences side by side or overlaid.
+//! surfcap's viewer: a local web server bound to 127.0.0.1 serving a three.js page that plays mesh
+//! sequences, colours original frames green and synthetic frames red (as the thesis's figures do),
+//! overlays a user's path and the achieved centre-of-mass trajectory, and plays several sequences
+//! side by side or overlaid.
 //!
-//! three.js is installed from npm at build time and embedded in the binary ([`assets`]), so the
-//! page works offline. The server answers only its page, its assets, the items' data
-//! (`/api/...`) and, when given, the files of one report folder (`/report/...`); anything else
-//! is 404, and report paths that leave the folder are refused.
+//! The server ([`server`], axum on a current-thread tokio runtime) answers GET only: the page, its
+//! embedded assets ([`assets`]), the items' positions, faces, optional per-vertex colours (body
+//! parts), UVs and textures as little-endian binary (`/api/...`), and the files of one report folder
+//! (`/report/...`, paths confined to it); anything else is 404. A `Host` header other than
+//! `127.0.0.1`, `localhost` or `[::1]` with its port gets 403, against DNS rebinding.
+//!
+//! The page (`web/`): play/pause, speed, arrow-key stepping, a timeline of original and synthetic
+//! spans with transition marks, path and centre overlays and the constraints' lines from a
+//! synthesis report; frame sets (each frame's own mesh swapped in, checked frame by frame on the
+//! server); a texture per frame (each decoded once and bound at its frames); a ground grid in the
+//! subject's unit; a legend of only what is drawn. The camera fits every frame's box into the part
+//! of the view the info panel leaves free (`setViewOffset`, so orbiting still turns about the
+//! scene).
+//!
+//! three.js 0.187 is installed from npm at build time (`build.rs` runs `npm ci` against
+//! `web/package-lock.json` when missing) and embedded with `include_str!`, so the page works
+//! offline. Nothing of surfcap is a dependency: the front end turns subjects into [`ViewItem`]s.
 
 pub mod assets;
 pub mod server;
