@@ -1,16 +1,43 @@
-//! surfcap's file formats: readers and writers of OBJ ([`obj`]), PLY ([`ply`]), PC2 ([`pc2`]),
-//! glb/glTF ([`glb`] for a subject's morph targets, [`glb_frame_set`] for a mesh per frame),
-//! Alembic ([`abc`], [`abc_read`] over the Ogawa container [`ogawa_write`], [`ogawa_read`]) and
-//! USD ([`usda`], [`usda_read`]); the source layouts a capture comes in ([`frame_folder`]: a
-//! folder of frames, [`shared_layout`]: a template with `positions.npy`, [`manifest`]: a
-//! `surfcap.toml`); [`import`], which turns any mix of sources into a subject or a frame set;
-//! and [`export`], which writes them for other tools.
+//! surfcap's file formats: readers and writers between files and surfcap-mesh's `Subject` and
+//! `FrameSet`, plus import (any source into a subject or a frame set) and export (a subject into
+//! any format, with a sidecar JSON of frame labels). Every reader opens its input through
+//! surfcap-mesh's regular-file check and names the file, the line or byte offset and the frame in
+//! its errors; the fuzz targets in `fuzz/` cover the readers. Layouts: `docs/formats.md`.
 //!
-//! Depends on `surfcap-mesh` (the data model, and its `.npy` layer, which the caches there need
-//! too: npy is read and written by `surfcap_mesh::npy`, never here) and on no other surfcap
-//! crate. Only the crates that read or write user files depend on it (the CLI, evaluation, the
-//! appearance crate's mesh reader); the algorithms take and return the data model. Every reader says which subset of its format it reads; every error names the file
-//! and the line, frame or byte, and what was expected; nothing panics on input data.
+//! - **OBJ and PLY** (ascii and binary PLY): parsed by hand because `tobj` and `ply-rs-bw` report
+//!   errors without line numbers or byte offsets; each reader states the subset it reads.
+//! - **npy**: the shared-data layout (`template.obj` + `positions.npy` + `meta.json`,
+//!   [`shared_layout`]) through `surfcap_mesh::npy`.
+//! - **PC2** point caches: no maintained crate; the format is a 32-byte header and f32 frames.
+//! - **glb**: a subject as morph targets (base mesh = first frame, one target per frame, one
+//!   animation per sequence with sparse weight accessors, so the size is linear in the frames; at
+//!   most 4 GiB, checked before writing, binary chunk streamed), and a frame set as a mesh and node
+//!   per frame shown one at a time by node scale 0/1 with STEP keys, sharing the root, buffer-view,
+//!   accessor and container code. Frames with UVs carry `TEXCOORD_0`, and with `FrameTextures` the
+//!   material of their texture (a subject with textures is written as a frame set: morph targets
+//!   cannot switch textures). Read back into a subject or a `FrameSet` with UVs and textures.
+//!   Writing uses `gltf-json`'s typed structs, reading the `gltf` crate.
+//! - **Alembic**: the Ogawa container written in two streamed passes (counting, then writing,
+//!   since the root's offset precedes everything and the atomic writer cannot seek); the Abc/AbcGeom
+//!   layers as the reference library lays them out, an `Xform` + `PolyMesh` per sequence,
+//!   homogeneous topology for a subject, heterogeneous for a frame set. The reader bounds every
+//!   offset and size by the file and checks groups for cycles and depth; a mesh whose topology
+//!   changes becomes frames of a frame set. Written here because no Rust crate writes Alembic and
+//!   `ogawa-rs` 0.4 panicked on the first `P` sample of a reference file; the tests read files back
+//!   with the reference library (PyPI `alembic3d`).
+//! - **USD text** (`.usda`): time-sampled points per sequence, units' name in `customLayerData`;
+//!   a reader of a USDA subset without composition (nested Xform/Scope/Mesh prims, time-sampled or
+//!   default points, fan-triangulated polygons, labels, UVs); `.usdc` refused with the `usdcat`
+//!   command to convert it. Read back by Pixar's usd-core in the tests.
+//! - **Manifests** (`surfcap.toml`, via `toml`): sequences from any of the above, PC2 or bare `.npy`
+//!   caches with a template, fps, up axis, units, tags.
+//! - **Import**: `open_any`/`import_any` return a subject or a frame set (a folder of frames whose
+//!   connectivity differs imports as a frame set, with a note); `open_subject`/`import` refuse a
+//!   frame set with a message saying what it is.
+//!
+//! Depends on `surfcap-mesh` and on no other surfcap crate. Only the crates that read or write
+//! user files depend on it (the CLI, evaluation, the appearance crate's mesh reader); the
+//! algorithms take and return the data model.
 
 pub mod abc;
 pub mod abc_read;

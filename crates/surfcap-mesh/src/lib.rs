@@ -1,19 +1,43 @@
-//! surfcap's data model: a [`Subject`] is one triangle [`Topology`], named [`Sequence`]s of
-//! vertex positions (contiguous f32), fps, up axis, units, tags, frame labels and optional
-//! ground-truth joints; a [`FrameSet`] is the same for frames that each have their own topology;
-//! a [`FrameIndex`] maps global frame numbers to (sequence, frame). Beside the model: the subject
-//! cache ([`cache`]) and the frame-set cache ([`frame_set_cache`]) that later commands read, the
-//! cache of derived matrices ([`derived_cache`]), output safety ([`output_path`], [`atomic`],
-//! [`temporaries`]: refuse to overwrite what surfcap did not write, write under a temporary
-//! name and rename), [`regular_file`] opening of inputs, and [`Progress`].
+//! surfcap's data model, shared by every other crate, with no file format in it (those are in
+//! `surfcap-formats`).
+//!
+//! - A [`Subject`] is one triangle [`Topology`], named [`Sequence`]s of vertex positions
+//!   (contiguous f32), fps, up axis, units, tags, frame labels (original or synthetic) and optional
+//!   ground-truth joints; a [`FrameIndex`] maps global frame numbers to (sequence, frame) and holds
+//!   the sequences' names, so every layer names a frame `sequence:frame`. Connected components.
+//! - A [`FrameSet`] is the input of Huang et al. 2009's surface motion graph: every frame has its
+//!   own `Topology` and f32 positions (and optional UVs), validated on construction, named through
+//!   the same `FrameIndex`, convertible from and into a `Subject`; `FrameSetSequence::from_frames`
+//!   serves any reader that yields per-frame (topology, positions).
+//! - `FrameTextures`: encoded PNG bytes per distinct texture and a texture index per frame (so this
+//!   crate needs no image library); `UvVertices`: one vertex per (vertex, UV) pair, the mesh's own
+//!   vertices first, for glTF and the viewer.
+//! - Caches: the subject cache (`x.subject`: `subject.json` + `.npy` arrays, opened without
+//!   parsing source files; `CachedFrames` reads only some frames, for tile jobs), the frame set
+//!   folder (`x.frames`, written atomically with its marker, read back with every offset and index
+//!   checked), and the derived-matrix cache (`.npy` files keyed by a BLAKE3 hash of the subject's
+//!   geometry and the product's parameters; 240 MB hash in about 0.1 s). One header reader serves
+//!   both caches. Layouts: `docs/formats.md`.
+//! - Output safety: atomic writes (a temporary sibling `.NAME.tmp-PID`, then rename); where an
+//!   output may go (resolved to its real place, refused when it overlaps an input, replacing only a
+//!   regular file, an empty folder or surfcap's own marked folder of the same kind unless forced);
+//!   the live temporaries, a process-wide registry a front end empties on SIGINT/SIGTERM, and stale
+//!   temporaries of dead processes swept before the next write (`libc::kill(pid, 0)` says whether
+//!   the writer is alive). Every input is opened as a regular file, so a FIFO, folder, socket or
+//!   device is refused by name, never read or waited on.
+//! - `Progress`: how libraries report progress without printing; the front end draws it.
+//!
+//! No function here panics on bad input, prints or exits: errors are [`Error`]s that name the file,
+//! the line or frame, and what was expected. `npyz` parses `.npy` headers and decodes data in
+//! chunks into an exact-size vector, so a 240 MB array costs 240 MB; frames and sequences are read
+//! in parallel (rayon).
 //!
 //! The `.npy` layer ([`npy`]) lives here, not with the file formats: the caches are folders of
-//! `.npy` arrays, and the format crate (`surfcap-formats`, which depends on this one) reuses it
-//! for its npy sources, so there is one npy reader and no cycle.
+//! `.npy` arrays, and `surfcap-formats` (which depends on this crate) reuses it for its npy
+//! sources, so there is one npy reader and no cycle.
 //!
-//! Depends on no other surfcap crate (serde, npyz, rayon, blake3 and libc only); every other
-//! crate depends on it. No function here panics on bad input, prints, or exits: errors are
-//! [`Error`]s that name the file, the line or frame, and what was expected.
+//! Depends on no other surfcap crate (serde, npyz, rayon, blake3 and libc only); every other crate
+//! depends on it.
 
 pub mod atomic;
 pub mod cache;

@@ -2,7 +2,7 @@
 //! previous folder output moved aside), known process-wide so that nothing is left behind:
 //! a front end that catches SIGINT/SIGTERM calls [`remove_live`] before it exits, and every
 //! write first sweeps the stale temporaries a killed run (SIGKILL, abort, power loss) left next
-//! to its output ([`sweep_stale`]).
+//! to its output (`sweep_stale`).
 //!
 //! Only names of surfcap's exact pattern are touched, and only when their PID is not a live
 //! process: another surfcap run writing the same output at the same time keeps its temporaries.

@@ -19,7 +19,7 @@ use crate::shared_layout::{dataset_sequences, is_layout_sequence, read_layout_se
 /// Reads every sequence a path holds: a shared-layout sequence folder, a dataset folder of them,
 /// a folder of OBJ or PLY frames, a single `.obj`/`.ply` (one frame), a `.glb`, a `.usda` or an
 /// `.abc` (Alembic).
-/// (Manifests and subject caches are whole subjects: see [`import`] and [`open_subject`].)
+/// (Manifests and subject caches are whole subjects: see [`super::import`] and [`super::open_subject`].)
 pub fn read_source(path: &Path, progress: &dyn Progress) -> Result<Vec<SourceSequence>> {
     if !path.exists() {
         return Err(err!(Io, "no such file or folder").in_file(path));
