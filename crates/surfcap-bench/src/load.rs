@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_mesh::{NoProgress, Sequence, Subject};
 use surfcap_builtin::{WormParams, worm_subject};
+use surfcap_mesh::{NoProgress, Sequence, Subject};
 
 use crate::measure::{FpsOpt, peak_rss};
 use crate::output::print_json;

@@ -21,10 +21,10 @@ use std::str::FromStr;
 
 use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
 use surfcap_appearance::{FlowOptions, PreprocessOptions};
-use surfcap_geometry::distance_matrix::DistanceParams;
-use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_formats::export::ExportFormat;
 use surfcap_formats::import::ImportOptions;
+use surfcap_geometry::distance_matrix::DistanceParams;
+use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_mesh::{Subject, Units, UpAxis};
 use surfcap_motion::dtw::Slope;
 use surfcap_motion::segment_bounds;

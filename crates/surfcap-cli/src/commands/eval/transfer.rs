@@ -4,13 +4,13 @@
 
 use std::path::{Path, PathBuf};
 
+use surfcap_builtin::mannequin::BodyShape;
 use surfcap_eval::transfer_eval::{
     CaseEval, CaseParts, TransferCase, TransferEvalOptions, catlion_subjects, kaykit_case, leave_one_out_eval,
     mannequin_case, transfer_case_eval,
 };
 use surfcap_mesh::Subject;
 use surfcap_plot::{LineChart, Series, write_line_chart};
-use surfcap_builtin::mannequin::BodyShape;
 
 const PALETTE: [(u8, u8, u8); 6] =
     [(31, 95, 191), (208, 48, 48), (46, 158, 68), (224, 138, 0), (120, 60, 170), (90, 90, 90)];
