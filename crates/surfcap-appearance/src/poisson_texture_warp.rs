@@ -30,7 +30,7 @@
 //! factorised once by sparse Cholesky (`surfcap_linalg::sparse_cholesky`, sequential: faer's
 //! parallel sparse solve was much slower on 2 cores) and every frame and channel is two triangular solves. The factorisation is not
 //! stored on disk: it is rebuilt from the mask (see the measured times in
-//! `examples/poisson_warp_timing.rs` and ARCHITECTURE.md).
+//! `examples/poisson_warp_timing.rs` and surfcap-linalg's `sparse_cholesky`).
 //!
 //! Inactive texels of the output are the direct warp (`warp_direct`), so the output is a
 //! complete image; every per-texel vector of the model ignores them.
@@ -245,7 +245,7 @@ impl PoissonTextureWarp {
         drop(columns);
         // Two sequential solves side by side, the first channel alone and the others
         // together: faer's parallel sparse solve was 40 times slower on 2 cores
-        // (ARCHITECTURE.md).
+        // (measured: surfcap-linalg's `sparse_cholesky`).
         let solve = |mut cols: Mat<f64>| {
             self.symbolic.solve_in_place(&self.numeric, cols.as_mut());
             cols

@@ -1,5 +1,5 @@
 //! A subject's body parts as the commands that learn per part take them (`transfer train`,
-//! `vary train`): the user's parts file (any form README "Body parts" describes), one part for
+//! `vary train`): the user's parts file (any form docs/formats.md, "Body parts files", describes), one part for
 //! the whole body, or five parts proposed from the subject (thesis 5.4.2 and 6.4.2: P = 5), as
 //! `surfcap parts propose` does.
 

@@ -220,7 +220,7 @@ pub fn parse_restriction(s: &Subject, text: &str) -> Result<Restriction> {
     if !allowed.iter().any(|&x| x) {
         if s.sequences().iter().all(|q| q.tags.is_empty()) {
             return Err(Error::Request(format!(
-                "{text:?}: no sequence is tagged {tag:?}: the subject has no tags; tag its sequences in a surfcap.toml manifest (tags = [\"{tag}\"] in a [[sequence]] entry, see the README's manifest section) and import it again"
+                "{text:?}: no sequence is tagged {tag:?}: the subject has no tags; tag its sequences in a surfcap.toml manifest (tags = [\"{tag}\"] in a [[sequence]] entry, see docs/formats.md, \"Manifest\") and import it again"
             )));
         }
         let mut known: Vec<&str> = s.sequences().iter().flat_map(|q| q.tags.iter().map(|x| x.as_str())).collect();

@@ -1,8 +1,8 @@
 //! Body parts a user writes by hand or exports from a tool (thesis 5.4.2, Fig. 5.2: the user
 //! draws two curves per boundary; the strip between them is the overlap of the two parts).
 //!
-//! [`read_parts_file`] reads five forms, told apart by their content (documented in the
-//! README's "Body parts" section):
+//! [`read_parts_file`] reads five forms, told apart by their content (documented in
+//! docs/formats.md, "Body parts files"):
 //! - the canonical JSON (`"format": "surfcap-parts"`, every part's full vertex list);
 //! - per-vertex labels in JSON: `{"labels": [...], "names": [...], "parents": [...],
 //!   "overlap_rings": k}`, only `labels` required ([`BodyParts::from_labels`] grows the bands);

@@ -39,7 +39,7 @@
 //!   point carries its own dynamics noise and the poses jitter from frame to frame (the
 //!   learnt trajectories do not). A triangular moving average of radius 2 frames is applied
 //!   to each sampled trajectory (`smoothing`, 0 turns it off; measured with `surfcap eval
-//!   vary`, see the README).
+//!   vary`, see docs/results/variation.md).
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
 //!   variant can replace its source inside a longer animation.
 

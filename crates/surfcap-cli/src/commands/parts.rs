@@ -1,8 +1,8 @@
 //! `surfcap parts propose|check|show`: a subject's body parts for motion transfer (thesis 5.4.2,
 //! Fig. 5.2: a torso and four limbs that overlap their parent). `propose` writes the canonical
 //! parts file from the subject's joints, connected components or the rigidity of its motion;
-//! `check` reads a user's file (canonical, labels, cutting planes or vertex loops: see the README's
-//! "Body parts") against the subject; `show` plays the subject in the viewer with one colour per
+//! `check` reads a user's file (canonical, labels, cutting planes or vertex loops: see docs/formats.md,
+//! "Body parts files") against the subject; `show` plays the subject in the viewer with one colour per
 //! part and the overlaps shaded darker.
 
 use std::io::Write;

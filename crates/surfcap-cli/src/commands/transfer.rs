@@ -41,7 +41,7 @@ pub struct TrainArgs {
     /// (ranges `walk:0-29, walk:0-29` pair frames one to one; `#` comments).
     #[arg(long)]
     pub pairs: PathBuf,
-    /// Body parts of the source (a parts file, see README "Body parts"); default: five parts
+    /// Body parts of the source (a parts file, see docs/formats.md, "Body parts files"); default: five parts
     /// proposed from the subject (its joints, its separate meshes or the rigidity of its
     /// motion), as `surfcap parts propose` does.
     #[arg(long)]
