@@ -1,4 +1,4 @@
-// Plays a frame-set glb with a texture per frame (crates/surfcap-mesh/src/io/glb_frame_set.rs)
+// Plays a frame-set glb with a texture per frame (crates/surfcap-formats/src/glb_frame_set.rs)
 // in headless Chromium with three.js's GLTFLoader (the viewer's three.js), since decoding the
 // embedded PNGs needs a browser. At every frame of every animation: exactly one mesh is shown,
 // the frame's own node, its material's `map` is the glTF texture that frame's material names,

@@ -1,5 +1,8 @@
 //! `surfcap`: the command-line front of the surfcap toolkit, as a library so that the binary
-//! (`src/main.rs`) and tests share one definition of the command line ([`Cli`], [`main`]).
+//! (`src/main.rs`) and tests share one definition of the command line ([`Cli`], [`main`]), and
+//! other front-end programs (`surfcap-bench`) share its pieces: the output context ([`Ctx`]),
+//! progress bars, option groups ([`options`]), the global options ([`GlobalOpts`]) and the way a
+//! program runs and reports failures ([`run_front`] for any [`Front`]).
 //!
 //! Exit codes: 0 success, 1 user error (bad input, bad arguments; the message says what and
 //! where), 2 internal error (a bug: please report it), 3 a soft constraint missed with
