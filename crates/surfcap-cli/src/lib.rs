@@ -12,7 +12,6 @@
 mod body_parts;
 mod commands;
 mod files;
-mod frame_appearance;
 mod html_report;
 mod limits;
 mod mannequin_spec;
@@ -21,8 +20,7 @@ mod output;
 mod progress;
 mod signals;
 mod subject_summary;
-mod synthesis;
-mod travel;
+mod synthesis_args;
 mod view_items;
 
 pub use output::Ctx;
@@ -241,7 +239,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
-            let code = if e.is::<synthesis::ConstraintsMissed>() { 3 } else { 1 };
+            let code = if e.is::<surfcap_synthesis::ConstraintsMissed>() { 3 } else { 1 };
             let m = messages(&e);
             report_failure(json, &m[0], &m[1..], code);
             ExitCode::from(code)

@@ -14,11 +14,18 @@
 //!   timing;
 //! - **parametrisation** (6.7, [`motion_parametrisation`]): a variant of the blend at any
 //!   weight by interpolating variants of the two nearest learned trajectories;
-//! - the model folder on disk ([`variation_model_file`]).
+//! - the model folder on disk ([`variation_model_file`]);
+//! - measures of variants against what they vary: the learnt motion without sampling
+//!   ([`learnt_motion`]), [`pose_centroid`], [`mean_vertex_distance`] (body-frame poses),
+//!   [`centroid_path_length`].
 
+pub mod centroid_path_length;
 pub mod error;
+pub mod learnt_motion;
+pub mod mean_vertex_distance;
 pub mod motion_parametrisation;
 pub mod motion_preparation;
+pub mod pose_centroid;
 pub mod variation_model;
 pub mod variation_model_file;
 pub mod variation_sampling;
