@@ -28,8 +28,9 @@
 //! - [`constraint`]: soft constraints and how closely they were met.
 //! - [`request_size`] and [`travel_check`]: requests refused before any work (too many frames,
 //!   too much memory, a glb over 4 GiB; a path or distance asked of clips that stay in place).
-//! - [`variant_samples`]: `vary sample`'s variants of a learnt sequence or blend (thesis 6.6-6.7),
-//!   written with a report measuring each against the learnt motion.
+//! - [`variation_training`] and [`variant_samples`]: a variation model learnt from a subject
+//!   (thesis 6.4-6.5, 6.7) and variants of a learnt sequence or blend sampled from it (6.6-6.7),
+//!   written with reports (each variant measured against the learnt motion).
 //!
 //! Errors are [`Error`]: messages name the option or file a request came from and what was
 //! expected; a message that adds context keeps the lower layer's error as its source.
@@ -47,6 +48,7 @@ pub mod request_size;
 pub mod smg_query;
 pub mod travel_check;
 pub mod variant_samples;
+pub mod variation_training;
 pub mod walk_output;
 pub mod walk_variants;
 pub mod words;

@@ -9,14 +9,11 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Instant;
 
-use serde_json::json;
-use surfcap_learn::gpdm::GpdmOptions;
-use surfcap_mesh::Subject;
 use surfcap_synthesis::variant_samples::{SampleRequest, Varied, sample_variants_to_folder};
-use surfcap_variation::VariationModel;
-use surfcap_variation::motion_preparation::{PreparationOptions, TimeAlignment};
-use surfcap_variation::variation_model::TrainOptions;
-use surfcap_variation::variation_model_file::KIND;
+use surfcap_synthesis::variation_training::{
+    MODEL_KIND, TrainReport, TrainRequest, learnt_names, train_plan, train_variation_model,
+};
+use surfcap_variation::motion_preparation::SequenceOrigin;
 use surfcap_variation::variation_sampling::{ChainStart, SamplingOptions};
 
 use crate::body_parts::parts_of;
@@ -184,68 +181,28 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     }
 }
 
-/// The indices of `names` in `subject`, or an error listing its sequences.
-fn sequence_indices(subject: &Subject, path: &Path, names: &[String]) -> anyhow::Result<Vec<usize>> {
-    let known = || subject.sequences().iter().map(|q| q.name.as_str()).collect::<Vec<_>>().join(", ");
-    let mut out = Vec::with_capacity(names.len());
-    for n in names {
-        let (k, _) = subject.sequence(n).ok_or_else(|| {
-            anyhow::anyhow!("--sequences: {} has no sequence {n:?}; it has {}", path.display(), known())
-        })?;
-        anyhow::ensure!(!out.contains(&k), "--sequences: {n:?} is given twice: expected each sequence once");
-        out.push(k);
-    }
-    Ok(out)
-}
-
 fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.subject];
     inputs.extend(a.parts.as_deref());
     surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
-    ctx.claim_dir(&a.output, KIND)?;
+    ctx.claim_dir(&a.output, MODEL_KIND)?;
     let t0 = Instant::now();
     let subject = open(ctx, &a.subject, &a.source_opts)?;
-    let names: Vec<String> = if a.sequences.is_empty() {
-        let all: Vec<String> = subject.sequences().iter().map(|q| q.name.clone()).collect();
-        ctx.note(&format!(
-            "no --sequences given, so every sequence of {} is learnt ({}); a variation model is meant for one motion type",
-            subject.name,
-            all.join(", ")
-        ));
-        all
-    } else {
-        a.sequences.clone()
+    let request = TrainRequest {
+        subject_path: a.subject.clone(),
+        sequences: a.sequences.clone(),
+        reference: a.reference.clone(),
+        blends: a.blend.iter().map(|p| (p.a.clone(), p.b.clone())).collect(),
+        blend_weights: a.blend_weights.clone(),
+        latent_dim: a.latent_dim,
+        iterations: a.iterations,
+        output: a.output.clone(),
+        force: ctx.force,
     };
-    let chosen = sequence_indices(&subject, &a.subject, &names)?;
-    let position = |n: &str, what: &str| {
-        names
-            .iter()
-            .position(|x| x == n)
-            .ok_or_else(|| anyhow::anyhow!("{what}: {n:?} is not one of the learnt sequences ({})", names.join(", ")))
-    };
-    let reference = match &a.reference {
-        Some(r) => position(r, "--reference")?,
-        None => 0,
-    };
-    let mut blend_pairs = Vec::with_capacity(a.blend.len());
-    for p in &a.blend {
-        let pair = (position(&p.a, "--blend")?, position(&p.b, "--blend")?);
-        anyhow::ensure!(pair.0 != pair.1, "--blend {}:{}: expected two different sequences", p.a, p.b);
-        blend_pairs.push(pair);
-    }
+    let bar = crate::progress::Bar::new(ctx);
+    let names = learnt_names(&subject, &request, &bar);
+    let (chosen, options) = train_plan(&subject, &request, &names)?;
     let parts = parts_of(ctx, a.parts.as_deref(), false, &subject, "", "--parts")?;
-    let mut gpdm = GpdmOptions { latent_dim: a.latent_dim, ..GpdmOptions::default() };
-    gpdm.lbfgs.max_iters = a.iterations;
-    gpdm.lbfgs.max_evals = gpdm.lbfgs.max_evals.max(a.iterations + a.iterations / 4);
-    let options = TrainOptions {
-        preparation: PreparationOptions {
-            reference,
-            time_alignment: TimeAlignment::Uniform,
-            blend_pairs,
-            blend_weights: a.blend_weights.clone(),
-        },
-        gpdm,
-    };
     ctx.say(&format!(
         "learning {} of {} (+ {}), {} parts, d = {}, reference {}",
         count_of(names.len(), "sequence"),
@@ -253,72 +210,33 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
         count_of(if a.blend.is_empty() { 0 } else { a.blend.len() * a.blend_weights.len() }, "blend"),
         parts.len(),
         a.latent_dim,
-        names[reference]
+        names[options.preparation.reference]
     ));
-    let bar = crate::progress::Bar::new(ctx);
-    let t_train = Instant::now();
-    let model = VariationModel::train(&subject, &chosen, &parts, &options, &bar)?;
-    let train_seconds = t_train.elapsed().as_secs_f64();
+    let report = train_variation_model(&subject, &request, &chosen, &parts, &options, t0, &bar)?;
     drop(bar);
-    model.save(&a.output, ctx.force)?;
-    let sequences: Vec<serde_json::Value> =
-        model.sequences.iter().map(|s| json!({ "name": s.name, "origin": s.origin, "frames": s.own_frames })).collect();
-    let fits: Vec<serde_json::Value> = model
-        .fits
-        .iter()
-        .map(|f| {
-            json!({
-                "part": f.part, "vertices": f.vertices, "dimensions": f.dimensions,
-                "iterations": f.fit.iters, "evaluations": f.fit.evals, "converged": f.fit.converged,
-                "objective_start": f.fit.initial_objective, "objective": f.fit.objective,
-                "alpha": f.alpha, "beta": f.beta, "seconds": f.seconds,
-            })
-        })
-        .collect();
-    let subject_path = std::fs::canonicalize(&a.subject).unwrap_or_else(|_| a.subject.clone());
-    let result = json!({
-        "model": a.output, "subject": model.subject, "subject_path": subject_path,
-        "vertices": model.topology.n_vertices(), "reference": model.reference, "frames": model.frames,
-        "latent_dim": a.latent_dim, "max_iterations": a.iterations,
-        "sequences": sequences, "parts": fits,
-        "train_seconds": train_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
-        "threads": rayon::current_num_threads(),
-    });
-    crate::output::write_json(&a.output.join("report.json"), &result)?;
-    ctx.result(&result, || print_trained(&result));
+    ctx.result(&report, || print_trained(&report));
     Ok(())
 }
 
-/// The human summary of a training, from its report.
-fn print_trained(r: &serde_json::Value) {
-    let seqs = r["sequences"].as_array().cloned().unwrap_or_default();
-    let parts = r["parts"].as_array().cloned().unwrap_or_default();
+/// The human summary of a training.
+fn print_trained(r: &TrainReport) {
     println!(
         "{}: {} of {} reference frames ({}), {} parts, d = {}: learnt in {:.1} s -> {}",
-        r["subject"].as_str().unwrap_or_default(),
-        count_of(seqs.len(), "sequence"),
-        r["frames"],
-        r["reference"].as_str().unwrap_or_default(),
-        parts.len(),
-        r["latent_dim"],
-        r["train_seconds"].as_f64().unwrap_or(0.0),
-        r["model"].as_str().unwrap_or_default()
+        r.subject,
+        count_of(r.sequences.len(), "sequence"),
+        r.frames,
+        r.reference,
+        r.parts.len(),
+        r.latent_dim,
+        r.train_seconds,
+        r.model.display()
     );
-    for s in &seqs {
-        let origin = match s["origin"]["kind"].as_str() {
-            Some("blend") => format!(
-                "blend of {} and {} at {}",
-                s["origin"]["a"].as_str().unwrap_or_default(),
-                s["origin"]["b"].as_str().unwrap_or_default(),
-                s["origin"]["w"]
-            ),
-            _ => "captured".into(),
+    for s in &r.sequences {
+        let origin = match &s.origin {
+            SequenceOrigin::Blend { a, b, w } => format!("blend of {a} and {b} at {w}"),
+            SequenceOrigin::Captured { .. } => "captured".into(),
         };
-        println!(
-            "  sequence {:<24} {:>5} frames  {origin}",
-            s["name"].as_str().unwrap_or_default(),
-            s["frames"].as_u64().unwrap_or(0)
-        );
+        println!("  sequence {:<24} {:>5} frames  {origin}", s.name, s.frames);
     }
     println!(
         "  {:<12} {:>8} {:>6} {:>11} {:>14} {:>14}  {:<27} {:<35} {:>7}",
@@ -332,27 +250,20 @@ fn print_trained(r: &serde_json::Value) {
         "beta (eq. 6.6)",
         "seconds"
     );
-    for p in &parts {
-        let list = |v: &serde_json::Value| -> String {
-            v.as_array()
-                .into_iter()
-                .flatten()
-                .map(|x| format!("{:.2e}", x.as_f64().unwrap_or(0.0)))
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:.2e}")).collect::<Vec<_>>().join(" ");
+    for p in &r.parts {
         println!(
             "  {:<12} {:>8} {:>6} {:>5}{} {:>14.1} {:>14.1}  {:<27} {:<35} {:>7.1}",
-            p["part"].as_str().unwrap_or_default(),
-            p["vertices"].as_u64().unwrap_or(0),
-            p["dimensions"].as_u64().unwrap_or(0),
-            p["iterations"].as_u64().unwrap_or(0),
-            if p["converged"] == true { " conv." } else { "      " },
-            p["objective"].as_f64().unwrap_or(0.0),
-            p["objective_start"].as_f64().unwrap_or(0.0),
-            list(&p["alpha"]),
-            list(&p["beta"]),
-            p["seconds"].as_f64().unwrap_or(0.0)
+            p.part,
+            p.vertices,
+            p.dimensions,
+            p.iterations,
+            if p.converged { " conv." } else { "      " },
+            p.objective,
+            p.objective_start,
+            list(&p.alpha),
+            list(&p.beta),
+            p.seconds
         );
     }
 }
