@@ -213,7 +213,7 @@ impl TableOpts {
 #[derive(clap::Args, Debug, Clone)]
 pub struct GraphOpts {
     /// essential (union of all shortest-path trees, O(N^3)), sparse-essential (the same on every
-    /// frame's --k cheapest transitions plus the original edges: for long captures, issue 21)
+    /// frame's --k cheapest transitions plus the original edges: for long captures)
     /// or motion (Kovar's baseline).
     #[arg(long, default_value = "essential")]
     pub kind: GraphKind,
