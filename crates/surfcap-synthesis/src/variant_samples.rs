@@ -219,7 +219,7 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
             model.up_axis,
             model.units.clone(),
         )?;
-        files.extend(export(&s, ExportFormat::Glb, &file, export_options.clone(), progress)?);
+        files.extend(export(&s, ExportFormat::Glb, &file, export_options, progress)?);
         let end = v.world.last().map(|p| centroid(p)).unwrap_or_default();
         per_variant.push(VariantReport {
             file,
