@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use surfcap_cli::{Ctx, GlobalOpts};
 // The CLI's shared modules, under the names the benchmarks use (`crate::options::count`).
-use surfcap_cli::{options, output, progress, synthesis};
+use surfcap_cli::{options, output, progress};
 
 mod appearance;
 mod distance;

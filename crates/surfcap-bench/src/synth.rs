@@ -71,7 +71,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let t2 = Instant::now();
     let _ = pipe.table(&params.table)?;
     let table_secs = t2.elapsed().as_secs_f64();
-    let prep = crate::synthesis::Prepared::new(pipe, params, None)?;
+    let prep = surfcap_synthesis::Prepared::new(pipe, params, None)?;
     let graph_secs = prep.seconds;
     let n = prep.graph.n;
     // 15 m S-path.

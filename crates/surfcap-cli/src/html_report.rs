@@ -226,7 +226,7 @@ pub fn write_report(
                 let to = copy_into(&anim_dir, f)?;
                 let mut row = format!("<h3>{}</h3><p><a href=\"{}\">{}</a>", esc(&name), rel(out, &to), rel(out, &to));
                 // The synthesis report and the labels sidecar travel with the animation.
-                let report = crate::synthesis::report_path(f);
+                let report = surfcap_synthesis::report_path(f);
                 let to_stem = to.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
                 for (side, suffix) in [(report.clone(), ".report.json"), (f.with_extension("json"), ".json")] {
                     if side.is_file() {

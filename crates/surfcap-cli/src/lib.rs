@@ -15,7 +15,6 @@
 mod body_parts;
 pub mod commands;
 mod files;
-mod frame_appearance;
 mod html_report;
 mod limits;
 mod mannequin_spec;
@@ -24,8 +23,7 @@ pub mod output;
 pub mod progress;
 mod signals;
 mod subject_summary;
-pub mod synthesis;
-mod travel;
+mod synthesis_args;
 mod view_items;
 
 pub use output::Ctx;
@@ -280,7 +278,7 @@ pub fn run_front<F: Front>() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
-            let code = if e.is::<synthesis::ConstraintsMissed>() { 3 } else { 1 };
+            let code = if e.is::<surfcap_synthesis::ConstraintsMissed>() { 3 } else { 1 };
             let m = messages(&e);
             report_failure(F::NAME, json, &m[0], &m[1..], code);
             ExitCode::from(code)

@@ -2,17 +2,14 @@
 //! any work. A few characters of arguments (`--steps 100000`, a key at frame 100000, `--time
 //! 1e9`, a 2 km curve) ask for hours of search and gigabytes to terabytes of memory; the frame
 //! count is estimated from the request, the bytes from frames x vertices (and the timed search's
-//! tables), and the request is refused with the size, the limit and the option that raises it.
+//! tables), and the request is refused with the size, the limit and the option that raises it
+//! (`surfcap_synthesis::request_size`). Here: the options, and the memory available, read from
+//! the environment (Linux's `/proc/meminfo`), which a library does not read.
 
 use std::str::FromStr;
 
-use anyhow::bail;
-use surfcap_formats::export::ExportFormat;
-use surfcap_formats::glb::{GLB_MAX_BYTES, estimated_glb_bytes};
-use surfcap_mesh::Subject;
-
-/// Frames an animation may have unless raised: 10 minutes at 30 fps.
-pub const DEFAULT_MAX_FRAMES: usize = 18_000;
+use surfcap_synthesis::request_size::SizeLimits;
+pub use surfcap_synthesis::request_size::{DEFAULT_MAX_FRAMES, Request};
 
 /// Bounds on what one request may produce.
 #[derive(clap::Args, Debug, Clone)]
@@ -58,18 +55,6 @@ impl FromStr for Bytes {
     }
 }
 
-/// `12345678` -> `11.8 MiB`.
-pub fn human(bytes: u64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut x = bytes as f64;
-    let mut k = 0;
-    while x >= 1024.0 && k + 1 < units.len() {
-        x /= 1024.0;
-        k += 1;
-    }
-    if k == 0 { format!("{bytes} bytes") } else { format!("{x:.1} {}", units[k]) }
-}
-
 /// Memory available to new allocations (Linux `MemAvailable`), in bytes.
 fn mem_available() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -78,82 +63,26 @@ fn mem_available() -> Option<u64> {
     Some(kb * 1024)
 }
 
-/// What a request will make, estimated before any work.
-pub struct Request<'a> {
-    /// The arguments responsible, as the user typed them (e.g. `--steps 100000`).
-    pub what: String,
-    /// Output frames.
-    pub frames: f64,
-    pub subject: &'a Subject,
-    /// Working memory besides the output positions (a search's tables).
-    pub search_bytes: u64,
-    pub format: ExportFormat,
-}
-
 impl LimitOpts {
-    /// An error naming the size, the limit and the option that raises it when `r` exceeds
-    /// the frame limit, the memory limit, or (as glb) the format's 4 GiB.
-    pub fn check(&self, r: &Request) -> anyhow::Result<()> {
-        let what = &r.what;
-        // NaN frames (never from the callers' finite estimates) are refused too.
-        if r.frames.is_nan() || r.frames > self.max_frames as f64 {
-            bail!(
-                "{what} asks for about {:.0} frames, above the limit of {} (--max-frames; raise it for longer animations)",
-                r.frames,
-                self.max_frames
-            );
+    /// The limits of `--max-frames` and `--max-memory`, with the memory available now.
+    pub fn limits(&self) -> SizeLimits {
+        SizeLimits {
+            max_frames: self.max_frames,
+            max_memory: self.max_memory.map(|b| b.0),
+            available_memory: mem_available(),
         }
-        let frames = r.frames.ceil() as u64;
-        let nv = r.subject.topology().n_vertices() as u64;
-        let need = frames.saturating_mul(12 * nv).saturating_add(r.search_bytes);
-        let (limit, whence) = match (self.max_memory, mem_available()) {
-            (Some(b), _) => (b.0, "--max-memory".to_string()),
-            (None, Some(a)) => (a / 2, format!("half the {} available; raise it with --max-memory", human(a))),
-            (None, None) => (4 << 30, "memory available unknown; raise it with --max-memory".to_string()),
-        };
-        if need > limit {
-            let search = if r.search_bytes > 0 {
-                format!(" and {} of search tables", human(r.search_bytes))
-            } else {
-                String::new()
-            };
-            bail!(
-                "{what} needs about {} of memory ({frames} frames x {nv} vertices{search}), above the limit of {} ({whence})",
-                human(need),
-                human(limit)
-            );
-        }
-        if r.format == ExportFormat::Glb {
-            let glb = estimated_glb_bytes(nv as usize, r.subject.topology().n_triangles(), &[frames as usize]);
-            if glb > GLB_MAX_BYTES {
-                bail!(
-                    "{what} would write a glb of about {} ({frames} frames x {nv} vertices), above the format's limit of {GLB_MAX_BYTES} bytes (4 GiB: its lengths are 32-bit); write --format npy or pc2, or fewer frames",
-                    human(glb)
-                );
-            }
-        }
-        Ok(())
     }
-}
 
-/// The fastest ground speed (subject units per second) of the subject's sequences: the mean
-/// per-frame travel of the vertices' centroid along `axes`. A curve of length L cannot be
-/// followed in fewer than L / speed seconds, so frames estimated with it are a lower bound and a
-/// refusal is never spurious. `None` when nothing travels.
-pub fn fastest_speed(subject: &Subject, axes: &[usize]) -> Option<f64> {
-    let speed = |s: &surfcap_mesh::Sequence| {
-        let cs: Vec<[f64; 3]> = (0..s.n_frames()).map(|f| surfcap_motion::blend::centre(s.frame(f))).collect();
-        let travel: f64 =
-            cs.windows(2).map(|w| axes.iter().map(|&k| (w[1][k] - w[0][k]).powi(2)).sum::<f64>().sqrt()).sum();
-        travel / (s.n_frames().max(2) - 1) as f64 * subject.fps
-    };
-    let v = subject.sequences().iter().map(speed).fold(0.0, f64::max);
-    (v > 0.0).then_some(v)
+    /// Refuses `r` when it exceeds the limits (`SizeLimits::check`).
+    pub fn check(&self, r: &Request) -> anyhow::Result<()> {
+        Ok(self.limits().check(r)?)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use surfcap_synthesis::request_size::human;
 
     #[test]
     fn byte_counts_parse_with_binary_suffixes_and_bad_ones_are_refused() {

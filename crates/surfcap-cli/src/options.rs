@@ -356,14 +356,9 @@ pub struct ConstraintOpts {
 }
 
 impl ConstraintOpts {
-    /// The distance tolerance for a constraint of size `asked`.
-    pub fn distance(&self, asked: f64) -> f64 {
-        self.tolerance.unwrap_or(0.1 * asked.abs())
-    }
-
-    /// The timing tolerance, frames.
-    pub fn frames(&self) -> f64 {
-        self.frame_tolerance.unwrap_or(10) as f64
+    /// `--tolerance` and `--frame-tolerance` (`surfcap_synthesis::Tolerances` has the defaults).
+    pub fn tolerances(&self) -> surfcap_synthesis::Tolerances {
+        surfcap_synthesis::Tolerances { distance: self.tolerance, frames: self.frame_tolerance }
     }
 }
 

@@ -261,6 +261,38 @@ fn split_commands(line: &str) -> Result<Vec<Vec<String>>, String> {
     Ok(commands.into_iter().filter(|w| !w.is_empty()).collect())
 }
 
+/// Parses every `program ...` example of the docs under `root` with the command line `C` and
+/// panics naming each example that does not parse (file, line, clap's message), or when no
+/// example is found at all. `--help` and `--version` examples count as parsed.
+pub fn assert_doc_examples_parse<C: clap::Parser>(root: &Path, program: &str) {
+    let examples = doc_examples(root, program).expect("the docs are readable");
+    assert!(
+        !examples.is_empty(),
+        "no `{program} ...` example found in {}/README.md or docs/**/*.md (```sh blocks)",
+        root.display()
+    );
+    let failures: Vec<String> = examples
+        .iter()
+        .filter_map(|ex| match C::try_parse_from(&ex.words) {
+            Ok(_) => None,
+            // clap reports `--help` and `--version` as "errors".
+            Err(e)
+                if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) =>
+            {
+                None
+            }
+            Err(e) => Some(format!("{}:{}: {}\n{}", ex.file.display(), ex.line, ex.words.join(" "), e.render())),
+        })
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} `{program}` examples do not parse:\n\n{}",
+        failures.len(),
+        examples.len(),
+        failures.join("\n")
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -310,36 +342,4 @@ mod tests {
     fn an_unterminated_quote_names_its_line() {
         assert_eq!(examples_in("```sh\n\nsurfcap 'a\n```\n", "surfcap").unwrap_err().0, 3);
     }
-}
-
-/// Parses every `program ...` example of the docs under `root` with the command line `C` and
-/// panics naming each example that does not parse (file, line, clap's message), or when no
-/// example is found at all. `--help` and `--version` examples count as parsed.
-pub fn assert_doc_examples_parse<C: clap::Parser>(root: &Path, program: &str) {
-    let examples = doc_examples(root, program).expect("the docs are readable");
-    assert!(
-        !examples.is_empty(),
-        "no `{program} ...` example found in {}/README.md or docs/**/*.md (```sh blocks)",
-        root.display()
-    );
-    let failures: Vec<String> = examples
-        .iter()
-        .filter_map(|ex| match C::try_parse_from(&ex.words) {
-            Ok(_) => None,
-            // clap reports `--help` and `--version` as "errors".
-            Err(e)
-                if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) =>
-            {
-                None
-            }
-            Err(e) => Some(format!("{}:{}: {}\n{}", ex.file.display(), ex.line, ex.words.join(" "), e.render())),
-        })
-        .collect();
-    assert!(
-        failures.is_empty(),
-        "{} of {} `{program}` examples do not parse:\n\n{}",
-        failures.len(),
-        examples.len(),
-        failures.join("\n")
-    );
 }

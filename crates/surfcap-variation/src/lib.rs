@@ -24,10 +24,17 @@
 //! - the model folder on disk ([`variation_model_file`]: `model.json`, `faces.npy`,
 //!   `reference_pose.npy`, per part its latent positions and training vectors as `.npy`, every
 //!   shape checked on load and the file at fault named; factorisations recomputed on load).
+//! - measures of variants against what they vary: the learnt motion without sampling
+//!   ([`learnt_motion`]), [`pose_centroid`], [`mean_vertex_distance`] (body-frame poses),
+//!   [`centroid_path_length`].
 
+pub mod centroid_path_length;
 pub mod error;
+pub mod learnt_motion;
+pub mod mean_vertex_distance;
 pub mod motion_parametrisation;
 pub mod motion_preparation;
+pub mod pose_centroid;
 pub mod variation_model;
 pub mod variation_model_file;
 pub mod variation_sampling;

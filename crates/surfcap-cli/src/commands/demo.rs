@@ -19,10 +19,10 @@ use surfcap_pipeline::{GraphKind, GraphParams};
 
 use crate::html_report::write_report;
 use crate::mannequin_spec::{MannequinArgs, build};
-use crate::options::{CacheOpts, OutOpts, TableOpts};
+use crate::options::{CacheOpts, TableOpts};
 use crate::output::print_json;
 use crate::subject_summary::{describe, print_summary};
-use crate::synthesis::{Prepared, run_path};
+use surfcap_synthesis::{Output, PathQuery, Prepared};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -160,16 +160,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     surfcap_mesh::atomic::write_file(&curve_path, |w| w.write_all(csv.as_bytes()))?;
     let curve = read_curve(&curve_path, subject.up_axis, true)?;
-    let out = OutOpts {
-        output: a.output.join("export/path.glb"),
-        format: None,
-        constraints: Default::default(),
-        limits: Default::default(),
-    };
+    let out = Output { force: ctx.force, ..Output::new(a.output.join("export/path.glb")) };
     // Twice the default branching: this graph is small and the S tight (radius ~1.3 m), and the
     // wider search halves the error (0.32 -> 0.17 m) for ~1 s more.
     let search = PathSearch { branching: 16, ..PathSearch::for_fps(subject.fps) };
-    let path = run_path(ctx, &prep, &curve, &[], None, &search, &out)?;
+    let path = prep.follow_path(&PathQuery { curve: &curve, restrictions: &[], start: None, search }, &out, &bar)?;
     say(&format!(
         "8. followed the S-shaped path {} ({:.1} long): {} frames, {} transitions, centre-of-mass error mean {:.3}, max {:.3} -> {} and {}",
         curve_path.display(),
@@ -178,14 +173,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         path.played.transitions,
         path.mean_error,
         path.max_error,
-        out.output.display(),
+        out.path.display(),
         path.played.report_path.display()
     ));
     written.extend(path.played.written.iter().cloned());
     written.push(path.played.report_path.clone());
     // The report of what the demo made, and the command that plays it.
     let report_dir = a.output.join("report");
-    let include = vec![interp_path.clone(), out.output.clone()];
+    let include = vec![interp_path.clone(), out.path.clone()];
     let rep = write_report(&prep.pipe, &cache, &report_dir, &include, ctx.force)?;
     say(&format!(
         "9. wrote the report {} ({} plots, {} animations); play them in the browser with: surfcap view {}",
@@ -207,7 +202,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             report_dir.display(),
             a.output.join("export/mannequin.glb").display(),
             interp_path.display(),
-            out.output.display()
+            out.path.display()
         );
     }
     Ok(())

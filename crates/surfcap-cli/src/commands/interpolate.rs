@@ -43,7 +43,7 @@ pub struct Args {
     /// With --appearance, the in-between poses' textures are the two frames interpolated in the
     /// eigen spaces with the same weight as the geometry (thesis 4.6.1, Fig. 7.1).
     #[command(flatten)]
-    pub appearance: crate::frame_appearance::AppearanceOpts,
+    pub appearance: crate::synthesis_args::AppearanceOpts,
 }
 
 /// How the poses in between are made.
@@ -95,19 +95,21 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         .with_labels(FrameLabel::original_ends(a.steps))?
         .with_tags(vec!["interpolation".into()]);
     let out = s.derived(format!("{}-interpolation", s.name), seq)?;
+    let bar = crate::progress::Bar::new(ctx);
     let (written, textures) = match &appearance {
         Some(app) => {
-            let textured = app.textures(ctx, &mix)?;
-            (crate::frame_appearance::write_textured(ctx, &out, &textured, &a.output)?, Some(textured.report))
+            let textured = app.textures(&mix, &bar)?;
+            (
+                surfcap_synthesis::frame_appearance::write_textured(&out, &textured, &a.output, &bar)?,
+                Some(textured.report),
+            )
         }
-        None => {
-            let bar = crate::progress::Bar::new(ctx);
-            (export(&out, format, &a.output, ctx.export_options(), &bar)?, None)
-        }
+        None => (export(&out, format, &a.output, ctx.export_options(), &bar)?, None),
     };
+    drop(bar);
     let mut result = json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() });
     if let Some(t) = textures {
-        result["appearance"] = t;
+        result["appearance"] = serde_json::to_value(t)?;
     }
     ctx.result(&result, || {
         println!(

@@ -1,31 +1,20 @@
 //! `surfcap smg query <input> --connect A:B ... --from seq:frame --to seq:frame --distance D
 //! --time SECONDS -o out`: Huang et al. 2009's surface motion graph, surfcap's second synthesis
-//! engine (issue 17): the input may be a subject or a frame set (every frame its own topology).
-//! The library does the work (`surfcap_smg`: the similarity, cached; the graph from the user's
-//! higher level and the two key frames; the ILP path); this command opens the input, writes the
-//! animation and its report as the other synthesis commands do (`synthesis::write_animation`:
-//! glb by default, a subject's in any `--format`, a frame set's as glb (a mesh per frame), abc,
-//! obj or a `.frames` folder; the report with the centre track, the target distance and the
-//! transition frames that `surfcap view` draws), and reports a missed distance or time as
-//! missed (`--strict`: exit 3).
+//! engine: the input may be a subject or a frame set (every frame its own topology). The
+//! library does the work (`surfcap_synthesis::smg_query` over `surfcap_smg`: the similarity,
+//! cached; the graph from the user's higher level and the two key frames; the ILP path; the
+//! animation written as the other synthesis commands write theirs, glb by default, a frame set's
+//! as glb (a mesh per frame), abc, obj or a `.frames` folder, and its report with the centre
+//! track, the target distance and the transition frames that `surfcap view` draws); this command
+//! prints the result and reports a missed distance or time as missed (`--strict`: exit 3).
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use anyhow::Context;
-use serde_json::json;
-use surfcap_formats::import::{ImportedData, open_any};
-use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
-use surfcap_mesh::{Sequence, Subject, Topology, Units};
-use surfcap_smg::motion_frames::MotionFrames;
-use surfcap_smg::path_optimisation::{
-    PathQuery, PathSolution, PlayedFrame, Tolerance, optimise_path, path_segments, play_path,
-};
-use surfcap_smg::shape_similarity::HistogramParams;
-use surfcap_smg::surface_motion_graph::{GraphInput, SurfaceMotionGraph, build_graph};
+use surfcap_synthesis::Output;
+use surfcap_synthesis::smg_query::{SimilarityCache, SmgGraph, SmgGraphRequest, SmgQuery};
 
 use crate::options::{CacheOpts, ConstraintOpts, SourceOpts};
-use crate::synthesis::{Animation, Constraint, add_travel, check_constraints, report_path, write_animation};
+use crate::synthesis_args::check_constraints;
 
 #[derive(clap::Subcommand, Debug)]
 pub enum Cmd {
@@ -120,64 +109,6 @@ pub struct QueryArgs {
     pub constraints: ConstraintOpts,
 }
 
-/// Writes the played path: a subject's frames as one sequence of the subject, a frame set's as a
-/// frame set (every frame its own mesh), in the format the output asks for
-/// (`synthesis::write_animation`: glb by default, `.frames` a frame-set folder).
-fn write_output(
-    ctx: &crate::Ctx,
-    a: &QueryArgs,
-    frames: &MotionFrames,
-    subject: Option<&Subject>,
-    played: Vec<PlayedFrame>,
-    name: String,
-    units: &Units,
-) -> anyhow::Result<Vec<PathBuf>> {
-    match subject {
-        Some(s) => {
-            let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
-            let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
-            let result = s.derived(name, sequence)?;
-            write_animation(ctx, Animation::Subject(&result), a.format, &a.output)
-        }
-        None => {
-            let per_frame = played
-                .into_iter()
-                .map(|(p, t)| Ok((Topology::new(p.len() / 3, t.to_vec(), None)?, p)))
-                .collect::<anyhow::Result<Vec<_>>>()?;
-            let sequence = FrameSetSequence::from_frames("smg", per_frame)?;
-            let set = FrameSet::new(name, vec![sequence], frames.fps, frames.up, units.clone())?;
-            write_animation(ctx, Animation::FrameSet(&set), a.format, &a.output)
-        }
-    }
-}
-
-/// The area-weighted centroid of every output frame: its source frame's, moved by the ground
-/// offset the path adds there (as `play_path` moves the vertices).
-fn played_centres(frames: &MotionFrames, path: &PathSolution) -> Vec<[f64; 3]> {
-    let centroids = frames.centroids();
-    let (axis, _) = frames.up.axis_and_sign();
-    let (x, y) = ((axis + 1) % 3, (axis + 2) % 3);
-    path.frames
-        .iter()
-        .zip(&path.offsets)
-        .map(|(&f, o)| {
-            let mut c = centroids[f];
-            c[x] += o[0];
-            c[y] += o[1];
-            c
-        })
-        .collect()
-}
-
-fn windows(text: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
-    let parse = |s: &str| s.trim().parse::<usize>().ok().filter(|&n| n >= 1);
-    let (a, b) = text.split_once('-').unwrap_or((text, text));
-    match (parse(a), parse(b)) {
-        (Some(a), Some(b)) if a <= b => Ok(a..=b),
-        _ => anyhow::bail!("--windows {text:?}: expected MIN-MAX frames, 1 <= MIN <= MAX"),
-    }
-}
-
 pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     match cmd {
         Cmd::Query(a) => query(ctx, a),
@@ -185,122 +116,46 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     }
 }
 
-/// An opened input with its similarity and graph.
-struct Opened {
-    data: ImportedData,
-    frames: MotionFrames,
-    ground: Vec<[f64; 2]>,
-    similarity_seconds: f64,
-    similarity_cached: bool,
-    graph: SurfaceMotionGraph,
-    /// The key frames asked for (global frames), in order.
-    keys: Vec<usize>,
-}
-
-/// Opens `a.input`, computes (or reads back) its similarity and builds the graph with the
-/// key frames `keys` (`(option, sequence:frame)`, named in errors).
-fn open_graph(ctx: &crate::Ctx, a: &GraphArgs, keys: &[(&str, &str)]) -> anyhow::Result<Opened> {
-    let lengths = windows(&a.windows)?;
-    let bar = crate::progress::Bar::new(ctx);
-    let data = open_any(&a.input, &a.source.to_import(None)?, &bar)?;
-    let frames = match &data {
-        ImportedData::Subject(i) => MotionFrames::from_subject(&i.subject),
-        ImportedData::FrameSet(f) => MotionFrames::from_frame_set(&f.frame_set),
-    };
-    let t0 = Instant::now();
-    let store = surfcap_mesh::derived_cache::DerivedCache::new(a.cache.dir());
-    let params = HistogramParams { resolution: a.resolution, ..Default::default() };
-    let (similarity, similarity_cached) = frames.shape_similarity(params, Some((&store, a.cache.no_cache)), &bar)?;
-    let similarity_seconds = t0.elapsed().as_secs_f64();
-    let seq = |name: &str| {
-        frames.names.iter().position(|n| n == name).ok_or_else(|| {
-            anyhow::anyhow!("--connect: no sequence {name:?}: expected one of {}", frames.names.join(", "))
-        })
-    };
-    let mut connections = Vec::new();
-    for c in &a.connect {
-        let (x, y) = c.split_once(':').with_context(|| format!("--connect {c:?}: expected FROM:TO"))?;
-        connections.push((seq(x)?, seq(y)?));
+impl GraphArgs {
+    fn request(&self) -> SmgGraphRequest {
+        SmgGraphRequest {
+            input: self.input.clone(),
+            connect: self.connect.clone(),
+            windows: self.windows.clone(),
+            transitions: self.transitions,
+            separation: self.separation,
+            resolution: self.resolution,
+        }
     }
-    let keys = keys
-        .iter()
-        .map(|(option, spec)| frames.resolve(spec).with_context(|| format!("{option} {spec:?}")))
-        .collect::<anyhow::Result<Vec<usize>>>()?;
-    let ground = frames.ground_centroids();
-    let graph = build_graph(&GraphInput {
-        sequences: &frames.sequences,
-        similarity: &similarity,
-        ground: &ground,
-        connections: &connections,
-        key_frames: &keys,
-        lengths,
-        per_connection: a.transitions,
-        separation: a.separation,
-    })?;
-    for (x, y) in &graph.missing {
-        ctx.note(&format!(
-            "no transition {} -> {}: a sequence is shorter than the smallest window",
-            frames.names[*x], frames.names[*y]
-        ));
-    }
-    Ok(Opened { data, frames, ground, similarity_seconds, similarity_cached, graph, keys })
-}
 
-/// The graph's transitions for reports: last frame played, first frame switched to
-/// (`sequence:frame`), window and cost.
-fn transitions_json(f: &MotionFrames, g: &SurfaceMotionGraph) -> Vec<serde_json::Value> {
-    g.transitions
-        .iter()
-        .map(|(x, y, t)| {
-            json!({
-                "from": f.name_of(f.sequences[*x].start + t.last_x),
-                "to": f.name_of(f.sequences[*y].start + t.first_y),
-                "window": t.length, "cost": t.cost})
-        })
-        .collect()
+    /// Opens the input with its similarity and graph, the key frames `keys` among the nodes.
+    fn open(&self, keys: &[(&str, &str)], bar: &crate::progress::Bar) -> anyhow::Result<SmgGraph> {
+        let cache = SimilarityCache { dir: self.cache.dir(), refresh: self.cache.no_cache };
+        Ok(SmgGraph::open(&self.request(), &self.source.to_import(None)?, &cache, keys, bar)?)
+    }
 }
 
 fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.graph.input])?;
     let keys: Vec<(&str, &str)> = a.keys.iter().map(|k| ("--keys", k.as_str())).collect();
-    let o = open_graph(ctx, &a.graph, &keys)?;
-    let (f, g) = (&o.frames, &o.graph);
-    let name = |node: usize| f.name_of(g.nodes[node]);
-    let report = json!({
-        "input": a.graph.input,
-        "frames": f.n_frames(),
-        "sequences": f.names,
-        "connections": a.graph.connect,
-        "key_frames": o.keys.iter().map(|&k| f.name_of(k)).collect::<Vec<_>>(),
-        "similarity_seconds": o.similarity_seconds,
-        "similarity_cached": o.similarity_cached,
-        "nodes": g.nodes.iter().map(|&n| f.name_of(n)).collect::<Vec<_>>(),
-        "edges": g.edges.iter().map(|e| json!({
-            "from": name(e.from), "to": name(e.to), "kind": e.kind, "frames": e.frames,
-            "distance": e.distance, "cost": e.cost})).collect::<Vec<_>>(),
-        "transitions": transitions_json(f, g),
-        "missing_transitions": g.missing.iter().map(|&(x, y)| format!("{}:{}", f.names[x], f.names[y])).collect::<Vec<_>>(),
-    });
+    let bar = crate::progress::Bar::new(ctx);
+    let o = a.graph.open(&keys, &bar)?;
+    drop(bar);
+    let report = o.report(&a.graph.request());
     crate::output::write_json(&a.output, &report)?;
     ctx.result(&report, || {
         println!(
             "{} frames in {} sequence(s); similarity {:.1} s{}; {} nodes, {} edges, {} transition(s)",
-            f.n_frames(),
-            f.names.len(),
-            o.similarity_seconds,
-            if o.similarity_cached { " (cached)" } else { "" },
-            g.nodes.len(),
-            g.edges.len(),
-            g.transitions.len()
+            report.frames,
+            report.sequences.len(),
+            report.similarity_seconds,
+            if report.similarity_cached { " (cached)" } else { "" },
+            report.nodes.len(),
+            report.edges.len(),
+            report.transitions.len()
         );
-        for t in report["transitions"].as_array().into_iter().flatten() {
-            println!(
-                "  transition {} -> {} (window {}, cost {:.4})",
-                t["from"].as_str().unwrap_or(""),
-                t["to"].as_str().unwrap_or(""),
-                t["window"],
-                t["cost"].as_f64().unwrap_or(0.0)
-            );
+        for t in &report.transitions {
+            println!("  transition {} -> {} (window {}, cost {:.4})", t.from, t.to, t.window, t.cost);
         }
         println!("wrote {}", a.output.display());
     });
@@ -309,98 +164,44 @@ fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
 
 fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.graph.input])?;
-    let o = open_graph(ctx, &a.graph, &[("--from", &a.from), ("--to", &a.to)])?;
-    let (frames, graph, ground) = (&o.frames, &o.graph, &o.ground);
-    let (from, to) = (o.keys[0], o.keys[1]);
-    let (similarity_seconds, cached) = (o.similarity_seconds, o.similarity_cached);
-    let (subject, set_name, units) = match &o.data {
-        ImportedData::Subject(i) => (Some(&i.subject), i.subject.name.clone(), i.subject.units.clone()),
-        ImportedData::FrameSet(f) => (None, f.frame_set.name.clone(), f.frame_set.units.clone()),
+    let bar = crate::progress::Bar::new(ctx);
+    let o = a.graph.open(&[("--from", &a.from), ("--to", &a.to)], &bar)?;
+    let q = SmgQuery {
+        from: a.from.clone(),
+        to: a.to.clone(),
+        distance: a.distance,
+        time: a.time,
+        distance_weight: a.distance_weight,
+        time_weight: a.time_weight,
+        paper_cost: a.paper_cost,
     };
-    let q = PathQuery {
-        w_d: a.distance_weight,
-        w_t: a.time_weight,
-        tolerance: (!a.paper_cost).then(Tolerance::default),
-        ..PathQuery::new(from, to, a.distance, a.time * frames.fps)
-    };
-    let t1 = Instant::now();
-    let path = optimise_path(graph, ground, &q)?;
-    let query_seconds = t1.elapsed().as_secs_f64();
-    let played = play_path(frames, &path);
-    let written = write_output(ctx, &a, frames, subject, played, format!("{set_name}-smg"), &units)?;
-    let unit = crate::output::unit_name(&units).to_string();
-    let constraints = vec![
-        Constraint::new(
-            "distance",
-            unit.clone(),
-            a.distance,
-            path.distance,
-            path.distance_error,
-            a.constraints.distance(a.distance),
-        )
-        .relative_to(a.distance),
-        Constraint::new("time", "frames", q.frames, path.frames.len() as f64, path.time_error, a.constraints.frames())
-            .relative_to(q.frames),
-    ];
-    let mut report = json!({
-        "input": a.graph.input,
-        "engine": "surface motion graph (Huang et al. 2009)",
-        "fps": frames.fps,
-        "from": a.from,
-        "to": a.to,
-        "connections": a.graph.connect,
-        "frames": path.frames.len(),
-        "distance": path.distance,
-        "unit": unit,
-        "transition_cost": path.transition_cost,
-        "cost": path.cost,
-        "path": path_segments(frames, &path),
-        "loops": path.loops.iter().map(|(c, n)| json!({"edges": c.len(), "repetitions": n})).collect::<Vec<_>>(),
-        "graph": {"nodes": graph.nodes.len(), "edges": graph.edges.len(),
-            "transitions": transitions_json(frames, graph),
-            "walks": path.walks, "loops": path.loops_in_graph},
-        "similarity_seconds": similarity_seconds,
-        "similarity_cached": cached,
-        "query_seconds": query_seconds,
-        "ilp_solves": path.ilp_solves,
-        "constraints": constraints,
-        "outputs": written,
-        "target_distance": a.distance,
-        "target_seconds": a.time,
-        "seconds": path.frames.len() as f64 / frames.fps,
-        // Output frames where the path jumps to another sequence or back (the transitions play
-        // captured frames only, nothing is blended, so every frame is labelled original):
-        // `surfcap view` marks them on its timeline.
-        "transition_frames": path.switches,
-        // With the tolerance: whether the path meets it, and why no path can when it does not.
-        "tolerance": q.tolerance,
-        "within_tolerance": path.within_tolerance,
-        "unreachable": path.unreachable.as_ref().map(|u| json!({"kind": u.kind(), "why": u.to_string(), "detail": u})),
-        "unconverged_subproblems": path.unconverged_subproblems,
-    });
-    add_travel(&mut report, &played_centres(frames, &path), frames.up);
-    let rp = report_path(&a.output);
-    crate::output::write_json(&rp, &report)?;
-    ctx.result(&report, || {
+    let out =
+        Output { path: a.output.clone(), format: a.format, force: ctx.force, tolerances: a.constraints.tolerances() };
+    let done = o.query(&a.graph.request(), &q, &out, &bar)?;
+    drop(bar);
+    let (r, path) = (&done.report, &done.path);
+    ctx.result(r, || {
         println!(
-            "{} frames ({:.1} s), {:.2} {unit} covered (asked {} in {} s); {} transition(s), cost {:.3}; {} walk(s), {} loop(s) in the graph, {} ILP solve(s) in {:.3} s",
-            path.frames.len(),
-            path.frames.len() as f64 / frames.fps,
-            path.distance,
+            "{} frames ({:.1} s), {:.2} {} covered (asked {} in {} s); {} transition(s), cost {:.3}; {} walk(s), {} loop(s) in the graph, {} ILP solve(s) in {:.3} s",
+            r.frames,
+            r.seconds,
+            r.distance,
+            r.unit,
             a.distance,
             a.time,
             path.switches.len(),
-            path.transition_cost,
-            path.walks,
-            path.loops_in_graph,
-            path.ilp_solves,
-            query_seconds
+            r.transition_cost,
+            r.graph.walks,
+            r.graph.loops,
+            r.ilp_solves,
+            r.query_seconds
         );
-        println!("path: {}", path_segments(frames, &path).join(", "));
+        println!("path: {}", r.path.join(", "));
         if let Some(u) = &path.unreachable {
-            println!("no path of the graph meets {} {unit} in {} s within 1% and 1 frame: {u}", a.distance, a.time);
+            println!("no path of the graph meets {} {} in {} s within 1% and 1 frame: {u}", a.distance, r.unit, a.time);
         }
-        println!("wrote {}, {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "), rp.display());
+        let written: Vec<String> = done.written.iter().map(|p| p.display().to_string()).collect();
+        println!("wrote {}, {}", written.join(", "), done.report_path.display());
     });
-    check_constraints(ctx, &a.constraints, &constraints)
+    check_constraints(ctx, &a.constraints, &done.constraints)
 }

@@ -167,7 +167,10 @@ fn plan(ctx: &crate::Ctx, a: PlanArgs) -> anyhow::Result<()> {
         for (s, bytes) in &plan.job_memory_bytes {
             println!("  {:<10} {:>5} jobs, each about {:.1} MB", s.name(), plan.jobs(*s), *bytes as f64 / 1e6);
         }
-        println!("run: surfcap tiles run {} --all   (or one job: --stage S --index I; see docs/src/tiles.md)", a.output.display());
+        println!(
+            "run: surfcap tiles run {} --all   (or one job: --stage S --index I; see docs/src/tiles.md)",
+            a.output.display()
+        );
     });
     Ok(())
 }

@@ -369,7 +369,7 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
         "per_frame": { "displacement": out.displacements, "cuts": cuts },
         "written": written,
     });
-    crate::output::write_json(&crate::synthesis::report_path(&a.out.output), &report)?;
+    crate::output::write_json(&surfcap_synthesis::report_path(&a.out.output), &report)?;
     ctx.result(&report, || {
         println!(
             "{} ({} frames) transferred onto {} in {transfer_seconds:.2} s ({}; set-up {setup_seconds:.2} s) -> {}",

@@ -9,27 +9,16 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Instant;
 
-use serde_json::json;
-use surfcap_formats::export::{ExportFormat, export};
-use surfcap_learn::gpdm::GpdmOptions;
-use surfcap_mesh::{FrameLabel, Sequence, Subject};
-use surfcap_variation::VariationModel;
-use surfcap_variation::motion_parametrisation::{
-    blend_ladder, bounding_rungs, interpolate_latents, interpolated_timing, sample_blend_variants,
+use surfcap_synthesis::variant_samples::{SampleRequest, Varied, sample_variants_to_folder};
+use surfcap_synthesis::variation_training::{
+    MODEL_KIND, TrainReport, TrainRequest, learnt_names, train_plan, train_variation_model,
 };
-use surfcap_variation::motion_preparation::{PreparationOptions, TimeAlignment};
-use surfcap_variation::variation_model::TrainOptions;
-use surfcap_variation::variation_model_file::KIND;
-use surfcap_variation::variation_sampling::{
-    ChainStart, SamplingOptions, VariantPath, place_and_retime, reconstruct_aligned, sample_variants,
-};
+use surfcap_variation::motion_preparation::SequenceOrigin;
+use surfcap_variation::variation_sampling::{ChainStart, SamplingOptions};
 
 use crate::body_parts::parts_of;
 use crate::options::{SourceOpts, count, open, whole_in};
 use crate::output::count_of;
-
-/// The folder kind of `vary sample`'s output (its marker).
-pub const SAMPLES_KIND: &str = "variation-samples";
 
 #[derive(clap::Subcommand, Debug)]
 pub enum Cmd {
@@ -192,68 +181,28 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     }
 }
 
-/// The indices of `names` in `subject`, or an error listing its sequences.
-fn sequence_indices(subject: &Subject, path: &Path, names: &[String]) -> anyhow::Result<Vec<usize>> {
-    let known = || subject.sequences().iter().map(|q| q.name.as_str()).collect::<Vec<_>>().join(", ");
-    let mut out = Vec::with_capacity(names.len());
-    for n in names {
-        let (k, _) = subject.sequence(n).ok_or_else(|| {
-            anyhow::anyhow!("--sequences: {} has no sequence {n:?}; it has {}", path.display(), known())
-        })?;
-        anyhow::ensure!(!out.contains(&k), "--sequences: {n:?} is given twice: expected each sequence once");
-        out.push(k);
-    }
-    Ok(out)
-}
-
 fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.subject];
     inputs.extend(a.parts.as_deref());
     surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
-    ctx.claim_dir(&a.output, KIND)?;
+    ctx.claim_dir(&a.output, MODEL_KIND)?;
     let t0 = Instant::now();
     let subject = open(ctx, &a.subject, &a.source_opts)?;
-    let names: Vec<String> = if a.sequences.is_empty() {
-        let all: Vec<String> = subject.sequences().iter().map(|q| q.name.clone()).collect();
-        ctx.note(&format!(
-            "no --sequences given, so every sequence of {} is learnt ({}); a variation model is meant for one motion type",
-            subject.name,
-            all.join(", ")
-        ));
-        all
-    } else {
-        a.sequences.clone()
+    let request = TrainRequest {
+        subject_path: a.subject.clone(),
+        sequences: a.sequences.clone(),
+        reference: a.reference.clone(),
+        blends: a.blend.iter().map(|p| (p.a.clone(), p.b.clone())).collect(),
+        blend_weights: a.blend_weights.clone(),
+        latent_dim: a.latent_dim,
+        iterations: a.iterations,
+        output: a.output.clone(),
+        force: ctx.force,
     };
-    let chosen = sequence_indices(&subject, &a.subject, &names)?;
-    let position = |n: &str, what: &str| {
-        names
-            .iter()
-            .position(|x| x == n)
-            .ok_or_else(|| anyhow::anyhow!("{what}: {n:?} is not one of the learnt sequences ({})", names.join(", ")))
-    };
-    let reference = match &a.reference {
-        Some(r) => position(r, "--reference")?,
-        None => 0,
-    };
-    let mut blend_pairs = Vec::with_capacity(a.blend.len());
-    for p in &a.blend {
-        let pair = (position(&p.a, "--blend")?, position(&p.b, "--blend")?);
-        anyhow::ensure!(pair.0 != pair.1, "--blend {}:{}: expected two different sequences", p.a, p.b);
-        blend_pairs.push(pair);
-    }
+    let bar = crate::progress::Bar::new(ctx);
+    let names = learnt_names(&subject, &request, &bar);
+    let (chosen, options) = train_plan(&subject, &request, &names)?;
     let parts = parts_of(ctx, a.parts.as_deref(), false, &subject, "", "--parts")?;
-    let mut gpdm = GpdmOptions { latent_dim: a.latent_dim, ..GpdmOptions::default() };
-    gpdm.lbfgs.max_iters = a.iterations;
-    gpdm.lbfgs.max_evals = gpdm.lbfgs.max_evals.max(a.iterations + a.iterations / 4);
-    let options = TrainOptions {
-        preparation: PreparationOptions {
-            reference,
-            time_alignment: TimeAlignment::Uniform,
-            blend_pairs,
-            blend_weights: a.blend_weights.clone(),
-        },
-        gpdm,
-    };
     ctx.say(&format!(
         "learning {} of {} (+ {}), {} parts, d = {}, reference {}",
         count_of(names.len(), "sequence"),
@@ -261,72 +210,33 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
         count_of(if a.blend.is_empty() { 0 } else { a.blend.len() * a.blend_weights.len() }, "blend"),
         parts.len(),
         a.latent_dim,
-        names[reference]
+        names[options.preparation.reference]
     ));
-    let bar = crate::progress::Bar::new(ctx);
-    let t_train = Instant::now();
-    let model = VariationModel::train(&subject, &chosen, &parts, &options, &bar)?;
-    let train_seconds = t_train.elapsed().as_secs_f64();
+    let report = train_variation_model(&subject, &request, &chosen, &parts, &options, t0, &bar)?;
     drop(bar);
-    model.save(&a.output, ctx.force)?;
-    let sequences: Vec<serde_json::Value> =
-        model.sequences.iter().map(|s| json!({ "name": s.name, "origin": s.origin, "frames": s.own_frames })).collect();
-    let fits: Vec<serde_json::Value> = model
-        .fits
-        .iter()
-        .map(|f| {
-            json!({
-                "part": f.part, "vertices": f.vertices, "dimensions": f.dimensions,
-                "iterations": f.fit.iters, "evaluations": f.fit.evals, "converged": f.fit.converged,
-                "objective_start": f.fit.initial_objective, "objective": f.fit.objective,
-                "alpha": f.alpha, "beta": f.beta, "seconds": f.seconds,
-            })
-        })
-        .collect();
-    let subject_path = std::fs::canonicalize(&a.subject).unwrap_or_else(|_| a.subject.clone());
-    let result = json!({
-        "model": a.output, "subject": model.subject, "subject_path": subject_path,
-        "vertices": model.topology.n_vertices(), "reference": model.reference, "frames": model.frames,
-        "latent_dim": a.latent_dim, "max_iterations": a.iterations,
-        "sequences": sequences, "parts": fits,
-        "train_seconds": train_seconds, "total_seconds": t0.elapsed().as_secs_f64(),
-        "threads": rayon::current_num_threads(),
-    });
-    crate::output::write_json(&a.output.join("report.json"), &result)?;
-    ctx.result(&result, || print_trained(&result));
+    ctx.result(&report, || print_trained(&report));
     Ok(())
 }
 
-/// The human summary of a training, from its report.
-fn print_trained(r: &serde_json::Value) {
-    let seqs = r["sequences"].as_array().cloned().unwrap_or_default();
-    let parts = r["parts"].as_array().cloned().unwrap_or_default();
+/// The human summary of a training.
+fn print_trained(r: &TrainReport) {
     println!(
         "{}: {} of {} reference frames ({}), {} parts, d = {}: learnt in {:.1} s -> {}",
-        r["subject"].as_str().unwrap_or_default(),
-        count_of(seqs.len(), "sequence"),
-        r["frames"],
-        r["reference"].as_str().unwrap_or_default(),
-        parts.len(),
-        r["latent_dim"],
-        r["train_seconds"].as_f64().unwrap_or(0.0),
-        r["model"].as_str().unwrap_or_default()
+        r.subject,
+        count_of(r.sequences.len(), "sequence"),
+        r.frames,
+        r.reference,
+        r.parts.len(),
+        r.latent_dim,
+        r.train_seconds,
+        r.model.display()
     );
-    for s in &seqs {
-        let origin = match s["origin"]["kind"].as_str() {
-            Some("blend") => format!(
-                "blend of {} and {} at {}",
-                s["origin"]["a"].as_str().unwrap_or_default(),
-                s["origin"]["b"].as_str().unwrap_or_default(),
-                s["origin"]["w"]
-            ),
-            _ => "captured".into(),
+    for s in &r.sequences {
+        let origin = match &s.origin {
+            SequenceOrigin::Blend { a, b, w } => format!("blend of {a} and {b} at {w}"),
+            SequenceOrigin::Captured { .. } => "captured".into(),
         };
-        println!(
-            "  sequence {:<24} {:>5} frames  {origin}",
-            s["name"].as_str().unwrap_or_default(),
-            s["frames"].as_u64().unwrap_or(0)
-        );
+        println!("  sequence {:<24} {:>5} frames  {origin}", s.name, s.frames);
     }
     println!(
         "  {:<12} {:>8} {:>6} {:>11} {:>14} {:>14}  {:<27} {:<35} {:>7}",
@@ -340,281 +250,73 @@ fn print_trained(r: &serde_json::Value) {
         "beta (eq. 6.6)",
         "seconds"
     );
-    for p in &parts {
-        let list = |v: &serde_json::Value| -> String {
-            v.as_array()
-                .into_iter()
-                .flatten()
-                .map(|x| format!("{:.2e}", x.as_f64().unwrap_or(0.0)))
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:.2e}")).collect::<Vec<_>>().join(" ");
+    for p in &r.parts {
         println!(
             "  {:<12} {:>8} {:>6} {:>5}{} {:>14.1} {:>14.1}  {:<27} {:<35} {:>7.1}",
-            p["part"].as_str().unwrap_or_default(),
-            p["vertices"].as_u64().unwrap_or(0),
-            p["dimensions"].as_u64().unwrap_or(0),
-            p["iterations"].as_u64().unwrap_or(0),
-            if p["converged"] == true { " conv." } else { "      " },
-            p["objective"].as_f64().unwrap_or(0.0),
-            p["objective_start"].as_f64().unwrap_or(0.0),
-            list(&p["alpha"]),
-            list(&p["beta"]),
-            p["seconds"].as_f64().unwrap_or(0.0)
+            p.part,
+            p.vertices,
+            p.dimensions,
+            p.iterations,
+            if p.converged { " conv." } else { "      " },
+            p.objective,
+            p.objective_start,
+            list(&p.alpha),
+            list(&p.beta),
+            p.seconds
         );
     }
-}
-
-/// A file-name-safe form of a name (letters, digits, `.`, `_`, `-`; anything else `_`).
-fn file_safe(name: &str) -> String {
-    name.chars().map(|c| if c.is_ascii_alphanumeric() || "._-".contains(c) { c } else { '_' }).collect()
-}
-
-/// Centroid of a pose.
-fn centroid(p: &[f32]) -> [f64; 3] {
-    let n = (p.len() / 3).max(1) as f64;
-    std::array::from_fn(|k| p.chunks_exact(3).map(|v| v[k] as f64).sum::<f64>() / n)
-}
-
-fn distance3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-}
-
-/// Mean per-vertex distance between two motions of one frame count and vertex count.
-fn mean_vertex_distance(a: &[Vec<f32>], b: &[Vec<f32>]) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for (x, y) in a.iter().zip(b) {
-        for (p, q) in x.chunks_exact(3).zip(y.chunks_exact(3)) {
-            s += (0..3).map(|k| ((p[k] - q[k]) as f64).powi(2)).sum::<f64>().sqrt();
-            n += 1;
-        }
-    }
-    if n == 0 { 0.0 } else { s / n as f64 }
-}
-
-/// Length of the path of the centroids of `frames`.
-fn path_length(frames: &[Vec<f32>]) -> f64 {
-    frames.windows(2).map(|w| distance3(centroid(&w[0]), centroid(&w[1]))).sum()
-}
-
-/// The motion the variants vary, without sampling: the learnt trajectory's reconstruction (a
-/// sequence) or the latent interpolation of the two learnt trajectories around the weight (a
-/// blend); its body-frame poses on the reference's frames and its world frames.
-struct Learnt {
-    aligned: Vec<Vec<f32>>,
-    world: Vec<Vec<f32>>,
-}
-
-fn learnt_sequence(model: &VariationModel, name: &str) -> anyhow::Result<Learnt> {
-    let j = model.sequence_index(name)?;
-    let (aligned, disp) = reconstruct_aligned(model, &model.learnt_latents(j)?)?;
-    let s = &model.sequences[j];
-    let world = place_and_retime(&aligned, &disp, &s.first_placement, &s.times, s.own_frames)?;
-    Ok(Learnt { aligned, world })
-}
-
-fn learnt_blend(model: &VariationModel, b: &BlendAt) -> anyhow::Result<Learnt> {
-    let ladder = blend_ladder(model, &b.a, &b.b)?;
-    let (r1, r2) = bounding_rungs(&ladder, b.w)?;
-    let lat =
-        interpolate_latents(&model.learnt_latents(r1.sequence)?, &model.learnt_latents(r2.sequence)?, r1, r2, b.w);
-    let (aligned, disp) = reconstruct_aligned(model, &lat)?;
-    let (own, times) = interpolated_timing(model, r1, r2, b.w);
-    let start = model.sequences[model.sequence_index(&b.a)?].first_placement;
-    let world = place_and_retime(&aligned, &disp, &start, &times, own)?;
-    Ok(Learnt { aligned, world })
-}
-
-/// The subject path `vary train` recorded in the model folder's `report.json`, if any.
-fn trained_subject_path(model: &Path) -> Option<PathBuf> {
-    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(model.join("report.json")).ok()?).ok()?;
-    v["subject_path"].as_str().map(PathBuf::from)
-}
-
-/// A shell word for `p` (quoted when it holds anything but plain path characters).
-fn shell_word(p: &str) -> String {
-    if !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || "/._-~+@:=,".contains(c)) {
-        p.to_string()
-    } else {
-        format!("'{}'", p.replace('\'', "'\\''"))
-    }
-}
-
-/// What `vary sample` varies.
-#[derive(Clone, Copy)]
-enum Request<'a> {
-    Sequence(&'a str),
-    Blend(&'a BlendAt),
 }
 
 fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.model])?;
-    let t0 = Instant::now();
-    let model = VariationModel::load(&a.model)?;
-    let load_seconds = t0.elapsed().as_secs_f64();
-    let opts = SamplingOptions {
-        start: a.start.0,
-        path: a.path.0,
-        smoothing: a.smoothing,
-        warmup: a.warmup,
-        thin: a.thin,
-        max_leapfrog: a.max_leapfrog,
-    };
-    let what = match (&a.sequence, &a.blend) {
-        (Some(name), _) => Request::Sequence(name),
-        (None, Some(b)) => Request::Blend(b),
+    let varied = match (&a.sequence, &a.blend) {
+        (Some(name), _) => Varied::Sequence(name.clone()),
+        (None, Some(b)) => Varied::Blend { a: b.a.clone(), b: b.b.clone(), w: b.w },
         (None, None) => anyhow::bail!("expected --sequence NAME or --blend A:B:W"),
     };
-    // The request checked against the model before the output is claimed or anything sampled.
-    let (stem, sequence_stem, sources) = match what {
-        Request::Sequence(name) => {
-            model.sequence_index(name)?;
-            (file_safe(name), name.to_string(), vec![name.to_string()])
-        }
-        Request::Blend(b) => {
-            let ladder = blend_ladder(&model, &b.a, &b.b)?;
-            bounding_rungs(&ladder, b.w)?;
-            if ladder.len() == 2 && b.w > 0.0 && b.w < 1.0 {
-                ctx.note(&format!(
-                    "the model learnt no blend of {} and {}: variants of the two are interpolated directly (train with --blend {}:{} for the thesis's learnt blends)",
-                    b.a, b.b, b.a, b.b
-                ));
-            }
-            (
-                file_safe(&format!("{}-{}-{}", b.a, b.b, b.w)),
-                format!("{}+{}@{}", b.a, b.b, b.w),
-                vec![b.a.clone(), b.b.clone()],
-            )
-        }
+    let request = SampleRequest {
+        model: a.model.clone(),
+        varied,
+        count: a.count,
+        seed: a.seed,
+        options: SamplingOptions {
+            start: a.start.0,
+            path: a.path.0,
+            smoothing: a.smoothing,
+            warmup: a.warmup,
+            thin: a.thin,
+            max_leapfrog: a.max_leapfrog,
+        },
+        output: a.output.clone(),
+        force: ctx.force,
     };
-    let out_dir = ctx.claim_dir(&a.output, SAMPLES_KIND)?;
-    ctx.say(&format!(
-        "sampling {} of {} (seed {}, warm-up {}, thin {}) ...",
-        count_of(a.count, "variant"),
-        sequence_stem,
-        a.seed,
-        a.warmup,
-        a.thin
-    ));
-    let t_sample = Instant::now();
-    let (variants, chains, blend, learnt) = match what {
-        Request::Sequence(name) => {
-            let (v, c) = sample_variants(&model, name, a.count, a.seed, &opts)?;
-            (v, c, None, learnt_sequence(&model, name)?)
-        }
-        Request::Blend(b) => {
-            let (v, s) = sample_blend_variants(&model, &b.a, &b.b, b.w, a.count, a.seed, &opts)?;
-            let chains = s.chains.clone();
-            (v, chains, Some(s), learnt_blend(&model, b)?)
-        }
-    };
-    let sample_seconds = t_sample.elapsed().as_secs_f64();
-
-    let t_write = Instant::now();
-    let nv = model.topology.n_vertices();
-    let learnt_end = learnt.world.last().map(|p| centroid(p)).unwrap_or_default();
-    let mut files = Vec::new();
-    let mut per_variant = Vec::new();
-    let mut names = sources.clone();
     let bar = crate::progress::Bar::new(ctx);
-    for (k, v) in variants.iter().enumerate() {
-        let name = format!("{sequence_stem}~{}", k + 1);
-        let file = out_dir.join(format!("{stem}-variant-{}.glb", k + 1));
-        let frames = v.world.len();
-        let positions: Vec<f32> = v.world.iter().flatten().copied().collect();
-        let seq = Sequence::new(name.clone(), nv, positions)?
-            .with_labels(vec![FrameLabel::Synthetic; frames])?
-            .with_tags(vec!["variation".into()]);
-        let s = Subject::new(
-            name.clone(),
-            model.topology.clone(),
-            vec![seq],
-            model.fps,
-            model.up_axis,
-            model.units.clone(),
-        )?;
-        files.extend(export(&s, ExportFormat::Glb, &file, ctx.export_options(), &bar)?);
-        let end = v.world.last().map(|p| centroid(p)).unwrap_or_default();
-        per_variant.push(json!({
-            "file": file, "sequence": name, "frames": frames,
-            "body_frame_distance": mean_vertex_distance(&v.aligned, &learnt.aligned),
-            "end_distance": distance3(end, learnt_end),
-            "path_length": path_length(&v.world),
-        }));
-        names.push(name);
-    }
+    let o = sample_variants_to_folder(&request, &bar)?;
     drop(bar);
-    let write_seconds = t_write.elapsed().as_secs_f64();
-    let subject_path =
-        trained_subject_path(&a.model).map_or_else(|| "SUBJECT".to_string(), |p| p.display().to_string());
-    let mut view = vec!["surfcap".to_string(), "view".into(), shell_word(&subject_path)];
-    view.extend(
-        files
-            .iter()
-            .filter(|f| f.extension().is_some_and(|x| x == "glb"))
-            .map(|f| shell_word(&f.display().to_string())),
-    );
-    view.push("--sequences".into());
-    view.push(shell_word(&names.join(",")));
-    let view = view.join(" ");
-    let start = match a.start.0 {
-        ChainStart::Learnt => "learnt",
-        ChainStart::MeanPrediction => "mean",
-    };
-    let report = json!({
-        "model": a.model, "subject": model.subject, "units": model.units.name,
-        "sequence": a.sequence,
-        "blend": blend.as_ref().map(|b| json!({
-            "a": b.a, "b": b.b, "w": b.w, "lower": b.lower, "upper": b.upper, "pairing": b.pairing,
-            "lower_sequence": model.sequences[b.lower.sequence].name,
-            "upper_sequence": model.sequences[b.upper.sequence].name,
-        })),
-        "seed": a.seed, "count": a.count,
-        "options": {
-            "start": start,
-            "path": match a.path.0 { VariantPath::Source => "source", VariantPath::Sampled => "sampled", VariantPath::Contacts => "contacts" },
-            "warmup": a.warmup, "thin": a.thin, "max_leapfrog": a.max_leapfrog,
-        },
-        "chains": chains,
-        "learnt": {
-            "frames": learnt.world.len(), "path_length": path_length(&learnt.world),
-            "what": if blend.is_some() {
-                "the latent interpolation of the two learnt trajectories around the weight, reconstructed"
-            } else {
-                "the learnt trajectory, reconstructed"
-            },
-        },
-        "variants": per_variant,
-        "load_seconds": load_seconds, "sample_seconds": sample_seconds, "write_seconds": write_seconds,
-        "total_seconds": t0.elapsed().as_secs_f64(),
-        "view": view,
-    });
-    crate::output::write_json(&out_dir.join("report.json"), &report)?;
-    ctx.result(&report, || {
+    let r = &o.report;
+    ctx.result(r, || {
         println!(
-            "{} of {} sampled in {sample_seconds:.1} s (seed {}) -> {}",
+            "{} of {} sampled in {:.1} s (seed {}) -> {}",
             count_of(a.count, "variant"),
-            sequence_stem,
+            o.name,
+            r.sample_seconds,
             a.seed,
             a.output.display()
         );
-        let unit = crate::output::unit_name(&model.units);
-        for v in report["variants"].as_array().into_iter().flatten() {
+        let unit = &o.unit;
+        for v in &r.variants {
             println!(
                 "  {:<28} {:>4} frames: {:.4} {unit} per vertex from the learnt motion (body frame), ends {:.3} {unit} from its end",
-                v["sequence"].as_str().unwrap_or_default(),
-                v["frames"].as_u64().unwrap_or(0),
-                v["body_frame_distance"].as_f64().unwrap_or(0.0),
-                v["end_distance"].as_f64().unwrap_or(0.0)
+                v.sequence, v.frames, v.body_frame_distance, v.end_distance
             );
         }
-        for c in &chains {
+        for c in &r.chains {
             println!(
                 "  chain {:<12} acceptance {:.2}, step {:.2e}, {} leapfrog steps, {} divergences, {:.1} s",
                 c.part, c.acceptance_rate, c.step_size, c.leapfrog_steps, c.divergences, c.seconds
             );
         }
-        println!("view them next to the source: {view}");
+        println!("view them next to the source: {}", r.view);
     });
     Ok(())
 }

@@ -37,7 +37,7 @@ fn is_report(p: &Path) -> bool {
 /// the animation: the achieved centres (one per frame), the requested path when there is one,
 /// the frames where a transition lands, and a line per constraint.
 fn overlay_of(output: &Path, frames: usize) -> Option<Overlay> {
-    let report = crate::synthesis::report_path(output);
+    let report = surfcap_synthesis::report_path(output);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(report).ok()?).ok()?;
     let points = |x: &serde_json::Value| -> Option<Vec<[f64; 3]>> {
         x.as_array()?.iter().map(|p| Some([p[0].as_f64()?, p[1].as_f64()?, p[2].as_f64()?])).collect()
@@ -48,8 +48,8 @@ fn overlay_of(output: &Path, frames: usize) -> Option<Overlay> {
         .as_array()
         .map(|t| t.iter().filter_map(|f| f.as_u64().map(|f| f as usize)).filter(|&f| f < frames).collect())
         .unwrap_or_default();
-    let constraints = serde_json::from_value::<Vec<crate::synthesis::Constraint>>(v["constraints"].clone())
-        .map(|c| c.iter().map(crate::synthesis::Constraint::summary).collect())
+    let constraints = serde_json::from_value::<Vec<surfcap_synthesis::Constraint>>(v["constraints"].clone())
+        .map(|c| c.iter().map(surfcap_synthesis::Constraint::summary).collect())
         .unwrap_or_default();
     (centres.len() == frames).then_some(Overlay { curve, centres, transitions, constraints })
 }

@@ -1,14 +1,12 @@
 //! `surfcap synth keyposes <subject> --keys k.csv -o out.glb`: move key poses to new times
-//! (thesis 3.5.2); prints the table of Fig. 3.18.
+//! (thesis 3.5.2; `surfcap_synthesis::keyposes_run`); prints the table of Fig. 3.18.
 
 use std::path::PathBuf;
 
-use surfcap_motion::timed_walk::search_table_bytes;
-use surfcap_pipeline::constraint_files::read_key_poses;
+use surfcap_synthesis::synthesize_keyposes;
 
-use crate::limits::Request;
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis::{Prepared, check_constraints, run_keyposes};
+use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -24,42 +22,31 @@ pub struct Args {
     #[command(flatten)]
     pub out: OutOpts,
     #[command(flatten)]
-    pub appearance: crate::frame_appearance::AppearanceOpts,
+    pub appearance: AppearanceOpts,
     #[command(flatten)]
-    pub vary: crate::synthesis::VaryOpts,
+    pub vary: VaryOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject, &a.keys])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
-    let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
-    a.vary.check(&a.out.output)?;
-    let keys = read_key_poses(&a.keys, &s)?;
-    let (first, last) = (keys[0].requested, keys[keys.len() - 1].requested);
-    let longest = keys.windows(2).map(|p| (p[1].requested - p[0].requested) as usize).max().unwrap_or(0);
-    let what = format!("{}: keys from output frame {first} to {last}", a.keys.display());
-    let frames = (last - first + 1) as f64;
-    let search_bytes = search_table_bytes(s.n_frames(), longest);
-    a.out.limits.check(&Request { what, frames, subject: &s, search_bytes, format: a.out.format() })?;
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, None)?
-        .with_appearance(appearance)
-        .with_variation(a.vary.clone());
-    let o = run_keyposes(ctx, &prep, &keys, &a.out)?;
-    ctx.result(&o.played.report, || {
+    let pipe = a.graph.cache.pipeline(ctx, s);
+    let bar = crate::progress::Bar::new(ctx);
+    let playback = playback(&a.appearance, &a.vary);
+    let o = synthesize_keyposes(pipe, params, &a.keys, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
+    drop(bar);
+    ctx.result(&o.report, || {
         // Thesis Fig. 3.18: input, requested and obtained times.
         let row = |label: &str, v: Vec<String>| {
             println!("{label:<10}{}", v.iter().map(|x| format!("{x:>7}")).collect::<String>())
         };
-        row("Input", keys.iter().map(|k| k.input.to_string()).collect());
-        row("Requested", keys.iter().map(|k| k.requested.to_string()).collect());
+        let keys = &o.report.keys;
+        row("Input", keys.iter().map(|k| k.input_time.to_string()).collect());
+        row("Requested", keys.iter().map(|k| k.requested_time.to_string()).collect());
         row("Obtained", o.obtained.iter().map(|x| x.to_string()).collect());
         // Pose distance (eq. 2.13) between each key's pose and the frame shown at its time.
-        let shown = o.played.report["keys"].as_array().map(Vec::as_slice).unwrap_or_default();
-        row(
-            "Distance",
-            shown.iter().map(|k| format!("{:.1}", k["pose_distance"].as_f64().unwrap_or(f64::NAN))).collect(),
-        );
+        row("Distance", keys.iter().map(|k| format!("{:.1}", k.pose_distance)).collect());
         println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));

@@ -1,16 +1,13 @@
 //! `surfcap synth path <subject> --curve c.csv -o out.glb`: follow a 3D or ground-plane curve
-//! with the centre of mass (thesis 3.5.1).
+//! with the centre of mass (thesis 3.5.1; `surfcap_synthesis::path_run`).
 
 use std::path::PathBuf;
 
-use anyhow::Context;
-use surfcap_motion::path_following::PathSearch;
-use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
+use surfcap_synthesis::{PathRequest, synthesize_path};
 
-use crate::limits::{Request, fastest_speed};
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::output::length;
-use crate::synthesis::{Prepared, check_constraints, run_path};
+use crate::output::{count_of, length};
+use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -49,60 +46,41 @@ pub struct Args {
     #[command(flatten)]
     pub out: OutOpts,
     #[command(flatten)]
-    pub appearance: crate::frame_appearance::AppearanceOpts,
+    pub appearance: AppearanceOpts,
     #[command(flatten)]
-    pub vary: crate::synthesis::VaryOpts,
+    pub vary: VaryOpts,
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject, &a.curve])?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
-    let appearance = a.appearance.open(&s, a.out.format(), &a.out.output)?;
-    a.vary.check(&a.out.output)?;
-    let curve = read_curve(&a.curve, s.up_axis, a.planar)?;
-    if let Some(speed) = fastest_speed(&s, curve.axes()) {
-        let what = format!(
-            "--curve {} ({} long, the subject's fastest motion covers {} a second)",
-            a.curve.display(),
-            length(curve.length(), &s.units, 1),
-            length(speed, &s.units, 2)
-        );
-        let frames = curve.length() / speed * s.fps;
-        a.out.limits.check(&Request { what, frames, subject: &s, search_bytes: 0, format: a.out.format() })?;
-    }
-    let restrictions = a
-        .tags
-        .iter()
-        .map(|t| parse_restriction(&s, t).with_context(|| format!("--tags {t:?}")))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let travel = surfcap_motion::clip_travel::subject_travel(&s);
-    crate::travel::require_travel(&s, &travel, "a path constraint", None)?;
-    for (t, r) in a.tags.iter().zip(&restrictions) {
-        crate::travel::require_travel(&s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
-    }
-    let start = a.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
-    let search = PathSearch {
+    let units = s.units.clone();
+    let request = PathRequest {
+        curve: a.curve.clone(),
+        planar: a.planar,
+        tags: a.tags.clone(),
+        start: a.start.clone(),
+        track: a.track.clone(),
         window: a.window,
         max_transitions: a.max_transitions,
         branching: a.branching,
-        ..PathSearch::for_fps(s.fps)
     };
-    let tracked = (!a.track.is_empty()).then_some(a.track.as_slice());
-    let prep = Prepared::new(a.graph.cache.pipeline(ctx, s), params, tracked)?
-        .with_appearance(appearance)
-        .with_variation(a.vary.clone());
-    let o = run_path(ctx, &prep, &curve, &restrictions, start, &search, &a.out)?;
-    let units = &prep.subject().units;
-    ctx.result(&o.played.report, || {
+    let pipe = a.graph.cache.pipeline(ctx, s);
+    let bar = crate::progress::Bar::new(ctx);
+    let playback = playback(&a.appearance, &a.vary);
+    let o = synthesize_path(pipe, params, &request, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
+    drop(bar);
+    let curve_length = o.report.curve_length;
+    ctx.result(&o.report, || {
         println!(
             "followed a {} curve: {}, {}; centre error mean {}, max {} ({:.1}% of the curve); search {:.2} s",
-            length(curve.length(), units, 2),
-            crate::output::count_of(o.frames, "frame"),
-            crate::output::count_of(o.played.transitions, "transition"),
-            length(o.mean_error, units, 3),
-            length(o.max_error, units, 3),
-            100.0 * o.max_error / curve.length(),
+            length(curve_length, &units, 2),
+            count_of(o.frames, "frame"),
+            count_of(o.played.transitions, "transition"),
+            length(o.mean_error, &units, 3),
+            length(o.max_error, &units, 3),
+            100.0 * o.max_error / curve_length,
             o.search_seconds
         );
     });

@@ -1,0 +1,155 @@
+//! Key-pose timing (thesis 3.5.2, Fig. 3.18): key poses moved to new times; the walk through
+//! them meets each requested time as closely as the graph allows (`TimedGraph`, a shortest path
+//! of a given duration between consecutive keys), and the pose shown at each obtained time is
+//! compared with the key's.
+
+use std::time::Instant;
+
+use serde::Serialize;
+use surfcap_geometry::motion_plane_alignment::PlaneMotion;
+use surfcap_mesh::Progress;
+use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
+use surfcap_pipeline::constraint_files::{KeyPose, read_key_poses};
+use surfcap_pipeline::{GraphParams, Pipeline};
+
+use crate::animation_output::{CentreTrack, write_report};
+use crate::constraint::Constraint;
+use crate::error::{Error, Result};
+use crate::prepared::{Output, Prepared};
+use crate::request_size::{Request, SizeLimits};
+use crate::walk_output::{Played, WalkReport, play_and_write, pose_distance_to_output};
+
+/// One key of the report: asked, obtained, and the pose distance at the obtained time.
+#[derive(Debug, Clone, Serialize)]
+pub struct KeyReport {
+    /// The frame as the user wrote it.
+    pub frame: String,
+    /// Its frame number inside its own sequence (Fig. 3.18's "Input").
+    pub input_time: usize,
+    pub requested_time: i64,
+    pub obtained_time: i64,
+    pub error: i64,
+    /// Pose distance (eq. 2.13) between the key's pose and the frame shown at its time.
+    pub pose_distance: f64,
+}
+
+/// The report of a key-pose timing run.
+#[derive(Debug, Clone, Serialize)]
+pub struct KeyposesReport {
+    /// `keyposes`.
+    pub constraint: &'static str,
+    pub keys: Vec<KeyReport>,
+    pub mean_abs_error_frames: f64,
+    pub search_seconds: f64,
+    #[serde(flatten)]
+    pub walk: WalkReport,
+    pub per_frame: CentreTrack,
+    pub constraints: Vec<Constraint>,
+}
+
+/// A key-pose timing run: the animation written, its report and summary.
+pub struct KeyposesOutcome {
+    pub played: Played,
+    pub report: KeyposesReport,
+    /// The output frame at which each key pose appears.
+    pub obtained: Vec<i64>,
+    pub mean_abs_error: f64,
+    pub search_seconds: f64,
+    pub constraints: Vec<Constraint>,
+}
+
+impl Prepared {
+    /// The walk through `keys` meeting their requested times as closely as the graph allows,
+    /// written with its report to `out`.
+    pub fn time_key_poses(&self, keys: &[KeyPose], out: &Output, progress: &dyn Progress) -> Result<KeyposesOutcome> {
+        let t0 = Instant::now();
+        let tg = TimedGraph::new(&self.graph, &self.model);
+        let longest = tg.longest_edge();
+        let mut walk = vec![keys[0].frame];
+        let mut obtained = vec![keys[0].requested];
+        for (k, pair) in keys.windows(2).enumerate() {
+            let now = *obtained.last().expect("one key at least");
+            let w =
+                tg.walk_with_duration(pair[0].frame, pair[1].frame, pair[1].requested - now, longest).map_err(|e| {
+                    let label = |k: &KeyPose| self.subject().frame_index().label(k.frame as usize);
+                    Error::Request(format!(
+                        "keys {} and {} ({} -> {}): {e}",
+                        k + 1,
+                        k + 2,
+                        label(&pair[0]),
+                        label(&pair[1])
+                    ))
+                })?;
+            walk.extend_from_slice(&w.walk[1..]);
+            obtained.push(now + w.frames as i64);
+        }
+        let search_seconds = t0.elapsed().as_secs_f64();
+        let errors: Vec<i64> = keys.iter().zip(&obtained).map(|(k, o)| (o - k.requested).abs()).collect();
+        let mean_abs_error = errors.iter().sum::<i64>() as f64 / errors.len() as f64;
+        let played = play_and_write(self, &walk, &PlaneMotion::identity(self.up()), "keyposes", out, progress)?;
+        let mut key_reports = Vec::with_capacity(keys.len());
+        for (k, &o) in keys.iter().zip(&obtained) {
+            // The pose shown at the key's obtained time against the pose asked for there.
+            let pose_distance = pose_distance_to_output(self, &played.output, k.frame, (o - obtained[0]) as usize)?;
+            key_reports.push(KeyReport {
+                frame: k.spec.clone(),
+                input_time: k.input,
+                requested_time: k.requested,
+                obtained_time: o,
+                error: (o - k.requested).abs(),
+                pose_distance,
+            });
+        }
+        let constraints: Vec<Constraint> = keys
+            .iter()
+            .zip(&obtained)
+            .map(|(k, &o)| {
+                let error = (o - k.requested).abs() as f64;
+                Constraint::new(
+                    format!("key {}", k.spec),
+                    "frames",
+                    k.requested as f64,
+                    o as f64,
+                    error,
+                    out.tolerances.frames(),
+                )
+            })
+            .collect();
+        let report = KeyposesReport {
+            constraint: "keyposes",
+            keys: key_reports,
+            mean_abs_error_frames: mean_abs_error,
+            search_seconds,
+            walk: played.report.clone(),
+            // The viewer draws this track over the animation, as it does for paths and reach.
+            per_frame: CentreTrack { centre: played.centres.clone() },
+            constraints: constraints.clone(),
+        };
+        write_report(&played.report_path, &report)?;
+        Ok(KeyposesOutcome { played, report, obtained, mean_abs_error, search_seconds, constraints })
+    }
+}
+
+/// One key-pose synthesis from an unprepared subject: the key file (`frame,time` lines) read,
+/// the request sized before any work, the subject prepared and the keys timed.
+pub fn synthesize_keyposes(
+    pipe: Pipeline,
+    params: GraphParams,
+    keys_file: &std::path::Path,
+    playback: crate::Playback,
+    out: &Output,
+    limits: &SizeLimits,
+    progress: &dyn Progress,
+) -> Result<KeyposesOutcome> {
+    let s = pipe.subject();
+    let playback = playback.open(s, out)?;
+    let keys = read_key_poses(keys_file, s)?;
+    let (first, last) = (keys[0].requested, keys[keys.len() - 1].requested);
+    let longest = keys.windows(2).map(|p| (p[1].requested - p[0].requested) as usize).max().unwrap_or(0);
+    let what = format!("{}: keys from output frame {first} to {last}", keys_file.display());
+    let frames = (last - first + 1) as f64;
+    let search_bytes = search_table_bytes(s.n_frames(), longest);
+    limits.check(&Request { what, frames, subject: s, search_bytes, format: out.format() })?;
+    let prep = playback.prepare(pipe, params, None)?;
+    prep.time_key_poses(&keys, out, progress)
+}

@@ -1,0 +1,242 @@
+//! Path following (thesis 3.5.1): the centre of mass (or of chosen vertices) follows a 3D or
+//! ground-plane curve; the walk is searched window by window in the graph, played, written, and
+//! its errors measured on the written frames.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+use surfcap_mesh::Progress;
+use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path, path_errors};
+use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
+use surfcap_pipeline::{GraphParams, Pipeline};
+
+use crate::animation_output::write_report;
+use crate::constraint::Constraint;
+use crate::error::{Context, Error, Result};
+use crate::prepared::{Output, Prepared};
+use crate::request_size::{Request, SizeLimits, fastest_speed};
+use crate::walk_output::{Played, WalkReport, play_and_write, pose_distance_to_output};
+use crate::words::{length, length_unit, mean, unit_name};
+
+/// A path query on a prepared subject.
+#[derive(Debug, Clone)]
+pub struct PathQuery<'a> {
+    pub curve: &'a Curve,
+    /// Motion types allowed on parts of the curve.
+    pub restrictions: &'a [Restriction],
+    /// The first frame (global); default: the best of all frames from which the walk can go on.
+    pub start: Option<u32>,
+    pub search: PathSearch,
+}
+
+/// The report's `search`.
+#[derive(Debug, Clone, Serialize)]
+pub struct SearchReport {
+    pub window: f64,
+    pub max_transitions: usize,
+    pub windows: usize,
+    pub expanded: u64,
+    pub seconds: f64,
+}
+
+/// Mean and largest centre error.
+#[derive(Debug, Clone, Serialize)]
+pub struct ErrorSummary {
+    pub mean_error: f64,
+    pub max_error: f64,
+}
+
+/// The report's `per_frame` of a path: centre error and centre of every output frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathPerFrame {
+    pub error: Vec<f64>,
+    pub centre: Vec<[f64; 3]>,
+}
+
+/// The report of a path-following run (`<output>.report.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct PathReport {
+    /// `path`.
+    pub constraint: &'static str,
+    pub curve_length: f64,
+    pub planar: bool,
+    pub search: SearchReport,
+    /// The errors the search predicted from the walk model.
+    pub predicted: ErrorSummary,
+    #[serde(flatten)]
+    pub walk: WalkReport,
+    /// Measured on the written frames.
+    pub mean_error: f64,
+    pub max_error: f64,
+    /// Arc length of the curve covered.
+    pub travelled: f64,
+    pub path_length: f64,
+    pub net_displacement: f64,
+    pub per_frame: PathPerFrame,
+    /// The curve, 201 points evenly spaced along it.
+    pub curve: Vec<[f64; 3]>,
+    /// Pose distance between the asked start frame and the first frame shown.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose_distance_start: Option<f64>,
+    pub constraints: Vec<Constraint>,
+}
+
+/// A path-following run: the animation written, its report (written beside it) and summary.
+pub struct PathOutcome {
+    pub played: Played,
+    pub report: PathReport,
+    pub mean_error: f64,
+    pub max_error: f64,
+    pub frames: usize,
+    pub search_seconds: f64,
+    pub constraints: Vec<Constraint>,
+}
+
+fn mean_max(x: &[f64]) -> (f64, f64) {
+    (mean(x.iter().copied()), x.iter().copied().fold(0.0, f64::max))
+}
+
+impl Prepared {
+    /// Follows the query's curve and writes the animation and its report to `out`.
+    pub fn follow_path(&self, q: &PathQuery, out: &Output, progress: &dyn Progress) -> Result<PathOutcome> {
+        let (curve, search) = (q.curve, &q.search);
+        let r = follow_path(&self.model, &self.graph, curve, q.restrictions, q.start, search).map_err(|e| {
+            // The search's own messages give lengths as bare numbers (the motion library does
+            // not know units): say which unit they are in.
+            use surfcap_motion::Error::{PathStalls, PathStuck};
+            if matches!(e, PathStuck { .. } | PathStalls { .. }) {
+                Error::Context {
+                    context: format!(
+                        "the curve could not be followed (lengths in {})",
+                        unit_name(&self.subject().units)
+                    ),
+                    source: Box::new(e.into()),
+                }
+            } else {
+                e.into()
+            }
+        })?;
+        let (pred_mean, pred_max) = mean_max(&r.errors);
+        let played = play_and_write(self, &r.walk, &r.start, "path", out, progress)?;
+        let (errors, travelled) = path_errors(curve, &played.centres);
+        let (mean, max) = mean_max(&errors);
+        // Path length adds up the centre's sway; the net displacement says whether it went anywhere.
+        let (net, _) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, self.up());
+        let pose_distance_start = match q.start {
+            // The pose shown first against the asked start frame.
+            Some(f) => Some(pose_distance_to_output(self, &played.output, f, 0)?),
+            None => None,
+        };
+        let constraints = vec![
+            Constraint::new(
+                "path",
+                length_unit(self.subject()),
+                curve.length(),
+                travelled,
+                max,
+                out.tolerances.distance(curve.length()),
+            )
+            .relative_to(curve.length()),
+        ];
+        let report = PathReport {
+            constraint: "path",
+            curve_length: curve.length(),
+            planar: curve.axes().len() == 2,
+            search: SearchReport {
+                window: search.window,
+                max_transitions: search.max_transitions,
+                windows: r.windows,
+                expanded: r.expanded,
+                seconds: r.seconds,
+            },
+            predicted: ErrorSummary { mean_error: pred_mean, max_error: pred_max },
+            walk: played.report.clone(),
+            mean_error: mean,
+            max_error: max,
+            travelled,
+            path_length: travelled,
+            net_displacement: net,
+            per_frame: PathPerFrame { error: errors.clone(), centre: played.centres.clone() },
+            curve: (0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect(),
+            pose_distance_start,
+            constraints: constraints.clone(),
+        };
+        write_report(&played.report_path, &report)?;
+        Ok(PathOutcome {
+            frames: errors.len(),
+            played,
+            report,
+            mean_error: mean,
+            max_error: max,
+            search_seconds: r.seconds,
+            constraints,
+        })
+    }
+}
+
+/// What `synth path` asks: a curve file and how to follow it.
+#[derive(Debug, Clone)]
+pub struct PathRequest {
+    /// CSV of curve points (x,y,z in the subject's axes and units, or two ground-plane columns).
+    pub curve: PathBuf,
+    /// Follow only the projection on the ground plane (implied by a two-column curve).
+    pub planar: bool,
+    /// Motion types on parts of the curve, `TAG:FROM-TO` (arc lengths).
+    pub tags: Vec<String>,
+    /// The first frame (`sequence:frame` or global).
+    pub start: Option<String>,
+    /// Follow the centre of these vertices instead of the centre of mass.
+    pub track: Vec<usize>,
+    /// Window, transitions per window, branching (the frame-rate dependent rest from the
+    /// subject's fps: [`PathSearch::for_fps`]).
+    pub window: f64,
+    pub max_transitions: usize,
+    pub branching: usize,
+}
+
+/// One path-following synthesis from an unprepared subject: the curve read and the request
+/// sized and checked (clips that travel, tags, start frame) before any work, then the subject
+/// prepared with `prepare` (appearance and variants: [`crate::Playback`]) and the path followed.
+pub fn synthesize_path(
+    pipe: Pipeline,
+    params: GraphParams,
+    request: &PathRequest,
+    playback: crate::Playback,
+    out: &Output,
+    limits: &SizeLimits,
+    progress: &dyn Progress,
+) -> Result<PathOutcome> {
+    let s = pipe.subject();
+    let playback = playback.open(s, out)?;
+    let curve = read_curve(&request.curve, s.up_axis, request.planar)?;
+    if let Some(speed) = fastest_speed(s, curve.axes()) {
+        let what = format!(
+            "--curve {} ({} long, the subject's fastest motion covers {} a second)",
+            request.curve.display(),
+            length(curve.length(), &s.units, 1),
+            length(speed, &s.units, 2)
+        );
+        let frames = curve.length() / speed * s.fps;
+        limits.check(&Request { what, frames, subject: s, search_bytes: 0, format: out.format() })?;
+    }
+    let restrictions = request
+        .tags
+        .iter()
+        .map(|t| parse_restriction(s, t).with_context(|| format!("--tags {t:?}")))
+        .collect::<Result<Vec<_>>>()?;
+    let travel = surfcap_motion::clip_travel::subject_travel(s);
+    crate::travel_check::require_travel(s, &travel, "a path constraint", None)?;
+    for (t, r) in request.tags.iter().zip(&restrictions) {
+        crate::travel_check::require_travel(s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
+    }
+    let start = request.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
+    let search = PathSearch {
+        window: request.window,
+        max_transitions: request.max_transitions,
+        branching: request.branching,
+        ..PathSearch::for_fps(s.fps)
+    };
+    let tracked = (!request.track.is_empty()).then_some(request.track.as_slice());
+    let prep = playback.prepare(pipe, params, tracked)?;
+    prep.follow_path(&PathQuery { curve: &curve, restrictions: &restrictions, start, search }, out, progress)
+}

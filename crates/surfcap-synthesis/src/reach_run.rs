@@ -1,0 +1,222 @@
+//! Reach (Huang et al. 2009's constraint, searched in the essential graph): from one frame to
+//! another covering a ground distance in a time, at the least realism cost
+//! (`TimedGraph::walk_with_distance_and_time`: distance and timing errors weighed by their
+//! scales against the walk's transition cost).
+
+use std::time::Instant;
+
+use serde::Serialize;
+use surfcap_geometry::motion_plane_alignment::PlaneMotion;
+use surfcap_mesh::Progress;
+use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
+use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
+use surfcap_pipeline::{GraphParams, Pipeline};
+
+use crate::animation_output::{Travel, write_report};
+use crate::constraint::Constraint;
+use crate::error::{Result, refuse};
+use crate::prepared::{Output, Prepared};
+use crate::request_size::{Request, SizeLimits};
+use crate::walk_output::{Played, WalkReport, play_and_write, pose_distance_to_output};
+use crate::words::length_unit;
+
+/// A reach query: frames, distance, duration and the scales of the realism cost.
+#[derive(Debug, Clone)]
+pub struct ReachQuery {
+    /// Start and end frames as the user wrote them (for the report).
+    pub from_spec: String,
+    pub to_spec: String,
+    /// Start and end frames, global.
+    pub from: u32,
+    pub to: u32,
+    /// Ground-plane distance the centre of mass must travel (subject units).
+    pub distance: f64,
+    /// Duration, frames of 1/fps (the animation shows one frame more).
+    pub frames: usize,
+    /// Distance error and timing error (frames) worth one unit of realism cost (Huang et al.:
+    /// 0.3 m and 10 frames).
+    pub distance_scale: f64,
+    pub time_scale: f64,
+}
+
+/// The report of a reach run.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReachReport {
+    /// `reach`.
+    pub constraint: &'static str,
+    pub from: String,
+    pub to: String,
+    pub target_distance: f64,
+    pub distance: f64,
+    pub distance_error: f64,
+    pub target_seconds: f64,
+    pub seconds: f64,
+    /// Frames written for the asked duration and for the obtained one (both ends shown).
+    pub target_frames: usize,
+    pub obtained_frames: usize,
+    pub time_error_frames: usize,
+    pub realism_cost: f64,
+    pub total_cost: f64,
+    pub search_seconds: f64,
+    #[serde(flatten)]
+    pub walk: WalkReport,
+    #[serde(flatten)]
+    pub travel: Travel,
+    /// Pose distances between the frames asked for and the first and last frames shown.
+    pub pose_distance_from: f64,
+    pub pose_distance_to: f64,
+    pub constraints: Vec<Constraint>,
+}
+
+/// A reach run: the animation written, its report and summary.
+pub struct ReachOutcome {
+    pub played: Played,
+    pub report: ReachReport,
+    /// The start and end frames as `sequence:frame`.
+    pub from_label: String,
+    pub to_label: String,
+    pub constraints: Vec<Constraint>,
+}
+
+impl Prepared {
+    /// The walk of the reach query, written with its report to `out`.
+    pub fn reach(&self, q: &ReachQuery, out: &Output, progress: &dyn Progress) -> Result<ReachOutcome> {
+        let t0 = Instant::now();
+        let tg = TimedGraph::new(&self.graph, &self.model);
+        let scales = (q.distance_scale, q.time_scale);
+        let (w, cost) =
+            tg.walk_with_distance_and_time(q.from, q.to, q.distance, q.frames, scales, tg.longest_edge())?;
+        let search_seconds = t0.elapsed().as_secs_f64();
+        // The time asks for a duration: `frames` steps of 1/fps, so the animation that lasts it
+        // shows one frame more (both ends). Counts below are frames written, as `frames` is.
+        let (asked_frames, obtained_frames) = (q.frames + 1, w.frames + 1);
+        let distance_error = (w.distance - q.distance).abs();
+        let time_error = w.frames.abs_diff(q.frames);
+        let fps = self.subject().fps;
+        let played = play_and_write(self, &w.walk, &PlaneMotion::identity(self.up()), "reach", out, progress)?;
+        // The viewer draws the centre track over the animation, as it does for paths.
+        let travel = Travel::of(&played.centres, self.up());
+        // The poses shown first and last against the frames asked for there.
+        let last = played.output.n_frames() - 1;
+        let pose_distance_from = pose_distance_to_output(self, &played.output, q.from, 0)?;
+        let pose_distance_to = pose_distance_to_output(self, &played.output, q.to, last)?;
+        let tol = &out.tolerances;
+        let constraints = vec![
+            Constraint::new(
+                "distance",
+                length_unit(self.subject()),
+                q.distance,
+                w.distance,
+                distance_error,
+                tol.distance(q.distance),
+            )
+            .relative_to(q.distance),
+            Constraint::new(
+                "time",
+                "frames",
+                asked_frames as f64,
+                obtained_frames as f64,
+                time_error as f64,
+                tol.frames(),
+            )
+            .relative_to(q.frames as f64),
+        ];
+        let report = ReachReport {
+            constraint: "reach",
+            from: q.from_spec.clone(),
+            to: q.to_spec.clone(),
+            target_distance: q.distance,
+            distance: w.distance,
+            distance_error,
+            target_seconds: q.frames as f64 / fps,
+            seconds: w.frames as f64 / fps,
+            target_frames: asked_frames,
+            obtained_frames,
+            time_error_frames: time_error,
+            realism_cost: w.cost,
+            total_cost: cost,
+            search_seconds,
+            walk: played.report.clone(),
+            travel,
+            pose_distance_from,
+            pose_distance_to,
+            constraints: constraints.clone(),
+        };
+        write_report(&played.report_path, &report)?;
+        let index = self.subject().frame_index();
+        Ok(ReachOutcome {
+            played,
+            report,
+            from_label: index.label(q.from as usize),
+            to_label: index.label(q.to as usize),
+            constraints,
+        })
+    }
+}
+
+/// What `synth reach` asks, as the user wrote it.
+#[derive(Debug, Clone)]
+pub struct ReachRequest {
+    /// Start and end frames (`sequence:frame` or global).
+    pub from: String,
+    pub to: String,
+    /// Ground-plane distance (subject units), >= 0.
+    pub distance: f64,
+    /// Duration: seconds (bare or `3s`) or output frames (`90f`).
+    pub time: TimeSpec,
+    pub distance_scale: f64,
+    pub time_scale: f64,
+}
+
+impl ReachRequest {
+    /// The duration as given, with its unit.
+    pub fn time_text(&self) -> String {
+        match self.time.unit {
+            Some(TimeUnit::Frames) => format!("{}f", self.time.value),
+            Some(TimeUnit::Seconds) | None => format!("{}s", self.time.value),
+        }
+    }
+}
+
+/// One reach synthesis from an unprepared subject: the frames resolved and the request sized
+/// and checked (clips that travel) before any work, then the subject prepared and searched.
+pub fn synthesize_reach(
+    pipe: Pipeline,
+    params: GraphParams,
+    request: &ReachRequest,
+    playback: crate::Playback,
+    out: &Output,
+    limits: &SizeLimits,
+    progress: &dyn Progress,
+) -> Result<ReachOutcome> {
+    let s = pipe.subject();
+    let playback = playback.open(s, out)?;
+    let (from, to) = (s.resolve_frame(&request.from)? as u32, s.resolve_frame(&request.to)? as u32);
+    let frames = match request.time.frames(s.fps, TimeUnit::Seconds) {
+        Some(f) if f >= 1 => f as usize,
+        _ => refuse!(
+            "--time {}: expected a duration of at least one whole frame (at {} fps), e.g. 90f or 3s",
+            request.time_text(),
+            s.fps
+        ),
+    };
+    let search_bytes = search_table_bytes(s.n_frames(), frames);
+    let what = format!("--time {} at {} fps", request.time_text(), s.fps);
+    limits.check(&Request { what, frames: frames as f64, subject: s, search_bytes, format: out.format() })?;
+    if request.distance > 0.0 {
+        let travel = surfcap_motion::clip_travel::subject_travel(s);
+        crate::travel_check::require_travel(s, &travel, &format!("--distance {}", request.distance), None)?;
+    }
+    let query = ReachQuery {
+        from_spec: request.from.clone(),
+        to_spec: request.to.clone(),
+        from,
+        to,
+        distance: request.distance,
+        frames,
+        distance_scale: request.distance_scale,
+        time_scale: request.time_scale,
+    };
+    let prep = playback.prepare(pipe, params, None)?;
+    prep.reach(&query, out, progress)
+}

@@ -1,0 +1,135 @@
+//! Refusing requests whose output or working memory would exceed what the machine has, before
+//! any work. A few characters of arguments (`--steps 100000`, a key at frame 100000, `--time
+//! 1e9`, a 2 km curve) ask for hours of search and gigabytes to terabytes of memory; the frame
+//! count is estimated from the request, the bytes from frames x vertices (and the timed search's
+//! tables), and the request is refused with the size, the limit and the option that raises it.
+//!
+//! The memory available is the front end's to find out (the command line reads Linux's
+//! `/proc/meminfo`); this module only compares ([`SizeLimits::available_memory`]).
+
+use surfcap_formats::export::ExportFormat;
+use surfcap_formats::glb::{GLB_MAX_BYTES, estimated_glb_bytes};
+use surfcap_mesh::Subject;
+
+use crate::error::{Result, refuse};
+
+/// Frames an animation may have unless raised: 10 minutes at 30 fps.
+pub const DEFAULT_MAX_FRAMES: usize = 18_000;
+
+/// The limit on memory when neither a limit nor the memory available is known: 4 GiB.
+pub const UNKNOWN_MEMORY_LIMIT: u64 = 4 << 30;
+
+/// Bounds on what one request may produce.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizeLimits {
+    /// Most frames the animation may have (`--max-frames`).
+    pub max_frames: usize,
+    /// Most memory the output and the search may need, bytes (`--max-memory`); default half the
+    /// memory available.
+    pub max_memory: Option<u64>,
+    /// The memory available to new allocations when the request starts, bytes, if known.
+    pub available_memory: Option<u64>,
+}
+
+impl Default for SizeLimits {
+    fn default() -> Self {
+        SizeLimits { max_frames: DEFAULT_MAX_FRAMES, max_memory: None, available_memory: None }
+    }
+}
+
+/// What a request will make, estimated before any work.
+pub struct Request<'a> {
+    /// The arguments responsible, as the user typed them (e.g. `--steps 100000`).
+    pub what: String,
+    /// Output frames.
+    pub frames: f64,
+    pub subject: &'a Subject,
+    /// Working memory besides the output positions (a search's tables).
+    pub search_bytes: u64,
+    pub format: ExportFormat,
+}
+
+/// `12345678` -> `11.8 MiB`.
+pub fn human(bytes: u64) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut x = bytes as f64;
+    let mut k = 0;
+    while x >= 1024.0 && k + 1 < units.len() {
+        x /= 1024.0;
+        k += 1;
+    }
+    if k == 0 { format!("{bytes} bytes") } else { format!("{x:.1} {}", units[k]) }
+}
+
+impl SizeLimits {
+    /// An error naming the size, the limit and the option that raises it when `r` exceeds
+    /// the frame limit, the memory limit, or (as glb) the format's 4 GiB.
+    pub fn check(&self, r: &Request) -> Result<()> {
+        let what = &r.what;
+        // NaN frames (never from the callers' finite estimates) are refused too.
+        if r.frames.is_nan() || r.frames > self.max_frames as f64 {
+            refuse!(
+                "{what} asks for about {:.0} frames, above the limit of {} (--max-frames; raise it for longer animations)",
+                r.frames,
+                self.max_frames
+            );
+        }
+        let frames = r.frames.ceil() as u64;
+        let nv = r.subject.topology().n_vertices() as u64;
+        let need = frames.saturating_mul(12 * nv).saturating_add(r.search_bytes);
+        let (limit, whence) = match (self.max_memory, self.available_memory) {
+            (Some(b), _) => (b, "--max-memory".to_string()),
+            (None, Some(a)) => (a / 2, format!("half the {} available; raise it with --max-memory", human(a))),
+            (None, None) => (UNKNOWN_MEMORY_LIMIT, "memory available unknown; raise it with --max-memory".to_string()),
+        };
+        if need > limit {
+            let search = if r.search_bytes > 0 {
+                format!(" and {} of search tables", human(r.search_bytes))
+            } else {
+                String::new()
+            };
+            refuse!(
+                "{what} needs about {} of memory ({frames} frames x {nv} vertices{search}), above the limit of {} ({whence})",
+                human(need),
+                human(limit)
+            );
+        }
+        if r.format == ExportFormat::Glb {
+            let glb = estimated_glb_bytes(nv as usize, r.subject.topology().n_triangles(), &[frames as usize]);
+            if glb > GLB_MAX_BYTES {
+                refuse!(
+                    "{what} would write a glb of about {} ({frames} frames x {nv} vertices), above the format's limit of {GLB_MAX_BYTES} bytes (4 GiB: its lengths are 32-bit); write --format npy or pc2, or fewer frames",
+                    human(glb)
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The fastest ground speed (subject units per second) of the subject's sequences: the mean
+/// per-frame travel of the vertices' centroid along `axes`. A curve of length L cannot be
+/// followed in fewer than L / speed seconds, so frames estimated with it are a lower bound and a
+/// refusal is never spurious. `None` when nothing travels.
+pub fn fastest_speed(subject: &Subject, axes: &[usize]) -> Option<f64> {
+    let speed = |s: &surfcap_mesh::Sequence| {
+        let cs: Vec<[f64; 3]> = (0..s.n_frames()).map(|f| surfcap_motion::blend::centre(s.frame(f))).collect();
+        let travel: f64 =
+            cs.windows(2).map(|w| axes.iter().map(|&k| (w[1][k] - w[0][k]).powi(2)).sum::<f64>().sqrt()).sum();
+        travel / (s.n_frames().max(2) - 1) as f64 * subject.fps
+    };
+    let v = subject.sequences().iter().map(speed).fold(0.0, f64::max);
+    (v > 0.0).then_some(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn byte_counts_read_in_binary_units() {
+        assert_eq!(human(1536), "1.5 KiB");
+        assert_eq!(human(12), "12 bytes");
+        assert_eq!(human(2 << 30), "2.0 GiB");
+    }
+}

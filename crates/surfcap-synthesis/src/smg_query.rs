@@ -1,0 +1,449 @@
+//! Huang et al. 2009's surface motion graph as a synthesis run, on a subject or on a frame set
+//! (every frame its own topology): the input opened, its shape similarity computed (or read
+//! back from the derived cache), the two-level graph built from the user's higher level and the
+//! key frames (3.3), then a query (the path between two key frames that covers a distance in a
+//! time at the least transition cost, eq. 6-20) played and written with its report
+//! ([`SmgQueryReport`]), or the graph itself reported ([`SmgGraphReport`]). The engine is
+//! `surfcap_smg`; this module only opens, plays, writes and reports.
+
+use std::ops::RangeInclusive;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde::Serialize;
+use surfcap_formats::import::{ImportOptions, ImportedData, open_any};
+use surfcap_mesh::derived_cache::DerivedCache;
+use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
+use surfcap_mesh::{Progress, Sequence, Topology, Units};
+use surfcap_smg::motion_frames::MotionFrames;
+use surfcap_smg::path_optimisation::{
+    PathQuery, PathSolution, PlayedFrame, Tolerance, Unreachable, optimise_path, path_segments, play_path,
+};
+use surfcap_smg::shape_similarity::HistogramParams;
+use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
+
+use crate::animation_output::{Animation, Travel, report_path, write_animation, write_report};
+use crate::constraint::Constraint;
+use crate::error::{Context, Error, Result, refuse};
+use crate::prepared::Output;
+use crate::words::unit_name;
+
+/// What the graph is built from: the input, the user's higher level, the transitions.
+#[derive(Debug, Clone)]
+pub struct SmgGraphRequest {
+    /// A subject or a frame set, or any source `surfcap import` reads.
+    pub input: PathBuf,
+    /// Sequence pairs `FROM:TO` that may follow each other.
+    pub connect: Vec<String>,
+    /// Transition windows searched, frames: `MIN-MAX` (eq. 5's adaptive window).
+    pub windows: String,
+    /// Transitions per connection (1: the paper's).
+    pub transitions: usize,
+    /// Least distance between the switches of one connection's transitions, frames.
+    pub separation: usize,
+    /// Voxels along the frames' largest extent (the shape histograms' lattice).
+    pub resolution: usize,
+}
+
+/// Where the similarity is cached: the folder, and whether to recompute.
+#[derive(Debug, Clone)]
+pub struct SimilarityCache {
+    pub dir: PathBuf,
+    pub refresh: bool,
+}
+
+/// An opened input with its similarity and graph.
+pub struct SmgGraph {
+    pub data: ImportedData,
+    pub frames: MotionFrames,
+    pub ground: Vec<[f64; 2]>,
+    pub similarity_seconds: f64,
+    pub similarity_cached: bool,
+    pub graph: SurfaceMotionGraph,
+    /// The key frames asked for (global frames), in order.
+    pub keys: Vec<usize>,
+}
+
+fn windows(text: &str) -> Result<RangeInclusive<usize>> {
+    let parse = |s: &str| s.trim().parse::<usize>().ok().filter(|&n| n >= 1);
+    let (a, b) = text.split_once('-').unwrap_or((text, text));
+    match (parse(a), parse(b)) {
+        (Some(a), Some(b)) if a <= b => Ok(a..=b),
+        _ => refuse!("--windows {text:?}: expected MIN-MAX frames, 1 <= MIN <= MAX"),
+    }
+}
+
+impl SmgGraph {
+    /// Opens the request's input, computes (or reads back) its similarity and builds the graph
+    /// with the key frames `keys` (`(option, sequence:frame)`, the option named in errors).
+    pub fn open(
+        request: &SmgGraphRequest,
+        import: &ImportOptions,
+        cache: &SimilarityCache,
+        keys: &[(&str, &str)],
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let lengths = windows(&request.windows)?;
+        let data = open_any(&request.input, import, progress)?;
+        let frames = match &data {
+            ImportedData::Subject(i) => MotionFrames::from_subject(&i.subject),
+            ImportedData::FrameSet(f) => MotionFrames::from_frame_set(&f.frame_set),
+        };
+        let t0 = Instant::now();
+        let store = DerivedCache::new(cache.dir.clone());
+        let params = HistogramParams { resolution: request.resolution, ..Default::default() };
+        let (similarity, similarity_cached) =
+            frames.shape_similarity(params, Some((&store, cache.refresh)), progress)?;
+        let similarity_seconds = t0.elapsed().as_secs_f64();
+        let seq = |name: &str| {
+            frames.names.iter().position(|n| n == name).ok_or_else(|| {
+                Error::Request(format!("--connect: no sequence {name:?}: expected one of {}", frames.names.join(", ")))
+            })
+        };
+        let mut connections = Vec::new();
+        for c in &request.connect {
+            let Some((x, y)) = c.split_once(':') else { refuse!("--connect {c:?}: expected FROM:TO") };
+            connections.push((seq(x)?, seq(y)?));
+        }
+        let keys = keys
+            .iter()
+            .map(|(option, spec)| frames.resolve(spec).with_context(|| format!("{option} {spec:?}")))
+            .collect::<Result<Vec<usize>>>()?;
+        let ground = frames.ground_centroids();
+        let graph = build_graph(&GraphInput {
+            sequences: &frames.sequences,
+            similarity: &similarity,
+            ground: &ground,
+            connections: &connections,
+            key_frames: &keys,
+            lengths,
+            per_connection: request.transitions,
+            separation: request.separation,
+        })?;
+        for (x, y) in &graph.missing {
+            progress.note(&format!(
+                "no transition {} -> {}: a sequence is shorter than the smallest window",
+                frames.names[*x], frames.names[*y]
+            ));
+        }
+        Ok(SmgGraph { data, frames, ground, similarity_seconds, similarity_cached, graph, keys })
+    }
+
+    /// The graph's transitions for reports.
+    pub fn transitions(&self) -> Vec<TransitionReport> {
+        let f = &self.frames;
+        self.graph
+            .transitions
+            .iter()
+            .map(|(x, y, t)| TransitionReport {
+                from: f.name_of(f.sequences[*x].start + t.last_x),
+                to: f.name_of(f.sequences[*y].start + t.first_y),
+                window: t.length,
+                cost: t.cost,
+            })
+            .collect()
+    }
+
+    /// The report of the graph itself (`smg build`).
+    pub fn report(&self, request: &SmgGraphRequest) -> SmgGraphReport {
+        let (f, g) = (&self.frames, &self.graph);
+        let name = |node: usize| f.name_of(g.nodes[node]);
+        SmgGraphReport {
+            input: request.input.clone(),
+            frames: f.n_frames(),
+            sequences: f.names.clone(),
+            connections: request.connect.clone(),
+            key_frames: self.keys.iter().map(|&k| f.name_of(k)).collect(),
+            similarity_seconds: self.similarity_seconds,
+            similarity_cached: self.similarity_cached,
+            nodes: g.nodes.iter().map(|&n| f.name_of(n)).collect(),
+            edges: g
+                .edges
+                .iter()
+                .map(|e| EdgeReport {
+                    from: name(e.from),
+                    to: name(e.to),
+                    kind: e.kind.clone(),
+                    frames: e.frames,
+                    distance: e.distance,
+                    cost: e.cost,
+                })
+                .collect(),
+            transitions: self.transitions(),
+            missing_transitions: g.missing.iter().map(|&(x, y)| format!("{}:{}", f.names[x], f.names[y])).collect(),
+        }
+    }
+}
+
+/// A transition of the graph: last frame played, first frame switched to (`sequence:frame`),
+/// window and cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct TransitionReport {
+    pub from: String,
+    pub to: String,
+    pub window: usize,
+    pub cost: f64,
+}
+
+/// An edge of the lower level.
+#[derive(Debug, Clone, Serialize)]
+pub struct EdgeReport {
+    pub from: String,
+    pub to: String,
+    pub kind: EdgeKind,
+    pub frames: usize,
+    pub distance: f64,
+    pub cost: f64,
+}
+
+/// The report of `smg build`: the graph, for inspection.
+#[derive(Debug, Clone, Serialize)]
+pub struct SmgGraphReport {
+    pub input: PathBuf,
+    pub frames: usize,
+    pub sequences: Vec<String>,
+    pub connections: Vec<String>,
+    pub key_frames: Vec<String>,
+    pub similarity_seconds: f64,
+    pub similarity_cached: bool,
+    pub nodes: Vec<String>,
+    pub edges: Vec<EdgeReport>,
+    pub transitions: Vec<TransitionReport>,
+    pub missing_transitions: Vec<String>,
+}
+
+/// A query: the key frames (the graph's first two keys), distance, time and weights.
+#[derive(Debug, Clone)]
+pub struct SmgQuery {
+    /// The key frames as the user wrote them.
+    pub from: String,
+    pub to: String,
+    /// Ground distance, subject units.
+    pub distance: f64,
+    /// Duration, seconds.
+    pub time: f64,
+    /// Weight of a distance error per unit and of a time error per frame.
+    pub distance_weight: f64,
+    pub time_weight: f64,
+    /// Take eq. 6's optimum as the paper does, instead of the least-cost path within 1% and 1
+    /// frame where one exists.
+    pub paper_cost: bool,
+}
+
+/// A repeated loop of the path.
+#[derive(Debug, Clone, Serialize)]
+pub struct LoopReport {
+    pub edges: usize,
+    pub repetitions: u64,
+}
+
+/// The report's `graph` of a query.
+#[derive(Debug, Clone, Serialize)]
+pub struct QueryGraphReport {
+    pub nodes: usize,
+    pub edges: usize,
+    pub transitions: Vec<TransitionReport>,
+    pub walks: usize,
+    pub loops: usize,
+}
+
+/// Why no path meets the targets within the tolerance.
+#[derive(Debug, Clone, Serialize)]
+pub struct UnreachableReport {
+    pub kind: &'static str,
+    pub why: String,
+    pub detail: Unreachable,
+}
+
+/// The report of a surface motion graph query.
+#[derive(Debug, Clone, Serialize)]
+pub struct SmgQueryReport {
+    pub input: PathBuf,
+    pub engine: &'static str,
+    pub fps: f64,
+    pub from: String,
+    pub to: String,
+    pub connections: Vec<String>,
+    pub frames: usize,
+    pub distance: f64,
+    pub unit: String,
+    pub transition_cost: f64,
+    pub cost: f64,
+    /// The path's runs, `sequence:first-last`.
+    pub path: Vec<String>,
+    pub loops: Vec<LoopReport>,
+    pub graph: QueryGraphReport,
+    pub similarity_seconds: f64,
+    pub similarity_cached: bool,
+    pub query_seconds: f64,
+    pub ilp_solves: usize,
+    pub constraints: Vec<Constraint>,
+    pub outputs: Vec<PathBuf>,
+    pub target_distance: f64,
+    pub target_seconds: f64,
+    pub seconds: f64,
+    /// Output frames where the path jumps to another sequence or back (the transitions play
+    /// captured frames only, nothing is blended, so every frame is labelled original):
+    /// `surfcap view` marks them on its timeline.
+    pub transition_frames: Vec<usize>,
+    /// With the tolerance: whether the path meets it, and why no path can when it does not.
+    pub tolerance: Option<Tolerance>,
+    pub within_tolerance: Option<bool>,
+    pub unreachable: Option<UnreachableReport>,
+    pub unconverged_subproblems: usize,
+    #[serde(flatten)]
+    pub travel: Travel,
+}
+
+/// A query's outcome: the animation and report written, and the path.
+pub struct SmgQueryOutcome {
+    pub report: SmgQueryReport,
+    pub report_path: PathBuf,
+    pub written: Vec<PathBuf>,
+    pub path: PathSolution,
+    pub constraints: Vec<Constraint>,
+}
+
+impl SmgGraph {
+    /// Answers `q` (its key frames are the graph's first two keys) and writes the animation
+    /// and its report to `out`: a subject's frames as one sequence of the subject, a frame
+    /// set's as a frame set (every frame its own mesh).
+    pub fn query(
+        &self,
+        request: &SmgGraphRequest,
+        q: &SmgQuery,
+        out: &Output,
+        progress: &dyn Progress,
+    ) -> Result<SmgQueryOutcome> {
+        let (frames, graph) = (&self.frames, &self.graph);
+        let (from, to) = (self.keys[0], self.keys[1]);
+        let (set_name, units) = match &self.data {
+            ImportedData::Subject(i) => (i.subject.name.clone(), i.subject.units.clone()),
+            ImportedData::FrameSet(f) => (f.frame_set.name.clone(), f.frame_set.units.clone()),
+        };
+        let pq = PathQuery {
+            w_d: q.distance_weight,
+            w_t: q.time_weight,
+            tolerance: (!q.paper_cost).then(Tolerance::default),
+            ..PathQuery::new(from, to, q.distance, q.time * frames.fps)
+        };
+        let t1 = Instant::now();
+        let path = optimise_path(graph, &self.ground, &pq)?;
+        let query_seconds = t1.elapsed().as_secs_f64();
+        let played = play_path(frames, &path);
+        let written = self.write_output(out, played, format!("{set_name}-smg"), &units, progress)?;
+        let unit = unit_name(&units).to_string();
+        let constraints = vec![
+            Constraint::new(
+                "distance",
+                unit.clone(),
+                q.distance,
+                path.distance,
+                path.distance_error,
+                out.tolerances.distance(q.distance),
+            )
+            .relative_to(q.distance),
+            Constraint::new(
+                "time",
+                "frames",
+                pq.frames,
+                path.frames.len() as f64,
+                path.time_error,
+                out.tolerances.frames(),
+            )
+            .relative_to(pq.frames),
+        ];
+        let report = SmgQueryReport {
+            input: request.input.clone(),
+            engine: "surface motion graph (Huang et al. 2009)",
+            fps: frames.fps,
+            from: q.from.clone(),
+            to: q.to.clone(),
+            connections: request.connect.clone(),
+            frames: path.frames.len(),
+            distance: path.distance,
+            unit,
+            transition_cost: path.transition_cost,
+            cost: path.cost,
+            path: path_segments(frames, &path),
+            loops: path.loops.iter().map(|(c, n)| LoopReport { edges: c.len(), repetitions: *n }).collect(),
+            graph: QueryGraphReport {
+                nodes: graph.nodes.len(),
+                edges: graph.edges.len(),
+                transitions: self.transitions(),
+                walks: path.walks,
+                loops: path.loops_in_graph,
+            },
+            similarity_seconds: self.similarity_seconds,
+            similarity_cached: self.similarity_cached,
+            query_seconds,
+            ilp_solves: path.ilp_solves,
+            constraints: constraints.clone(),
+            outputs: written.clone(),
+            target_distance: q.distance,
+            target_seconds: q.time,
+            seconds: path.frames.len() as f64 / frames.fps,
+            transition_frames: path.switches.clone(),
+            tolerance: pq.tolerance,
+            within_tolerance: path.within_tolerance,
+            unreachable: path.unreachable.as_ref().map(|u| UnreachableReport {
+                kind: u.kind(),
+                why: u.to_string(),
+                detail: u.clone(),
+            }),
+            unconverged_subproblems: path.unconverged_subproblems,
+            travel: Travel::of(&played_centres(frames, &path), frames.up),
+        };
+        let report_path = report_path(&out.path);
+        write_report(&report_path, &report)?;
+        Ok(SmgQueryOutcome { report, report_path, written, path, constraints })
+    }
+
+    /// Writes the played path: a subject's frames as one sequence of the subject, a frame
+    /// set's as a frame set, in the format the output asks for.
+    fn write_output(
+        &self,
+        out: &Output,
+        played: Vec<PlayedFrame>,
+        name: String,
+        units: &Units,
+        progress: &dyn Progress,
+    ) -> Result<Vec<PathBuf>> {
+        match &self.data {
+            ImportedData::Subject(i) => {
+                let s = &i.subject;
+                let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
+                let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
+                let result = s.derived(name, sequence)?;
+                write_animation(Animation::Subject(&result), out.format, &out.path, out.export_options(), progress)
+            }
+            ImportedData::FrameSet(_) => {
+                let per_frame = played
+                    .into_iter()
+                    .map(|(p, t)| Ok((Topology::new(p.len() / 3, t.to_vec(), None)?, p)))
+                    .collect::<Result<Vec<_>>>()?;
+                let sequence = FrameSetSequence::from_frames("smg", per_frame)?;
+                let set = FrameSet::new(name, vec![sequence], self.frames.fps, self.frames.up, units.clone())?;
+                write_animation(Animation::FrameSet(&set), out.format, &out.path, out.export_options(), progress)
+            }
+        }
+    }
+}
+
+/// The area-weighted centroid of every output frame: its source frame's, moved by the ground
+/// offset the path adds there (as `play_path` moves the vertices).
+fn played_centres(frames: &MotionFrames, path: &PathSolution) -> Vec<[f64; 3]> {
+    let centroids = frames.centroids();
+    let (axis, _) = frames.up.axis_and_sign();
+    let (x, y) = ((axis + 1) % 3, (axis + 2) % 3);
+    path.frames
+        .iter()
+        .zip(&path.offsets)
+        .map(|(&f, o)| {
+            let mut c = centroids[f];
+            c[x] += o[0];
+            c[y] += o[1];
+            c
+        })
+        .collect()
+}

@@ -1,0 +1,300 @@
+//! Variants of a learnt motion written as animations (thesis 6.6-6.7): a learnt sequence's, or
+//! a blend's of two learnt sequences at any weight, sampled by Hybrid Monte Carlo from a
+//! variation model (`surfcap vary train`), one glb per variant, with a report measuring each
+//! against the learnt motion it varies (`surfcap_variation::learnt_motion`: body-frame distance,
+//! where it ends, how far it travels) and the command that shows them next to the source.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+use surfcap_formats::export::{ExportFormat, ExportOptions, export};
+use surfcap_mesh::{FrameLabel, Progress, Sequence, Subject};
+use surfcap_variation::VariationModel;
+use surfcap_variation::centroid_path_length::centroid_path_length;
+use surfcap_variation::learnt_motion::{LearntMotion, learnt_blend, learnt_sequence};
+use surfcap_variation::mean_vertex_distance::mean_vertex_distance;
+use surfcap_variation::motion_parametrisation::{Rung, blend_ladder, bounding_rungs, sample_blend_variants};
+use surfcap_variation::pose_centroid::{centroid, distance3};
+use surfcap_variation::variation_sampling::{ChainStart, ChainSummary, SamplingOptions, VariantPath, sample_variants};
+
+use crate::animation_output::write_report;
+use crate::error::Result;
+use crate::words::count_of;
+
+/// The folder kind of the output (its marker).
+pub const SAMPLES_KIND: &str = "variation-samples";
+
+/// What is varied: a learnt sequence, or the blend of two at weight `w` in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Varied {
+    Sequence(String),
+    Blend { a: String, b: String, w: f64 },
+}
+
+/// A sampling request.
+#[derive(Debug, Clone)]
+pub struct SampleRequest {
+    /// The model folder (`surfcap vary train`).
+    pub model: PathBuf,
+    pub varied: Varied,
+    pub count: usize,
+    /// Seed of the HMC chains (same seed, same files, whatever the thread count).
+    pub seed: u64,
+    pub options: SamplingOptions,
+    /// The output folder: `<name>-variant-<k>.glb` per variant and `report.json`.
+    pub output: PathBuf,
+    /// The output folder may replace a folder surfcap did not write.
+    pub force: bool,
+}
+
+/// The report's `blend`.
+#[derive(Debug, Clone, Serialize)]
+pub struct BlendReport {
+    pub a: String,
+    pub b: String,
+    pub w: f64,
+    pub lower: Rung,
+    pub upper: Rung,
+    pub pairing: Vec<usize>,
+    pub lower_sequence: String,
+    pub upper_sequence: String,
+}
+
+/// The report's `options`.
+#[derive(Debug, Clone, Serialize)]
+pub struct OptionsReport {
+    pub start: &'static str,
+    pub path: &'static str,
+    pub warmup: usize,
+    pub thin: usize,
+    pub max_leapfrog: usize,
+}
+
+/// The report's `learnt`: the motion the variants vary.
+#[derive(Debug, Clone, Serialize)]
+pub struct LearntReport {
+    pub frames: usize,
+    pub path_length: f64,
+    pub what: &'static str,
+}
+
+/// One variant written.
+#[derive(Debug, Clone, Serialize)]
+pub struct VariantReport {
+    pub file: PathBuf,
+    pub sequence: String,
+    pub frames: usize,
+    /// Mean per-vertex distance from the learnt motion, body frame.
+    pub body_frame_distance: f64,
+    /// Distance between its last centroid and the learnt motion's.
+    pub end_distance: f64,
+    pub path_length: f64,
+}
+
+/// The report of a sampling (`report.json` in the output folder).
+#[derive(Debug, Clone, Serialize)]
+pub struct SampleReport {
+    pub model: PathBuf,
+    pub subject: String,
+    pub units: String,
+    pub sequence: Option<String>,
+    pub blend: Option<BlendReport>,
+    pub seed: u64,
+    pub count: usize,
+    pub options: OptionsReport,
+    pub chains: Vec<ChainSummary>,
+    pub learnt: LearntReport,
+    pub variants: Vec<VariantReport>,
+    pub load_seconds: f64,
+    pub sample_seconds: f64,
+    pub write_seconds: f64,
+    pub total_seconds: f64,
+    /// The command that shows the variants next to the source.
+    pub view: String,
+}
+
+/// A sampling's outcome.
+pub struct SampleOutcome {
+    pub report: SampleReport,
+    /// The varied motion's name (`walk`, `walk+jog@0.5`).
+    pub name: String,
+    pub out_dir: PathBuf,
+    /// The model's length unit, as messages give it.
+    pub unit: String,
+}
+
+/// A file-name-safe form of a name (letters, digits, `.`, `_`, `-`; anything else `_`).
+fn file_safe(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || "._-".contains(c) { c } else { '_' }).collect()
+}
+
+/// The subject path `vary train` recorded in the model folder's `report.json`, if any.
+fn trained_subject_path(model: &Path) -> Option<PathBuf> {
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(model.join("report.json")).ok()?).ok()?;
+    v["subject_path"].as_str().map(PathBuf::from)
+}
+
+/// A shell word for `p` (quoted when it holds anything but plain path characters).
+fn shell_word(p: &str) -> String {
+    if !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || "/._-~+@:=,".contains(c)) {
+        p.to_string()
+    } else {
+        format!("'{}'", p.replace('\'', "'\\''"))
+    }
+}
+
+/// Samples the request's variants and writes them with their report; the request is checked
+/// against the model before the output folder is claimed or anything sampled.
+pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> Result<SampleOutcome> {
+    surfcap_mesh::output_path::check_not_input(&r.output, &[&r.model])?;
+    let t0 = Instant::now();
+    let model = VariationModel::load(&r.model)?;
+    let load_seconds = t0.elapsed().as_secs_f64();
+    let (stem, name, sources) = match &r.varied {
+        Varied::Sequence(name) => {
+            model.sequence_index(name)?;
+            (file_safe(name), name.clone(), vec![name.clone()])
+        }
+        Varied::Blend { a, b, w } => {
+            let ladder = blend_ladder(&model, a, b)?;
+            bounding_rungs(&ladder, *w)?;
+            if ladder.len() == 2 && *w > 0.0 && *w < 1.0 {
+                progress.note(&format!(
+                    "the model learnt no blend of {a} and {b}: variants of the two are interpolated directly (train with --blend {a}:{b} for the thesis's learnt blends)"
+                ));
+            }
+            (file_safe(&format!("{a}-{b}-{w}")), format!("{a}+{b}@{w}"), vec![a.clone(), b.clone()])
+        }
+    };
+    let out_dir = surfcap_mesh::output_path::claim_dir(&r.output, SAMPLES_KIND, r.force)?;
+    let opts = &r.options;
+    progress.start(
+        &format!(
+            "sampling {} of {} (seed {}, warm-up {}, thin {}) ...",
+            count_of(r.count, "variant"),
+            name,
+            r.seed,
+            opts.warmup,
+            opts.thin
+        ),
+        1,
+    );
+    let t_sample = Instant::now();
+    let (variants, chains, blend, learnt): (_, _, _, LearntMotion) = match &r.varied {
+        Varied::Sequence(name) => {
+            let (v, c) = sample_variants(&model, name, r.count, r.seed, opts)?;
+            (v, c, None, learnt_sequence(&model, name)?)
+        }
+        Varied::Blend { a, b, w } => {
+            let (v, s) = sample_blend_variants(&model, a, b, *w, r.count, r.seed, opts)?;
+            let chains = s.chains.clone();
+            (v, chains, Some(s), learnt_blend(&model, a, b, *w)?)
+        }
+    };
+    progress.advance(1);
+    progress.finish();
+    let sample_seconds = t_sample.elapsed().as_secs_f64();
+
+    let t_write = Instant::now();
+    let nv = model.topology.n_vertices();
+    let learnt_end = learnt.world.last().map(|p| centroid(p)).unwrap_or_default();
+    let mut files = Vec::new();
+    let mut per_variant = Vec::new();
+    let mut names = sources;
+    let export_options = ExportOptions { force: r.force, ..Default::default() };
+    for (k, v) in variants.iter().enumerate() {
+        let variant_name = format!("{name}~{}", k + 1);
+        let file = out_dir.join(format!("{stem}-variant-{}.glb", k + 1));
+        let frames = v.world.len();
+        let positions: Vec<f32> = v.world.iter().flatten().copied().collect();
+        let seq = Sequence::new(variant_name.clone(), nv, positions)?
+            .with_labels(vec![FrameLabel::Synthetic; frames])?
+            .with_tags(vec!["variation".into()]);
+        let s = Subject::new(
+            variant_name.clone(),
+            model.topology.clone(),
+            vec![seq],
+            model.fps,
+            model.up_axis,
+            model.units.clone(),
+        )?;
+        files.extend(export(&s, ExportFormat::Glb, &file, export_options, progress)?);
+        let end = v.world.last().map(|p| centroid(p)).unwrap_or_default();
+        per_variant.push(VariantReport {
+            file,
+            sequence: variant_name.clone(),
+            frames,
+            body_frame_distance: mean_vertex_distance(&v.aligned, &learnt.aligned),
+            end_distance: distance3(end, learnt_end),
+            path_length: centroid_path_length(&v.world),
+        });
+        names.push(variant_name);
+    }
+    let write_seconds = t_write.elapsed().as_secs_f64();
+    let subject_path =
+        trained_subject_path(&r.model).map_or_else(|| "SUBJECT".to_string(), |p| p.display().to_string());
+    let mut view = vec!["surfcap".to_string(), "view".into(), shell_word(&subject_path)];
+    view.extend(
+        files
+            .iter()
+            .filter(|f| f.extension().is_some_and(|x| x == "glb"))
+            .map(|f| shell_word(&f.display().to_string())),
+    );
+    view.push("--sequences".into());
+    view.push(shell_word(&names.join(",")));
+    let report = SampleReport {
+        model: r.model.clone(),
+        subject: model.subject.clone(),
+        units: model.units.name.clone(),
+        sequence: match &r.varied {
+            Varied::Sequence(name) => Some(name.clone()),
+            Varied::Blend { .. } => None,
+        },
+        blend: blend.as_ref().map(|b| BlendReport {
+            a: b.a.clone(),
+            b: b.b.clone(),
+            w: b.w,
+            lower: b.lower,
+            upper: b.upper,
+            pairing: b.pairing.clone(),
+            lower_sequence: model.sequences[b.lower.sequence].name.clone(),
+            upper_sequence: model.sequences[b.upper.sequence].name.clone(),
+        }),
+        seed: r.seed,
+        count: r.count,
+        options: OptionsReport {
+            start: match opts.start {
+                ChainStart::Learnt => "learnt",
+                ChainStart::MeanPrediction => "mean",
+            },
+            path: match opts.path {
+                VariantPath::Source => "source",
+                VariantPath::Sampled => "sampled",
+                VariantPath::Contacts => "contacts",
+            },
+            warmup: opts.warmup,
+            thin: opts.thin,
+            max_leapfrog: opts.max_leapfrog,
+        },
+        chains,
+        learnt: LearntReport {
+            frames: learnt.world.len(),
+            path_length: centroid_path_length(&learnt.world),
+            what: if blend.is_some() {
+                "the latent interpolation of the two learnt trajectories around the weight, reconstructed"
+            } else {
+                "the learnt trajectory, reconstructed"
+            },
+        },
+        variants: per_variant,
+        load_seconds,
+        sample_seconds,
+        write_seconds,
+        total_seconds: t0.elapsed().as_secs_f64(),
+        view: view.join(" "),
+    };
+    write_report(&out_dir.join("report.json"), &report)?;
+    let unit = crate::words::unit_name(&model.units).to_string();
+    Ok(SampleOutcome { report, name, out_dir, unit })
+}
