@@ -66,7 +66,7 @@ fn heading_change(path: &[[f64; 2]]) -> f64 {
     d
 }
 
-/// The checks, on every frame of every clip, for two body shapes at two resolutions:
+/// The mesh-quality checks, on every frame of every clip, for two body shapes at two resolutions:
 /// the mannequin's start-to-end horizontal travel and heading change match the BVH root's
 /// (travel within 1%, heading within 1% or half a degree), the mesh is closed and 2-manifold
 /// with no degenerate triangle at any frame, no triangle folds over, and 99.9% of edges stay

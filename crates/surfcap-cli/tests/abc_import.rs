@@ -1,4 +1,4 @@
-//! `surfcap import x.abc` (issue 22 item 3, the Alembic part) on archives written by the
+//! `surfcap import x.abc` on archives written by the
 //! reference library (PyPI `alembic3d`, through `tools/abc-write.py`): triangles and quads with
 //! Alembic's clockwise faces turned counter-clockwise, several samples to the bit (checked
 //! against what the reference library reads back), indexed UVs, labels, a 24000/1001 rate,

@@ -1,4 +1,4 @@
-//! Issue 17 item 1, frame sets (every frame its own vertices and triangles, as the per-frame
+//! Frame sets (every frame its own vertices and triangles, as the per-frame
 //! reconstructions of Huang et al. 2009): a folder of frames with different connectivity imports
 //! as a `.frames` folder with a note, `info` summarises it, commands that need one topology say
 //! what it is; and `remesh-frames` makes frame sets with known answers from the Vlasic crane and

@@ -1,4 +1,4 @@
-//! Issue 16, in-place clips: path and distance constraints refused on clips that cannot travel
+//! In-place clips: path and distance constraints refused on clips that cannot travel
 //! (with the clips named and the way out), root motion recovered from ground contacts at import
 //! (the KayKit knight's in-place walks and runs then follow a path), and `eval root-motion`.
 

@@ -178,7 +178,7 @@ fn eval_smg_takes_any_input_with_its_graph_and_key_pairs() {
 }
 
 /// `eval smg` on the CMU mannequin runs the essential graph beside the surface motion graph on
-/// the same key frames and targets (issue 17 item 7): a comparison row per engine with finite
+/// the same key frames and targets: a comparison row per engine with finite
 /// errors, transition costs and times, and the error heat maps as PNGs; re-meshed frames say
 /// why there is no essential graph.
 #[test]

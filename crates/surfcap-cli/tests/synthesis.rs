@@ -26,7 +26,7 @@ fn check_labels(glb: &Path, r: &serde_json::Value) {
     assert!(r["transitions"].as_u64().unwrap() > 0 && synthetic > 0, "a synthesis that never transitions");
 }
 
-/// Issue acceptance: on the mannequin driven by the real CMU locomotion clips, a 15 m S-shaped
+/// Acceptance: on the mannequin driven by the real CMU locomotion clips, a 15 m S-shaped
 /// ground path is followed with a mean centre-of-mass error under 0.25 m (measured on the
 /// written frames); `reach` meets a distance and a time; restrictions and bad input.
 #[test]
@@ -72,7 +72,7 @@ fn path_and_reach_on_cmu_locomotion() {
     assert!((predicted - mean).abs() < 0.01, "predicted {predicted} vs measured {mean}");
     check_labels(&glb, &r);
     surfcap_testkit::validate_glb(std::slice::from_ref(&glb));
-    // Issue 16 item 4: the error in the subject's unit and relative to the curve's length.
+    // The error in the subject's unit and relative to the curve's length.
     let path = &r["constraints"][0];
     assert_eq!(path["unit"], "m", "{path}");
     assert_eq!(path["error"].as_f64(), Some(max));
@@ -96,7 +96,7 @@ fn path_and_reach_on_cmu_locomotion() {
         "--json",
     ]);
     let r = report(&o);
-    // Issue 16 item 4: the asked start pose is shown first (f32 rounding only).
+    // The asked start pose is shown first (f32 rounding only).
     assert!(r["pose_distance_start"].as_f64().unwrap() < 1.0, "{}", r["pose_distance_start"]);
     let centres = r["per_frame"]["centre"].as_array().unwrap();
     let (mut s, mut prev) = (0.0, None::<(f64, f64)>);
@@ -155,7 +155,7 @@ fn path_and_reach_on_cmu_locomotion() {
     let met = r["constraints"].as_array().unwrap();
     assert_eq!(met.len(), 2, "distance and time: {met:?}");
     assert!(met.iter().all(|c| c["missed"] == false), "{met:?}");
-    // Issue 16 item 4: one count of frames (frames written: 9 s at 30 fps is 270 steps, 271
+    // One count of frames (frames written: 9 s at 30 fps is 270 steps, 271
     // frames), errors in metres and relative to the request, and the poses at both ends.
     assert_eq!(r["target_frames"], 271, "{r}");
     assert_eq!(r["obtained_frames"], r["frames"], "{r}");
@@ -234,7 +234,7 @@ fn path_and_reach_on_cmu_locomotion() {
         (vec!["--curve", p(&curve), "--tags", "moonwalk:1-2"], "jump, run, turn_left"),
         (vec!["--curve", p(&curve), "--tags", "run:9-5"], "FROM < TO"),
         (vec!["--curve", p(&curve), "--start", "16_15:500"], "16_15"),
-        // Issue 16 item 2: the last frame of a clip leads nowhere; named, not walked into.
+        // The last frame of a clip leads nowhere; named, not walked into.
         (vec!["--curve", p(&curve), "--start", "16_15:116"], "the start frame 16_15:116 is a dead end"),
     ] {
         let o = surfcap!(
@@ -245,7 +245,7 @@ fn path_and_reach_on_cmu_locomotion() {
     }
     assert!(!out.exists());
 
-    // Issue 16 item 3: lengths in the subject's units, frames as sequence:frame, --time in
+    // Lengths in the subject's units, frames as sequence:frame, --time in
     // seconds (bare, or 9s) or frames (270f at 30 fps), and an impossible request says why.
     let line = tmp.path().join("line.csv");
     std::fs::write(&line, "x,z\n0,0\n3,0\n").unwrap();
@@ -309,7 +309,7 @@ fn path_and_reach_on_cmu_locomotion() {
     );
 }
 
-/// Issue acceptance: ten key poses moved to new times on the Vlasic samba and the Briceno dance,
+/// Acceptance: ten key poses moved to new times on the Vlasic samba and the Briceno dance,
 /// mean absolute timing error at most 3 frames (thesis Fig. 3.18).
 #[test]
 fn key_pose_timing_on_samba_and_dance() {
@@ -344,7 +344,7 @@ fn key_pose_timing_on_samba_and_dance() {
         assert!(err <= 3.0, "{keys}: {err}");
         // The output's length is the last key's obtained time plus one frame.
         assert_eq!(r["frames"].as_i64().unwrap(), rows[9]["obtained_time"].as_i64().unwrap() + 1);
-        // Issue 16 item 4: the pose shown at each key's time is the key's own pose (the
+        // The pose shown at each key's time is the key's own pose (the
         // distance is f32 rounding; neighbouring frames are hundreds apart); times are in
         // frames, which are positions, so no relative error.
         for k in rows {
@@ -374,7 +374,7 @@ fn key_pose_timing_on_samba_and_dance() {
     assert!(stderr(&o).contains("bad_keys.csv:4"), "{}", stderr(&o));
 }
 
-/// Issue 15 case 7: a few characters of arguments that asked for tens of gigabytes to terabytes
+/// A few characters of arguments that asked for tens of gigabytes to terabytes
 /// (`interpolate --steps 100000`, a key at output frame 100000, `reach --time 1e9`, a 2 km
 /// curve) are refused with the size, the limit and the option that raises it, before any work:
 /// no graph is built (the cache folder stays absent) and nothing is written.
@@ -473,7 +473,7 @@ fn procedural_walker(dir: &Path) -> PathBuf {
     walker
 }
 
-/// Issue 19 item 6's plumbing: a walk that loops reports its repeated frames; `--vary` needs
+/// Learned variants' plumbing (thesis 6.6): a walk that loops reports its repeated frames; `--vary` needs
 /// `--variation-model` and a model folder that is there, refused before any search (the cache
 /// folder stays absent) and before anything is written.
 #[test]
@@ -508,7 +508,7 @@ fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
     assert!(r.get("variation").is_none(), "no variation without --vary");
 }
 
-/// Issue 19 item 6 end to end: a path that loops over a procedural walker's frames, played with
+/// Learned variants on a walk's repeats (thesis 6.1, 6.6) end to end: a path that loops over a procedural walker's frames, played with
 /// variants from a variation model of that walker: the repeated runs show variants (the output
 /// differs from the plain walk there, not in the first pass), the same seed gives the same
 /// bytes, and a model of another mesh is refused.

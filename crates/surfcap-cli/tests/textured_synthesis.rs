@@ -1,4 +1,4 @@
-//! Shape and appearance animated together (issue 20 item 8, thesis Fig. 7.1), end to end on the
+//! Shape and appearance animated together (thesis Fig. 7.1), end to end on the
 //! real head scan at a tiny size: `synth --head` (the scan bent into nod, turn and tilt, its UV
 //! atlas kept), `appearance generate --mesh SUBJECT` (one map per frame), `appearance build
 //! --mesh SUBJECT` (the model's frames named `sequence:frame`), then `synth keyposes` and

@@ -1,4 +1,4 @@
-//! `surfcap tiles` on real data (issue 21 items 1-2): a KayKit character's walk and run planned in
+//! `surfcap tiles` on real data: a KayKit character's walk and run planned in
 //! tiles, every job run from the command line, merged; the distances equal `surfcap distance`'s
 //! matrix to the bit, and zarr-python (the reference implementation numpy/xarray users have)
 //! reads every array of the work folder with the tiles as chunks. Errors name what was expected.

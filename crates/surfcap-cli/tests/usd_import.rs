@@ -1,4 +1,4 @@
-//! `surfcap import x.usda` (issue 22 item 3): surfcap's own `--format usda` reads back exactly
+//! `surfcap import x.usda` - surfcap's own `--format usda` reads back exactly
 //! (positions to the bit, topology with UVs, fps, up axis, metres per unit, labels) for a KayKit
 //! clip and a 10-frame Vlasic crane subject; a stage written by Pixar's USD itself (quads, time
 //! samples from frame 1) imports with its quads fan-triangulated and every frame; a binary

@@ -91,7 +91,7 @@ fn the_viewer_plays_a_real_capture_in_chromium() {
     assert_eq!(count(&seen, "timeline", "red"), 0, "{seen}");
 }
 
-/// Issue 16 item 5 on synthesis outputs (the CMU-driven mannequin): `reach` reports its centre
+/// The viewer on synthesis outputs (the CMU-driven mannequin): `reach` reports its centre
 /// track and the viewer overlays it (with no path entry); on a `path` output the page draws the
 /// grid, the requested path and the achieved centre, green original and red synthetic frames on
 /// the mesh and on the timeline, and keeps every frame of the walk in view.
@@ -248,7 +248,7 @@ fn head_texture(path: &Path, tint: [f32; 3]) -> Vec<u8> {
     png
 }
 
-/// A texture per frame (issue 20 item 8) plays: the head scan turning over six frames with its
+/// A texture per frame plays: the head scan turning over six frames with its
 /// real texture, a red tint and a blue tint (frames 0-5 show 0, 1, 2, 2, 1, 0), written as a
 /// textured glb by the library and opened by `surfcap view`. Chromium checks that every frame
 /// binds its own texture; the canvas turns red at the red frame and blue at the blue one.

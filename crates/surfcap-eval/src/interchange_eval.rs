@@ -1,4 +1,4 @@
-//! Round trips through the interchange formats (issue "Alembic and USD" item 4): every sequence
+//! Round trips through the interchange formats: every sequence
 //! of a data folder laid out as `../shared/data` is imported as its own subject, exported as
 //! `.abc` and `.usda`, and imported back; the evaluation says for each whether everything came
 //! back exactly (positions to the bit in f32, topology with its UVs, sequence names, frame labels,

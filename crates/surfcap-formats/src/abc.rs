@@ -1,4 +1,4 @@
-//! Alembic export (issue "Alembic and USD" item 1): a subject as an Alembic archive in the
+//! Alembic export: a subject as an Alembic archive in the
 //! Ogawa container (`ogawa_write.rs`), the format the studios' tools (Maya, Houdini, Blender,
 //! Nuke, Unreal, volumetric-capture editors) exchange animated meshes in. No Rust crate writes
 //! Alembic, so the layers above Ogawa (AbcCoreOgawa's objects and properties, AbcGeom's

@@ -1,5 +1,5 @@
 //! The Ogawa container (Alembic's file format since 1.5), written: a tree of groups and data
-//! blocks addressed by absolute file offsets (issue "Alembic and USD" item 1; the layout is the
+//! blocks addressed by absolute file offsets (the layout is the
 //! one of the reference library's `Ogawa::OArchive`, read from its source and checked against
 //! files it writes):
 //!

@@ -1,4 +1,4 @@
-//! USD export as `.usda` text (issue "Alembic and USD"): one `Xform` per sequence under the
+//! USD export as `.usda` text: one `Xform` per sequence under the
 //! subject's root `Xform`, each holding one `Mesh` of constant topology whose `points` (and
 //! `extent`) are time-sampled, one sample per frame at the subject's rate, and whose frame
 //! labels are the constant primvar `primvars:surfcap:synthetic` (0 original, 1 synthetic),

@@ -1,5 +1,5 @@
 //! Bayesian linear regression between paired poses (thesis 5.5.1, eq. 5.4-5.8): the
-//! association cost used to densify key-pose correspondences in the transfer issue.
+//! association cost used to densify key-pose correspondences in motion transfer (thesis chapter 5).
 //!
 //! Model `y = M x + e`, `e ~ N(0, s^2 I)` (eq. 5.4-5.5), prior `row(M) ~ N(0, I)`. With the
 //! L training pairs as columns of X (p x L) and Y (q x L), `A = X X^T / s^2 + I` and the

@@ -37,8 +37,8 @@ use crate::graph::{Cost, Edge, Graph};
 /// No predecessor (the source, and nodes it does not reach).
 pub const NO_PRED: u32 = u32::MAX;
 
-/// The k the CLI and the pipeline use by default, chosen by `surfcap eval sparse-graph` (issue
-/// 21 item 4) on the mannequin moved by every CMU clip at 50 fps (1,878 frames, alpha 0.05).
+/// The k the CLI and the pipeline use by default, chosen by `surfcap eval sparse-graph`
+/// on the mannequin moved by every CMU clip at 50 fps (1,878 frames, alpha 0.05).
 /// Our rule (the smallest k with at least 99% of the all-pairs shortest-path costs
 /// within 1% of the exact graph's and no query more than 1% worse) is met by no k up to 512:
 /// there the exact graph keeps about 300 transitions per frame, as most pairs' cheapest path is

@@ -12,7 +12,7 @@ fn normal(s: &[f32], t: &[u32; 3]) -> Vector3<f64> {
     (point(s, t[1]) - point(s, t[0])).cross(&(point(s, t[2]) - point(s, t[0])))
 }
 
-/// Poses every frame and asserts the checks: no degenerate triangle, no triangle
+/// Poses every frame and asserts the mesh-quality checks: no degenerate triangle, no triangle
 /// folded over (its posed normal against the rest normal turned by the skinning rotations at
 /// its corners: turning the whole body is no fold), 99.9% of edges within 2.5x their rest
 /// length. Returns the edge length ratios' 99.9th percentile, largest and smallest.
