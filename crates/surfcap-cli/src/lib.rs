@@ -4,9 +4,24 @@
 //! progress bars, option groups ([`options`]), the global options ([`GlobalOpts`]) and the way a
 //! program runs and reports failures ([`run_front`] for any [`Front`]).
 //!
+//! A command is a file under `commands/` (a folder for a family: `synth/`, `eval/`,
+//! `appearance/`): its arguments and one `run` that calls one library function
+//! (surfcap-synthesis, surfcap-eval, surfcap-pipeline, ...) and prints or writes the result.
+//! Argument groups several commands share (subject and source, cache, table, graph, output,
+//! constraint, appearance and variation options) are defined once in [`options`] and flattened.
+//! Option values are checked when parsed (`--w nan`, `--branching 0`: the message names the
+//! option, the value and the range). What the front end itself holds: results as text or JSON
+//! (`--json`), progress bars (indicatif, on stderr, hidden when not a terminal) and notes hidden
+//! by `--quiet`, the HTML report page, the memory this machine has available (read here and
+//! handed to surfcap-synthesis's request sizing), and signal handling: SIGINT/SIGTERM delivered
+//! by `signal-hook` to an ordinary thread remove the live temporaries (a raw handler may not
+//! remove folders) and exit 130/143. `tests/doc_examples.rs` parses every `surfcap ...` example
+//! of the README and the user guide with [`Cli`].
+//!
 //! Exit codes: 0 success, 1 user error (bad input, bad arguments; the message says what and
 //! where), 2 internal error (a bug: please report it), 3 a soft constraint missed with
-//! `--strict` (`synth path | keyposes | reach`: the animation and its report are written).
+//! `--strict` (`synth path | keyposes | reach`, `smg query`: the animation and its report are
+//! written).
 //!
 //! With `--json` (found in the raw arguments, so it holds for argument errors too) every
 //! failure prints exactly one JSON object on stderr, `{"error", "causes", "exit_code"}`, and
