@@ -8,11 +8,12 @@
 //! the viewer's port ([`PortOpt`]).
 //!
 //! Option values are parsed by `FromStr` (clap calls it): library types implement it
-//! (`UpAxis`, `ExportFormat`, `PoseMetric`, `StretchInterpolation`, `GraphKind`), and the few
-//! values that are only the command line's ([`SlopeArg`], [`Positive`]) are newtypes here.
-//! Every numeric option is checked when it is parsed, by [`Positive`] or one of the value
-//! parsers [`positive`], [`non_negative`], [`fraction`], [`count`], [`at_least`] and
-//! [`whole_in`]: clap's
+//! (`UpAxis`, `ExportFormat`, `PoseMetric`, `StretchInterpolation`, `GraphKind`, and `Alpha`, the
+//! edge weights' tolerance, checked there once for every caller), and the few values that are
+//! only the command line's ([`SlopeArg`], [`Positive`]) are newtypes here.
+//! Every numeric option is checked when it is parsed, by its type ([`Positive`], `Alpha`) or
+//! one of the value parsers [`positive`], [`non_negative`], [`fraction`], [`count`],
+//! [`at_least`] and [`whole_in`]: clap's
 //! message names the option and the value, ours the allowed range, and nothing runs (or is
 //! cached) with NaN, a negative weight or a count of 0.
 
@@ -27,6 +28,7 @@ use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_distance::PoseMetric;
 use surfcap_mesh::{Subject, Units, UpAxis};
 use surfcap_motion::dtw::Slope;
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::segment_bounds;
 use surfcap_motion::transition_table::TableParams;
 use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
@@ -100,12 +102,12 @@ impl DistanceOpts {
 pub struct AlphaOpt {
     /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
     #[arg(long, default_value = "0.05")]
-    pub alpha: Positive,
+    pub alpha: Alpha,
 }
 
 impl AlphaOpt {
-    pub fn value(&self) -> f64 {
-        self.alpha.0
+    pub fn value(&self) -> Alpha {
+        self.alpha
     }
 }
 

@@ -26,7 +26,7 @@ pub enum Error {
         source: surfcap_learn::LearnError,
     },
     /// An option outside its domain, named as on the command line: "--slopes: expected whole
-    /// numbers >= 1", "--alpha 0: expected a positive number".
+    /// numbers >= 1", "--alpha: expected at least one value".
     #[error("{option}{}: {expected}", value.as_ref().map(|v| format!(" {v}")).unwrap_or_default())]
     Parameter { option: &'static str, value: Option<String>, expected: String },
     /// A subject this evaluation cannot use (no ground-truth joints, too few frames, ...).

@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use serde::Serialize;
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::transition_table::TableParams;
 use surfcap_pipeline::{GraphKind, GraphParams, Pipeline};
 
@@ -13,8 +14,8 @@ use crate::error::{Error, Result};
 /// Options of [`graph_comparison_eval`] (`surfcap eval graphs`).
 #[derive(Debug, Clone)]
 pub struct GraphComparisonOptions {
-    /// Values of alpha (each > 0).
-    pub alphas: Vec<f64>,
+    /// Values of alpha.
+    pub alphas: Vec<Alpha>,
     /// Frame pairs in the sampled shortest-path curves ([`PathCostCurves`]).
     pub plot_pairs: usize,
     /// The transition table both graphs are built on.
@@ -51,7 +52,7 @@ pub struct EssentialGraphStats {
 /// Both graphs at one alpha.
 #[derive(Debug, Clone, Serialize)]
 pub struct AlphaRow {
-    pub alpha: f64,
+    pub alpha: Alpha,
     pub motion_graph: MotionGraphStats,
     pub essential_graph: EssentialGraphStats,
     /// Ordered pairs (i != j) the motion graph connects: both graphs are compared on these.
@@ -64,7 +65,7 @@ pub struct AlphaRow {
 /// (Fig. 3.8b-c): points (index in the sample, path cost) of each graph.
 #[derive(Debug, Clone, Serialize)]
 pub struct PathCostCurves {
-    pub alpha: f64,
+    pub alpha: Alpha,
     pub essential_graph: Vec<(f64, f64)>,
     pub motion_graph: Vec<(f64, f64)>,
 }
@@ -92,11 +93,6 @@ pub struct GraphComparisonEval {
 pub fn graph_comparison_eval(pipe: &Pipeline, o: &GraphComparisonOptions) -> Result<GraphComparisonEval> {
     if o.alphas.is_empty() {
         return Err(Error::parameter("--alpha", None, "expected at least one value"));
-    }
-    for &a in &o.alphas {
-        if !(a.is_finite() && a > 0.0) {
-            return Err(Error::parameter("--alpha", Some(a.to_string()), "expected a positive number"));
-        }
     }
     let s = pipe.subject();
     let n = s.n_frames();
@@ -176,6 +172,7 @@ mod tests {
     use crate::test_subjects::{pipeline, worm};
 
     fn options(alphas: Vec<f64>) -> GraphComparisonOptions {
+        let alphas = alphas.into_iter().map(|a| Alpha::new(a).unwrap()).collect();
         GraphComparisonOptions { alphas, plot_pairs: 20, table: TableParams { l_min: 3, l_max: 6, slope: Some(3) } }
     }
 
@@ -186,7 +183,7 @@ mod tests {
         let n = pipe.subject().n_frames();
         assert_eq!((r.frames, r.l_min, r.l_max), (n, 3, 6));
         assert_eq!(r.rows.len(), 2);
-        assert_eq!(r.path_costs.iter().map(|c| c.alpha).collect::<Vec<_>>(), [0.05, 0.2]);
+        assert_eq!(r.path_costs.iter().map(|c| c.alpha.get()).collect::<Vec<_>>(), [0.05, 0.2]);
         for (row, curves) in r.rows.iter().zip(&r.path_costs) {
             assert!(row.pairs_compared > 0, "{row:?}");
             // Thesis 3.3.3: the essential graph keeps every shortest path.
@@ -224,6 +221,7 @@ mod tests {
         let pipe = pipeline(worm(30.0));
         let e = |alphas| graph_comparison_eval(&pipe, &options(alphas)).unwrap_err().to_string();
         assert_eq!(e(vec![]), "--alpha: expected at least one value");
-        assert_eq!(e(vec![0.05, 0.0]), "--alpha 0: expected a positive number");
+        // An alpha of 0 cannot reach the comparison: it is refused where it is made.
+        assert_eq!(Alpha::new(0.0).unwrap_err().to_string(), "alpha 0: expected a positive number");
     }
 }

@@ -26,6 +26,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::motion_plane_alignment;
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::segment_bounds;
 use surfcap_motion::timed_walk::TimedGraph;
 use surfcap_motion::walk_sequence::{Step, WalkModel};
@@ -95,7 +96,7 @@ pub struct EngineRow {
 /// The essential graph's precomputation.
 #[derive(Debug, Clone, Serialize)]
 pub struct EssentialGraphSetup {
-    pub alpha: f64,
+    pub alpha: Alpha,
     pub l_min: usize,
     pub l_max: usize,
     pub nodes: usize,
@@ -127,7 +128,7 @@ pub fn default_graph_params(fps: f64) -> GraphParams {
     GraphParams {
         table: surfcap_motion::transition_table::TableParams { l_min, l_max, slope: Some(3) },
         kind: GraphKind::Essential,
-        alpha: 0.05,
+        alpha: Alpha::new(0.05).expect("0.05 is a positive number"),
     }
 }
 

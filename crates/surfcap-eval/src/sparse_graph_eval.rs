@@ -29,6 +29,7 @@ use surfcap_builtin::bvh::read_bvh;
 use surfcap_builtin::mannequin::{BodyShape, mannequin};
 use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_mesh::{Progress, Subject};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::path_following::{Curve, PathSearch, follow_path};
@@ -183,7 +184,7 @@ pub struct SparseGraphEval {
     pub frames: usize,
     pub vertices: usize,
     pub triangles: usize,
-    pub alpha: f64,
+    pub alpha: Alpha,
     pub l_min: usize,
     pub l_max: usize,
     /// Distance matrix and transition table, seconds (0 when read from the cache), and whether

@@ -4,6 +4,7 @@
 
 use surfcap_eval::sparse_graph_eval::{SparseGraphEvalOptions, cmu_subject, sparse_graph_eval};
 use surfcap_mesh::NoProgress;
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::segment_bounds;
 use surfcap_motion::transition_table::TableParams;
 use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
@@ -17,8 +18,11 @@ fn sparse_costs_rise_with_fewer_transitions_and_all_of_them_give_the_exact_graph
     let n = s.n_frames();
     assert!((300..500).contains(&n), "{n} frames");
     let (l_min, l_max) = segment_bounds(s.fps);
-    let graph =
-        GraphParams { table: TableParams { l_min, l_max, slope: Some(3) }, kind: GraphKind::Essential, alpha: 0.05 };
+    let graph = GraphParams {
+        table: TableParams { l_min, l_max, slope: Some(3) },
+        kind: GraphKind::Essential,
+        alpha: Alpha::new(0.05).unwrap(),
+    };
     let mut opts = SparseGraphEvalOptions::cmu(graph);
     opts.ks = vec![2, 8, 32, n - 1];
     let pipe = Pipeline::new(s, CacheStore::memory_only(), Box::new(NoProgress));

@@ -17,18 +17,79 @@
 //! shortest paths go through the chain at the same cost. This keeps the essential graph free of
 //! "skip" edges that only duplicate original playback (equal-cost ties otherwise decided by
 //! rounding).
+//!
+//! alpha itself is an [`Alpha`]: a finite number > 0, checked once where it is made (parsed
+//! from the command line or a file, or built from a number), so nothing below checks it again.
 
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Deserializer, Serialize};
 use surfcap_mesh::FrameIndex;
 
 use crate::error::{Error, Result};
 use crate::transition_table::TransitionTable;
+
+/// The tolerance alpha of eq. 3.2-3.3 between a transition's deformation and its duration: a
+/// finite number > 0 (a smaller alpha gives a denser graph).
+///
+/// Made by [`Alpha::new`] (from a number), [`FromStr`] (from text: usable as a clap value
+/// parser) or [`Deserialize`] (from a file), each refusing 0, negative numbers, NaN and
+/// infinity; serialised as the bare number (so cache keys and reports hold the number as
+/// before), and shown as the number.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Serialize)]
+#[serde(transparent)]
+pub struct Alpha(f64);
+
+impl Alpha {
+    /// `value` as an alpha, or [`Error::Parameter`] ("alpha 0: expected a positive number")
+    /// when it is not a finite number > 0.
+    pub fn new(value: f64) -> Result<Alpha> {
+        if value.is_finite() && value > 0.0 {
+            Ok(Alpha(value))
+        } else {
+            Err(Error::Parameter { name: "alpha", value, expected: "a positive number" })
+        }
+    }
+
+    /// The number.
+    pub fn get(self) -> f64 {
+        self.0
+    }
+}
+
+impl fmt::Display for Alpha {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(&self.0, f)
+    }
+}
+
+/// Text (surrounding blanks ignored) that is a finite number > 0; otherwise
+/// [`Error::AlphaText`], whose message ("expected a finite number > 0") leaves the text to the
+/// caller (clap names the option and the value).
+impl FromStr for Alpha {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Alpha> {
+        match s.trim().parse::<f64>() {
+            Ok(x) => Alpha::new(x).map_err(|_| Error::AlphaText { text: s.to_string() }),
+            Err(_) => Err(Error::AlphaText { text: s.to_string() }),
+        }
+    }
+}
+
+/// A number, refused (with [`Alpha::new`]'s message) when it is not > 0.
+impl<'de> Deserialize<'de> for Alpha {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Alpha, D::Error> {
+        Alpha::new(f64::deserialize(d)?).map_err(serde::de::Error::custom)
+    }
+}
 
 /// Dense N x N edge weights (row-major, `f64::INFINITY` where there is no edge; the diagonal
 /// has none).
 #[derive(Debug, Clone, PartialEq)]
 pub struct EdgeWeights {
     pub n: usize,
-    pub alpha: f64,
+    pub alpha: Alpha,
     /// D was divided by this (the median finite D).
     pub d_scale: f64,
     pub weight: Vec<f64>,
@@ -45,13 +106,10 @@ impl EdgeWeights {
     }
 }
 
-/// Algorithm 1 over a transition table. `alpha` must be positive and finite, and the table
-/// one of `index`'s frames with costs >= 0 or infinity and durations (an inconsistent table is
-/// an error, not a panic or NaN weights).
-pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: f64) -> Result<EdgeWeights> {
-    if !(alpha.is_finite() && alpha > 0.0) {
-        return Err(Error::Parameter { name: "alpha", value: alpha, expected: "a positive number" });
-    }
+/// Algorithm 1 over a transition table. The table must be one of `index`'s frames, with
+/// durations and costs that are 0 or more, or infinity (an inconsistent table is an error, not
+/// a panic or NaN weights).
+pub fn edge_weights(table: &TransitionTable, index: &FrameIndex, alpha: Alpha) -> Result<EdgeWeights> {
     let n = index.len();
     for (what, len) in [("transition costs", table.cost.len()), ("transition durations", table.len.len())] {
         if table.n != n || len != n * n {
@@ -93,10 +151,11 @@ pub fn edge_weight_row(
     len_row: &[u32],
     i: usize,
     index: &FrameIndex,
-    alpha: f64,
+    alpha: Alpha,
     d_scale: f64,
     out: &mut [f64],
 ) {
+    let alpha = alpha.get();
     let n = index.len();
     assert!(cost_row.len() == n && len_row.len() == n && out.len() == n, "rows of {n} frames");
     let (s, _) = index.locate(i).expect("row of a frame of the index");
@@ -130,14 +189,15 @@ mod tests {
         let mut cost = vec![0.5; n * n];
         cost[4] = 0.25;
         let t = TransitionTable { n, cost, len: vec![2; n * n], li: vec![1; n * n], lj: vec![1; n * n] };
-        let e = edge_weights(&t, &index, 0.1).unwrap();
+        let alpha = |a| Alpha::new(a).unwrap();
+        let e = edge_weights(&t, &index, alpha(0.1)).unwrap();
         assert_eq!(e.at(0, 1), 0.1, "successive frames");
         assert_eq!(e.d_scale, 0.5);
         assert!(e.at(0, 2).is_infinite(), "1.2 > 0.2: the original chain is cheaper");
         assert!((e.at(2, 0) - 1.2).abs() < 1e-12, "backwards in a sequence: a transition");
         assert!((e.at(0, 4) - 0.7).abs() < 1e-12, "across sequences");
         assert!(e.at(3, 3).is_infinite());
-        let e = edge_weights(&t, &index, 1.0).unwrap();
+        let e = edge_weights(&t, &index, alpha(1.0)).unwrap();
         assert!(e.at(0, 2).is_infinite(), "3 > 2");
         assert!(EdgeWeights::is_original(&index, 1, 2) && !EdgeWeights::is_original(&index, 2, 3));
         // Row by row, the same numbers.
@@ -148,11 +208,34 @@ mod tests {
                 &t.len[i * n..(i + 1) * n],
                 i,
                 &index,
-                1.0,
+                alpha(1.0),
                 e.d_scale,
                 &mut out,
             );
             assert_eq!(out.as_slice(), &e.weight[i * n..(i + 1) * n]);
         }
+    }
+
+    /// alpha is a finite number > 0 however it is made: from a number, from text (the command
+    /// line's message) or from a file; it is written and shown as the bare number.
+    #[test]
+    fn alpha_is_a_positive_finite_number() {
+        for bad in [0.0, -0.0, -1.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let e = Alpha::new(bad).unwrap_err();
+            assert!(matches!(e, Error::Parameter { name: "alpha", .. }), "{bad}: {e:?}");
+        }
+        assert_eq!(Alpha::new(0.0).unwrap_err().to_string(), "alpha 0: expected a positive number");
+        assert_eq!(Alpha::new(0.05).unwrap().get(), 0.05);
+        for bad in ["0", "nan", "-1", "inf", "abc", ""] {
+            assert_eq!(bad.parse::<Alpha>().unwrap_err().to_string(), "expected a finite number > 0", "{bad:?}");
+        }
+        assert_eq!(" 0.2 ".parse::<Alpha>().unwrap(), Alpha::new(0.2).unwrap());
+        let a = Alpha::new(0.05).unwrap();
+        assert_eq!(format!("{a} {a:.3}"), "0.05 0.050");
+        assert_eq!(serde_json::to_string(&a).unwrap(), serde_json::to_string(&0.05f64).unwrap());
+        assert_eq!(serde_json::from_str::<Alpha>("0.05").unwrap(), a);
+        let e = serde_json::from_str::<Alpha>("0").unwrap_err().to_string();
+        assert!(e.starts_with("alpha 0: expected a positive number"), "{e}");
+        assert!(serde_json::from_str::<Alpha>("\"0.05\"").is_err());
     }
 }

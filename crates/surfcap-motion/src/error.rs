@@ -93,6 +93,10 @@ pub enum Error {
     /// A parameter outside its domain (NaN included).
     #[error("{name} {value}: expected {expected}")]
     Parameter { name: &'static str, value: f64, expected: &'static str },
+    /// Text for [`crate::edge_weights::Alpha`] that is not a finite number > 0. The message
+    /// leaves the text out: a command-line parser names the option and the value itself.
+    #[error("expected a finite number > 0")]
+    AlphaText { text: String },
 
     /// Time alignment: the `which` sequence ("reference" or "other") has no frames.
     #[error("the {which} sequence has no frames")]

@@ -92,6 +92,7 @@ pub fn essential_graph(w: &EdgeWeights, progress: &dyn Progress) -> EssentialGra
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::edge_weights::Alpha;
     use surfcap_mesh::NoProgress;
 
     /// A small example in the spirit of thesis 3.3.3 (Fig. 3.3-3.7, whose cost matrix is only
@@ -117,7 +118,7 @@ mod tests {
         weight[a(1) * n + b(1)] = 1.5;
         weight[a(0) * n + b(2)] = 2.0;
         weight[b(2) * n + a(0)] = 4.0;
-        let w = EdgeWeights { n, alpha: 1.0, d_scale: 1.0, weight };
+        let w = EdgeWeights { n, alpha: Alpha::new(1.0).unwrap(), d_scale: 1.0, weight };
         let eg = essential_graph(&w, &NoProgress);
         let mg = motion_graph(&w, &index);
         let has = |g: &Graph, x: usize, y: usize| g.edges().iter().any(|e| (e.from as usize, e.to as usize) == (x, y));
@@ -146,7 +147,7 @@ mod tests {
                 }
             }
         }
-        let w = EdgeWeights { n, alpha: 1.0, d_scale: 1.0, weight };
+        let w = EdgeWeights { n, alpha: Alpha::new(1.0).unwrap(), d_scale: 1.0, weight };
         let eg = essential_graph(&w, &NoProgress);
         let complete: Vec<Edge> = (0..n * n)
             .filter(|k| k / n != k % n)

@@ -12,7 +12,7 @@
 //!   (Algorithm 2: recurring motion-plane alignment, non-linear interpolation, centre-of-mass
 //!   integration; `blend_placements` is its rigid part alone).
 //! - Graphs (thesis 3.3): [`edge_weights`] (Algorithm 1, D scaled by its median; `edge_weight_row`
-//!   is its one definition, row by row); the [`essential_graph`] (union of shortest-path trees,
+//!   is its one definition, row by row; the tolerance alpha an `Alpha`, checked where it is made); the [`essential_graph`] (union of shortest-path trees,
 //!   dense Dijkstra per source, O(V^3), parallel); the [`sparse_essential_graph`] (per frame its k
 //!   cheapest transitions plus the original edge, one heap Dijkstra per source, O(E + V log V),
 //!   tileable by source rows; with k >= N - 1 bit-identical to the exact build, same tie rules);

@@ -89,6 +89,7 @@ pub fn motion_graph(w: &EdgeWeights, index: &FrameIndex) -> MotionGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::edge_weights::Alpha;
 
     #[test]
     fn local_minima_and_dead_ends() {
@@ -103,7 +104,7 @@ mod tests {
         }
         weight[3 * n + 4] = 2.0; // 3 -> 4
         weight[6 * n + 1] = 2.0; // 6 -> 1
-        let w = EdgeWeights { n, alpha: 1.0, d_scale: 1.0, weight };
+        let w = EdgeWeights { n, alpha: Alpha::new(1.0).unwrap(), d_scale: 1.0, weight };
         let mg = motion_graph(&w, &index);
         let has = |a: u32, b: u32| mg.graph.edges().iter().any(|e| e.from == a && e.to == b);
         assert!(has(3, 4) && has(6, 1));
@@ -114,7 +115,7 @@ mod tests {
         // Distinct weights everywhere: each block's smallest transition is a minimum.
         let weight =
             (0..n * n).map(|k| if k / n == k % n { f64::INFINITY } else { 10.0 + ((k * 37) % 61) as f64 }).collect();
-        let w = EdgeWeights { n, alpha: 1.0, d_scale: 1.0, weight };
+        let w = EdgeWeights { n, alpha: Alpha::new(1.0).unwrap(), d_scale: 1.0, weight };
         let mg = motion_graph(&w, &index);
         for (a, b) in [(0..4, 0..4), (0..4, 4..8), (4..8, 0..4), (4..8, 4..8)] {
             let best = a

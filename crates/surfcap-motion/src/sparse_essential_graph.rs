@@ -205,6 +205,7 @@ pub fn sparse_essential_graph(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::edge_weights::Alpha;
     use crate::essential_graph::essential_graph;
     use surfcap_mesh::NoProgress;
 
@@ -232,7 +233,7 @@ mod tests {
                 };
             }
         }
-        (EdgeWeights { n, alpha: 0.05, d_scale: 1.0, weight }, index)
+        (EdgeWeights { n, alpha: Alpha::new(0.05).unwrap(), d_scale: 1.0, weight }, index)
     }
 
     #[test]

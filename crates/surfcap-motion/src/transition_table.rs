@@ -318,10 +318,13 @@ pub(crate) mod tests {
         bad = good.clone();
         bad.cost[k] = -1.0;
         assert!(bad.check(&index, 4..=7).is_err());
-        let edges = crate::edge_weights::edge_weights(&bad, &index, 0.1).unwrap_err().to_string();
+        use crate::edge_weights::{Alpha, edge_weights};
+        let alpha = Alpha::new(0.1).unwrap();
+        let edges = edge_weights(&bad, &index, alpha).unwrap_err().to_string();
         assert!(edges.contains("is -1, expected a cost >= 0 or inf"), "{edges}");
-        assert!(crate::edge_weights::edge_weights(&good, &FrameIndex::new([16]), 0.1).is_err());
-        assert!(crate::edge_weights::edge_weights(&good, &index, f64::NAN).is_err());
+        assert!(edge_weights(&good, &FrameIndex::new([16]), alpha).is_err());
+        // A NaN alpha is refused where it is made: no edge weights can be asked for with one.
+        assert!(Alpha::new(f64::NAN).is_err());
     }
 
     #[test]

@@ -454,7 +454,7 @@ pub fn walk_sequence_with(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::edge_weights::edge_weights;
+    use crate::edge_weights::{Alpha, edge_weights};
     use crate::essential_graph::essential_graph;
     use crate::transition_table::{TableParams, transition_table};
     use surfcap_builtin::{WormParams, worm_subject};
@@ -467,7 +467,7 @@ pub(crate) mod tests {
         let d = distance_matrix(&s, &DistanceParams::default(), &NoProgress);
         let p = TableParams { l_min: 4, l_max: 8, slope: Some(3) };
         let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress).unwrap();
-        let w = edge_weights(&table, s.frame_index(), 0.05).unwrap();
+        let w = edge_weights(&table, s.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
         let g = essential_graph(&w, &NoProgress).graph;
         let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
         (s, g, model, d.values)

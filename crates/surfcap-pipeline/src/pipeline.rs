@@ -9,7 +9,7 @@ use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_mesh::derived_cache::{DerivedCache, subject_hash};
 use surfcap_mesh::npy::NpyArray;
 use surfcap_mesh::{Progress, Subject};
-use surfcap_motion::edge_weights::{EdgeWeights, edge_weights};
+use surfcap_motion::edge_weights::{Alpha, EdgeWeights, edge_weights};
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
 use surfcap_motion::motion_graph::motion_graph;
@@ -71,8 +71,8 @@ pub struct PoseDistances {
 pub struct GraphParams {
     pub table: TableParams,
     pub kind: GraphKind,
-    /// Tolerance between deformation and duration (eq. 3.2-3.3), > 0.
-    pub alpha: f64,
+    /// Tolerance between deformation and duration (eq. 3.2-3.3).
+    pub alpha: Alpha,
 }
 
 /// Products of one kind already produced in this process, by key.
@@ -109,7 +109,7 @@ pub struct Pipeline {
     tables: Memo<TableKey, TransitionTable>,
     /// The edge weights of the last (table, alpha) asked for: the essential and the motion graph
     /// of one alpha share them.
-    weights: Mutex<Option<(TableKey, f64, Arc<EdgeWeights>)>>,
+    weights: Mutex<Option<(TableKey, Alpha, Arc<EdgeWeights>)>>,
     graphs: Memo<GraphKey, Graph>,
     walk_models: Memo<WalkModelKey, WalkModel>,
 }
@@ -255,8 +255,7 @@ impl Pipeline {
     }
 
     /// Edge weights of the table at `alpha` (Algorithm 1); kept for the last (table, alpha).
-    pub fn edge_weights(&self, p: &TableParams, alpha: f64) -> Result<Arc<EdgeWeights>> {
-        check_alpha(alpha)?;
+    pub fn edge_weights(&self, p: &TableParams, alpha: Alpha) -> Result<Arc<EdgeWeights>> {
         let key = TableKey::new(&self.chain_distance, p);
         if let Some((k, a, w)) = self.weights.lock().expect("weights lock").as_ref()
             && *k == key
@@ -278,7 +277,6 @@ impl Pipeline {
     ///
     /// On disk: `graph-<key>.npy`, f64 `[E, 3]`: from, to, weight of every edge.
     pub fn graph(&self, p: &GraphParams) -> Result<Fetched<Graph>> {
-        check_alpha(p.alpha)?;
         check_table(&p.table)?;
         let key = self.graph_key(p);
         let n = self.subject.n_frames();
@@ -376,15 +374,6 @@ fn check_shape(shape: &[usize], expected: &[usize], what: &'static str) -> Resul
     if shape == expected { Ok(()) } else { Err(shape_error(shape, &format!("{expected:?}"), what)) }
 }
 
-/// alpha must be a positive number (thesis eq. 3.2-3.3).
-fn check_alpha(alpha: f64) -> Result<()> {
-    if alpha.is_finite() && alpha > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::Parameter { name: "alpha", value: alpha.to_string(), expected: "expected a positive number" })
-    }
-}
-
 fn check_table(p: &TableParams) -> Result<()> {
     if 1 <= p.l_min && p.l_min <= p.l_max {
         Ok(())
@@ -411,7 +400,7 @@ mod tests {
         GraphParams {
             table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
             kind: GraphKind::Essential,
-            alpha: 0.05,
+            alpha: Alpha::new(0.05).unwrap(),
         }
     }
 
@@ -484,8 +473,8 @@ mod tests {
     #[test]
     fn bad_parameters_are_refused() {
         let pipe = Pipeline::new(worm(), CacheStore::memory_only(), Box::new(NoProgress));
-        let bad_alpha = GraphParams { alpha: 0.0, ..params() };
-        assert!(pipe.graph(&bad_alpha).unwrap_err().to_string().contains("alpha 0"));
+        // A graph cannot be asked for with alpha 0: it is refused where it is made.
+        assert!(Alpha::new(0.0).unwrap_err().to_string().contains("alpha 0"));
         let bad_lengths = GraphParams { table: TableParams { l_min: 5, l_max: 4, slope: None }, ..params() };
         assert!(pipe.graph(&bad_lengths).unwrap_err().to_string().contains("l-min"));
         let n = pipe.subject().topology().n_vertices();

@@ -14,6 +14,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_mesh::derived_cache::DerivedCache;
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::transition_table::TableParams;
 
 use crate::graph_kind::GraphKind;
@@ -91,7 +92,8 @@ impl ProductKey for TableKey {
 pub struct GraphKey {
     pub table: TableKey,
     pub kind: GraphKind,
-    pub alpha: f64,
+    /// Serialised as the bare number.
+    pub alpha: Alpha,
 }
 
 impl ProductKey for GraphKey {
@@ -137,7 +139,8 @@ mod tests {
         let table = TableKey::new(&base, &t);
         assert_ne!(table.path(&cache, &h), TableKey::new(&weighted, &t).path(&cache, &h));
         assert_ne!(table.path(&cache, &h), TableKey::new(&base, &TableParams { slope: None, ..t }).path(&cache, &h));
-        let g = |kind, alpha| GraphKey { table: table.clone(), kind, alpha }.path(&cache, &h);
+        let g =
+            |kind, alpha| GraphKey { table: table.clone(), kind, alpha: Alpha::new(alpha).unwrap() }.path(&cache, &h);
         assert_ne!(g(GraphKind::Essential, 0.05), g(GraphKind::Motion, 0.05));
         assert_ne!(g(GraphKind::Essential, 0.05), g(GraphKind::Essential, 0.1));
         // The sparse essential graph's k is part of the key.
@@ -145,7 +148,15 @@ mod tests {
         assert_ne!(sparse(8), sparse(16));
         assert_ne!(sparse(16), g(GraphKind::Essential, 0.05));
         assert_eq!(sparse(16), sparse(16));
-        let graph = GraphKey { table, kind: GraphKind::Essential, alpha: 0.05 };
+        let graph = GraphKey { table, kind: GraphKind::Essential, alpha: Alpha::new(0.05).unwrap() };
+        // alpha is written as the bare number (the key's bytes, so the cache files' names, are
+        // those of a plain f64 field).
+        let plain = format!(
+            r#"{{"table":{},"kind":{},"alpha":0.05}}"#,
+            serde_json::to_string(&graph.table).unwrap(),
+            serde_json::to_string(&graph.kind).unwrap()
+        );
+        assert_eq!(serde_json::to_string(&graph).unwrap(), plain);
         let w = |tracked| WalkModelKey { graph: graph.clone(), tracked }.path(&cache, &h);
         assert_ne!(w(None), w(Some(vec![1, 2])));
         assert_ne!(w(Some(vec![1, 2])), w(Some(vec![1, 3])));

@@ -233,7 +233,7 @@ mod tests {
         let p = GraphParams {
             table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
             kind: GraphKind::Essential,
-            alpha: 0.05,
+            alpha: surfcap_motion::edge_weights::Alpha::new(0.05).unwrap(),
         };
         let graph = pipe.graph(&p).unwrap();
         let model = pipe.walk_model(&p, None).unwrap();

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::{Progress, Subject};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_pipeline::GraphKind;
 use surfcap_pipeline::walk_playback::{SequenceVariation, WalkSegment, play_walk, play_walk_with};
 
@@ -22,7 +23,7 @@ use crate::words::count_of;
 #[derive(Debug, Clone, Serialize)]
 pub struct GraphReport {
     pub kind: GraphKind,
-    pub alpha: f64,
+    pub alpha: Alpha,
     pub edges: usize,
     pub transitions: usize,
     pub prepare_seconds: f64,

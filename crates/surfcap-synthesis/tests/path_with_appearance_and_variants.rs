@@ -12,6 +12,7 @@ use surfcap_builtin::locomotion::Gait;
 use surfcap_builtin::mannequin::{BodyShape, mannequin};
 use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_mesh::{NoProgress, Subject};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::path_following::{Curve, PathSearch};
 use surfcap_motion::transition_table::TableParams;
 use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
@@ -90,8 +91,11 @@ fn a_path_played_with_textures_and_variants_without_the_command_line() {
     appearance_model(&s).save(&appearance_dir, false).unwrap();
 
     let (l_min, l_max) = surfcap_motion::segment_bounds(s.fps);
-    let params =
-        GraphParams { table: TableParams { l_min, l_max, slope: Some(3) }, kind: GraphKind::Essential, alpha: 0.05 };
+    let params = GraphParams {
+        table: TableParams { l_min, l_max, slope: Some(3) },
+        kind: GraphKind::Essential,
+        alpha: Alpha::new(0.05).unwrap(),
+    };
     let out = Output::new(dir.path().join("path.glb"));
     let appearance = SubjectAppearance::open(&appearance_dir, &s, out.format(), &out.path).unwrap();
     let variation = Variation { seed: 3, model: model_dir };

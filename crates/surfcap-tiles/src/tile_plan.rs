@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use surfcap_geometry::distance_tiles::{TileSpan, plan_distance_tiles};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::transition_tiles::{TableSpan, plan_table_tiles};
 
 use crate::error::{Error, Result};
@@ -66,8 +67,8 @@ pub struct WorkParams {
     pub l_max: usize,
     /// Slope constraint p of eq. 2.53 (`None`: unconstrained).
     pub slope: Option<usize>,
-    /// Tolerance alpha of Algorithm 1.
-    pub alpha: f64,
+    /// Tolerance alpha of Algorithm 1 (a plan whose alpha is not > 0 is refused when read).
+    pub alpha: Alpha,
     /// Transitions kept per frame by the sparse graph.
     pub k: usize,
 }

@@ -7,6 +7,7 @@ use std::path::Path;
 use surfcap_builtin::{WormParams, worm_subject};
 use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_mesh::{NoProgress, Sequence, Subject};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::transition_table::{TableParams, transition_table};
 use surfcap_tiles::tile_jobs::{JobOutcome, read_scale, run_job};
 use surfcap_tiles::tile_merge::{merge, status};
@@ -25,7 +26,15 @@ fn tube() -> Subject {
 }
 
 fn params() -> WorkParams {
-    WorkParams { metric: "deformation".into(), w: 0.01, l_min: 2, l_max: 5, slope: Some(3), alpha: 0.05, k: 4 }
+    WorkParams {
+        metric: "deformation".into(),
+        w: 0.01,
+        l_min: 2,
+        l_max: 5,
+        slope: Some(3),
+        alpha: Alpha::new(0.05).unwrap(),
+        k: 4,
+    }
 }
 
 fn run_stage(work: &Path, stage: Stage) -> Vec<JobOutcome> {
@@ -59,7 +68,7 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
     assert_eq!(store.read_u32(Matrix::TableLen, 0..n, 0..n).unwrap(), t.len);
     assert_eq!(store.read_u32(Matrix::TableLi, 0..n, 0..n).unwrap(), t.li);
     assert_eq!(store.read_u32(Matrix::TableLj, 0..n, 0..n).unwrap(), t.lj);
-    let w = surfcap_motion::edge_weights::edge_weights(&t, subject.frame_index(), 0.05).unwrap();
+    let w = surfcap_motion::edge_weights::edge_weights(&t, subject.frame_index(), params().alpha).unwrap();
     assert_eq!(read_scale(&store).unwrap().d_scale.to_bits(), w.d_scale.to_bits(), "Algorithm 1's median");
     for stage in [Stage::Candidates, Stage::Paths] {
         run_stage(&work, stage);
@@ -100,4 +109,12 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
     let e = create_work(&cache, &work, 7, other).unwrap_err().to_string();
     assert!(e.contains("another subject or other parameters"), "{e}");
     assert!(create_work(&cache, &cache.join("inside"), 7, params()).is_err(), "never inside an input");
+    // A plan whose alpha is not a positive number is refused when read, naming the file.
+    let plan_file = work.join("plan.json");
+    let text = std::fs::read_to_string(&plan_file).unwrap();
+    let field = "\"alpha\": 0.05,";
+    assert!(text.contains(field), "{text}");
+    std::fs::write(&plan_file, text.replace(field, "\"alpha\": 0,")).unwrap();
+    let e = open_work(&work).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains(&plan_file.display().to_string()) && e.contains("alpha 0: expected a positive number"), "{e}");
 }

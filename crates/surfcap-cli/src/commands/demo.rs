@@ -12,6 +12,7 @@ use surfcap_geometry::distance_matrix::DistanceParams;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::npy::write_npy;
 use surfcap_mesh::{FrameLabel, Sequence};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::path_following::PathSearch;
 
 use surfcap_pipeline::constraint_files::read_curve;
@@ -140,8 +141,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ));
 
     // Transitions, essential graph and a path-following animation (thesis 2.5, 3.3, 3.5.1).
-    let params =
-        GraphParams { table: TableOpts::default().params(subject.fps)?, kind: GraphKind::Essential, alpha: 0.05 };
+    let params = GraphParams {
+        table: TableOpts::default().params(subject.fps)?,
+        kind: GraphKind::Essential,
+        alpha: Alpha::new(0.05)?,
+    };
     let prep = Prepared::new(pipe, params, None)?;
     say(&format!(
         "7. found the optimal transition between every pair of frames (DTW, thesis 2.5) and built the essential graph: {} edges, {} of them transitions ({:.1} s)",

@@ -5,15 +5,16 @@
 use std::path::PathBuf;
 
 use surfcap_eval::graph_comparison_eval::{AlphaRow, GraphComparisonOptions, graph_comparison_eval};
+use surfcap_motion::edge_weights::Alpha;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
-use crate::options::{CacheOpts, Positive, SubjectArgs, TableOpts};
+use crate::options::{CacheOpts, SubjectArgs, TableOpts};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Values of alpha.
     #[arg(long = "alpha", value_delimiter = ',', default_value = "0.01,0.02,0.03,0.05,0.1,0.2")]
-    pub alphas: Vec<Positive>,
+    pub alphas: Vec<Alpha>,
     /// Frame pairs in the shortest-path plots.
     #[arg(long, default_value_t = 200, value_parser = crate::options::count)]
     pub plot_pairs: usize,
@@ -32,8 +33,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-graphs")?;
     anyhow::ensure!(!a.alphas.is_empty(), "--alpha: expected at least one value");
     let s = a.subject.open(ctx)?;
-    let alphas = a.alphas.iter().map(|a| a.0).collect();
-    let opts = GraphComparisonOptions { alphas, plot_pairs: a.plot_pairs, table: a.table.params(s.fps)? };
+    let opts =
+        GraphComparisonOptions { alphas: a.alphas.clone(), plot_pairs: a.plot_pairs, table: a.table.params(s.fps)? };
     let pipe = a.cache.pipeline(ctx, s);
     let output = a.output.as_path();
     let r = graph_comparison_eval(&pipe, &opts)?;
@@ -51,8 +52,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         x_label: "alpha".into(),
         y_label: y.into(),
         series: vec![
-            series("essential graph", r.rows.iter().map(|x| (x.alpha, eg(x))).collect(), blue, true),
-            series("motion graph", r.rows.iter().map(|x| (x.alpha, mg(x))).collect(), red, true),
+            series("essential graph", r.rows.iter().map(|x| (x.alpha.get(), eg(x))).collect(), blue, true),
+            series("motion graph", r.rows.iter().map(|x| (x.alpha.get(), mg(x))).collect(), red, true),
         ],
     };
     let mut plots = write_line_chart(
