@@ -6,14 +6,21 @@
 //! surfcap's own earlier output of the same kind. Temporaries are registered
 //! (`crate::temporaries`) so a front end can remove them on SIGINT/SIGTERM, and stale ones of
 //! killed runs are swept before the next write of the same output.
+//!
+//! A command that writes several outputs plans them in a `crate::output_set::OutputSet`: while
+//! it lives, [`write_file`] and [`write_dir`] on a planned path only stage the temporary, and the
+//! set renames them all at its commit (or none). A folder output written on its own is a set of
+//! one, so its place is re-checked at the swap too: a folder the user made there meanwhile is
+//! kept and the new output discarded.
 
 use std::fs;
 use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::error::{Error, Result};
-use crate::output_path::{check_dir_place, check_file_place, resolve, write_marker};
-use crate::temporaries::{inside_live, register, register_aside, sibling, sweep_stale};
+use crate::error::{Error, ErrorKind, Result};
+use crate::output_path::{check_file_place, resolve, write_marker};
+use crate::output_set::{OutputSet, Staging, set_staged, staging};
+use crate::temporaries::{inside_live, register, sibling, sweep_stale};
 
 fn ensure_parent(path: &Path) -> Result<()> {
     match path.parent() {
@@ -22,35 +29,51 @@ fn ensure_parent(path: &Path) -> Result<()> {
     }
 }
 
-/// Resolves an output path and sweeps the stale temporaries next to it (not inside a folder
-/// being built, which is new: sweeping there per file would cost a listing per file).
-fn prepare(path: &Path) -> Result<PathBuf> {
-    let path = resolve(path)?;
-    if !inside_live(&path) {
-        sweep_stale(&path);
-    }
-    Ok(path)
-}
-
-/// Writes a file through `write`, then renames it onto `path`. `path` may be new or a regular
-/// file (a symlink is written through to its target); anything else is refused.
-pub fn write_file(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
-    let path = &prepare(path)?;
-    check_file_place(path)?;
-    ensure_parent(path)?;
-    let tmp = sibling(path, "tmp");
-    let _live = register(&tmp);
+/// Writes `tmp` through `write` and syncs it; removes it on failure.
+fn write_temporary(tmp: &Path, path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
     let result = (|| {
-        let f = fs::File::create(&tmp)?;
+        let f = fs::File::create(tmp)?;
         let mut w = BufWriter::with_capacity(1 << 20, f);
         write(&mut w)?;
         let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
+        f.sync_all()
     })();
     result.map_err(|e| {
-        let _ = fs::remove_file(&tmp);
+        let _ = fs::remove_file(tmp);
         Error::io(path, "write", e)
+    })
+}
+
+/// Writes a file through `write`, then renames it onto `path`. `path` may be new or a regular
+/// file (a symlink is written through to its target); anything else is refused. A path planned
+/// by a live output set is only staged (renamed at the set's commit).
+pub fn write_file(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+    let path = resolve(path)?;
+    let path = match staging(&path)? {
+        Some(Staging::File(tmp)) => {
+            ensure_parent(&path)?;
+            set_staged(&path, false);
+            write_temporary(&tmp, &path, write)?;
+            set_staged(&path, true);
+            return Ok(());
+        }
+        Some(Staging::Dir { .. }) => {
+            return Err(Error::new(ErrorKind::Refused, "planned as a folder output, written as a file").in_file(&path));
+        }
+        Some(Staging::Inside(real)) => real,
+        None => path,
+    };
+    if !inside_live(&path) {
+        sweep_stale(&path);
+    }
+    check_file_place(&path)?;
+    ensure_parent(&path)?;
+    let tmp = sibling(&path, "tmp");
+    let _live = register(&tmp);
+    write_temporary(&tmp, &path, write)?;
+    fs::rename(&tmp, &path).map_err(|e| {
+        let _ = fs::remove_file(&tmp);
+        Error::io(&path, "write", e)
     })
 }
 
@@ -58,35 +81,38 @@ pub fn write_file(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Re
 /// holds the marker of `kind`), then swaps it in for `path`; a previous folder at `path` is
 /// removed only once the new one is complete. `path` may be new, an empty folder, or surfcap's
 /// earlier output of the same `kind`; any other folder only with `force` (see
-/// `crate::output_path`).
+/// `crate::output_path`), and only when it can be removed whole. A path planned by a live output
+/// set is only built (swapped in at the set's commit).
 pub fn write_dir(path: &Path, kind: &str, force: bool, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let path = &prepare(path)?;
-    check_dir_place(path, kind, force)?;
-    ensure_parent(path)?;
-    let tmp = sibling(path, "tmp");
-    let _live = register(&tmp);
-    let _ = fs::remove_dir_all(&tmp);
-    fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, "create directory", e))?;
-    if let Err(e) = write_marker(&tmp, kind).and_then(|()| fill(&tmp)) {
-        let _ = fs::remove_dir_all(&tmp);
-        return Err(e);
-    }
-    let old = sibling(path, "old");
-    let _aside = register_aside(&old, path);
-    let had_old = path.exists();
-    if had_old {
-        fs::rename(path, &old).map_err(|e| Error::io(path, "move the previous output aside", e))?;
-    }
-    if let Err(e) = fs::rename(&tmp, path) {
-        if had_old {
-            let _ = fs::rename(&old, path);
+    let path = resolve(path)?;
+    let path = match staging(&path)? {
+        Some(Staging::Dir { tmp, kind: planned }) => {
+            if planned != kind {
+                return Err(Error::new(ErrorKind::Refused, format!("planned as a {planned} output, written as {kind}"))
+                    .in_file(&path));
+            }
+            ensure_parent(&path)?;
+            set_staged(&path, false);
+            let _ = fs::remove_dir_all(&tmp);
+            fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, "create directory", e))?;
+            if let Err(e) = write_marker(&tmp, kind).and_then(|()| fill(&tmp)) {
+                let _ = fs::remove_dir_all(&tmp);
+                return Err(e);
+            }
+            set_staged(&path, true);
+            return Ok(());
         }
-        let _ = fs::remove_dir_all(&tmp);
-        return Err(Error::io(path, "rename the new output into place", e));
-    }
-    if had_old {
-        let _ = fs::remove_dir_all(&old);
-    }
+        Some(Staging::File(_)) => {
+            return Err(Error::new(ErrorKind::Refused, "planned as a file output, written as a folder").in_file(&path));
+        }
+        Some(Staging::Inside(real)) => real,
+        None => path,
+    };
+    // A folder output on its own: a set of one.
+    let mut set = OutputSet::new(&[]);
+    set.dir(&path, kind, force)?;
+    write_dir(&path, kind, force, fill)?;
+    set.commit()?;
     Ok(())
 }
 

@@ -52,6 +52,7 @@ pub mod frame_textures;
 pub mod natural_order;
 pub mod npy;
 pub mod output_path;
+pub mod output_set;
 pub mod progress;
 pub mod regular_file;
 pub mod subject;

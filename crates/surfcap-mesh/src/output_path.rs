@@ -120,6 +120,11 @@ fn marker_kind(dir: &Path) -> Option<String> {
     (v["written_by"] == "surfcap").then(|| v["kind"].as_str().map(str::to_owned)).flatten()
 }
 
+/// Whether `dir` holds a marker surfcap wrote (of any kind).
+pub fn has_marker(dir: &Path) -> bool {
+    marker_kind(dir).is_some()
+}
+
 /// Whether `dir` is surfcap's earlier output of `kind` (holds its marker).
 pub fn is_output_of(dir: &Path, kind: &str) -> bool {
     marker_kind(dir).is_some_and(|k| k == kind)
@@ -170,17 +175,123 @@ pub(crate) fn check_dir_place(path: &Path, kind: &str, force: bool) -> Result<()
     ))
 }
 
-/// Makes `path` a folder output of `kind` that is filled file by file in place (each file written
-/// atomically), rather than built aside and swapped in whole: checks the place as a folder
-/// output, creates the folder and writes the marker. Earlier files of the same kind stay until
-/// overwritten; with `force` a foreign folder's files are kept beside the new ones (nothing is
-/// removed). Returns the resolved folder.
+/// A folder that will be replaced whole (moved aside, then removed) can be: its parent and the
+/// folder and every folder inside it are writable. Checked before the commit, so that a forced
+/// run over a read-only folder is refused rather than leaving the folder moved aside and
+/// half-removed. Nothing there, or not a folder: nothing to check.
+pub(crate) fn check_removable(path: &Path) -> Result<()> {
+    match fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => {}
+        _ => return Ok(()),
+    }
+    let read_only = |p: &Path, what: &str| {
+        refused(
+            path,
+            format!(
+                "{what} {} is not writable, so the previous folder could not be moved aside and removed when the new output replaces it; make it writable or choose another output",
+                p.display()
+            ),
+        )
+    };
+    if let Some(parent) = path.parent()
+        && !writable(parent)
+    {
+        return Err(read_only(parent, "its parent folder"));
+    }
+    let mut todo = vec![path.to_path_buf()];
+    while let Some(dir) = todo.pop() {
+        if !writable(&dir) {
+            return Err(read_only(&dir, "the folder"));
+        }
+        let entries = fs::read_dir(&dir).map_err(|e| Error::io(&dir, "list", e))?;
+        for e in entries.flatten() {
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                todo.push(e.path());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether this process may create and remove entries in the folder `dir`, and the folder is
+/// not marked read-only (no write permission for anyone: its owner protected it, and even a
+/// process that could override that, such as root, leaves it alone).
+fn writable(dir: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        use std::os::unix::fs::PermissionsExt;
+        if fs::metadata(dir).is_ok_and(|m| m.permissions().mode() & 0o222 == 0) {
+            return false;
+        }
+        let Ok(c) = std::ffi::CString::new(dir.as_os_str().as_bytes()) else { return false };
+        // SAFETY: `c` is a valid NUL-terminated path; access only reads it.
+        unsafe { libc::access(c.as_ptr(), libc::W_OK | libc::X_OK) == 0 }
+    }
+    #[cfg(not(unix))]
+    {
+        fs::metadata(dir).is_ok_and(|m| !m.permissions().readonly())
+    }
+}
+
+/// Makes `path` a folder output of `kind` that the command fills file by file.
+///
+/// When a live [`crate::output_set::OutputSet`] planned `path`, the folder is its temporary
+/// (with the marker inside): writes under `path` go there, and the folder, marker included,
+/// reaches `path` only with the commit, so a failed run leaves the place as it was.
+///
+/// Otherwise the folder is filled in place (each file written atomically): checks the place as a
+/// folder output, creates the folder and writes the marker. Earlier files of the same kind stay
+/// until overwritten. A forced claim of a folder surfcap did not write is refused here (its
+/// marker would be left in the user's folder by a failed run): plan it in an output set.
+/// Returns the resolved folder.
 pub fn claim_dir(path: &Path, kind: &str, force: bool) -> Result<PathBuf> {
     let path = resolve(path)?;
-    check_dir_place(&path, kind, force)?;
+    match crate::output_set::staging(&path)? {
+        Some(crate::output_set::Staging::Dir { tmp, kind: planned }) => {
+            if planned != kind {
+                return Err(refused(&path, format!("planned as a {planned} output, claimed as {kind}")));
+            }
+            remove_tmp(&tmp);
+            fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, "create directory", e))?;
+            write_marker(&tmp, kind)?;
+            crate::output_set::set_staged(&path, true);
+            return Ok(path);
+        }
+        Some(crate::output_set::Staging::File(_)) => {
+            return Err(refused(&path, "planned as a file output, claimed as a folder".into()));
+        }
+        // Inside a folder output being built: claimed there, named by its final path.
+        Some(crate::output_set::Staging::Inside(real)) => {
+            check_dir_place(&real, kind, false)?;
+            fs::create_dir_all(&real).map_err(|e| Error::io(&real, "create directory", e))?;
+            write_marker(&real, kind)?;
+            return Ok(path);
+        }
+        None => {}
+    }
+    check_dir_place(&path, kind, false).map_err(|e| {
+        if force {
+            refused(&path, format!("{}; a forced folder output is replaced only as a whole, at the end of a run", e.message))
+        } else {
+            e
+        }
+    })?;
     fs::create_dir_all(&path).map_err(|e| Error::io(&path, "create directory", e))?;
     write_marker(&path, kind)?;
     Ok(path)
+}
+
+fn remove_tmp(tmp: &Path) {
+    match fs::symlink_metadata(tmp) {
+        Ok(m) if m.is_dir() => {
+            let _ = fs::remove_dir_all(tmp);
+        }
+        Ok(_) => {
+            let _ = fs::remove_file(tmp);
+        }
+        Err(_) => {}
+    }
 }
 
 /// Refuses an output that is, contains or lies inside one of `inputs` (inputs that do not exist

@@ -6,6 +6,15 @@
 //!
 //! Only names of surfcap's exact pattern are touched, and only when their PID is not a live
 //! process: another surfcap run writing the same output at the same time keeps its temporaries.
+//! A stale `.NAME.old-PID` folder is removed only when it is surfcap's own earlier output (it
+//! holds surfcap's marker); a folder of the user's moved aside by a forced run that was killed is
+//! left where it is.
+//!
+//! The commits of `crate::output_set` hold a process-wide commit lock and record what they put in
+//! place, so a front end that catches a signal asks [`stop_for_signal`]: it waits for a commit in
+//! progress, then either removes the live temporaries (the run was interrupted, every previous
+//! output kept) or, when nothing was in progress and outputs were committed, says they are
+//! complete.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -46,16 +55,61 @@ pub(crate) fn register(tmp: &Path) -> Registered {
     Registered(entry)
 }
 
-/// Registers a previous output moved aside, until the guard is dropped.
-pub(crate) fn register_aside(aside: &Path, output: &Path) -> Registered {
-    let entry = Live::Aside { aside: aside.to_path_buf(), output: output.to_path_buf() };
-    live().push(entry.clone());
-    Registered(entry)
-}
-
 /// Unregisters its temporary when dropped.
 #[must_use]
 pub(crate) struct Registered(Live);
+
+/// The outputs committed so far by this process; locked for the whole of a commit.
+static COMMITTED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The commit lock: held by `crate::output_set` while it renames outputs into place, and by the
+/// signal handler before it decides.
+pub(crate) fn commit_lock() -> MutexGuard<'static, Vec<PathBuf>> {
+    COMMITTED.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// What a signal stopped, as [`stop_for_signal`] and [`signal_outcome`] say.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SignalOutcome {
+    /// Work was in progress: its temporaries are (or would be) removed and every previous
+    /// output kept. `completed` lists outputs an earlier commit of this run had already put in
+    /// place.
+    Interrupted { completed: Vec<PathBuf> },
+    /// Nothing was in progress and these outputs were committed whole: the run's outputs are
+    /// complete.
+    Completed(Vec<PathBuf>),
+}
+
+fn outcome(committed: &[PathBuf], live: &[Live]) -> SignalOutcome {
+    if live.is_empty() && !committed.is_empty() {
+        SignalOutcome::Completed(committed.to_vec())
+    } else {
+        SignalOutcome::Interrupted { completed: committed.to_vec() }
+    }
+}
+
+/// What a signal would stop now: waits for a commit in progress, changes nothing.
+pub fn signal_outcome() -> SignalOutcome {
+    let c = commit_lock();
+    let l = live();
+    outcome(&c, &l)
+}
+
+/// For a front end about to exit on a signal: waits for a commit in progress to finish, then
+/// removes every live temporary (putting back a previous output moved aside) when work was in
+/// progress. Both registries stay locked afterwards, so no thread starts or finishes a write or
+/// a commit meanwhile: call this only right before exiting the process.
+pub fn stop_for_signal() -> SignalOutcome {
+    let c = commit_lock();
+    let l = live();
+    let o = outcome(&c, &l);
+    for e in l.iter().rev() {
+        undo(e);
+    }
+    std::mem::forget(l);
+    std::mem::forget(c);
+    o
+}
 
 impl Drop for Registered {
     fn drop(&mut self) {
@@ -66,7 +120,7 @@ impl Drop for Registered {
     }
 }
 
-fn remove_any(p: &Path) {
+pub(crate) fn remove_any(p: &Path) {
     // A folder may still be filled by the writing thread: retry a few times.
     for _ in 0..5 {
         match fs::symlink_metadata(p) {
@@ -90,7 +144,7 @@ fn undo(e: &Live) {
         Live::Aside { aside, output } => {
             if fs::symlink_metadata(output).is_err() {
                 let _ = fs::rename(aside, output);
-            } else {
+            } else if is_surfcaps_own(aside) {
                 remove_any(aside);
             }
         }
@@ -98,15 +152,21 @@ fn undo(e: &Live) {
 }
 
 /// Removes every live temporary (and puts back a previous output moved aside), for a front end
-/// about to exit on a signal. The registry stays locked afterwards, so a writing thread that
-/// finishes or fails meanwhile blocks instead of reporting a half-removed output: call this
-/// only right before exiting the process.
+/// about to exit on a signal: [`stop_for_signal`] without its answer. The registries stay locked
+/// afterwards: call this only right before exiting the process.
 pub fn remove_live() {
-    let l = live();
-    for e in l.iter().rev() {
-        undo(e);
+    let _ = stop_for_signal();
+}
+
+/// Whether a previous output moved aside may be removed: a file (an output surfcap replaced
+/// with the user's leave), or a folder holding surfcap's marker. A folder without it is the
+/// user's and stays.
+fn is_surfcaps_own(aside: &Path) -> bool {
+    match fs::symlink_metadata(aside) {
+        Ok(m) if m.is_dir() => crate::output_path::has_marker(aside),
+        Ok(_) => true,
+        Err(_) => false,
     }
-    std::mem::forget(l);
 }
 
 fn pid_is_live(pid: u32) -> bool {
@@ -136,7 +196,8 @@ fn temp_pid(entry: &str, name: &str, tag: &str) -> Option<u32> {
 
 /// Removes the stale `.NAME.tmp-PID` and `.NAME.old-PID` siblings of `output` (absolute) whose
 /// process is gone. A stale `.old` is a previous output moved aside by a run killed before it
-/// renamed the new one in: it is put back when `output` is missing, else removed.
+/// renamed the new one in: it is put back when `output` is missing, else removed when it is
+/// surfcap's own (a file, or a folder with surfcap's marker) and left alone otherwise.
 pub(crate) fn sweep_stale(output: &Path) {
     let (Some(dir), Some(name)) = (output.parent(), output.file_name().and_then(|n| n.to_str())) else {
         return;
@@ -184,6 +245,7 @@ mod tests {
         let stale_dir = d.path().join(format!(".a.glb.old-{DEAD}"));
         fs::create_dir(&stale_dir).unwrap();
         fs::write(stale_dir.join("x"), b"1").unwrap();
+        crate::output_path::write_marker(&stale_dir, "test").unwrap();
         let live_one = d.path().join(format!(".a.glb.tmp-{}", std::process::id()));
         fs::write(&live_one, b"mine").unwrap();
         let keep = [".a.glb.tmp-12x", ".b.glb.tmp-99999999", "a.glb.tmp-99999999"];
@@ -197,6 +259,18 @@ mod tests {
             assert!(d.path().join(k).exists(), "{k} is not surfcap's");
         }
         assert_eq!(fs::read(&out).unwrap(), b"old output");
+    }
+
+    #[test]
+    fn a_stale_previous_folder_of_the_users_is_never_swept() {
+        let d = tempfile::tempdir().unwrap();
+        let out = d.path().join("o");
+        fs::create_dir(&out).unwrap();
+        let aside = d.path().join(format!(".o.old-{DEAD}"));
+        fs::create_dir(&aside).unwrap();
+        fs::write(aside.join("thesis.tex"), b"user").unwrap();
+        sweep_stale(&out);
+        assert_eq!(fs::read(aside.join("thesis.tex")).unwrap(), b"user", "no marker: not surfcap's to delete");
     }
 
     #[test]
