@@ -107,11 +107,14 @@ fn unique(dir: &Path, file: &Path) -> PathBuf {
     }
 }
 
+/// Copies `file` into `dir` (in the report folder's temporary while the report is built);
+/// returns the copy's final path.
 fn copy_into(dir: &Path, file: &Path) -> anyhow::Result<PathBuf> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let to = unique(dir, file);
+    let place = surfcap_mesh::output_set::write_place(dir);
+    std::fs::create_dir_all(&place).with_context(|| format!("creating {}", dir.display()))?;
+    let to = unique(&place, file);
     std::fs::copy(file, &to).with_context(|| format!("copying {} to {}", file.display(), to.display()))?;
-    Ok(to)
+    Ok(to.file_name().map_or(to.clone(), |n| dir.join(n)))
 }
 
 fn rel(root: &Path, p: &Path) -> String {
@@ -127,6 +130,12 @@ pub struct Written {
     pub plots: usize,
     pub animations: usize,
     pub tables: usize,
+}
+
+/// Whether `out` holds a report surfcap wrote before its folders had a marker (its page names
+/// surfcap as generator).
+pub fn is_earlier_report(out: &Path) -> bool {
+    std::fs::read_to_string(out.join("index.html")).is_ok_and(|h| h.contains(REPORT_MARK))
 }
 
 /// Writes the report of `s` into `out`, replacing an earlier report there; any other non-empty
@@ -146,10 +155,12 @@ pub fn write_report(
     // An earlier report in `out` (marked, or older than the marker: its page names surfcap as
     // generator) is replaced whole, never mixed with the new one; any other non-empty folder is
     // refused unless `force`.
-    let unmarked_report = std::fs::read_to_string(out.join("index.html")).is_ok_and(|h| h.contains(REPORT_MARK));
+    let unmarked_report = is_earlier_report(out);
     let old_report = unmarked_report || surfcap_mesh::output_path::is_output_of(out, "report");
     surfcap_mesh::output_path::claim_dir(out, "report", force || unmarked_report)?;
-    if old_report {
+    // Built in place (not planned in an output set, as inside the demo's folder): an earlier
+    // report's files go first.
+    if old_report && !surfcap_mesh::output_set::is_planned(out) {
         for sub in ["plots", "anim", "data"] {
             let _ = std::fs::remove_dir_all(out.join(sub));
         }
@@ -231,7 +242,8 @@ pub fn write_report(
                 for (side, suffix) in [(report.clone(), ".report.json"), (f.with_extension("json"), ".json")] {
                     if side.is_file() {
                         let dest = to.with_file_name(format!("{to_stem}{suffix}"));
-                        std::fs::copy(&side, &dest).with_context(|| format!("copying {}", side.display()))?;
+                        std::fs::copy(&side, surfcap_mesh::output_set::write_place(&dest))
+                            .with_context(|| format!("copying {}", side.display()))?;
                     }
                 }
                 row += "</p>";

@@ -365,6 +365,15 @@ impl ConstraintOpts {
 }
 
 impl OutOpts {
+    /// Plans the animation (its sidecar when a file) and its report before any work, checked
+    /// against `inputs` and the place rules (`surfcap_mesh::output_set`); commit it with
+    /// [`crate::Ctx::commit`] once written.
+    pub fn plan(&self, ctx: &crate::Ctx, inputs: &[&Path]) -> anyhow::Result<surfcap_mesh::output_set::OutputSet> {
+        let mut set = surfcap_mesh::output_set::OutputSet::new(inputs);
+        surfcap_synthesis::plan_animation_and_report(&mut set, self.format, &self.output, ctx.force)?;
+        Ok(set)
+    }
+
     pub fn format(&self) -> ExportFormat {
         output_format(self.format, &self.output)
     }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 use surfcap_formats::export::ExportOptions;
+use surfcap_mesh::output_set::OutputSet;
 
 /// What every command gets: how to report.
 pub struct Ctx {
@@ -25,10 +26,29 @@ impl Ctx {
         ExportOptions { force: self.force, ..Default::default() }
     }
 
-    /// Makes `dir` a folder output of `kind` that the command fills file by file: refused when
-    /// it is a folder surfcap did not write (unless `--force`), else created with its marker.
-    pub fn claim_dir(&self, dir: &Path, kind: &str) -> anyhow::Result<PathBuf> {
-        Ok(surfcap_mesh::output_path::claim_dir(dir, kind, self.force)?)
+    /// Plans `dir` as the folder output of `kind` the command fills file by file (refused when
+    /// it overlaps `inputs`, or is a folder surfcap did not write unless `--force`), and starts
+    /// it: the files go to its temporary, which replaces `dir` whole, marker included, only at
+    /// [`Ctx::commit`]. Returns the set and the folder's path to write under.
+    pub fn claim_dir(&self, dir: &Path, kind: &str, inputs: &[&Path]) -> anyhow::Result<(OutputSet, PathBuf)> {
+        let mut set = OutputSet::new(inputs);
+        set.dir(dir, kind, self.force)?;
+        let path = surfcap_mesh::output_path::claim_dir(dir, kind, self.force)?;
+        Ok((set, path))
+    }
+
+    /// Commits a command's planned outputs together (`surfcap_mesh::output_set`); a previous
+    /// folder that could not be removed afterwards is named.
+    pub fn commit(&self, set: OutputSet) -> anyhow::Result<()> {
+        let done = set.commit()?;
+        for (output, kept) in done.kept_previous {
+            eprintln!(
+                "warning: {} replaced, but its previous folder could not be removed: it is kept as {}",
+                output.display(),
+                kept.display()
+            );
+        }
+        Ok(())
     }
 
     /// A note for humans (assumptions, hints) on stderr; silent with --quiet or --json.

@@ -53,6 +53,11 @@ pub struct VaryOpts {
     pub variation_model: Option<PathBuf>,
 }
 
+/// The files `--appearance` and `--variation-model` name (inputs no output may overlap).
+pub fn playback_inputs<'a>(appearance: &'a AppearanceOpts, vary: &'a VaryOpts) -> Vec<&'a Path> {
+    appearance.appearance.iter().chain(&vary.variation_model).map(PathBuf::as_path).collect()
+}
+
 /// How the walk is played: `--appearance` and `--vary`.
 pub fn playback(appearance: &AppearanceOpts, vary: &VaryOpts) -> Playback {
     let variation = match (vary.vary, &vary.variation_model) {

@@ -9,6 +9,7 @@ use crate::{glb, obj, pc2, ply, shared_layout};
 use surfcap_mesh::atomic::{write_dir, write_file};
 use surfcap_mesh::error::Result;
 use surfcap_mesh::frame_set::FrameSet;
+use surfcap_mesh::output_set::{OutputSet, Stamped};
 use surfcap_mesh::progress::Progress;
 use surfcap_mesh::subject::Subject;
 
@@ -107,6 +108,35 @@ pub fn sidecar(subject: &Subject) -> serde_json::Value {
     })
 }
 
+/// The kind of side file a sidecar is (`surfcap_mesh::output_set::Stamped`): a sidecar replaces
+/// only an earlier sidecar surfcap wrote.
+pub const SIDECAR_KIND: &str = "export-sidecar";
+
+/// Writes a sidecar beside a file output: `v` stamped as surfcap's (`"written_by"`,
+/// `"output_kind"`), its own fields as they are.
+fn write_sidecar(path: &Path, v: &serde_json::Value) -> Result<()> {
+    write_file(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &Stamped::new(SIDECAR_KIND, v)).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+}
+
+/// Plans the outputs of an export to `out` in `format` in `set` (before any work): the file and
+/// its sidecar for glb, usda and abc, else the folder (replacing a folder surfcap did not write
+/// only with `force`).
+pub fn plan_export(set: &mut OutputSet, format: ExportFormat, out: &Path, force: bool) -> Result<()> {
+    match format {
+        ExportFormat::Glb | ExportFormat::Usda | ExportFormat::Abc => {
+            set.file(out)?;
+            set.side_file(&glb_sidecar_path(out), SIDECAR_KIND)?;
+        }
+        ExportFormat::Obj | ExportFormat::Ply | ExportFormat::Pc2 | ExportFormat::Npy => {
+            set.dir(out, format.output_kind(), force)?;
+        }
+    }
+    Ok(())
+}
+
 fn write_json(path: &Path, v: &serde_json::Value) -> Result<()> {
     write_file(path, |w| {
         serde_json::to_writer_pretty(&mut *w, v).map_err(std::io::Error::other)?;
@@ -160,7 +190,7 @@ pub fn export_frame_set(
                 write_file(out, |w| crate::abc::write_abc_frame_set(w, set))?;
             }
             let side = glb_sidecar_path(out);
-            write_json(&side, &meta)?;
+            write_sidecar(&side, &meta)?;
             progress.finish();
             Ok(vec![out.to_path_buf(), side])
         }
@@ -206,7 +236,7 @@ pub fn export_textured_glb(
     progress.start("writing glb", 1);
     write_file(out, |w| crate::glb_frame_set::write_glb_frame_set_textured(w, set, textures))?;
     let side = glb_sidecar_path(out);
-    write_json(&side, &meta)?;
+    write_sidecar(&side, &meta)?;
     progress.finish();
     Ok(vec![out.to_path_buf(), side])
 }
@@ -226,7 +256,7 @@ pub fn export(
             progress.start("writing glb", 1);
             write_file(out, |w| glb::write_glb(w, subject))?;
             let side = glb_sidecar_path(out);
-            write_json(&side, &meta)?;
+            write_sidecar(&side, &meta)?;
             progress.finish();
             Ok(vec![out.to_path_buf(), side])
         }
@@ -240,7 +270,7 @@ pub fn export(
             progress.start(what, 1);
             write_file(out, |w| write(w, subject))?;
             let side = glb_sidecar_path(out);
-            write_json(&side, &meta)?;
+            write_sidecar(&side, &meta)?;
             progress.finish();
             Ok(vec![out.to_path_buf(), side])
         }

@@ -157,6 +157,17 @@ pub fn is_planned(path: &Path) -> bool {
     resolve(path).is_ok_and(|p| planned().iter().any(|e| e.path == p))
 }
 
+/// Where a write to `path` goes now: inside the temporary of a planned folder that holds it
+/// (the folder reaches `path` at the commit), else `path` itself. For writers that do not go
+/// through `crate::atomic` (copies).
+pub fn write_place(path: &Path) -> PathBuf {
+    match resolve(path).ok().and_then(|p| staging(&p).ok().flatten()) {
+        Some(Staging::Inside(real)) => real,
+        Some(Staging::Dir { tmp, .. }) | Some(Staging::File(tmp)) => tmp,
+        None => path.to_path_buf(),
+    }
+}
+
 /// Records whether the planned output at `path` has a complete temporary.
 pub(crate) fn set_staged(path: &Path, staged: bool) {
     if let Some(e) = planned().iter_mut().find(|e| e.path == path) {

@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
-use surfcap_formats::export::{ExportFormat, ExportOptions, export, export_frame_set};
+use surfcap_formats::export::{ExportFormat, ExportOptions, export, export_frame_set, plan_export};
+use surfcap_mesh::output_set::{OutputSet, Stamped};
 use surfcap_mesh::frame_set::FrameSet;
 use surfcap_mesh::{Progress, Subject, UpAxis};
 
@@ -60,10 +61,39 @@ pub fn report_path(output: &Path) -> PathBuf {
     output.with_file_name(format!("{stem}.report.json"))
 }
 
-/// Writes a report as pretty JSON (a final newline) to `path`, atomically.
+/// The kind of side file a report is (`surfcap_mesh::output_set::Stamped`): a report replaces
+/// only an earlier report surfcap wrote.
+pub const REPORT_KIND: &str = "report";
+
+/// Plans an animation's outputs in `set` before any work: the `.frames` folder (when `format` is
+/// none and the output ends in `.frames`), else the exporter's file and sidecar or folder
+/// (`surfcap_formats::export::plan_export`).
+pub fn plan_animation(set: &mut OutputSet, format: Option<ExportFormat>, output: &Path, force: bool) -> Result<()> {
+    if format.is_none() && output.extension().is_some_and(|e| e == "frames") {
+        set.dir(output, surfcap_mesh::frame_set_cache::OUTPUT_KIND, force)?;
+    } else {
+        plan_export(set, output_format(format, output), output, force)?;
+    }
+    Ok(())
+}
+
+/// [`plan_animation`] and the report beside it ([`report_path`]).
+pub fn plan_animation_and_report(
+    set: &mut OutputSet,
+    format: Option<ExportFormat>,
+    output: &Path,
+    force: bool,
+) -> Result<()> {
+    plan_animation(set, format, output, force)?;
+    set.side_file(&report_path(output), REPORT_KIND)?;
+    Ok(())
+}
+
+/// Writes a report as pretty JSON (a final newline) to `path`, atomically, stamped as surfcap's
+/// report (`"written_by"`, `"output_kind"` first, then the report's own fields).
 pub fn write_report<T: Serialize + ?Sized>(path: &Path, report: &T) -> Result<()> {
     surfcap_mesh::atomic::write_file(path, |w| {
-        serde_json::to_writer_pretty(&mut *w, report).map_err(std::io::Error::other)?;
+        serde_json::to_writer_pretty(&mut *w, &Stamped::new(REPORT_KIND, report)).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })?;
     Ok(())

@@ -53,7 +53,9 @@ pub mod walk_output;
 pub mod walk_variants;
 pub mod words;
 
-pub use animation_output::{Animation, report_path, write_animation};
+pub use animation_output::{
+    Animation, REPORT_KIND, plan_animation, plan_animation_and_report, report_path, write_animation, write_report,
+};
 pub use constraint::{Constraint, ConstraintsMissed, Tolerances};
 pub use error::{Error, Result};
 pub use keyposes_run::{KeyposesOutcome, KeyposesReport, synthesize_keyposes};

@@ -144,10 +144,19 @@ fn shell_word(p: &str) -> String {
     }
 }
 
-/// Samples the request's variants and writes them with their report; the request is checked
-/// against the model before the output folder is claimed or anything sampled.
+/// Samples the request's variants and writes them with their report; the output folder is
+/// planned (`surfcap_mesh::output_set`) and the request checked against the model before
+/// anything is sampled. The folder is filled in its temporary and put in place whole at the end
+/// (by the caller's output set when it planned the folder, else here), so a failed run leaves
+/// the place as it was.
 pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> Result<SampleOutcome> {
-    surfcap_mesh::output_path::check_not_input(&r.output, &[&r.model])?;
+    let own = if surfcap_mesh::output_set::is_planned(&r.output) {
+        None
+    } else {
+        let mut set = surfcap_mesh::output_set::OutputSet::new(&[&r.model]);
+        set.dir(&r.output, SAMPLES_KIND, r.force)?;
+        Some(set)
+    };
     let t0 = Instant::now();
     let model = VariationModel::load(&r.model)?;
     let load_seconds = t0.elapsed().as_secs_f64();
@@ -295,6 +304,9 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
         view: view.join(" "),
     };
     write_report(&out_dir.join("report.json"), &report)?;
+    if let Some(set) = own {
+        set.commit()?;
+    }
     let unit = crate::words::unit_name(&model.units).to_string();
     Ok(SampleOutcome { report, name, out_dir, unit })
 }

@@ -164,6 +164,15 @@ pub fn train_variation_model(
     let t_train = Instant::now();
     let model = VariationModel::train(subject, chosen, parts, options, progress)?;
     let train_seconds = t_train.elapsed().as_secs_f64();
+    // The model and its report go in place together: in the caller's output set when it planned
+    // the folder, else in one of their own.
+    let own = if surfcap_mesh::output_set::is_planned(&r.output) {
+        None
+    } else {
+        let mut set = surfcap_mesh::output_set::OutputSet::new(&[&r.subject_path]);
+        set.dir(&r.output, KIND, r.force)?;
+        Some(set)
+    };
     model.save(&r.output, r.force)?;
     let report = TrainReport {
         model: r.output.clone(),
@@ -201,6 +210,9 @@ pub fn train_variation_model(
         threads: rayon::current_num_threads(),
     };
     write_report(&r.output.join("report.json"), &report)?;
+    if let Some(set) = own {
+        set.commit()?;
+    }
     Ok(report)
 }
 

@@ -44,7 +44,9 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let inputs: Vec<&std::path::Path> = a.bvh.iter().map(|p| p.as_path()).collect();
     surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
-    ctx.claim_dir(&a.output, "demo")?;
+    // Filled in place (the demo reads back what it writes); a folder surfcap did not write is
+    // refused, even with --force, so a failed demo never leaves its marker among the user's files.
+    surfcap_mesh::output_path::claim_dir(&a.output, "demo", ctx.force)?;
     let bar = crate::progress::Bar::new(ctx);
     let say = |s: &str| ctx.say(s);
     let procedural: Vec<String> = if a.bvh.is_empty() {

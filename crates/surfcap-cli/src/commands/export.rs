@@ -30,7 +30,9 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
+    // Every output (the file and its sidecar, or the folder) planned before any work.
+    let mut outs = surfcap_mesh::output_set::OutputSet::new(&[&a.subject.path]);
+    surfcap_formats::export::plan_export(&mut outs, a.format, &a.output, ctx.force)?;
     // A frame set (every frame its own topology) goes to the formats that hold that: abc, obj.
     if surfcap_mesh::frame_set_cache::is_frame_set(&a.subject.path) {
         if !a.sequences.is_empty() {
@@ -40,6 +42,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         let set = surfcap_mesh::frame_set_cache::read_frame_set(&a.subject.path, &bar)?;
         let written = surfcap_formats::export::export_frame_set(&set, a.format, &a.output, ctx.export_options(), &bar)
             .with_context(|| format!("exporting {:?}", set.name))?;
+        ctx.commit(outs)?;
         ctx.result(
             &json!({ "written": written, "frames": set.frame_count(), "sequences": set.sequences().len() }),
             || ctx.wrote(&written),
@@ -50,6 +53,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&s, a.format, &a.output, ExportOptions { ply_ascii: a.ascii, ..ctx.export_options() }, &bar)
         .with_context(|| format!("exporting {:?}", s.name))?;
+    ctx.commit(outs)?;
     ctx.result(&json!({ "written": written, "frames": s.n_frames(), "sequences": s.sequences().len() }), || {
         ctx.wrote(&written)
     });

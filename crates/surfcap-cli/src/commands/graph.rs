@@ -43,8 +43,7 @@ fn edge_kinds(g: &Graph, s: &Subject) -> (usize, usize) {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let What::Build { subject, output, graph } = a.what;
-    surfcap_mesh::output_path::check_not_input(&output, &[&subject])?;
-    let output = ctx.claim_dir(&output, "graph")?;
+    let (outs, output) = ctx.claim_dir(&output, "graph", &[&subject])?;
     let s = open(ctx, &subject, &graph.source)?;
     let p = graph.params(s.fps)?;
     let pipe = graph.cache.pipeline(ctx, s);
@@ -66,6 +65,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "seconds": secs, "cached": fetched.from_cache, "files": ["edges.npy", "weights.npy", "graph.json"],
     });
     write_json(&output.join("graph.json"), &report)?;
+    ctx.commit(outs)?;
     ctx.result(&report, || {
         println!(
             "{} graph of {:?}, alpha {alpha}: {} ({frames_in_graph} with edges), {} ({original} original, {}), density {:.5} -> {} ({}, {secs:.2} s)",

@@ -66,7 +66,10 @@ impl std::str::FromStr for Method {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == Method::Nonlinear);
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
+    let mut inputs = vec![a.subject.as_path()];
+    inputs.extend(a.appearance.appearance.as_deref());
+    let mut outs = surfcap_mesh::output_set::OutputSet::new(&inputs);
+    surfcap_formats::export::plan_export(&mut outs, format, &a.output, ctx.force)?;
     let s = open(ctx, &a.subject, &a.source)?;
     let what = format!("--steps {}", a.steps);
     a.limits.check(&Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
@@ -107,6 +110,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         None => (export(&out, format, &a.output, ctx.export_options(), &bar)?, None),
     };
     drop(bar);
+    ctx.commit(outs)?;
     let mut result = json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() });
     if let Some(t) = textures {
         result["appearance"] = serde_json::to_value(t)?;

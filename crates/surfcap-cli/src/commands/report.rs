@@ -26,10 +26,13 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut inputs = vec![a.subject.path.as_path()];
     inputs.extend(a.include.iter().map(|p| p.as_path()));
-    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
+    // The report folder is built in its temporary and replaces the output whole at the end.
+    let mut outs = surfcap_mesh::output_set::OutputSet::new(&inputs);
+    outs.dir(&a.output, "report", ctx.force || crate::html_report::is_earlier_report(&a.output))?;
     let s = a.subject.open(ctx)?;
     let pipe = a.cache.pipeline(ctx, s);
     let w = write_report(&pipe, &a.subject.path, &a.output, &a.include, ctx.force)?;
+    ctx.commit(outs)?;
     let result = json!({ "index": w.index, "plots": w.plots, "animations": w.animations, "tables": w.tables });
     ctx.result(&result, || {
         println!(

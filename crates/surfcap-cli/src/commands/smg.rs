@@ -163,7 +163,8 @@ fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
 }
 
 fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.graph.input])?;
+    let mut outs = surfcap_mesh::output_set::OutputSet::new(&[&a.graph.input]);
+    surfcap_synthesis::plan_animation_and_report(&mut outs, a.format, &a.output, ctx.force)?;
     let bar = crate::progress::Bar::new(ctx);
     let o = a.graph.open(&[("--from", &a.from), ("--to", &a.to)], &bar)?;
     let q = SmgQuery {
@@ -179,6 +180,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         Output { path: a.output.clone(), format: a.format, force: ctx.force, tolerances: a.constraints.tolerances() };
     let done = o.query(&a.graph.request(), &q, &out, &bar)?;
     drop(bar);
+    ctx.commit(outs)?;
     let (r, path) = (&done.report, &done.path);
     ctx.result(r, || {
         println!(

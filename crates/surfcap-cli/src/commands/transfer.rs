@@ -137,8 +137,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.source, &a.target, &a.pairs];
     inputs.extend(a.source_parts.as_deref());
     inputs.extend(a.target_parts.as_deref());
-    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
-    ctx.claim_dir(&a.output, KIND)?;
+    let (outs, output) = ctx.claim_dir(&a.output, KIND, &inputs)?;
     let t0 = Instant::now();
     let source = open(ctx, &a.source, &a.source_opts)?;
     let target = open(ctx, &a.target, &a.source_opts)?;
@@ -179,7 +178,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
             target.sequences()[g.target_sequence].name
         ));
     }
-    write_model(&a.output, &trained.model, &trained.subjects, &trained.target_training)?;
+    write_model(&output, &trained.model, &trained.subjects, &trained.target_training)?;
     let groups: Vec<serde_json::Value> = t
         .groups
         .iter()
@@ -200,7 +199,8 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
         "parts": t.report.parts, "displacement": t.report.displacement,
         "fit_seconds": t.fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(), "cached": trained.from_cache,
     });
-    crate::output::write_json(&a.output.join("report.json"), &result)?;
+    crate::output::write_json(&output.join("report.json"), &result)?;
+    ctx.commit(outs)?;
     ctx.result(&result, || print_trained(&result));
     Ok(())
 }
@@ -245,7 +245,10 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
     })?;
     let subject_path = PathBuf::from(subject_path);
     let format = a.out.format();
-    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.model, &subject_path])?;
+    // The animation (its sidecar when a file) and the report, planned before any work.
+    let mut outs = surfcap_mesh::output_set::OutputSet::new(&[&a.model, &subject_path]);
+    surfcap_formats::export::plan_export(&mut outs, format, &a.out.output, ctx.force)?;
+    outs.side_file(&surfcap_synthesis::report_path(&a.out.output), surfcap_synthesis::REPORT_KIND)?;
     let t0 = Instant::now();
     let saved = read_model(&a.model)?;
     let model = &saved.model;
@@ -369,7 +372,8 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
         "per_frame": { "displacement": out.displacements, "cuts": cuts },
         "written": written,
     });
-    crate::output::write_json(&surfcap_synthesis::report_path(&a.out.output), &report)?;
+    surfcap_synthesis::write_report(&surfcap_synthesis::report_path(&a.out.output), &report)?;
+    ctx.commit(outs)?;
     ctx.result(&report, || {
         println!(
             "{} ({} frames) transferred onto {} in {transfer_seconds:.2} s ({}; set-up {setup_seconds:.2} s) -> {}",

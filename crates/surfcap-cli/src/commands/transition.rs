@@ -10,7 +10,6 @@ use surfcap_mesh::{FrameLabel, Sequence};
 use surfcap_motion::transition_frames::transition_frames;
 
 use crate::options::{CacheOpts, SubjectArgs, TableOpts};
-use crate::output::write_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -32,7 +31,15 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
+    // The glb, its sidecar, the report and the plot, planned before any work.
+    let rp = a.output.with_extension("transition.json");
+    let stem = a.output.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
+    let plot = a.output.with_file_name(format!("{stem}-dtw"));
+    let mut outs = surfcap_mesh::output_set::OutputSet::new(&[&a.subject.path]);
+    surfcap_formats::export::plan_export(&mut outs, ExportFormat::Glb, &a.output, ctx.force)?;
+    outs.side_file(&rp, surfcap_synthesis::REPORT_KIND)?;
+    outs.file(&plot.with_extension("svg"))?;
+    outs.file(&plot.with_extension("png"))?;
     let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
@@ -69,8 +76,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         "normalised_cost": warp.cost, "table_cost": table.cost[k], "slope": p.slope,
         "warp": warp.path, "blend_seconds": secs,
     });
-    let rp = a.output.with_extension("transition.json");
-    write_json(&rp, &report)?;
+    surfcap_synthesis::write_report(&rp, &report)?;
     written.push(rp);
     // The distance matrix around the transition with its DTW warp on it (thesis Fig. 2.10):
     // source frames down, destination frames across, a margin of a few frames around both
@@ -89,8 +95,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         range: None,
         path: warp.path.clone(),
     };
-    let stem = a.output.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
-    written.extend(surfcap_plot::write_heat_map(&a.output.with_file_name(format!("{stem}-dtw")), &heat)?);
+    written.extend(surfcap_plot::write_heat_map(&plot, &heat)?);
+    ctx.commit(outs)?;
     ctx.result(&json!({ "transition": report, "written": written }), || {
         println!(
             "transition {i} -> {j}: source segment {li} frames, destination {lj}, duration {} frames, normalised cost {:.3}; blended in {secs:.2} s",

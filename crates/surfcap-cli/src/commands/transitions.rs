@@ -22,8 +22,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
-    ctx.claim_dir(&a.output, "transitions")?;
+    let (outs, _) = ctx.claim_dir(&a.output, "transitions", &[&a.subject.path])?;
     let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
     let pipe = a.cache.pipeline(ctx, s);
@@ -41,6 +40,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     w("lj.npy", &|o| write_npy(o, &[n, n], &t.lj))?;
     let finite: Vec<f64> = t.cost.iter().copied().filter(|c| c.is_finite()).collect();
     let mean = crate::output::mean(finite.iter().copied());
+    ctx.commit(outs)?;
     let result = json!({
         "frames": n, "pairs_with_transitions": finite.len(), "mean_cost": mean,
         "l_min": p.l_min, "l_max": p.l_max, "slope": p.slope, "seconds": secs, "cached": fetched.from_cache,

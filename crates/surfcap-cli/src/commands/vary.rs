@@ -184,8 +184,9 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
 fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.subject];
     inputs.extend(a.parts.as_deref());
-    surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
-    ctx.claim_dir(&a.output, MODEL_KIND)?;
+    // The model folder is built in its temporary and put in place, marker included, only when
+    // the training succeeded: a failed run leaves the folder as it was.
+    let (outs, _) = ctx.claim_dir(&a.output, MODEL_KIND, &inputs)?;
     let t0 = Instant::now();
     let subject = open(ctx, &a.subject, &a.source_opts)?;
     let request = TrainRequest {
@@ -214,6 +215,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     ));
     let report = train_variation_model(&subject, &request, &chosen, &parts, &options, t0, &bar)?;
     drop(bar);
+    ctx.commit(outs)?;
     ctx.result(&report, || print_trained(&report));
     Ok(())
 }

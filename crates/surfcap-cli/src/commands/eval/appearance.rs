@@ -263,7 +263,7 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.data];
     inputs.extend(a.frames_dir.as_deref());
-    super::folder::claim(ctx, &a.output, &inputs, "eval-appearance")?;
+    let outs = super::folder::claim(ctx, &a.output, &inputs, "eval-appearance")?;
     let source = match a.frames_dir {
         Some(d) => Frames::Existing(d),
         None => {
@@ -279,7 +279,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         image_size: a.image_size,
         ..Default::default()
     };
-    evaluate(ctx, source, &opts, &a.flow, a.full_resolution_flows, &a.cache, &a.output)
+    evaluate(ctx, source, &opts, &a.flow, a.full_resolution_flows, &a.cache, &a.output)?;
+    ctx.commit(outs)
 }
 
 fn evaluate(

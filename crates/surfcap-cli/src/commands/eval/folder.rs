@@ -6,11 +6,15 @@ use std::path::{Path, PathBuf};
 use crate::output::write_json;
 
 /// Refuses an output that overlaps one of the inputs, then makes it an evaluation folder of
-/// `kind` (refused when surfcap did not write it, unless `--force`).
-pub fn claim(ctx: &crate::Ctx, output: &Path, inputs: &[&Path], kind: &str) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(output, inputs)?;
-    ctx.claim_dir(output, kind)?;
-    Ok(())
+/// `kind` (refused when surfcap did not write it, unless `--force`), filled in its temporary
+/// and put in place whole when the returned set is committed (`crate::Ctx::commit`).
+pub fn claim(
+    ctx: &crate::Ctx,
+    output: &Path,
+    inputs: &[&Path],
+    kind: &str,
+) -> anyhow::Result<surfcap_mesh::output_set::OutputSet> {
+    Ok(ctx.claim_dir(output, kind, inputs)?.0)
 }
 
 /// Writes an evaluation's report to `dir/name`: `result` as JSON with the files the command

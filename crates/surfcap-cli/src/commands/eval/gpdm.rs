@@ -99,10 +99,11 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-gpdm")?;
+    let outs = super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-gpdm")?;
     let Args { sequences, vertices, max_frames, latent_dim, samples, iterations, seed, output, subject } = a;
     let opts = GpdmEvalOptions { sequences, vertices, max_frames, latent_dim, samples, seed: seed.seed, iterations };
-    evaluate(ctx, &subject.open(ctx)?, &opts, &output)
+    evaluate(ctx, &subject.open(ctx)?, &opts, &output)?;
+    ctx.commit(outs)
 }
 
 fn evaluate(ctx: &crate::Ctx, s: &Subject, opts: &GpdmEvalOptions, output: &Path) -> anyhow::Result<()> {

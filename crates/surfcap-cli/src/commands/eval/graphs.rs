@@ -30,7 +30,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-graphs")?;
+    let outs = super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-graphs")?;
     anyhow::ensure!(!a.alphas.is_empty(), "--alpha: expected at least one value");
     let s = a.subject.open(ctx)?;
     let opts =
@@ -96,5 +96,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         println!("wrote {} and {} plots in {} ({:.1} s)", rp.display(), plots.len(), output.display(), r.seconds);
     });
-    Ok(())
+    ctx.commit(outs)
 }

@@ -28,7 +28,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    super::folder::claim(ctx, &a.output, &[&a.data], "eval-interchange")?;
+    let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-interchange")?;
     let Args { data, datasets, formats, output } = a;
     let output = output.as_path();
     let scratch = tempfile::tempdir().context("creating a temporary folder")?;
@@ -84,5 +84,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     if r.not_exact > 0 {
         anyhow::bail!("{} of {} round trips were not exact (see {})", r.not_exact, r.round_trips.len(), path.display());
     }
-    Ok(())
+    ctx.commit(outs)
 }

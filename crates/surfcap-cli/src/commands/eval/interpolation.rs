@@ -33,9 +33,10 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    if let Some(o) = &a.output {
-        super::folder::claim(ctx, o, &[&a.subject.path], "eval-interpolation")?;
-    }
+    let outs = match &a.output {
+        Some(o) => Some(super::folder::claim(ctx, o, &[&a.subject.path], "eval-interpolation")?),
+        None => None,
+    };
     let Args { pairs, lambda, stretch, output, subject } = a;
     let opts = InterpolationOptions { pairs, lambda, stretch, sweeps: output.is_some() };
     let r = interpolation_eval(&subject.open(ctx)?, &opts)?;
@@ -60,7 +61,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             );
         }
     });
-    Ok(())
+    match outs {
+        Some(outs) => ctx.commit(outs),
+        None => Ok(()),
+    }
 }
 
 /// `interpolation.json` and `distortion.svg/png`, `volume.svg/png`: each measure over lambda,

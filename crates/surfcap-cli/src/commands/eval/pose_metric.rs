@@ -37,7 +37,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    claim(ctx, &a.output, &[&a.subject], "eval-pose-metric")?;
+    let outs = claim(ctx, &a.output, &[&a.subject], "eval-pose-metric")?;
     let opts =
         PoseMetricOptions { max_frames: a.max_frames, permutations: a.permutations, classes: a.classes, seed: a.seed };
     let s = open(ctx, &a.subject, &a.source)?;
@@ -90,5 +90,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         print_wrote(&rp, &plots);
     });
-    Ok(())
+    ctx.commit(outs)
 }

@@ -33,7 +33,7 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let bvh: Vec<&Path> = a.bvh.iter().map(PathBuf::as_path).collect();
-    super::folder::claim(ctx, &a.output, &bvh, "eval-root-motion")?;
+    let outs = super::folder::claim(ctx, &a.output, &bvh, "eval-root-motion")?;
     let contacts =
         ContactParams { height: a.contact_height, speed: a.contact_speed, vertical_speed: a.contact_vertical_speed };
     let output = a.output.as_path();
@@ -68,5 +68,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         println!("wrote {} ({:.1} s)", path.display(), r.seconds);
     });
-    Ok(())
+    ctx.commit(outs)
 }

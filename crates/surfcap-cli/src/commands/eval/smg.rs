@@ -80,7 +80,7 @@ struct Input {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.data];
     inputs.extend(a.input.as_deref());
-    super::folder::claim(ctx, &a.output, &inputs, "eval-smg")?;
+    let outs = super::folder::claim(ctx, &a.output, &inputs, "eval-smg")?;
     let Args {
         data,
         vertices,
@@ -252,7 +252,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             println!("wrote {}", p.display());
         }
     });
-    Ok(())
+    ctx.commit(outs)
 }
 
 /// The comparison table: one row per key pair and engine.

@@ -31,7 +31,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    claim(ctx, &a.output, &[&a.subject.path], "eval-transitions")?;
+    let outs = claim(ctx, &a.output, &[&a.subject.path], "eval-transitions")?;
     let opts = TransitionCostsOptions { slopes: a.slopes, fixed: a.fixed, plot_pairs: a.plot_pairs };
     let pipe = a.cache.pipeline(ctx, a.subject.open(ctx)?);
     let output = a.output.as_path();
@@ -102,5 +102,5 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         print_wrote(&rp, &plots);
     });
-    Ok(())
+    ctx.commit(outs)
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use surfcap_synthesis::synthesize_keyposes;
 
 use crate::options::{GraphOpts, OutOpts, open};
-use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback};
+use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback, playback_inputs};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -28,7 +28,9 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject, &a.keys])?;
+    let mut inputs = vec![a.subject.as_path(), a.keys.as_path()];
+    inputs.extend(playback_inputs(&a.appearance, &a.vary));
+    let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let pipe = a.graph.cache.pipeline(ctx, s);
@@ -36,6 +38,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_keyposes(pipe, params, &a.keys, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
     drop(bar);
+    ctx.commit(outs)?;
     ctx.result(&o.report, || {
         // Thesis Fig. 3.18: input, requested and obtained times.
         let row = |label: &str, v: Vec<String>| {

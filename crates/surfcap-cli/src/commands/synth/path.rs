@@ -7,7 +7,7 @@ use surfcap_synthesis::{PathRequest, synthesize_path};
 
 use crate::options::{GraphOpts, OutOpts, open};
 use crate::output::{count_of, length};
-use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback};
+use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback, playback_inputs};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -52,7 +52,9 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject, &a.curve])?;
+    let mut inputs = vec![a.subject.as_path(), a.curve.as_path()];
+    inputs.extend(playback_inputs(&a.appearance, &a.vary));
+    let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let units = s.units.clone();
@@ -71,6 +73,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_path(pipe, params, &request, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
     drop(bar);
+    ctx.commit(outs)?;
     let curve_length = o.report.curve_length;
     ctx.result(&o.report, || {
         println!(

@@ -9,7 +9,7 @@ use surfcap_synthesis::{ReachRequest, synthesize_reach};
 
 use crate::options::{GraphOpts, OutOpts, Positive, open};
 use crate::output::length;
-use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback};
+use crate::synthesis_args::{AppearanceOpts, VaryOpts, check_constraints, playback, playback_inputs};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -45,7 +45,9 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    surfcap_mesh::output_path::check_not_input(&a.out.output, &[&a.subject])?;
+    let mut inputs = vec![a.subject.as_path()];
+    inputs.extend(playback_inputs(&a.appearance, &a.vary));
+    let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
     let units = s.units.clone();
@@ -62,6 +64,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_reach(pipe, params, &request, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
     drop(bar);
+    ctx.commit(outs)?;
     let r = &o.report;
     ctx.result(r, || {
         println!(
