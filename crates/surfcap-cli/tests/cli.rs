@@ -1180,3 +1180,109 @@ fn distance_scale_is_explained_and_an_untagged_subject_says_how_to_tag() {
     assert!(!e.contains("tags are"), "{e}");
     assert!(!out.exists());
 }
+
+/// Every output of a command is planned and checked before any work: a side file (the sidecar
+/// beside a glb, the report beside an animation) replaces only surfcap's own earlier side file,
+/// never an input or a file of the user's, and a side file that cannot be written leaves every
+/// previous output as it was (and no new one).
+#[cfg(unix)]
+#[test]
+fn side_files_replace_only_surfcaps_own_and_a_refusal_changes_nothing() {
+    let Some(src) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let subject = t.join("h.subject");
+    assert!(surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]).status.success());
+    let user = r#"{"mine": true}"#;
+    // The user's notes.json beside -o notes.glb.
+    std::fs::write(t.join("notes.json"), user).unwrap();
+    let o = surfcap!(&["export", p(&subject), "--format", "glb", "-o", p(&t.join("notes.glb"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("notes.json") && stderr(&o).contains("surfcap did not write"), "{}", stderr(&o));
+    // The keys file is an input (and not surfcap's).
+    std::fs::write(t.join("poses.json"), user).unwrap();
+    let o = surfcap!(&["synth", "keyposes", p(&subject), "--keys", p(&t.join("poses.json")), "-o", p(&t.join("poses.glb"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("is the input"), "{}", stderr(&o));
+    // A curve named like the report of -o x.glb.
+    std::fs::write(t.join("x.report.json"), "0,0\n1,1\n").unwrap();
+    let o = surfcap!(&["synth", "path", p(&subject), "--curve", p(&t.join("x.report.json")), "-o", p(&t.join("x.glb"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("x.report.json") && stderr(&o).contains("is the input"), "{}", stderr(&o));
+    // The user's parts file beside -o knight.parts.glb of a transfer.
+    std::fs::write(t.join("knight.parts.json"), user).unwrap();
+    let motion = format!("{}:gallop", p(&subject));
+    let model = t.join("no-model");
+    let o = surfcap!(&["transfer", "apply", p(&model), "--motion", &motion, "-o", p(&t.join("knight.parts.glb"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("knight.parts.json") && stderr(&o).contains("did not write"), "{}", stderr(&o));
+    for f in ["notes.json", "poses.json", "knight.parts.json"] {
+        assert_eq!(std::fs::read_to_string(t.join(f)).unwrap(), user, "{f}");
+    }
+    assert_eq!(std::fs::read_to_string(t.join("x.report.json")).unwrap(), "0,0\n1,1\n");
+    assert_eq!(names(t), ["h.subject", "knight.parts.json", "notes.json", "poses.json", "x.report.json"]);
+    // surfcap's own sidecar is replaced, run after run, and says it is surfcap's.
+    let glb = t.join("y.glb");
+    for _ in 0..2 {
+        let o = surfcap!(&["export", p(&subject), "--format", "glb", "-o", p(&glb), "--quiet"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let side: serde_json::Value = serde_json::from_slice(&std::fs::read(t.join("y.json")).unwrap()).unwrap();
+    assert_eq!((side["written_by"].as_str(), side["output_kind"].as_str()), (Some("surfcap"), Some("export-sidecar")));
+    assert!(side["fps"].is_number() && side["sequences"].is_array(), "{side}");
+    // The sidecar's place is a folder, then a FIFO: refused before anything is replaced.
+    std::fs::remove_file(t.join("y.json")).unwrap();
+    std::fs::create_dir(t.join("y.json")).unwrap();
+    let o = surfcap!(&["export", p(&subject), "--format", "glb", "-o", p(&glb)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("y.json") && stderr(&o).contains("a folder"), "{}", stderr(&o));
+    std::fs::remove_dir(t.join("y.json")).unwrap();
+    assert!(Command::new("mkfifo").arg(t.join("y.json")).status().unwrap().success());
+    std::fs::write(&glb, b"previous").unwrap();
+    let o = surfcap!(&["export", p(&subject), "--format", "glb", "-o", p(&glb)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("FIFO"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&glb).unwrap(), b"previous", "the previous glb is kept");
+    // No previous output: nothing new is left behind.
+    let o = surfcap!(&["export", p(&subject), "--format", "usda", "-o", p(&t.join("y.usda"))]);
+    assert_eq!(o.status.code(), Some(1), "the sidecar y.json is a FIFO: {}", stderr(&o));
+    assert!(!t.join("y.usda").exists());
+    let leftovers: Vec<String> = names(t).into_iter().filter(|n| n.contains(".tmp-") || n.contains(".old-")).collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// A forced run that fails leaves the user's folder as it was, with no surfcap marker in it, so
+/// the next run without --force still refuses it; a forced run over a folder it could not remove
+/// whole (read-only) is refused before anything is moved, never leaving the folder hidden.
+#[cfg(unix)]
+#[test]
+fn a_failed_forced_run_leaves_the_users_folder_as_it_was() {
+    use std::os::unix::fs::PermissionsExt;
+    let Some(src) = small_source() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let subject = t.join("h.subject");
+    assert!(surfcap!(&["import", p(&src), "-o", p(&subject), "--quiet"]).status.success());
+    let user = t.join("userdir");
+    std::fs::create_dir(&user).unwrap();
+    std::fs::write(user.join("data.csv"), "1,2").unwrap();
+    let o = surfcap!(&["vary", "train", p(&subject), "--sequences", "nope", "--force", "-o", p(&user)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("nope"), "{}", stderr(&o));
+    assert_eq!(names(&user), ["data.csv"], "no marker left in the user's folder");
+    let o = surfcap!(&["vary", "train", p(&subject), "--sequences", "nope", "-o", p(&user)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("did not write"), "still the user's folder: {}", stderr(&o));
+    assert_eq!(names(&user), ["data.csv"]);
+    // A read-only folder inside the output: --force is refused up front, the folder stays visible.
+    let ro = t.join("ro");
+    std::fs::create_dir_all(ro.join("locked")).unwrap();
+    std::fs::write(ro.join("locked/mine.txt"), "user").unwrap();
+    std::fs::set_permissions(ro.join("locked"), std::fs::Permissions::from_mode(0o555)).unwrap();
+    let o = surfcap!(&["export", p(&subject), "--format", "obj", "--force", "-o", p(&ro)]);
+    std::fs::set_permissions(ro.join("locked"), std::fs::Permissions::from_mode(0o755)).unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not writable"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(ro.join("locked/mine.txt")).unwrap(), "user");
+    assert_eq!(names(t), ["h.subject", "ro", "userdir"], "nothing hidden beside it");
+}

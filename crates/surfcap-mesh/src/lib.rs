@@ -24,7 +24,11 @@
 //!   the live temporaries, a process-wide registry a front end empties on SIGINT/SIGTERM, and stale
 //!   temporaries of dead processes swept before the next write (`libc::kill(pid, 0)` says whether
 //!   the writer is alive). Every input is opened as a regular file, so a FIFO, folder, socket or
-//!   device is refused by name, never read or waited on.
+//!   device is refused by name, never read or waited on. Output sets (`output_set`): every output
+//!   of a command (main file, sidecar, report, folder) planned and checked before work, staged,
+//!   and committed together or not at all, each place re-checked at the swap; side files replace
+//!   only surfcap's own (stamped `"written_by": "surfcap"`), and a signal handler learns whether
+//!   a commit completed the outputs.
 //! - `Progress`: how libraries report progress without printing; the front end draws it.
 //!
 //! No function here panics on bad input, prints or exits: errors are [`Error`]s that name the file,

@@ -9,7 +9,13 @@
 //!   socket or a folder); a symlink is written through to its target;
 //! - a folder output replaces only an empty folder or surfcap's own earlier output of the same
 //!   kind, recognised by the marker file [`MARKER`] surfcap writes in every folder it creates;
-//!   anything else needs `force` (the CLI's `--force`).
+//!   anything else needs `force` (the CLI's `--force`), and then only a folder that can be moved
+//!   aside and removed whole (it, every folder in it and its parent writable and not marked
+//!   read-only), so that a forced run never leaves the old folder hidden beside the new one.
+//!
+//! A command writing several outputs plans them with `crate::output_set`, which applies these
+//! rules to each before any work and again at the commit; [`claim_dir`] on a planned folder
+//! starts its temporary, so the folder and its marker reach the place only with the commit.
 
 use std::fs;
 use std::path::{Component, Path, PathBuf};
