@@ -202,6 +202,7 @@ pub struct Committed {
 }
 
 /// The outputs of one command, planned before work and committed together (module docs).
+#[must_use = "an output set dropped without a commit discards every staged output"]
 pub struct OutputSet {
     id: u64,
     inputs: Vec<PathBuf>,

@@ -36,7 +36,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    super::folder::claim(ctx, &a.output, &[&a.data], "eval-sparse-graph")?;
+    let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-sparse-graph")?;
     let (data, cache, output) = (a.data.as_path(), &a.cache, a.output.as_path());
     let subject = cmu_subject(data, a.vertices, a.fps)?;
     ctx.note(&format!(
@@ -57,7 +57,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let plots = plot(&r, output)?;
     let (report, rp) = super::folder::save_report(output, "sparse-graph.json", &r, "plots", &plots)?;
     ctx.result(&report, || print_table(&r, &rp, &plots, output));
-    Ok(())
+    ctx.commit(outs)
 }
 
 fn plot(r: &SparseGraphEval, output: &Path) -> anyhow::Result<Vec<std::path::PathBuf>> {

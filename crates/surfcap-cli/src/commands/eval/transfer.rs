@@ -81,7 +81,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    super::folder::claim(ctx, &a.output, &[&a.data], "eval-transfer")?;
+    let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-transfer")?;
     let Args { data, cases, sizes, components, seed, whole_body, overlap_rings, output } = a;
     let parts = if whole_body { CaseParts::WholeBody } else { CaseParts::Proposed { overlap_rings } };
     let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
@@ -103,7 +103,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue, mannequins or catlion"),
         });
     }
-    evaluate(ctx, built, catlion, &opts, &output)
+    evaluate(ctx, built, catlion, &opts, &output)?;
+    ctx.commit(outs)
 }
 
 fn evaluate(

@@ -226,7 +226,7 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    super::folder::claim(ctx, &a.output, &[&a.data], "eval-vary")?;
+    let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-vary")?;
     let (cmu, kaykit) = match a.only.as_deref() {
         None => (true, true),
         Some("cmu") => (true, false),
@@ -244,7 +244,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         VariationEvalOptions { variants: a.variants, seed: a.seed, iterations: a.iterations, ..Default::default() };
     opts.sampling.path = a.path.0;
     opts.sampling.smoothing = a.smoothing;
-    evaluate(ctx, cases, &opts, &a.output)
+    evaluate(ctx, cases, &opts, &a.output)?;
+    ctx.commit(outs)
 }
 
 fn evaluate(
@@ -254,7 +255,8 @@ fn evaluate(
     output: &Path,
 ) -> anyhow::Result<()> {
     let r = variation_eval(&cases, opts)?;
-    std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
+    let place = surfcap_mesh::output_set::write_place(output);
+    std::fs::create_dir_all(&place).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
     let mut written = Vec::new();
     for c in &r.cases {
         written.extend(plots(output, c)?);
