@@ -35,7 +35,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::output_path::{check_dir_place, check_file_place, check_not_input, check_removable, resolve};
-use crate::temporaries::{Registered, commit_lock, inside_live, register, remove_any, sibling, sweep_stale};
+use crate::temporaries::{
+    Registered, commit_lock, inside_live, register, remove_any, sibling, sweep_stale, visible_name,
+};
 
 /// The value of the `written_by` key surfcap puts in every side file and marker it writes.
 pub const WRITTEN_BY: &str = "surfcap";
@@ -467,13 +469,7 @@ impl Swap {
         if removable && (fs::remove_dir_all(a).is_ok() || fs::symlink_metadata(a).is_err()) {
             return None;
         }
-        let name = self.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let mut visible = self.path.with_file_name(format!("{name}.previous"));
-        let mut k = 1;
-        while fs::symlink_metadata(&visible).is_ok() {
-            k += 1;
-            visible = self.path.with_file_name(format!("{name}.previous-{k}"));
-        }
+        let visible = visible_name(&self.path);
         Some(if fs::rename(a, &visible).is_ok() { visible } else { a.clone() })
     }
 }

@@ -8,7 +8,7 @@
 //! process: another surfcap run writing the same output at the same time keeps its temporaries.
 //! A stale `.NAME.old-PID` folder is removed only when it is surfcap's own earlier output (it
 //! holds surfcap's marker); a folder of the user's moved aside by a forced run that was killed is
-//! left where it is.
+//! renamed to a visible `NAME.previous`, never deleted.
 //!
 //! The commits of `crate::output_set` hold a process-wide commit lock and record what they put in
 //! place, so a front end that catches a signal asks [`stop_for_signal`]: it waits for a commit in
@@ -146,6 +146,10 @@ fn undo(e: &Live) {
                 let _ = fs::rename(aside, output);
             } else if is_surfcaps_own(aside) {
                 remove_any(aside);
+            } else {
+                // A folder of the user's replaced with --force by a run killed before it removed
+                // it: made visible again, never deleted.
+                let _ = fs::rename(aside, visible_name(output));
             }
         }
     }
@@ -156,6 +160,19 @@ fn undo(e: &Live) {
 /// afterwards: call this only right before exiting the process.
 pub fn remove_live() {
     let _ = stop_for_signal();
+}
+
+/// A free visible name for a previous folder kept beside `output`: `NAME.previous`, else
+/// `NAME.previous-2`, `-3`...
+pub(crate) fn visible_name(output: &Path) -> PathBuf {
+    let name = output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut visible = output.with_file_name(format!("{name}.previous"));
+    let mut k = 1;
+    while fs::symlink_metadata(&visible).is_ok() {
+        k += 1;
+        visible = output.with_file_name(format!("{name}.previous-{k}"));
+    }
+    visible
 }
 
 /// Whether a previous output moved aside may be removed: a file (an output surfcap replaced
@@ -197,7 +214,8 @@ fn temp_pid(entry: &str, name: &str, tag: &str) -> Option<u32> {
 /// Removes the stale `.NAME.tmp-PID` and `.NAME.old-PID` siblings of `output` (absolute) whose
 /// process is gone. A stale `.old` is a previous output moved aside by a run killed before it
 /// renamed the new one in: it is put back when `output` is missing, else removed when it is
-/// surfcap's own (a file, or a folder with surfcap's marker) and left alone otherwise.
+/// surfcap's own (a file, or a folder with surfcap's marker), else renamed to a visible
+/// `NAME.previous`.
 pub(crate) fn sweep_stale(output: &Path) {
     let (Some(dir), Some(name)) = (output.parent(), output.file_name().and_then(|n| n.to_str())) else {
         return;
@@ -270,7 +288,9 @@ mod tests {
         fs::create_dir(&aside).unwrap();
         fs::write(aside.join("thesis.tex"), b"user").unwrap();
         sweep_stale(&out);
-        assert_eq!(fs::read(aside.join("thesis.tex")).unwrap(), b"user", "no marker: not surfcap's to delete");
+        let visible = d.path().join("o.previous");
+        assert_eq!(fs::read(visible.join("thesis.tex")).unwrap(), b"user", "no marker: not surfcap's to delete");
+        assert!(!aside.exists(), "made visible again");
     }
 
     #[test]
