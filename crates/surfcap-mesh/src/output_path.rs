@@ -259,6 +259,9 @@ pub fn claim_dir(path: &Path, kind: &str, force: bool) -> Result<PathBuf> {
                 return Err(refused(&path, format!("planned as a {planned} output, claimed as {kind}")));
             }
             remove_tmp(&tmp);
+            if let Some(parent) = tmp.parent() {
+                fs::create_dir_all(parent).map_err(|e| Error::io(parent, "create directory", e))?;
+            }
             fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, "create directory", e))?;
             write_marker(&tmp, kind)?;
             crate::output_set::set_staged(&path, true);
