@@ -1201,12 +1201,21 @@ fn side_files_replace_only_surfcaps_own_and_a_refusal_changes_nothing() {
     assert!(stderr(&o).contains("notes.json") && stderr(&o).contains("surfcap did not write"), "{}", stderr(&o));
     // The keys file is an input (and not surfcap's).
     std::fs::write(t.join("poses.json"), user).unwrap();
-    let o = surfcap!(&["synth", "keyposes", p(&subject), "--keys", p(&t.join("poses.json")), "-o", p(&t.join("poses.glb"))]);
+    let o = surfcap!(&[
+        "synth",
+        "keyposes",
+        p(&subject),
+        "--keys",
+        p(&t.join("poses.json")),
+        "-o",
+        p(&t.join("poses.glb"))
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("is the input"), "{}", stderr(&o));
     // A curve named like the report of -o x.glb.
     std::fs::write(t.join("x.report.json"), "0,0\n1,1\n").unwrap();
-    let o = surfcap!(&["synth", "path", p(&subject), "--curve", p(&t.join("x.report.json")), "-o", p(&t.join("x.glb"))]);
+    let o =
+        surfcap!(&["synth", "path", p(&subject), "--curve", p(&t.join("x.report.json")), "-o", p(&t.join("x.glb"))]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("x.report.json") && stderr(&o).contains("is the input"), "{}", stderr(&o));
     // The user's parts file beside -o knight.parts.glb of a transfer.

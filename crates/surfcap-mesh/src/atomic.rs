@@ -88,8 +88,11 @@ pub fn write_dir(path: &Path, kind: &str, force: bool, fill: impl FnOnce(&Path) 
     let path = match staging(&path)? {
         Some(Staging::Dir { tmp, kind: planned }) => {
             if planned != kind {
-                return Err(Error::new(ErrorKind::Refused, format!("planned as a {planned} output, written as {kind}"))
-                    .in_file(&path));
+                return Err(Error::new(
+                    ErrorKind::Refused,
+                    format!("planned as a {planned} output, written as {kind}"),
+                )
+                .in_file(&path));
             }
             ensure_parent(&path)?;
             set_staged(&path, false);

@@ -281,7 +281,10 @@ pub fn claim_dir(path: &Path, kind: &str, force: bool) -> Result<PathBuf> {
     }
     check_dir_place(&path, kind, false).map_err(|e| {
         if force {
-            refused(&path, format!("{}; a forced folder output is replaced only as a whole, at the end of a run", e.message))
+            refused(
+                &path,
+                format!("{}; a forced folder output is replaced only as a whole, at the end of a run", e.message),
+            )
         } else {
             e
         }

@@ -294,7 +294,8 @@ impl OutputSet {
         self.done = true;
         let entries: Vec<Entry> = {
             let mut p = planned();
-            let (mine, rest): (Vec<Entry>, Vec<Entry>) = std::mem::take(&mut *p).into_iter().partition(|e| e.set == self.id);
+            let (mine, rest): (Vec<Entry>, Vec<Entry>) =
+                std::mem::take(&mut *p).into_iter().partition(|e| e.set == self.id);
             *p = rest;
             mine
         };
@@ -353,7 +354,8 @@ impl Drop for OutputSet {
         }
         let mine: Vec<Entry> = {
             let mut p = planned();
-            let (mine, rest): (Vec<Entry>, Vec<Entry>) = std::mem::take(&mut *p).into_iter().partition(|e| e.set == self.id);
+            let (mine, rest): (Vec<Entry>, Vec<Entry>) =
+                std::mem::take(&mut *p).into_iter().partition(|e| e.set == self.id);
             *p = rest;
             mine
         };
@@ -386,7 +388,10 @@ fn check_place(path: &Path, role: &Role, planned: Option<Found>) -> Result<()> {
                 if planned.is_some() {
                     return Err(refused(
                         path,
-                        format!("changed while the command ran, so nothing was replaced and the new output was discarded: {}", e.message),
+                        format!(
+                            "changed while the command ran, so nothing was replaced and the new output was discarded: {}",
+                            e.message
+                        ),
                     ));
                 }
                 return Err(e);

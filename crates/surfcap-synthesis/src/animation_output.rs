@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 use surfcap_formats::export::{ExportFormat, ExportOptions, export, export_frame_set, plan_export};
-use surfcap_mesh::output_set::{OutputSet, Stamped};
 use surfcap_mesh::frame_set::FrameSet;
+use surfcap_mesh::output_set::{OutputSet, Stamped};
 use surfcap_mesh::{Progress, Subject, UpAxis};
 
 use crate::error::Result;
