@@ -271,7 +271,11 @@ fuzz_target!(|data: &[u8]| {
         };
         for (p, node) in &before {
             if after.get(p) != Some(node) {
-                assert!(may_change(p), "{p:?} changed though surfcap may not replace it: {node:?} -> {:?}", after.get(p));
+                assert!(
+                    may_change(p),
+                    "{p:?} changed though surfcap may not replace it: {node:?} -> {:?}",
+                    after.get(p)
+                );
             }
         }
         for p in after.keys() {
