@@ -2,7 +2,6 @@
 //! commit of an output set: its own test binary, since the outcome is process-wide.
 
 use std::fs;
-use std::io::Write;
 
 use surfcap_mesh::atomic::write_file;
 use surfcap_mesh::output_set::{CommitStep, OutputSet};
