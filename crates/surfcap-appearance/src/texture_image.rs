@@ -10,6 +10,39 @@ use image::{ImageBuffer, Rgb};
 
 use crate::error::{Error, Result};
 
+/// The image file formats a texture map is written in, chosen by the output's extension so
+/// that the bytes are what the name says (`-o base.jpg` writes a JPEG, not PNG bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFileFormat {
+    /// `.png`: 8-bit RGB, lossless.
+    Png,
+    /// `.jpg` or `.jpeg`: 8-bit RGB baseline JPEG, quality 95.
+    Jpeg,
+}
+
+impl ImageFileFormat {
+    /// The extensions accepted, as an error message lists them.
+    pub const EXTENSIONS: &'static str = ".png, .jpg or .jpeg";
+
+    /// The format `path`'s extension names (any case); another extension or none is refused
+    /// naming the file and the extensions accepted.
+    pub fn of_path(path: &Path) -> Result<Self> {
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("png") => Ok(ImageFileFormat::Png),
+            Some("jpg" | "jpeg") => Ok(ImageFileFormat::Jpeg),
+            other => Err(Error::WriteImage {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{}: expected {} (the format follows the extension)",
+                    other.map_or_else(|| "no extension".to_string(), |e| format!("extension .{e}")),
+                    Self::EXTENSIONS
+                ),
+            }),
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextureImage {
     width: usize,
@@ -154,6 +187,28 @@ impl TextureImage {
         Ok(encoded)
     }
 
+    /// Writes the image in the format its extension names ([`ImageFileFormat::of_path`]: PNG,
+    /// or JPEG for `.jpg`/`.jpeg`), atomically; another extension is refused before anything is
+    /// written.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let encoded = match ImageFileFormat::of_path(path)? {
+            ImageFileFormat::Png => self.to_png_bytes(),
+            ImageFileFormat::Jpeg => self.to_jpeg_bytes(),
+        }
+        .map_err(|message| Error::WriteImage { path: path.to_path_buf(), message })?;
+        surfcap_mesh::atomic::write_file(path, |w| w.write_all(&encoded))?;
+        Ok(())
+    }
+
+    /// The image encoded as an 8-bit RGB JPEG (quality 95), in memory.
+    pub fn to_jpeg_bytes(&self) -> std::result::Result<Vec<u8>, String> {
+        let mut encoded = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut encoded, 95)
+            .encode(&self.to_rgb8(), self.width as u32, self.height as u32, image::ColorType::Rgb8)
+            .map_err(|e| e.to_string())?;
+        Ok(encoded)
+    }
+
     /// Writes the image as an 8-bit RGB PNG, atomically (a temporary sibling renamed into place).
     pub fn write_png(&self, path: &Path) -> Result<()> {
         let encoded = self.to_png_bytes().map_err(|message| Error::WriteImage { path: path.to_path_buf(), message })?;
@@ -175,6 +230,28 @@ mod tests {
         img.write_png(&path).unwrap();
         let back = TextureImage::read(&path).unwrap();
         assert_eq!(back, img);
+    }
+
+    /// The bytes follow the extension: `.jpg` writes a JPEG (read back close to the image),
+    /// `.png` a PNG, and any other extension is refused naming the file and those accepted.
+    #[test]
+    fn the_written_format_follows_the_extension() {
+        let dir = tempfile::tempdir().unwrap();
+        let data: Vec<f32> = (0..3 * 64).map(|i| (100 + i % 7) as f32).collect();
+        let img = TextureImage::from_planes(8, 8, 3, data).unwrap();
+        for (name, magic) in [("a.jpg", &[0xFF, 0xD8, 0xFF][..]), ("b.JPEG", &[0xFF, 0xD8, 0xFF]), ("c.png", b"\x89PNG")] {
+            let path = dir.path().join(name);
+            img.write(&path).unwrap();
+            assert!(std::fs::read(&path).unwrap().starts_with(magic), "{name}");
+            let back = TextureImage::read(&path).unwrap();
+            assert!(back.data.iter().zip(&img.data).all(|(a, b)| (a - b).abs() <= 8.0), "{name}");
+        }
+        for name in ["d.gif", "e"] {
+            let path = dir.path().join(name);
+            let e = img.write(&path).unwrap_err().to_string();
+            assert!(e.starts_with(&path.display().to_string()) && e.contains("expected .png, .jpg or .jpeg"), "{e}");
+            assert!(!path.exists());
+        }
     }
 
     #[test]

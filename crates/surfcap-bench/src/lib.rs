@@ -9,7 +9,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use surfcap_cli::{Ctx, GlobalOpts};
+use surfcap_cli::{Ctx, GlobalOpts, NegativeValues};
 // The CLI's shared modules, under the names the benchmarks use (`crate::options::count`).
 use surfcap_cli::{options, output, progress};
 
@@ -30,7 +30,7 @@ mod vary;
 
 /// Measure surfcap's speed and memory against its targets (on 2 cores unless said otherwise).
 #[derive(Parser, Debug)]
-#[command(name = "surfcap-bench", version, about, long_about = None)]
+#[command(name = "surfcap-bench", version, about, long_about = None, negative_values = true)]
 pub struct Cli {
     #[command(flatten)]
     globals: GlobalOpts,

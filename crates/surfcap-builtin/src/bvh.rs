@@ -243,9 +243,7 @@ pub fn parse_bvh(text: &str) -> Result<Bvh> {
     }
     let (tl, ft) = field("Frame Time:")?;
     let frame_time: f64 = ft.parse().map_err(|_| syntax(tl, format!("{ft:?}: expected seconds per frame")))?;
-    if !(frame_time.is_finite() && frame_time > 0.0) {
-        return Err(syntax(tl, format!("frame time {frame_time}: expected a positive number of seconds")));
-    }
+    surfcap_mesh::subject::check_frame_time(frame_time).map_err(|e| syntax(tl, e.message))?;
     // Reserve no more than the text can hold (a value takes at least two bytes), so a huge
     // 'Frames:' in a small file costs nothing before its error.
     let mut motion = Vec::with_capacity(frames.saturating_mul(n_channels).min((text.len() - m) / 2 + 1));
@@ -421,6 +419,19 @@ mod tests {
             assert_eq!((e.kind, e.location.clone()), (kind, Some(surfcap_mesh::Location::Line(line))), "{e}");
         }
         assert_eq!(parse_bvh("").unwrap_err().kind, ErrorKind::Empty);
+        for ft in ["1e-300", "1e300", "0.00001", "11"] {
+            let e = parse_bvh(&SMALL.replace("Frame Time: 0.5", &format!("Frame Time: {ft}"))).unwrap_err();
+            assert_eq!(e.location, Some(surfcap_mesh::Location::Line(18)), "{e}");
+            assert!(e.to_string().contains("a frame time of 1e-4 to 10 s"), "{e}");
+        }
+        let d = tempfile::tempdir().unwrap();
+        let f = d.path().join("fast.bvh");
+        std::fs::write(&f, SMALL.replace("Frame Time: 0.5", "Frame Time: 1e-300")).unwrap();
+        let e = read_bvh(&f).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{}: line 18: frame time 1e-300 s", f.display())), "{e}");
+        for ft in ["0.0001", "10", "0.0083333"] {
+            assert!(parse_bvh(&SMALL.replace("Frame Time: 0.5", &format!("Frame Time: {ft}"))).is_ok(), "{ft}");
+        }
         let e = parse_bvh(&SMALL.replace("Frames: 2", "Frames: 0")).unwrap_err();
         assert_eq!(e.to_string(), "line 17: Frames: 0: expected at least one frame of motion");
         let e = parse_bvh(&SMALL.replace("1 2 3 90 0 0 0 0 0\r\n", "1 2 3 90 0 0 0 0 0\r\n1 2 3 0 0 0 0 0 0\r\n"));

@@ -49,12 +49,29 @@ use clap::{Parser, Subcommand};
 
 /// Make new animations from 4D surface capture.
 #[derive(Parser, Debug)]
-#[command(name = "surfcap", version, about, long_about = None)]
+#[command(name = "surfcap", version, about, long_about = None, negative_values = true)]
 pub struct Cli {
     #[command(flatten)]
     globals: GlobalOpts,
     #[command(subcommand)]
     command: Command,
+}
+
+/// Values that start with a hyphen: `--opt -1` gives `-1` to the option, as `--opt=-1` does, so a
+/// negative number out of range gets the option's own range message rather than clap's
+/// "unexpected argument '-1'" (whose tip, `-- -1`, does not apply). A front end's top-level
+/// `#[command(negative_values = true)]` sets it for every option of every command (clap's
+/// `allow_negative_numbers` is per argument; this walks the tree once it is built). Only
+/// tokens that read as numbers are taken: `--opt --json` still sees the flag.
+pub trait NegativeValues {
+    fn negative_values(self, yes: bool) -> Self;
+}
+
+impl NegativeValues for clap::Command {
+    fn negative_values(self, yes: bool) -> Self {
+        self.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(yes) } else { a })
+            .mut_subcommands(|c| c.negative_values(yes))
+    }
 }
 
 /// The options of every command of a front end (`surfcap`, `surfcap-bench`): how results are

@@ -211,6 +211,19 @@ fn number_in(s: &str, ok: impl Fn(f64) -> bool, range: &str) -> Result<f64, Stri
     }
 }
 
+/// Value parser: an image file to write, whose extension names its format (`.png`, `.jpg`,
+/// `.jpeg`), so that a `.jpg` never holds PNG bytes.
+pub fn image_output(s: &str) -> Result<std::path::PathBuf, String> {
+    let p = std::path::PathBuf::from(s);
+    match surfcap_appearance::texture_image::ImageFileFormat::of_path(&p) {
+        Ok(_) => Ok(p),
+        Err(_) => Err(format!(
+            "expected an image file ending in {} (the format follows the extension)",
+            surfcap_appearance::texture_image::ImageFileFormat::EXTENSIONS
+        )),
+    }
+}
+
 /// Value parser: a finite number > 0.
 pub fn positive(s: &str) -> Result<f64, String> {
     number_in(s, |x| x > 0.0, "a finite number > 0")

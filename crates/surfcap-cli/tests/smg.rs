@@ -38,7 +38,7 @@ fn a_gallop_loops_to_fill_the_time_on_a_subject_and_on_a_frame_set() {
             "--distance-weight".into(),
             "0.0001".into(),
             "--windows".into(),
-            "2-4".into(),
+            "3-4".into(),
             "--tolerance".into(),
             "1000".into(),
             "--cache-dir".into(),
@@ -295,7 +295,7 @@ fn build_precomputes_what_queries_reuse() {
             "--keys",
             keys,
             "--windows",
-            "2-4",
+            "3-4",
             "--cache-dir",
             p(&cache),
             "-o",
@@ -333,7 +333,7 @@ fn build_precomputes_what_queries_reuse() {
         "--time",
         "3",
         "--windows",
-        "2-4",
+        "3-4",
         "--cache-dir",
         p(&cache),
         "-o",
@@ -344,4 +344,33 @@ fn build_precomputes_what_queries_reuse() {
     let o = build("horse_gallop:0,horse_gallop:16");
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--keys \"horse_gallop:16\""), "{}", stderr(&o));
+}
+
+/// A window shorter than 3 frames maps a frame onto itself and the walk freezes: refused before
+/// any work, naming the option and the minimum.
+#[test]
+fn windows_shorter_than_three_frames_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    for w in ["1-30", "2-4", "1-1"] {
+        let o = surfcap!(&[
+            "smg",
+            "query",
+            p(&d.path().join("absent")),
+            "--connect",
+            "a:a",
+            "--from",
+            "a:0",
+            "--to",
+            "a:1",
+            "--time",
+            "1",
+            "--windows",
+            w,
+            "-o",
+            p(&d.path().join("q.glb"))
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{w}");
+        let e = stderr(&o);
+        assert!(e.contains(&format!("--windows \"{w}\"")) && e.contains("at least 3 frames"), "{e}");
+    }
 }

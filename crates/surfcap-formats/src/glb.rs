@@ -754,7 +754,12 @@ fn decode(bytes: &[u8]) -> Result<GlbAnimation> {
         targets.push(t);
     }
     let root_meta = extras_surfcap(&g.document.as_json().extras);
-    let mut fps = root_meta.as_ref().and_then(|m| m["fps"].as_f64());
+    let mut fps = match root_meta.as_ref().map(|m| &m["fps"]) {
+        None | Some(serde_json::Value::Null) => None,
+        Some(v) => Some(v.as_f64().and_then(|f| surfcap_mesh::subject::check_frame_rate(f).ok()).ok_or_else(|| {
+            err!(Metadata, "extras.surfcap.fps = {v}: expected {}", surfcap_mesh::subject::FRAME_RATES_TEXT)
+        })?),
+    };
     let up_axis = root_meta.as_ref().and_then(|m| m["up_axis"].as_str()).and_then(|s| UpAxis::parse(s).ok());
     let units = root_meta.as_ref().and_then(|m| serde_json::from_value::<Units>(m["units"].clone()).ok());
 
@@ -980,6 +985,25 @@ mod tests {
         buf[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
         let e = parse_glb(&buf).unwrap_err();
         assert!(e.message.contains("sparse index 4294967295 (entry 0): expected below 18"), "{e}");
+    }
+
+    /// A frame rate in `extras.surfcap` of the wrong type or out of range is named, not ignored
+    /// (the importer adds the file).
+    #[test]
+    fn a_bad_frame_rate_in_the_extras_is_named() {
+        let mut buf = Vec::new();
+        write_glb(&mut buf, &moving(3)).unwrap();
+        let pattern = b"\"fps\":30.0";
+        let places: Vec<usize> = (0..buf.len() - 10).filter(|&k| &buf[k..k + 10] == pattern).collect();
+        assert!(!places.is_empty(), "the frame rate in the extras");
+        for (same_length, shown) in [(&b"\"fps\":-30 "[..], "-30"), (b"\"fps\":\"x\" ", "\"x\""), (b"\"fps\":9e99", "9e+99")] {
+            let mut bad = buf.clone();
+            for &at in &places {
+                bad[at..at + 10].copy_from_slice(same_length);
+            }
+            let e = parse_glb(&bad).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("extras.surfcap.fps = {shown}: expected 0.1 to 10000")), "{e}");
+        }
     }
 
     #[test]

@@ -93,14 +93,28 @@ pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOpti
         Some(u) => Some(UpAxis::parse(u).map_err(|e| at(e, "up_axis"))?),
         None => None,
     };
-    if let Some(f) = m.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
-        return Err(at(err!(Metadata, "fps = {f}: expected a positive number"), "fps"));
+    if let Some(f) = m.fps {
+        surfcap_mesh::subject::check_frame_rate(f)
+            .map_err(|_| at(err!(Metadata, "fps = {f}: expected {}", surfcap_mesh::subject::FRAME_RATES_TEXT), "fps"))?;
     }
     let opts = ImportOptions { name: m.name.clone(), fps: m.fps, up_axis, units: m.units.as_deref().map(Units::parse) };
-    let mut out = Vec::new();
+    let mut out: Vec<SourceSequence> = Vec::new();
+    // The entry (its source as written) each sequence of `out` came from.
+    let mut listed_by: Vec<String> = Vec::new();
     for e in &m.sequence {
         let src = base.join(&e.source);
         let needle = e.source.to_string_lossy().into_owned();
+        if let Some(inner) = find_manifest(&src) {
+            return Err(at(
+                err!(
+                    Unsupported,
+                    "manifests cannot nest: {} names the manifest {}; list its sources directly",
+                    path.display(),
+                    inner.display()
+                ),
+                &needle,
+            ));
+        }
         let mut seqs = match &e.template {
             Some(t) => vec![read_with_template(&src, &base.join(t)).map_err(|er| at(er, &needle))?],
             None => read_source(&src, progress)?,
@@ -136,6 +150,21 @@ pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOpti
         }
         for s in &mut seqs {
             s.tags.extend(e.tags.iter().cloned());
+        }
+        for s in &seqs {
+            if let Some(k) = out.iter().position(|o| o.name == s.name) {
+                let first = &listed_by[k];
+                let how = if *first == needle {
+                    format!("{needle:?} holds two sequences named {:?}", s.name)
+                } else {
+                    format!("{:?} (from {needle:?}) is also the name of a sequence from {first:?}", s.name)
+                };
+                return Err(at(
+                    err!(Metadata, "sequence name {how}: expected unique names (give one a `name = ...`)"),
+                    &needle,
+                ));
+            }
+            listed_by.push(needle.clone());
         }
         out.extend(seqs);
     }
@@ -212,5 +241,53 @@ mod tests {
                 m.display()
             )
         );
+    }
+
+    const TET: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+
+    #[test]
+    fn a_nested_manifest_is_refused_saying_manifests_cannot_nest() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir(d.path().join("inner")).unwrap();
+        std::fs::write(d.path().join("inner/surfcap.toml"), "[[sequence]]\nsource = \"a.obj\"\n").unwrap();
+        std::fs::write(d.path().join("other.toml"), "[[sequence]]\nsource = \"a.obj\"\n").unwrap();
+        let m = d.path().join("surfcap.toml");
+        for (source, inner) in [("inner", "inner/surfcap.toml"), ("other.toml", "other.toml")] {
+            std::fs::write(&m, format!("fps = 30\n[[sequence]]\nsource = \"{source}\"\n")).unwrap();
+            let e = read_manifest(&m, &NoProgress).unwrap_err().to_string();
+            assert_eq!(
+                e,
+                format!(
+                    "{}: line 3: manifests cannot nest: {} names the manifest {}; list its sources directly",
+                    m.display(),
+                    m.display(),
+                    d.path().join(inner).display()
+                )
+            );
+        }
+    }
+
+    #[test]
+    fn a_repeated_sequence_name_names_the_manifest_and_the_line() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir(d.path().join("b")).unwrap();
+        std::fs::write(d.path().join("walk.obj"), TET).unwrap();
+        std::fs::write(d.path().join("b/walk.obj"), TET).unwrap();
+        let m = d.path().join("surfcap.toml");
+        std::fs::write(&m, "fps = 30\n[[sequence]]\nsource = \"walk.obj\"\n\n[[sequence]]\nsource = \"b/walk.obj\"\n")
+            .unwrap();
+        let e = read_manifest(&m, &NoProgress).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{}: line 6: sequence name \"walk\"", m.display())), "{e}");
+        assert!(e.contains("also the name of a sequence from \"walk.obj\""), "{e}");
+    }
+
+    #[test]
+    fn a_frame_rate_out_of_range_names_the_manifest_line() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("walk.obj"), TET).unwrap();
+        let m = d.path().join("surfcap.toml");
+        std::fs::write(&m, "name = \"x\"\nfps = 1e300\n[[sequence]]\nsource = \"walk.obj\"\n").unwrap();
+        let e = read_manifest(&m, &NoProgress).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{}: line 2: fps = ", m.display())) && e.contains("0.1 to 10000"), "{e}");
     }
 }

@@ -11,7 +11,7 @@ use crate::obj::read_obj;
 use surfcap_mesh::error::{Error, Result, err};
 use surfcap_mesh::npy::{expect_shape, read_npy};
 use surfcap_mesh::regular_file::{check_regular_file, exists_at, read_regular_file};
-use surfcap_mesh::subject::{FrameLabel, JointTrack, Units, UpAxis};
+use surfcap_mesh::subject::{FRAME_RATES_TEXT, FrameLabel, JointTrack, Units, UpAxis, check_frame_rate};
 use surfcap_mesh::topology::Topology;
 
 /// What a dataset's `meta.json` says about one sequence.
@@ -68,11 +68,70 @@ pub fn dataset_sequences(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-fn number(v: &Value) -> Option<f64> {
-    v.as_f64().filter(|x| x.is_finite() && *x > 0.0)
+/// A field of `meta.json`, `key` where the sequence's own entry (`sequences.<name>.<key>`) wins
+/// over the dataset's (`<key>`); absent or `null` is unknown.
+struct MetaFields<'a> {
+    path: &'a Path,
+    root: &'a Value,
+    seq: &'a Value,
+    name: &'a str,
 }
 
-/// Reads `meta.json` next to the sequence folder (in its parent), if there is one.
+impl MetaFields<'_> {
+    /// The value of `key` and the field's name as the user wrote it: the sequence's own, else
+    /// the dataset's.
+    fn pick(&self, key: &str) -> (&Value, String) {
+        if self.seq[key].is_null() {
+            (&self.root[key], key.to_string())
+        } else {
+            (&self.seq[key], format!("sequences.{}.{key}", self.name))
+        }
+    }
+
+    /// `key` of the sequence's own entry only.
+    fn own(&self, key: &str) -> (&Value, String) {
+        (&self.seq[key], format!("sequences.{}.{key}", self.name))
+    }
+
+    /// The value as a `T`, `None` when absent or `null`; any other type is an error naming the
+    /// file, the field and what was expected.
+    fn typed<T: serde::de::DeserializeOwned>(&self, (v, field): (&Value, String), expected: &str) -> Result<Option<T>> {
+        if v.is_null() {
+            return Ok(None);
+        }
+        serde_json::from_value(v.clone()).map(Some).map_err(|_| self.bad(v, &field, expected))
+    }
+
+    fn bad(&self, v: &Value, field: &str, expected: &str) -> Error {
+        let mut shown = v.to_string();
+        if shown.len() > 60 {
+            shown = format!("{}...", &shown[..shown.floor_char_boundary(57)]);
+        }
+        err!(Metadata, "{field} = {shown}: expected {expected}").in_file(self.path)
+    }
+
+    /// The frame rate: a number of frames per second in the accepted range, or unknown
+    /// (absent, `null`, or a text starting with "unknown", such as `"unknown (35-frame cycle)"`).
+    fn fps(&self) -> Result<Option<f64>> {
+        let (v, field) = self.pick("fps");
+        let unknown = |v: &Value| v.is_null() || v.as_str().is_some_and(|t| t.trim().to_lowercase().starts_with("unknown"));
+        if unknown(v) {
+            // A sequence's own "unknown" leaves the dataset's rate to decide.
+            return if v.is_null() || self.root["fps"].is_null() || unknown(&self.root["fps"]) {
+                Ok(None)
+            } else {
+                MetaFields { seq: &Value::Null, ..*self }.fps()
+            };
+        }
+        let expected = format!("{FRAME_RATES_TEXT}, null or \"unknown\"");
+        let f = v.as_f64().ok_or_else(|| self.bad(v, &field, &expected))?;
+        check_frame_rate(f).map(Some).map_err(|_| self.bad(v, &field, &expected))
+    }
+}
+
+/// Reads `meta.json` next to the sequence folder (in its parent), if there is one. A field of
+/// the wrong type or out of range is an error naming the file and the field (a silently ignored
+/// `"fps": -10` would surface later as "no frame rate is known").
 pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
     let name = seq_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let Some(meta_path) = seq_dir.parent().map(|p| p.join("meta.json")).filter(|p| exists_at(p)) else {
@@ -82,31 +141,40 @@ pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
         .map_err(|_| err!(Syntax, "not UTF-8 text: expected JSON").in_file(&meta_path))?;
     let root: Value = serde_json::from_str(&text)
         .map_err(|e| err!(Syntax, "invalid JSON: {e}").in_file(&meta_path).at_line(e.line()))?;
+    if !root.is_object() {
+        return Err(err!(Metadata, "expected a JSON object of fields (fps, units, up_axis, sequences)")
+            .in_file(&meta_path));
+    }
+    if !(root["sequences"].is_null() || root["sequences"].is_object()) {
+        return Err(err!(Metadata, "sequences: expected an object with one entry per sequence folder")
+            .in_file(&meta_path));
+    }
     let seq = &root["sequences"][&name];
-    let pick = |key: &str| {
-        if seq[key].is_null() { &root[key] } else { &seq[key] }
-    };
-    let up_axis = match pick("up_axis").as_str() {
-        Some(s) => Some(UpAxis::parse(s).map_err(|e| e.in_file(&meta_path))?),
+    if !(seq.is_null() || seq.is_object()) {
+        return Err(err!(Metadata, "sequences.{name}: expected an object of fields (fps, frames, name, tags)")
+            .in_file(&meta_path));
+    }
+    let m = MetaFields { path: &meta_path, root: &root, seq, name: &name };
+    let up_axis = match m.typed::<String>(m.pick("up_axis"), "an axis such as \"+y\"")? {
+        Some(s) => Some(UpAxis::parse(&s).map_err(|e| e.in_file(&meta_path))?),
         None => None,
     };
-    let joint_names = root["joint_names"]
-        .as_array()
-        .map(|a| a.iter().map(|n| n.as_str().unwrap_or("").to_string()).collect::<Vec<_>>());
-    let joint_parents = root["joint_parents"]
-        .as_array()
-        .map(|a| a.iter().map(|p| p.as_i64().and_then(|p| usize::try_from(p).ok())).collect::<Vec<_>>());
+    let joint_names = m.typed::<Vec<String>>((&root["joint_names"], "joint_names".into()), "a list of texts")?;
+    let joint_parents = m
+        .typed::<Vec<Option<i64>>>((&root["joint_parents"], "joint_parents".into()), "a list of joint indices (-1 or null for a root)")?
+        .map(|a| a.into_iter().map(|p| p.and_then(|p| usize::try_from(p).ok())).collect::<Vec<_>>());
+    let count = "a whole number";
     Ok(SequenceMeta {
-        fps: number(&seq["fps"]).or_else(|| number(&root["fps"])),
+        fps: m.fps()?,
         up_axis,
-        units: pick("units").as_str().map(Units::parse),
-        frames: seq["frames"].as_u64().map(|x| x as usize),
-        vertices: seq["vertices"].as_u64().map(|x| x as usize),
+        units: m.typed::<String>(m.pick("units"), "a unit such as \"m\"")?.map(|u| Units::parse(&u)),
+        frames: m.typed::<usize>(m.own("frames"), count)?,
+        vertices: m.typed::<usize>(m.own("vertices"), count)?,
         joint_names,
         joint_parents,
-        name: seq["name"].as_str().map(str::to_string),
-        tags: serde_json::from_value(seq["tags"].clone()).unwrap_or_default(),
-        labels: serde_json::from_value(seq["frame_labels"].clone()).ok(),
+        name: m.typed::<String>(m.own("name"), "a text")?,
+        tags: m.typed::<Vec<String>>(m.own("tags"), "a list of texts")?.unwrap_or_default(),
+        labels: m.typed::<Vec<FrameLabel>>(m.own("frame_labels"), "a list of \"original\" or \"synthetic\"")?,
         meta_path: Some(meta_path),
     })
 }
@@ -188,4 +256,66 @@ pub fn write_layout_sequence(
         })?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `read_sequence_meta` of the sequence folder `walk` under a dataset whose `meta.json` is `json`.
+    fn meta(json: &str) -> (Result<SequenceMeta>, PathBuf) {
+        let d = tempfile::tempdir().unwrap();
+        let m = d.path().join("meta.json");
+        std::fs::write(&m, json).unwrap();
+        (read_sequence_meta(&d.path().join("walk")), m)
+    }
+
+    #[test]
+    fn a_bad_frame_rate_in_meta_json_names_the_file_and_the_field() {
+        let cases = [
+            (r#"{"fps": -10}"#, "fps = -10"),
+            (r#"{"fps": "fast"}"#, "fps = \"fast\""),
+            (r#"{"fps": [30]}"#, "fps = [30]"),
+            (r#"{"fps": 1e300}"#, "fps = 1e+300"),
+            (r#"{"fps": 30, "sequences": {"walk": {"fps": {"a": 1}}}}"#, "sequences.walk.fps = {\"a\":1}"),
+        ];
+        for (json, field) in cases {
+            let (r, path) = meta(json);
+            let e = r.unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{}: {field}: expected 0.1 to 10000 frames per second", path.display())), "{e}");
+            assert!(e.ends_with("null or \"unknown\""), "{e}");
+        }
+    }
+
+    #[test]
+    fn unknown_frame_rates_stay_unknown_and_good_ones_are_read() {
+        for (json, fps) in [
+            (r#"{"fps": null}"#, None),
+            (r#"{"fps": "unknown (35-frame walk cycle)", "sequences": {"walk": {"fps": null}}}"#, None),
+            (r#"{"fps": 24}"#, Some(24.0)),
+            (r#"{"fps": 24, "sequences": {"walk": {"fps": 30}}}"#, Some(30.0)),
+            (r#"{"fps": 24, "sequences": {"walk": {"fps": "unknown"}}}"#, Some(24.0)),
+        ] {
+            assert_eq!(meta(json).0.unwrap().fps, fps, "{json}");
+        }
+    }
+
+    #[test]
+    fn other_fields_of_the_wrong_type_name_the_file_and_the_field() {
+        let cases = [
+            (r#"[1, 2]"#, "expected a JSON object"),
+            (r#"{"units": 3}"#, "units = 3: expected a unit"),
+            (r#"{"up_axis": true}"#, "up_axis = true: expected an axis"),
+            (r#"{"sequences": {"walk": {"frames": -1}}}"#, "sequences.walk.frames = -1: expected a whole number"),
+            (r#"{"sequences": {"walk": {"tags": "a"}}}"#, "sequences.walk.tags = \"a\": expected a list of texts"),
+            (r#"{"sequences": {"walk": {"frame_labels": ["x"]}}}"#, "sequences.walk.frame_labels = [\"x\"]"),
+            (r#"{"joint_names": [1]}"#, "joint_names = [1]: expected a list of texts"),
+            (r#"{"sequences": [1]}"#, "sequences: expected an object"),
+        ];
+        for (json, want) in cases {
+            let (r, path) = meta(json);
+            let e = r.unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{}: ", path.display())) && e.contains(want), "{json}: {e}");
+        }
+    }
 }

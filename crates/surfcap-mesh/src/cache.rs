@@ -150,6 +150,10 @@ fn read_header_and_faces(path: &Path) -> Result<(Header, std::path::PathBuf, Vec
     let hp = path.join("subject.json");
     let h: Header =
         read_description(&hp, "subject description", (FORMAT, VERSION), |h: &Header| (h.format.as_str(), h.version))?;
+    // Checked here as well as by `Subject::new`: a cache opened for some frames only
+    // (`CachedFrames`) builds no subject.
+    crate::subject::check_frame_rate(h.fps).map_err(|e| e.in_file(&hp))?;
+    crate::subject::check_sequence_names(h.sequences.iter().map(|s| s.name.as_str())).map_err(|e| e.in_file(&hp))?;
     let fp = path.join("faces.npy");
     let faces = read_npy::<u32>(&fp)?;
     expect_shape(&faces, &[Some(h.triangles), Some(3)], "triangles").map_err(|e| e.in_file(&fp))?;
@@ -289,5 +293,53 @@ impl CachedFrames {
             k = end;
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    /// A cache of two one-frame sequences, "a" and "b", at 30 fps; returns its folder.
+    fn cache(dir: &Path) -> std::path::PathBuf {
+        let topo = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
+        let seqs = vec![Sequence::new("a", 3, vec![0.0; 9]).unwrap(), Sequence::new("b", 3, vec![1.0; 9]).unwrap()];
+        let s = Subject::new("s", topo, seqs, 30.0, UpAxis::PosY, Units::metres()).unwrap();
+        let p = dir.join("s.subject");
+        write_cache(&p, &s, false, &NoProgress).unwrap();
+        p
+    }
+
+    fn edit(p: &Path, from: &str, to: &str) {
+        let hp = p.join("subject.json");
+        let t = std::fs::read_to_string(&hp).unwrap();
+        assert!(t.contains(from), "{t}");
+        std::fs::write(&hp, t.replacen(from, to, 1)).unwrap();
+    }
+
+    #[test]
+    fn an_empty_or_repeated_sequence_name_is_refused_naming_the_file_and_the_sequence() {
+        let d = tempfile::tempdir().unwrap();
+        let p = cache(d.path());
+        edit(&p, "\"name\": \"b\"", "\"name\": \"\"");
+        for e in [read_cache(&p, &NoProgress).unwrap_err(), CachedFrames::open(&p).err().unwrap()] {
+            let m = e.to_string();
+            assert!(m.contains("subject.json") && m.contains("sequence 1 has an empty name"), "{m}");
+        }
+        edit(&p, "\"name\": \"\"", "\"name\": \"a\"");
+        let m = read_cache(&p, &NoProgress).unwrap_err().to_string();
+        assert!(m.contains("subject.json") && m.contains("sequences 0 and 1 are both named \"a\""), "{m}");
+    }
+
+    #[test]
+    fn a_frame_rate_out_of_range_is_refused_naming_the_file() {
+        let d = tempfile::tempdir().unwrap();
+        let p = cache(d.path());
+        edit(&p, "\"fps\": 30.0", "\"fps\": 1e300");
+        for e in [read_cache(&p, &NoProgress).unwrap_err(), CachedFrames::open(&p).err().unwrap()] {
+            let m = e.to_string();
+            assert!(m.contains("subject.json") && m.contains("0.1 to 10000 frames per second"), "{m}");
+        }
     }
 }

@@ -262,17 +262,11 @@ impl FrameSet {
         units: Units,
     ) -> Result<Self> {
         let name = name.into();
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(err!(Metadata, "frame rate {fps}: expected a positive number of frames per second"));
-        }
+        crate::subject::check_frame_rate(fps)?;
         if sequences.is_empty() {
             return Err(err!(Empty, "frame set {name:?} has no sequences"));
         }
-        for (i, s) in sequences.iter().enumerate() {
-            if sequences[..i].iter().any(|t| t.name == s.name) {
-                return Err(err!(Metadata, "two sequences are named {:?}: names must be unique", s.name));
-            }
-        }
+        crate::subject::check_sequence_names(sequences.iter().map(|s| s.name.as_str()))?;
         let index = FrameIndex::new(sequences.iter().map(FrameSetSequence::n_frames))
             .with_names(sequences.iter().map(|s| s.name.clone()).collect());
         Ok(FrameSet { name, sequences, fps, up_axis, units, index })

@@ -254,6 +254,59 @@ impl Sequence {
     }
 }
 
+/// The frame rates surfcap accepts, in frames per second: a frame time from 1e-4 s (10,000 fps)
+/// to 10 s (0.1 fps). Every reader that learns a frame rate (BVH `Frame Time`, `meta.json`,
+/// `surfcap.toml`, glb extras, USD and Alembic time codes, a subject cache) and every subject
+/// checks it against this one range, so a typo like `Frame Time: 1e-300` cannot make a subject
+/// at 1e300 fps.
+pub const FRAME_RATES: std::ops::RangeInclusive<f64> = 0.1..=10_000.0;
+
+/// The accepted frame rates and frame times, as an error message says them.
+pub const FRAME_RATES_TEXT: &str = "0.1 to 10000 frames per second (a frame time of 1e-4 to 10 s)";
+
+/// Checks a frame rate against [`FRAME_RATES`]: the error says the value and the range (the
+/// caller adds the file and field).
+pub fn check_frame_rate(fps: f64) -> Result<f64> {
+    if FRAME_RATES.contains(&fps) {
+        Ok(fps)
+    } else {
+        Err(err!(Metadata, "frame rate {} fps: expected {FRAME_RATES_TEXT}", short_number(fps)))
+    }
+}
+
+/// Checks a frame time in seconds (the reciprocal of a frame rate) against [`FRAME_RATES`].
+pub fn check_frame_time(seconds: f64) -> Result<f64> {
+    if (1.0 / FRAME_RATES.end()..=1.0 / FRAME_RATES.start()).contains(&seconds) {
+        Ok(seconds)
+    } else {
+        Err(err!(Metadata, "frame time {} s: expected {FRAME_RATES_TEXT}", short_number(seconds)))
+    }
+}
+
+/// A number as a person writes it: plainly when moderate, in exponent form when tiny or huge
+/// (`1e-300`, not three hundred zeros).
+fn short_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e7).contains(&x.abs()) { format!("{x}") } else { format!("{x:e}") }
+}
+
+/// Checks sequence names: none empty, no two alike. The error names the 0-based index of the
+/// sequence at fault (the caller adds the file).
+pub fn check_sequence_names<'a>(names: impl IntoIterator<Item = &'a str>) -> Result<()> {
+    let mut seen: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for (i, n) in names.into_iter().enumerate() {
+        if n.is_empty() {
+            return Err(err!(Metadata, "sequence {i} has an empty name: expected a non-empty name"));
+        }
+        if let Some(j) = seen.insert(n, i) {
+            return Err(err!(
+                Metadata,
+                "sequences {j} and {i} are both named {n:?}: expected unique sequence names"
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A subject: one topology, several named sequences, frame rate, up axis and units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Subject {
@@ -267,7 +320,8 @@ pub struct Subject {
 }
 
 impl Subject {
-    /// Checks that every sequence has the topology's vertex count and that names are unique.
+    /// Checks the frame rate ([`FRAME_RATES`]), that every sequence has the topology's vertex
+    /// count, and that names are non-empty and unique.
     pub fn new(
         name: impl Into<String>,
         topology: Topology,
@@ -277,13 +331,12 @@ impl Subject {
         units: Units,
     ) -> Result<Self> {
         let name = name.into();
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(err!(Metadata, "frame rate {fps}: expected a positive number of frames per second"));
-        }
+        check_frame_rate(fps)?;
         if sequences.is_empty() {
             return Err(err!(Empty, "subject {name:?} has no sequences"));
         }
-        for (i, s) in sequences.iter().enumerate() {
+        check_sequence_names(sequences.iter().map(|s| s.name.as_str()))?;
+        for s in &sequences {
             if s.n_vertices() != topology.n_vertices() {
                 return Err(err!(
                     TopologyMismatch,
@@ -292,9 +345,6 @@ impl Subject {
                     s.n_vertices(),
                     topology.n_vertices()
                 ));
-            }
-            if sequences[..i].iter().any(|t| t.name == s.name) {
-                return Err(err!(Metadata, "two sequences are named {:?}: names must be unique", s.name));
             }
         }
         let index = FrameIndex::new(sequences.iter().map(|s| s.n_frames()))
@@ -421,5 +471,23 @@ mod tests {
         assert_eq!(e.unwrap_err().kind, ErrorKind::Metadata);
         let s = Subject::new("s", topo, vec![a], 30.0, UpAxis::PosY, Units::metres()).unwrap();
         assert_eq!(s.n_frames(), 1);
+    }
+
+    #[test]
+    fn subject_refuses_empty_names_and_frame_rates_out_of_range() {
+        let topo = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
+        let a = Sequence::new("a", 3, vec![0.0; 9]).unwrap();
+        let blank = Sequence::new("", 3, vec![0.0; 9]).unwrap();
+        let e = Subject::new("s", topo.clone(), vec![a.clone(), blank], 30.0, UpAxis::PosY, Units::metres());
+        assert!(e.unwrap_err().to_string().contains("sequence 1 has an empty name"));
+        for fps in [1e300, 1e-300, 0.05, 20_000.0, f64::NAN, -30.0] {
+            let e = Subject::new("s", topo.clone(), vec![a.clone()], fps, UpAxis::PosY, Units::metres()).unwrap_err();
+            assert!(e.to_string().contains("0.1 to 10000 frames per second"), "{fps}: {e}");
+        }
+        for fps in [0.1, 24.0, 10_000.0] {
+            assert!(Subject::new("s", topo.clone(), vec![a.clone()], fps, UpAxis::PosY, Units::metres()).is_ok());
+        }
+        assert!(check_frame_time(1e-4).is_ok() && check_frame_time(10.0).is_ok());
+        assert!(check_frame_time(1e-300).is_err() && check_frame_time(1e300).is_err());
     }
 }

@@ -30,6 +30,11 @@ use std::ops::Range;
 
 use crate::error::{Error, Result};
 
+/// The shortest transition window: 3 frames, one each side of the centre, the least that holds
+/// motion. A 1-frame window matches a frame with itself and the "transition" it makes maps a
+/// frame onto itself, so a walk through it freezes; the paper's windows start at 3.
+pub const MIN_WINDOW: usize = 3;
+
 /// The normalised weights `w(m)`, `m = 0 ... n-1`, of an `n`-frame window (eq. 4).
 pub fn window_weights(n: usize) -> Vec<f64> {
     let w: Vec<f64> = (0..n).map(|m| (m + 1).min(n - m) as f64).collect();
@@ -74,8 +79,10 @@ pub fn optimal_transition(
     if x.end > frames || y.end > frames || x.start > x.end || y.start > y.end {
         return Err(Error::Invalid(format!("frames {x:?} and {y:?}: expected ranges within 0..{frames}")));
     }
-    if *lengths.start() == 0 || lengths.start() > lengths.end() {
-        return Err(Error::Invalid(format!("window lengths {lengths:?}: expected a non-empty range from 1")));
+    if *lengths.start() < MIN_WINDOW || lengths.start() > lengths.end() {
+        return Err(Error::Invalid(format!(
+            "window lengths {lengths:?}: expected a non-empty range of windows of at least {MIN_WINDOW} frames"
+        )));
     }
     let same = x == y;
     let mut best: Option<Transition> = None;
@@ -226,5 +233,9 @@ mod tests {
         }
         assert_eq!(best_transitions(&s, f, 0..10, 10..20, 3..=5, 1, 4).unwrap(), vec![ts[0]]);
         assert!(optimal_transition(&s, f, 0..10, 10..21, 3..=3).unwrap_err().to_string().contains("within 0..20"));
+        for short in [1..=5, 2..=2, 0..=3] {
+            let e = optimal_transition(&s, f, 0..10, 10..20, short.clone()).unwrap_err().to_string();
+            assert!(e.contains("at least 3 frames"), "{short:?}: {e}");
+        }
     }
 }

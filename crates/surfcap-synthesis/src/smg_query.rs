@@ -64,12 +64,20 @@ pub struct SmgGraph {
     pub keys: Vec<usize>,
 }
 
+/// The window lengths of `--windows MIN-MAX`: windows of at least
+/// [`MIN_WINDOW`](surfcap_smg::temporal_shape_similarity::MIN_WINDOW) frames (a 1-frame window
+/// maps a frame onto itself and the walk freezes).
 fn windows(text: &str) -> Result<RangeInclusive<usize>> {
-    let parse = |s: &str| s.trim().parse::<usize>().ok().filter(|&n| n >= 1);
+    use surfcap_smg::temporal_shape_similarity::MIN_WINDOW;
+    let parse = |s: &str| s.trim().parse::<usize>().ok();
     let (a, b) = text.split_once('-').unwrap_or((text, text));
     match (parse(a), parse(b)) {
-        (Some(a), Some(b)) if a <= b => Ok(a..=b),
-        _ => refuse!("--windows {text:?}: expected MIN-MAX frames, 1 <= MIN <= MAX"),
+        (Some(a), Some(b)) if MIN_WINDOW <= a && a <= b => Ok(a..=b),
+        (Some(a), Some(_)) if a < MIN_WINDOW => refuse!(
+            "--windows {text:?}: windows of at least {MIN_WINDOW} frames are needed (a shorter window maps a frame \
+             onto itself): expected MIN-MAX frames, {MIN_WINDOW} <= MIN <= MAX"
+        ),
+        _ => refuse!("--windows {text:?}: expected MIN-MAX frames, {MIN_WINDOW} <= MIN <= MAX"),
     }
 }
 

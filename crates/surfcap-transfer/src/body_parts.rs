@@ -25,6 +25,7 @@ pub const VERSION: u32 = 1;
 
 /// One body part.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Part {
     pub name: String,
     /// The part it hangs from (its name); `None` for the root.
@@ -33,8 +34,10 @@ pub struct Part {
     pub vertices: Vec<u32>,
 }
 
-/// A subject's body parts: a tree of overlapping vertex sets covering the template.
+/// A subject's body parts: a tree of overlapping vertex sets covering the template. Unknown
+/// fields are refused when read, as in every other parts form.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct BodyParts {
     /// Always [`FORMAT`] in a file.
     pub format: String,

@@ -108,7 +108,8 @@ fn default_root() -> String {
 /// (`positions` its `[vertices][3]` positions, used by cutting planes). Errors name the file.
 pub fn read_parts_file(path: &Path, topology: &Topology, positions: &[f32]) -> Result<BodyParts> {
     let name = path.display().to_string();
-    let bytes = surfcap_mesh::read_regular_file(path)?;
+    // A FIFO, folder or device is refused by name, as a parts file (not as "mesh data").
+    let bytes = surfcap_mesh::read_regular_file(path).map_err(|e| Error::Parts(format!("{name}: {}", e.message)))?;
     let text = String::from_utf8(bytes).map_err(|e| {
         Error::Parts(format!(
             "{name}: byte {}: not UTF-8 text (expected JSON or one label per line)",
@@ -555,5 +556,34 @@ mod tests {
         let b = BodyParts::whole_body(12);
         let b2 = parse_parts(&b.to_json(), &topo, &p).unwrap();
         assert_eq!(b, b2);
+    }
+
+    /// The canonical form refuses unknown fields, as the other forms do, naming the file and
+    /// the field (a misspelt key must not be silently ignored).
+    #[test]
+    fn the_canonical_form_refuses_unknown_fields() {
+        let (topo, p) = tube(3);
+        let d = tempfile::tempdir().unwrap();
+        let f = d.path().join("knight.parts.json");
+        let good = BodyParts::whole_body(12).to_json();
+        for (from, to, field) in [
+            ("\"version\"", "\"colour\": \"red\",\n  \"version\"", "colour"),
+            ("\"parent\"", "\"parnet\": null,\n      \"parent\"", "parnet"),
+        ] {
+            std::fs::write(&f, good.replacen(from, to, 1)).unwrap();
+            let e = read_parts_file(&f, &topo, &p).unwrap_err().to_string();
+            assert!(e.contains(&format!("{}: line", f.display())) && e.contains(&format!("unknown field `{field}`")), "{e}");
+        }
+    }
+
+    /// A FIFO (or folder) given as the parts file is refused naming the file and what it is.
+    #[test]
+    fn a_fifo_as_the_parts_file_is_named() {
+        let (topo, p) = tube(3);
+        let d = tempfile::tempdir().unwrap();
+        let f = d.path().join("parts.json");
+        assert!(std::process::Command::new("mkfifo").arg(&f).status().unwrap().success());
+        let e = read_parts_file(&f, &topo, &p).unwrap_err().to_string();
+        assert!(e.contains(&format!("{}: is a FIFO", f.display())) && e.starts_with("body parts: "), "{e}");
     }
 }

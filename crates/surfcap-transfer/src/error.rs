@@ -17,7 +17,7 @@ pub enum Error {
     #[error("Poisson reconstruction")]
     Geometry(#[from] surfcap_geometry::Error),
     /// Mesh data that does not fit (topology, frames).
-    #[error("mesh data")]
+    #[error(transparent)]
     Mesh(#[from] surfcap_mesh::Error),
 }
 

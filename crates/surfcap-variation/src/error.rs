@@ -23,7 +23,7 @@ pub enum Error {
     #[error("time alignment")]
     Motion(#[from] surfcap_motion::Error),
     /// Mesh data or files.
-    #[error("mesh data")]
+    #[error(transparent)]
     Mesh(#[from] surfcap_mesh::Error),
 }
 

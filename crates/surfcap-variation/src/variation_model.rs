@@ -408,6 +408,30 @@ mod tests {
         assert!(e.contains("model.json") && e.contains("surfcap-variation-model"), "{e}");
     }
 
+    /// Repeated or empty names in a model file are refused naming the file and the field.
+    #[test]
+    fn repeated_names_in_a_model_file_name_the_file() {
+        let s = worm();
+        let m = VariationModel::train(&s, &[0, 1], &halves(&s), &quick(), &NoProgress).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model");
+        m.save(&path, false).unwrap();
+        let json = path.join("model.json");
+        let good: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        let edits: [(fn(&mut serde_json::Value), &str); 3] = [
+            (|v| v["sequences"][1]["name"] = v["sequences"][0]["name"].clone(), "sequences 0 and 1 are both named"),
+            (|v| v["sequences"][0]["name"] = "".into(), "sequence 0 has an empty name"),
+            (|v| v["parts"]["parts"][1]["name"] = v["parts"]["parts"][0]["name"].clone(), "appears twice"),
+        ];
+        for (edit, want) in edits {
+            let mut v = good.clone();
+            edit(&mut v);
+            std::fs::write(&json, serde_json::to_vec(&v).unwrap()).unwrap();
+            let e = VariationModel::load(&path).err().unwrap().to_string();
+            assert!(e.starts_with(&json.display().to_string()) && e.contains(want), "{e}");
+        }
+    }
+
     fn anyhow_chain(e: Error) -> String {
         let mut s = e.to_string();
         let mut src = std::error::Error::source(&e);

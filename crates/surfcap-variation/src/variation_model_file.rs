@@ -180,6 +180,12 @@ impl VariationModel {
                 head.format, head.version
             )));
         }
+        // Names and rate checked here, so that the error names this file (the parts' own check
+        // and the model's do not know it).
+        head.parts.validate().map_err(|e| bad(format!("{e}")))?;
+        surfcap_mesh::subject::check_sequence_names(head.sequences.iter().map(|s| s.name.as_str()))
+            .map_err(|e| bad(format!("{}", e.message)))?;
+        surfcap_mesh::subject::check_frame_rate(head.fps).map_err(|e| bad(format!("fps: {}", e.message)))?;
         if head.part_models.len() != head.parts.len() {
             return Err(bad(format!(
                 "{} part models for {} body parts: expected one per part",
@@ -261,7 +267,7 @@ impl VariationModel {
         })
         .map_err(|e| match e {
             Error::Model(m) => Error::Model(format!("{}: {m}", dir.display())),
-            other => other,
+            other => Error::Model(format!("{}: {other}", dir.display())),
         })
     }
 }

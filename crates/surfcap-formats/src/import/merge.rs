@@ -91,6 +91,32 @@ fn agree<T: Clone + PartialEq + std::fmt::Debug, S: HasOrigin>(
     Ok(found.map(|(v, _)| v))
 }
 
+/// Sequence names non-empty and unique, an error naming the file (or files) they came from: two
+/// sources, or one file (a USD stage, a glb, an Alembic archive) holding two alike.
+fn unique_names<'a>(named: impl Iterator<Item = (&'a str, &'a Path)>) -> Result<()> {
+    let mut seen: Vec<(&str, &Path)> = Vec::new();
+    for (name, origin) in named {
+        if name.is_empty() {
+            return Err(err!(Metadata, "a sequence has an empty name: expected a non-empty name").in_file(origin));
+        }
+        if let Some((_, first)) = seen.iter().find(|(n, _)| *n == name) {
+            let also = if *first == origin {
+                "two sequences of this file".to_string()
+            } else {
+                format!("a sequence of this file and one of {}", first.display())
+            };
+            return Err(err!(
+                Metadata,
+                "{also} are both named {name:?}: expected unique sequence names (rename one, e.g. with a \
+                 `name = ...` in surfcap.toml)"
+            )
+            .in_file(origin));
+        }
+        seen.push((name, origin));
+    }
+    Ok(())
+}
+
 /// Merges sequences into one subject. All must share the first one's topology.
 pub fn assemble(default_name: &str, seqs: Vec<SourceSequence>, opts: &ImportOptions) -> Result<Imported> {
     let Some(first) = seqs.first() else {
@@ -107,6 +133,7 @@ pub fn assemble(default_name: &str, seqs: Vec<SourceSequence>, opts: &ImportOpti
             .in_file(&s.origin));
         }
     }
+    unique_names(seqs.iter().map(|s| (s.name.as_str(), s.origin.as_path())))?;
     let mut notes = Vec::new();
     let (fps, up_axis, units) = agreed_metadata(opts, &seqs, |s| (s.fps, s.up_axis, s.units.clone()), &mut notes)?;
     let nv = topology.n_vertices();
@@ -146,6 +173,7 @@ pub(super) fn assemble_frames(
     if seqs.is_empty() {
         return Err(err!(Empty, "nothing to import: no sequences were found"));
     }
+    unique_names(seqs.iter().map(|s| (s.name.as_str(), s.origin.as_path())))?;
     let mut notes = Vec::new();
     let (fps, up_axis, units) = agreed_metadata(opts, &seqs, |s| (s.fps, s.up_axis, s.units.clone()), &mut notes)?;
     let sources = seqs

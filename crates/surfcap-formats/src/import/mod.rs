@@ -348,6 +348,28 @@ mod tests {
 
     /// The optional files (`joints.npy`, a folder's `surfcap.toml`) are refused by name when
     /// something that is not a regular file has their name, instead of being silently ignored.
+    /// Two sources whose sequences share a name: the error names both files (it said only
+    /// "two sequences are named").
+    #[test]
+    fn a_repeated_sequence_name_names_both_files() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir(d.path().join("b")).unwrap();
+        let (a, b) = (d.path().join("walk.obj"), d.path().join("b/walk.obj"));
+        std::fs::write(&a, TETRA).unwrap();
+        std::fs::write(&b, TETRA).unwrap();
+        let opts = ImportOptions { fps: Some(30.0), ..Default::default() };
+        let e = import_any(&[a.clone(), b.clone()], &opts, &NoProgress).err().unwrap().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "{}: a sequence of this file and one of {} are both named \"walk\": expected unique sequence names \
+                 (rename one, e.g. with a `name = ...` in surfcap.toml)",
+                b.display(),
+                a.display()
+            )
+        );
+    }
+
     #[test]
     fn optional_files_that_are_not_regular_files_are_refused() {
         let d = tempfile::tempdir().unwrap();

@@ -46,7 +46,7 @@ pub fn open_subject(path: &Path, opts: &ImportOptions, progress: &dyn Progress) 
 /// A subject cache, with the user's overrides of fps, up axis and units.
 fn open_cache(path: &Path, opts: &ImportOptions, progress: &dyn Progress) -> Result<Imported> {
     let mut subject = cache::read_cache(path, progress)?;
-    override_metadata(opts, &mut subject.fps, &mut subject.up_axis, &mut subject.units);
+    override_metadata(opts, &mut subject.fps, &mut subject.up_axis, &mut subject.units)?;
     let sources = sequences_of(&subject, path)
         .into_iter()
         .map(|s| ImportedSource {
@@ -68,7 +68,7 @@ pub fn open_any(path: &Path, opts: &ImportOptions, progress: &dyn Progress) -> R
     }
     if frame_set_cache::is_frame_set(path) {
         let mut set = frame_set_cache::read_frame_set(path, progress)?;
-        override_metadata(opts, &mut set.fps, &mut set.up_axis, &mut set.units);
+        override_metadata(opts, &mut set.fps, &mut set.up_axis, &mut set.units)?;
         let sources = set
             .sequences()
             .iter()
@@ -90,9 +90,10 @@ pub fn open_any(path: &Path, opts: &ImportOptions, progress: &dyn Progress) -> R
 }
 
 /// The user's fps, up axis and units, where given, over those a cache recorded.
-fn override_metadata(opts: &ImportOptions, fps: &mut f64, up_axis: &mut UpAxis, units: &mut Units) {
+/// The frame rate given is checked against the accepted range, as any frame rate a subject gets.
+fn override_metadata(opts: &ImportOptions, fps: &mut f64, up_axis: &mut UpAxis, units: &mut Units) -> Result<()> {
     if let Some(f) = opts.fps {
-        *fps = f;
+        *fps = surfcap_mesh::subject::check_frame_rate(f)?;
     }
     if let Some(u) = opts.up_axis {
         *up_axis = u;
@@ -100,4 +101,5 @@ fn override_metadata(opts: &ImportOptions, fps: &mut f64, up_axis: &mut UpAxis, 
     if let Some(u) = &opts.units {
         *units = u.clone();
     }
+    Ok(())
 }

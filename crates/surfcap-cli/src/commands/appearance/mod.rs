@@ -220,8 +220,8 @@ pub struct PaintArgs {
     /// Width and height of the texture, texels.
     #[arg(long, default_value_t = 1024, value_parser = |s: &str| crate::options::whole_in(s, 8, 16384))]
     pub size: usize,
-    /// The PNG file to write.
-    #[arg(short, long)]
+    /// The image to write: .png, .jpg or .jpeg (the format follows the extension).
+    #[arg(short, long, value_parser = crate::options::image_output)]
     pub output: PathBuf,
 }
 
@@ -245,7 +245,7 @@ fn paint(ctx: &crate::Ctx, a: &PaintArgs) -> anyhow::Result<()> {
     let raster =
         AtlasRaster::new(atlas, a.size, a.size).with_context(|| format!("{}: the UV atlas", a.mesh.display()))?;
     let texture = solid_texture(&raster, topology.triangles(), &positions, up)?;
-    texture.write_png(&a.output)?;
+    texture.write(&a.output)?;
     let seconds = t0.elapsed().as_secs_f64();
     ctx.result(&json!({ "mesh": a.mesh, "size": a.size, "output": a.output, "seconds": seconds }), || {
         println!("painted a {0}x{0} texture from {1} in {seconds:.2} s", a.size, a.mesh.display())

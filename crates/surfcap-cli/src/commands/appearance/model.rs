@@ -226,8 +226,8 @@ pub struct ReconstructArgs {
     /// Eigen maps used (two thirds textures, one third warps); default: all the model has.
     #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 0))]
     pub components: Option<usize>,
-    /// The texture map to write (PNG).
-    #[arg(short, long)]
+    /// The texture map to write: .png, .jpg or .jpeg (the format follows the extension).
+    #[arg(short, long, value_parser = crate::options::image_output)]
     pub output: PathBuf,
 }
 
@@ -240,7 +240,7 @@ pub fn reconstruct(ctx: &crate::Ctx, a: &ReconstructArgs) -> anyhow::Result<()> 
     let t = Instant::now();
     let texture = model.instantiate(&tc[..nt.min(tc.len())], &wc[..nw.min(wc.len())])?;
     let seconds = t.elapsed().as_secs_f64();
-    texture.write_png(&a.output)?;
+    texture.write(&a.output)?;
     let value = json!({"frame": a.frame, "eigen_textures": nt.min(tc.len()), "eigen_warps": nw.min(wc.len()), "seconds": seconds, "output": a.output});
     ctx.result(&value, || {
         println!(
@@ -262,8 +262,8 @@ pub struct InterpolateArgs {
     /// `NAME` alone for equal weights, e.g. `walk:3=0.25,run:7=0.75` (thesis 4.6.1).
     #[arg(long, value_delimiter = ',', required = true)]
     pub frames: Vec<String>,
-    /// The texture map to write (PNG).
-    #[arg(short, long)]
+    /// The texture map to write: .png, .jpg or .jpeg (the format follows the extension).
+    #[arg(short, long, value_parser = crate::options::image_output)]
     pub output: PathBuf,
 }
 
@@ -300,7 +300,7 @@ pub fn interpolate(ctx: &crate::Ctx, a: &InterpolateArgs) -> anyhow::Result<()> 
     let t = Instant::now();
     let texture = model.interpolate(&weights)?;
     let seconds = t.elapsed().as_secs_f64();
-    texture.write_png(&a.output)?;
+    texture.write(&a.output)?;
     let frames: Vec<_> = weights.iter().map(|&(k, w)| json!({"frame": model.names()[k], "weight": w})).collect();
     ctx.result(&json!({"frames": frames, "seconds": seconds, "output": a.output}), || {
         println!("blended {} frames in the eigen spaces in {seconds:.2} s", weights.len())
@@ -328,8 +328,8 @@ pub struct CompleteArgs {
     pub flow: FlowArgs,
     #[command(flatten)]
     pub cache: CacheOpts,
-    /// The texture map to write (PNG).
-    #[arg(short, long)]
+    /// The texture map to write: .png, .jpg or .jpeg (the format follows the extension).
+    #[arg(short, long, value_parser = crate::options::image_output)]
     pub output: PathBuf,
 }
 
@@ -384,7 +384,7 @@ pub fn complete(ctx: &crate::Ctx, a: &CompleteArgs) -> anyhow::Result<()> {
             }
         }
     }
-    out.write_png(&a.output)?;
+    out.write(&a.output)?;
     let value = json!({"missing_texels": missing, "active_texels": mask.len(), "seconds": seconds, "output": a.output});
     ctx.result(&value, || {
         println!(
