@@ -41,6 +41,7 @@
 
 pub mod atomic;
 pub mod cache;
+pub mod cache_entry;
 mod cache_description;
 pub mod connected_components;
 pub mod derived_cache;
