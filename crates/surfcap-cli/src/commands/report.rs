@@ -28,7 +28,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(a.include.iter().map(|p| p.as_path()));
     surfcap_mesh::output_path::check_not_input(&a.output, &inputs)?;
     let s = a.subject.open(ctx)?;
-    let pipe = a.cache.pipeline(ctx, s);
+    let pipe = a.cache.pipeline(ctx, s)?;
     let w = write_report(&pipe, &a.subject.path, &a.output, &a.include, ctx.force)?;
     let result = json!({ "index": w.index, "plots": w.plots, "animations": w.animations, "tables": w.tables });
     ctx.result(&result, || {

@@ -26,7 +26,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ctx.claim_dir(&a.output, "transitions")?;
     let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
-    let pipe = a.cache.pipeline(ctx, s);
+    let pipe = a.cache.pipeline(ctx, s)?;
     let t0 = Instant::now();
     let fetched = pipe.table(&p)?;
     let secs = t0.elapsed().as_secs_f64();
