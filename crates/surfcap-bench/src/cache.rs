@@ -58,7 +58,13 @@ fn best_read(cache: &DerivedCache, path: &Path, verify: bool, repeat: usize) -> 
 }
 
 /// The report of one entry.
-fn measure(ctx: &crate::Ctx, what: &str, cache: &DerivedCache, path: &Path, repeat: usize) -> anyhow::Result<serde_json::Value> {
+fn measure(
+    ctx: &crate::Ctx,
+    what: &str,
+    cache: &DerivedCache,
+    path: &Path,
+    repeat: usize,
+) -> anyhow::Result<serde_json::Value> {
     let bytes = std::fs::metadata(path).with_context(|| format!("{}", path.display()))?.len();
     // A first read warms the page cache.
     best_read(cache, path, true, 1)?;
@@ -116,7 +122,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     std::hint::black_box(blake3::hash(&bytes));
     let secs = t.elapsed().as_secs_f64();
-    ctx.say(&format!("BLAKE3 alone on {:.1} MB in memory: {:.1} ms ({:.2} GB/s)", bytes.len() as f64 / 1e6, secs * 1e3, bytes.len() as f64 / secs / 1e9));
+    ctx.say(&format!(
+        "BLAKE3 alone on {:.1} MB in memory: {:.1} ms ({:.2} GB/s)",
+        bytes.len() as f64 / 1e6,
+        secs * 1e3,
+        bytes.len() as f64 / secs / 1e9
+    ));
     ctx.result(&json!({ "entries": reports, "blake3_gb_per_s": bytes.len() as f64 / secs / 1e9 }), || {});
     Ok(())
 }

@@ -129,17 +129,15 @@ pub fn hash_path(entry: &Path) -> PathBuf {
 /// Opens the regular file at `path` for reading without following a link or blocking on a
 /// FIFO, and checks that it is this user's regular file.
 fn open_own_file(path: &Path) -> std::result::Result<fs::File, Error> {
-    let f = fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
-        .open(path)
-        .map_err(|e| {
+    let f = fs::OpenOptions::new().read(true).custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK).open(path).map_err(
+        |e| {
             if e.raw_os_error() == Some(libc::ELOOP) {
                 refused(path, "is a symbolic link: the cache never follows one".into())
             } else {
                 Error::io(path, "read", e)
             }
-        })?;
+        },
+    )?;
     let m = f.metadata().map_err(|e| Error::io(path, "look at", e))?;
     if !m.is_file() {
         return Err(refused(path, format!("is {}: expected a cache entry file", what_is(&m.file_type()))));
@@ -265,26 +263,35 @@ fn make_room(path: &Path, for_folder: bool, note: &mut dyn FnMut(String)) -> Res
         return Ok(());
     }
     if t.is_file() {
-        return Err(refused(path, "is a file where a cache folder goes: surfcap did not write it, so it is left alone".into()));
+        return Err(refused(
+            path,
+            "is a file where a cache folder goes: surfcap did not write it, so it is left alone".into(),
+        ));
     }
     let what = describe(path, &t);
     if t.is_dir() {
         fs::remove_dir(path).map_err(|_| {
-            refused(path, "is a folder holding files where a cache entry goes: surfcap did not write it, so it is left alone".into())
+            refused(
+                path,
+                "is a folder holding files where a cache entry goes: surfcap did not write it, so it is left alone"
+                    .into(),
+            )
         })?;
     } else {
         fs::remove_file(path).map_err(|e| Error::io(path, "remove", e))?;
     }
-    note(format!("cache entry {}: was {what}; removed as a name (nothing it points to was touched) and replaced", path.display()));
+    note(format!(
+        "cache entry {}: was {what}; removed as a name (nothing it points to was touched) and replaced",
+        path.display()
+    ));
     Ok(())
 }
 
 /// Creates `tmp` as a new file of this user's (0600), never through a link; whatever a dead
 /// run of the same PID left at that name is removed first.
 fn create_temp(tmp: &Path) -> Result<fs::File> {
-    let open = || {
-        fs::OpenOptions::new().write(true).create_new(true).mode(0o600).custom_flags(libc::O_NOFOLLOW).open(tmp)
-    };
+    let open =
+        || fs::OpenOptions::new().write(true).create_new(true).mode(0o600).custom_flags(libc::O_NOFOLLOW).open(tmp);
     match open() {
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
             match fs::symlink_metadata(tmp) {
@@ -363,7 +370,10 @@ fn folder_hash(dir: &Path) -> Result<blake3::Hash> {
         let p = dir.join(&name);
         let m = fs::symlink_metadata(&p).map_err(|e| Error::io(&p, "look at", e))?;
         if !m.is_file() {
-            return Err(refused(&p, format!("is {} inside a cache entry: expected only files", what_is(&m.file_type()))));
+            return Err(refused(
+                &p,
+                format!("is {} inside a cache entry: expected only files", what_is(&m.file_type())),
+            ));
         }
         let bytes = name.as_encoded_bytes();
         h.update(&(bytes.len() as u64).to_le_bytes());
@@ -386,7 +396,10 @@ pub fn check_folder_entry(path: &Path, kind: &str) -> EntryRead<()> {
     };
     if !m.is_dir() {
         let what = describe(path, &m.file_type());
-        return EntryRead::Unusable(refused(path, format!("is {what}, not a cache folder: it is not followed or read")));
+        return EntryRead::Unusable(refused(
+            path,
+            format!("is {what}, not a cache folder: it is not followed or read"),
+        ));
     }
     if m.uid() != euid() {
         return EntryRead::Unusable(refused(path, format!("belongs to another user (uid {}): not trusted", m.uid())));

@@ -41,8 +41,8 @@
 
 pub mod atomic;
 pub mod cache;
-pub mod cache_entry;
 mod cache_description;
+pub mod cache_entry;
 pub mod connected_components;
 pub mod derived_cache;
 pub mod error;
