@@ -14,6 +14,7 @@ use surfcap_cli::{Ctx, GlobalOpts, NegativeValues};
 use surfcap_cli::{options, output, progress};
 
 mod appearance;
+mod cache;
 mod distance;
 mod export;
 mod graph;
@@ -79,6 +80,9 @@ enum Command {
     /// The tiled all-pairs work at 20,000 frames: sampled tile jobs, the projection on N
     /// workers, and a 5,000-frame run end to end.
     Scale(scale::Args),
+    /// What verifying a cache entry's content hash costs on reading: the crane's distance
+    /// matrix and a 2,000-frame transition table, read with and without the hash (ms, GB/s).
+    Cache(cache::Args),
     /// Write long animations as .glb, .abc or .usda (default: glb, 10 minutes at 30 fps of a
     /// 10,000-vertex tube, 18,000 frames): file size, time and the memory the write adds, for
     /// each length (`--frames 1800,3600,9000,18000` shows that both grow linearly).
@@ -111,6 +115,7 @@ impl surfcap_cli::Front for Cli {
             Command::Transfer(a) => transfer::run(ctx, &a),
             Command::Vary(a) => vary::run(ctx, &a),
             Command::Scale(a) => scale::run(ctx, a),
+            Command::Cache(a) => cache::run(ctx, a),
             Command::Export(a) => export::run(ctx, a),
             Command::Interpolate(a) => interpolate::run(ctx, a),
             Command::Tiles(c) => surfcap_cli::commands::tiles::run(ctx, c),

@@ -64,7 +64,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         alpha,
     };
     let cache = CacheOpts { cache_dir: Some(cache_dir.unwrap_or_else(|| tmp.path().into())), no_cache: false };
-    let pipe = cache.pipeline(ctx, s);
+    let pipe = cache.pipeline(ctx, s)?;
     let t1 = Instant::now();
     let _ = pipe.chain_distances()?;
     let dist_secs = t1.elapsed().as_secs_f64();

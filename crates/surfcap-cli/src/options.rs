@@ -132,24 +132,54 @@ pub struct CacheOpts {
 
 impl CacheOpts {
     /// The cache folder: `--cache-dir`, else `$XDG_CACHE_HOME/surfcap`, else `~/.cache/surfcap`.
-    pub fn dir(&self) -> PathBuf {
-        self.cache_dir.clone().unwrap_or_else(|| {
+    /// Refused when it is, contains or lies inside one of the inputs this run has opened
+    /// ([`record_input`]): its entries would be written into the input. (Whether other users
+    /// can write it is checked by the cache itself, when it is first used.)
+    pub fn dir(&self) -> anyhow::Result<PathBuf> {
+        let dir = self.cache_dir.clone().unwrap_or_else(|| {
             std::env::var_os("XDG_CACHE_HOME")
                 .map(PathBuf::from)
                 .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))
                 .unwrap_or_else(|| PathBuf::from(".cache"))
                 .join("surfcap")
-        })
+        });
+        let out = surfcap_mesh::output_path::resolve(&dir)?;
+        for input in INPUTS.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+            let Ok(inp) = std::fs::canonicalize(input) else { continue };
+            let how = if out == inp {
+                "is"
+            } else if out.starts_with(&inp) {
+                "lies inside"
+            } else if inp.starts_with(&out) {
+                "contains"
+            } else {
+                continue;
+            };
+            anyhow::bail!(
+                "{}: the cache folder {how} the input {}: the cache would write its entries into the input; choose a --cache-dir outside the inputs",
+                dir.display(),
+                input.display()
+            );
+        }
+        Ok(dir)
     }
 
-    pub fn store(&self) -> CacheStore {
-        CacheStore::in_folder(self.dir(), self.no_cache)
+    pub fn store(&self) -> anyhow::Result<CacheStore> {
+        Ok(CacheStore::in_folder(self.dir()?, self.no_cache))
     }
 
     /// The derived-product pipeline of `subject`, with progress bars.
-    pub fn pipeline(&self, ctx: &crate::Ctx, subject: Subject) -> Pipeline {
-        Pipeline::new(subject, self.store(), Box::new(crate::progress::Bar::new(ctx)))
+    pub fn pipeline(&self, ctx: &crate::Ctx, subject: Subject) -> anyhow::Result<Pipeline> {
+        Ok(Pipeline::new(subject, self.store()?, Box::new(crate::progress::Bar::new(ctx))))
     }
+}
+
+/// The inputs this run has opened, which the cache folder must stay out of ([`CacheOpts::dir`]).
+static INPUTS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Records an input of this run (every subject [`open`] opens is recorded).
+pub fn record_input(path: &Path) {
+    INPUTS.lock().unwrap_or_else(|e| e.into_inner()).push(path.to_path_buf());
 }
 
 /// How the optical flow between texture maps runs (thesis 4.4.1): `appearance build |
@@ -167,11 +197,15 @@ pub struct FlowArgs {
 
 impl FlowArgs {
     /// The thesis's flow through the derived cache (`--cache-dir`, `--no-cache` recomputes).
-    pub fn estimator<'a>(&self, cache: &CacheOpts, progress: &'a dyn surfcap_mesh::Progress) -> TextureFlow<'a> {
-        let dir = cache.dir();
+    pub fn estimator<'a>(
+        &self,
+        cache: &CacheOpts,
+        progress: &'a dyn surfcap_mesh::Progress,
+    ) -> anyhow::Result<TextureFlow<'a>> {
+        let dir = cache.dir()?;
         let pre = if self.no_preprocess { PreprocessOptions::none() } else { PreprocessOptions::default() };
         let options = FlowOptions { finest_scale: self.flow_scale, ..FlowOptions::default() };
-        TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options)
+        Ok(TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options))
     }
 }
 
@@ -401,6 +435,7 @@ pub fn output_format(format: Option<ExportFormat>, output: &Path) -> ExportForma
 
 /// Opens a subject (cache or any importable source) with a progress bar and shows the notes.
 pub fn open(ctx: &crate::Ctx, path: &Path, opts: &SourceOpts) -> anyhow::Result<Subject> {
+    record_input(path);
     let bar = crate::progress::Bar::new(ctx);
     let imported = surfcap_formats::import::open_subject(path, &opts.to_import(None)?, &bar)?;
     for n in &imported.notes {

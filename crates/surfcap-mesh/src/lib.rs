@@ -46,6 +46,7 @@
 pub mod atomic;
 pub mod cache;
 mod cache_description;
+pub mod cache_entry;
 pub mod connected_components;
 pub mod derived_cache;
 pub mod error;

@@ -192,16 +192,24 @@ impl Pipeline {
         }
         let key = DistanceKey::new(p);
         let n = self.subject.n_frames();
+        // Set once the matrix is computed here: only a matrix read from the cache is suspected
+        // of being zeros it should not be (a subject whose frames differ only rigidly does
+        // compute to zeros under the deformation distances).
+        let computed = std::cell::Cell::new(false);
         self.distances.get_or_try(&key, || {
             self.fetch(
                 &key,
                 || {
+                    computed.set(true);
                     let d = distance_matrix(&self.subject, p, &*self.progress);
                     Ok(NpyArray { shape: vec![d.n, d.n], data: d.values })
                 },
                 |a: NpyArray<f64>| {
                     check_shape(&a.shape, &[n, n], "distance matrix")?;
                     check_distances(&a.data, self.subject.frame_index())?;
+                    if !computed.get() {
+                        check_distances_make_sense(&a.data, n)?;
+                    }
                     Ok(PoseDistances { n, values: a.data })
                 },
             )
@@ -364,6 +372,21 @@ impl Pipeline {
             )
         })
     }
+}
+
+/// What a stored distance matrix must be besides finite and >= 0: zero on its diagonal and,
+/// over more than one frame, not zero between every pair of frames (an all-zero matrix makes
+/// every transition free).
+fn check_distances_make_sense(d: &[f64], n: usize) -> Result<()> {
+    if let Some(i) = (0..n).find(|&i| d[i * n + i] != 0.0) {
+        let reason = format!("distance {} from frame {i} to itself, expected 0", d[i * n + i]);
+        return Err(Error::Product { kind: "distance matrix", reason });
+    }
+    if n > 1 && d.iter().all(|&x| x == 0.0) {
+        let reason = format!("all {n} x {n} distances are 0: expected distances between different poses");
+        return Err(Error::Product { kind: "distance matrix", reason });
+    }
+    Ok(())
 }
 
 fn shape_error(shape: &[usize], expected: &str, what: &'static str) -> Error {

@@ -173,7 +173,11 @@ impl MotionFrames {
         progress: &dyn Progress,
     ) -> Result<(Vec<f64>, bool)> {
         let n = self.n_frames();
+        // Set once the matrix is computed here: only one read from the cache is suspected of
+        // being all zeros where the frames differ.
+        let computed = std::cell::Cell::new(false);
         let compute = || -> Result<NpyArray<f64>> {
+            computed.set(true);
             progress.start("shape histograms and similarity (eq. 2)", 1);
             let set = frame_histograms(&self.meshes(), self.up, params)?;
             let m = shape_similarity_matrix(&set)?;
@@ -185,6 +189,11 @@ impl MotionFrames {
                 return Err(Error::Invalid(format!(
                     "expected {n} x {n} finite similarities, found shape {:?}",
                     a.shape
+                )));
+            }
+            if !computed.get() && n > 1 && a.data.iter().all(|&x| x == 0.0) {
+                return Err(Error::Invalid(format!(
+                    "all {n} x {n} similarities are 0: expected a stored matrix of the frames' histograms"
                 )));
             }
             Ok(a.data)

@@ -141,6 +141,15 @@ pub fn read_model(dir: &Path) -> Result<SavedModel> {
     let npy_path = dir.join("target_training.npy");
     let a = read_npy::<f32>(&npy_path)?;
     expect_shape(&a, &[None, Some(nv), Some(3)], "the target's training poses").map_err(|e| e.in_file(&npy_path))?;
+    if let Some(k) = a.data.iter().position(|x| !x.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "{}: training pose {}, vertex {}: coordinate {}: expected finite coordinates",
+            npy_path.display(),
+            k / (3 * nv),
+            (k / 3) % nv,
+            a.data[k]
+        )));
+    }
     if env.subjects.target_triangles.iter().flatten().any(|&v| v as usize >= nv) {
         return Err(bad(format!("the target's triangles name vertices beyond its {nv}")));
     }

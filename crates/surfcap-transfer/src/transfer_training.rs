@@ -7,14 +7,16 @@
 //! `transfer-model-<16 hex>` in the cache folder, keyed by everything it depends on (both
 //! subjects' geometry, names, rates and the target's units, the key pairs, both parts and every
 //! option, and a layout version), holding the model files of [`crate::transfer_model_file`] and
-//! `training.json` (what [`TrainedTransfer`] says besides the model). A repeat of the same
-//! training reads it; an entry that does not read is trained again and replaced.
+//! `training.json` (what [`TrainedTransfer`] says besides the model), with its content hash in
+//! `transfer-model-<16 hex>.b3`. A repeat of the same training reads it; an entry that does not
+//! read, or whose files do not match their hash, is trained again and replaced.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 use surfcap_mesh::Subject;
+use surfcap_mesh::cache_entry::{self, EntryRead};
 use surfcap_mesh::derived_cache::{DerivedCache, subject_hash};
 
 use crate::body_parts::BodyParts;
@@ -148,28 +150,48 @@ fn read_entry(entry: &Path) -> Result<TrainedTransfer> {
 }
 
 /// Trains through the cache folder `cache_dir`: a good entry is read (unless `refresh`), else
-/// the training runs and is stored. Notes (an entry not used, one not stored) go to `note`.
+/// the training runs and is stored. Notes (an entry not used, one not stored, a name that was
+/// not an entry) go to `note`.
+///
+/// The folder and its entries are handled as [`surfcap_mesh::cache_entry`] says: a cache folder
+/// other users can write is refused (an error), an entry is used only when it is a real folder
+/// of this user's holding surfcap's marker and files matching its content hash, and storing
+/// replaces only such an earlier entry, or a symlink or other non-folder name (removed as a
+/// name, its target never touched); never anything else, and never by force.
 pub fn train_cached(
     req: &TrainingRequest<'_>,
     cache_dir: &Path,
     refresh: bool,
     note: &mut dyn FnMut(String),
 ) -> Result<TrainedTransfer> {
+    cache_entry::check_folder(cache_dir)?;
     let entry = cache_entry(cache_dir, req);
-    if !refresh && entry.is_dir() {
-        match read_entry(&entry) {
-            Ok(t) => return Ok(t),
-            Err(e) => note(format!("cached model {} not used ({e}); training again", entry.display())),
+    if !refresh {
+        let problem = match cache_entry::check_folder_entry(&entry, KIND) {
+            EntryRead::Missing => None,
+            EntryRead::Unusable(e) => Some(e.to_string()),
+            EntryRead::Read(()) => match read_entry(&entry) {
+                Ok(t) => return Ok(t),
+                Err(e) => Some(e.to_string()),
+            },
+        };
+        if let Some(problem) = problem {
+            note(format!("cached model {} not used ({problem}); training again", entry.display()));
         }
     }
     let trained = train_transfer(req)?;
-    let stored = surfcap_mesh::atomic::write_dir(&entry, KIND, true, |dir| {
-        write_model(dir, &trained.model, &trained.subjects, &trained.target_training).map_err(|e| {
-            surfcap_mesh::Error::io(dir, "write the cached model", std::io::Error::other(e.to_string()))
-        })?;
-        let summary = serde_json::to_vec(&trained.summary).map_err(std::io::Error::other);
-        surfcap_mesh::atomic::write_file(&dir.join("training.json"), |w| w.write_all(&summary?))
-    });
+    let stored = cache_entry::store_folder_entry(
+        &entry,
+        KIND,
+        |dir| {
+            write_model(dir, &trained.model, &trained.subjects, &trained.target_training).map_err(|e| {
+                surfcap_mesh::Error::io(dir, "write the cached model", std::io::Error::other(e.to_string()))
+            })?;
+            let summary = serde_json::to_vec(&trained.summary).map_err(std::io::Error::other);
+            surfcap_mesh::atomic::write_file(&dir.join("training.json"), |w| w.write_all(&summary?))
+        },
+        &mut *note,
+    );
     if let Err(e) = stored {
         note(format!("the model could not be cached in {} ({e})", entry.display()));
     }

@@ -104,7 +104,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 
     // Pose geometry (thesis 2.3-2.4): all-pairs distances and a non-linear interpolation. The
     // distances go to the demo's own cache, where the later steps read them.
-    let pipe = CacheOpts { cache_dir: Some(a.output.join("cache")), no_cache: false }.pipeline(ctx, subject.clone());
+    let pipe = CacheOpts { cache_dir: Some(a.output.join("cache")), no_cache: false }.pipeline(ctx, subject.clone())?;
     let d = pipe.distances(&DistanceParams::default())?.value;
     let n = d.n;
     let dist_path = a.output.join("distances.npy");

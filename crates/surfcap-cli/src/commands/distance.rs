@@ -27,7 +27,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject.path])?;
     let subject = a.subject.open(ctx)?;
     let params = a.distance.params();
-    let pipe = a.cache.pipeline(ctx, subject);
+    let pipe = a.cache.pipeline(ctx, subject)?;
     let t0 = Instant::now();
     let d = pipe.distances(&params)?;
     let secs = t0.elapsed().as_secs_f64();

@@ -46,7 +46,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (outs, output) = ctx.claim_dir(&output, "graph", &[&subject])?;
     let s = open(ctx, &subject, &graph.source)?;
     let p = graph.params(s.fps)?;
-    let pipe = graph.cache.pipeline(ctx, s);
+    let pipe = graph.cache.pipeline(ctx, s)?;
     let t0 = Instant::now();
     let fetched = pipe.graph(&p)?;
     let secs = t0.elapsed().as_secs_f64();

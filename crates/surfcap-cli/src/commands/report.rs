@@ -30,7 +30,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut outs = surfcap_mesh::output_set::OutputSet::new(&inputs);
     outs.dir(&a.output, "report", ctx.force || crate::html_report::is_earlier_report(&a.output))?;
     let s = a.subject.open(ctx)?;
-    let pipe = a.cache.pipeline(ctx, s);
+    let pipe = a.cache.pipeline(ctx, s)?;
     let w = write_report(&pipe, &a.subject.path, &a.output, &a.include, ctx.force)?;
     ctx.commit(outs)?;
     let result = json!({ "index": w.index, "plots": w.plots, "animations": w.animations, "tables": w.tables });

@@ -130,7 +130,8 @@ impl GraphArgs {
 
     /// Opens the input with its similarity and graph, the key frames `keys` among the nodes.
     fn open(&self, keys: &[(&str, &str)], bar: &crate::progress::Bar) -> anyhow::Result<SmgGraph> {
-        let cache = SimilarityCache { dir: self.cache.dir(), refresh: self.cache.no_cache };
+        crate::options::record_input(&self.input);
+        let cache = SimilarityCache { dir: self.cache.dir()?, refresh: self.cache.no_cache };
         Ok(SmgGraph::open(&self.request(), &self.source.to_import(None)?, &cache, keys, bar)?)
     }
 }

@@ -169,7 +169,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
         a.components,
         a.kernel.name()
     ));
-    let trained = train_cached(&req, &a.cache.dir(), a.cache.no_cache, &mut |n: String| ctx.note(&n))?;
+    let trained = train_cached(&req, &a.cache.dir()?, a.cache.no_cache, &mut |n: String| ctx.note(&n))?;
     let t = &trained.summary;
     for g in t.groups.iter().filter(|g| !g.densified) {
         ctx.note(&format!(

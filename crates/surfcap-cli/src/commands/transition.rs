@@ -43,7 +43,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
-    let pipe = a.cache.pipeline(ctx, s);
+    let pipe = a.cache.pipeline(ctx, s)?;
     let table = pipe.table(&p)?.value;
     let n = table.n;
     let k = i * n + j;

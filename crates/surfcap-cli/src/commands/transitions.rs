@@ -25,7 +25,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (outs, _) = ctx.claim_dir(&a.output, "transitions", &[&a.subject.path])?;
     let s = a.subject.open(ctx)?;
     let p = a.table.params(s.fps)?;
-    let pipe = a.cache.pipeline(ctx, s);
+    let pipe = a.cache.pipeline(ctx, s)?;
     let t0 = Instant::now();
     let fetched = pipe.table(&p)?;
     let secs = t0.elapsed().as_secs_f64();

@@ -146,6 +146,7 @@ pub fn mesh_of(textures: &Path, mesh: Option<&Path>) -> anyhow::Result<PathBuf> 
 pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
     let mesh = mesh_of(&a.textures, a.mesh.as_deref())?;
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.textures, &mesh])?;
+    crate::options::record_input(&a.textures);
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
     let files = texture_files(ctx, &a.textures, a.keep_holed)?;
@@ -168,7 +169,7 @@ pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
         mask.len(),
         100.0 * mask.len() as f64 / (w * h) as f64
     ));
-    let flow = a.flow.estimator(&a.cache, &bar);
+    let flow = a.flow.estimator(&a.cache, &bar)?;
     let estimate = |r: &TextureImage, t: &TextureImage| flow.estimate(r, t, &mask);
     let (model, report) = build_appearance_model(&textures, &names, &mask, &options, &estimate, &bar)?;
     drop(textures);
@@ -369,7 +370,7 @@ pub fn complete(ctx: &crate::Ctx, a: &CompleteArgs) -> anyhow::Result<()> {
     };
     let missing = (0..texture.texels()).filter(|&i| mask.is_active(i) && !observed[i]).count();
     let bar = crate::progress::Bar::new(ctx);
-    let flow = a.flow.estimator(&a.cache, &bar);
+    let flow = a.flow.estimator(&a.cache, &bar)?;
     let estimate = |r: &TextureImage, t: &TextureImage, m: &TexelMask| flow.estimate(r, t, m);
     let t = Instant::now();
     let mut out = model.complete(&texture, &observed, &estimate)?;

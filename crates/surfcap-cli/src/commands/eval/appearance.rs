@@ -328,7 +328,7 @@ fn evaluate(
     };
     let generated = GeneratedFrames::open(&dir)
         .with_context(|| format!("{}: not a folder of `surfcap appearance generate`", dir.display()))?;
-    let estimator = flow.estimator(cache, &bar);
+    let estimator = flow.estimator(cache, &bar)?;
     let estimate = |r: &TextureImage, t: &TextureImage, m: &surfcap_appearance::TexelMask| estimator.estimate(r, t, m);
     let name = format!(
         "TV-L1, finest scale {} ({}){}",
@@ -337,7 +337,7 @@ fn evaluate(
         if flow.no_preprocess { ", no pre-processing" } else { "" }
     );
     let full = FlowArgs { flow_scale: 0, ..flow.clone() };
-    let full_estimator = full.estimator(cache, &bar);
+    let full_estimator = full.estimator(cache, &bar)?;
     let full_estimate =
         |r: &TextureImage, t: &TextureImage, m: &surfcap_appearance::TexelMask| full_estimator.estimate(r, t, m);
     let opts = AppearanceEvalOptions { second_flow_frames: full_resolution_flows, ..opts.clone() };

@@ -35,7 +35,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = a.subject.open(ctx)?;
     let opts =
         GraphComparisonOptions { alphas: a.alphas.clone(), plot_pairs: a.plot_pairs, table: a.table.params(s.fps)? };
-    let pipe = a.cache.pipeline(ctx, s);
+    let pipe = a.cache.pipeline(ctx, s)?;
     let output = a.output.as_path();
     let r = graph_comparison_eval(&pipe, &opts)?;
     std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;

@@ -43,7 +43,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.source)?;
     let (cache, output) = (&a.cache, a.output.as_path());
     let progress = Box::new(crate::progress::Bar::new(ctx));
-    let r = pose_metric_eval(&s, &cache.store(), progress, &opts)?;
+    let r = pose_metric_eval(&s, &cache.store()?, progress, &opts)?;
     let mid = |c: &CorrelogramClass| 0.5 * (c.lo + c.hi);
     let line = |name: &str, points: Vec<(f64, f64)>, color, dashed, markers| Series {
         name: name.into(),

@@ -151,7 +151,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let connections: Vec<(&str, &str)> = connections.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
     let pairs: Vec<(&str, &str)> = pairs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
-    let store = surfcap_mesh::derived_cache::DerivedCache::new(cache.dir());
+    let store = surfcap_mesh::derived_cache::DerivedCache::new(cache.dir()?);
     let opts = SmgEvalOptions {
         per_connection: transitions,
         targets: grid(&distances, &seconds),
@@ -170,7 +170,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let comparison = match (subject, compare) {
         (Some(s), true) => {
             let params = default_graph_params(s.fps);
-            let pipe = cache.pipeline(ctx, s);
+            let pipe = cache.pipeline(ctx, s)?;
             Some(smg_comparison(&pipe, &frames, &r, &opts, &params, &bar)?)
         }
         _ => None,

@@ -51,7 +51,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut opts = SparseGraphEvalOptions::cmu(graph);
     opts.ks.clone_from(&a.ks);
     let bar = crate::progress::Bar::new(ctx);
-    let pipe = cache.pipeline(ctx, subject);
+    let pipe = cache.pipeline(ctx, subject)?;
     let r = sparse_graph_eval(&pipe, &opts, &bar)?;
     drop(bar);
     let plots = plot(&r, output)?;

@@ -33,7 +33,7 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = claim(ctx, &a.output, &[&a.subject.path], "eval-transitions")?;
     let opts = TransitionCostsOptions { slopes: a.slopes, fixed: a.fixed, plot_pairs: a.plot_pairs };
-    let pipe = a.cache.pipeline(ctx, a.subject.open(ctx)?);
+    let pipe = a.cache.pipeline(ctx, a.subject.open(ctx)?)?;
     let output = a.output.as_path();
     let r = transition_costs_eval(&pipe, &opts)?;
     let (name, fixed, p_plot, sample) = (&r.subject, r.fixed_length, r.plot.slope, &r.plot.sample);

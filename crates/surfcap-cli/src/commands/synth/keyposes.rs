@@ -33,7 +33,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let params = a.graph.params(s.fps)?;
-    let pipe = a.graph.cache.pipeline(ctx, s);
+    let pipe = a.graph.cache.pipeline(ctx, s)?;
     let bar = crate::progress::Bar::new(ctx);
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_keyposes(pipe, params, &a.keys, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;

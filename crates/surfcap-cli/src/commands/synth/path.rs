@@ -68,7 +68,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         max_transitions: a.max_transitions,
         branching: a.branching,
     };
-    let pipe = a.graph.cache.pipeline(ctx, s);
+    let pipe = a.graph.cache.pipeline(ctx, s)?;
     let bar = crate::progress::Bar::new(ctx);
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_path(pipe, params, &request, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;

@@ -59,7 +59,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         distance_scale: a.distance_scale.0,
         time_scale: a.time_scale.0,
     };
-    let pipe = a.graph.cache.pipeline(ctx, s);
+    let pipe = a.graph.cache.pipeline(ctx, s)?;
     let bar = crate::progress::Bar::new(ctx);
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_reach(pipe, params, &request, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
