@@ -26,6 +26,8 @@
 //!   the writer is alive). Every input is opened as a regular file, so a FIFO, folder, socket or
 //!   device is refused by name, never read or waited on.
 //! - `Progress`: how libraries report progress without printing; the front end draws it.
+//! - Sizing ([`sizing`]): a request's memory and disk estimated before any work and checked
+//!   against the front end's limits; fallible allocation where a size comes from input.
 //!
 //! No function here panics on bad input, prints or exits: errors are [`Error`]s that name the file,
 //! the line or frame, and what was expected. `npyz` parses `.npy` headers and decodes data in
@@ -54,6 +56,7 @@ pub mod npy;
 pub mod output_path;
 pub mod progress;
 pub mod regular_file;
+pub mod sizing;
 pub mod subject;
 pub mod temporaries;
 pub mod topology;

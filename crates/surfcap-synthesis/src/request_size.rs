@@ -16,8 +16,7 @@ use crate::error::{Result, refuse};
 /// Frames an animation may have unless raised: 10 minutes at 30 fps.
 pub const DEFAULT_MAX_FRAMES: usize = 18_000;
 
-/// The limit on memory when neither a limit nor the memory available is known: 4 GiB.
-pub const UNKNOWN_MEMORY_LIMIT: u64 = 4 << 30;
+pub use surfcap_mesh::sizing::{UNKNOWN_MEMORY_LIMIT, human};
 
 /// Bounds on what one request may produce.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,18 +46,6 @@ pub struct Request<'a> {
     /// Working memory besides the output positions (a search's tables).
     pub search_bytes: u64,
     pub format: ExportFormat,
-}
-
-/// `12345678` -> `11.8 MiB`.
-pub fn human(bytes: u64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut x = bytes as f64;
-    let mut k = 0;
-    while x >= 1024.0 && k + 1 < units.len() {
-        x /= 1024.0;
-        k += 1;
-    }
-    if k == 0 { format!("{bytes} bytes") } else { format!("{x:.1} {}", units[k]) }
 }
 
 impl SizeLimits {
