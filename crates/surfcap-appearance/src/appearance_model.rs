@@ -37,6 +37,16 @@ use crate::poisson_texture_warp::{DEFAULT_LAMBDA, TextureWarper, Warping, reads_
 use crate::texel_mask::TexelMask;
 use crate::texture_image::TextureImage;
 
+
+/// Widest and tallest texture map a model file may declare: 4 times the 16384 texels
+/// `appearance generate` makes at most, so that an edited size is refused before any
+/// allocation.
+pub const MAX_MODEL_SIDE: usize = 65_536;
+
+/// Largest Poisson warp weight a model file may declare (the command line's bound on
+/// `appearance build --lambda`; the thesis uses 0.02).
+pub const MAX_MODEL_LAMBDA: f64 = 1000.0;
+
 /// The folder kind of a saved model (its marker).
 pub const KIND: &str = "appearance-model";
 const FORMAT: &str = "surfcap-appearance-model";
@@ -553,9 +563,31 @@ impl AppearanceModel {
                 head.width, head.height
             )));
         }
+        // The size is checked against the limit and the mask's file before the texel flags are
+        // allocated: an edited width of 1e9 is an error naming the file, never an abort.
+        if head.width > MAX_MODEL_SIDE || head.height > MAX_MODEL_SIDE {
+            return Err(bad(format!(
+                "{}x{} texels: expected a width and height of at most {MAX_MODEL_SIDE}",
+                head.width, head.height
+            )));
+        }
         let mask_path = dir.join("mask.npy");
         let index = load_array::<u32>(&mask_path, &[Some(n)], "the active texels")?;
-        let mut flags = vec![false; head.width * head.height];
+        if n > head.width * head.height {
+            return Err(bad(format!(
+                "{n} active texels in {}x{} texels: expected at most one per texel",
+                head.width, head.height
+            )));
+        }
+        if !(head.lambda.is_finite() && head.lambda > 0.0 && head.lambda <= MAX_MODEL_LAMBDA) {
+            return Err(bad(format!("lambda {}: expected a number > 0 and at most {MAX_MODEL_LAMBDA}", head.lambda)));
+        }
+        let mut flags = surfcap_mesh::sizing::try_vec(
+            head.width * head.height,
+            false,
+            &format!("the texel flags of {} ({}x{})", path.display(), head.width, head.height),
+        )
+        .map_err(|e| Error::Invalid(e.to_string()))?;
         let mut last: Option<u32> = None;
         for &t in &index {
             if t as usize >= flags.len() || last.is_some_and(|l| t <= l) {
