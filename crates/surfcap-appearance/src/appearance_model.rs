@@ -858,6 +858,31 @@ mod tests {
     }
 
     #[test]
+    fn a_model_file_whose_size_or_lambda_was_edited_is_refused_by_name_before_allocating() {
+        let (_, _, model, _) = synthetic_model(&[0, 1, 2]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.appearance");
+        model.save(&path, false).unwrap();
+        let json_path = path.join("model.json");
+        let text = std::fs::read_to_string(&json_path).unwrap();
+        let head: serde_json::Value = serde_json::from_str(&text).unwrap();
+        for (field, value, expected) in [
+            ("width", serde_json::json!(1_000_000_000u64), "expected a width and height of at most 65536"),
+            ("height", serde_json::json!(4_000_000_000u64), "expected a width and height of at most 65536"),
+            ("width", serde_json::json!(1), "active texels in 1x"),
+            ("lambda", serde_json::json!(1e308), "lambda 1e308: expected a number > 0 and at most 1000"),
+        ] {
+            let mut edited = head.clone();
+            edited[field] = value;
+            std::fs::write(&json_path, serde_json::to_vec(&edited).unwrap()).unwrap();
+            let e = AppearanceModel::load(&path).err().expect("refused").to_string();
+            assert!(e.contains("model.json") && e.contains(expected), "{field}: {e}");
+        }
+        std::fs::write(&json_path, text).unwrap();
+        assert!(AppearanceModel::load(&path).is_ok());
+    }
+
+    #[test]
     fn frames_of_another_size_are_refused_by_name() {
         let mask = disc_mask(16);
         let textures = vec![synthetic_frame(&mask, 0, 1.0), TextureImage::zeros(16, 12, 3)];

@@ -74,14 +74,21 @@ pub fn free_disk(path: &std::path::Path) -> Option<u64> {
 }
 
 impl LimitOpts {
-    /// The limits of `--max-frames` and the global `--max-memory`, with the memory available now.
-    pub fn limits(&self, ctx: &crate::Ctx) -> SizeLimits {
-        SizeLimits { max_frames: self.max_frames, max_memory: ctx.max_memory, available_memory: mem_available() }
+    /// The limits of `--max-frames` and the global `--max-memory` and `--max-disk`, with the
+    /// memory available now and the free space where `output` goes.
+    pub fn limits(&self, ctx: &crate::Ctx, output: &std::path::Path) -> SizeLimits {
+        SizeLimits {
+            max_frames: self.max_frames,
+            max_memory: ctx.max_memory,
+            available_memory: mem_available(),
+            max_disk: ctx.max_disk,
+            free_disk: free_disk(output),
+        }
     }
 
-    /// Refuses `r` when it exceeds the limits (`SizeLimits::check`).
-    pub fn check(&self, ctx: &crate::Ctx, r: &Request) -> anyhow::Result<()> {
-        Ok(self.limits(ctx).check(r)?)
+    /// Refuses `r`, written to `output`, when it exceeds the limits (`SizeLimits::check`).
+    pub fn check(&self, ctx: &crate::Ctx, output: &std::path::Path, r: &Request) -> anyhow::Result<()> {
+        Ok(self.limits(ctx, output).check(r)?)
     }
 }
 

@@ -69,7 +69,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?;
     let what = format!("--steps {}", a.steps);
-    a.limits.check(ctx, &Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
+    a.limits.check(ctx, &a.output, &Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let appearance = a.appearance.open(&s, format, &a.output)?;
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));

@@ -295,7 +295,7 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
         meta.target_up_axis,
         meta.target_units.clone(),
     )?;
-    a.out.limits.check(ctx, &Request {
+    a.out.limits.check(ctx, &a.out.output, &Request {
         what: format!("--motion {}", a.motion),
         frames: seq.n_frames() as f64,
         subject: &shape,
