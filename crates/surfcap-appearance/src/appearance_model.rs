@@ -37,7 +37,6 @@ use crate::poisson_texture_warp::{DEFAULT_LAMBDA, TextureWarper, Warping, reads_
 use crate::texel_mask::TexelMask;
 use crate::texture_image::TextureImage;
 
-
 /// Widest and tallest texture map a model file may declare: 4 times the 16384 texels
 /// `appearance generate` makes at most, so that an edited size is refused before any
 /// allocation.
@@ -875,7 +874,8 @@ mod tests {
             let mut edited = head.clone();
             edited[field] = value;
             std::fs::write(&json_path, serde_json::to_vec(&edited).unwrap()).unwrap();
-            let e = AppearanceModel::load(&path).err().expect("refused").to_string();
+            let Err(e) = AppearanceModel::load(&path) else { panic!("{field}: accepted") };
+            let e = e.to_string();
             assert!(e.contains("model.json") && e.contains(expected), "{field}: {e}");
         }
         std::fs::write(&json_path, text).unwrap();

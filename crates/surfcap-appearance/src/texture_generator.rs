@@ -137,9 +137,11 @@ pub fn generated_frames_size(
         .saturating_add(bytes(&[texels], 96 + 96 * threads.max(1) as u64))
         .saturating_add(bytes(&[holed, texels], 1))
         .saturating_add(bytes(&[frames], 128));
-    let disk = bytes(&[frames, texels], 6)
-        .saturating_add(bytes(&[holed, texels], 1))
-        .saturating_add(if displacement { bytes(&[frames, texels], 8) } else { 0 });
+    let disk = bytes(&[frames, texels], 6).saturating_add(bytes(&[holed, texels], 1)).saturating_add(if displacement {
+        bytes(&[frames, texels], 8)
+    } else {
+        0
+    });
     surfcap_mesh::sizing::Estimate {
         what: format!(
             "--frames {} at {w}x{h}{}",
@@ -744,7 +746,8 @@ mod tests {
 
     #[test]
     fn the_size_estimate_grows_with_frames_and_texels_and_counts_the_displacement() {
-        let o = GeneratorOptions { frames: 1_000_000, size: Some(1024), hole_fraction: 0.0, ..GeneratorOptions::default() };
+        let o =
+            GeneratorOptions { frames: 1_000_000, size: Some(1024), hole_fraction: 0.0, ..GeneratorOptions::default() };
         assert_eq!(generated_size(&o, [2048, 1024]), [1024, 512]);
         let plain = generated_frames_size(&o, [1024, 1024], false, 2);
         let with = generated_frames_size(&o, [1024, 1024], true, 2);
@@ -763,7 +766,8 @@ mod tests {
             (GeneratorOptions { noise_sigma: 256.0, ..quiet(2) }, "noise_sigma: 256: expected at most 255"),
             (GeneratorOptions { max_drift: 1e308, ..quiet(2) }, "max_drift: 1e308: expected at most 64"),
         ] {
-            let e = TextureGenerator::new(&topo, &pos, &tex, &o).err().expect("refused").to_string();
+            let Err(e) = TextureGenerator::new(&topo, &pos, &tex, &o) else { panic!("{name}: accepted") };
+            let e = e.to_string();
             assert!(e.contains(name), "{e}");
         }
     }

@@ -60,7 +60,8 @@ pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
         + f * v * 3.0 * 8.0 * 4.0
         + f * f * 8.0 * 6.0
         + a.hmc_samples as f64 * a.hmc_frames as f64 * 8.0 * 16.0;
-    let what = format!("--gp-points {} --gp-dims {} --frames {} --vertices {}", a.gp_points, a.gp_dims, a.frames, a.vertices);
+    let what =
+        format!("--gp-points {} --gp-dims {} --frames {} --vertices {}", a.gp_points, a.gp_dims, a.frames, a.vertices);
     crate::check_size(ctx, what, memory, 0.0, "--gp-points, --gp-dims, --frames, --vertices or --hmc-samples")?;
     // 1. GP regression: y = sin(x . w1) + 0.5 cos(x . w2) + noise (sd 0.1), inputs in [-1, 1]^d.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed.seed);

@@ -74,7 +74,10 @@ fn every_benchmark_parses_with_its_arguments() {
 #[test]
 fn huge_benchmark_requests_are_refused_before_any_work() {
     for (args, needles) in [
-        (vec!["load", "--frames", "1000000000", "--vertices", "1000000"], vec!["--frames 1000000000 --vertices 1000000", "of memory"]),
+        (
+            vec!["load", "--frames", "1000000000", "--vertices", "1000000"],
+            vec!["--frames 1000000000 --vertices 1000000", "of memory"],
+        ),
         (vec!["learn", "--gp-points", "1000000000"], vec!["--gp-points 1000000000", "of memory", "lower --gp-points"]),
         (vec!["distance", "--frames", "100000000"], vec!["--frames 100000000 --triangles 20000", "of memory"]),
         (vec!["transitions", "--frames", "100000000"], vec!["--frames 100000000", "of memory"]),
@@ -83,7 +86,10 @@ fn huge_benchmark_requests_are_refused_before_any_work() {
         (vec!["smg", "--frames", "100000000"], vec!["--frames 100000000", "of memory"]),
         (vec!["appearance", "--frames", "1000000000"], vec!["--frames 1000000000 --size 1024", "of memory"]),
         (vec!["transfer", "--pairs", "1000000000"], vec!["--pairs 1000000000", "of memory"]),
-        (vec!["export", "--frames", "1000000000", "--vertices", "1000000"], vec!["of memory", "--frames or --vertices"]),
+        (
+            vec!["export", "--frames", "1000000000", "--vertices", "1000000"],
+            vec!["of memory", "--frames or --vertices"],
+        ),
         (vec!["scale", "--frames", "100000000"], vec!["--frames 100000000", "--frames or --triangles"]),
         (vec!["load", "--repeat", "1000000000"], vec!["--repeat", "from 1 to 100"]),
         (vec!["vary", "--iterations", "1000000000000"], vec!["--iterations", "from 1 to 10000"]),

@@ -57,15 +57,12 @@ fn procedural_motion_sizes_are_refused_by_name_before_any_frame_is_made() {
         a.extend(args);
         refused(d.path(), &[], &a, &[option, range]);
     }
-    // Within the ranges, an hour at 1000 fps of 20,000 vertices is about 3.6 million frames:
+    // Within the ranges, an hour at 1000 fps is about 3.6 million frames:
     // sized before work and refused with the size, the limit and what to lower.
     let t = refused(
         d.path(),
         &[],
-        &[
-            "synth", "--procedural", "walk", "--duration", "3600", "--fps", "1000", "--vertices", "20000", "--max-memory",
-            "1G", "-o", o,
-        ],
+        &["synth", "--procedural", "walk", "--duration", "3600", "--fps", "1000", "--max-memory", "1G", "-o", o],
         &["synthesising 3600001 frames", "of memory", "above the limit of 1.0 GiB", "--max-memory", "--duration"],
     );
     assert!(t.contains("TiB") || t.contains("GiB"), "{t}");
@@ -106,7 +103,17 @@ fn a_head_of_a_billion_frames_per_sequence_is_refused_with_its_size() {
     refused(
         d.path(),
         &["square.obj", "tex.png"],
-        &["synth", "--head", p(&d.path().join("square.obj")), "--frames-per-sequence", "1000000000", "--max-memory", "1G", "-o", p(&o)],
+        &[
+            "synth",
+            "--head",
+            p(&d.path().join("square.obj")),
+            "--frames-per-sequence",
+            "1000000000",
+            "--max-memory",
+            "1G",
+            "-o",
+            p(&o),
+        ],
         &["--frames-per-sequence 1000000000 (3 sequences of 4 vertices)", "of memory", "--max-memory"],
     );
 }
@@ -147,7 +154,19 @@ fn generated_texture_sequences_are_sized_before_the_output_is_started() {
     refused(
         d.path(),
         &keep,
-        &with(&["--frames", "1000000", "--size", "1024", "--displacement-npy", "--hole-fraction", "0", "--max-memory", "1T", "--max-disk", "50G"]),
+        &with(&[
+            "--frames",
+            "1000000",
+            "--size",
+            "1024",
+            "--displacement-npy",
+            "--hole-fraction",
+            "0",
+            "--max-memory",
+            "1T",
+            "--max-disk",
+            "50G",
+        ]),
         &[
             "--frames 1000000 at 1024x1024 with --displacement-npy needs about 13.4 TiB of disk",
             "above --max-disk 50.0 GiB",
@@ -164,7 +183,18 @@ fn a_painted_texture_too_large_for_memory_is_refused() {
     refused(
         d.path(),
         &["square.obj", "tex.png"],
-        &["appearance", "paint", "--mesh", p(&d.path().join("square.obj")), "--size", "16384", "--max-memory", "1G", "-o", p(&out)],
+        &[
+            "appearance",
+            "paint",
+            "--mesh",
+            p(&d.path().join("square.obj")),
+            "--size",
+            "16384",
+            "--max-memory",
+            "1G",
+            "-o",
+            p(&out),
+        ],
         &["--size 16384 (16384x16384 texels) needs about 14.5 GiB of memory", "--max-memory"],
     );
 }
@@ -186,16 +216,39 @@ fn iteration_counts_have_documented_bounds() {
     let d = tempfile::tempdir().unwrap();
     let (s, o) = (d.path().join("s.subject"), d.path().join("o"));
     let (s, o) = (p(&s), p(&o));
-    refused(d.path(), &[], &["vary", "train", s, "--iterations", "1000000000000", "-o", o], &["--iterations", "from 1 to 10000"]);
-    refused(d.path(), &[], &["remesh-frames", s, "--iterations", "1000000000", "-o", o], &["--iterations", "from 1 to 100"]);
+    refused(
+        d.path(),
+        &[],
+        &["vary", "train", s, "--iterations", "1000000000000", "-o", o],
+        &["--iterations", "from 1 to 10000"],
+    );
+    refused(
+        d.path(),
+        &[],
+        &["remesh-frames", s, "--iterations", "1000000000", "-o", o],
+        &["--iterations", "from 1 to 100"],
+    );
     // Each HMC option within its range, but together 10^11 leapfrog steps: refused before the
     // model is even opened.
     refused(
         d.path(),
         &[],
         &[
-            "vary", "sample", s, "--sequence", "walk", "--count", "1000", "--warmup", "100000", "--thin", "10000",
-            "--max-leapfrog", "10000", "-o", o,
+            "vary",
+            "sample",
+            s,
+            "--sequence",
+            "walk",
+            "--count",
+            "1000",
+            "--warmup",
+            "100000",
+            "--thin",
+            "10000",
+            "--max-leapfrog",
+            "10000",
+            "-o",
+            o,
         ],
         &["--max-leapfrog 10000", "1.010e11 leapfrog steps per body part", "above the 2000000 allowed"],
     );

@@ -156,7 +156,13 @@ mod tests {
     #[test]
     fn the_output_on_disk_is_checked_against_the_disk_limit_and_the_free_space() {
         let s = triangle();
-        let r = Request { what: "--steps 10000".into(), frames: 10_000.0, subject: &s, search_bytes: 0, format: ExportFormat::Npy };
+        let r = Request {
+            what: "--steps 10000".into(),
+            frames: 10_000.0,
+            subject: &s,
+            search_bytes: 0,
+            format: ExportFormat::Npy,
+        };
         assert!(SizeLimits::default().check(&r).is_ok());
         // 10,000 frames x 3 vertices x 12 bytes = 360,000 bytes.
         let tight = SizeLimits { max_disk: Some(100_000), ..SizeLimits::default() };

@@ -197,7 +197,11 @@ impl VariationModel {
         let triangles: Vec<[u32; 3]> = faces.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
         let topology = Topology::new(nv, triangles, None).map_err(|e| e.in_file(&dir.join("faces.npy")))?;
         let n: usize = head.frames.checked_mul(head.sequences.len()).ok_or_else(|| {
-            bad(format!("{} frames x {} sequences: expected a frame count that fits", head.frames, head.sequences.len()))
+            bad(format!(
+                "{} frames x {} sequences: expected a frame count that fits",
+                head.frames,
+                head.sequences.len()
+            ))
         })?;
         let mut part_models = Vec::with_capacity(head.parts.len());
         let mut fits = Vec::with_capacity(head.parts.len());

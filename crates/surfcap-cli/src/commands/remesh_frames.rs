@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_builtin::frame_remeshing::{remeshed_frames_size, RemeshFramesOptions, remesh_subject_frames};
+use surfcap_builtin::frame_remeshing::{RemeshFramesOptions, remesh_subject_frames, remeshed_frames_size};
 
 use crate::options::{SourceOpts, open};
 
