@@ -228,6 +228,8 @@ fn iteration_counts_have_documented_bounds() {
         &["remesh-frames", s, "--iterations", "1000000000", "-o", o],
         &["--iterations", "from 1 to 100"],
     );
+    refused(d.path(), &[], &["eval", "gpdm", s, "--iterations", "1000000000000"], &["--iterations", "from 1 to 10000"]);
+    refused(d.path(), &[], &["eval", "vary", "--iterations", "1000000000000"], &["--iterations", "from 1 to 10000"]);
     // Each HMC option within its range, but together 10^11 leapfrog steps: refused before the
     // model is even opened.
     refused(
