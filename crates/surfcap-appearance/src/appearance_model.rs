@@ -579,7 +579,7 @@ impl AppearanceModel {
             )));
         }
         if !(head.lambda.is_finite() && head.lambda > 0.0 && head.lambda <= MAX_MODEL_LAMBDA) {
-            return Err(bad(format!("lambda {}: expected a number > 0 and at most {MAX_MODEL_LAMBDA}", head.lambda)));
+            return Err(bad(format!("lambda {:?}: expected a number > 0 and at most {MAX_MODEL_LAMBDA}", head.lambda)));
         }
         let mut flags = surfcap_mesh::sizing::try_vec(
             head.width * head.height,

@@ -188,7 +188,7 @@ impl GeneratorOptions {
             ("noise_sigma", self.noise_sigma, MAX_NOISE_SIGMA),
         ] {
             if v > max {
-                return bad(name, format!("{v}: expected at most {max}"));
+                return bad(name, format!("{v:?}: expected at most {max}"));
             }
         }
         if !(0.0..=1.0).contains(&self.hole_fraction) {
@@ -763,7 +763,7 @@ mod tests {
         let (topo, pos, tex) = plane(32);
         for (o, name) in [
             (GeneratorOptions { blur_sigma: 1e308, ..quiet(2) }, "blur_sigma: 1e308: expected at most 32"),
-            (GeneratorOptions { noise_sigma: 256.0, ..quiet(2) }, "noise_sigma: 256: expected at most 255"),
+            (GeneratorOptions { noise_sigma: 256.0, ..quiet(2) }, "noise_sigma: 256.0: expected at most 255"),
             (GeneratorOptions { max_drift: 1e308, ..quiet(2) }, "max_drift: 1e308: expected at most 64"),
         ] {
             let Err(e) = TextureGenerator::new(&topo, &pos, &tex, &o) else { panic!("{name}: accepted") };
