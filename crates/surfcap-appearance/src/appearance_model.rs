@@ -37,6 +37,15 @@ use crate::poisson_texture_warp::{DEFAULT_LAMBDA, TextureWarper, Warping, reads_
 use crate::texel_mask::TexelMask;
 use crate::texture_image::TextureImage;
 
+/// Widest and tallest texture map a model file may declare: 4 times the 16384 texels
+/// `appearance generate` makes at most, so that an edited size is refused before any
+/// allocation.
+pub const MAX_MODEL_SIDE: usize = 65_536;
+
+/// Largest Poisson warp weight a model file may declare (the command line's bound on
+/// `appearance build --lambda`; the thesis uses 0.02).
+pub const MAX_MODEL_LAMBDA: f64 = 1000.0;
+
 /// The folder kind of a saved model (its marker).
 pub const KIND: &str = "appearance-model";
 const FORMAT: &str = "surfcap-appearance-model";
@@ -553,9 +562,31 @@ impl AppearanceModel {
                 head.width, head.height
             )));
         }
+        // The size is checked against the limit and the mask's file before the texel flags are
+        // allocated: an edited width of 1e9 is an error naming the file, never an abort.
+        if head.width > MAX_MODEL_SIDE || head.height > MAX_MODEL_SIDE {
+            return Err(bad(format!(
+                "{}x{} texels: expected a width and height of at most {MAX_MODEL_SIDE}",
+                head.width, head.height
+            )));
+        }
         let mask_path = dir.join("mask.npy");
         let index = load_array::<u32>(&mask_path, &[Some(n)], "the active texels")?;
-        let mut flags = vec![false; head.width * head.height];
+        if n > head.width * head.height {
+            return Err(bad(format!(
+                "{n} active texels in {}x{} texels: expected at most one per texel",
+                head.width, head.height
+            )));
+        }
+        if !(head.lambda.is_finite() && head.lambda > 0.0 && head.lambda <= MAX_MODEL_LAMBDA) {
+            return Err(bad(format!("lambda {:?}: expected a number > 0 and at most {MAX_MODEL_LAMBDA}", head.lambda)));
+        }
+        let mut flags = surfcap_mesh::sizing::try_vec(
+            head.width * head.height,
+            false,
+            &format!("the texel flags of {} ({}x{})", path.display(), head.width, head.height),
+        )
+        .map_err(|e| Error::Invalid(e.to_string()))?;
         let mut last: Option<u32> = None;
         for &t in &index {
             if t as usize >= flags.len() || last.is_some_and(|l| t <= l) {
@@ -823,6 +854,32 @@ mod tests {
             .unwrap();
         let e = AppearanceModel::load(&path).unwrap_err().to_string();
         assert!(e.contains("mean_warp.npy") && e.contains("the mean backward warp"), "{e}");
+    }
+
+    #[test]
+    fn a_model_file_whose_size_or_lambda_was_edited_is_refused_by_name_before_allocating() {
+        let (_, _, model, _) = synthetic_model(&[0, 1, 2]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.appearance");
+        model.save(&path, false).unwrap();
+        let json_path = path.join("model.json");
+        let text = std::fs::read_to_string(&json_path).unwrap();
+        let head: serde_json::Value = serde_json::from_str(&text).unwrap();
+        for (field, value, expected) in [
+            ("width", serde_json::json!(1_000_000_000u64), "expected a width and height of at most 65536"),
+            ("height", serde_json::json!(4_000_000_000u64), "expected a width and height of at most 65536"),
+            ("width", serde_json::json!(1), "active texels in 1x"),
+            ("lambda", serde_json::json!(1e308), "lambda 1e308: expected a number > 0 and at most 1000"),
+        ] {
+            let mut edited = head.clone();
+            edited[field] = value;
+            std::fs::write(&json_path, serde_json::to_vec(&edited).unwrap()).unwrap();
+            let Err(e) = AppearanceModel::load(&path) else { panic!("{field}: accepted") };
+            let e = e.to_string();
+            assert!(e.contains("model.json") && e.contains(expected), "{field}: {e}");
+        }
+        std::fs::write(&json_path, text).unwrap();
+        assert!(AppearanceModel::load(&path).is_ok());
     }
 
     #[test]

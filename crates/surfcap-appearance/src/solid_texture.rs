@@ -37,6 +37,19 @@ fn value_noise(p: [f32; 3]) -> f32 {
     acc
 }
 
+/// What painting a `size` x `size` texture takes, estimated before any work: the atlas raster
+/// and the surface point of every texel (about 40 bytes a texel), the texture (12) and its
+/// PNG encoding (6); on disk the PNG, 3 bytes a texel at worst.
+pub fn solid_texture_size(size: usize) -> surfcap_mesh::sizing::Estimate {
+    use surfcap_mesh::sizing::bytes;
+    surfcap_mesh::sizing::Estimate {
+        what: format!("--size {size} ({size}x{size} texels)"),
+        memory: bytes(&[size as f64, size as f64], 58),
+        disk: bytes(&[size as f64, size as f64], 3),
+        lower: "--size".into(),
+    }
+}
+
 /// The texture of `raster`'s atlas painted from the rest positions `positions` ([vertices][3])
 /// of the mesh whose `triangles` the atlas maps; `up` is the index of the up axis (0, 1 or 2).
 /// Texels no triangle covers are mid grey.

@@ -95,6 +95,69 @@ impl Default for GeneratorOptions {
     }
 }
 
+/// Largest blur the generator accepts, texels: real captures blur by a texel or two (the
+/// default is 0.6); at 32 a texture is a smear, and the kernel (6 sigma + 1 texels per pass)
+/// stays small.
+pub const MAX_BLUR_SIGMA: f64 = 32.0;
+
+/// Largest noise the generator accepts, on the 0-255 scale: beyond one full range the frames
+/// are noise whatever the texture.
+pub const MAX_NOISE_SIGMA: f64 = 255.0;
+
+/// Largest drift the generator accepts, texels: real texture drift is a few texels (the
+/// default is 3); the flow estimators are built for displacements well under 64.
+pub const MAX_DRIFT: f64 = 64.0;
+
+/// The generated textures' width and height for a source texture of `texture_size`.
+pub fn generated_size(options: &GeneratorOptions, texture_size: [usize; 2]) -> [usize; 2] {
+    let [tw, th] = texture_size;
+    let width = options.size.unwrap_or(tw);
+    let height = ((width as f64 * th as f64 / tw.max(1) as f64).round() as usize).max(1);
+    [width, height]
+}
+
+/// What [`write_generated_frames`] takes, estimated before any work from the options, the
+/// source texture's size and the threads that make frames at once. Memory: the source and the
+/// resampled texture, the atlas's geometry (about 96 bytes a texel), each thread's frame in
+/// the making (about 96 bytes a texel), the hole masks (a byte a texel per holed frame) and a
+/// little per frame; disk: two PNGs a frame (3 bytes a texel at worst), the hole masks, and
+/// with `displacement` the f32 [F, 2, H, W] array.
+pub fn generated_frames_size(
+    options: &GeneratorOptions,
+    texture_size: [usize; 2],
+    displacement: bool,
+    threads: usize,
+) -> surfcap_mesh::sizing::Estimate {
+    use surfcap_mesh::sizing::bytes;
+    let [w, h] = generated_size(options, texture_size);
+    let texels = w as f64 * h as f64;
+    let frames = options.frames as f64;
+    let holed = (options.hole_fraction * frames).round();
+    let memory = bytes(&[texture_size[0] as f64, texture_size[1] as f64], 12)
+        .saturating_add(bytes(&[texels], 96 + 96 * threads.max(1) as u64))
+        .saturating_add(bytes(&[holed, texels], 1))
+        .saturating_add(bytes(&[frames], 128));
+    let disk = bytes(&[frames, texels], 6).saturating_add(bytes(&[holed, texels], 1)).saturating_add(if displacement {
+        bytes(&[frames, texels], 8)
+    } else {
+        0
+    });
+    surfcap_mesh::sizing::Estimate {
+        what: format!(
+            "--frames {} at {w}x{h}{}",
+            options.frames,
+            if displacement { " with --displacement-npy" } else { "" }
+        ),
+        memory,
+        disk,
+        lower: if displacement {
+            "--frames or --size, or leave out --displacement-npy".into()
+        } else {
+            "--frames or --size".into()
+        },
+    }
+}
+
 impl GeneratorOptions {
     fn check(&self) -> Result<()> {
         let bad = |what: &str, v: String| Err(Error::Invalid(format!("{what}: {v}")));
@@ -117,6 +180,15 @@ impl GeneratorOptions {
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(name, format!("{v}: expected a finite value >= 0"));
+            }
+        }
+        for (name, v, max) in [
+            ("max_drift", self.max_drift, MAX_DRIFT),
+            ("blur_sigma", self.blur_sigma, MAX_BLUR_SIGMA),
+            ("noise_sigma", self.noise_sigma, MAX_NOISE_SIGMA),
+        ] {
+            if v > max {
+                return bad(name, format!("{v:?}: expected at most {max}"));
             }
         }
         if !(0.0..=1.0).contains(&self.hole_fraction) {
@@ -269,8 +341,7 @@ impl TextureGenerator {
         let atlas = topology.uv().ok_or_else(|| {
             Error::Invalid("the mesh has no texture coordinates (vt): expected a UV-mapped mesh".into())
         })?;
-        let width = options.size.unwrap_or(texture.width());
-        let height = ((width as f64 * texture.height() as f64 / texture.width() as f64).round() as usize).max(1);
+        let [width, height] = generated_size(options, [texture.width(), texture.height()]);
         let texture = resample_area(texture, width, height)?;
         let raster = AtlasRaster::new(atlas, width, height)?;
         let geometry = AtlasGeometry::new(&raster, topology, positions, options.margin)?;
@@ -671,6 +742,34 @@ mod tests {
         assert!((mean(&tex) - mean(&small)).abs() < 1e-3);
         let flat = TextureImage::from_planes(10, 10, 1, vec![7.0; 100]).unwrap();
         assert!(resample_area(&flat, 3, 4).unwrap().data().iter().all(|&v| (v - 7.0).abs() < 1e-5));
+    }
+
+    #[test]
+    fn the_size_estimate_grows_with_frames_and_texels_and_counts_the_displacement() {
+        let o =
+            GeneratorOptions { frames: 1_000_000, size: Some(1024), hole_fraction: 0.0, ..GeneratorOptions::default() };
+        assert_eq!(generated_size(&o, [2048, 1024]), [1024, 512]);
+        let plain = generated_frames_size(&o, [1024, 1024], false, 2);
+        let with = generated_frames_size(&o, [1024, 1024], true, 2);
+        assert_eq!(plain.disk, 1_000_000 * 1024 * 1024 * 6);
+        // The displacement: 8 bytes a texel a frame, 8 TB for a million 1024 x 1024 frames.
+        assert_eq!(with.disk - plain.disk, 1_000_000 * 1024 * 1024 * 8);
+        assert!(with.what.contains("--frames 1000000 at 1024x1024 with --displacement-npy"), "{}", with.what);
+        assert!(plain.memory < 1 << 30, "no frame is kept: {}", plain.memory);
+    }
+
+    #[test]
+    fn blur_noise_and_drift_beyond_their_ranges_are_refused_before_any_work() {
+        let (topo, pos, tex) = plane(32);
+        for (o, name) in [
+            (GeneratorOptions { blur_sigma: 1e308, ..quiet(2) }, "blur_sigma: 1e308: expected at most 32"),
+            (GeneratorOptions { noise_sigma: 256.0, ..quiet(2) }, "noise_sigma: 256.0: expected at most 255"),
+            (GeneratorOptions { max_drift: 1e308, ..quiet(2) }, "max_drift: 1e308: expected at most 64"),
+        ] {
+            let Err(e) = TextureGenerator::new(&topo, &pos, &tex, &o) else { panic!("{name}: accepted") };
+            let e = e.to_string();
+            assert!(e.contains(name), "{e}");
+        }
     }
 
     #[test]

@@ -139,6 +139,19 @@ impl TextureImage {
         out
     }
 
+    /// The width and height of a PNG or JPEG file, from its header (nothing decoded): to size a
+    /// request before any work.
+    pub fn dimensions(path: &Path) -> Result<[usize; 2]> {
+        let bytes = surfcap_mesh::read_regular_file(path)?;
+        let bad = |e: &dyn std::fmt::Display| Error::ReadImage {
+            path: path.to_path_buf(),
+            message: format!("expected a PNG or JPEG image: {e}"),
+        };
+        let reader = image::io::Reader::new(std::io::Cursor::new(&bytes)).with_guessed_format().map_err(|e| bad(&e))?;
+        let (w, h) = reader.into_dimensions().map_err(|e| bad(&e))?;
+        Ok([w as usize, h as usize])
+    }
+
     /// Reads a PNG or JPEG file as RGB (grey and alpha files converted; alpha dropped).
     pub fn read(path: &Path) -> Result<TextureImage> {
         let bytes = surfcap_mesh::read_regular_file(path)?;

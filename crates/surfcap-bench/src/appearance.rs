@@ -41,7 +41,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 0, 4))]
     pub flow_scale: usize,
     /// Instantiations timed (the mean and the worst are reported).
-    #[arg(long, default_value_t = 5, value_parser = crate::options::count)]
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::whole_in(s, 1, 100))]
     pub repeat: usize,
     /// Seed of the generated sequence.
     #[arg(long, default_value_t = 7)]
@@ -53,6 +53,11 @@ fn gib(bytes: Option<u64>) -> f64 {
 }
 
 pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
+    // The maps in memory (RGB f32), their flows, warps and the model's matrices: about four
+    // times the maps.
+    let (f, t) = (a.frames as f64, a.size as f64 * a.size as f64);
+    let what = format!("--frames {} --size {}", a.frames, a.size);
+    crate::check_size(ctx, what, f * t * 12.0 * 4.0, f * t * 6.0, "--frames or --size")?;
     let head = a.data.join("leeperrysmith_head");
     let mesh = head.join("template.obj");
     let (topology, positions) = read_uv_mesh(&mesh).with_context(|| format!("{}: the head scan", head.display()))?;

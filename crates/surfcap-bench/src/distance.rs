@@ -54,6 +54,12 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
     let Args { subject, frames, triangles, fps } = a;
+    if subject.is_none() {
+        // The matrix (f64) and every frame's deformation gradients (a 3x3 f64 per triangle).
+        let (f, t) = (frames as f64, triangles as f64);
+        let what = format!("--frames {frames} --triangles {triangles}");
+        crate::check_size(ctx, what, f * f * 8.0 + f * t * 72.0 + f * t * 6.0, 0.0, "--frames or --triangles")?;
+    }
     let s = match subject {
         Some(p) => fps.open_quietly(&p)?,
         None => {

@@ -66,6 +66,15 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let Args { format, frames: lengths, vertices, output } = a;
+    // The longest animation in memory (the tube and its copy for the writer); every file on disk.
+    let v = vertices as f64;
+    let longest = lengths.iter().copied().max().unwrap_or(0) as f64;
+    let all: f64 = lengths.iter().map(|&n| n as f64).sum();
+    let what = format!(
+        "--frames {} --vertices {vertices}",
+        lengths.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(",")
+    );
+    crate::check_size(ctx, what, longest * v * 12.0 * 2.0, all * v * 12.0, "--frames or --vertices")?;
     let ext = match format {
         ExportFormat::Glb => "glb",
         ExportFormat::Abc => "abc",

@@ -21,6 +21,9 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (frames, sequences, alpha, seed) = (a.frames, a.sequences, a.alpha.value(), a.seed.seed);
+    // The random table's costs and durations and the edge weights: a few f64 matrices.
+    let f = frames as f64;
+    crate::check_size(ctx, format!("--frames {frames}"), f * f * 8.0 * 4.0, 0.0, "--frames")?;
     use surfcap_motion::edge_weights::edge_weights;
     use surfcap_motion::essential_graph::essential_graph;
     use surfcap_motion::motion_graph::motion_graph;

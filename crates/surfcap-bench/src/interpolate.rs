@@ -15,7 +15,8 @@ pub struct Args {
     pub from: String,
     #[arg(long)]
     pub to: String,
-    #[arg(long, default_value_t = 5, value_parser = crate::options::count)]
+    /// Repetitions, 1 to 100.
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::whole_in(s, 1, 100))]
     pub repeat: usize,
     #[command(flatten)]
     pub fps: FpsOpt,

@@ -29,7 +29,8 @@ pub struct Args {
     pub gp_dims: usize,
     /// Random restarts of the GP hyper-parameter fit (besides the first start), screened on 500
     /// points before the best is refined on all of them.
-    #[arg(long, default_value_t = 2)]
+    /// At most 100 (each restart is a fit of its own).
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 0, 100))]
     pub gp_restarts: usize,
     /// GPDM frames (two sequences: walk and jog).
     #[arg(long, default_value_t = 400, value_parser = crate::options::count)]
@@ -50,6 +51,18 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(a.gp_points >= 10 && a.gp_dims >= 1, "--gp-points >= 10 and --gp-dims >= 1 expected");
     anyhow::ensure!(a.frames >= 20 && a.hmc_frames >= 2 && a.hmc_samples >= 1, "--frames >= 20, --hmc-frames >= 2");
+    // Sized before faer allocates: the GP's n x n kernel, its factor and gradient matrices
+    // (about six f64 matrices) and inputs; the GPDM's data (f64, 3 per vertex) and its latent
+    // kernels (frames x frames); the HMC's trajectories.
+    let (n, d, f, v) = (a.gp_points as f64, a.gp_dims as f64, a.frames as f64, a.vertices as f64);
+    let memory = n * n * 8.0 * 6.0
+        + n * d * 8.0
+        + f * v * 3.0 * 8.0 * 4.0
+        + f * f * 8.0 * 6.0
+        + a.hmc_samples as f64 * a.hmc_frames as f64 * 8.0 * 16.0;
+    let what =
+        format!("--gp-points {} --gp-dims {} --frames {} --vertices {}", a.gp_points, a.gp_dims, a.frames, a.vertices);
+    crate::check_size(ctx, what, memory, 0.0, "--gp-points, --gp-dims, --frames, --vertices or --hmc-samples")?;
     // 1. GP regression: y = sin(x . w1) + 0.5 cos(x . w2) + noise (sd 0.1), inputs in [-1, 1]^d.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed.seed);
     let (n, d) = (a.gp_points, a.gp_dims);

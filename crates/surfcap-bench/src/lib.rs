@@ -123,6 +123,16 @@ impl surfcap_cli::Front for Cli {
     }
 }
 
+/// Refuses a benchmark whose memory or files, estimated from its arguments before any work
+/// (each benchmark sizes itself in its own file: bytes as `f64`, so huge counts saturate), exceed
+/// `--max-memory` (default half the memory available) or `--max-disk` (default the free space
+/// of the temporary folder, where the benchmarks write), naming the size and what to lower.
+fn check_size(ctx: &Ctx, what: String, memory: f64, disk: f64, lower: &str) -> anyhow::Result<()> {
+    use surfcap_mesh::sizing::{Estimate, bytes};
+    let e = Estimate { what, memory: bytes(&[memory], 1), disk: bytes(&[disk], 1), lower: lower.into() };
+    ctx.check_size(&e, Some(&std::env::temp_dir()))
+}
+
 /// Runs the benchmarks' program on the process's arguments and returns its exit code.
 pub fn main() -> ExitCode {
     surfcap_cli::run_front::<Cli>()

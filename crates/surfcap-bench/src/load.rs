@@ -21,8 +21,9 @@ pub struct Args {
     pub frames: usize,
     #[arg(long, default_value_t = 10000, value_parser = crate::options::count)]
     pub vertices: usize,
-    /// Repetitions (the best and the median are reported).
-    #[arg(long, default_value_t = 3, value_parser = crate::options::count)]
+    /// Repetitions, 1 to 100 (the best and the median are reported; more adds time, not
+    /// precision).
+    #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::options::whole_in(s, 1, 100))]
     pub repeat: usize,
     /// Measure in this process (used by the parent run).
     #[arg(long, hide = true)]
@@ -47,6 +48,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "vertices": s.topology().n_vertices(),
         }));
         return Ok(());
+    }
+    if subject.is_none() {
+        // The generated subject: its positions in memory and in its cache.
+        let (f, v) = (frames as f64, vertices as f64);
+        let what = format!("--frames {frames} --vertices {vertices}");
+        crate::check_size(ctx, what, (f + 500.0) * v * 12.0, f * v * 12.0, "--frames or --vertices")?;
     }
     let tmp;
     let path = match subject {

@@ -109,6 +109,12 @@ fn make_subject(dir: &Path, name: &str, frames: usize, triangles: usize) -> anyh
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    // The subject (f32 positions, about half as many vertices as triangles) and the Zarr
+    // matrix (f32) on disk; each worker's tiles of deformation gradients in memory.
+    let (f, t) = ((a.frames.max(a.e2e_frames)) as f64, a.triangles.max(a.e2e_triangles) as f64);
+    let what = format!("--frames {} --triangles {} --e2e-frames {}", a.frames, a.triangles, a.e2e_frames);
+    let disk = f * t * 6.0 + f * f * 4.0 * 2.0;
+    crate::check_size(ctx, what, f * t * 6.0 * 2.0 + a.tile as f64 * t * 72.0 * 2.0, disk, "--frames or --triangles")?;
     let tmp = tempfile::tempdir()?;
     let dir = a.keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -51,6 +51,10 @@ fn summary(v: &mut [f64]) -> serde_json::Value {
 }
 
 pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
+    // The frames' positions and the all-pairs similarity matrices (f64).
+    let (f, v) = (a.frames as f64, a.vertices as f64);
+    let what = format!("--frames {} --vertices {}", a.frames, a.vertices);
+    crate::check_size(ctx, what, f * v * 12.0 + f * f * 8.0 * 3.0, 0.0, "--frames or --vertices")?;
     ctx.say("building the mannequin and its CMU clips (not timed) ...");
     let subject = locomotion_subject(&a.data, a.vertices)?;
     let frames = MotionFrames::from_subject(&subject);

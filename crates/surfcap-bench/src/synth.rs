@@ -30,6 +30,10 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let Args { frames, vertices, alpha, seed, cache_dir, branching } = a;
+    // The subject's positions, then the distance matrix and the transition table's matrices.
+    let (f, v) = (frames as f64, vertices as f64);
+    let what = format!("--frames {frames} --vertices {vertices}");
+    crate::check_size(ctx, what, f * v * 12.0 + f * f * 8.0 * 4.0, f * f * 8.0 * 3.0, "--frames or --vertices")?;
     let (alpha, seed) = (alpha.value(), seed.seed);
     use rand::{Rng, SeedableRng};
     use surfcap_builtin::locomotion::Gait;

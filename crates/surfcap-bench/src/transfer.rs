@@ -46,6 +46,12 @@ pub struct Args {
 }
 
 pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
+    // The training pairs' positions (both mannequins) and the transferred frames, f32, with
+    // their f64 working copies.
+    let (p, sv, tv) = (a.pairs as f64, a.source_vertices as f64, a.target_vertices as f64);
+    let what = format!("--pairs {} --frames {}", a.pairs, a.frames);
+    let memory = (p * (sv + tv) + a.frames as f64 * (sv + tv)) * 12.0 * 3.0 + a.components as f64 * p * 8.0 * 8.0;
+    crate::check_size(ctx, what, memory, 0.0, "--pairs, --frames or --components")?;
     ctx.say("building the two mannequins and their CMU clips (not timed) ...");
     let source = mannequin_cmu_subject(&a.data, "average", &BodyShape::average(), a.source_vertices)?;
     let target = mannequin_cmu_subject(&a.data, "heavy", &BodyShape::heavy(), a.target_vertices)?;

@@ -29,6 +29,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
     use surfcap_motion::transition_table::{SegmentRoom, naive_transition, transition_table};
     let Args { subject, frames, sample, table, fps } = a;
+    if subject.is_none() {
+        // The distance matrix and the table's cost and length matrices (f64 each), and more.
+        let f = frames as f64;
+        crate::check_size(ctx, format!("--frames {frames}"), f * f * 8.0 * 4.0, 0.0, "--frames")?;
+    }
     let s = match subject {
         Some(p) => fps.open_quietly(&p)?,
         None => worm_subject(&WormParams { frames: frames.div_ceil(2), ..Default::default() })?,

@@ -38,10 +38,10 @@ pub struct Args {
     #[arg(long, default_value_t = 3000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
     /// Variants sampled.
-    #[arg(long, default_value_t = 5, value_parser = crate::options::count)]
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| crate::options::whole_in(s, 1, 1000))]
     pub count: usize,
     /// Most L-BFGS iterations of every part's GPDM fit (`vary train --iterations`).
-    #[arg(long, default_value_t = 400, value_parser = crate::options::count)]
+    #[arg(long, default_value_t = 400, value_parser = |s: &str| crate::options::whole_in(s, 1, 10_000))]
     pub iterations: usize,
     #[command(flatten)]
     pub seed: SeedOpt,

@@ -66,3 +66,44 @@ fn every_benchmark_parses_with_its_arguments() {
     let help = String::from_utf8_lossy(&o.stdout);
     assert!(help.contains("synth") && help.contains("distance") && !help.contains("tiles"), "{help}");
 }
+
+/// Every benchmark sizes its request from its arguments before any work: huge sizes are
+/// refused at once (exit 1, never an abort), with a JSON error naming the arguments, the size
+/// and the limit; repetition counts have bounds. `learn --gp-points 1e9` once panicked inside
+/// faer's allocation.
+#[test]
+fn huge_benchmark_requests_are_refused_before_any_work() {
+    for (args, needles) in [
+        (
+            vec!["load", "--frames", "1000000000", "--vertices", "1000000"],
+            vec!["--frames 1000000000 --vertices 1000000", "of memory"],
+        ),
+        (vec!["learn", "--gp-points", "1000000000"], vec!["--gp-points 1000000000", "of memory", "lower --gp-points"]),
+        (vec!["distance", "--frames", "100000000"], vec!["--frames 100000000 --triangles 20000", "of memory"]),
+        (vec!["transitions", "--frames", "100000000"], vec!["--frames 100000000", "of memory"]),
+        (vec!["graph", "--frames", "100000000"], vec!["--frames 100000000", "of memory"]),
+        (vec!["synth", "--frames", "100000000"], vec!["--frames 100000000 --vertices 1000", "of memory"]),
+        (vec!["smg", "--frames", "100000000"], vec!["--frames 100000000", "of memory"]),
+        (vec!["appearance", "--frames", "1000000000"], vec!["--frames 1000000000 --size 1024", "of memory"]),
+        (vec!["transfer", "--pairs", "1000000000"], vec!["--pairs 1000000000", "of memory"]),
+        (
+            vec!["export", "--frames", "1000000000", "--vertices", "1000000"],
+            vec!["of memory", "--frames or --vertices"],
+        ),
+        (vec!["scale", "--frames", "100000000"], vec!["--frames 100000000", "--frames or --triangles"]),
+        (vec!["load", "--repeat", "1000000000"], vec!["--repeat", "from 1 to 100"]),
+        (vec!["vary", "--iterations", "1000000000000"], vec!["--iterations", "from 1 to 10000"]),
+        (vec!["learn", "--gp-restarts", "1000000000"], vec!["--gp-restarts", "from 0 to 100"]),
+    ] {
+        let mut all = vec!["--json", "--max-memory", "4G"];
+        all.extend(&args);
+        let o = surfcap_bench!(&all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {:?} {}", o.status, stderr(&o));
+        let v: serde_json::Value =
+            serde_json::from_slice(&o.stderr).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {}", stderr(&o)));
+        let text = v["error"].as_str().unwrap_or("").to_string();
+        for n in needles {
+            assert!(text.contains(n), "{args:?}: {n:?} not in {text}");
+        }
+    }
+}

@@ -696,6 +696,22 @@ fn frame_seed(seed: u64, s: usize, f: usize) -> u64 {
     z ^ (z >> 31)
 }
 
+/// What [`remesh_subject_frames`] takes for `frames` frames of about `vertices` vertices
+/// (+10% at most), estimated before any work: each kept frame's positions and triangles (two
+/// per vertex: 36 bytes a vertex), in memory and in the frame set folder, and each thread's
+/// re-meshing work (about 400 bytes a vertex: half-edges, queues, the projection's grid).
+pub fn remeshed_frames_size(frames: usize, vertices: usize, threads: usize) -> surfcap_mesh::sizing::Estimate {
+    use surfcap_mesh::sizing::bytes;
+    let v = vertices as f64 * 1.1;
+    let kept = bytes(&[frames as f64, v], 36);
+    surfcap_mesh::sizing::Estimate {
+        what: format!("re-meshing {frames} frames to --vertices {vertices}"),
+        memory: kept.saturating_add(bytes(&[threads.max(1) as f64, v], 400)),
+        disk: kept,
+        lower: "--vertices or --frames".into(),
+    }
+}
+
 /// Every frame of a shared-topology subject re-meshed on its own (frames in parallel), as a
 /// frame set with the known correspondence to the subject's triangles (source triangle indices
 /// refer to `subject.topology()`, barycentrics to the same frame's positions). Names, labels,

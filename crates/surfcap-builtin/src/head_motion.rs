@@ -10,11 +10,28 @@
 //! little pitch). The vertices keep the scan's order, topology and UV atlas.
 
 use nalgebra::{Rotation3, Vector3};
+use surfcap_mesh::sizing::{Estimate, bytes};
 use surfcap_mesh::{Result, Sequence, Subject, Topology, Units, UpAxis};
 
 /// One sequence: its name and the peak (pitch, yaw, roll) in degrees.
 const MOTIONS: [(&str, [f64; 3]); 3] =
     [("nod", [15.0, 0.0, 0.0]), ("turn", [0.0, 25.0, 0.0]), ("tilt", [4.0, 0.0, 12.0])];
+
+/// What [`head_motion_subject`] takes for a scan of `n_vertices` vertices, estimated before any
+/// frame is made: three sequences of `frames_per_sequence` frames of three f32 per vertex, in
+/// memory and in the subject cache.
+pub fn head_motion_size(n_vertices: usize, frames_per_sequence: usize) -> Estimate {
+    let b = bytes(&[MOTIONS.len() as f64, frames_per_sequence as f64, n_vertices as f64], 12);
+    Estimate {
+        what: format!(
+            "--frames-per-sequence {frames_per_sequence} ({} sequences of {n_vertices} vertices)",
+            MOTIONS.len()
+        ),
+        memory: b,
+        disk: b,
+        lower: "--frames-per-sequence".into(),
+    }
+}
 
 /// The scan moved: `frames_per_sequence` frames of each of `nod`, `turn`, `tilt` at 30 fps, +y
 /// up (as the scan), in the scan's units (arbitrary; `units_name` names them).

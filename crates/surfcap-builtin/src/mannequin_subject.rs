@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use nalgebra::Isometry3;
+use surfcap_mesh::sizing::{Estimate, bytes};
 use surfcap_mesh::{Error, ErrorKind, JointTrack, Result, Sequence, Subject, Units, UpAxis};
 
 use crate::bvh::Bvh;
@@ -123,6 +124,26 @@ fn joint_track(m: &Mannequin, poses: &[Vec<Isometry3<f64>>]) -> JointTrack {
     }
 }
 
+/// Frames of a clip lasting `duration` seconds at `fps`, first to last frame, as
+/// [`locomotion`] and [`resample`] count them (in `f64`, so a huge request is a huge number,
+/// not a wrapped one).
+pub fn clip_frames(duration: f64, fps: f64) -> f64 {
+    (duration * fps).round().max(1.0) + 1.0
+}
+
+/// What [`mannequin_subject`] takes for clips of `frames` frames each (at the subject's rate),
+/// estimated before any clip is made: per frame and vertex three f32 positions, per frame and
+/// joint the clip's and the resampled pose (two f64 isometries) and the ground-truth matrix in
+/// memory; the subject cache writes the positions and one f32 4x4 matrix per joint.
+/// `what` names the arguments responsible, `lower` what to lower instead of raising a limit.
+pub fn mannequin_subject_size(m: &Mannequin, frames: &[f64], what: String, lower: String) -> Estimate {
+    let total: f64 = frames.iter().sum();
+    let (nv, nj) = (m.topology.n_vertices() as f64, m.skeleton.names.len() as f64);
+    let per_frame_disk = 12.0 * nv + 64.0 * nj;
+    let per_frame_memory = per_frame_disk + 2.0 * 56.0 * nj;
+    Estimate { what, memory: bytes(&[total, per_frame_memory], 1), disk: bytes(&[total, per_frame_disk], 1), lower }
+}
+
 /// The subject: one sequence per clip (resampled to `fps`), +y up, metres, each with its tags
 /// and ground-truth joints. Clip names must be unique.
 pub fn mannequin_subject(name: &str, m: &Mannequin, clips: &[Clip], fps: f64) -> Result<Subject> {
@@ -143,6 +164,20 @@ pub fn mannequin_subject(name: &str, m: &Mannequin, clips: &[Clip], fps: f64) ->
 mod tests {
     use super::*;
     use crate::mannequin::{BodyShape, mannequin};
+
+    #[test]
+    fn the_size_estimate_counts_frames_vertices_and_joints_before_any_clip_is_made() {
+        let m = mannequin(&BodyShape::average(), 1000).unwrap();
+        assert_eq!(clip_frames(3.0, 30.0), 91.0);
+        assert_eq!(clip_frames(1e9, 30.0), 3e10 + 1.0);
+        let (nv, nj) = (m.topology.n_vertices() as u64, m.skeleton.names.len() as u64);
+        let e = mannequin_subject_size(&m, &[91.0, 61.0], "--duration 3".into(), "--duration".into());
+        assert_eq!(e.disk, 152 * (12 * nv + 64 * nj));
+        assert_eq!(e.memory, 152 * (12 * nv + 64 * nj + 112 * nj));
+        // A billion seconds is refused by any budget, not wrapped to a small number.
+        let huge = mannequin_subject_size(&m, &[clip_frames(1e9, 30.0)], String::new(), String::new());
+        assert!(huge.memory > 1 << 50, "{}", huge.memory);
+    }
 
     #[test]
     fn procedural_subject_with_tags_joints_and_one_frame_rate() {

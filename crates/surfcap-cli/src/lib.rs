@@ -88,6 +88,16 @@ pub struct GlobalOpts {
     /// only an empty folder or surfcap's own earlier output of the same kind is replaced).
     #[arg(long, global = true)]
     force: bool,
+    /// Most memory a command may need, estimated before any work (requests above it are
+    /// refused with their size), in bytes or with a K, M, G or T suffix (powers of 1024)
+    /// [default: half the memory available when the command starts, from /proc/meminfo's
+    /// MemAvailable].
+    #[arg(long, global = true)]
+    max_memory: Option<limits::Bytes>,
+    /// Most a command may write to disk, estimated before any work, in bytes or with a K, M, G
+    /// or T suffix [default: the free space of the output's file system].
+    #[arg(long, global = true)]
+    max_disk: Option<limits::Bytes>,
 }
 
 /// A command-line program run by [`run_front`]: its parsed command line.
@@ -296,7 +306,13 @@ pub fn run_front<F: Front>() -> ExitCode {
         }
     };
     let g = *cli.globals();
-    let ctx = Ctx { quiet: g.quiet, json: g.json, force: g.force };
+    let ctx = Ctx {
+        quiet: g.quiet,
+        json: g.json,
+        force: g.force,
+        max_memory: g.max_memory.map(|b| b.0),
+        max_disk: g.max_disk.map(|b| b.0),
+    };
     signals::remove_temporaries_on_signals();
     // Unwind-safe enough: after a panic nothing of the run is used again (the program exits).
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {

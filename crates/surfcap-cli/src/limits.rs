@@ -18,20 +18,15 @@ pub struct LimitOpts {
     /// for longer animations.
     #[arg(long, default_value_t = DEFAULT_MAX_FRAMES)]
     pub max_frames: usize,
-    /// Most memory the output and the search may need, in bytes or with a K, M, G or T suffix
-    /// (powers of 1024) [default: half the memory available when the command starts, from
-    /// /proc/meminfo's MemAvailable].
-    #[arg(long)]
-    pub max_memory: Option<Bytes>,
 }
 
 impl Default for LimitOpts {
     fn default() -> Self {
-        LimitOpts { max_frames: DEFAULT_MAX_FRAMES, max_memory: None }
+        LimitOpts { max_frames: DEFAULT_MAX_FRAMES }
     }
 }
 
-/// A byte count: `123`, `512M`, `1.5G`.
+/// A byte count: `123`, `512M`, `1.5G` (`--max-memory`, `--max-disk`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bytes(pub u64);
 
@@ -56,26 +51,44 @@ impl FromStr for Bytes {
 }
 
 /// Memory available to new allocations (Linux `MemAvailable`), in bytes.
-fn mem_available() -> Option<u64> {
+pub fn mem_available() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
 }
 
+/// Free space (for an unprivileged user) on the file system that holds `path`, or its nearest
+/// existing ancestor, in bytes; `None` when it cannot be found.
+pub fn free_disk(path: &std::path::Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let abs = std::path::absolute(path).ok()?;
+    let existing = abs.ancestors().find(|p| p.exists())?;
+    let c = std::ffi::CString::new(existing.as_os_str().as_bytes()).ok()?;
+    let mut st: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: `c` is a NUL-terminated path and `st` a writable statvfs.
+    if unsafe { libc::statvfs(c.as_ptr(), &mut st) } != 0 {
+        return None;
+    }
+    Some((st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
+}
+
 impl LimitOpts {
-    /// The limits of `--max-frames` and `--max-memory`, with the memory available now.
-    pub fn limits(&self) -> SizeLimits {
+    /// The limits of `--max-frames` and the global `--max-memory` and `--max-disk`, with the
+    /// memory available now and the free space where `output` goes.
+    pub fn limits(&self, ctx: &crate::Ctx, output: &std::path::Path) -> SizeLimits {
         SizeLimits {
             max_frames: self.max_frames,
-            max_memory: self.max_memory.map(|b| b.0),
+            max_memory: ctx.max_memory,
             available_memory: mem_available(),
+            max_disk: ctx.max_disk,
+            free_disk: free_disk(output),
         }
     }
 
-    /// Refuses `r` when it exceeds the limits (`SizeLimits::check`).
-    pub fn check(&self, r: &Request) -> anyhow::Result<()> {
-        Ok(self.limits().check(r)?)
+    /// Refuses `r`, written to `output`, when it exceeds the limits (`SizeLimits::check`).
+    pub fn check(&self, ctx: &crate::Ctx, output: &std::path::Path, r: &Request) -> anyhow::Result<()> {
+        Ok(self.limits(ctx, output).check(r)?)
     }
 }
 

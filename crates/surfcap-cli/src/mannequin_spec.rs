@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use surfcap_builtin::bvh::read_bvh;
 use surfcap_builtin::locomotion::Gait;
 use surfcap_builtin::mannequin::{BodyShape, mannequin};
-use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
+use surfcap_builtin::mannequin_subject::{Clip, clip_frames, mannequin_subject, mannequin_subject_size};
 use surfcap_mesh::Subject;
 
 #[derive(clap::Args, Debug, Clone)]
@@ -27,14 +27,17 @@ pub struct MannequinArgs {
     /// Seed of the procedural motions (same seed, same motion).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Frame rate of the subject (default: 30, or the first BVH file's).
-    #[arg(long, value_parser = crate::options::positive)]
+    /// Frame rate of the subject, 0.1 to 10000 fps (default: 30, or the first BVH file's).
+    #[arg(long, value_parser = crate::options::frame_rate)]
     pub fps: Option<f64>,
-    /// Duration of each procedural motion in seconds (default: 3, the jump 2).
-    #[arg(long, value_parser = crate::options::positive)]
+    /// Duration of each procedural motion in seconds, at most 3600 (default: 3, the jump 2).
+    /// The subject's size is estimated before any work and checked against --max-memory and
+    /// --max-disk.
+    #[arg(long, value_parser = |s: &str| crate::options::positive_at_most(s, 3600.0))]
     pub duration: Option<f64>,
-    /// Metres per BVH unit (default: guessed from each file's rest-pose height and printed).
-    #[arg(long, value_parser = crate::options::positive)]
+    /// Metres per BVH unit, 0.0001 to 100 (default: guessed from each file's rest-pose height
+    /// and printed).
+    #[arg(long, value_parser = |s: &str| crate::options::number_from(s, 1e-4, 100.0))]
     pub bvh_units: Option<f64>,
     /// Keep a UV atlas in the mannequin's topology (a cylindrical chart per bone,
     /// `surfcap_builtin::mannequin_atlas`), so it can carry a texture per frame (`surfcap
@@ -62,9 +65,25 @@ pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
         m.topology =
             surfcap_mesh::Topology::new(m.topology.n_vertices(), m.topology.triangles().to_vec(), Some(atlas))?;
     }
+    let bvhs: Vec<_> = a.bvh.iter().map(|p| read_bvh(p)).collect::<Result<_, _>>()?;
+    let fps = a.fps.unwrap_or_else(|| bvhs.first().map_or(30.0, |b| b.fps()));
+    // The subject's size before any clip is made: every clip resampled to `fps`.
+    let mut frames: Vec<f64> =
+        bvhs.iter().map(|b| clip_frames(b.n_frames().saturating_sub(1) as f64 * b.frame_time, fps)).collect();
+    frames.extend(gaits.iter().map(|g| clip_frames(a.duration.unwrap_or(g.duration()), fps)));
+    let total: f64 = frames.iter().sum();
+    let what = format!(
+        "synthesising {total:.0} frames of {} vertices at {fps} fps{}",
+        m.topology.n_vertices(),
+        a.duration.map(|d| format!(" ({d} s per procedural motion)")).unwrap_or_default()
+    );
+    let mut lower = vec!["--fps", "--vertices"];
+    if !gaits.is_empty() {
+        lower.insert(0, "--duration");
+    }
+    ctx.check_size(&mannequin_subject_size(&m, &frames, what, lower.join(", ")), a.output.as_deref())?;
     let mut clips = Vec::new();
-    for path in &a.bvh {
-        let b = read_bvh(path)?;
+    for (path, b) in a.bvh.iter().zip(&bvhs) {
         let mpu = match a.bvh_units {
             Some(u) => u,
             None => {
@@ -77,9 +96,8 @@ pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
                 u
             }
         };
-        clips.push(Clip::from_bvh(path, &b, &m, mpu)?);
+        clips.push(Clip::from_bvh(path, b, &m, mpu)?);
     }
-    let fps = a.fps.unwrap_or_else(|| clips.first().map_or(30.0, |c| c.fps));
     for g in gaits {
         clips.push(Clip::procedural(&m, g, fps, a.duration.unwrap_or(g.duration()), a.seed)?);
     }

@@ -13,7 +13,9 @@
 //! only the command line's ([`SlopeArg`], [`Positive`]) are newtypes here.
 //! Every numeric option is checked when it is parsed, by its type ([`Positive`], `Alpha`) or
 //! one of the value parsers [`positive`], [`non_negative`], [`fraction`], [`count`],
-//! [`at_least`] and [`whole_in`]: clap's
+//! [`at_least`], [`whole_in`], and for values that scale a size or a coordinate
+//! [`number_from`], [`positive_at_most`] and [`frame_rate`] (documented bounds, so that `1e308`
+//! is refused by name instead of overflowing later): clap's
 //! message names the option and the value, ours the allowed range, and nothing runs (or is
 //! cached) with NaN, a negative weight or a count of 0.
 
@@ -269,6 +271,23 @@ pub fn positive_time(s: &str) -> Result<surfcap_pipeline::constraint_files::Time
         Ok(t) if t.value > 0.0 => Ok(t),
         _ => Err(format!("expected a duration > 0 in seconds (3 or 3s) or frames (90f), got {s:?}")),
     }
+}
+
+/// Value parser: a finite number from `min` to `max` (both included): for the options whose
+/// value scales a size or a coordinate, so an overflow (`1e308`) is refused by name at parse time.
+pub fn number_from(s: &str, min: f64, max: f64) -> Result<f64, String> {
+    number_in(s, |x| (min..=max).contains(&x), &format!("a number from {min} to {max}"))
+}
+
+/// Value parser: a finite number > 0 and at most `max`.
+pub fn positive_at_most(s: &str, max: f64) -> Result<f64, String> {
+    number_in(s, |x| x > 0.0 && x <= max, &format!("a number > 0 and at most {max}"))
+}
+
+/// Value parser: a frame rate from 0.1 to 10000 fps (frame times from 1e-4 to 10 s: no capture
+/// or animation is outside them).
+pub fn frame_rate(s: &str) -> Result<f64, String> {
+    number_in(s, |x| (0.1..=10_000.0).contains(&x), "a frame rate from 0.1 to 10000 fps")
 }
 
 /// Value parser: a finite number >= 0.

@@ -18,9 +18,32 @@ pub struct Ctx {
     pub json: bool,
     /// `--force`: a folder output may replace a folder surfcap did not write.
     pub force: bool,
+    /// `--max-memory`, bytes: most memory a request may need (default half the memory available).
+    pub max_memory: Option<u64>,
+    /// `--max-disk`, bytes: most a command may write (default the free space of its output's
+    /// file system).
+    pub max_disk: Option<u64>,
 }
 
 impl Ctx {
+    /// The limits a request is checked against before any work: `--max-memory` and
+    /// `--max-disk`, the memory available now (/proc/meminfo) and the free space where `output`
+    /// goes (statvfs).
+    pub fn budget(&self, output: Option<&Path>) -> surfcap_mesh::sizing::Budget {
+        surfcap_mesh::sizing::Budget {
+            max_memory: self.max_memory,
+            available_memory: crate::limits::mem_available(),
+            max_disk: self.max_disk,
+            free_disk: output.and_then(crate::limits::free_disk),
+        }
+    }
+
+    /// Refuses `estimate` when it exceeds [`Ctx::budget`], with the size, the limit and the
+    /// option that raises it.
+    pub fn check_size(&self, estimate: &surfcap_mesh::sizing::Estimate, output: Option<&Path>) -> anyhow::Result<()> {
+        Ok(self.budget(output).check(estimate)?)
+    }
+
     /// Export options honouring `--force`.
     pub fn export_options(&self) -> ExportOptions {
         ExportOptions { force: self.force, ..Default::default() }

@@ -30,6 +30,8 @@
 //!   only surfcap's own (stamped `"written_by": "surfcap"`), and a signal handler learns whether
 //!   a commit completed the outputs.
 //! - `Progress`: how libraries report progress without printing; the front end draws it.
+//! - Sizing ([`sizing`]): a request's memory and disk estimated before any work and checked
+//!   against the front end's limits; fallible allocation where a size comes from input.
 //!
 //! No function here panics on bad input, prints or exits: errors are [`Error`]s that name the file,
 //! the line or frame, and what was expected. `npyz` parses `.npy` headers and decodes data in
@@ -60,6 +62,7 @@ pub mod output_path;
 pub mod output_set;
 pub mod progress;
 pub mod regular_file;
+pub mod sizing;
 pub mod subject;
 pub mod temporaries;
 pub mod topology;

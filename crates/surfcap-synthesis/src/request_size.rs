@@ -16,8 +16,7 @@ use crate::error::{Result, refuse};
 /// Frames an animation may have unless raised: 10 minutes at 30 fps.
 pub const DEFAULT_MAX_FRAMES: usize = 18_000;
 
-/// The limit on memory when neither a limit nor the memory available is known: 4 GiB.
-pub const UNKNOWN_MEMORY_LIMIT: u64 = 4 << 30;
+pub use surfcap_mesh::sizing::{UNKNOWN_MEMORY_LIMIT, human};
 
 /// Bounds on what one request may produce.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,11 +28,21 @@ pub struct SizeLimits {
     pub max_memory: Option<u64>,
     /// The memory available to new allocations when the request starts, bytes, if known.
     pub available_memory: Option<u64>,
+    /// Most bytes the output may take on disk (`--max-disk`).
+    pub max_disk: Option<u64>,
+    /// Free space on the output's file system, bytes, if known.
+    pub free_disk: Option<u64>,
 }
 
 impl Default for SizeLimits {
     fn default() -> Self {
-        SizeLimits { max_frames: DEFAULT_MAX_FRAMES, max_memory: None, available_memory: None }
+        SizeLimits {
+            max_frames: DEFAULT_MAX_FRAMES,
+            max_memory: None,
+            available_memory: None,
+            max_disk: None,
+            free_disk: None,
+        }
     }
 }
 
@@ -47,18 +56,6 @@ pub struct Request<'a> {
     /// Working memory besides the output positions (a search's tables).
     pub search_bytes: u64,
     pub format: ExportFormat,
-}
-
-/// `12345678` -> `11.8 MiB`.
-pub fn human(bytes: u64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut x = bytes as f64;
-    let mut k = 0;
-    while x >= 1024.0 && k + 1 < units.len() {
-        x /= 1024.0;
-        k += 1;
-    }
-    if k == 0 { format!("{bytes} bytes") } else { format!("{x:.1} {}", units[k]) }
 }
 
 impl SizeLimits {
@@ -94,6 +91,29 @@ impl SizeLimits {
                 human(limit)
             );
         }
+        // The output on disk: binary formats 12 bytes a vertex a frame, text formats about 40
+        // and 20 a triangle (OBJ, PLY, USD text), glb as it will be laid out.
+        let nt = r.subject.topology().n_triangles() as u64;
+        let disk = match r.format {
+            ExportFormat::Glb => estimated_glb_bytes(nv as usize, nt as usize, &[frames as usize]),
+            ExportFormat::Obj | ExportFormat::Ply | ExportFormat::Usda => {
+                frames.saturating_mul((40 * nv).saturating_add(20 * nt))
+            }
+            _ => frames.saturating_mul(12 * nv),
+        };
+        let budget = surfcap_mesh::sizing::Budget {
+            max_memory: Some(u64::MAX),
+            available_memory: None,
+            max_disk: self.max_disk,
+            free_disk: self.free_disk,
+        };
+        let estimate = surfcap_mesh::sizing::Estimate {
+            what: format!("{what} ({frames} frames x {nv} vertices as {:?})", r.format),
+            memory: 0,
+            disk,
+            lower: "the frames asked for".into(),
+        };
+        budget.check(&estimate).map_err(|e| crate::error::Error::Request(e.to_string()))?;
         if r.format == ExportFormat::Glb {
             let glb = estimated_glb_bytes(nv as usize, r.subject.topology().n_triangles(), &[frames as usize]);
             if glb > GLB_MAX_BYTES {
@@ -125,6 +145,33 @@ pub fn fastest_speed(subject: &Subject, axes: &[usize]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn triangle() -> Subject {
+        use surfcap_mesh::{Sequence, Topology, Units, UpAxis};
+        let t = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
+        let q = Sequence::new("a".to_string(), 3, vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]).unwrap();
+        Subject::new("t", t, vec![q], 30.0, UpAxis::PosY, Units::metres()).unwrap()
+    }
+
+    #[test]
+    fn the_output_on_disk_is_checked_against_the_disk_limit_and_the_free_space() {
+        let s = triangle();
+        let r = Request {
+            what: "--steps 10000".into(),
+            frames: 10_000.0,
+            subject: &s,
+            search_bytes: 0,
+            format: ExportFormat::Npy,
+        };
+        assert!(SizeLimits::default().check(&r).is_ok());
+        // 10,000 frames x 3 vertices x 12 bytes = 360,000 bytes.
+        let tight = SizeLimits { max_disk: Some(100_000), ..SizeLimits::default() };
+        let e = tight.check(&r).unwrap_err().to_string();
+        assert!(e.contains("--steps 10000") && e.contains("351.6 KiB of disk") && e.contains("--max-disk"), "{e}");
+        let full = SizeLimits { free_disk: Some(1000), ..SizeLimits::default() };
+        let e = full.check(&r).unwrap_err().to_string();
+        assert!(e.contains("1000 bytes free"), "{e}");
+    }
 
     #[test]
     fn byte_counts_read_in_binary_units() {

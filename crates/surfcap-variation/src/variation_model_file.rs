@@ -194,12 +194,21 @@ impl VariationModel {
             )));
         }
         let (nv, nt) = (head.vertices, head.triangles);
+        // Every size the header declares is checked against the arrays' files before anything
+        // is allocated from it: the reference pose fixes the vertex count before the topology
+        // (which allocates per vertex) is made, and an edited frame count cannot overflow.
+        let reference_pose =
+            load_array::<f32>(&dir.join("reference_pose.npy"), &[Some(nv), Some(3)], "the reference pose")?;
         let faces = load_array::<u32>(&dir.join("faces.npy"), &[Some(nt), Some(3)], "the triangles")?;
         let triangles: Vec<[u32; 3]> = faces.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
         let topology = Topology::new(nv, triangles, None).map_err(|e| e.in_file(&dir.join("faces.npy")))?;
-        let reference_pose =
-            load_array::<f32>(&dir.join("reference_pose.npy"), &[Some(nv), Some(3)], "the reference pose")?;
-        let n: usize = head.frames * head.sequences.len();
+        let n: usize = head.frames.checked_mul(head.sequences.len()).ok_or_else(|| {
+            bad(format!(
+                "{} frames x {} sequences: expected a frame count that fits",
+                head.frames,
+                head.sequences.len()
+            ))
+        })?;
         let mut part_models = Vec::with_capacity(head.parts.len());
         let mut fits = Vec::with_capacity(head.parts.len());
         for (k, rec) in head.part_models.into_iter().enumerate() {

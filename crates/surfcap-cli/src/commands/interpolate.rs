@@ -72,7 +72,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_formats::export::plan_export(&mut outs, format, &a.output, ctx.force)?;
     let s = open(ctx, &a.subject, &a.source)?;
     let what = format!("--steps {}", a.steps);
-    a.limits.check(&Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
+    a.limits.check(ctx, &a.output, &Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let appearance = a.appearance.open(&s, format, &a.output)?;
     let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));

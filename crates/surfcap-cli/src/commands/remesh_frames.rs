@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_builtin::frame_remeshing::{RemeshFramesOptions, remesh_subject_frames};
+use surfcap_builtin::frame_remeshing::{RemeshFramesOptions, remesh_subject_frames, remeshed_frames_size};
 
 use crate::options::{SourceOpts, open};
 
@@ -25,7 +25,8 @@ pub struct Args {
     #[arg(long, default_value = "0")]
     pub seed: u64,
     /// Vertices wanted per frame before the +-10% edge-length variation (default: the subject's
-    /// vertex count).
+    /// vertex count); the frame set's size is checked against --max-memory and --max-disk before
+    /// any work.
     #[arg(long, value_parser = crate::options::count)]
     pub vertices: Option<usize>,
     /// Only these sequences, in this order (comma-separated names).
@@ -34,8 +35,9 @@ pub struct Args {
     /// Only the first K frames of each sequence.
     #[arg(long, value_parser = crate::options::count)]
     pub frames: Option<usize>,
-    /// Re-meshing rounds (split, collapse, flip, smooth and project).
-    #[arg(long, default_value = "5", value_parser = crate::options::count)]
+    /// Re-meshing rounds (split, collapse, flip, smooth and project), 1 to 100: the edge
+    /// lengths settle within the default 5 to 10 rounds, so 100 bounds the time with room to spare.
+    #[arg(long, default_value = "5", value_parser = |s: &str| crate::options::whole_in(s, 1, 100))]
     pub iterations: usize,
     #[command(flatten)]
     pub source: SourceOpts,
@@ -44,6 +46,14 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.subject])?;
     let s = open(ctx, &a.subject, &a.source)?;
+    let frames: usize = s
+        .sequences()
+        .iter()
+        .filter(|q| a.sequences.is_empty() || a.sequences.contains(&q.name))
+        .map(|q| a.frames.map_or(q.n_frames(), |k| k.min(q.n_frames())))
+        .sum();
+    let vertices = a.vertices.unwrap_or(s.topology().n_vertices());
+    ctx.check_size(&remeshed_frames_size(frames, vertices, rayon::current_num_threads()), Some(&a.output))?;
     let t0 = Instant::now();
     let opts = RemeshFramesOptions {
         seed: a.seed,

@@ -298,13 +298,17 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
         meta.target_up_axis,
         meta.target_units.clone(),
     )?;
-    a.out.limits.check(&Request {
-        what: format!("--motion {}", a.motion),
-        frames: seq.n_frames() as f64,
-        subject: &shape,
-        search_bytes: 0,
-        format,
-    })?;
+    a.out.limits.check(
+        ctx,
+        &a.out.output,
+        &Request {
+            what: format!("--motion {}", a.motion),
+            frames: seq.n_frames() as f64,
+            subject: &shape,
+            search_bytes: 0,
+            format,
+        },
+    )?;
     let frames: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
     let t_setup = Instant::now();
     let stitching = a.reconstruction == Reconstruction::Stitch;

@@ -20,8 +20,10 @@ use serde_json::json;
 use surfcap_appearance::TextureImage;
 use surfcap_appearance::atlas_raster::AtlasRaster;
 use surfcap_appearance::solid_texture::solid_texture;
+use surfcap_appearance::solid_texture::solid_texture_size;
 use surfcap_appearance::texture_generator::{
-    GeneratorOptions, GeneratorSource, write_generated_frames, write_generated_frames_of,
+    GeneratorOptions, GeneratorSource, MAX_BLUR_SIGMA, MAX_DRIFT, MAX_NOISE_SIGMA, generated_frames_size,
+    write_generated_frames, write_generated_frames_of,
 };
 use surfcap_mesh::Subject;
 
@@ -69,6 +71,8 @@ pub struct GenerateArgs {
     #[arg(long, requires = "mesh")]
     pub texture: Option<PathBuf>,
     /// Frames to generate (default: the subject's frame count with a subject --mesh, else 100).
+    /// The memory and disk the frames take are estimated before any work and checked against
+    /// --max-memory and --max-disk.
     #[arg(long, value_parser = crate::options::count)]
     pub frames: Option<usize>,
     /// Seed of every random choice (drift, light, holes, noise): the same seed gives the same
@@ -79,14 +83,14 @@ pub struct GenerateArgs {
     /// default: the texture's own size).
     #[arg(long, value_parser = |s: &str| crate::options::whole_in(s, 8, 16384))]
     pub size: Option<usize>,
-    /// Largest drift, texels of the generated size.
-    #[arg(long, default_value_t = 3.0, value_parser = crate::options::non_negative)]
+    /// Largest drift, texels of the generated size, 0 to 64 (real texture drift is a few texels).
+    #[arg(long, default_value_t = 3.0, value_parser = |s: &str| crate::options::number_from(s, 0.0, MAX_DRIFT))]
     pub max_drift: f64,
-    /// Gaussian blur, texels (0: none).
-    #[arg(long, default_value_t = 0.6, value_parser = crate::options::non_negative)]
+    /// Gaussian blur, texels, 0 (none) to 32 (a smear).
+    #[arg(long, default_value_t = 0.6, value_parser = |s: &str| crate::options::number_from(s, 0.0, MAX_BLUR_SIGMA))]
     pub blur: f64,
-    /// Gaussian noise, on the 0-255 scale (0: none).
-    #[arg(long, default_value_t = 2.0, value_parser = crate::options::non_negative)]
+    /// Gaussian noise, on the 0-255 scale, 0 (none) to 255.
+    #[arg(long, default_value_t = 2.0, value_parser = |s: &str| crate::options::number_from(s, 0.0, MAX_NOISE_SIGMA))]
     pub noise: f64,
     /// Share of frames with an occlusion hole.
     #[arg(long, default_value_t = 0.15, value_parser = crate::options::fraction)]
@@ -145,6 +149,10 @@ fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
         tint: if a.no_lighting { 0.0 } else { defaults.tint },
         ..defaults
     };
+    // Sized before any work, so a refusal leaves nothing behind.
+    let texture_size = TextureImage::dimensions(&texture)?;
+    let estimate = generated_frames_size(&options, texture_size, a.displacement_npy, rayon::current_num_threads());
+    ctx.check_size(&estimate, Some(&a.output))?;
     let t0 = Instant::now();
     let bar = crate::progress::Bar::new(ctx);
     let header = match &subject {
@@ -217,7 +225,8 @@ pub struct PaintArgs {
     /// its up axis) or an OBJ with `vt` (+y up).
     #[arg(long)]
     pub mesh: PathBuf,
-    /// Width and height of the texture, texels.
+    /// Width and height of the texture, texels (its memory is checked against --max-memory
+    /// before any work).
     #[arg(long, default_value_t = 1024, value_parser = |s: &str| crate::options::whole_in(s, 8, 16384))]
     pub size: usize,
     /// The image to write: .png, .jpg or .jpeg (the format follows the extension).
@@ -227,6 +236,7 @@ pub struct PaintArgs {
 
 fn paint(ctx: &crate::Ctx, a: &PaintArgs) -> anyhow::Result<()> {
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.mesh])?;
+    ctx.check_size(&solid_texture_size(a.size), Some(&a.output))?;
     let t0 = Instant::now();
     let (topology, positions, up) = if is_obj(&a.mesh) {
         let obj = surfcap_formats::obj::read_obj(&a.mesh)?;

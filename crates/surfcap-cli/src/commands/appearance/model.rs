@@ -39,8 +39,10 @@ pub struct BuildArgs {
     /// 4.5.1); default: every component (at most one per frame less one of each kind).
     #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 2))]
     pub components: Option<usize>,
-    /// Weight of the intensity term of the Poisson warp (thesis eq. 4.1-4.3).
-    #[arg(long, default_value_t = 0.02, value_parser = crate::options::positive)]
+    /// Weight of the intensity term of the Poisson warp (thesis eq. 4.1-4.3), above 0 and at
+    /// most 1000 (the thesis uses 0.02; far larger weights make the warp's system singular in
+    /// floating point).
+    #[arg(long, default_value_t = 0.02, value_parser = |s: &str| crate::options::positive_at_most(s, 1000.0))]
     pub lambda: f64,
     /// How textures are warped: poisson (thesis) or direct (the baseline of Fig. 4.5).
     #[arg(long, default_value = "poisson", value_parser = parse_warping)]

@@ -83,11 +83,11 @@ pub struct Args {
     /// Latent dimension d.
     #[arg(long, default_value_t = 3, value_parser = crate::options::count)]
     pub latent_dim: usize,
-    /// HMC latent trajectories to sample (0: none).
-    #[arg(long, default_value_t = 3)]
+    /// HMC latent trajectories to sample, 0 (none) to 1000.
+    #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::options::whole_in(s, 0, 1000))]
     pub samples: usize,
-    /// L-BFGS iterations at most (default 400).
-    #[arg(long, value_parser = crate::options::count)]
+    /// L-BFGS iterations at most, 1 to 10000 (default 400; as `vary train --iterations`).
+    #[arg(long, value_parser = |s: &str| crate::options::whole_in(s, 1, 10_000))]
     pub iterations: Option<usize>,
     #[command(flatten)]
     pub seed: SeedOpt,

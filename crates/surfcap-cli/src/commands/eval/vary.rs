@@ -208,8 +208,9 @@ pub struct Args {
     /// Seed of the variants.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// L-BFGS iterations at most of every GPDM (default 400).
-    #[arg(long, value_parser = crate::options::count)]
+    /// L-BFGS iterations at most of every GPDM, 1 to 10000 (default 400; as `vary train
+    /// --iterations`).
+    #[arg(long, value_parser = |s: &str| crate::options::whole_in(s, 1, 10_000))]
     pub iterations: Option<usize>,
     /// Where the variants go in the world, the world criteria judged there: source (the
     /// source's path, `vary sample`'s default) or sampled (the torso GP's displacements,

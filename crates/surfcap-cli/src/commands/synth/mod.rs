@@ -9,7 +9,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde_json::json;
-use surfcap_builtin::head_motion::head_motion_subject;
+use surfcap_builtin::head_motion::{head_motion_size, head_motion_subject};
 use surfcap_mesh::Subject;
 
 use crate::mannequin_spec::{MannequinArgs, build};
@@ -38,7 +38,8 @@ pub struct HeadArgs {
     /// and tilt (a non-rigid bend of the neck), at 30 fps, keeping its UV atlas.
     #[arg(long, conflicts_with_all = ["bvh", "procedural", "uv_atlas"])]
     pub head: Option<std::path::PathBuf>,
-    /// Frames of each head sequence (one period of the motion, starting and ending at rest).
+    /// Frames of each head sequence (one period of the motion, starting and ending at rest); the
+    /// subject's size is checked against --max-memory and --max-disk before any frame is made.
     #[arg(long, default_value_t = 34, requires = "head", value_parser = |s: &str| crate::options::at_least(s, 2))]
     pub frames_per_sequence: usize,
 }
@@ -63,7 +64,13 @@ pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
 }
 
 /// The head scan of `head` (a folder's `template.obj`, or an OBJ) bent into its sequences.
-fn head_subject(head: &Path, frames_per_sequence: usize, name: Option<&str>) -> anyhow::Result<Subject> {
+fn head_subject(
+    ctx: &crate::Ctx,
+    head: &Path,
+    frames_per_sequence: usize,
+    name: Option<&str>,
+    output: &Path,
+) -> anyhow::Result<Subject> {
     let obj = if head.is_dir() { head.join("template.obj") } else { head.to_path_buf() };
     let mesh = surfcap_formats::obj::read_obj(&obj)?;
     let topology = mesh.topology().map_err(|e| e.in_file(&obj))?;
@@ -72,6 +79,7 @@ fn head_subject(head: &Path, frames_per_sequence: usize, name: Option<&str>) -> 
         "{}: the scan has no texture coordinates: expected a UV-mapped mesh (`vt` on every face corner)",
         obj.display()
     );
+    ctx.check_size(&head_motion_size(topology.n_vertices(), frames_per_sequence), Some(output))?;
     let mut s = head_motion_subject(&topology, &mesh.positions, frames_per_sequence, "arbitrary")
         .map_err(|e| e.in_file(&obj))?;
     if let Some(n) = name {
@@ -89,7 +97,7 @@ fn build_and_write(ctx: &crate::Ctx, a: MannequinArgs, head: HeadArgs) -> anyhow
     surfcap_mesh::output_path::check_not_input(&output, &inputs)?;
     let t0 = Instant::now();
     let s = match &head.head {
-        Some(h) => head_subject(h, head.frames_per_sequence, a.name.as_deref())?,
+        Some(h) => head_subject(ctx, h, head.frames_per_sequence, a.name.as_deref(), &output)?,
         None => build(ctx, &a)?,
     };
     let bar = crate::progress::Bar::new(ctx);

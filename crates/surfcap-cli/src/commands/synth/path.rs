@@ -71,7 +71,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let pipe = a.graph.cache.pipeline(ctx, s)?;
     let bar = crate::progress::Bar::new(ctx);
     let playback = playback(&a.appearance, &a.vary);
-    let o = synthesize_path(pipe, params, &request, playback, &a.out.output(ctx), &a.out.limits.limits(), &bar)?;
+    let o = synthesize_path(
+        pipe,
+        params,
+        &request,
+        playback,
+        &a.out.output(ctx),
+        &a.out.limits.limits(ctx, &a.out.output),
+        &bar,
+    )?;
     drop(bar);
     ctx.commit(outs)?;
     let curve_length = o.report.curve_length;
