@@ -62,6 +62,14 @@ pub(crate) struct Registered(Live);
 /// The outputs committed so far by this process; locked for the whole of a commit.
 static COMMITTED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
+/// Registers a previous output moved aside (`aside`, from `output`) until the guard is
+/// dropped: on a signal it is put back when `output` is missing, else removed.
+pub(crate) fn register_aside(aside: &Path, output: &Path) -> Registered {
+    let entry = Live::Aside { aside: aside.to_path_buf(), output: output.to_path_buf() };
+    live().push(entry.clone());
+    Registered(entry)
+}
+
 /// The commit lock: held by `crate::output_set` while it renames outputs into place, and by the
 /// signal handler before it decides.
 pub(crate) fn commit_lock() -> MutexGuard<'static, Vec<PathBuf>> {
