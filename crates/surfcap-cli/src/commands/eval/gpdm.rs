@@ -112,7 +112,8 @@ fn evaluate(ctx: &crate::Ctx, s: &Subject, opts: &GpdmEvalOptions, output: &Path
     let latents: Vec<(String, &Mat<f64>)> = r.sequences.iter().map(|q| q.name.clone()).zip(r.latents.iter()).collect();
     let mut written = plots(output, &r.subject, &r.fit.history, &latents, &r.trajectories)?;
     let latent_path = output.join("latent.npy");
-    surfcap_learn::matrix::save_npy(&latent_path, r.model.latent())?;
+    // Written in the folder's temporary (`save_npy` does not go through `surfcap_mesh::atomic`).
+    surfcap_learn::matrix::save_npy(&surfcap_mesh::output_set::write_place(&latent_path), r.model.latent())?;
     written.push(latent_path);
     let model_path = output.join("gpdm.model.json");
     write_json(&model_path, &r.model)?;
