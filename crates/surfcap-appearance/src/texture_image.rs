@@ -252,7 +252,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let data: Vec<f32> = (0..3 * 64).map(|i| (100 + i % 7) as f32).collect();
         let img = TextureImage::from_planes(8, 8, 3, data).unwrap();
-        for (name, magic) in [("a.jpg", &[0xFF, 0xD8, 0xFF][..]), ("b.JPEG", &[0xFF, 0xD8, 0xFF]), ("c.png", b"\x89PNG")] {
+        for (name, magic) in
+            [("a.jpg", &[0xFF, 0xD8, 0xFF][..]), ("b.JPEG", &[0xFF, 0xD8, 0xFF]), ("c.png", b"\x89PNG")]
+        {
             let path = dir.path().join(name);
             img.write(&path).unwrap();
             assert!(std::fs::read(&path).unwrap().starts_with(magic), "{name}");

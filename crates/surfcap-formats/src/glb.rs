@@ -996,7 +996,9 @@ mod tests {
         let pattern = b"\"fps\":30.0";
         let places: Vec<usize> = (0..buf.len() - 10).filter(|&k| &buf[k..k + 10] == pattern).collect();
         assert!(!places.is_empty(), "the frame rate in the extras");
-        for (same_length, shown) in [(&b"\"fps\":-30 "[..], "-30"), (b"\"fps\":\"x\" ", "\"x\""), (b"\"fps\":9e99", "9e+99")] {
+        for (same_length, shown) in
+            [(&b"\"fps\":-30 "[..], "-30"), (b"\"fps\":\"x\" ", "\"x\""), (b"\"fps\":9e99", "9e+99")]
+        {
             let mut bad = buf.clone();
             for &at in &places {
                 bad[at..at + 10].copy_from_slice(same_length);

@@ -94,8 +94,9 @@ pub fn read_manifest(path: &Path, progress: &dyn Progress) -> Result<(ImportOpti
         None => None,
     };
     if let Some(f) = m.fps {
-        surfcap_mesh::subject::check_frame_rate(f)
-            .map_err(|_| at(err!(Metadata, "fps = {f}: expected {}", surfcap_mesh::subject::FRAME_RATES_TEXT), "fps"))?;
+        surfcap_mesh::subject::check_frame_rate(f).map_err(|_| {
+            at(err!(Metadata, "fps = {f}: expected {}", surfcap_mesh::subject::FRAME_RATES_TEXT), "fps")
+        })?;
     }
     let opts = ImportOptions { name: m.name.clone(), fps: m.fps, up_axis, units: m.units.as_deref().map(Units::parse) };
     let mut out: Vec<SourceSequence> = Vec::new();

@@ -114,7 +114,8 @@ impl MetaFields<'_> {
     /// (absent, `null`, or a text starting with "unknown", such as `"unknown (35-frame cycle)"`).
     fn fps(&self) -> Result<Option<f64>> {
         let (v, field) = self.pick("fps");
-        let unknown = |v: &Value| v.is_null() || v.as_str().is_some_and(|t| t.trim().to_lowercase().starts_with("unknown"));
+        let unknown =
+            |v: &Value| v.is_null() || v.as_str().is_some_and(|t| t.trim().to_lowercase().starts_with("unknown"));
         if unknown(v) {
             // A sequence's own "unknown" leaves the dataset's rate to decide.
             return if v.is_null() || self.root["fps"].is_null() || unknown(&self.root["fps"]) {
@@ -142,12 +143,14 @@ pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
     let root: Value = serde_json::from_str(&text)
         .map_err(|e| err!(Syntax, "invalid JSON: {e}").in_file(&meta_path).at_line(e.line()))?;
     if !root.is_object() {
-        return Err(err!(Metadata, "expected a JSON object of fields (fps, units, up_axis, sequences)")
-            .in_file(&meta_path));
+        return Err(
+            err!(Metadata, "expected a JSON object of fields (fps, units, up_axis, sequences)").in_file(&meta_path)
+        );
     }
     if !(root["sequences"].is_null() || root["sequences"].is_object()) {
-        return Err(err!(Metadata, "sequences: expected an object with one entry per sequence folder")
-            .in_file(&meta_path));
+        return Err(
+            err!(Metadata, "sequences: expected an object with one entry per sequence folder").in_file(&meta_path)
+        );
     }
     let seq = &root["sequences"][&name];
     if !(seq.is_null() || seq.is_object()) {
@@ -161,7 +164,10 @@ pub fn read_sequence_meta(seq_dir: &Path) -> Result<SequenceMeta> {
     };
     let joint_names = m.typed::<Vec<String>>((&root["joint_names"], "joint_names".into()), "a list of texts")?;
     let joint_parents = m
-        .typed::<Vec<Option<i64>>>((&root["joint_parents"], "joint_parents".into()), "a list of joint indices (-1 or null for a root)")?
+        .typed::<Vec<Option<i64>>>(
+            (&root["joint_parents"], "joint_parents".into()),
+            "a list of joint indices (-1 or null for a root)",
+        )?
         .map(|a| a.into_iter().map(|p| p.and_then(|p| usize::try_from(p).ok())).collect::<Vec<_>>());
     let count = "a whole number";
     Ok(SequenceMeta {
@@ -282,7 +288,10 @@ mod tests {
         for (json, field) in cases {
             let (r, path) = meta(json);
             let e = r.unwrap_err().to_string();
-            assert!(e.starts_with(&format!("{}: {field}: expected 0.1 to 10000 frames per second", path.display())), "{e}");
+            assert!(
+                e.starts_with(&format!("{}: {field}: expected 0.1 to 10000 frames per second", path.display())),
+                "{e}"
+            );
             assert!(e.ends_with("null or \"unknown\""), "{e}");
         }
     }

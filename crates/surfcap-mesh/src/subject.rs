@@ -298,10 +298,7 @@ pub fn check_sequence_names<'a>(names: impl IntoIterator<Item = &'a str>) -> Res
             return Err(err!(Metadata, "sequence {i} has an empty name: expected a non-empty name"));
         }
         if let Some(j) = seen.insert(n, i) {
-            return Err(err!(
-                Metadata,
-                "sequences {j} and {i} are both named {n:?}: expected unique sequence names"
-            ));
+            return Err(err!(Metadata, "sequences {j} and {i} are both named {n:?}: expected unique sequence names"));
         }
     }
     Ok(())

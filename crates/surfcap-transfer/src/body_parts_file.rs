@@ -572,7 +572,10 @@ mod tests {
         ] {
             std::fs::write(&f, good.replacen(from, to, 1)).unwrap();
             let e = read_parts_file(&f, &topo, &p).unwrap_err().to_string();
-            assert!(e.contains(&format!("{}: line", f.display())) && e.contains(&format!("unknown field `{field}`")), "{e}");
+            assert!(
+                e.contains(&format!("{}: line", f.display())) && e.contains(&format!("unknown field `{field}`")),
+                "{e}"
+            );
         }
     }
 
