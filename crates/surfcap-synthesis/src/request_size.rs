@@ -60,7 +60,8 @@ pub struct Request<'a> {
 
 impl SizeLimits {
     /// An error naming the size, the limit and the option that raises it when `r` exceeds
-    /// the frame limit, the memory limit, or (as glb) the format's 4 GiB.
+    /// the frame limit, the memory limit, (as glb) the format's 4 GiB, or the disk limit
+    /// (`--max-disk`, else the free space of the output's file system).
     pub fn check(&self, r: &Request) -> Result<()> {
         let what = &r.what;
         // NaN frames (never from the callers' finite estimates) are refused too.
@@ -91,6 +92,15 @@ impl SizeLimits {
                 human(limit)
             );
         }
+        if r.format == ExportFormat::Glb {
+            let glb = estimated_glb_bytes(nv as usize, r.subject.topology().n_triangles(), &[frames as usize]);
+            if glb > GLB_MAX_BYTES {
+                refuse!(
+                    "{what} would write a glb of about {} ({frames} frames x {nv} vertices), above the format's limit of {GLB_MAX_BYTES} bytes (4 GiB: its lengths are 32-bit); write --format npy or pc2, or fewer frames",
+                    human(glb)
+                );
+            }
+        }
         // The output on disk: binary formats 12 bytes a vertex a frame, text formats about 40
         // and 20 a triangle (OBJ, PLY, USD text), glb as it will be laid out.
         let nt = r.subject.topology().n_triangles() as u64;
@@ -114,15 +124,6 @@ impl SizeLimits {
             lower: "the frames asked for".into(),
         };
         budget.check(&estimate).map_err(|e| crate::error::Error::Request(e.to_string()))?;
-        if r.format == ExportFormat::Glb {
-            let glb = estimated_glb_bytes(nv as usize, r.subject.topology().n_triangles(), &[frames as usize]);
-            if glb > GLB_MAX_BYTES {
-                refuse!(
-                    "{what} would write a glb of about {} ({frames} frames x {nv} vertices), above the format's limit of {GLB_MAX_BYTES} bytes (4 GiB: its lengths are 32-bit); write --format npy or pc2, or fewer frames",
-                    human(glb)
-                );
-            }
-        }
         Ok(())
     }
 }
