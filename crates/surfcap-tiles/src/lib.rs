@@ -36,6 +36,7 @@ pub mod tile_jobs;
 pub mod tile_merge;
 pub mod tile_plan;
 pub mod tile_store;
+pub mod tile_verify;
 
 pub use error::{Error, Result};
 pub use tile_plan::{Plan, Stage};
