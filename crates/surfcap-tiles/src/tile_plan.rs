@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use surfcap_geometry::distance_tiles::TileSpan;
 use surfcap_geometry::pose_distance::PoseMetric;
-use surfcap_motion::edge_weights::Alpha;
+pub use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::transition_tiles::TableSpan;
 
 use crate::error::{Error, Result};
