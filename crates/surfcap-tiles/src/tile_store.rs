@@ -12,7 +12,8 @@
 //! candidates/edges_<k>.npy     f64 [m, 3]: (from, to, weight) kept for source rows block k
 //! paths/costs.zarr             f64 [n, n]: shortest-path costs on the sparse graph
 //! paths/tree_<k>.npy           u32 [m, 2]: (predecessor, node) edges of block k's trees
-//! jobs/<stage>/<index>.json    a job's record, written last: the job is done when it is there
+//! jobs/<stage>/<index>.json    a job's record, written last: the plan's hash and each output's
+//!                              size and BLAKE3; the job is done when it is there and they match
 //! ```
 //!
 //! Every chunk and file is written atomically (temporary + rename, `surfcap_mesh::atomic`): a

@@ -208,9 +208,9 @@ fn run_jobs(ctx: &crate::Ctx, a: RunArgs) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
     let mut done = Vec::new();
     for stage in stages {
-        let jobs: Vec<usize> = match (a.index, a.all) {
-            (Some(i), _) => vec![i],
-            (None, true) => (0..plan.jobs(stage)).collect(),
+        let jobs: Box<dyn Iterator<Item = usize>> = match (a.index, a.all) {
+            (Some(i), _) => Box::new(std::iter::once(i)),
+            (None, true) => Box::new(0..plan.jobs(stage)),
             (None, false) => anyhow::bail!("expected --index I (0..{}) or --all", plan.jobs(stage).saturating_sub(1)),
         };
         for k in jobs {
