@@ -84,7 +84,8 @@ pub fn table_params(plan: &Plan) -> TableParams {
 /// and every output it lists has its size and content hash. A job whose outputs are missing or
 /// damaged is computed again (its files are surfcap's, named by its own record); a record that
 /// cannot be read, or was written for another plan or another job, is refused by name and left
-/// as it is (`tile_verify.rs`).
+/// as it is (`tile_verify.rs`). Every job of an earlier stage whose outputs it reads must be
+/// done (contents checked), so a result is never computed from a damaged or foreign input.
 pub fn run_job(
     store: &Store,
     plan: &Plan,
@@ -101,6 +102,7 @@ pub fn run_job(
             return Err(Error::Damaged { work: store.root().to_path_buf(), problems: vec![problem] });
         }
     }
+    crate::tile_verify::check_inputs(store, plan, stage, index)?;
     let start = Instant::now();
     let (span, kernel, details, outputs) = match stage {
         Stage::Distances => distances_job(store, plan, subject, index, progress)?,

@@ -351,3 +351,58 @@ pub fn check_work(store: &Store, plan: &Plan, depth: Depth) -> WorkCheck {
     }
     WorkCheck { stages, problems, records }
 }
+
+/// Index of the `distances` job of tile (a, b), a <= b < blocks (the inverse of
+/// [`Plan::distance_tile`]).
+fn distance_job(nb: usize, a: usize, b: usize) -> usize {
+    a * nb - a * a.saturating_sub(1) / 2 + (b - a)
+}
+
+/// The jobs of earlier stages whose outputs job `index` of `stage` reads.
+pub fn input_jobs(plan: &Plan, stage: Stage, index: usize) -> Vec<(Stage, usize)> {
+    let nb = plan.blocks();
+    let t = plan.tile;
+    match stage {
+        Stage::Distances => Vec::new(),
+        Stage::Table => {
+            let (hr, hc) = plan.table_span(index).halo(plan.frames(), plan.params.l_max);
+            let mut v = Vec::new();
+            for x in hr.start / t..hr.end.div_ceil(t) {
+                for y in hc.start / t..hc.end.div_ceil(t) {
+                    v.push((Stage::Distances, distance_job(nb, x.min(y), x.max(y))));
+                }
+            }
+            v.sort_unstable_by_key(|&(_, k)| k);
+            v.dedup();
+            v
+        }
+        Stage::Scale => (0..plan.jobs(Stage::Table)).map(|k| (Stage::Table, k)).collect(),
+        Stage::Candidates => {
+            let mut v: Vec<_> = (0..nb).map(|c| (Stage::Table, index * nb + c)).collect();
+            v.push((Stage::Scale, 0));
+            v
+        }
+        Stage::Paths => (0..plan.jobs(Stage::Candidates)).map(|k| (Stage::Candidates, k)).collect(),
+    }
+}
+
+/// Checks (contents included) that every job whose outputs job `index` of `stage` reads is
+/// done, so a job never computes from a missing, damaged or foreign input: the first that is
+/// not is named.
+pub fn check_inputs(store: &Store, plan: &Plan, stage: Stage, index: usize) -> crate::Result<()> {
+    for (s, k) in input_jobs(plan, stage, index) {
+        let why = match check_job(store, plan, s, k, Depth::Contents) {
+            JobState::Done(_) => continue,
+            JobState::NotRun => "not run".to_string(),
+            JobState::Damaged(p) => p.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "),
+            JobState::Refused(p) => p.to_string(),
+        };
+        return Err(crate::Error::Job(format!(
+            "{}: job {index} of stage {} reads job {k} of stage {}, which is not done ({why}): run the earlier stage's jobs first",
+            store.root().display(),
+            stage.name(),
+            s.name()
+        )));
+    }
+    Ok(())
+}

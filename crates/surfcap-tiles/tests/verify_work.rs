@@ -281,3 +281,23 @@ fn plans_of_too_many_jobs_are_refused_without_sizing_anything() {
     assert_eq!(plan.distance_span(1000).rows, 100..200, "row 0 holds 1000 tiles; job 1000 starts row 1");
     assert_eq!(plan.table_span(1001).cols, 100..200);
 }
+
+#[test]
+fn a_job_refuses_to_compute_from_a_damaged_input() {
+    let (_d, _, work) = done(4, params());
+    // Table job (0, 1) reads the distance tiles (0, 0), (0, 1) and (1, 1) of its halo; damage (0, 1).
+    let chunk = work.join("distances.zarr/c/0/1");
+    let len = std::fs::metadata(&chunk).unwrap().len() as usize;
+    std::fs::write(&chunk, (0..len).map(|i| f64::NAN.to_le_bytes()[i % 8]).collect::<Vec<u8>>()).unwrap();
+    std::fs::remove_file(work.join("jobs/table/1.json")).unwrap();
+    let (plan, store, frames) = open_work(&work).unwrap();
+    let e = run_job(&store, &plan, &frames, Stage::Table, 1, &NoProgress).unwrap_err().to_string();
+    assert!(
+        e.contains("job 1 of stage table reads job 1 of stage distances, which is not done (distances.zarr/c/0/1: content differs"),
+        "{e}"
+    );
+    assert!(!work.join("jobs/table/1.json").exists());
+    run_all(&work);
+    assert!(problems(&work, Depth::Contents).is_empty());
+    merge(&store, &plan).unwrap();
+}
