@@ -49,7 +49,12 @@ pub fn run(
     Ok((text, String::new(), details, outputs))
 }
 
-fn candidates(store: &Store, plan: &Plan, subject: &CachedFrames, block: usize) -> Result<(serde_json::Value, Vec<OutputHash>)> {
+fn candidates(
+    store: &Store,
+    plan: &Plan,
+    subject: &CachedFrames,
+    block: usize,
+) -> Result<(serde_json::Value, Vec<OutputHash>)> {
     let n = plan.frames();
     let rows = plan.row_block(block);
     let scale = read_scale(store)?;
@@ -75,7 +80,8 @@ fn candidates(store: &Store, plan: &Plan, subject: &CachedFrames, block: usize) 
         }
     }
     let mut bytes = Vec::new();
-    write_npy(&mut bytes, &[edges, 3], &flat).map_err(|e| surfcap_mesh::Error::io(&store.file(&edges_file(block)), "encode", e))?;
+    write_npy(&mut bytes, &[edges, 3], &flat)
+        .map_err(|e| surfcap_mesh::Error::io(&store.file(&edges_file(block)), "encode", e))?;
     let out = store.write_file(&edges_file(block), &bytes)?;
     Ok((serde_json::json!({ "edges": edges }), vec![out]))
 }
@@ -133,7 +139,8 @@ fn paths(
     tree.dedup();
     let flat: Vec<u32> = tree.iter().flat_map(|&(a, b)| [a, b]).collect();
     let mut bytes = Vec::new();
-    write_npy(&mut bytes, &[tree.len(), 2], &flat).map_err(|e| surfcap_mesh::Error::io(&store.file(&tree_file(block)), "encode", e))?;
+    write_npy(&mut bytes, &[tree.len(), 2], &flat)
+        .map_err(|e| surfcap_mesh::Error::io(&store.file(&tree_file(block)), "encode", e))?;
     outputs.push(store.write_file(&tree_file(block), &bytes)?);
     let unreachable = sp.costs.iter().filter(|c| c.is_infinite()).count();
     Ok((

@@ -224,10 +224,13 @@ pub fn read_scale(store: &Store) -> Result<Scale> {
     let p = store.file(SCALE_FILE);
     let bytes = crate::tile_store::read_regular(&p)
         .map_err(|e| Error::Job(format!("{}: {e}: run the scale stage first", p.display())))?;
-    let scale: Scale =
-        serde_json::from_slice(&bytes).map_err(|e| Error::Plan { path: p.clone(), message: format!("damaged ({e})") })?;
+    let scale: Scale = serde_json::from_slice(&bytes)
+        .map_err(|e| Error::Plan { path: p.clone(), message: format!("damaged ({e})") })?;
     if !(scale.d_scale.is_finite() && scale.d_scale > 0.0) {
-        return Err(Error::Plan { path: p, message: format!("d_scale {}: expected a finite median > 0", scale.d_scale) });
+        return Err(Error::Plan {
+            path: p,
+            message: format!("d_scale {}: expected a finite median > 0", scale.d_scale),
+        });
     }
     Ok(scale)
 }

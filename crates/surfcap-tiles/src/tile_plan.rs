@@ -388,10 +388,7 @@ pub fn job_memory(
         (Stage::Distances, tile_memory_bytes(&span, vertices, triangles, SLAB_BYTES)),
         (Stage::Table, halo.saturating_add(table_out)),
         (Stage::Scale, rows.saturating_mul(8).saturating_add(1 << 19)),
-        (
-            Stage::Candidates,
-            rows.saturating_mul(12).saturating_add(frames * 8).saturating_add(t.saturating_mul(kept)),
-        ),
+        (Stage::Candidates, rows.saturating_mul(12).saturating_add(frames * 8).saturating_add(t.saturating_mul(kept))),
         (Stage::Paths, frames.saturating_mul(kept).saturating_add(rows.saturating_mul(12))),
     ]
 }

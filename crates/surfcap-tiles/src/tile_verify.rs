@@ -105,15 +105,14 @@ pub fn check_job(store: &Store, plan: &Plan, stage: Stage, index: usize, depth: 
     let bytes = match read_regular(&store.record_path(stage, index)) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return JobState::NotRun,
-        Err(e) => return JobState::Refused(problem(&rel, format!("cannot be read ({e}): remove it to run the job again"))),
+        Err(e) => {
+            return JobState::Refused(problem(&rel, format!("cannot be read ({e}): remove it to run the job again")));
+        }
     };
     let record: JobRecord = match serde_json::from_slice(&bytes) {
         Ok(r) => r,
         Err(e) => {
-            return JobState::Refused(problem(
-                &rel,
-                format!("not a job record ({e}): delete it to run the job again"),
-            ));
+            return JobState::Refused(problem(&rel, format!("not a job record ({e}): delete it to run the job again")));
         }
     };
     if record.plan != plan.hash {

@@ -167,7 +167,10 @@ fn zarr_json_of_another_shape_or_data_type_is_named() {
     std::fs::write(&len, text.replace("\"uint32\"", "\"float64\"")).unwrap();
     let p = problems(&work, Depth::Sizes);
     assert_eq!(p.len(), 2, "{p:?}");
-    assert!(p[0].starts_with("distances.zarr/zarr.json: shape [12,12]") && p[0].contains("expected shape [11,11]"), "{p:?}");
+    assert!(
+        p[0].starts_with("distances.zarr/zarr.json: shape [12,12]") && p[0].contains("expected shape [11,11]"),
+        "{p:?}"
+    );
     assert!(p[1].starts_with("table/len.zarr/zarr.json: shape [11,11], data type \"float64\""), "{p:?}");
     assert!(p[1].contains("expected shape [11,11], data type \"uint32\""), "{p:?}");
     assert!(merge_error(&work).contains("distances.zarr/zarr.json"));
@@ -190,8 +193,7 @@ fn records_and_chunks_of_another_plan_are_refused_by_name() {
     let p = problems(&work, Depth::Contents);
     assert_eq!(p.len(), 3, "{p:?}");
     assert_eq!(
-        p[0],
-        "distances.zarr/c/3: not a row of this plan's 3 x 3 chunks (from another plan?)",
+        p[0], "distances.zarr/c/3: not a row of this plan's 3 x 3 chunks (from another plan?)",
         "the arrays are checked first"
     );
     let foreign = format!(
@@ -240,7 +242,11 @@ fn edited_plans_are_refused_on_load_naming_the_field() {
         ("\"metric\": \"deformation\"", "\"metric\": \"nope\"", "metric \"nope\": expected deformation"),
         ("\"l_max\": 3", "\"l_max\": 1", "l_min 2 l_max 1: expected 1 <= l_min <= l_max"),
         ("\"l_max\": 3", "\"l_max\": 4", "edited since it was planned"),
-        ("\"jobs\": 9", "\"jobs\": 1000000000000", "stage table: 1000000000000 jobs: expected 9 for 11 frames in tiles of 4"),
+        (
+            "\"jobs\": 9",
+            "\"jobs\": 1000000000000",
+            "stage table: 1000000000000 jobs: expected 9 for 11 frames in tiles of 4",
+        ),
         ("\"tile\": 4", "\"tile\": 3", "stage distances: 6 jobs: expected 10 for 11 frames in tiles of 3"),
         ("\"k\": 3", "\"k\": 0", "k 0: expected at least 1"),
     ];

@@ -128,7 +128,9 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
                 }
             });
             if !check.problems.is_empty() {
-                return Err(surfcap_tiles::Error::Damaged { work: a.work.work.clone(), problems: check.problems }.into());
+                return Err(
+                    surfcap_tiles::Error::Damaged { work: a.work.work.clone(), problems: check.problems }.into()
+                );
             }
             Ok(())
         }
