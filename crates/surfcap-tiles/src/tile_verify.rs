@@ -11,9 +11,10 @@
 //! cannot be read, or a folder or link where an output belongs: nothing surfcap may overwrite,
 //! so it is named and left for the user to remove).
 //!
-//! Cost: [`Depth::Contents`] reads every byte the jobs wrote once (BLAKE3 runs at about 2 GB/s
-//! here, below the disk's read speed, so the check costs what reading the products costs);
-//! [`Depth::Sizes`] reads only the records and the files' metadata.
+//! Cost: [`Depth::Contents`] reads every byte the jobs wrote once (BLAKE3 runs at about 2 GB/s,
+//! so the check costs about what reading the products costs: 0.4 to 0.6 s for the 155 MB of a
+//! 2,006-frame plan in tiles of 256, on a loaded 2-core machine); [`Depth::Sizes`] reads only
+//! the records and the files' metadata (0.01 to 0.14 s there).
 
 use std::path::Path;
 
