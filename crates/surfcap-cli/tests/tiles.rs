@@ -113,3 +113,36 @@ fn tile_commands_refuse_bad_requests_by_name() {
     let o = surfcap!(&["tiles", "status", p(&work)]);
     assert!(!o.status.success() && stderr(&o).contains("changed since it was planned"), "{}", stderr(&o));
 }
+
+#[test]
+fn tiles_status_and_merge_exit_non_zero_naming_a_damaged_chunk() {
+    let d = tempfile::tempdir().unwrap();
+    let subject = d.path().join("m.subject");
+    let o = surfcap!(&["--quiet", "synth", "--procedural", "walk", "--vertices", "1000", "-o", p(&subject)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let work = d.path().join("work");
+    let o = surfcap!(&["--quiet", "tiles", "plan", p(&subject), "-o", p(&work), "--tile", "16"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = surfcap!(&["--quiet", "tiles", "run", p(&work), "--stage", "distances", "--all"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = surfcap!(&["tiles", "status", p(&work)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A chunk of the right size filled with NaN: found by its content hash, not by --quick.
+    let chunk = work.join("distances.zarr/c/0/1");
+    let len = std::fs::metadata(&chunk).unwrap().len() as usize;
+    std::fs::write(&chunk, (0..len).map(|i| f64::NAN.to_le_bytes()[i % 8]).collect::<Vec<u8>>()).unwrap();
+    let o = surfcap!(&["tiles", "status", p(&work), "--quick"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = surfcap!(&["tiles", "status", p(&work)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("1 problem") && e.contains("distances.zarr/c/0/1: content differs from its job record"), "{e}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("damaged 1"), "the stage line names the damaged job");
+    let o = surfcap!(&["tiles", "merge", p(&work)]);
+    assert!(!o.status.success() && stderr(&o).contains("distances.zarr/c/0/1"), "{}", stderr(&o));
+    // `run` computes the damaged job again; status is clean.
+    let o = surfcap!(&["--quiet", "tiles", "run", p(&work), "--stage", "distances", "--all"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = surfcap!(&["tiles", "status", p(&work)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -19,13 +19,15 @@ use surfcap_motion::sparse_essential_graph::{NO_PRED, cheapest_transitions, spar
 use crate::error::{Error, Result};
 use crate::tile_jobs::{JobResult, frames_text, read_scale};
 use crate::tile_plan::{Plan, Stage};
-use crate::tile_store::{Matrix, Store};
+use crate::tile_store::{Matrix, OutputHash, Store};
 
-fn edges_file(block: usize) -> String {
+/// The file of `candidates` job `block`'s edges.
+pub fn edges_file(block: usize) -> String {
     format!("candidates/edges_{block}.npy")
 }
 
-fn tree_file(block: usize) -> String {
+/// The file of `paths` job `block`'s tree edges.
+pub fn tree_file(block: usize) -> String {
     format!("paths/tree_{block}.npy")
 }
 
@@ -39,15 +41,20 @@ pub fn run(
     progress: &dyn Progress,
 ) -> Result<JobResult> {
     let text = format!("sources {}", frames_text(subject, &plan.row_block(index)));
-    let details = match stage {
+    let (details, outputs) = match stage {
         Stage::Candidates => candidates(store, plan, subject, index)?,
         Stage::Paths => paths(store, plan, index, progress)?,
-        _ => unreachable!("graph stages only"),
+        _ => return Err(Error::Job(format!("stage {}: not a graph stage", stage.name()))),
     };
-    Ok((text, String::new(), details))
+    Ok((text, String::new(), details, outputs))
 }
 
-fn candidates(store: &Store, plan: &Plan, subject: &CachedFrames, block: usize) -> Result<serde_json::Value> {
+fn candidates(
+    store: &Store,
+    plan: &Plan,
+    subject: &CachedFrames,
+    block: usize,
+) -> Result<(serde_json::Value, Vec<OutputHash>)> {
     let n = plan.frames();
     let rows = plan.row_block(block);
     let scale = read_scale(store)?;
@@ -72,8 +79,11 @@ fn candidates(store: &Store, plan: &Plan, subject: &CachedFrames, block: usize) 
             edges += 1;
         }
     }
-    surfcap_mesh::atomic::write_file(&store.file(&edges_file(block)), |f| write_npy(f, &[edges, 3], &flat))?;
-    Ok(serde_json::json!({ "edges": edges }))
+    let mut bytes = Vec::new();
+    write_npy(&mut bytes, &[edges, 3], &flat)
+        .map_err(|e| surfcap_mesh::Error::io(&store.file(&edges_file(block)), "encode", e))?;
+    let out = store.write_file(&edges_file(block), &bytes)?;
+    Ok((serde_json::json!({ "edges": edges }), vec![out]))
 }
 
 /// The sparse graph from every block's candidates.
@@ -103,17 +113,23 @@ pub fn sparse_graph(store: &Store, plan: &Plan) -> Result<Graph> {
     Ok(Graph::new(n, edges))
 }
 
-fn paths(store: &Store, plan: &Plan, block: usize, progress: &dyn Progress) -> Result<serde_json::Value> {
+fn paths(
+    store: &Store,
+    plan: &Plan,
+    block: usize,
+    progress: &dyn Progress,
+) -> Result<(serde_json::Value, Vec<OutputHash>)> {
     let n = plan.frames();
     let graph = sparse_graph(store, plan)?;
     let rows = plan.row_block(block);
     let sp = sparse_shortest_paths(&graph, rows.clone(), progress);
     let t = plan.tile;
+    let mut outputs = Vec::new();
     for cj in 0..n.div_ceil(t) {
         let cols = cj * t..((cj + 1) * t).min(n);
         let values: Vec<f64> =
             (0..rows.len()).flat_map(|r| sp.costs[r * n + cols.start..r * n + cols.end].iter().copied()).collect();
-        store.write_chunk_f64(Matrix::PathCosts, block, cj, rows.len(), cols.len(), &values)?;
+        outputs.push(store.write_chunk_f64(Matrix::PathCosts, block, cj, rows.len(), cols.len(), &values)?);
     }
     let mut tree: Vec<(u32, u32)> = sp
         .pred_rows()
@@ -122,11 +138,15 @@ fn paths(store: &Store, plan: &Plan, block: usize, progress: &dyn Progress) -> R
     tree.sort_unstable();
     tree.dedup();
     let flat: Vec<u32> = tree.iter().flat_map(|&(a, b)| [a, b]).collect();
-    surfcap_mesh::atomic::write_file(&store.file(&tree_file(block)), |f| write_npy(f, &[tree.len(), 2], &flat))?;
+    let mut bytes = Vec::new();
+    write_npy(&mut bytes, &[tree.len(), 2], &flat)
+        .map_err(|e| surfcap_mesh::Error::io(&store.file(&tree_file(block)), "encode", e))?;
+    outputs.push(store.write_file(&tree_file(block), &bytes)?);
     let unreachable = sp.costs.iter().filter(|c| c.is_infinite()).count();
-    Ok(
+    Ok((
         serde_json::json!({ "graph_edges": graph.edges().len(), "tree_edges": tree.len(), "unreachable_pairs": unreachable }),
-    )
+        outputs,
+    ))
 }
 
 /// The sparse essential graph: the union of every block's tree edges, weighted as in the sparse

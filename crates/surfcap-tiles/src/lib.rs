@@ -5,7 +5,9 @@
 //! an interrupted run resumes. The work folder's layout is in `docs/formats.md`.
 //!
 //! - [`tile_plan`]: `plan.json`: the subject's stamp (path, counts, BLAKE3 of its description and
-//!   faces, position file sizes: a changed subject is refused), the parameters, the stages
+//!   faces, position file sizes: a changed subject is refused), the parameters (checked on load:
+//!   tile, metric, lengths, job counts computed without overflow and bounded, and the plan's
+//!   own content hash, so an edited plan is refused), the stages
 //!   distances -> table -> scale -> candidates -> paths with their job counts and per-job memory
 //!   estimates; a job's span derived from (frames, tile) by the functions the one-machine code uses;
 //! - [`tile_store`]: Zarr v3 arrays whose chunks are the tiles (f64 distances, each upper tile
@@ -17,8 +19,12 @@
 //! - [`tile_jobs`]: distance jobs read only their frames from the subject cache, table jobs their
 //!   halo; the kernel and the process's peak memory recorded; [`graph_jobs`]: each frame's k
 //!   cheapest transitions from rows of the table, then Dijkstra per block of sources;
-//! - [`tile_merge`]: missing jobs named, distance kernels never mixed, `merge.json`,
-//!   `graph_edges.npy`.
+//! - [`tile_verify`]: every record (written for this plan, this job, listing this job's files),
+//!   every output (a regular file of the recorded size and BLAKE3) and every `zarr.json` checked
+//!   against the plan; a damaged job is not done (and `run` computes it again), a foreign record
+//!   or a folder in an output's place is refused by name;
+//! - [`tile_merge`]: status from the checks; the merge refuses any problem and missing jobs by
+//!   name, never mixes distance kernels, writes `merge.json`, `graph_edges.npy`.
 //!
 //! The tile functions themselves live with their algorithms (`surfcap_geometry::distance_tiles`,
 //! `surfcap_motion::transition_tiles`, `surfcap_motion::sparse_essential_graph`), where the
@@ -36,6 +42,7 @@ pub mod tile_jobs;
 pub mod tile_merge;
 pub mod tile_plan;
 pub mod tile_store;
+pub mod tile_verify;
 
 pub use error::{Error, Result};
 pub use tile_plan::{Plan, Stage};

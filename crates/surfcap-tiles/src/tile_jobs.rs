@@ -18,7 +18,8 @@ use surfcap_motion::transition_tiles::{DistanceBlock, transition_tile};
 use crate::cost_median::finite_cost_median;
 use crate::error::{Error, Result};
 use crate::tile_plan::{Plan, Stage};
-use crate::tile_store::{JobRecord, Matrix, Store};
+use crate::tile_store::{JobRecord, Matrix, OutputHash, Store};
+use crate::tile_verify::JobState;
 
 /// What running a job did.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,7 +80,12 @@ pub fn table_params(plan: &Plan) -> TableParams {
     TableParams { l_min: plan.params.l_min, l_max: plan.params.l_max, slope: plan.params.slope }
 }
 
-/// Runs job `index` of `stage` unless its record is present.
+/// Runs job `index` of `stage` unless it is done: its record is there, written for this plan,
+/// and every output it lists has its size and content hash. A job whose outputs are missing or
+/// damaged is computed again (its files are surfcap's, named by its own record); a record that
+/// cannot be read, or was written for another plan or another job, is refused by name and left
+/// as it is (`tile_verify.rs`). Every job of an earlier stage whose outputs it reads must be
+/// done (contents checked), so a result is never computed from a damaged or foreign input.
 pub fn run_job(
     store: &Store,
     plan: &Plan,
@@ -89,17 +95,23 @@ pub fn run_job(
     progress: &dyn Progress,
 ) -> Result<JobOutcome> {
     plan.check_job(stage, index)?;
-    if store.record(stage, index)?.is_some() {
-        return Ok(JobOutcome::Skipped);
+    match crate::tile_verify::check_job(store, plan, stage, index, crate::tile_verify::Depth::Contents) {
+        JobState::Done(_) => return Ok(JobOutcome::Skipped),
+        JobState::NotRun | JobState::Damaged(_) => {}
+        JobState::Refused(problem) => {
+            return Err(Error::Damaged { work: store.root().to_path_buf(), problems: vec![problem] });
+        }
     }
+    crate::tile_verify::check_inputs(store, plan, stage, index)?;
     let start = Instant::now();
-    let (span, kernel, details) = match stage {
+    let (span, kernel, details, outputs) = match stage {
         Stage::Distances => distances_job(store, plan, subject, index, progress)?,
         Stage::Table => table_job(store, plan, subject, index, progress)?,
         Stage::Scale => scale_job(store, plan)?,
         Stage::Candidates | Stage::Paths => crate::graph_jobs::run(store, plan, subject, stage, index, progress)?,
     };
     let record = JobRecord {
+        plan: plan.hash.clone(),
         stage,
         index,
         span,
@@ -107,13 +119,15 @@ pub fn run_job(
         seconds: start.elapsed().as_secs_f64(),
         peak_bytes: peak_resident_bytes(),
         details,
+        outputs,
     };
     store.write_record(&record)?;
     Ok(JobOutcome::Done(record))
 }
 
-/// What a job reports: its span in the user's terms, the distance kernel (or empty), details.
-pub(crate) type JobResult = (String, String, serde_json::Value);
+/// What a job reports: its span in the user's terms, the distance kernel (or empty), details,
+/// the files it wrote.
+pub(crate) type JobResult = (String, String, serde_json::Value, Vec<OutputHash>);
 
 /// Frames `r` as `sequence:frame .. sequence:frame`.
 pub(crate) fn frames_text(subject: &CachedFrames, r: &std::ops::Range<usize>) -> String {
@@ -138,7 +152,7 @@ fn distances_job(
     let t = distance_tile(&frames, subject.topology.triangles(), subject.up_axis, &span, &params, SLAB_BYTES, progress);
     let (ci, cj) = (span.rows.start / plan.tile, span.cols.start / plan.tile);
     let (nr, nc) = (span.rows.len(), span.cols.len());
-    store.write_chunk_f64(Matrix::Distances, ci, cj, nr, nc, &t.values)?;
+    let mut outputs = vec![store.write_chunk_f64(Matrix::Distances, ci, cj, nr, nc, &t.values)?];
     if ci != cj {
         let mut mirror = vec![0.0; nr * nc];
         for r in 0..nr {
@@ -146,7 +160,7 @@ fn distances_job(
                 mirror[c * nr + r] = t.values[r * nc + c];
             }
         }
-        store.write_chunk_f64(Matrix::Distances, cj, ci, nc, nr, &mirror)?;
+        outputs.push(store.write_chunk_f64(Matrix::Distances, cj, ci, nc, nr, &mirror)?);
     }
     let text = format!("rows {} x columns {}", frames_text(subject, &span.rows), frames_text(subject, &span.cols));
     let details = serde_json::json!({
@@ -154,7 +168,7 @@ fn distances_job(
         "triangle_pairs": span.pairs() * subject.topology.n_triangles(),
         "max_skipped_triangles": t.max_skipped_triangles,
     });
-    Ok((text, kernel_name(), details))
+    Ok((text, kernel_name(), details, outputs))
 }
 
 fn table_job(
@@ -175,13 +189,15 @@ fn table_job(
     let t = transition_tile(&block, &after, &p, &span, progress)?;
     let (ci, cj) = (span.rows.start / plan.tile, span.cols.start / plan.tile);
     let (nr, nc) = (span.rows.len(), span.cols.len());
-    store.write_chunk_u32(Matrix::TableLen, ci, cj, nr, nc, &t.len)?;
-    store.write_chunk_u32(Matrix::TableLi, ci, cj, nr, nc, &t.li)?;
-    store.write_chunk_u32(Matrix::TableLj, ci, cj, nr, nc, &t.lj)?;
-    store.write_chunk_f64(Matrix::TableCost, ci, cj, nr, nc, &t.cost)?;
+    let outputs = vec![
+        store.write_chunk_u32(Matrix::TableLen, ci, cj, nr, nc, &t.len)?,
+        store.write_chunk_u32(Matrix::TableLi, ci, cj, nr, nc, &t.li)?,
+        store.write_chunk_u32(Matrix::TableLj, ci, cj, nr, nc, &t.lj)?,
+        store.write_chunk_f64(Matrix::TableCost, ci, cj, nr, nc, &t.cost)?,
+    ];
     let text = format!("sources {} x ends {}", frames_text(subject, &span.rows), frames_text(subject, &span.cols));
     let finite = t.cost.iter().filter(|c| c.is_finite()).count();
-    Ok((text, String::new(), serde_json::json!({ "pairs": nr * nc, "finite": finite })))
+    Ok((text, String::new(), serde_json::json!({ "pairs": nr * nc, "finite": finite }), outputs))
 }
 
 fn scale_job(store: &Store, plan: &Plan) -> Result<JobResult> {
@@ -196,14 +212,25 @@ fn scale_job(store: &Store, plan: &Plan) -> Result<JobResult> {
     })?;
     let scale = Scale { d_scale };
     let bytes = serde_json::to_vec_pretty(&scale).expect("plain data");
-    surfcap_mesh::atomic::write_file(&store.file("scale.json"), |w| w.write_all(&bytes))?;
-    Ok(("the whole table".into(), String::new(), serde_json::json!({ "d_scale": d_scale })))
+    let outputs = vec![store.write_file(SCALE_FILE, &bytes)?];
+    Ok(("the whole table".into(), String::new(), serde_json::json!({ "d_scale": d_scale }), outputs))
 }
+
+/// The file of the `scale` stage's result.
+pub const SCALE_FILE: &str = "scale.json";
 
 /// Reads the `scale` stage's result.
 pub fn read_scale(store: &Store) -> Result<Scale> {
-    let p = store.file("scale.json");
-    let bytes =
-        std::fs::read(&p).map_err(|e| Error::Job(format!("{}: {e}: run the scale stage first", p.display())))?;
-    serde_json::from_slice(&bytes).map_err(|e| Error::Plan { path: p, message: format!("damaged ({e})") })
+    let p = store.file(SCALE_FILE);
+    let bytes = crate::tile_store::read_regular(&p)
+        .map_err(|e| Error::Job(format!("{}: {e}: run the scale stage first", p.display())))?;
+    let scale: Scale = serde_json::from_slice(&bytes)
+        .map_err(|e| Error::Plan { path: p.clone(), message: format!("damaged ({e})") })?;
+    if !(scale.d_scale.is_finite() && scale.d_scale > 0.0) {
+        return Err(Error::Plan {
+            path: p,
+            message: format!("d_scale {}: expected a finite median > 0", scale.d_scale),
+        });
+    }
+    Ok(scale)
 }

@@ -1,4 +1,5 @@
-//! The status of a work folder and its merge: once every job of every stage is done, the
+//! The status of a work folder and its merge: every array, record and output is checked against
+//! the plan (`tile_verify.rs`); once every job of every stage is done and nothing is wrong, the
 //! records are checked (one distance kernel throughout: kernels differ in the last bits) and the
 //! merged products written: `merge.json` (per stage the jobs' time and peak memory, the kernel,
 //! the median scale) and the sparse essential graph's edges, the union of the trees of the
@@ -9,31 +10,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::tile_plan::{Plan, Stage};
-use crate::tile_store::{JobRecord, Store};
+use crate::tile_store::Store;
+use crate::tile_verify::{Depth, WorkCheck, check_work};
 
-/// Done and missing jobs of one stage.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StageStatus {
-    pub stage: Stage,
-    pub jobs: usize,
-    pub done: usize,
-    pub missing: Vec<usize>,
-}
-
-/// The status of every stage of the plan.
-pub fn status(store: &Store, plan: &Plan) -> Result<Vec<StageStatus>> {
-    plan.stages
-        .iter()
-        .map(|s| {
-            let mut missing = Vec::new();
-            for k in 0..s.jobs {
-                if store.record(s.name, k)?.is_none() {
-                    missing.push(k);
-                }
-            }
-            Ok(StageStatus { stage: s.name, jobs: s.jobs, done: s.jobs - missing.len(), missing })
-        })
-        .collect()
+/// The status of every stage of the plan, every job and array checked against the plan
+/// (`tile_verify.rs`): done, missing and damaged jobs, and every problem found.
+pub fn status(store: &Store, plan: &Plan, depth: Depth) -> WorkCheck {
+    check_work(store, plan, depth)
 }
 
 /// Per stage, what its jobs cost.
@@ -60,29 +43,26 @@ pub struct MergeReport {
     pub graph_edges: usize,
 }
 
-/// Reads every record of a stage, refusing missing jobs by name.
-pub fn records(store: &Store, plan: &Plan, stage: Stage) -> Result<Vec<JobRecord>> {
-    let jobs = plan.jobs(stage);
-    let mut out = Vec::with_capacity(jobs);
-    let mut missing = Vec::new();
-    for k in 0..jobs {
-        match store.record(stage, k)? {
-            Some(r) => out.push(r),
-            None => missing.push(k),
+/// Checks every array, record and output against the plan (contents included), refuses any
+/// problem and any job not done by name, and writes the merged products.
+pub fn merge(store: &Store, plan: &Plan) -> Result<MergeReport> {
+    let check = check_work(store, plan, Depth::Contents);
+    if !check.problems.is_empty() {
+        return Err(Error::Damaged { work: store.root().to_path_buf(), problems: check.problems });
+    }
+    for st in &check.stages {
+        if let Some(&first) = st.missing.first() {
+            return Err(Error::Missing {
+                stage: st.stage.name(),
+                count: st.missing.len(),
+                jobs: st.jobs,
+                first: format!("job {first}"),
+            });
         }
     }
-    if let Some(&first) = missing.first() {
-        return Err(Error::Missing { stage: stage.name(), count: missing.len(), jobs, first: format!("job {first}") });
-    }
-    Ok(out)
-}
-
-/// Checks that every job is done and writes the merged products.
-pub fn merge(store: &Store, plan: &Plan) -> Result<MergeReport> {
     let mut stages = Vec::new();
     let mut kernel = String::new();
-    for s in &plan.stages {
-        let recs = records(store, plan, s.name)?;
+    for (s, recs) in plan.stages.iter().zip(check.records) {
         if s.name == Stage::Distances {
             let mut kernels: Vec<&str> = recs.iter().map(|r| r.kernel.as_str()).collect();
             kernels.sort_unstable();

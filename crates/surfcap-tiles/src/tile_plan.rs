@@ -14,14 +14,20 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use surfcap_geometry::distance_tiles::{TileSpan, plan_distance_tiles};
-use surfcap_motion::edge_weights::Alpha;
-use surfcap_motion::transition_tiles::{TableSpan, plan_table_tiles};
+use surfcap_geometry::distance_tiles::TileSpan;
+use surfcap_geometry::pose_distance::PoseMetric;
+pub use surfcap_motion::edge_weights::Alpha;
+use surfcap_motion::transition_tiles::TableSpan;
 
 use crate::error::{Error, Result};
 
 const FORMAT: &str = "surfcap-tiles";
-const VERSION: u32 = 1;
+/// Version 2: the plan records its own content hash, job records the plan's hash and their
+/// outputs' hashes.
+const VERSION: u32 = 2;
+/// The most jobs a stage may have: a plan beyond it is refused (a larger tile makes fewer jobs),
+/// so no loop over a stage's jobs can run for hours.
+pub const MAX_STAGE_JOBS: usize = 10_000_000;
 /// The marker kind of a work folder.
 pub const WORK_KIND: &str = "tile-work";
 
@@ -104,21 +110,138 @@ pub struct Plan {
     pub stages: Vec<StagePlan>,
     /// Bytes of memory a job of each stage holds at most (estimated from its tile).
     pub job_memory_bytes: Vec<(Stage, usize)>,
+    /// BLAKE3 of the plan's canonical content (this file as surfcap writes it, with this field
+    /// empty): a plan edited by hand no longer matches it and is refused; every job record
+    /// carries it, so a record of another plan is recognised.
+    pub hash: String,
+}
+
+/// Job counts of the stages of `frames` frames in tiles of `tile` (>= 1), in stage order,
+/// computed with checked arithmetic; `None` on overflow.
+pub fn stage_job_counts(frames: usize, tile: usize) -> Option<[(Stage, usize); 5]> {
+    let blocks = frames.div_ceil(tile.max(1));
+    let upper = blocks.checked_mul(blocks.checked_add(1)?)? / 2;
+    let all = blocks.checked_mul(blocks)?;
+    Some([
+        (Stage::Distances, upper),
+        (Stage::Table, all),
+        (Stage::Scale, 1),
+        (Stage::Candidates, blocks),
+        (Stage::Paths, blocks),
+    ])
 }
 
 impl Plan {
-    pub fn new(subject: SubjectStamp, tile: usize, params: WorkParams, job_memory_bytes: Vec<(Stage, usize)>) -> Plan {
-        let n = subject.frames;
-        let tile = tile.max(1);
-        let rows = n.div_ceil(tile);
-        let stages = vec![
-            StagePlan { name: Stage::Distances, jobs: plan_distance_tiles(n, tile).len() },
-            StagePlan { name: Stage::Table, jobs: plan_table_tiles(n, tile).len() },
-            StagePlan { name: Stage::Scale, jobs: 1 },
-            StagePlan { name: Stage::Candidates, jobs: rows },
-            StagePlan { name: Stage::Paths, jobs: rows },
-        ];
-        Plan { format: FORMAT.into(), version: VERSION, subject, tile, params, stages, job_memory_bytes }
+    /// The plan of `subject` in tiles of `tile` frames (a tile larger than the subject is one
+    /// tile of all its frames), checked as [`Plan::read`] checks it and hashed.
+    pub fn new(
+        subject: SubjectStamp,
+        tile: usize,
+        params: WorkParams,
+        job_memory_bytes: Vec<(Stage, usize)>,
+    ) -> Result<Plan> {
+        let tile = tile.max(1).min(subject.frames.max(1));
+        let stages = stage_job_counts(subject.frames, tile)
+            .map(|c| c.iter().map(|&(name, jobs)| StagePlan { name, jobs }).collect())
+            .unwrap_or_default();
+        let mut plan = Plan {
+            format: FORMAT.into(),
+            version: VERSION,
+            subject,
+            tile,
+            params,
+            stages,
+            job_memory_bytes,
+            hash: String::new(),
+        };
+        plan.hash = plan.content_hash();
+        plan.validate(Path::new("plan.json"))?;
+        Ok(plan)
+    }
+
+    /// BLAKE3 of the plan's canonical content: its compact JSON with `hash` empty.
+    pub fn content_hash(&self) -> String {
+        let mut bare = self.clone();
+        bare.hash.clear();
+        let json = serde_json::to_vec(&bare).expect("plans are plain data");
+        blake3::hash(&json).to_hex().to_string()
+    }
+
+    /// Checks what the plan says against itself, before anything is sized from it: the format,
+    /// at least one frame, a tile of 1 to `frames` frames, a known metric, w finite and >= 0,
+    /// 1 <= l_min <= l_max <= 2^32 - 1 (lengths are stored as u32), k >= 1, the five stages in
+    /// order with the job counts that (frames, tile) give (computed without overflow, at most
+    /// [`MAX_STAGE_JOBS`] each), and finally its own content hash. `path` names the file in
+    /// the errors.
+    pub fn validate(&self, path: &Path) -> Result<()> {
+        let bad = |message: String| Err(Error::Plan { path: path.to_path_buf(), message });
+        if self.format != FORMAT || self.version != VERSION {
+            return bad(format!(
+                "format {:?} version {}: expected {FORMAT:?} version {VERSION} (plan again with this surfcap)",
+                self.format, self.version
+            ));
+        }
+        let n = self.subject.frames;
+        if n == 0 {
+            return bad("subject frames 0: expected a subject with at least one frame".into());
+        }
+        if self.tile == 0 || self.tile > n {
+            return bad(format!(
+                "tile {}: expected 1 to {n} frames per tile side (the subject has {n} frames)",
+                self.tile
+            ));
+        }
+        let p = &self.params;
+        if PoseMetric::parse(&p.metric).is_none() {
+            return bad(format!("metric {:?}: expected deformation, deformation-log or euclidean", p.metric));
+        }
+        if !(p.w.is_finite() && p.w >= 0.0) {
+            return bad(format!("w {}: expected a finite stretch weight >= 0", p.w));
+        }
+        if p.l_min < 1 || p.l_min > p.l_max || p.l_max > u32::MAX as usize {
+            return bad(format!(
+                "segment lengths l_min {} l_max {}: expected 1 <= l_min <= l_max <= {}",
+                p.l_min,
+                p.l_max,
+                u32::MAX
+            ));
+        }
+        if p.k == 0 {
+            return bad("k 0: expected at least 1 transition kept per frame".into());
+        }
+        let Some(counts) = stage_job_counts(n, self.tile) else {
+            return bad(format!("{n} frames in tiles of {}: the job counts overflow", self.tile));
+        };
+        let names: Vec<Stage> = self.stages.iter().map(|s| s.name).collect();
+        if names != Stage::ALL {
+            let got: Vec<&str> = names.iter().map(|s| s.name()).collect();
+            return bad(format!("stages [{}]: expected distances, table, scale, candidates, paths", got.join(", ")));
+        }
+        for (s, (_, expected)) in self.stages.iter().zip(counts) {
+            if s.jobs != expected {
+                return bad(format!(
+                    "stage {}: {} jobs: expected {expected} for {n} frames in tiles of {}",
+                    s.name.name(),
+                    s.jobs,
+                    self.tile
+                ));
+            }
+            if expected > MAX_STAGE_JOBS {
+                return bad(format!(
+                    "stage {}: {expected} jobs: at most {MAX_STAGE_JOBS} per stage (plan with a larger tile)",
+                    s.name.name()
+                ));
+            }
+        }
+        let hash = self.content_hash();
+        if hash != self.hash {
+            return bad(format!(
+                "edited since it was planned (its content hashes to {}…, it records {}…): plan again into a new folder",
+                short(&hash),
+                short(&self.hash)
+            ));
+        }
+        Ok(())
     }
 
     pub fn frames(&self) -> usize {
@@ -142,12 +265,46 @@ impl Plan {
         Ok(())
     }
 
+    /// Frames of block `b` (rows or columns of tiles).
+    fn block(&self, b: usize) -> std::ops::Range<usize> {
+        let s = b * self.tile;
+        s..(s + self.tile).min(self.frames())
+    }
+
+    /// Number of blocks of frames per side.
+    pub fn blocks(&self) -> usize {
+        self.frames().div_ceil(self.tile)
+    }
+
+    /// Tile (row block, column block) of `distances` job `index` (< the stage's jobs): the upper
+    /// tiles row by row, as `plan_distance_tiles` lists them, found without listing them.
+    pub fn distance_tile(&self, index: usize) -> (usize, usize) {
+        let nb = self.blocks();
+        let mut k = index;
+        for a in 0..nb {
+            let row = nb - a;
+            if k < row {
+                return (a, a + k);
+            }
+            k -= row;
+        }
+        (nb, nb)
+    }
+
     pub fn distance_span(&self, index: usize) -> TileSpan {
-        plan_distance_tiles(self.frames(), self.tile).swap_remove(index)
+        let (a, b) = self.distance_tile(index);
+        TileSpan { rows: self.block(a), cols: self.block(b) }
+    }
+
+    /// Tile (row block, column block) of `table` job `index`, as `plan_table_tiles` lists them.
+    pub fn table_tile(&self, index: usize) -> (usize, usize) {
+        let nb = self.blocks().max(1);
+        (index / nb, index % nb)
     }
 
     pub fn table_span(&self, index: usize) -> TableSpan {
-        plan_table_tiles(self.frames(), self.tile).swap_remove(index)
+        let (a, b) = self.table_tile(index);
+        TableSpan { rows: self.block(a), cols: self.block(b) }
     }
 
     /// Source rows of job `index` of the `candidates` and `paths` stages.
@@ -165,15 +322,7 @@ impl Plan {
         })?;
         let plan: Plan = serde_json::from_slice(&text)
             .map_err(|e| Error::Plan { path: path.clone(), message: format!("not a surfcap tile plan: {e}") })?;
-        if plan.format != FORMAT || plan.version != VERSION {
-            return Err(Error::Plan {
-                path,
-                message: format!(
-                    "format {:?} version {}: expected {FORMAT:?} version {VERSION} (plan again with this surfcap)",
-                    plan.format, plan.version
-                ),
-            });
-        }
+        plan.validate(&path)?;
         Ok(plan)
     }
 
@@ -183,6 +332,11 @@ impl Plan {
         surfcap_mesh::atomic::write_file(&work.join("plan.json"), |w| w.write_all(&json))?;
         Ok(())
     }
+}
+
+/// The first 12 hex digits of a hash, for messages.
+pub fn short(hash: &str) -> &str {
+    hash.get(..12).unwrap_or(hash)
 }
 
 /// The stamp of the subject cache at `path`: its description, topology and the sizes of its
@@ -224,15 +378,18 @@ pub fn job_memory(
     let t = tile.min(frames.max(1));
     let span = TileSpan { rows: 0..t, cols: t.min(frames)..(2 * t).min(frames) };
     let span = if span.cols.is_empty() { TileSpan { rows: 0..t, cols: 0..t } } else { span };
-    let halo = (t + params.l_max) * (t + params.l_max) * 8;
-    let table_out = t * t * 20 + params.l_max * params.l_max * 16;
-    let rows = t * frames;
+    // Saturating: the estimate of an absurd request stays a (huge) number, never an overflow.
+    let side = t.saturating_add(params.l_max);
+    let halo = side.saturating_mul(side).saturating_mul(8);
+    let table_out = (t * t * 20).saturating_add(params.l_max.saturating_mul(params.l_max).saturating_mul(16));
+    let rows = t.saturating_mul(frames);
+    let kept = params.k.saturating_add(1).saturating_mul(24);
     vec![
         (Stage::Distances, tile_memory_bytes(&span, vertices, triangles, SLAB_BYTES)),
-        (Stage::Table, halo + table_out),
-        (Stage::Scale, rows * 8 + (1 << 19)),
-        (Stage::Candidates, rows * 12 + frames * 8 + t * (params.k + 1) * 24),
-        (Stage::Paths, frames * (params.k + 1) * 24 + rows * 12),
+        (Stage::Table, halo.saturating_add(table_out)),
+        (Stage::Scale, rows.saturating_mul(8).saturating_add(1 << 19)),
+        (Stage::Candidates, rows.saturating_mul(12).saturating_add(frames * 8).saturating_add(t.saturating_mul(kept))),
+        (Stage::Paths, frames.saturating_mul(kept).saturating_add(rows.saturating_mul(12))),
     ]
 }
 
@@ -246,12 +403,15 @@ pub fn create_work(subject: &Path, work: &Path, tile: usize, params: WorkParams)
         return Err(Error::Job("tile 0: expected at least 1 frame per tile side".into()));
     }
     let memory = job_memory(stamp.frames, tile, stamp.vertices, stamp.triangles, &params);
-    let plan = Plan::new(stamp, tile, params, memory);
+    let plan = Plan::new(stamp, tile, params, memory).map_err(|e| match e {
+        Error::Plan { message, .. } => Error::Plan { path: work.join("plan.json"), message },
+        e => e,
+    })?;
     surfcap_mesh::output_path::check_not_input(work, &[subject])?;
     let work = surfcap_mesh::output_path::claim_dir(work, WORK_KIND, false)?;
     if work.join("plan.json").is_file() {
         let old = Plan::read(&work)?;
-        if old.subject != plan.subject || old.tile != plan.tile || old.params != plan.params {
+        if old.hash != plan.hash {
             return Err(Error::Plan {
                 path: work.join("plan.json"),
                 message: "this work folder was planned for another subject or other parameters: plan into a new folder"

@@ -12,7 +12,8 @@
 //! candidates/edges_<k>.npy     f64 [m, 3]: (from, to, weight) kept for source rows block k
 //! paths/costs.zarr             f64 [n, n]: shortest-path costs on the sparse graph
 //! paths/tree_<k>.npy           u32 [m, 2]: (predecessor, node) edges of block k's trees
-//! jobs/<stage>/<index>.json    a job's record, written last: the job is done when it is there
+//! jobs/<stage>/<index>.json    a job's record, written last: the plan's hash and each output's
+//!                              size and BLAKE3; the job is done when it is there and they match
 //! ```
 //!
 //! Every chunk and file is written atomically (temporary + rename, `surfcap_mesh::atomic`): a
@@ -69,9 +70,29 @@ impl Matrix {
     }
 }
 
-/// A job's record: written last, so its presence means the job's results are all in place.
+/// One file a job wrote: its place in the work folder, size and content hash.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OutputHash {
+    /// Path relative to the work folder, `/`-separated (`distances.zarr/c/1/3`).
+    pub file: String,
+    pub bytes: u64,
+    /// BLAKE3 of the file's bytes.
+    pub blake3: String,
+}
+
+impl OutputHash {
+    /// The hash of `bytes` written at `file`.
+    pub fn of(file: String, bytes: &[u8]) -> OutputHash {
+        OutputHash { file, bytes: bytes.len() as u64, blake3: blake3::hash(bytes).to_hex().to_string() }
+    }
+}
+
+/// A job's record: written last, so its presence means the job's results are all in place, as
+/// long as every output it lists still has its size and hash (`tile_verify.rs`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct JobRecord {
+    /// The hash of the plan the job ran for ([`Plan::hash`]).
+    pub plan: String,
     pub stage: Stage,
     pub index: usize,
     /// What the job covered, in the user's terms (frames of the tile).
@@ -83,6 +104,8 @@ pub struct JobRecord {
     pub peak_bytes: u64,
     /// Stage-specific numbers (skipped triangles, edges kept...).
     pub details: serde_json::Value,
+    /// Every file the job wrote, in the order written.
+    pub outputs: Vec<OutputHash>,
 }
 
 /// A work folder's store.
@@ -145,9 +168,30 @@ impl Store {
 
     /// The file of chunk (ci, cj) of `m`.
     pub fn chunk_path(&self, m: Matrix, ci: usize, cj: usize) -> Result<PathBuf> {
+        Ok(self.root.join(self.chunk_file(m, ci, cj)))
+    }
+
+    /// The file of chunk (ci, cj) of `m`, relative to the work folder, `/`-separated (the
+    /// default Zarr v3 chunk key `c/ci/cj` under the array's folder).
+    pub fn chunk_file(&self, m: Matrix, ci: usize, cj: usize) -> String {
+        format!("{}/c/{ci}/{cj}", m.dir())
+    }
+
+    /// Bytes of every chunk of `m` (uncompressed: the tile's cells times the element size).
+    pub fn chunk_bytes(&self, m: Matrix) -> u64 {
+        let t = self.tile.min(self.n.max(1)) as u64;
+        t * t * if m.is_float() { 8 } else { 4 }
+    }
+
+    /// Frames per side of the whole array and of a chunk.
+    pub fn shape(&self) -> (usize, usize) {
+        (self.n, self.tile.min(self.n.max(1)))
+    }
+
+    /// The metadata (`zarr.json`) of array `m` as this plan makes it.
+    pub fn expected_metadata(&self, m: Matrix) -> Result<serde_json::Value> {
         let a = self.array(m)?;
-        let key = a.chunk_key(&[ci as u64, cj as u64]);
-        Ok(self.root.join(key.as_str()))
+        serde_json::to_value(a.metadata()).map_err(|e| zarr_err(&self.root, e))
     }
 
     /// Writes chunk (ci, cj) of a float array from a rows x cols block (padded to the chunk shape
@@ -160,7 +204,7 @@ impl Store {
         rows: usize,
         cols: usize,
         values: &[f64],
-    ) -> Result<()> {
+    ) -> Result<OutputHash> {
         self.write_chunk(m, ci, cj, rows, cols, values, f64::NAN)
     }
 
@@ -173,7 +217,7 @@ impl Store {
         rows: usize,
         cols: usize,
         values: &[u32],
-    ) -> Result<()> {
+    ) -> Result<OutputHash> {
         self.write_chunk(m, ci, cj, rows, cols, values, 0)
     }
 
@@ -187,7 +231,7 @@ impl Store {
         cols: usize,
         values: &[T],
         fill: T,
-    ) -> Result<()> {
+    ) -> Result<OutputHash> {
         let t = self.tile.min(self.n.max(1));
         let mut chunk = vec![fill; t * t];
         for r in 0..rows {
@@ -203,24 +247,36 @@ impl Store {
         ci: usize,
         cj: usize,
         store: impl FnOnce(&Array<MemoryStore>) -> std::result::Result<(), zarrs::array::ArrayError>,
-    ) -> Result<()> {
+    ) -> Result<OutputHash> {
         let dir = self.root.join(m.dir());
         let mem = Arc::new(MemoryStore::new());
         let a = self.builder(m).build(mem.clone(), "/").map_err(|e| zarr_err(&dir, e))?;
         store(&a).map_err(|e| zarr_err(&dir, e))?;
         let key = a.chunk_key(&[ci as u64, cj as u64]);
         let bytes = mem.get(&key).map_err(|e| zarr_err(&dir, e))?.ok_or_else(|| zarr_err(&dir, "chunk not encoded"))?;
-        surfcap_mesh::atomic::write_file(&dir.join(key.as_str()), |w| w.write_all(&bytes))?;
-        Ok(())
+        let file = self.chunk_file(m, ci, cj);
+        debug_assert_eq!(file, format!("{}/{}", m.dir(), key.as_str()), "the chunk key encoding");
+        surfcap_mesh::atomic::write_file(&self.root.join(&file), |w| w.write_all(&bytes))?;
+        Ok(OutputHash::of(file, &bytes))
     }
 
-    /// Whether every chunk covering rows x cols of `m` has been written.
+    /// Writes a small file of the store (`relative` `/`-separated) atomically, returning its hash.
+    pub fn write_file(&self, relative: &str, bytes: &[u8]) -> Result<OutputHash> {
+        surfcap_mesh::atomic::write_file(&self.file(relative), |w| w.write_all(bytes))?;
+        Ok(OutputHash::of(relative.to_string(), bytes))
+    }
+
+    /// Whether every chunk covering rows x cols of `m` has been written: a regular file (not a
+    /// link or a folder) of the chunk's size. (Contents are checked against the job records
+    /// by `tile_verify.rs`.)
     pub fn has_region(&self, m: Matrix, rows: &std::ops::Range<usize>, cols: &std::ops::Range<usize>) -> Result<bool> {
         let t = self.tile;
+        let size = self.chunk_bytes(m);
         for ci in rows.start / t..rows.end.div_ceil(t) {
             for cj in cols.start / t..cols.end.div_ceil(t) {
-                if !self.chunk_path(m, ci, cj)?.is_file() {
-                    return Ok(false);
+                match std::fs::symlink_metadata(self.chunk_path(m, ci, cj)?) {
+                    Ok(md) if md.is_file() && md.len() == size => {}
+                    _ => return Ok(false),
                 }
             }
         }
@@ -269,10 +325,10 @@ impl Store {
         self.root.join("jobs").join(stage.name()).join(format!("{index}.json"))
     }
 
-    /// The job's record if it is done.
+    /// The job's record if it is there (its outputs not checked: see `tile_verify.rs`).
     pub fn record(&self, stage: Stage, index: usize) -> Result<Option<JobRecord>> {
         let p = self.record_path(stage, index);
-        match std::fs::read(&p) {
+        match read_regular(&p) {
             Ok(bytes) => serde_json::from_slice(&bytes).map(Some).map_err(|e| Error::Plan {
                 path: p,
                 message: format!("damaged job record ({e}): delete it to run the job again"),
@@ -293,6 +349,19 @@ impl Store {
     pub fn file(&self, relative: &str) -> PathBuf {
         self.root.join(relative)
     }
+}
+
+/// Reads a regular file without following a symlink at its place; a folder or anything else
+/// there is an error naming it.
+pub(crate) fn read_regular(p: &Path) -> std::io::Result<Vec<u8>> {
+    let md = std::fs::symlink_metadata(p)?;
+    if !md.is_file() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "not a regular file (a folder, link or device is there)",
+        ));
+    }
+    std::fs::read(p)
 }
 
 /// Codec options that write a chunk even when it holds only the fill value (zarrs skips those

@@ -13,6 +13,7 @@ use surfcap_tiles::tile_jobs::{JobOutcome, read_scale, run_job};
 use surfcap_tiles::tile_merge::{merge, status};
 use surfcap_tiles::tile_plan::{Stage, WorkParams, create_work, open_work};
 use surfcap_tiles::tile_store::Matrix;
+use surfcap_tiles::tile_verify::Depth;
 
 fn tube() -> Subject {
     let a = worm_subject(&WormParams { rings: 8, segments: 6, frames: 23, seed: 1, ..Default::default() }).unwrap();
@@ -90,7 +91,7 @@ fn tiles_through_the_store_equal_the_one_machine_products_to_the_bit() {
     let before = std::fs::read(&chunk).unwrap();
     std::fs::remove_file(&chunk).unwrap();
     std::fs::remove_file(store.record_path(Stage::Distances, 8)).unwrap();
-    let st = status(&store, &plan).unwrap();
+    let st = status(&store, &plan, Depth::Contents).stages;
     assert_eq!(st[0].missing, vec![8], "tile (1, 3) is job 8: six tiles in row 0, then (1, 1), (1, 2)");
     assert!(store.read_f64(Matrix::Distances, 0..n, 0..n).is_err(), "a region with a missing chunk is refused");
     let again = run_stage(&work, Stage::Distances);

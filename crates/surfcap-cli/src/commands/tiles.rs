@@ -9,6 +9,7 @@ use serde_json::json;
 use surfcap_tiles::tile_jobs::{JobOutcome, run_job};
 use surfcap_tiles::tile_merge::{merge, status};
 use surfcap_tiles::tile_plan::{Stage, WorkParams, create_work, open_work};
+use surfcap_tiles::tile_verify::Depth;
 
 use crate::options::{AlphaOpt, DistanceOpts, TableOpts};
 
@@ -23,9 +24,12 @@ pub enum Cmd {
     /// Runs one job of a stage (`--index`), every job of a stage (`--all`), or with `--all` and
     /// no `--stage` every stage in order. A job already done is skipped.
     Run(RunArgs),
-    /// Lists the done and missing jobs of every stage.
-    Status(WorkArgs),
-    /// Checks that every job is done and writes the merged products (`merge.json`, the graph).
+    /// Lists the done, missing and damaged jobs of every stage, checking every job record and
+    /// every chunk against the plan (content hashes; sizes only with --quick). Exits 1 naming
+    /// every file that is wrong.
+    Status(StatusArgs),
+    /// Checks every record and chunk against the plan and that every job is done, then writes
+    /// the merged products (`merge.json`, the graph).
     Merge(WorkArgs),
 }
 
@@ -55,6 +59,16 @@ pub struct PlanArgs {
 pub struct WorkArgs {
     /// A work folder made by `surfcap tiles plan`.
     pub work: PathBuf,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct StatusArgs {
+    #[command(flatten)]
+    pub work: WorkArgs,
+    /// Check the records and the outputs' sizes only, not their content hashes (which reads
+    /// every output once).
+    #[arg(long)]
+    pub quick: bool,
 }
 
 #[derive(clap::Args, Debug)]
@@ -93,20 +107,31 @@ pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
         }
         Cmd::Run(a) => run_jobs(ctx, a),
         Cmd::Status(a) => {
-            let (plan, store, _) = open_work(&a.work)?;
-            let st = status(&store, &plan)?;
-            ctx.result(&json!({ "work": a.work, "stages": st }), || {
-                for s in &st {
-                    let missing = if s.missing.is_empty() {
-                        String::new()
-                    } else {
-                        let shown: Vec<String> = s.missing.iter().take(10).map(|k| k.to_string()).collect();
-                        let more = if s.missing.len() > 10 { ", ..." } else { "" };
-                        format!("; missing {}{more}", shown.join(", "))
-                    };
-                    println!("{:<10} {}/{} done{missing}", s.stage.name(), s.done, s.jobs);
+            let (plan, store, _) = open_work(&a.work.work)?;
+            let depth = if a.quick { Depth::Sizes } else { Depth::Contents };
+            let check = status(&store, &plan, depth);
+            ctx.result(&json!({ "work": a.work.work, "stages": check.stages, "problems": check.problems }), || {
+                let list = |v: &[usize]| {
+                    let shown: Vec<String> = v.iter().take(10).map(|k| k.to_string()).collect();
+                    let more = if v.len() > 10 { ", ..." } else { "" };
+                    format!("{}{more}", shown.join(", "))
+                };
+                for s in &check.stages {
+                    let mut line = format!("{:<10} {}/{} done", s.stage.name(), s.done, s.jobs);
+                    if !s.missing.is_empty() {
+                        line += &format!("; missing {}", list(&s.missing));
+                    }
+                    if !s.damaged.is_empty() {
+                        line += &format!("; damaged {}", list(&s.damaged));
+                    }
+                    println!("{line}");
                 }
             });
+            if !check.problems.is_empty() {
+                return Err(
+                    surfcap_tiles::Error::Damaged { work: a.work.work.clone(), problems: check.problems }.into()
+                );
+            }
             Ok(())
         }
         Cmd::Merge(a) => {
@@ -185,9 +210,9 @@ fn run_jobs(ctx: &crate::Ctx, a: RunArgs) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
     let mut done = Vec::new();
     for stage in stages {
-        let jobs: Vec<usize> = match (a.index, a.all) {
-            (Some(i), _) => vec![i],
-            (None, true) => (0..plan.jobs(stage)).collect(),
+        let jobs: Box<dyn Iterator<Item = usize>> = match (a.index, a.all) {
+            (Some(i), _) => Box::new(std::iter::once(i)),
+            (None, true) => Box::new(0..plan.jobs(stage)),
             (None, false) => anyhow::bail!("expected --index I (0..{}) or --all", plan.jobs(stage).saturating_sub(1)),
         };
         for k in jobs {
