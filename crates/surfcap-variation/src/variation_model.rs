@@ -418,7 +418,8 @@ mod tests {
         m.save(&path, false).unwrap();
         let json = path.join("model.json");
         let good: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-        let edits: [(fn(&mut serde_json::Value), &str); 3] = [
+        type Edit = fn(&mut serde_json::Value);
+        let edits: [(Edit, &str); 3] = [
             (|v| v["sequences"][1]["name"] = v["sequences"][0]["name"].clone(), "sequences 0 and 1 are both named"),
             (|v| v["sequences"][0]["name"] = "".into(), "sequence 0 has an empty name"),
             (|v| v["parts"]["parts"][1]["name"] = v["parts"]["parts"][0]["name"].clone(), "appears twice"),

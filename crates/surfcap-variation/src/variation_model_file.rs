@@ -184,7 +184,7 @@ impl VariationModel {
         // and the model's do not know it).
         head.parts.validate().map_err(|e| bad(format!("{e}")))?;
         surfcap_mesh::subject::check_sequence_names(head.sequences.iter().map(|s| s.name.as_str()))
-            .map_err(|e| bad(format!("{}", e.message)))?;
+            .map_err(|e| bad(e.message.to_string()))?;
         surfcap_mesh::subject::check_frame_rate(head.fps).map_err(|e| bad(format!("fps: {}", e.message)))?;
         if head.part_models.len() != head.parts.len() {
             return Err(bad(format!(
