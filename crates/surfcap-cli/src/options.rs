@@ -134,9 +134,11 @@ pub struct CacheOpts {
 
 impl CacheOpts {
     /// The cache folder: `--cache-dir`, else `$XDG_CACHE_HOME/surfcap`, else `~/.cache/surfcap`.
-    /// Refused when it is, contains or lies inside one of the inputs this run has opened
-    /// ([`record_input`]): its entries would be written into the input. (Whether other users
-    /// can write it is checked by the cache itself, when it is first used.)
+    /// Refused when it is or lies inside one of the inputs this run has opened
+    /// ([`record_input`]): its entries would be written into the input. A cache folder that
+    /// merely holds an input (`--cache-dir .` beside `walk.subject`) is fine: entries are
+    /// written only under the cache's own hashed names, never into a folder of the input's.
+    /// (Whether other users can write it is checked by the cache itself, when it is first used.)
     pub fn dir(&self) -> anyhow::Result<PathBuf> {
         let dir = self.cache_dir.clone().unwrap_or_else(|| {
             std::env::var_os("XDG_CACHE_HOME")
@@ -152,8 +154,6 @@ impl CacheOpts {
                 "is"
             } else if out.starts_with(&inp) {
                 "lies inside"
-            } else if inp.starts_with(&out) {
-                "contains"
             } else {
                 continue;
             };

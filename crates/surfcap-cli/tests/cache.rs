@@ -138,6 +138,14 @@ fn a_cache_folder_others_can_write_or_inside_an_input_is_refused() {
         assert!(e.contains("the cache folder") && e.contains("the input") && e.contains("--cache-dir"), "{e}");
         assert_eq!(names(&subject), before, "nothing written into the input");
     }
+    // A cache folder that holds the input (beside it, not in it) is fine.
+    let beside = d.path().join("beside");
+    std::fs::create_dir(&beside).unwrap();
+    let moved = beside.join("cat.subject");
+    std::fs::rename(&subject, &moved).unwrap();
+    let o = surfcap!(&["--quiet", "distance", p(&moved), "-o", p(&out), "--cache-dir", p(&beside)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(names(&moved), before, "nothing written into the input");
 }
 
 /// Imports one KayKit clip of `character` as a subject cache in `dir`.

@@ -362,6 +362,8 @@ fn windows_shorter_than_three_frames_are_refused() {
             "a:0",
             "--to",
             "a:1",
+            "--distance",
+            "1",
             "--time",
             "1",
             "--windows",

@@ -202,7 +202,7 @@ fn the_viewer_plays_a_frame_set() {
         "--distance-weight",
         "0.0001",
         "--windows",
-        "2-4",
+        "3-4",
         "--tolerance",
         "1000",
         "--cache-dir",

@@ -507,8 +507,13 @@ mod tests {
 
     #[test]
     fn side_files_carry_the_stamp_and_keep_their_fields_in_order() {
-        let v = serde_json::to_string(&Stamped::new("report", &serde_json::json!({"b": 1, "a": 2}))).unwrap();
-        assert_eq!(v, r#"{"written_by":"surfcap","output_kind":"report","a":2,"b":1}"#);
+        #[derive(Serialize)]
+        struct Body {
+            b: u32,
+            a: u32,
+        }
+        let v = serde_json::to_string(&Stamped::new("report", &Body { b: 1, a: 2 })).unwrap();
+        assert_eq!(v, r#"{"written_by":"surfcap","output_kind":"report","b":1,"a":2}"#);
     }
 
     #[test]

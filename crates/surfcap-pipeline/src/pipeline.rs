@@ -439,6 +439,11 @@ mod tests {
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
+        // Every entry has its content hash beside it.
+        for f in files.iter().filter(|f| f.ends_with(".npy")) {
+            assert!(files.contains(&format!("{f}.b3")), "{f} has no content hash in {files:?}");
+        }
+        let files: Vec<&String> = files.iter().filter(|f| f.ends_with(".npy")).collect();
         for kind in ["distance-deformation-", "transitions-", "graph-", "walkmodel-"] {
             assert_eq!(files.iter().filter(|f| f.starts_with(kind)).count(), 1, "{kind} in {files:?}");
         }
@@ -472,7 +477,7 @@ mod tests {
         let graphs = std::fs::read_dir(dir.path())
             .unwrap()
             .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("graph-"));
-        assert_eq!(graphs.count(), 3);
+        assert_eq!(graphs.count(), 6, "three entries and their content hashes");
         let again = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), false), Box::new(NoProgress));
         let cached = again.graph(&with(GraphKind::SparseEssential { k: 1 })).unwrap();
         assert!(cached.from_cache);

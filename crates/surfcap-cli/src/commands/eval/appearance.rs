@@ -326,7 +326,9 @@ fn evaluate(
             out
         }
     };
-    let generated = GeneratedFrames::open(&dir)
+    // Frames generated into the output folder are read back from its temporary (the folder
+    // reaches its place at the commit).
+    let generated = GeneratedFrames::open(&surfcap_mesh::output_set::write_place(&dir))
         .with_context(|| format!("{}: not a folder of `surfcap appearance generate`", dir.display()))?;
     let estimator = flow.estimator(cache, &bar)?;
     let estimate = |r: &TextureImage, t: &TextureImage, m: &surfcap_appearance::TexelMask| estimator.estimate(r, t, m);

@@ -81,8 +81,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             path.display()
         );
     });
+    // The report is the result even when a round trip is not exact: it is committed first.
+    ctx.commit(outs)?;
     if r.not_exact > 0 {
         anyhow::bail!("{} of {} round trips were not exact (see {})", r.not_exact, r.round_trips.len(), path.display());
     }
-    ctx.commit(outs)
+    Ok(())
 }
