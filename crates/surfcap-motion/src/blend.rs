@@ -210,8 +210,11 @@ pub fn blend_placed(
             st.src.apply(&mut a);
             st.dst.apply(&mut b);
             Ok(match &pattern {
-                Some(pat) => NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?
-                    .at(st.lambda, StretchInterpolation::Linear),
+                Some(pat) => match placement {
+                    Placement::Aligned => NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?,
+                    Placement::Captured => NonlinearInterpolator::as_placed(pat, topology, &a, &b)?,
+                }
+                .at(st.lambda, StretchInterpolation::Linear),
                 None => linear_interpolation(&a, &b, st.lambda),
             })
         })

@@ -6,8 +6,8 @@
 use surfcap_mesh::Subject;
 
 use crate::blend::{Lambda, Mixing, blend_placed};
-use crate::subject_placement::Placement;
 use crate::dtw::{Slope, Warp, dtw_window};
+use crate::subject_placement::Placement;
 
 /// A transition's frames and its warp.
 #[derive(Debug, Clone)]

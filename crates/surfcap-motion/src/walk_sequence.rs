@@ -27,8 +27,8 @@ use crate::blend::{Lambda, blend_placements_from, centre};
 use crate::dtw::{Slope, dtw_window};
 use crate::error::{Error, Result};
 use crate::graph::Graph;
-use crate::subject_placement::{Placement, captured_placements, subject_travel};
 use crate::repeat_passes::{Captured, FramePlay, FrameSource, earlier_plays, run_passes};
+use crate::subject_placement::{Placement, captured_placements, subject_travel};
 use crate::transition_frames::{FrameMix, Segment, transition_frames_played};
 use crate::transition_table::TransitionTable;
 
@@ -446,14 +446,15 @@ pub fn walk_sequence_with(
                 let src = segment(passes[at], s0..s0 + t.li as usize)?;
                 let dst = segment(passes[at + 1], d0..v as usize + 1)?;
                 let ends = ((u as usize, t.li as usize), (v as usize, t.lj as usize));
-                let tf = transition_frames_played(subject, d, ends.0, ends.1, model.slope, model.placement, |seg, g| {
-                    match seg {
-                        Segment::Source => src.get(g.wrapping_sub(s0)),
-                        Segment::Destination => dst.get(g.wrapping_sub(d0)),
-                    }
-                    .map(|f| f.1)
-                })?
-                .ok_or(not_an_edge)?;
+                let tf =
+                    transition_frames_played(subject, d, ends.0, ends.1, model.slope, model.placement, |seg, g| {
+                        match seg {
+                            Segment::Source => src.get(g.wrapping_sub(s0)),
+                            Segment::Destination => dst.get(g.wrapping_sub(d0)),
+                        }
+                        .map(|f| f.1)
+                    })?
+                    .ok_or(not_an_edge)?;
                 let (s, mix) = (&tf.frames, tf.mix());
                 for (f, m) in s.iter().zip(&mix).take(s.len().saturating_sub(1)).skip(1) {
                     let play =
@@ -514,16 +515,12 @@ pub(crate) mod tests {
     /// transitions is the captured frame, unmoved.
     #[test]
     fn a_travelling_subject_is_re_placed_and_one_held_in_place_keeps_its_placement() {
-        let (s, g, model, d) = setup();
+        let (s, g, model, _) = setup();
         assert_eq!(model.placement(), Placement::Aligned);
         let id = PlaneMotion::identity(s.up_axis);
-        let moved = |m: &WalkModel| {
-            g.edges().iter().filter_map(|e| match m.step(e.from, e.to) {
-                Some(Step::Transition(t)) => Some(t.end != id),
-                _ => None,
-            })
-        };
-        assert!(moved(&model).any(|x| x), "some transition re-places the crawl");
+        let re_placed =
+            g.edges().iter().any(|e| matches!(model.step(e.from, e.to), Some(Step::Transition(t)) if t.end != id));
+        assert!(re_placed, "some transition re-places the crawl");
         let held: Vec<Sequence> = s
             .sequences()
             .iter()

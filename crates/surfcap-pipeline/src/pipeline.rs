@@ -347,7 +347,8 @@ impl Pipeline {
         }
         let captured_placement = surfcap_motion::subject_placement::subject_travel(s).placement
             == surfcap_motion::subject_placement::Placement::Captured;
-        let key = WalkModelKey { graph: self.graph_key(p), tracked: tracked.map(<[usize]>::to_vec), captured_placement };
+        let key =
+            WalkModelKey { graph: self.graph_key(p), tracked: tracked.map(<[usize]>::to_vec), captured_placement };
         let slope = p.table.slope;
         self.walk_models.get_or_try(&key, || {
             self.fetch(

@@ -168,6 +168,10 @@ mod tests {
         // subject's key is the one it had before the placement was part of it.
         let captured = WalkModelKey { graph: graph.clone(), tracked: None, captured_placement: true };
         assert_ne!(captured.path(&cache, &h), w(None));
-        assert!(!serde_json::to_string(&WalkModelKey { captured_placement: false, ..captured }).unwrap().contains("placement"));
+        assert!(
+            !serde_json::to_string(&WalkModelKey { captured_placement: false, ..captured })
+                .unwrap()
+                .contains("placement")
+        );
     }
 }

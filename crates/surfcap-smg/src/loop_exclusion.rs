@@ -209,7 +209,12 @@ mod tests {
     /// One sequence of `n` frames whose consecutive frames differ by 1 except inside `still`
     /// (0.01 there), every pair by the sum of its steps; a transition `to <- from` closing a
     /// loop.
-    fn case(n: usize, still: Range<usize>, from: usize, to: usize) -> (SurfaceMotionGraph, Vec<f64>, Vec<Range<usize>>) {
+    fn case(
+        n: usize,
+        still: Range<usize>,
+        from: usize,
+        to: usize,
+    ) -> (SurfaceMotionGraph, Vec<f64>, Vec<Range<usize>>) {
         let step = |f: usize| if still.contains(&f) && still.contains(&(f + 1)) { 0.01 } else { 1.0 };
         let mut s = vec![0.0; n * n];
         for a in 0..n {

@@ -15,11 +15,11 @@ use surfcap_formats::import::{ImportOptions, ImportedData, open_any};
 use surfcap_mesh::derived_cache::DerivedCache;
 use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
 use surfcap_mesh::{Progress, Sequence, Topology, Units};
-use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::loop_exclusion::{Exclusion, LoopFilter, LoopRule};
+use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::path_optimisation::{
-    PathQuery, PathSolution, PlayedFrame, Tolerance, Unreachable, optimise_planned, path_segments, plan_paths_excluding,
-    play_path,
+    PathQuery, PathSolution, PlayedFrame, Tolerance, Unreachable, optimise_planned, path_segments,
+    plan_paths_excluding, play_path,
 };
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
@@ -362,7 +362,8 @@ impl SmgGraph {
         let filter = LoopFilter::new(q.loops, &self.similarity, &frames.sequences)?;
         let plan = plan_paths_excluding(graph, pq.start, pq.end, pq.max_paths, &filter)?;
         let path = optimise_planned(graph, &self.ground, &plan, &pq)?;
-        let excluded_loops = plan.excluded_loops().iter().map(|x| excluded_report(frames, &x.frames, x.variation, &x.why)).collect();
+        let excluded_loops =
+            plan.excluded_loops().iter().map(|x| excluded_report(frames, &x.frames, x.variation, &x.why)).collect();
         let query_seconds = t1.elapsed().as_secs_f64();
         let played = play_path(frames, &path);
         let written = self.write_output(out, played, format!("{set_name}-smg"), &units, progress)?;
