@@ -248,7 +248,7 @@ mod tests {
             },
         ];
         let g = SurfaceMotionGraph { nodes, edges, transitions: Vec::new(), missing: Vec::new() };
-        (g, s, vec![0..n])
+        (g, s, std::iter::once(0..n).collect())
     }
 
     #[test]
