@@ -376,3 +376,84 @@ fn windows_shorter_than_three_frames_are_refused() {
         assert!(e.contains(&format!("--windows \"{w}\"")) && e.contains("at least 3 frames"), "{e}");
     }
 }
+
+/// On the Vlasic crane, the self-transition `crane:6 -> crane:4` closes a 3-frame loop of
+/// near-still standing; padding 10 s with it played 126 frames of the same pose. It is an
+/// excluded loop by default (too short, and too still once the minimum is lowered), the report
+/// and the message say so, and the answer is the walk alone with the reason no loop remains.
+#[test]
+fn loops_too_short_or_too_still_never_pad_time_on_the_crane() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let crane = data.join("vlasic2008/crane");
+    let cache = d.path().join("cache");
+    let query = |name: &str, extra: &[&str]| {
+        let out = d.path().join(format!("{name}.glb"));
+        let mut a = vec![
+            "smg",
+            "query",
+            p(&crane),
+            "--connect",
+            "crane:crane",
+            "--from",
+            "crane:0",
+            "--to",
+            "crane:174",
+            "--distance",
+            "3.1",
+            "--time",
+            "10",
+            "--cache-dir",
+            p(&cache),
+            "-o",
+            p(&out),
+        ];
+        a.extend_from_slice(extra);
+        let o = surfcap!(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (report(&out), String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    let (r, text) = query("default", &[]);
+    let excluded = r["excluded_loops"].as_array().unwrap();
+    assert_eq!(excluded.len(), 1, "{excluded:?}");
+    assert_eq!(excluded[0]["kind"], "too_short");
+    assert_eq!(excluded[0]["played_frames"], 3);
+    assert_eq!(excluded[0]["frames"], serde_json::json!(["crane:5-6", "crane:4-4"]));
+    assert!(text.contains("excluded loop crane:5-6, crane:4-4 (not used to pad time): 3 frame(s)"), "{text}");
+    // The walk alone: every captured frame once, and why 10 s cannot be met.
+    assert_eq!(r["frames"], 175);
+    assert_eq!(r["path"], serde_json::json!(["crane:0-174"]));
+    assert!(r["loops"].as_array().unwrap().is_empty());
+    assert_eq!(r["unreachable"]["kind"], "no_loop", "{}", r["unreachable"]);
+    assert!(text.contains("1 excluded loop(s) not counted"), "{text}");
+    // With a lower minimum the same loop is still a held pose: under the floor.
+    let (r, _) = query("floor", &["--min-loop", "3"]);
+    let excluded = r["excluded_loops"].as_array().unwrap();
+    assert_eq!(excluded[0]["kind"], "too_still", "{excluded:?}");
+    assert!(excluded[0]["pose_variation"].as_f64().unwrap() < 1.0);
+    assert_eq!(r["frames"], 175);
+    // Every loop allowed: the stutter the rule prevents.
+    let (r, _) = query("all", &["--min-loop", "1", "--loop-variation-floor", "0"]);
+    assert!(r["excluded_loops"].as_array().unwrap().is_empty());
+    assert!(r["loops"][0]["repetitions"].as_u64().unwrap() > 30, "{}", r["loops"]);
+    let bad = surfcap!(&[
+        "smg",
+        "query",
+        p(&crane),
+        "--connect",
+        "crane:crane",
+        "--from",
+        "crane:0",
+        "--to",
+        "crane:174",
+        "--distance",
+        "3.1",
+        "--time",
+        "10",
+        "--loop-variation-floor=-1",
+        "-o",
+        p(&d.path().join("bad.glb"))
+    ]);
+    assert_eq!(bad.status.code(), Some(1), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("--loop-variation-floor"), "{}", stderr(&bad));
+}

@@ -137,11 +137,18 @@ impl NonlinearInterpolator {
         up: UpAxis,
     ) -> Result<Self> {
         let pj = align_onto(pi, pj, up);
+        Self::as_placed(pattern, topology, pi, &pj)
+    }
+
+    /// As [`NonlinearInterpolator::with_pattern`] without the alignment: the two poses are
+    /// interpolated where they are (for a subject kept in its captured placement, whose frames
+    /// already share one).
+    pub fn as_placed(pattern: &Arc<PoissonPattern>, topology: &Topology, pi: &[f32], pj: &[f32]) -> Result<Self> {
         // The two sides are independent: factorise them on two threads; one symbolic
         // factorisation serves both poses (same topology).
-        let (from_i, from_j) = rayon::join(|| side(pattern, topology, pi, &pj), || side(pattern, topology, &pj, pi));
+        let (from_i, from_j) = rayon::join(|| side(pattern, topology, pi, pj), || side(pattern, topology, pj, pi));
         let (from_i, from_j) = (from_i?, from_j?);
-        Ok(NonlinearInterpolator { pi: pi.to_vec(), pj, from_i, from_j })
+        Ok(NonlinearInterpolator { pi: pi.to_vec(), pj: pj.to_vec(), from_i, from_j })
     }
 
     /// Pose j after alignment onto pose i.

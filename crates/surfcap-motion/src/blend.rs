@@ -20,6 +20,8 @@ use surfcap_geometry::poisson_reconstruction::PoissonPattern;
 use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation, linear_interpolation};
 use surfcap_mesh::{Topology, UpAxis};
 
+use crate::subject_placement::{Placement, captured_placements};
+
 /// How each output frame mixes its source and destination frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Lambda {
@@ -170,20 +172,49 @@ pub fn blend_substituted(
     lambda: Lambda,
     mixing: Mixing,
 ) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
+    blend_placed(topology, up, placed, played, path, lambda, mixing, Placement::Aligned)
+}
+
+/// [`blend_substituted`] with the rigid part chosen by `placement`: Algorithm 2's
+/// re-placement ([`Placement::Aligned`]) or the frames where they were captured
+/// ([`Placement::Captured`], for a subject that does not travel, see
+/// [`crate::subject_placement`]); the poses are interpolated alike.
+#[allow(clippy::too_many_arguments)]
+pub fn blend_placed(
+    topology: &Topology,
+    up: UpAxis,
+    placed: (&[&[f32]], &[&[f32]]),
+    played: (&[&[f32]], &[&[f32]]),
+    path: &[(usize, usize)],
+    lambda: Lambda,
+    mixing: Mixing,
+    placement: Placement,
+) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
     let pattern = match mixing {
         Mixing::Nonlinear => Some(Arc::new(PoissonPattern::new(topology)?)),
         Mixing::Linear => None,
     };
     let (source, destination) = played;
-    blend_placements(up, placed.0, placed.1, path, lambda)
+    let steps = match placement {
+        Placement::Aligned => blend_placements(up, placed.0, placed.1, path, lambda),
+        Placement::Captured => {
+            let (cs, cd): (Vec<[f64; 3]>, Vec<[f64; 3]>) =
+                (placed.0.iter().map(|f| centre(f)).collect(), placed.1.iter().map(|f| centre(f)).collect());
+            captured_placements(up, &cs, &cd, path, lambda)
+        }
+    };
+    steps
         .iter()
         .map(|st| {
             let (mut a, mut b) = (source[st.n].to_vec(), destination[st.m].to_vec());
             st.src.apply(&mut a);
             st.dst.apply(&mut b);
             Ok(match &pattern {
-                Some(pat) => NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?
-                    .at(st.lambda, StretchInterpolation::Linear),
+                Some(pat) => match placement {
+                    Placement::Aligned => NonlinearInterpolator::with_pattern(pat, topology, &a, &b, up)?,
+                    Placement::Captured => NonlinearInterpolator::as_placed(pat, topology, &a, &b)?,
+                }
+                .at(st.lambda, StretchInterpolation::Linear),
                 None => linear_interpolation(&a, &b, st.lambda),
             })
         })

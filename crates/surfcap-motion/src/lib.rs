@@ -33,7 +33,8 @@
 //!   node-major time layers, long edges pulled a block of layers at a time, every split of the
 //!   join judged by the true distance+time cost).
 //! - Travel: [`clip_travel`] (net displacement and path length of a clip's centre, whether it is in
-//!   place) and [`in_place_root_motion`] (in-place clips moved by their recovered root motion).
+//!   place), [`subject_placement`] (whether a subject travels: transitions re-place one that
+//!   does, keep the captured placement of one that does not) and [`in_place_root_motion`] (in-place clips moved by their recovered root motion).
 //! - [`sequence_time_alignment`] (thesis 6.4/6.5.2): a sequence re-timed onto a reference by
 //!   slope-constrained DTW, endpoints pinned, over the mean per-vertex distance scaled by its median
 //!   plus a weighted foot-contact mismatch; a monotone, smoothed `TimeMap` and its inverse; poses
@@ -55,6 +56,7 @@ pub mod path_following;
 pub mod repeat_passes;
 pub mod sequence_time_alignment;
 pub mod sparse_essential_graph;
+pub mod subject_placement;
 pub mod timed_walk;
 pub mod transition_frames;
 pub mod transition_table;

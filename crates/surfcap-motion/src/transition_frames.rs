@@ -5,8 +5,9 @@
 
 use surfcap_mesh::Subject;
 
-use crate::blend::{Lambda, Mixing, blend_substituted};
+use crate::blend::{Lambda, Mixing, blend_placed};
 use crate::dtw::{Slope, Warp, dtw_window};
+use crate::subject_placement::Placement;
 
 /// A transition's frames and its warp.
 #[derive(Debug, Clone)]
@@ -65,7 +66,8 @@ pub fn transition_frames(
     destination: (usize, usize),
     slope: Slope,
 ) -> Result<Option<TransitionFrames>, surfcap_geometry::Error> {
-    transition_frames_played(subject, d, source, destination, slope, |_, g| subject.frame(g))
+    let placement = crate::subject_placement::subject_travel(subject).placement;
+    transition_frames_played(subject, d, source, destination, slope, placement, |_, g| subject.frame(g))
 }
 
 /// Which segment of a transition a frame belongs to.
@@ -78,8 +80,9 @@ pub enum Segment {
 /// [`transition_frames`] whose poses are `played(segment, g)` for global frame `g` of either
 /// segment (the captured frame, or one of the same vertex count shown in its stead, e.g. a
 /// learned variant of it), while the warp and every rigid placement of Blend come from the
-/// captured frames ([`crate::blend::blend_substituted`]); `None` from `played` when `g` is not
-/// a frame. The warp is the captured transition's too: a substitute follows its frame closely
+/// captured frames ([`crate::blend::blend_placed`], by `placement`: Algorithm 2's re-placement
+/// or, for a subject that does not travel, the captured one); `None` from `played` when `g` is
+/// not a frame. The warp is the captured transition's too: a substitute follows its frame closely
 /// enough that the same frames still match (thesis 6.6).
 pub fn transition_frames_played<'a>(
     subject: &'a Subject,
@@ -87,6 +90,7 @@ pub fn transition_frames_played<'a>(
     (i, li): (usize, usize),
     (j, lj): (usize, usize),
     slope: Slope,
+    placement: Placement,
     played: impl Fn(Segment, usize) -> Option<&'a [f32]>,
 ) -> Result<Option<TransitionFrames>, surfcap_geometry::Error> {
     let Some(warp) = dtw_window(d, subject.n_frames(), i, li, j, lj, slope) else {
@@ -106,7 +110,7 @@ pub fn transition_frames_played<'a>(
         return Ok(None);
     };
     let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(a, b)| (a - i, b - d0)).collect();
-    let frames = blend_substituted(
+    let frames = blend_placed(
         subject.topology(),
         subject.up_axis,
         (&src, &dst),
@@ -114,6 +118,7 @@ pub fn transition_frames_played<'a>(
         &offsets,
         Lambda::Ramp,
         Mixing::Nonlinear,
+        placement,
     )?;
     Ok(Some(TransitionFrames { frames, warp }))
 }

@@ -28,6 +28,7 @@ use crate::dtw::{Slope, dtw_window};
 use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::repeat_passes::{Captured, FramePlay, FrameSource, earlier_plays, run_passes};
+use crate::subject_placement::{Placement, captured_placements, subject_travel};
 use crate::transition_frames::{FrameMix, Segment, transition_frames_played};
 use crate::transition_table::TransitionTable;
 
@@ -70,6 +71,9 @@ pub struct WalkModel {
     /// The DTW slope constraint the tracks were computed with (their warps are recomputed, not
     /// stored: a dense graph has hundreds of thousands of transitions and plays a few).
     slope: Slope,
+    /// How transitions place the subject: re-placed by Algorithm 2 when it travels, as
+    /// captured when it does not ([`crate::subject_placement`]).
+    placement: Placement,
 }
 
 impl WalkModel {
@@ -101,6 +105,7 @@ impl WalkModel {
         // vertices per warp cell.
         let gram = alignment_gram(subject, None);
         let up = subject.up_axis;
+        let placement = subject_travel(subject).placement;
         let edges: Vec<(u32, u32)> = graph
             .edges()
             .iter()
@@ -118,14 +123,13 @@ impl WalkModel {
                 let warp = dtw_window(d, n, u as usize, li, v as usize, lj, slope)?;
                 let (s0, d0) = (u as usize, v as usize + 1 - lj);
                 let offsets: Vec<(usize, usize)> = warp.path.iter().map(|&(a, b)| (a - s0, b - d0)).collect();
-                let steps = blend_placements_from(
-                    up,
-                    &mass[s0..s0 + li],
-                    &mass[d0..=v as usize],
-                    &offsets,
-                    Lambda::Ramp,
-                    |n, m| gram.theta(s0 + n, d0 + m),
-                );
+                let (cs, cd) = (&mass[s0..s0 + li], &mass[d0..=v as usize]);
+                let steps = match placement {
+                    Placement::Aligned => {
+                        blend_placements_from(up, cs, cd, &offsets, Lambda::Ramp, |n, m| gram.theta(s0 + n, d0 + m))
+                    }
+                    Placement::Captured => captured_placements(up, cs, cd, &offsets, Lambda::Ramp),
+                };
                 let last = steps.last()?;
                 let mix = |st: &crate::blend::BlendStep| -> [f64; 3] {
                     let a = st.src.apply_point(centres[u as usize + st.n]);
@@ -136,7 +140,15 @@ impl WalkModel {
                 Some(((u, v), TransitionTrack { li: li as u32, lj: lj as u32, centres: inner, end: last.dst }))
             })
             .collect();
-        WalkModel { up, fps: subject.fps, index, centres, tracks: tracks.into_iter().flatten().collect(), slope }
+        WalkModel {
+            up,
+            fps: subject.fps,
+            index,
+            centres,
+            tracks: tracks.into_iter().flatten().collect(),
+            slope,
+            placement,
+        }
     }
 
     /// The DTW warp of transition u -> v as (source, destination) offsets into its segments
@@ -161,6 +173,11 @@ impl WalkModel {
 
     pub fn n_transitions(&self) -> usize {
         self.tracks.len()
+    }
+
+    /// How the transitions place the subject ([`crate::subject_placement`]).
+    pub fn placement(&self) -> Placement {
+        self.placement
     }
 
     /// Calls `emit(centre, is_original)` for every frame edge u -> v adds to a walk placed by
@@ -284,7 +301,8 @@ impl WalkModel {
         }
         let index = subject.frame_index().clone();
         let centres = frame_centres(subject, tracked);
-        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, slope })
+        let placement = subject_travel(subject).placement;
+        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, slope, placement })
     }
 }
 
@@ -428,14 +446,15 @@ pub fn walk_sequence_with(
                 let src = segment(passes[at], s0..s0 + t.li as usize)?;
                 let dst = segment(passes[at + 1], d0..v as usize + 1)?;
                 let ends = ((u as usize, t.li as usize), (v as usize, t.lj as usize));
-                let tf = transition_frames_played(subject, d, ends.0, ends.1, model.slope, |seg, g| {
-                    match seg {
-                        Segment::Source => src.get(g.wrapping_sub(s0)),
-                        Segment::Destination => dst.get(g.wrapping_sub(d0)),
-                    }
-                    .map(|f| f.1)
-                })?
-                .ok_or(not_an_edge)?;
+                let tf =
+                    transition_frames_played(subject, d, ends.0, ends.1, model.slope, model.placement, |seg, g| {
+                        match seg {
+                            Segment::Source => src.get(g.wrapping_sub(s0)),
+                            Segment::Destination => dst.get(g.wrapping_sub(d0)),
+                        }
+                        .map(|f| f.1)
+                    })?
+                    .ok_or(not_an_edge)?;
                 let (s, mix) = (&tf.frames, tf.mix());
                 for (f, m) in s.iter().zip(&mix).take(s.len().saturating_sub(1)).skip(1) {
                     let play =
@@ -459,7 +478,7 @@ pub(crate) mod tests {
     use crate::transition_table::{TableParams, transition_table};
     use surfcap_builtin::{WormParams, worm_subject};
     use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
-    use surfcap_mesh::NoProgress;
+    use surfcap_mesh::{NoProgress, Sequence};
 
     /// The built-in tube (two crawling sequences), its essential graph and walk model.
     pub(crate) fn setup() -> (Subject, Graph, WalkModel, Vec<f64>) {
@@ -488,6 +507,62 @@ pub(crate) mod tests {
         bad[0] = s.n_frames() as f64;
         assert!(WalkModel::from_rows(&s, &bad, None, slope).unwrap_err().to_string().contains("row 0"));
         assert!(WalkModel::from_rows(&s, &rows[..4], None, slope).is_err());
+    }
+
+    /// The crawling tube travels: its transitions re-place the destination (Algorithm 2). The
+    /// same crawl held in place (every frame moved back over its first centre) does not: every
+    /// transition keeps the captured placement, so each original frame of a walk through
+    /// transitions is the captured frame, unmoved.
+    #[test]
+    fn a_travelling_subject_is_re_placed_and_one_held_in_place_keeps_its_placement() {
+        let (s, g, model, _) = setup();
+        assert_eq!(model.placement(), Placement::Aligned);
+        let id = PlaneMotion::identity(s.up_axis);
+        let re_placed =
+            g.edges().iter().any(|e| matches!(model.step(e.from, e.to), Some(Step::Transition(t)) if t.end != id));
+        assert!(re_placed, "some transition re-places the crawl");
+        let held: Vec<Sequence> = s
+            .sequences()
+            .iter()
+            .map(|q| {
+                let c0 = centre(q.frame(0));
+                let mut positions = Vec::new();
+                for f in 0..q.n_frames() {
+                    let mut p = q.frame(f).to_vec();
+                    let c = centre(&p);
+                    for v in p.chunks_exact_mut(3) {
+                        v[0] -= (c[0] - c0[0]) as f32;
+                        v[2] -= (c[2] - c0[2]) as f32;
+                    }
+                    positions.extend(p);
+                }
+                Sequence::new(q.name.clone(), q.n_vertices(), positions).unwrap()
+            })
+            .collect();
+        let h = Subject::new("held", s.topology().clone(), held, s.fps, s.up_axis, s.units.clone()).unwrap();
+        let dh = distance_matrix(&h, &DistanceParams::default(), &NoProgress).values;
+        let p = TableParams { l_min: 4, l_max: 8, slope: Some(3) };
+        let table = transition_table(&dh, h.frame_index(), &p, &NoProgress).unwrap();
+        let w = edge_weights(&table, h.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
+        let gh = essential_graph(&w, &NoProgress).graph;
+        let mh = WalkModel::new(&h, &gh, &table, &dh, p.slope, None);
+        assert_eq!(mh.placement(), Placement::Captured);
+        let (u, v) = gh
+            .edges()
+            .iter()
+            .map(|e| (e.from, e.to))
+            .find(|&(a, b)| {
+                a >= 1
+                    && matches!(mh.step(a - 1, a), Some(Step::Original))
+                    && matches!(mh.step(a, b), Some(Step::Transition(t)) if t.end == id)
+            })
+            .expect("a transition edge");
+        let walk = vec![u - 1, u, v];
+        let out = walk_sequence(&h, &mh, &dh, &walk, &id).unwrap();
+        let nv = h.topology().n_vertices();
+        let last = &out.positions[out.positions.len() - 3 * nv..];
+        assert_eq!(last, h.frame(v as usize).unwrap(), "the destination where it was captured");
+        assert_eq!(&out.positions[..3 * nv], h.frame(u as usize - 1).unwrap());
     }
 
     #[test]

@@ -345,7 +345,10 @@ impl Pipeline {
                 return Err(Error::Request(format!("tracked vertex {v}: the subject has vertices 0 to {}", nv - 1)));
             }
         }
-        let key = WalkModelKey { graph: self.graph_key(p), tracked: tracked.map(<[usize]>::to_vec) };
+        let captured_placement = surfcap_motion::subject_placement::subject_travel(s).placement
+            == surfcap_motion::subject_placement::Placement::Captured;
+        let key =
+            WalkModelKey { graph: self.graph_key(p), tracked: tracked.map(<[usize]>::to_vec), captured_placement };
         let slope = p.table.slope;
         self.walk_models.get_or_try(&key, || {
             self.fetch(

@@ -109,6 +109,10 @@ pub struct WalkModelKey {
     pub graph: GraphKey,
     /// The vertices whose centre is tracked, `None` for all (the centre of mass).
     pub tracked: Option<Vec<usize>>,
+    /// Transitions keep the captured placement (a subject that does not travel); absent from
+    /// the key otherwise, so a travelling subject's models keep their files.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub captured_placement: bool,
 }
 
 impl ProductKey for WalkModelKey {
@@ -157,8 +161,17 @@ mod tests {
             serde_json::to_string(&graph.kind).unwrap()
         );
         assert_eq!(serde_json::to_string(&graph).unwrap(), plain);
-        let w = |tracked| WalkModelKey { graph: graph.clone(), tracked }.path(&cache, &h);
+        let w = |tracked| WalkModelKey { graph: graph.clone(), tracked, captured_placement: false }.path(&cache, &h);
         assert_ne!(w(None), w(Some(vec![1, 2])));
         assert_ne!(w(Some(vec![1, 2])), w(Some(vec![1, 3])));
+        // A subject kept in its captured placement has its own walk models; a travelling
+        // subject's key is the one it had before the placement was part of it.
+        let captured = WalkModelKey { graph: graph.clone(), tracked: None, captured_placement: true };
+        assert_ne!(captured.path(&cache, &h), w(None));
+        assert!(
+            !serde_json::to_string(&WalkModelKey { captured_placement: false, ..captured })
+                .unwrap()
+                .contains("placement")
+        );
     }
 }

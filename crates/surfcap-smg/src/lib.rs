@@ -16,6 +16,8 @@
 //!   5); self-transitions jump back; the K best per connection as an opt-in extension;
 //! - [`surface_motion_graph`]: the two-level graph (3.3), sequences split at transitions and key
 //!   frames;
+//! - [`loop_exclusion`]: the loops that may pad time (no shorter than a minimum length, no
+//!   less varied than a pose-variation floor), the others reported as excluded loops;
 //! - [`path_optimisation`]: walks and elementary loops by depth-first search, planned once per key
 //!   pair (`plan_paths`) and shared by every target, four ILPs per walk (eq. 6-20; `good_lp` with
 //!   the pure-Rust `microlp`, which solves these models in under a millisecond), walks pruned by a
@@ -24,6 +26,7 @@
 //!   (4.2.3) with centroids matched at each switch.
 
 pub mod error;
+pub mod loop_exclusion;
 pub mod motion_frames;
 pub mod path_optimisation;
 pub mod shape_histogram;

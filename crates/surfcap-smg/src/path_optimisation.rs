@@ -44,6 +44,7 @@
 use good_lp::{Expression, ProblemVariables, Solution, SolverModel, Variable, microlp, variable};
 
 use crate::error::{Error, Result};
+use crate::loop_exclusion::{ExcludedLoop, LoopFilter};
 use crate::surface_motion_graph::{EdgeKind, SurfaceMotionGraph};
 
 /// A synthesis request: from key frame to key frame, covering a distance in a time.
@@ -511,6 +512,8 @@ pub struct PathPlan {
     start_node: usize,
     all_loops: Vec<Vec<usize>>,
     prepared: Vec<Prepared>,
+    /// Loops the plan does not repeat ([`plan_paths_excluding`]).
+    excluded: Vec<ExcludedLoop>,
 }
 
 impl PathPlan {
@@ -519,15 +522,46 @@ impl PathPlan {
         self.prepared.len()
     }
 
-    /// Elementary loops of the whole graph.
+    /// Elementary loops of the whole graph that may pad time.
     pub fn loops_in_graph(&self) -> usize {
         self.all_loops.len()
+    }
+
+    /// The excluded loops: those of the graph the plan never repeats, with why.
+    pub fn excluded_loops(&self) -> &[ExcludedLoop] {
+        &self.excluded
     }
 }
 
 /// The walks and loops between the key frames `start` and `end` (global frames); more than
 /// `max_paths` of either is refused.
 pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: usize) -> Result<PathPlan> {
+    plan_with_loops(g, start, end, max_paths, |loops| (loops, Vec::new()))
+}
+
+/// [`plan_paths`] without the excluded loops: those `filter` judges too short or below its
+/// pose-variation floor ([`crate::loop_exclusion`]) are never repeated to pad time, and the
+/// plan lists them ([`PathPlan::excluded_loops`]). When none is left, a target the walks alone
+/// miss is [`Unreachable::NoLoop`].
+pub fn plan_paths_excluding(
+    g: &SurfaceMotionGraph,
+    start: usize,
+    end: usize,
+    max_paths: usize,
+    filter: &LoopFilter<'_>,
+) -> Result<PathPlan> {
+    plan_with_loops(g, start, end, max_paths, |loops| filter.partition(g, loops))
+}
+
+/// [`plan_paths`] with the graph's loops split by `select` into those that may pad time and
+/// the excluded loops.
+fn plan_with_loops(
+    g: &SurfaceMotionGraph,
+    start: usize,
+    end: usize,
+    max_paths: usize,
+    select: impl FnOnce(Vec<Vec<usize>>) -> (Vec<Vec<usize>>, Vec<ExcludedLoop>),
+) -> Result<PathPlan> {
     let (Some(s), Some(t)) = (g.node_of(start), g.node_of(end)) else {
         return Err(Error::Invalid(format!(
             "key frames {start} and {end}: both must be nodes of the graph (build it with them)"
@@ -540,7 +574,7 @@ pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: u
             "no path from frame {start} to frame {end}: the higher-level graph does not connect them"
         )));
     }
-    let all_loops = cycles(g, &out, max_paths)?;
+    let (all_loops, excluded) = select(cycles(g, &out, max_paths)?);
     let prepared: Vec<Prepared> = all_walks
         .into_iter()
         .map(|walk| {
@@ -552,7 +586,7 @@ pub fn plan_paths(g: &SurfaceMotionGraph, start: usize, end: usize, max_paths: u
             Prepared { walk, a, base: (d0, t0 + 1.0, s0), per_loop }
         })
         .collect();
-    Ok(PathPlan { start, end, start_node: s, all_loops, prepared })
+    Ok(PathPlan { start, end, start_node: s, all_loops, prepared, excluded })
 }
 
 /// The optimal path for `q` on `g` (eq. 10-20), with `ground` each frame's ground centroid.
@@ -1036,6 +1070,35 @@ mod tests {
         let first = g.edges.iter().find(|e| e.to == stand).map(|e| g.nodes[e.from]).unwrap();
         let q = PathQuery { tolerance: Some(Tolerance::default()), ..PathQuery::new(first, 29, 3.0, 60.0) };
         assert_eq!(optimise_path(&g, &ground, &q).unwrap().unreachable, Some(Unreachable::NoLoop));
+    }
+
+    /// The walk's only loop plays 10 frames: with a minimum length of 11 it is an excluded
+    /// loop, never repeated, and a target only it could meet is unreachable for want of a loop.
+    #[test]
+    fn excluded_loops_never_pad_time() {
+        use crate::loop_exclusion::{Exclusion, LoopFilter, LoopRule};
+        let (g, ground) = graph();
+        let mut s = vec![1.0; 30 * 30];
+        for i in 0..30 {
+            s[i * 30 + i] = 0.0;
+        }
+        let seqs = [0..20, 20..30];
+        let q = PathQuery { tolerance: Some(Tolerance::default()), ..PathQuery::new(0, 29, 4.5, 57.0) };
+        let kept = LoopFilter::new(LoopRule { min_frames: 10, variation_floor: 1.0 }, &s, &seqs).unwrap();
+        let plan = plan_paths_excluding(&g, 0, 29, q.max_paths, &kept).unwrap();
+        assert!(plan.excluded_loops().is_empty());
+        assert_eq!(optimise_planned(&g, &ground, &plan, &q).unwrap().loops.len(), 1);
+        let rule = LoopRule { min_frames: 11, variation_floor: 1.0 };
+        let filter = LoopFilter::new(rule, &s, &seqs).unwrap();
+        let plan = plan_paths_excluding(&g, 0, 29, q.max_paths, &filter).unwrap();
+        let excluded = plan.excluded_loops();
+        assert_eq!(excluded.len(), 1);
+        assert_eq!(excluded[0].why, Exclusion::TooShort { frames: 10, minimum: 11 });
+        assert_eq!(excluded[0].frames, (7..=15).chain([6]).collect::<Vec<_>>());
+        assert_eq!(plan.loops_in_graph(), 0);
+        let p = optimise_planned(&g, &ground, &plan, &q).unwrap();
+        assert!(p.loops.is_empty() && p.frames.len() == 27, "{:?}", p.loops);
+        assert_eq!(p.unreachable, Some(Unreachable::NoLoop));
     }
 
     #[test]

@@ -15,9 +15,11 @@ use surfcap_formats::import::{ImportOptions, ImportedData, open_any};
 use surfcap_mesh::derived_cache::DerivedCache;
 use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
 use surfcap_mesh::{Progress, Sequence, Topology, Units};
+use surfcap_smg::loop_exclusion::{Exclusion, LoopFilter, LoopRule};
 use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::path_optimisation::{
-    PathQuery, PathSolution, PlayedFrame, Tolerance, Unreachable, optimise_path, path_segments, play_path,
+    PathQuery, PathSolution, PlayedFrame, Tolerance, Unreachable, optimise_planned, path_segments,
+    plan_paths_excluding, play_path,
 };
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
@@ -62,6 +64,9 @@ pub struct SmgGraph {
     pub graph: SurfaceMotionGraph,
     /// The key frames asked for (global frames), in order.
     pub keys: Vec<usize>,
+    /// The shape similarity (eq. 2) the graph was built from, `frames x frames`: the excluded
+    /// loops' pose variation is measured on it.
+    pub similarity: Vec<f64>,
 }
 
 /// The window lengths of `--windows MIN-MAX`: windows of at least
@@ -134,7 +139,7 @@ impl SmgGraph {
                 frames.names[*x], frames.names[*y]
             ));
         }
-        Ok(SmgGraph { data, frames, ground, similarity_seconds, similarity_cached, graph, keys })
+        Ok(SmgGraph { data, frames, ground, similarity_seconds, similarity_cached, graph, keys, similarity })
     }
 
     /// The graph's transitions for reports.
@@ -236,6 +241,21 @@ pub struct SmgQuery {
     /// Take eq. 6's optimum as the paper does, instead of the least-cost path within 1% and 1
     /// frame where one exists.
     pub paper_cost: bool,
+    /// Which loops may pad time (the others are excluded loops, reported).
+    pub loops: LoopRule,
+}
+
+/// An excluded loop: a loop of the graph the query never repeats.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExcludedLoopReport {
+    /// The frames one repetition plays, as runs `sequence:first-last`.
+    pub frames: Vec<String>,
+    pub played_frames: usize,
+    /// The largest dissimilarity between its frames over the typical frame-to-frame one.
+    pub pose_variation: f64,
+    /// `too_short` (under the minimum length) or `too_still` (under the pose-variation floor).
+    pub kind: &'static str,
+    pub why: String,
 }
 
 /// A repeated loop of the path.
@@ -299,6 +319,9 @@ pub struct SmgQueryReport {
     pub within_tolerance: Option<bool>,
     pub unreachable: Option<UnreachableReport>,
     pub unconverged_subproblems: usize,
+    /// The rule deciding which loops may pad time, and the loops it excluded.
+    pub loop_rule: LoopRule,
+    pub excluded_loops: Vec<ExcludedLoopReport>,
     #[serde(flatten)]
     pub travel: Travel,
 }
@@ -336,7 +359,11 @@ impl SmgGraph {
             ..PathQuery::new(from, to, q.distance, q.time * frames.fps)
         };
         let t1 = Instant::now();
-        let path = optimise_path(graph, &self.ground, &pq)?;
+        let filter = LoopFilter::new(q.loops, &self.similarity, &frames.sequences)?;
+        let plan = plan_paths_excluding(graph, pq.start, pq.end, pq.max_paths, &filter)?;
+        let path = optimise_planned(graph, &self.ground, &plan, &pq)?;
+        let excluded_loops =
+            plan.excluded_loops().iter().map(|x| excluded_report(frames, &x.frames, x.variation, &x.why)).collect();
         let query_seconds = t1.elapsed().as_secs_f64();
         let played = play_path(frames, &path);
         let written = self.write_output(out, played, format!("{set_name}-smg"), &units, progress)?;
@@ -400,6 +427,8 @@ impl SmgGraph {
                 detail: u.clone(),
             }),
             unconverged_subproblems: path.unconverged_subproblems,
+            loop_rule: q.loops,
+            excluded_loops,
             travel: Travel::of(&played_centres(frames, &path), frames.up),
         };
         let report_path = report_path(&out.path);
@@ -435,6 +464,29 @@ impl SmgGraph {
                 write_animation(Animation::FrameSet(&set), out.format, &out.path, out.export_options(), progress)
             }
         }
+    }
+}
+
+/// An excluded loop in the user's terms: its frames as runs of consecutive frames.
+fn excluded_report(frames: &MotionFrames, played: &[usize], variation: f64, why: &Exclusion) -> ExcludedLoopReport {
+    let mut runs = Vec::new();
+    let mut i = 0;
+    while i < played.len() {
+        let mut j = i;
+        while j + 1 < played.len() && played[j + 1] == played[j] + 1 {
+            j += 1;
+        }
+        let last = frames.name_of(played[j]);
+        let last = last.rsplit_once(':').map(|(_, f)| f.to_string()).unwrap_or(last);
+        runs.push(format!("{}-{last}", frames.name_of(played[i])));
+        i = j + 1;
+    }
+    ExcludedLoopReport {
+        frames: runs,
+        played_frames: played.len(),
+        pose_variation: variation,
+        kind: why.kind(),
+        why: why.to_string(),
     }
 }
 

@@ -53,6 +53,10 @@ pub struct WalkReport {
     pub original_frames: usize,
     pub synthetic_frames: usize,
     pub transitions: usize,
+    /// How the transitions placed the subject: `aligned` (Algorithm 2's rigid re-placement, for
+    /// a subject that travels) or `captured` (where its frames were captured, for one that does
+    /// not; surfcap-motion's `subject_placement`).
+    pub placement: surfcap_motion::subject_placement::Placement,
     pub blend_seconds: f64,
     pub repeated_frames: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -142,6 +146,7 @@ pub fn play_and_write(
         original_frames: played.original_frames,
         synthetic_frames: played.synthetic_frames,
         transitions: played.transitions,
+        placement: prep.model.placement(),
         blend_seconds: played.blend_seconds,
         repeated_frames: repeats.repeats,
         variation,

@@ -96,6 +96,16 @@ pub struct QueryArgs {
     /// why when none does.
     #[arg(long)]
     pub paper_cost: bool,
+    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
+    /// to pad time (a few frames repeated dozens of times is a stutter, not a motion; 1: no
+    /// minimum).
+    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
+    pub min_loop: usize,
+    /// Excluded loops: a loop whose frames differ among themselves (largest shape
+    /// dissimilarity) by less than this many typical frame-to-frame dissimilarities of their
+    /// sequences is a held pose, never repeated to pad time (0: no floor).
+    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
+    pub loop_variation_floor: f64,
     /// Output: a .glb (the default format), .abc or .usda file, a folder (see --format), or a
     /// `.frames` folder (surfcap's own frame set, lossless). The report goes beside it as
     /// <output>.report.json, which `surfcap view <output>` shows over the animation.
@@ -176,6 +186,10 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         distance_weight: a.distance_weight,
         time_weight: a.time_weight,
         paper_cost: a.paper_cost,
+        loops: surfcap_smg::loop_exclusion::LoopRule {
+            min_frames: a.min_loop,
+            variation_floor: a.loop_variation_floor,
+        },
     };
     let out =
         Output { path: a.output.clone(), format: a.format, force: ctx.force, tolerances: a.constraints.tolerances() };
@@ -200,8 +214,18 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
             r.query_seconds
         );
         println!("path: {}", r.path.join(", "));
+        for x in &r.excluded_loops {
+            println!("excluded loop {} (not used to pad time): {}", x.frames.join(", "), x.why);
+        }
         if let Some(u) = &path.unreachable {
-            println!("no path of the graph meets {} {} in {} s within 1% and 1 frame: {u}", a.distance, r.unit, a.time);
+            let excluded = match r.excluded_loops.len() {
+                0 => String::new(),
+                n => format!(" ({n} excluded loop(s) not counted)"),
+            };
+            println!(
+                "no path of the graph meets {} {} in {} s within 1% and 1 frame: {u}{excluded}",
+                a.distance, r.unit, a.time
+            );
         }
         let written: Vec<String> = done.written.iter().map(|p| p.display().to_string()).collect();
         println!("wrote {}, {}", written.join(", "), done.report_path.display());
