@@ -222,7 +222,7 @@ impl<'a> Query<'a> {
         // The edges the search can play: successive frames and the transitions with a track.
         let playable: Vec<Edge> = (0..n as u32)
             .flat_map(|u| {
-                let next = matches!(model.step(u, u + 1), Some(Step::Original)).then_some(u + 1);
+                let next = model.next(u).map(|(v, _)| v);
                 next.into_iter().chain(transitions[u as usize].iter().map(|&(v, _)| v)).map(move |to| Edge {
                     from: u,
                     to,
@@ -317,12 +317,13 @@ impl Window<'_> {
         }
         let (q, u) = (self.q, st.node);
         let open = |v: u32| q.live[v as usize];
-        // Children: the next original frame, then up to `branching` transitions; explored
+        // Children: the next original frame (or a looping clip's wrap), then up to `branching` transitions; explored
         // cheapest first so that good complete walks tighten the bound early.
         let mut children: Vec<(State, usize)> = Vec::new();
-        if let Some(step @ Step::Original) = q.model.step(u, u + 1)
-            && open(u + 1)
-            && let Some(next) = q.append(&st, step, u + 1)
+        // The next frame as captured: u + 1, or the start of a looping clip after its last frame.
+        if let Some((v, step)) = q.model.next(u)
+            && open(v)
+            && let Some(next) = q.append(&st, step, v)
         {
             children.push((next, transitions_left));
         }

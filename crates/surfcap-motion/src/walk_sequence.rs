@@ -56,6 +56,10 @@ pub enum Step<'a> {
     /// u -> u + 1 in one sequence: one frame, placement unchanged.
     Original,
     Transition(&'a TransitionTrack),
+    /// The last frame of a looping clip to its start ([`crate::clip_loops`]): one frame, like
+    /// a successive frame, with the placement moved by this motion (the start's placement in
+    /// the coordinates where the last frame is unmoved) so that the clip's travel carries on.
+    Wrap(&'a PlaneMotion),
 }
 
 /// Per-frame centres of mass and the rigid tracks of every transition edge of a graph.
@@ -67,6 +71,8 @@ pub struct WalkModel {
     /// Centre of mass of every global frame, as captured.
     pub centres: Vec<[f64; 3]>,
     tracks: HashMap<(u32, u32), TransitionTrack>,
+    /// Wrap edges of looping clips in the graph: last frame -> (start, its placement).
+    wraps: HashMap<u32, (u32, PlaneMotion)>,
     /// The DTW slope constraint the tracks were computed with (their warps are recomputed, not
     /// stored: a dense graph has hundreds of thousands of transitions and plays a few).
     slope: Slope,
@@ -101,10 +107,17 @@ impl WalkModel {
         // vertices per warp cell.
         let gram = alignment_gram(subject, None);
         let up = subject.up_axis;
+        // Wrap edges of looping clips that the graph holds.
+        let wraps: HashMap<u32, (u32, PlaneMotion)> = crate::clip_loops::clip_loops(subject)
+            .iter()
+            .filter(|l| graph.find(l.last as usize, l.first as usize).is_some())
+            .map(|l| (l.last, (l.first, crate::clip_loops::wrap_placement(subject, l))))
+            .collect();
         let edges: Vec<(u32, u32)> = graph
             .edges()
             .iter()
             .filter(|e| !is_successive(&index, e.from as usize, e.to as usize))
+            .filter(|e| wraps.get(&e.from).is_none_or(|w| w.0 != e.to))
             .map(|e| (e.from, e.to))
             .collect();
         let tracks: Vec<Option<((u32, u32), TransitionTrack)>> = edges
@@ -136,7 +149,7 @@ impl WalkModel {
                 Some(((u, v), TransitionTrack { li: li as u32, lj: lj as u32, centres: inner, end: last.dst }))
             })
             .collect();
-        WalkModel { up, fps: subject.fps, index, centres, tracks: tracks.into_iter().flatten().collect(), slope }
+        WalkModel { up, fps: subject.fps, index, centres, tracks: tracks.into_iter().flatten().collect(), wraps, slope }
     }
 
     /// The DTW warp of transition u -> v as (source, destination) offsets into its segments
@@ -154,9 +167,30 @@ impl WalkModel {
     pub fn step(&self, u: u32, v: u32) -> Option<Step<'_>> {
         if is_successive(&self.index, u as usize, v as usize) {
             Some(Step::Original)
+        } else if let Some((w, g)) = self.wraps.get(&u)
+            && *w == v
+        {
+            Some(Step::Wrap(g))
         } else {
             self.tracks.get(&(u, v)).map(Step::Transition)
         }
+    }
+
+    /// The frame that follows `u` as captured: u + 1 in its sequence, or the start of a looping
+    /// clip after its last frame (the wrap); `None` at the end of a clip that does not loop.
+    pub fn next(&self, u: u32) -> Option<(u32, Step<'_>)> {
+        if is_successive(&self.index, u as usize, u as usize + 1) {
+            Some((u + 1, Step::Original))
+        } else {
+            self.wraps.get(&u).map(|(v, g)| (*v, Step::Wrap(g)))
+        }
+    }
+
+    /// The wrap edges (last frame, start) of the looping clips the model plays, sorted.
+    pub fn wraps(&self) -> Vec<(u32, u32)> {
+        let mut w: Vec<(u32, u32)> = self.wraps.iter().map(|(u, (v, _))| (*u, *v)).collect();
+        w.sort();
+        w
     }
 
     pub fn n_transitions(&self) -> usize {
@@ -185,6 +219,11 @@ impl WalkModel {
                 emit(g2.apply_point(self.centres[v as usize]), true);
                 g2
             }
+            Step::Wrap(end) => {
+                let g2 = g.after(end);
+                emit(g2.apply_point(self.centres[v as usize]), true);
+                g2
+            }
         }
     }
 
@@ -205,7 +244,7 @@ impl WalkModel {
         let mut t = 0;
         for (at, w) in walk.windows(2).enumerate() {
             t += match self.step(w[0], w[1]).ok_or(Error::NotAnEdge { at, from: w[0], to: w[1] })? {
-                Step::Original => 1,
+                Step::Original | Step::Wrap(_) => 1,
                 Step::Transition(tr) => tr.duration(),
             };
         }
@@ -220,7 +259,9 @@ impl WalkModel {
 
     /// The transition tracks as rows of three numbers, for an on-disk cache (`.npy` [R, 3]),
     /// tracks in (u, v) order, each as: `[u, v, C]`, `[li, lj, 0]`, `[end theta, end t0,
-    /// end t1]`, then its C inner centres. Frame numbers are exact in f64.
+    /// end t1]`, then its C inner centres; then every wrap edge of a looping clip in u order, as
+    /// `[u, v, 0]`, `[0, 0, 0]`, `[theta, t0, t1]` (segment lengths 0, which no transition has,
+    /// mark a wrap). Frame numbers are exact in f64.
     pub fn tracks_to_rows(&self) -> Vec<f64> {
         let mut keys: Vec<&(u32, u32)> = self.tracks.keys().collect();
         keys.sort();
@@ -233,6 +274,10 @@ impl WalkModel {
             for c in &t.centres {
                 rows.extend(c);
             }
+        }
+        for (u, v) in self.wraps() {
+            let g = &self.wraps[&u].1;
+            rows.extend([u as f64, v as f64, 0.0, 0.0, 0.0, 0.0, g.theta, g.t[0], g.t[1]]);
         }
         rows
     }
@@ -261,6 +306,7 @@ impl WalkModel {
             }
         };
         let mut tracks = HashMap::new();
+        let mut wraps = HashMap::new();
         let mut at = 0;
         while at < rows.len() {
             if at + 3 > rows.len() {
@@ -279,12 +325,16 @@ impl WalkModel {
                 return Err(Error::TrackNonFiniteCentre { row: at, from: u, to: v });
             }
             let end = PlaneMotion { theta, t: [t0, t1], up: subject.up_axis };
-            tracks.insert((u, v), TransitionTrack { li, lj, centres, end });
+            if li == 0 && lj == 0 && nc == 0 {
+                wraps.insert(u, (v, end));
+            } else {
+                tracks.insert((u, v), TransitionTrack { li, lj, centres, end });
+            }
             at += 3 + nc;
         }
         let index = subject.frame_index().clone();
         let centres = frame_centres(subject, tracked);
-        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, slope })
+        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, wraps, slope })
     }
 }
 
@@ -413,6 +463,10 @@ pub fn walk_sequence_with(
         let (variant, p) = node(at + 1)?;
         match step {
             Step::Original => {
+                push(&mut out, p, &g, FrameLabel::Original, Some(v), FrameMix::original(v), original(at + 1, variant))
+            }
+            Step::Wrap(end) => {
+                g = g.after(end);
                 push(&mut out, p, &g, FrameLabel::Original, Some(v), FrameMix::original(v), original(at + 1, variant))
             }
             Step::Transition(t) => {

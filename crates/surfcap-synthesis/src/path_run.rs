@@ -79,6 +79,58 @@ pub struct PathReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pose_distance_start: Option<f64>,
     pub constraints: Vec<Constraint>,
+    /// Where the path was missed: the stretches of the curve (arc lengths from, to) along which
+    /// the centre was farther from the curve than the tolerance, with the curve's sharpest turn
+    /// there (degrees per unit of length); empty when the path was followed.
+    pub missed_stretches: Vec<MissedStretch>,
+}
+
+/// A stretch of the curve the walk did not follow within the tolerance.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct MissedStretch {
+    /// Arc lengths along the curve where the stretch starts and ends.
+    pub from: f64,
+    pub to: f64,
+    /// The curve's sharpest turn over the stretch, degrees per unit of length (measured over
+    /// one unit of arc length).
+    pub turn_degrees_per_unit: f64,
+}
+
+/// The stretches of `curve` along which `errors` (per frame, at arc lengths `arcs`) exceed
+/// `tolerance`.
+fn missed_stretches(curve: &Curve, arcs: &[f64], errors: &[f64], tolerance: f64) -> Vec<MissedStretch> {
+    let mut out: Vec<MissedStretch> = Vec::new();
+    let mut open: Option<f64> = None;
+    let heading = |s: f64| {
+        let axes = curve.axes();
+        let (a, b) = (curve.at(s), curve.at(s + 0.05));
+        let (i, j) = (axes[0], axes[axes.len() - 1]);
+        (b[j] - a[j]).atan2(b[i] - a[i])
+    };
+    let close = |from: f64, to: f64| {
+        let steps = ((to - from) / 0.1).ceil().max(1.0) as usize;
+        let turn = (0..=steps)
+            .map(|k| {
+                let s = from + (to - from) * k as f64 / steps as f64;
+                surfcap_motion::blend::wrap_angle(heading(s + 0.5) - heading(s - 0.5)).abs().to_degrees()
+            })
+            .fold(0.0, f64::max);
+        MissedStretch { from, to, turn_degrees_per_unit: turn }
+    };
+    for (k, (&s, &e)) in arcs.iter().zip(errors).enumerate() {
+        match (open, e > tolerance) {
+            (None, true) => open = Some(s),
+            (Some(from), false) => {
+                out.push(close(from, arcs[k - 1].max(from)));
+                open = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(from) = open {
+        out.push(close(from, arcs.last().copied().unwrap_or(from)));
+    }
+    out
 }
 
 /// A path-following run: the animation written, its report (written beside it) and summary.
@@ -120,6 +172,13 @@ impl Prepared {
         let played = play_and_write(self, &r.walk, &r.start, "path", out, progress)?;
         let (errors, travelled) = path_errors(curve, &played.centres);
         let (mean, max) = mean_max(&errors);
+        let tolerance = out.tolerances.distance(curve.length());
+        let mut arcs = Vec::with_capacity(played.centres.len());
+        for (k, c) in played.centres.iter().enumerate() {
+            let before = if k == 0 { 0.0 } else { arcs[k - 1] + curve.distance(&played.centres[k - 1], c) };
+            arcs.push(before);
+        }
+        let missed = missed_stretches(curve, &arcs, &errors, tolerance);
         // Path length adds up the centre's sway; the net displacement says whether it went anywhere.
         let (net, _) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, self.up());
         let pose_distance_start = match q.start {
@@ -134,7 +193,7 @@ impl Prepared {
                 curve.length(),
                 travelled,
                 max,
-                out.tolerances.distance(curve.length()),
+                tolerance,
             )
             .relative_to(curve.length()),
         ];
@@ -160,6 +219,7 @@ impl Prepared {
             curve: (0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect(),
             pose_distance_start,
             constraints: constraints.clone(),
+            missed_stretches: missed,
         };
         write_report(&played.report_path, &report)?;
         Ok(PathOutcome {

@@ -56,7 +56,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(playback_inputs(&a.appearance, &a.vary));
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
-    let params = a.graph.params(s.fps)?;
+    let params = a.graph.params_for(s.fps, s.frame_index())?;
     let units = s.units.clone();
     let request = PathRequest {
         curve: a.curve.clone(),
@@ -83,9 +83,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     drop(bar);
     ctx.commit(outs)?;
     let curve_length = o.report.curve_length;
+    let missed = o.constraints.iter().any(|c| c.missed);
     ctx.result(&o.report, || {
+        // A path off by more than the tolerance was not followed: say so, and where.
+        let verb = if missed { "missed" } else { "followed" };
         println!(
-            "followed a {} curve: {}, {}; centre error mean {}, max {} ({:.1}% of the curve); search {:.2} s",
+            "{verb} a {} curve: {}, {}; centre error mean {}, max {} ({:.1}% of the curve); search {:.2} s",
             length(curve_length, &units, 2),
             count_of(o.frames, "frame"),
             count_of(o.played.transitions, "transition"),
@@ -94,6 +97,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             100.0 * o.max_error / curve_length,
             o.search_seconds
         );
+        for m in &o.report.missed_stretches {
+            println!(
+                "  off the curve from {} to {} along it, where it turns up to {:.0} degrees per {}",
+                length(m.from, &units, 2),
+                length(m.to, &units, 2),
+                m.turn_degrees_per_unit,
+                surfcap_synthesis::words::unit_name(&units)
+            );
+        }
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
     check_constraints(ctx, &a.out.constraints, &o.constraints)
