@@ -329,7 +329,7 @@ pub struct TableOpts {
     /// third of the longest).
     #[arg(long, value_parser = count)]
     pub l_min: Option<usize>,
-    /// Longest segment, frames (default: two seconds, at most half the shortest clip).
+    /// Longest segment, frames (default: two seconds, at most half the shortest looping clip).
     #[arg(long, value_parser = count)]
     pub l_max: Option<usize>,
 }
@@ -345,11 +345,12 @@ impl TableOpts {
         self.with_bounds(segment_bounds(fps))
     }
 
-    /// The parameters for these clips: by default segments fit the shortest clip
+    /// The parameters for a subject: by default segments fit its shortest looping clip
     /// ([`surfcap_motion::clip_loops::segment_bounds_for_clips`]: a one-cycle game clip of 25
     /// frames gets windows of 4 to 12 frames, not 10 to 60).
-    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::FrameIndex) -> anyhow::Result<TableParams> {
-        self.with_bounds(surfcap_motion::clip_loops::segment_bounds_for_clips(fps, clips))
+    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::Subject) -> anyhow::Result<TableParams> {
+        let loops = surfcap_motion::clip_loops::clip_loops(clips);
+        self.with_bounds(surfcap_motion::clip_loops::segment_bounds_for_clips(fps, clips.frame_index(), &loops))
     }
 
     fn with_bounds(&self, (lo, hi): (usize, usize)) -> anyhow::Result<TableParams> {
@@ -387,7 +388,7 @@ impl GraphOpts {
     }
 
     /// [`GraphOpts::params`] with segment bounds that fit these clips ([`TableOpts::params_for`]).
-    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::FrameIndex) -> anyhow::Result<GraphParams> {
+    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::Subject) -> anyhow::Result<GraphParams> {
         self.with_table(self.table.params_for(fps, clips)?)
     }
 

@@ -12,10 +12,14 @@
 //! world but alike in the body frame.
 //!
 //! Threshold: a clip of n >= [`MIN_LOOP_FRAMES`] frames loops when the gap d(last, first) is no
-//! larger than the largest of its own successive-frame distances d(k, k + 1): the wrap then jumps
-//! no further than the clip already jumps between two of its captured frames, so playing it pops
-//! no more than the clip itself does. (A cut of a clip that does not loop, e.g. a walk that
-//! starts from standing, has a gap of many steps.) Some exporters repeat the first frame at the
+//! larger than [`LOOP_GAP_IN_STEPS`] = 1.5 times the largest of its own successive-frame
+//! distances d(k, k + 1). A wrap no larger than the clip's own largest step pops no more than the
+//! clip already does between two captured frames; the half step more admits a cycle whose length
+//! is not a whole number of frames (cut at the nearest frame, the next cycle's start is missed
+//! by up to half a frame) and a wrap that falls on the clip's fastest phase, where the largest
+//! step is the wrap's own. A cut of a clip that does not loop (a walk that starts from standing,
+//! half a cycle) has a gap of several of its largest steps.
+//! Some exporters repeat the first frame at the
 //! end: a gap below half the median step means the last frame *is* the first, and the wrap then
 //! goes to the second frame (whose distance from the last must pass the same test), so no pose is
 //! shown twice.
@@ -39,6 +43,9 @@ use crate::edge_weights::EdgeWeights;
 
 /// Shortest clip that can loop (a last step and one more).
 pub const MIN_LOOP_FRAMES: usize = 4;
+
+/// The largest wrap gap of a looping clip, in units of its largest successive-frame distance.
+pub const LOOP_GAP_IN_STEPS: f64 = 1.5;
 
 /// A clip that loops, and its wrap edge `last` -> `first` (global frames).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,7 +84,7 @@ pub fn clip_loops_by(index: &FrameIndex, mut dist: impl FnMut(usize, usize) -> f
         let gap = dist(last, r.start);
         let repeats_first = gap < 0.5 * median_step;
         let (first, gap) = if repeats_first { (r.start + 1, dist(last, r.start + 1)) } else { (r.start, gap) };
-        if gap.is_finite() && gap <= largest_step {
+        if gap.is_finite() && gap <= LOOP_GAP_IN_STEPS * largest_step {
             out.push(ClipLoop {
                 sequence: s,
                 last: last as u32,
@@ -131,13 +138,13 @@ pub fn add_wrap_edges(w: &mut EdgeWeights, loops: &[ClipLoop]) {
     }
 }
 
-/// Default segment bounds for these clips: [`crate::segment_bounds`] with the longest window
-/// no longer than half the shortest clip (at least 2 frames) and the shortest window no longer
-/// than a third of the longest (at least 1). Clips of two seconds or more keep the thesis's
-/// bounds.
-pub fn segment_bounds_for_clips(fps: f64, index: &FrameIndex) -> (usize, usize) {
+/// Default segment bounds for a subject whose looping clips are `loops` over `index`:
+/// [`crate::segment_bounds`] with the longest window no longer than half the shortest looping
+/// clip (at least 2 frames) and the shortest window no longer than a third of the longest (at
+/// least 1). Without looping clips, or with loops of two seconds or more, the thesis's bounds.
+pub fn segment_bounds_for_clips(fps: f64, index: &FrameIndex, loops: &[ClipLoop]) -> (usize, usize) {
     let (lo, hi) = crate::segment_bounds(fps);
-    let shortest = (0..index.n_sequences()).map(|s| index.range(s).len()).min().unwrap_or(usize::MAX);
+    let shortest = loops.iter().map(|l| index.range(l.sequence).len()).min().unwrap_or(usize::MAX);
     let hi = hi.min((shortest / 2).max(2));
     let lo = lo.min(hi.div_ceil(3)).max(1);
     (lo, hi)
@@ -169,7 +176,7 @@ mod tests {
         let loops = clip_loops_by(&index, dist);
         assert_eq!(loops.len(), 2, "{loops:?}");
         assert_eq!((loops[0].sequence, loops[0].last, loops[0].first, loops[0].repeats_first), (0, 11, 0, false));
-        assert!((loops[0].gap - loops[0].largest_step).abs() < 1e-12);
+        assert!((loops[0].gap - loops[0].largest_step).abs() < 1e-12, "the wrap is one of the circle's equal steps");
         assert_eq!((loops[1].sequence, loops[1].last, loops[1].first, loops[1].repeats_first), (2, 36, 25, true));
     }
 
@@ -188,9 +195,12 @@ mod tests {
         };
         add_wrap_edges(&mut w, &[l]);
         assert_eq!(w.at(3, 0), 0.1);
-        assert_eq!(segment_bounds_for_clips(30.0, &FrameIndex::new([300, 200])), (10, 60));
-        assert_eq!(segment_bounds_for_clips(30.0, &FrameIndex::new([300, 25])), (4, 12));
-        assert_eq!(segment_bounds_for_clips(30.0, &FrameIndex::new([33])), (6, 16));
+        let index = FrameIndex::new([300, 25, 33, 20]);
+        let looping = |s: usize| ClipLoop { sequence: s, ..l };
+        assert_eq!(segment_bounds_for_clips(30.0, &index, &[]), (10, 60), "no loop: the thesis's bounds");
+        assert_eq!(segment_bounds_for_clips(30.0, &index, &[looping(0)]), (10, 60));
+        assert_eq!(segment_bounds_for_clips(30.0, &index, &[looping(0), looping(1), looping(2)]), (4, 12));
+        assert_eq!(segment_bounds_for_clips(30.0, &index, &[looping(2)]), (6, 16), "the short clip does not loop");
     }
 
     /// A rigid triangle gliding +1 along x per frame: every pose is alike in the body frame, so

@@ -544,6 +544,59 @@ pub(crate) mod tests {
         assert!(WalkModel::from_rows(&s, &rows[..4], None, slope).is_err());
     }
 
+    /// Two one-cycle clips of a gliding, bobbing quad (8 frames each, 0.1 m per frame along x
+    /// with a bob of period 8): both loop, the graph holds their wrap edges, and a walk through
+    /// a wrap keeps gliding 0.1 m per frame in the model, in the played frames and through the
+    /// model's cache rows; a path three clips long is followed through the wraps.
+    #[test]
+    fn looping_clips_play_their_wrap_as_a_step_that_carries_the_travel_on() {
+        use crate::clip_loops::{add_wrap_edges, clip_loops};
+        use surfcap_mesh::{Sequence, Topology, Units, UpAxis};
+        let clip = |phase: f64| -> Vec<f32> {
+            (0..8)
+                .flat_map(|f| {
+                    let (x, b) = (0.1 * f as f32, (0.2 * (std::f64::consts::TAU * (f as f64 / 8.0 + phase)).sin()) as f32);
+                    [x, 0.0, 0.0, x + 0.3, b, 0.0, x + 0.3, 0.0, 0.3, x, 0.1, 0.3]
+                })
+                .collect()
+        };
+        let topology = Topology::new(4, vec![[0, 1, 2], [0, 2, 3]], None).unwrap();
+        let seqs = vec![Sequence::new("a", 4, clip(0.0)).unwrap(), Sequence::new("b", 4, clip(0.3)).unwrap()];
+        let s = Subject::new("quad", topology, seqs, 30.0, UpAxis::parse("+y").unwrap(), Units::metres()).unwrap();
+        let loops = clip_loops(&s);
+        assert_eq!(loops.iter().map(|l| (l.last, l.first)).collect::<Vec<_>>(), vec![(7, 0), (15, 8)]);
+        let d = distance_matrix(&s, &DistanceParams::default(), &NoProgress);
+        let p = TableParams { l_min: 2, l_max: 3, slope: Some(3) };
+        let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress).unwrap();
+        let mut w = edge_weights(&table, s.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
+        add_wrap_edges(&mut w, &loops);
+        let g = essential_graph(&w, &NoProgress).graph;
+        let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
+        assert_eq!(model.wraps(), vec![(7, 0), (15, 8)]);
+        assert!(matches!(model.next(7), Some((0, Step::Wrap(_)))) && matches!(model.next(3), Some((4, Step::Original))));
+        let walk: Vec<u32> = (0..8).chain(0..8).chain(0..3).collect();
+        let start = PlaneMotion::identity(s.up_axis);
+        let centres = model.walk_centres(&walk, &start).unwrap();
+        for (k, c) in centres.windows(2).enumerate() {
+            assert!((c[1][0] - c[0][0] - 0.1).abs() < 1e-6 && (c[1][2] - c[0][2]).abs() < 1e-6, "step {k}: {c:?}");
+        }
+        assert_eq!(model.walk_duration(&walk).unwrap(), walk.len() - 1);
+        let played = walk_sequence(&s, &model, &d.values, &walk, &start).unwrap();
+        assert_eq!(played.n_frames(), walk.len());
+        assert!(played.labels.iter().all(|l| *l == FrameLabel::Original));
+        let (first, last) = (&played.positions[..12], &played.positions[played.positions.len() - 12..]);
+        assert!((last[0] - first[0] - 0.1 * 18.0).abs() < 1e-4, "{} after 18 steps", last[0] - first[0]);
+        let back = WalkModel::from_rows(&s, &model.tracks_to_rows(), None, p.slope).unwrap();
+        assert_eq!(back.wraps(), model.wraps());
+        assert_eq!(back.walk_centres(&walk, &start).unwrap(), centres);
+        use crate::path_following::{Curve, PathSearch, follow_path};
+        let curve = Curve::new(vec![[0.0, 0.0, 0.0], [2.4, 0.0, 0.0]], vec![0, 2]).unwrap();
+        let search = PathSearch { window: 0.4, ..PathSearch::for_fps(30.0) };
+        let r = follow_path(&model, &g, &curve, &[], None, &search).unwrap();
+        assert!(r.travelled >= curve.length());
+        assert!(r.walk.windows(2).any(|w| matches!(model.step(w[0], w[1]), Some(Step::Wrap(_)))), "{:?}", r.walk);
+    }
+
     #[test]
     fn the_model_predicts_the_played_centres_and_labels_follow_algorithm_3() {
         let (s, g, model, d) = setup();

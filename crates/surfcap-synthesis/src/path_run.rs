@@ -102,6 +102,7 @@ fn missed_stretches(curve: &Curve, arcs: &[f64], errors: &[f64], tolerance: f64)
     let mut out: Vec<MissedStretch> = Vec::new();
     let mut open: Option<f64> = None;
     let heading = |s: f64| {
+        let s = s.clamp(0.0, (curve.length() - 0.05).max(0.0));
         let axes = curve.axes();
         let (a, b) = (curve.at(s), curve.at(s + 0.05));
         let (i, j) = (axes[0], axes[axes.len() - 1]);
@@ -247,10 +248,10 @@ pub struct PathRequest {
     pub start: Option<String>,
     /// Follow the centre of these vertices instead of the centre of mass.
     pub track: Vec<usize>,
-    /// Window, transitions per window, branching (the frame-rate dependent rest from the
-    /// subject's fps: [`PathSearch::for_fps`]).
-    pub window: f64,
-    pub max_transitions: usize,
+    /// Window, transitions per window (`None`: [`PathSearch::for_clips`]'s for the subject's
+    /// looping clips), branching (the frame-rate dependent rest from the subject's fps).
+    pub window: Option<f64>,
+    pub max_transitions: Option<usize>,
     pub branching: usize,
 }
 
@@ -290,11 +291,16 @@ pub fn synthesize_path(
         crate::travel_check::require_travel(s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
     }
     let start = request.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
+    let shortest_loop = surfcap_motion::clip_loops::clip_loops(s)
+        .iter()
+        .map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps)
+        .min_by(f64::total_cmp);
+    let defaults = PathSearch::for_clips(s.fps, shortest_loop);
     let search = PathSearch {
-        window: request.window,
-        max_transitions: request.max_transitions,
+        window: request.window.unwrap_or(defaults.window),
+        max_transitions: request.max_transitions.unwrap_or(defaults.max_transitions),
         branching: request.branching,
-        ..PathSearch::for_fps(s.fps)
+        ..defaults
     };
     let tracked = (!request.track.is_empty()).then_some(request.track.as_slice());
     let prep = playback.prepare(pipe, params, tracked)?;

@@ -31,12 +31,14 @@ pub struct Args {
     /// Follow the centre of these vertices instead of the centre of mass (comma-separated ids).
     #[arg(long, value_delimiter = ',')]
     pub track: Vec<usize>,
-    /// Arc length covered by each branch-and-bound window (subject units).
-    #[arg(long, default_value_t = 3.0, value_parser = crate::options::positive)]
-    pub window: f64,
-    /// Transitions allowed within one window.
-    #[arg(long, default_value_t = 2)]
-    pub max_transitions: usize,
+    /// Arc length covered by each branch-and-bound window (subject units; default 3, or 2 when
+    /// some clip is a loop shorter than two seconds).
+    #[arg(long, value_parser = crate::options::positive)]
+    pub window: Option<f64>,
+    /// Transitions allowed within one window (default 2, or 3 when some clip is a loop shorter
+    /// than two seconds: its turns all come from transitions).
+    #[arg(long)]
+    pub max_transitions: Option<usize>,
     /// Transitions tried at each frame (its cheapest ones, round robin over destination
     /// sequences); the search's speed knob.
     #[arg(long, default_value_t = 8, value_parser = crate::options::count)]
@@ -56,7 +58,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(playback_inputs(&a.appearance, &a.vary));
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
-    let params = a.graph.params_for(s.fps, s.frame_index())?;
+    let params = a.graph.params_for(s.fps, &s)?;
     let units = s.units.clone();
     let request = PathRequest {
         curve: a.curve.clone(),
