@@ -185,4 +185,19 @@ fn one_cycle_mannequin_walk_and_jog_loop_and_follow_the_s_curve() {
     let (subject, lengths) = mannequin_cycles(tmp.path());
     eprintln!("mannequin cycles: {lengths:?} frames");
     check_character(&subject, 2, tmp.path(), "procedural mannequin");
+    // A path off by more than the tolerance is not "followed": the line says missed and where,
+    // the report lists the stretch, and --strict exits 3 as every missed constraint does.
+    let glb = tmp.path().join("missed.glb");
+    let (curve, cache) = (s_curve(), tmp.path().join("cache"));
+    let args = ["synth", "path", p(&subject), "--curve", p(&curve), "-o", p(&glb), "--tolerance", "0.001"];
+    let extra = ["--cache-dir", p(&cache)];
+    let o = surfcap!(&[&args[..], &extra, &["--strict"]].concat());
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.starts_with("missed a 14.99 m curve") && !out.contains("followed"), "{out}");
+    assert!(out.contains("off the curve from"), "{out}");
+    assert!(stderr(&o).contains("constraint path missed"), "{}", stderr(&o));
+    let r = json(&surfcap!(&[&args[..], &extra, &["--json", "--force"]].concat()));
+    assert_eq!(r["constraints"][0]["missed"], true);
+    assert!(!r["missed_stretches"].as_array().unwrap().is_empty(), "{r}");
 }

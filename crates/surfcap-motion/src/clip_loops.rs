@@ -20,8 +20,10 @@
 //! step is the wrap's own. A cut of a clip that does not loop (a walk that starts from standing,
 //! half a cycle) has a gap of several of its largest steps.
 //! Some exporters repeat the first frame at the
-//! end: a gap below half the median step means the last frame *is* the first, and the wrap then
-//! goes to the second frame (whose distance from the last must pass the same test), so no pose is
+//! end: a gap below half of both steps around the seam (d(first, first + 1) and d(last - 1,
+//! last)) means the last frame *is* the first (game loops often ease in and out at the seam, so
+//! the clip's median step would be the wrong yardstick there), and the wrap then goes to the
+//! second frame (whose distance from the last must pass the same test), so no pose is
 //! shown twice.
 //!
 //! Wrap placement: with the first frame a copy of the last, the start is placed by aligning it
@@ -57,9 +59,8 @@ pub struct ClipLoop {
     pub first: u32,
     /// Pose distance from the last frame to the wrap's destination.
     pub gap: f64,
-    /// The clip's largest and median successive-frame distances.
+    /// The clip's largest successive-frame distance.
     pub largest_step: f64,
-    pub median_step: f64,
     /// The last frame repeats the first (the wrap goes to the second).
     pub repeats_first: bool,
 }
@@ -73,16 +74,15 @@ pub fn clip_loops_by(index: &FrameIndex, mut dist: impl FnMut(usize, usize) -> f
         if r.len() < MIN_LOOP_FRAMES {
             continue;
         }
-        let mut steps: Vec<f64> = (r.start..r.end - 1).map(|k| dist(k, k + 1)).collect();
+        let steps: Vec<f64> = (r.start..r.end - 1).map(|k| dist(k, k + 1)).collect();
         if steps.iter().any(|x| !x.is_finite()) {
             continue;
         }
         let largest_step = steps.iter().copied().fold(0.0, f64::max);
-        let mid = steps.len() / 2;
-        let median_step = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let seam = steps[0].min(steps[steps.len() - 1]);
         let last = r.end - 1;
         let gap = dist(last, r.start);
-        let repeats_first = gap < 0.5 * median_step;
+        let repeats_first = gap < 0.5 * seam;
         let (first, gap) = if repeats_first { (r.start + 1, dist(last, r.start + 1)) } else { (r.start, gap) };
         if gap.is_finite() && gap <= LOOP_GAP_IN_STEPS * largest_step {
             out.push(ClipLoop {
@@ -91,7 +91,6 @@ pub fn clip_loops_by(index: &FrameIndex, mut dist: impl FnMut(usize, usize) -> f
                 first: first as u32,
                 gap,
                 largest_step,
-                median_step,
                 repeats_first,
             });
         }
@@ -190,7 +189,6 @@ mod tests {
             first: 0,
             gap: 1.0,
             largest_step: 1.0,
-            median_step: 1.0,
             repeats_first: false,
         };
         add_wrap_edges(&mut w, &[l]);
