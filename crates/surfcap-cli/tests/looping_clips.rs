@@ -80,8 +80,8 @@ fn mannequin_cycles(dir: &Path) -> (PathBuf, Vec<usize>) {
                 .with_tags(q.tags.clone())
         })
         .collect();
-    let cut = Subject::new("walker_cycles", s.topology().clone(), sequences, s.fps, s.up_axis, s.units.clone())
-        .unwrap();
+    let cut =
+        Subject::new("walker_cycles", s.topology().clone(), sequences, s.fps, s.up_axis, s.units.clone()).unwrap();
     let out = dir.join("cycles.subject");
     surfcap_mesh::cache::write_cache(&out, &cut, false, &surfcap_mesh::NoProgress).unwrap();
     (out, lengths)

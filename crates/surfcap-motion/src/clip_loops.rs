@@ -20,10 +20,10 @@
 //! step is the wrap's own. A cut of a clip that does not loop (a walk that starts from standing,
 //! half a cycle) has a gap of several of its largest steps.
 //! Some exporters repeat the first frame at the
-//! end: a gap below half of both steps around the seam (d(first, first + 1) and d(last - 1,
-//! last)) means the last frame *is* the first (game loops often ease in and out at the seam, so
-//! the clip's median step would be the wrong yardstick there), and the wrap then goes to the
-//! second frame (whose distance from the last must pass the same test), so no pose is
+//! end: a gap below [`COPY_IN_STEPS`] = 1% of the clip's largest step means the last frame *is*
+//! the first (an exporter's copy is exact up to rounding, while a seam where the motion eases or
+//! turns back is a real, if small, step: a fraction of the steps beside it, but not 1% of the
+//! largest), and the wrap then goes to the second frame (whose distance from the last must pass the same test), so no pose is
 //! shown twice.
 //!
 //! Wrap placement: with the first frame a copy of the last, the start is placed by aligning it
@@ -48,6 +48,9 @@ pub const MIN_LOOP_FRAMES: usize = 4;
 
 /// The largest wrap gap of a looping clip, in units of its largest successive-frame distance.
 pub const LOOP_GAP_IN_STEPS: f64 = 1.5;
+
+/// A last frame closer to the first than this, in units of the clip's largest step, is a copy of it.
+pub const COPY_IN_STEPS: f64 = 0.01;
 
 /// A clip that loops, and its wrap edge `last` -> `first` (global frames).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,10 +82,9 @@ pub fn clip_loops_by(index: &FrameIndex, mut dist: impl FnMut(usize, usize) -> f
             continue;
         }
         let largest_step = steps.iter().copied().fold(0.0, f64::max);
-        let seam = steps[0].min(steps[steps.len() - 1]);
         let last = r.end - 1;
         let gap = dist(last, r.start);
-        let repeats_first = gap < 0.5 * seam;
+        let repeats_first = gap < COPY_IN_STEPS * largest_step;
         let (first, gap) = if repeats_first { (r.start + 1, dist(last, r.start + 1)) } else { (r.start, gap) };
         if gap.is_finite() && gap <= LOOP_GAP_IN_STEPS * largest_step {
             out.push(ClipLoop {
@@ -162,10 +164,10 @@ mod tests {
             let (s, k) = index.locate(g).unwrap();
             let k = k as f64;
             match s {
-                0 => k / 12.0,       // once round in 12 steps: the 13th would be the first
-                1 => k / 24.0,       // half round
-                2 => k / 12.0,       // once round with the first frame repeated at the end
-                _ => k / 3.0,        // too short to loop
+                0 => k / 12.0, // once round in 12 steps: the 13th would be the first
+                1 => k / 24.0, // half round
+                2 => k / 12.0, // once round with the first frame repeated at the end
+                _ => k / 3.0,  // too short to loop
             }
         };
         let dist = |i: usize, j: usize| {
@@ -183,14 +185,7 @@ mod tests {
     fn wrap_edges_cost_a_step_and_bounds_fit_the_shortest_clip() {
         let alpha = crate::edge_weights::Alpha::new(0.1).unwrap();
         let mut w = EdgeWeights { n: 4, alpha, d_scale: 1.0, weight: vec![f64::INFINITY; 16] };
-        let l = ClipLoop {
-            sequence: 0,
-            last: 3,
-            first: 0,
-            gap: 1.0,
-            largest_step: 1.0,
-            repeats_first: false,
-        };
+        let l = ClipLoop { sequence: 0, last: 3, first: 0, gap: 1.0, largest_step: 1.0, repeats_first: false };
         add_wrap_edges(&mut w, &[l]);
         assert_eq!(w.at(3, 0), 0.1);
         let index = FrameIndex::new([300, 25, 33, 20]);
@@ -205,7 +200,7 @@ mod tests {
     /// the clip loops, and the wrap places the first frame one step past the last.
     #[test]
     fn the_wrap_carries_the_travel_on() {
-        use surfcap_mesh::{Sequence, Topology, UpAxis, Units};
+        use surfcap_mesh::{Sequence, Topology, Units, UpAxis};
         let tri = [0.0f32, 0.0, 0.0, 0.3, 0.0, 0.1, 0.1, 0.0, 0.4];
         let positions: Vec<f32> =
             (0..5).flat_map(|f| tri.chunks_exact(3).flat_map(move |v| [v[0] + f as f32, v[1], v[2]])).collect();

@@ -534,6 +534,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn short_loops_get_more_transitions_per_metre() {
+        let long = PathSearch::for_fps(30.0);
+        assert_eq!(PathSearch::for_clips(30.0, None), long);
+        assert_eq!(PathSearch::for_clips(30.0, Some(2.5)), long);
+        let short = PathSearch::for_clips(30.0, Some(0.8));
+        assert_eq!((short.window, short.max_transitions), (2.0, 3));
+        assert!(short.max_transitions as f64 / short.window > long.max_transitions as f64 / long.window);
+    }
+
+    #[test]
     fn curve_by_arc_length_and_planar_distances() {
         let c =
             Curve::new(vec![[0.0, 5.0, 0.0], [3.0, 9.0, 0.0], [3.0, 9.0, 0.0], [3.0, 0.0, 4.0]], vec![0, 2]).unwrap();

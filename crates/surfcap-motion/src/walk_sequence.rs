@@ -555,7 +555,8 @@ pub(crate) mod tests {
         let clip = |phase: f64| -> Vec<f32> {
             (0..8)
                 .flat_map(|f| {
-                    let (x, b) = (0.1 * f as f32, (0.2 * (std::f64::consts::TAU * (f as f64 / 8.0 + phase)).sin()) as f32);
+                    let (x, b) =
+                        (0.1 * f as f32, (0.2 * (std::f64::consts::TAU * (f as f64 / 8.0 + phase)).sin()) as f32);
                     [x, 0.0, 0.0, x + 0.3, b, 0.0, x + 0.3, 0.0, 0.3, x, 0.1, 0.3]
                 })
                 .collect()
@@ -573,7 +574,9 @@ pub(crate) mod tests {
         let g = essential_graph(&w, &NoProgress).graph;
         let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
         assert_eq!(model.wraps(), vec![(7, 0), (15, 8)]);
-        assert!(matches!(model.next(7), Some((0, Step::Wrap(_)))) && matches!(model.next(3), Some((4, Step::Original))));
+        assert!(
+            matches!(model.next(7), Some((0, Step::Wrap(_)))) && matches!(model.next(3), Some((4, Step::Original)))
+        );
         let walk: Vec<u32> = (0..8).chain(0..8).chain(0..3).collect();
         let start = PlaneMotion::identity(s.up_axis);
         let centres = model.walk_centres(&walk, &start).unwrap();

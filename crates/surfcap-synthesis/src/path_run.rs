@@ -188,15 +188,8 @@ impl Prepared {
             None => None,
         };
         let constraints = vec![
-            Constraint::new(
-                "path",
-                length_unit(self.subject()),
-                curve.length(),
-                travelled,
-                max,
-                tolerance,
-            )
-            .relative_to(curve.length()),
+            Constraint::new("path", length_unit(self.subject()), curve.length(), travelled, max, tolerance)
+                .relative_to(curve.length()),
         ];
         let report = PathReport {
             constraint: "path",
@@ -305,4 +298,37 @@ pub fn synthesize_path(
     let tracked = (!request.track.is_empty()).then_some(request.track.as_slice());
     let prep = playback.prepare(pipe, params, tracked)?;
     prep.follow_path(&PathQuery { curve: &curve, restrictions: &restrictions, start, search }, out, progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 10 m line then a quarter circle of radius 2: frames off by more than the tolerance
+    /// make one stretch, measured where it is along the curve, with the circle's turn
+    /// (1/2 rad per metre, about 29 degrees) and none of the line's.
+    #[test]
+    fn missed_stretches_say_where_and_how_sharply_the_curve_turns() {
+        let mut pts = vec![[0.0, 0.0, 0.0]];
+        pts.extend((0..=40).map(|k| {
+            let a = std::f64::consts::FRAC_PI_2 * k as f64 / 40.0;
+            [10.0 + 2.0 * a.sin(), 0.0, 2.0 - 2.0 * a.cos()]
+        }));
+        let curve = Curve::new(pts, vec![0, 2]).unwrap();
+        let arcs: Vec<f64> = (0..=26).map(|k| 0.5 * k as f64).collect();
+        let errors: Vec<f64> = arcs.iter().map(|&s| if (11.0..=12.5).contains(&s) { 0.5 } else { 0.01 }).collect();
+        let m = missed_stretches(&curve, &arcs, &errors, 0.1);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert_eq!((m[0].from, m[0].to), (11.0, 12.5));
+        assert!((m[0].turn_degrees_per_unit - 28.6).abs() < 1.5, "{m:?}");
+        let on_line = missed_stretches(
+            &curve,
+            &arcs,
+            &arcs.iter().map(|&s| if s <= 5.0 { 0.5 } else { 0.0 }).collect::<Vec<_>>(),
+            0.1,
+        );
+        assert_eq!((on_line[0].from, on_line[0].to), (0.0, 5.0));
+        assert!(on_line[0].turn_degrees_per_unit < 0.1, "{on_line:?}");
+        assert!(missed_stretches(&curve, &arcs, &vec![0.0; arcs.len()], 0.1).is_empty());
+    }
 }

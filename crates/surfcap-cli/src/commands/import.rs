@@ -110,10 +110,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::cache::write_cache(&a.output, s, ctx.force, &bar)?;
     // Clips authored as loops (last pose within the clip's largest step of the first, in the
     // body frame): synthesis plays their last frame into their start.
-    let loops: Vec<&str> = surfcap_motion::clip_loops::clip_loops(s)
-        .iter()
-        .map(|l| s.sequences()[l.sequence].name.as_str())
-        .collect();
+    let loops: Vec<&str> =
+        surfcap_motion::clip_loops::clip_loops(s).iter().map(|l| s.sequences()[l.sequence].name.as_str()).collect();
     let secs = t0.elapsed().as_secs_f64();
     ctx.result(
         &json!({
