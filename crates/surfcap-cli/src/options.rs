@@ -325,10 +325,11 @@ pub struct TableOpts {
     /// Slope constraint p of the warping path (thesis eq. 2.53; "inf" for none).
     #[arg(long, default_value = "3")]
     pub slope: SlopeArg,
-    /// Shortest segment, frames (default: a third of a second at the subject's fps).
+    /// Shortest segment, frames (default: a third of a second at the subject's fps, at most a
+    /// third of the longest).
     #[arg(long, value_parser = count)]
     pub l_min: Option<usize>,
-    /// Longest segment, frames (default: two seconds).
+    /// Longest segment, frames (default: two seconds, at most half the shortest looping clip).
     #[arg(long, value_parser = count)]
     pub l_max: Option<usize>,
 }
@@ -341,7 +342,18 @@ impl Default for TableOpts {
 
 impl TableOpts {
     pub fn params(&self, fps: f64) -> anyhow::Result<TableParams> {
-        let (lo, hi) = segment_bounds(fps);
+        self.with_bounds(segment_bounds(fps))
+    }
+
+    /// The parameters for a subject: by default segments fit its shortest looping clip
+    /// ([`surfcap_motion::clip_loops::segment_bounds_for_clips`]: a one-cycle game clip of 25
+    /// frames gets windows of 4 to 12 frames, not 10 to 60).
+    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::Subject) -> anyhow::Result<TableParams> {
+        let loops = surfcap_motion::clip_loops::clip_loops(clips);
+        self.with_bounds(surfcap_motion::clip_loops::segment_bounds_for_clips(fps, clips.frame_index(), &loops))
+    }
+
+    fn with_bounds(&self, (lo, hi): (usize, usize)) -> anyhow::Result<TableParams> {
         let (l_min, l_max) = (self.l_min.unwrap_or(lo), self.l_max.unwrap_or(hi));
         anyhow::ensure!(1 <= l_min && l_min <= l_max, "segment lengths {l_min}..{l_max}: expected 1 <= l-min <= l-max");
         Ok(TableParams { l_min, l_max, slope: self.slope.0 })
@@ -372,6 +384,15 @@ pub struct GraphOpts {
 
 impl GraphOpts {
     pub fn params(&self, fps: f64) -> anyhow::Result<GraphParams> {
+        self.with_table(self.table.params(fps)?)
+    }
+
+    /// [`GraphOpts::params`] with segment bounds that fit these clips ([`TableOpts::params_for`]).
+    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::Subject) -> anyhow::Result<GraphParams> {
+        self.with_table(self.table.params_for(fps, clips)?)
+    }
+
+    fn with_table(&self, table: TableParams) -> anyhow::Result<GraphParams> {
         let kind = match (self.kind, self.k) {
             (kind, None) => kind,
             (GraphKind::SparseEssential { k }, Some(given)) => {
@@ -383,7 +404,7 @@ impl GraphOpts {
                 anyhow::bail!("--k {given}: only with --kind sparse-essential (the graph is {kind})")
             }
         };
-        Ok(GraphParams { table: self.table.params(fps)?, kind, alpha: self.alpha.value() })
+        Ok(GraphParams { table, kind, alpha: self.alpha.value() })
     }
 }
 

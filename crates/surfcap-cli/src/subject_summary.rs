@@ -1,5 +1,5 @@
 //! What `surfcap info` (and the demo) say about a subject: sequences, frames, vertices,
-//! triangles, components, bounding box.
+//! triangles, components, bounding box, which clips loop.
 
 use serde_json::json;
 use surfcap_mesh::{Subject, bounding_box, connected_components};
@@ -14,7 +14,9 @@ pub fn describe(s: &Subject) -> serde_json::Value {
     let mut hi = [f32::NEG_INFINITY; 3];
     let mut degenerate_frames = 0usize;
     let mut seqs = Vec::new();
-    for q in s.sequences() {
+    let loops = surfcap_motion::clip_loops::clip_loops(s);
+    for (k, q) in s.sequences().iter().enumerate() {
+        let wrap = loops.iter().find(|l| l.sequence == k);
         let (a, b) = bounding_box(q.positions());
         for k in 0..3 {
             lo[k] = lo[k].min(a[k]);
@@ -37,6 +39,10 @@ pub fn describe(s: &Subject) -> serde_json::Value {
             "synthetic_frames": synthetic,
             "joints": q.joints.as_ref().map(|j| j.n_joints()),
             "max_zero_area_triangles_in_a_frame": zero_area,
+            // Authored as a loop: last pose within the clip's largest step of the first (in
+            // the body frame); synthesis plays its last frame into its start.
+            "loops": wrap.is_some(),
+            "loop_wraps_to_frame": wrap.map(|l| l.first as usize - s.frame_index().range(k).start),
         }));
     }
     json!({
@@ -102,8 +108,9 @@ pub fn print_summary(s: &Subject, d: &serde_json::Value) {
             Some(0) | None => String::new(),
             Some(n) => format!("  {n} synthetic"),
         };
+        let loops = if q["loops"].as_bool() == Some(true) { "  loops" } else { "" };
         println!(
-            "  {:w$}  {:5} frames  {:7.2} s{}{}{}",
+            "  {:w$}  {:5} frames  {:7.2} s{}{}{}{loops}",
             q["name"].as_str().unwrap_or(""),
             q["frames"],
             q["seconds"].as_f64().unwrap_or(0.0),

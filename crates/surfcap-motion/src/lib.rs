@@ -32,6 +32,9 @@
 //!   (key-pose timing 3.5.2 and Huang et al.'s distance+time: bidirectional layered search over
 //!   node-major time layers, long edges pulled a block of layers at a time, every split of the
 //!   join judged by the true distance+time cost).
+//! - Looping clips: [`clip_loops`] (last pose within the clip's own largest step of the first,
+//!   in the body frame; the wrap edge last -> first played as a successive frame that carries
+//!   the travel on; segment bounds that fit the shortest clip).
 //! - Travel: [`clip_travel`] (net displacement and path length of a clip's centre, whether it is in
 //!   place), [`subject_placement`] (whether a subject travels: transitions re-place one that
 //!   does, keep the captured placement of one that does not) and [`in_place_root_motion`] (in-place clips moved by their recovered root motion).
@@ -43,6 +46,7 @@
 //! The transition table runs one row per source frame in parallel (rayon).
 
 pub mod blend;
+pub mod clip_loops;
 pub mod clip_travel;
 pub mod dead_ends;
 pub mod dtw;

@@ -123,7 +123,7 @@ impl TimedGraph {
         for e in graph.edges() {
             let Some(step) = model.step(e.from, e.to) else { continue };
             let frames = match step {
-                Step::Original => 1,
+                Step::Original | Step::Wrap(_) => 1,
                 Step::Transition(t) => t.duration() as u32,
             };
             let id = surfcap_geometry::motion_plane_alignment::PlaneMotion::identity(model.up);
@@ -135,7 +135,7 @@ impl TimedGraph {
             });
             // Realism cost: the transitions' weights (Huang et al.'s C_s sums transition costs
             // only); successive frames cost nothing, so no duration is favoured by it.
-            let weight = if matches!(step, Step::Original) { 0.0 } else { e.weight };
+            let weight = if matches!(step, Step::Original | Step::Wrap(_)) { 0.0 } else { e.weight };
             edges.push(TimedEdge { from: e.from, to: e.to, frames, weight, length });
         }
         Self::from_edges(graph.n, edges, model.index.clone())

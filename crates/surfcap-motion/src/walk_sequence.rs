@@ -57,6 +57,10 @@ pub enum Step<'a> {
     /// u -> u + 1 in one sequence: one frame, placement unchanged.
     Original,
     Transition(&'a TransitionTrack),
+    /// The last frame of a looping clip to its start ([`crate::clip_loops`]): one frame, like
+    /// a successive frame, with the placement moved by this motion (the start's placement in
+    /// the coordinates where the last frame is unmoved) so that the clip's travel carries on.
+    Wrap(&'a PlaneMotion),
 }
 
 /// Per-frame centres of mass and the rigid tracks of every transition edge of a graph.
@@ -68,6 +72,8 @@ pub struct WalkModel {
     /// Centre of mass of every global frame, as captured.
     pub centres: Vec<[f64; 3]>,
     tracks: HashMap<(u32, u32), TransitionTrack>,
+    /// Wrap edges of looping clips in the graph: last frame -> (start, its placement).
+    wraps: HashMap<u32, (u32, PlaneMotion)>,
     /// The DTW slope constraint the tracks were computed with (their warps are recomputed, not
     /// stored: a dense graph has hundreds of thousands of transitions and plays a few).
     slope: Slope,
@@ -106,10 +112,17 @@ impl WalkModel {
         let gram = alignment_gram(subject, None);
         let up = subject.up_axis;
         let placement = subject_travel(subject).placement;
+        // Wrap edges of looping clips that the graph holds.
+        let wraps: HashMap<u32, (u32, PlaneMotion)> = crate::clip_loops::clip_loops(subject)
+            .iter()
+            .filter(|l| graph.find(l.last as usize, l.first as usize).is_some())
+            .map(|l| (l.last, (l.first, crate::clip_loops::wrap_placement(subject, l))))
+            .collect();
         let edges: Vec<(u32, u32)> = graph
             .edges()
             .iter()
             .filter(|e| !is_successive(&index, e.from as usize, e.to as usize))
+            .filter(|e| wraps.get(&e.from).is_none_or(|w| w.0 != e.to))
             .map(|e| (e.from, e.to))
             .collect();
         let tracks: Vec<Option<((u32, u32), TransitionTrack)>> = edges
@@ -146,6 +159,7 @@ impl WalkModel {
             index,
             centres,
             tracks: tracks.into_iter().flatten().collect(),
+            wraps,
             slope,
             placement,
         }
@@ -166,9 +180,30 @@ impl WalkModel {
     pub fn step(&self, u: u32, v: u32) -> Option<Step<'_>> {
         if is_successive(&self.index, u as usize, v as usize) {
             Some(Step::Original)
+        } else if let Some((w, g)) = self.wraps.get(&u)
+            && *w == v
+        {
+            Some(Step::Wrap(g))
         } else {
             self.tracks.get(&(u, v)).map(Step::Transition)
         }
+    }
+
+    /// The frame that follows `u` as captured: u + 1 in its sequence, or the start of a looping
+    /// clip after its last frame (the wrap); `None` at the end of a clip that does not loop.
+    pub fn next(&self, u: u32) -> Option<(u32, Step<'_>)> {
+        if is_successive(&self.index, u as usize, u as usize + 1) {
+            Some((u + 1, Step::Original))
+        } else {
+            self.wraps.get(&u).map(|(v, g)| (*v, Step::Wrap(g)))
+        }
+    }
+
+    /// The wrap edges (last frame, start) of the looping clips the model plays, sorted.
+    pub fn wraps(&self) -> Vec<(u32, u32)> {
+        let mut w: Vec<(u32, u32)> = self.wraps.iter().map(|(u, (v, _))| (*u, *v)).collect();
+        w.sort();
+        w
     }
 
     pub fn n_transitions(&self) -> usize {
@@ -202,6 +237,11 @@ impl WalkModel {
                 emit(g2.apply_point(self.centres[v as usize]), true);
                 g2
             }
+            Step::Wrap(end) => {
+                let g2 = g.after(end);
+                emit(g2.apply_point(self.centres[v as usize]), true);
+                g2
+            }
         }
     }
 
@@ -222,7 +262,7 @@ impl WalkModel {
         let mut t = 0;
         for (at, w) in walk.windows(2).enumerate() {
             t += match self.step(w[0], w[1]).ok_or(Error::NotAnEdge { at, from: w[0], to: w[1] })? {
-                Step::Original => 1,
+                Step::Original | Step::Wrap(_) => 1,
                 Step::Transition(tr) => tr.duration(),
             };
         }
@@ -237,7 +277,9 @@ impl WalkModel {
 
     /// The transition tracks as rows of three numbers, for an on-disk cache (`.npy` [R, 3]),
     /// tracks in (u, v) order, each as: `[u, v, C]`, `[li, lj, 0]`, `[end theta, end t0,
-    /// end t1]`, then its C inner centres. Frame numbers are exact in f64.
+    /// end t1]`, then its C inner centres; then every wrap edge of a looping clip in u order, as
+    /// `[u, v, 0]`, `[0, 0, 0]`, `[theta, t0, t1]` (segment lengths 0, which no transition has,
+    /// mark a wrap). Frame numbers are exact in f64.
     pub fn tracks_to_rows(&self) -> Vec<f64> {
         let mut keys: Vec<&(u32, u32)> = self.tracks.keys().collect();
         keys.sort();
@@ -250,6 +292,10 @@ impl WalkModel {
             for c in &t.centres {
                 rows.extend(c);
             }
+        }
+        for (u, v) in self.wraps() {
+            let g = &self.wraps[&u].1;
+            rows.extend([u as f64, v as f64, 0.0, 0.0, 0.0, 0.0, g.theta, g.t[0], g.t[1]]);
         }
         rows
     }
@@ -278,6 +324,7 @@ impl WalkModel {
             }
         };
         let mut tracks = HashMap::new();
+        let mut wraps = HashMap::new();
         let mut at = 0;
         while at < rows.len() {
             if at + 3 > rows.len() {
@@ -296,13 +343,17 @@ impl WalkModel {
                 return Err(Error::TrackNonFiniteCentre { row: at, from: u, to: v });
             }
             let end = PlaneMotion { theta, t: [t0, t1], up: subject.up_axis };
-            tracks.insert((u, v), TransitionTrack { li, lj, centres, end });
+            if li == 0 && lj == 0 && nc == 0 {
+                wraps.insert(u, (v, end));
+            } else {
+                tracks.insert((u, v), TransitionTrack { li, lj, centres, end });
+            }
             at += 3 + nc;
         }
         let index = subject.frame_index().clone();
         let centres = frame_centres(subject, tracked);
         let placement = subject_travel(subject).placement;
-        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, slope, placement })
+        Ok(WalkModel { up: subject.up_axis, fps: subject.fps, index, centres, tracks, wraps, slope, placement })
     }
 }
 
@@ -431,6 +482,10 @@ pub fn walk_sequence_with(
         let (variant, p) = node(at + 1)?;
         match step {
             Step::Original => {
+                push(&mut out, p, &g, FrameLabel::Original, Some(v), FrameMix::original(v), original(at + 1, variant))
+            }
+            Step::Wrap(end) => {
+                g = g.after(end);
                 push(&mut out, p, &g, FrameLabel::Original, Some(v), FrameMix::original(v), original(at + 1, variant))
             }
             Step::Transition(t) => {
@@ -563,6 +618,62 @@ pub(crate) mod tests {
         let last = &out.positions[out.positions.len() - 3 * nv..];
         assert_eq!(last, h.frame(v as usize).unwrap(), "the destination where it was captured");
         assert_eq!(&out.positions[..3 * nv], h.frame(u as usize - 1).unwrap());
+    }
+
+    /// Two one-cycle clips of a gliding, bobbing quad (8 frames each, 0.1 m per frame along x
+    /// with a bob of period 8): both loop, the graph holds their wrap edges, and a walk through
+    /// a wrap keeps gliding 0.1 m per frame in the model, in the played frames and through the
+    /// model's cache rows; a path three clips long is followed through the wraps.
+    #[test]
+    fn looping_clips_play_their_wrap_as_a_step_that_carries_the_travel_on() {
+        use crate::clip_loops::{add_wrap_edges, clip_loops};
+        use surfcap_mesh::{Sequence, Topology, Units, UpAxis};
+        let clip = |phase: f64| -> Vec<f32> {
+            (0..8)
+                .flat_map(|f| {
+                    let (x, b) =
+                        (0.1 * f as f32, (0.2 * (std::f64::consts::TAU * (f as f64 / 8.0 + phase)).sin()) as f32);
+                    [x, 0.0, 0.0, x + 0.3, b, 0.0, x + 0.3, 0.0, 0.3, x, 0.1, 0.3]
+                })
+                .collect()
+        };
+        let topology = Topology::new(4, vec![[0, 1, 2], [0, 2, 3]], None).unwrap();
+        let seqs = vec![Sequence::new("a", 4, clip(0.0)).unwrap(), Sequence::new("b", 4, clip(0.3)).unwrap()];
+        let s = Subject::new("quad", topology, seqs, 30.0, UpAxis::parse("+y").unwrap(), Units::metres()).unwrap();
+        let loops = clip_loops(&s);
+        assert_eq!(loops.iter().map(|l| (l.last, l.first)).collect::<Vec<_>>(), vec![(7, 0), (15, 8)]);
+        let d = distance_matrix(&s, &DistanceParams::default(), &NoProgress);
+        let p = TableParams { l_min: 2, l_max: 3, slope: Some(3) };
+        let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress).unwrap();
+        let mut w = edge_weights(&table, s.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
+        add_wrap_edges(&mut w, &loops);
+        let g = essential_graph(&w, &NoProgress).graph;
+        let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
+        assert_eq!(model.wraps(), vec![(7, 0), (15, 8)]);
+        assert!(
+            matches!(model.next(7), Some((0, Step::Wrap(_)))) && matches!(model.next(3), Some((4, Step::Original)))
+        );
+        let walk: Vec<u32> = (0..8).chain(0..8).chain(0..3).collect();
+        let start = PlaneMotion::identity(s.up_axis);
+        let centres = model.walk_centres(&walk, &start).unwrap();
+        for (k, c) in centres.windows(2).enumerate() {
+            assert!((c[1][0] - c[0][0] - 0.1).abs() < 1e-6 && (c[1][2] - c[0][2]).abs() < 1e-6, "step {k}: {c:?}");
+        }
+        assert_eq!(model.walk_duration(&walk).unwrap(), walk.len() - 1);
+        let played = walk_sequence(&s, &model, &d.values, &walk, &start).unwrap();
+        assert_eq!(played.n_frames(), walk.len());
+        assert!(played.labels.iter().all(|l| *l == FrameLabel::Original));
+        let (first, last) = (&played.positions[..12], &played.positions[played.positions.len() - 12..]);
+        assert!((last[0] - first[0] - 0.1 * 18.0).abs() < 1e-4, "{} after 18 steps", last[0] - first[0]);
+        let back = WalkModel::from_rows(&s, &model.tracks_to_rows(), None, p.slope).unwrap();
+        assert_eq!(back.wraps(), model.wraps());
+        assert_eq!(back.walk_centres(&walk, &start).unwrap(), centres);
+        use crate::path_following::{Curve, PathSearch, follow_path};
+        let curve = Curve::new(vec![[0.0, 0.0, 0.0], [2.4, 0.0, 0.0]], vec![0, 2]).unwrap();
+        let search = PathSearch { window: 0.4, ..PathSearch::for_fps(30.0) };
+        let r = follow_path(&model, &g, &curve, &[], None, &search).unwrap();
+        assert!(r.travelled >= curve.length());
+        assert!(r.walk.windows(2).any(|w| matches!(model.step(w[0], w[1]), Some(Step::Wrap(_)))), "{:?}", r.walk);
     }
 
     #[test]

@@ -262,7 +262,9 @@ impl Pipeline {
         })
     }
 
-    /// Edge weights of the table at `alpha` (Algorithm 1); kept for the last (table, alpha).
+    /// Edge weights of the table at `alpha` (Algorithm 1) with the wrap edges of looping clips
+    /// ([`surfcap_motion::clip_loops`]) at the weight of a successive step; kept for the last
+    /// (table, alpha).
     pub fn edge_weights(&self, p: &TableParams, alpha: Alpha) -> Result<Arc<EdgeWeights>> {
         let key = TableKey::new(&self.chain_distance, p);
         if let Some((k, a, w)) = self.weights.lock().expect("weights lock").as_ref()
@@ -271,7 +273,10 @@ impl Pipeline {
         {
             return Ok(w.clone());
         }
-        let w = Arc::new(edge_weights(&self.table(p)?.value, self.subject.frame_index(), alpha)?);
+        let mut w = edge_weights(&self.table(p)?.value, self.subject.frame_index(), alpha)?;
+        // Looping clips play their last frame into their start as a successive step.
+        surfcap_motion::clip_loops::add_wrap_edges(&mut w, &surfcap_motion::clip_loops::clip_loops(&self.subject));
+        let w = Arc::new(w);
         *self.weights.lock().expect("weights lock") = Some((key, alpha, w.clone()));
         Ok(w)
     }

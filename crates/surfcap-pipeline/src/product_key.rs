@@ -100,7 +100,8 @@ impl ProductKey for GraphKey {
     fn kind(&self) -> String {
         "graph".into()
     }
-    const VERSION: u32 = 3;
+    /// 4: looping clips' wrap edges (last frame -> start) weigh as successive steps.
+    const VERSION: u32 = 4;
 }
 
 /// The walk model of a graph: every transition's rigid track of the tracked vertices' centre.
@@ -119,7 +120,8 @@ impl ProductKey for WalkModelKey {
     fn kind(&self) -> String {
         "walkmodel".into()
     }
-    const VERSION: u32 = 2;
+    /// 3: rows for looping clips' wrap edges.
+    const VERSION: u32 = 3;
 }
 
 #[cfg(test)]

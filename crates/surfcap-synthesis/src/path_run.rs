@@ -79,6 +79,59 @@ pub struct PathReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pose_distance_start: Option<f64>,
     pub constraints: Vec<Constraint>,
+    /// Where the path was missed: the stretches of the curve (arc lengths from, to) along which
+    /// the centre was farther from the curve than the tolerance, with the curve's sharpest turn
+    /// there (degrees per unit of length); empty when the path was followed.
+    pub missed_stretches: Vec<MissedStretch>,
+}
+
+/// A stretch of the curve the walk did not follow within the tolerance.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct MissedStretch {
+    /// Arc lengths along the curve where the stretch starts and ends.
+    pub from: f64,
+    pub to: f64,
+    /// The curve's sharpest turn over the stretch, degrees per unit of length (measured over
+    /// one unit of arc length).
+    pub turn_degrees_per_unit: f64,
+}
+
+/// The stretches of `curve` along which `errors` (per frame, at arc lengths `arcs`) exceed
+/// `tolerance`.
+fn missed_stretches(curve: &Curve, arcs: &[f64], errors: &[f64], tolerance: f64) -> Vec<MissedStretch> {
+    let mut out: Vec<MissedStretch> = Vec::new();
+    let mut open: Option<f64> = None;
+    let heading = |s: f64| {
+        let s = s.clamp(0.0, (curve.length() - 0.05).max(0.0));
+        let axes = curve.axes();
+        let (a, b) = (curve.at(s), curve.at(s + 0.05));
+        let (i, j) = (axes[0], axes[axes.len() - 1]);
+        (b[j] - a[j]).atan2(b[i] - a[i])
+    };
+    let close = |from: f64, to: f64| {
+        let steps = ((to - from) / 0.1).ceil().max(1.0) as usize;
+        let turn = (0..=steps)
+            .map(|k| {
+                let s = from + (to - from) * k as f64 / steps as f64;
+                surfcap_motion::blend::wrap_angle(heading(s + 0.5) - heading(s - 0.5)).abs().to_degrees()
+            })
+            .fold(0.0, f64::max);
+        MissedStretch { from, to, turn_degrees_per_unit: turn }
+    };
+    for (k, (&s, &e)) in arcs.iter().zip(errors).enumerate() {
+        match (open, e > tolerance) {
+            (None, true) => open = Some(s),
+            (Some(from), false) => {
+                out.push(close(from, arcs[k - 1].max(from)));
+                open = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(from) = open {
+        out.push(close(from, arcs.last().copied().unwrap_or(from)));
+    }
+    out
 }
 
 /// A path-following run: the animation written, its report (written beside it) and summary.
@@ -120,6 +173,13 @@ impl Prepared {
         let played = play_and_write(self, &r.walk, &r.start, "path", out, progress)?;
         let (errors, travelled) = path_errors(curve, &played.centres);
         let (mean, max) = mean_max(&errors);
+        let tolerance = out.tolerances.distance(curve.length());
+        let mut arcs = Vec::with_capacity(played.centres.len());
+        for (k, c) in played.centres.iter().enumerate() {
+            let before = if k == 0 { 0.0 } else { arcs[k - 1] + curve.distance(&played.centres[k - 1], c) };
+            arcs.push(before);
+        }
+        let missed = missed_stretches(curve, &arcs, &errors, tolerance);
         // Path length adds up the centre's sway; the net displacement says whether it went anywhere.
         let (net, _) = surfcap_motion::clip_travel::horizontal_travel(&played.centres, self.up());
         let pose_distance_start = match q.start {
@@ -128,15 +188,8 @@ impl Prepared {
             None => None,
         };
         let constraints = vec![
-            Constraint::new(
-                "path",
-                length_unit(self.subject()),
-                curve.length(),
-                travelled,
-                max,
-                out.tolerances.distance(curve.length()),
-            )
-            .relative_to(curve.length()),
+            Constraint::new("path", length_unit(self.subject()), curve.length(), travelled, max, tolerance)
+                .relative_to(curve.length()),
         ];
         let report = PathReport {
             constraint: "path",
@@ -160,6 +213,7 @@ impl Prepared {
             curve: (0..=200).map(|k| curve.at(curve.length() * k as f64 / 200.0)).collect(),
             pose_distance_start,
             constraints: constraints.clone(),
+            missed_stretches: missed,
         };
         write_report(&played.report_path, &report)?;
         Ok(PathOutcome {
@@ -187,10 +241,10 @@ pub struct PathRequest {
     pub start: Option<String>,
     /// Follow the centre of these vertices instead of the centre of mass.
     pub track: Vec<usize>,
-    /// Window, transitions per window, branching (the frame-rate dependent rest from the
-    /// subject's fps: [`PathSearch::for_fps`]).
-    pub window: f64,
-    pub max_transitions: usize,
+    /// Window, transitions per window (`None`: [`PathSearch::for_clips`]'s for the subject's
+    /// looping clips), branching (the frame-rate dependent rest from the subject's fps).
+    pub window: Option<f64>,
+    pub max_transitions: Option<usize>,
     pub branching: usize,
 }
 
@@ -230,13 +284,51 @@ pub fn synthesize_path(
         crate::travel_check::require_travel(s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
     }
     let start = request.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
+    let shortest_loop = surfcap_motion::clip_loops::clip_loops(s)
+        .iter()
+        .map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps)
+        .min_by(f64::total_cmp);
+    let defaults = PathSearch::for_clips(s.fps, shortest_loop);
     let search = PathSearch {
-        window: request.window,
-        max_transitions: request.max_transitions,
+        window: request.window.unwrap_or(defaults.window),
+        max_transitions: request.max_transitions.unwrap_or(defaults.max_transitions),
         branching: request.branching,
-        ..PathSearch::for_fps(s.fps)
+        ..defaults
     };
     let tracked = (!request.track.is_empty()).then_some(request.track.as_slice());
     let prep = playback.prepare(pipe, params, tracked)?;
     prep.follow_path(&PathQuery { curve: &curve, restrictions: &restrictions, start, search }, out, progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 10 m line then a quarter circle of radius 2: frames off by more than the tolerance
+    /// make one stretch, measured where it is along the curve, with the circle's turn
+    /// (1/2 rad per metre, about 29 degrees) and none of the line's.
+    #[test]
+    fn missed_stretches_say_where_and_how_sharply_the_curve_turns() {
+        let mut pts = vec![[0.0, 0.0, 0.0]];
+        pts.extend((0..=40).map(|k| {
+            let a = std::f64::consts::FRAC_PI_2 * k as f64 / 40.0;
+            [10.0 + 2.0 * a.sin(), 0.0, 2.0 - 2.0 * a.cos()]
+        }));
+        let curve = Curve::new(pts, vec![0, 2]).unwrap();
+        let arcs: Vec<f64> = (0..=26).map(|k| 0.5 * k as f64).collect();
+        let errors: Vec<f64> = arcs.iter().map(|&s| if (11.0..=12.5).contains(&s) { 0.5 } else { 0.01 }).collect();
+        let m = missed_stretches(&curve, &arcs, &errors, 0.1);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert_eq!((m[0].from, m[0].to), (11.0, 12.5));
+        assert!((m[0].turn_degrees_per_unit - 28.6).abs() < 1.5, "{m:?}");
+        let on_line = missed_stretches(
+            &curve,
+            &arcs,
+            &arcs.iter().map(|&s| if s <= 5.0 { 0.5 } else { 0.0 }).collect::<Vec<_>>(),
+            0.1,
+        );
+        assert_eq!((on_line[0].from, on_line[0].to), (0.0, 5.0));
+        assert!(on_line[0].turn_degrees_per_unit < 0.1, "{on_line:?}");
+        assert!(missed_stretches(&curve, &arcs, &vec![0.0; arcs.len()], 0.1).is_empty());
+    }
 }

@@ -108,6 +108,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         return write_frame_set(ctx, &a, f, t0);
     }
     surfcap_mesh::cache::write_cache(&a.output, s, ctx.force, &bar)?;
+    // Clips authored as loops (last pose within the clip's largest step of the first, in the
+    // body frame): synthesis plays their last frame into their start.
+    let loops: Vec<&str> =
+        surfcap_motion::clip_loops::clip_loops(s).iter().map(|l| s.sequences()[l.sequence].name.as_str()).collect();
     let secs = t0.elapsed().as_secs_f64();
     ctx.result(
         &json!({
@@ -118,6 +122,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             "vertices": s.topology().n_vertices(),
             "triangles": s.topology().n_triangles(),
             "notes": imported.notes,
+            "loops": loops,
             "root_motion_from_contacts": recovered.iter().map(|r| json!({ "sequence": r.sequence,
                 "net_displacement_before": r.before, "net_displacement_after": r.after,
                 "contact_steps": r.contact_steps, "frames": r.frames })).collect::<Vec<_>>(),
@@ -139,6 +144,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 s.topology().n_triangles(),
                 a.output.display()
             );
+            if !loops.is_empty() {
+                println!("loops: {} (played seamlessly from the last frame to the first)", loops.join(", "));
+            }
         },
     );
     Ok(())

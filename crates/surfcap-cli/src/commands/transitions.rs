@@ -24,7 +24,7 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (outs, _) = ctx.claim_dir(&a.output, "transitions", &[&a.subject.path])?;
     let s = a.subject.open(ctx)?;
-    let p = a.table.params(s.fps)?;
+    let p = a.table.params_for(s.fps, &s)?;
     let pipe = a.cache.pipeline(ctx, s)?;
     let t0 = Instant::now();
     let fetched = pipe.table(&p)?;

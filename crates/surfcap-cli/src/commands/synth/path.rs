@@ -31,12 +31,14 @@ pub struct Args {
     /// Follow the centre of these vertices instead of the centre of mass (comma-separated ids).
     #[arg(long, value_delimiter = ',')]
     pub track: Vec<usize>,
-    /// Arc length covered by each branch-and-bound window (subject units).
-    #[arg(long, default_value_t = 3.0, value_parser = crate::options::positive)]
-    pub window: f64,
-    /// Transitions allowed within one window.
-    #[arg(long, default_value_t = 2)]
-    pub max_transitions: usize,
+    /// Arc length covered by each branch-and-bound window (subject units; default 3, or 2 when
+    /// some clip is a loop shorter than two seconds).
+    #[arg(long, value_parser = crate::options::positive)]
+    pub window: Option<f64>,
+    /// Transitions allowed within one window (default 2, or 3 when some clip is a loop shorter
+    /// than two seconds: its turns all come from transitions).
+    #[arg(long)]
+    pub max_transitions: Option<usize>,
     /// Transitions tried at each frame (its cheapest ones, round robin over destination
     /// sequences); the search's speed knob.
     #[arg(long, default_value_t = 8, value_parser = crate::options::count)]
@@ -56,7 +58,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(playback_inputs(&a.appearance, &a.vary));
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
-    let params = a.graph.params(s.fps)?;
+    let params = a.graph.params_for(s.fps, &s)?;
     let units = s.units.clone();
     let request = PathRequest {
         curve: a.curve.clone(),
@@ -83,9 +85,12 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     drop(bar);
     ctx.commit(outs)?;
     let curve_length = o.report.curve_length;
+    let missed = o.constraints.iter().any(|c| c.missed);
     ctx.result(&o.report, || {
+        // A path off by more than the tolerance was not followed: say so, and where.
+        let verb = if missed { "missed" } else { "followed" };
         println!(
-            "followed a {} curve: {}, {}; centre error mean {}, max {} ({:.1}% of the curve); search {:.2} s",
+            "{verb} a {} curve: {}, {}; centre error mean {}, max {} ({:.1}% of the curve); search {:.2} s",
             length(curve_length, &units, 2),
             count_of(o.frames, "frame"),
             count_of(o.played.transitions, "transition"),
@@ -94,6 +99,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             100.0 * o.max_error / curve_length,
             o.search_seconds
         );
+        for m in &o.report.missed_stretches {
+            println!(
+                "  off the curve from {} to {} along it, where it turns up to {:.0} degrees per {}",
+                length(m.from, &units, 2),
+                length(m.to, &units, 2),
+                m.turn_degrees_per_unit,
+                surfcap_synthesis::words::unit_name(&units)
+            );
+        }
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
     check_constraints(ctx, &a.out.constraints, &o.constraints)
