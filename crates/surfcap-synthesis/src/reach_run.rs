@@ -8,7 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::Progress;
-use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
+use surfcap_motion::timed_walk::{ExcludedLoop, LoopRule, TimedGraph, Unreachable, search_table_bytes};
 use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 use surfcap_pipeline::{GraphParams, Pipeline};
 
@@ -58,6 +58,17 @@ pub struct ReachReport {
     pub realism_cost: f64,
     pub total_cost: f64,
     pub search_seconds: f64,
+    /// Both targets met within the tolerances (`--tolerance`, `--frame-tolerance`).
+    pub met: bool,
+    /// When not met: why no walk of the graph can meet them (the surface motion graph's
+    /// reasons: too_short, too_near, no_loop, too_fast, too_slow, granularity), if the graph
+    /// proves it; absent on a met target or one the search missed.
+    pub unreachable: Option<Unreachable>,
+    /// The same reason in words.
+    pub unreachable_why: Option<String>,
+    /// Loops never played to pad time, and the rule that excluded them.
+    pub loop_rule: LoopRule,
+    pub excluded_loops: Vec<ExcludedLoop>,
     #[serde(flatten)]
     pub walk: WalkReport,
     #[serde(flatten)]
@@ -82,10 +93,16 @@ impl Prepared {
     /// The walk of the reach query, written with its report to `out`.
     pub fn reach(&self, q: &ReachQuery, out: &Output, progress: &dyn Progress) -> Result<ReachOutcome> {
         let t0 = Instant::now();
-        let tg = TimedGraph::new(&self.graph, &self.model);
+        // Degenerate loops (too short, or too still) never pad time.
+        let pose = self.pipe.chain_distances()?.value;
+        let loop_rule = LoopRule::default();
+        let (tg, excluded_loops) = TimedGraph::new(&self.graph, &self.model)
+            .without_degenerate_loops(loop_rule, &|i, j| pose.values[i * pose.n + j]);
         let scales = (q.distance_scale, q.time_scale);
-        let (w, cost) =
-            tg.walk_with_distance_and_time(q.from, q.to, q.distance, q.frames, scales, tg.longest_edge())?;
+        let tol = &out.tolerances;
+        let tolerance = (tol.distance(q.distance), tol.frames().floor() as usize);
+        let found = tg.walk_within(q.from, q.to, (q.distance, q.frames), scales, tolerance, tg.longest_edge())?;
+        let (w, cost) = (found.walk, found.total_cost);
         let search_seconds = t0.elapsed().as_secs_f64();
         // The time asks for a duration: `frames` steps of 1/fps, so the animation that lasts it
         // shows one frame more (both ends). Counts below are frames written, as `frames` is.
@@ -100,7 +117,6 @@ impl Prepared {
         let last = played.output.n_frames() - 1;
         let pose_distance_from = pose_distance_to_output(self, &played.output, q.from, 0)?;
         let pose_distance_to = pose_distance_to_output(self, &played.output, q.to, last)?;
-        let tol = &out.tolerances;
         let constraints = vec![
             Constraint::new(
                 "distance",
@@ -136,6 +152,11 @@ impl Prepared {
             realism_cost: w.cost,
             total_cost: cost,
             search_seconds,
+            met: found.met,
+            unreachable_why: found.unreachable.as_ref().map(|u| u.to_string()),
+            unreachable: found.unreachable,
+            loop_rule,
+            excluded_loops,
             walk: played.report.clone(),
             travel,
             pose_distance_from,
