@@ -263,6 +263,9 @@ pub struct TimedWalk {
     pub distance: f64,
 }
 
+/// A walk with its eq. 6 cost.
+type Scored = (f64, TimedWalk);
+
 /// The answer of a distance-and-time search with a tolerance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DistanceTimeWalk {
@@ -424,22 +427,41 @@ fn trace(dir: &Direction, ec: &EdgeCosts, layers: &Layers, from_times: usize, t:
 /// the forward table alone.
 fn cheapest_by_duration(
     g: &TimedGraph,
+    ends: (u32, u32),
+    range: (usize, usize),
+    costs: (f64, f64),
+    score: impl Fn(f64, f64) -> f64 + Sync,
+) -> Vec<Option<(f64, Vec<u32>)>> {
+    cheapest_joined(g, ends, range, [costs, costs], score)
+}
+
+/// [`cheapest_by_duration`] with the forward half's edge costs `realism * weight + mu * length`
+/// from `costs[0]` and the backward half's from `costs[1]`: each split then joins walks
+/// cheapest under different trade-offs, whose distances lie between those of either alone.
+fn cheapest_joined(
+    g: &TimedGraph,
     (a, b): (u32, u32),
     (lo, hi): (usize, usize),
-    (realism, mu): (f64, f64),
+    costs: [(f64, f64); 2],
     score: impl Fn(f64, f64) -> f64 + Sync,
 ) -> Vec<Option<(f64, Vec<u32>)>> {
     let h = (hi / 2).max(1);
     let longest = g.longest_edge();
     let length: Vec<f64> = g.edges.iter().map(|e| e.length).collect();
-    let ec = EdgeCosts { cost: g.edges.iter().map(|e| realism * e.weight + mu * e.length).collect(), length: &length };
+    let edge_costs = |(realism, mu): (f64, f64)| EdgeCosts {
+        cost: g.edges.iter().map(|e| realism * e.weight + mu * e.length).collect(),
+        length: &length,
+    };
+    let (ec, ecb) = (edge_costs(costs[0]), edge_costs(costs[1]));
+    let (mu, mub) = (costs[0].1, costs[1].1);
     let back_times = (hi + 1).saturating_sub(h);
     let (f, bw) = rayon::join(
         || layered(g, &g.forward, &ec, a, h + longest, h),
-        || layered(g, &g.backward, &ec, b, back_times, back_times),
+        || layered(g, &g.backward, &ecb, b, back_times, back_times),
     );
     // The realism of a state's walk is its cost minus mu times its distance.
     let judge = |cost: f64, dist: f64| score(cost - mu * dist, dist);
+    let join = |(fc, fd): (f64, f64), (bc, bd): (f64, f64)| score(fc - mu * fd + bc - mub * bd, fd + bd);
     // Per duration: (score, t, v) of the best split, smallest (t, v) on ties.
     let best: Vec<Option<(f64, usize, usize)>> = (0..=hi)
         .into_par_iter()
@@ -454,9 +476,9 @@ fn cheapest_by_duration(
             let mut best: Option<(f64, usize, usize)> = None;
             for t in h..=d.min(h + longest - 1) {
                 for v in 0..g.n {
-                    let x = f.at(t, v) + bw.at(d - t, v);
-                    if x.is_finite() {
-                        let y = judge(x, f.dist(t, v) + bw.dist(d - t, v));
+                    let (xf, xb) = (f.at(t, v), bw.at(d - t, v));
+                    if (xf + xb).is_finite() {
+                        let y = join((xf, f.dist(t, v)), (xb, bw.dist(d - t, v)));
                         if best.is_none_or(|b0| y < b0.0) {
                             best = Some((y, t, v));
                         }
@@ -473,7 +495,7 @@ fn cheapest_by_duration(
             let mut nodes = trace(&g.forward, &ec, &f, h, t, v);
             nodes.reverse();
             if d > t {
-                let back = trace(&g.backward, &ec, &bw, back_times, d - t, v);
+                let back = trace(&g.backward, &ecb, &bw, back_times, d - t, v);
                 nodes.extend_from_slice(&back[1..]);
             }
             Some((y, nodes))
@@ -642,13 +664,13 @@ impl TimedGraph {
             r + wd * e + 1e3 * wd * (e - tol_d).max(0.0)
         };
         // The best walk by eq. 6 among all seen, and among those within the tolerance.
-        let (mut best, mut best_met): (Option<(f64, TimedWalk)>, Option<(f64, TimedWalk)>) = (None, None);
+        let (mut best, mut best_met): (Option<Scored>, Option<Scored>) = (None, None);
         // Every walk found is a candidate; returns whether any walk was found, and the distance
         // of the walk closest to the target among the durations within the time tolerance (the
         // quantity the bisection steers).
         let consider = |found: &[Option<(f64, Vec<u32>)>],
-                        best: &mut Option<(f64, TimedWalk)>,
-                        best_met: &mut Option<(f64, TimedWalk)>|
+                        best: &mut Option<Scored>,
+                        best_met: &mut Option<Scored>|
          -> (bool, Option<f64>) {
             let (mut any, mut steer): (bool, Option<f64>) = (false, None);
             for (d, x) in found.iter().enumerate() {
@@ -685,7 +707,7 @@ impl TimedGraph {
             }
             tol *= 3;
         };
-        let done = |best_met: Option<(f64, TimedWalk)>, best: Option<(f64, TimedWalk)>, why: Option<Unreachable>| {
+        let done = |best_met: Option<Scored>, best: Option<Scored>, why: Option<Unreachable>| {
             let met = best_met.is_some();
             let (total_cost, walk) = best_met.or(best).expect("mu = 0 found a walk");
             Ok(DistanceTimeWalk { walk, total_cost, met, unreachable: if met { None } else { why } })
@@ -733,6 +755,17 @@ impl TimedGraph {
                 Some(_) => s_hi = s,
                 None => break,
             }
+        }
+        // The distance may jump across the target between s_lo and s_hi (the Lagrangian walks
+        // skip it): join halves cheapest under different trade-offs, whose distances fall
+        // between, from the bracket's ends and the extremes.
+        let cost_at = |s: f64| (1.0 - s, sign * s * scale);
+        for (sf, sb) in [(s_lo, s_hi), (s_hi, s_lo), (0.0, 1.0), (1.0, 0.0), (s_lo, 1.0), (1.0, s_lo)] {
+            if best_met.is_some() {
+                break;
+            }
+            let found = cheapest_joined(self, (a, b), (lo, hi), [cost_at(sf), cost_at(sb)], score);
+            consider(&found, &mut best, &mut best_met);
         }
         // A target within the bounds that no walk found meets: not proven unreachable (a walk
         // between the bounds may exist), reported as missed.
