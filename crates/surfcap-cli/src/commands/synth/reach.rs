@@ -24,8 +24,8 @@ pub struct Args {
     /// Ground-plane distance the centre of mass must travel (subject units).
     #[arg(long, value_parser = crate::options::non_negative)]
     pub distance: f64,
-    /// Duration: seconds (a bare number, e.g. 3, or 3s) or output frames (90f; seconds are
-    /// rounded to the nearest frame at the subject's rate).
+    /// Duration: seconds (a bare number, e.g. 3, or 3s) or frames shown (90f). T seconds show
+    /// round(T x fps) frames, start included, as `smg query` counts them.
     #[arg(long, value_parser = crate::options::positive_time)]
     pub time: TimeSpec,
     /// Distance error worth one unit of realism cost (Huang et al.: 0.3 m).
