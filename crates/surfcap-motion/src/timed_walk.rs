@@ -279,6 +279,16 @@ pub struct DistanceTimeWalk {
     pub unreachable: Option<Unreachable>,
 }
 
+/// The answer of a duration search with a tolerance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DurationWalk {
+    pub walk: TimedWalk,
+    /// Within the tolerance of the asked duration.
+    pub met: bool,
+    /// When not met: why no walk can be (`too_short`, `no_loop` or `granularity`).
+    pub unreachable: Option<Unreachable>,
+}
+
 /// Cheapest walk costs over (node, time) states, node-major: `cost[v * times + t]`, and the
 /// ground-plane distance of the walk that has that cost.
 struct Layers {
@@ -594,6 +604,38 @@ impl TimedGraph {
         }
     }
 
+    /// [`Self::walk_with_duration`] with a tolerance of `tol_t` frames: the walk whose duration
+    /// is closest to `frames` (which may be 0 or less when earlier keys came late), met when
+    /// within the tolerance; when not, why no walk can be, in the surface motion graph's words
+    /// ([`Unreachable`]): too short (every walk takes more frames), no loop (every walk has a
+    /// fixed length, so a longer time cannot be padded) or granularity (the cycles' durations do
+    /// not combine to it). When every walk is longer than the durations searched, the shortest
+    /// walk, too short, rather than an error.
+    pub fn walk_with_duration_within(
+        &self,
+        a: u32,
+        b: u32,
+        frames: i64,
+        tol_t: usize,
+        longest_edge: usize,
+    ) -> Result<DurationWalk> {
+        match self.walk_with_duration(a, b, frames, longest_edge) {
+            Ok(walk) => {
+                let met = (walk.frames as i64 - frames).unsigned_abs() as usize <= tol_t;
+                let unreachable = (!met).then(|| self.duration_reason((a, b), frames, tol_t));
+                Ok(DurationWalk { walk, met, unreachable })
+            }
+            Err(Error::NoWalkWithDuration { .. }) if self.least(a, b, |e| e.frames as f64).is_finite() => {
+                let shortest = self.least(a, b, |e| e.frames as f64);
+                let walk = self.walk_with_duration(a, b, shortest as i64, longest_edge)?;
+                let met = (walk.frames as i64 - frames).unsigned_abs() as usize <= tol_t;
+                let unreachable = (!met).then(|| self.duration_reason((a, b), frames, tol_t));
+                Ok(DurationWalk { walk, met, unreachable })
+            }
+            Err(e) => Err(e),
+        }
+    }
+
     /// Huang et al.'s constraint: the walk from `a` to `b` minimising
     /// C_s + |d - distance| / w_d_scale + |t - frames| / w_t_scale (eq. 6, with their weights
     /// 1/0.3 m and 1/10 frames when the scales are 0.3 and 10), among the walks within 1% of
@@ -714,7 +756,7 @@ impl TimedGraph {
         };
         // No walk lasts within the time tolerance: the durations say why.
         let Some(d0) = steer else {
-            let why = self.duration_reason((a, b), frames, tol_t);
+            let why = self.duration_reason((a, b), frames as i64, tol_t);
             return done(best_met, best, Some(why));
         };
         if best_met.is_some() {
@@ -774,9 +816,9 @@ impl TimedGraph {
 
     /// Why no walk lasts within `tol_t` frames of `frames`: every walk is longer, every walk
     /// has a fixed length, or the cycles' durations do not combine to it.
-    fn duration_reason(&self, (a, b): (u32, u32), frames: usize, tol_t: usize) -> Unreachable {
+    fn duration_reason(&self, (a, b): (u32, u32), frames: i64, tol_t: usize) -> Unreachable {
         let shortest = self.least(a, b, |e| e.frames as f64);
-        if shortest > (frames + tol_t) as f64 {
+        if shortest > (frames + tol_t as i64) as f64 {
             return Unreachable::TooShort { shortest_frames: shortest };
         }
         if !self.has_cycle_between(a, b) {
@@ -965,6 +1007,44 @@ mod tests {
             err.to_string().starts_with("no walk from sequence 0:0 to sequence 0:2 lasts between 1 and 10 frames"),
             "{err}"
         );
+    }
+
+    /// Key-pose times the graph cannot meet say why, in the surface motion graph's words: a
+    /// time shorter than the shortest walk is too short (and a walk longer than every duration
+    /// searched is still played), a longer one with no loop to pad it has no loop, and one the
+    /// loop's repetitions skip is granularity; a reachable time is met with no reason.
+    #[test]
+    fn duration_targets_that_cannot_be_met_say_why() {
+        let e = |from, to, frames| TimedEdge { from, to, frames, weight: 1.0, length: 1.0 };
+        // 0 -> 1 -> 2 -> 3, one frame each: every walk 0 -> 3 takes 3 frames.
+        let chain = TimedGraph::from_edges(4, vec![e(0, 1, 1), e(1, 2, 1), e(2, 3, 1)], FrameIndex::new([4]));
+        let l = chain.longest_edge();
+        let r = chain.walk_with_duration_within(0, 3, 1, 0, l).unwrap();
+        assert_eq!((r.walk.frames, r.met), (3, false));
+        assert_eq!(r.unreachable, Some(Unreachable::TooShort { shortest_frames: 3.0 }));
+        assert_eq!(r.unreachable.unwrap().to_string(), "too short: every walk takes at least 3 frames");
+        let r = chain.walk_with_duration_within(0, 3, 12, 2, l).unwrap();
+        assert_eq!((r.walk.frames, r.met, r.unreachable), (3, false, Some(Unreachable::NoLoop)));
+        let r = chain.walk_with_duration_within(0, 3, 2, 1, l).unwrap();
+        assert_eq!((r.walk.frames, r.met, r.unreachable), (3, true, None));
+        // A time earlier than the previous key (0 or less) is too short as well.
+        let r = chain.walk_with_duration_within(0, 3, -4, 1, l).unwrap();
+        assert_eq!(r.unreachable, Some(Unreachable::TooShort { shortest_frames: 3.0 }));
+        // With a loop 3 -> 1 of 4 frames, walks 0 -> 3 take 3, 9, 15, ... frames.
+        let looped =
+            TimedGraph::from_edges(4, vec![e(0, 1, 1), e(1, 2, 1), e(2, 3, 1), e(3, 1, 4)], FrameIndex::new([4]));
+        let l = looped.longest_edge();
+        let r = looped.walk_with_duration_within(0, 3, 6, 1, l).unwrap();
+        assert_eq!((r.met, r.unreachable), (false, Some(Unreachable::Granularity)));
+        let r = looped.walk_with_duration_within(0, 3, 14, 1, l).unwrap();
+        assert_eq!((r.walk.frames, r.met, r.unreachable), (15, true, None));
+        // Every walk longer than the durations searched (1..=10): the shortest, too short.
+        let long = TimedGraph::from_edges(3, vec![e(0, 1, 30), e(1, 2, 30)], FrameIndex::new([3]));
+        let r = long.walk_with_duration_within(0, 2, 5, 2, 2).unwrap();
+        assert_eq!((r.walk.walk, r.walk.frames), (vec![0, 1, 2], 60));
+        assert_eq!(r.unreachable, Some(Unreachable::TooShort { shortest_frames: 60.0 }));
+        // Ends no walk joins are still an error.
+        assert!(long.walk_with_duration_within(2, 0, 5, 2, 2).is_err());
     }
 
     /// Every walk from a to b of duration <= max by brute force: (duration, cost, length).
