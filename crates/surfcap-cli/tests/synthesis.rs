@@ -155,12 +155,14 @@ fn path_and_reach_on_cmu_locomotion() {
     let met = r["constraints"].as_array().unwrap();
     assert_eq!(met.len(), 2, "distance and time: {met:?}");
     assert!(met.iter().all(|c| c["missed"] == false), "{met:?}");
-    // One count of frames (frames written: 9 s at 30 fps is 270 steps, 271
-    // frames), errors in metres and relative to the request, and the poses at both ends.
-    assert_eq!(r["target_frames"], 271, "{r}");
+    // One count of frames, the surface motion graph's (frames shown, start included: 9 s at
+    // 30 fps is 270 frames), errors in metres and relative to the request, and the poses at both
+    // ends.
+    assert_eq!(r["target_frames"], 270, "{r}");
     assert_eq!(r["obtained_frames"], r["frames"], "{r}");
-    assert_eq!((met[1]["asked"].as_f64(), met[1]["achieved"].as_f64()), (Some(271.0), r["frames"].as_f64()), "{met:?}");
-    assert_eq!(r["seconds"].as_f64(), Some((r["frames"].as_f64().unwrap() - 1.0) / 30.0));
+    assert_eq!((met[1]["asked"].as_f64(), met[1]["achieved"].as_f64()), (Some(270.0), r["frames"].as_f64()), "{met:?}");
+    assert_eq!(r["seconds"].as_f64(), Some(r["frames"].as_f64().unwrap() / 30.0));
+    assert_eq!(r["target_seconds"].as_f64(), Some(9.0));
     assert_eq!(met[0]["unit"], "m");
     let distance_error = r["distance_error"].as_f64().unwrap();
     assert_eq!(met[0]["relative_error"].as_f64(), Some(distance_error / 10.0), "{met:?}");
@@ -205,10 +207,11 @@ fn path_and_reach_on_cmu_locomotion() {
     assert_eq!((distance["name"].as_str(), distance["missed"].as_bool()), (Some("distance"), Some(true)), "{r}");
     assert_eq!(distance["asked"], 1e9);
     assert_eq!(r["constraints"][1]["missed"], false);
-    // The printed line counts frames as the report does (4 s at 30 fps: 121 frames asked).
+    // The printed line counts frames as the report does (4 s at 30 fps: 120 frames shown,
+    // start included, asked).
     let printed = String::from_utf8_lossy(&o.stdout);
     assert!(printed.contains(&format!("in {} frames", r["frames"])), "{printed} vs {r}");
-    assert!(printed.contains("(asked 4s: 121 frames)"), "{printed}");
+    assert!(printed.contains("(asked 4s: 120 frames)"), "{printed}");
     std::fs::remove_file(&far).unwrap();
     let o = reach_far(&["--strict", "--quiet"]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
@@ -287,8 +290,8 @@ fn path_and_reach_on_cmu_locomotion() {
     let info: serde_json::Value = serde_json::from_slice(&surfcap!(&["info", p(&subject), "--json"]).stdout).unwrap();
     let fps = info["fps"].as_f64().unwrap();
     let frames = (3.0 * fps).round() as u64;
-    // Frames written: 3 s of steps at fps, both ends shown.
-    let written = frames + 1;
+    // Frames shown for 3 s, start included: round(3 x fps), as the surface motion graph counts.
+    let written = frames;
     let o = reach("16_15:10", "16_31:80", "3s", &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
@@ -451,6 +454,57 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
         &["line_2km.csv (2000.0 m long, the subject's fastest motion covers", "above the limit of 18000"],
         &path,
     );
+}
+
+/// A reach target no walk of the graph can meet (1 km in 6 s from a procedural walker's clips)
+/// says why, in the same words in the message and the report (the surface motion graph's
+/// reason `too_fast`), and `--strict` exits with the missed-constraint code 3.
+#[test]
+fn an_unreachable_reach_target_says_why_and_strict_exits_with_the_missed_code() {
+    let tmp = tempfile::tempdir().unwrap();
+    let walker = procedural_walker(tmp.path());
+    let cache = tmp.path().join("cache");
+    let out = tmp.path().join("far.glb");
+    let reach = |extra: &[&str]| {
+        let args = [
+            "synth",
+            "reach",
+            p(&walker),
+            "--from",
+            "walk:0",
+            "--to",
+            "jog:30",
+            "--distance",
+            "1000",
+            "--time",
+            "6",
+            "--strict",
+            "-o",
+            p(&out),
+            "--cache-dir",
+            p(&cache),
+        ];
+        surfcap!(&[&args[..], extra].concat())
+    };
+    let o = reach(&[]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.contains("no walk of the graph can meet this target: too fast: needs "), "{text}");
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("far.report.json")).unwrap()).unwrap();
+    assert_eq!(r["met"], false, "{r}");
+    let u = &r["unreachable"];
+    assert_eq!(u["reason"], "too_fast", "{r}");
+    assert!(u["needed"].as_f64().unwrap() > u["fastest"].as_f64().unwrap(), "{u}");
+    let why = r["unreachable_why"].as_str().unwrap();
+    assert!(why.starts_with("too fast: needs "), "{why}");
+    assert!(text.contains(&format!("no walk of the graph can meet this target: {why}\n")), "{text} vs {why}");
+    assert!(!text.contains("missed: the target lies within"), "{text}");
+    // With --json the report on stdout carries the same reason.
+    let o = reach(&["--json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("the report on stdout");
+    assert_eq!((&j["unreachable"], &j["unreachable_why"]), (u, &r["unreachable_why"]), "{j}");
 }
 
 /// A procedural walker (walk and jog of 2 s, 1,000 vertices) in `dir`: 20 m of path loop over

@@ -21,14 +21,14 @@
 //!   transition matches (the surface motion graph: its eq. 4 window; the essential graph: its
 //!   DTW warp), each engine placing the destination frame as it does when playing.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::motion_plane_alignment;
 use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::segment_bounds;
-use surfcap_motion::timed_walk::TimedGraph;
+use surfcap_motion::timed_walk::{LoopRule, TimedGraph};
 use surfcap_motion::walk_sequence::{Step, WalkModel};
 use surfcap_pipeline::{GraphKind, GraphParams, Pipeline};
 use surfcap_smg::motion_frames::MotionFrames;
@@ -87,6 +87,16 @@ pub struct EngineRow {
     pub smoothness: MinMeanMax,
     /// Per query, the search only (precomputation apart).
     pub cpu_seconds: MeanStd,
+    /// The targets within the tolerance (`SmgEvalOptions::tolerance`): how many each engine
+    /// meets, how many no walk of its graph can meet and why (the reasons of
+    /// `surfcap_smg::path_optimisation::Unreachable`, counted by name), and how many it missed
+    /// though no reason proves them unreachable (a search defect; 0 for both engines).
+    pub met: usize,
+    pub unreachable: BTreeMap<String, usize>,
+    pub missed_reachable: usize,
+    /// The worst errors among the met targets: distance relative to the target, and frames.
+    pub met_distance_relative_max: f64,
+    pub met_time_error_max: f64,
     /// Each query's (distance error, time error in frames), in the order of the targets; NaN
     /// for a failed query.
     #[serde(skip)]
@@ -107,6 +117,9 @@ pub struct EssentialGraphSetup {
     pub precompute_seconds: f64,
     /// Whether the graph and walk model came from the disk cache.
     pub graph_cached: bool,
+    /// Loops the searches never play to pad time (too short or too still), and the rule.
+    pub loop_rule: LoopRule,
+    pub excluded_loops: usize,
 }
 
 /// The result of [`smg_comparison`].
@@ -167,6 +180,17 @@ impl<K: std::hash::Hash + Eq + Copy> Measured<K> {
     }
 }
 
+/// The targets within the tolerance: met, unreachable by reason, missed while reachable, and the
+/// worst relative distance and time errors of the met.
+#[derive(Debug, Clone, Default)]
+struct Goal {
+    met: usize,
+    unreachable: BTreeMap<String, usize>,
+    missed_reachable: usize,
+    met_distance_relative_max: f64,
+    met_time_error_max: f64,
+}
+
 /// A row from per-query errors, times and the measures of the transitions taken.
 fn row(
     engine: &'static str,
@@ -175,6 +199,7 @@ fn row(
     cpu_seconds: MeanStd,
     taken: &[(f64, f64)],
     first_failure: Option<String>,
+    goal: Goal,
 ) -> EngineRow {
     let (d, t): (Vec<f64>, Vec<f64>) = errors.iter().copied().filter(|e| e.0.is_finite()).unzip();
     let (cost, smooth): (Vec<f64>, Vec<f64>) = taken.iter().copied().unzip();
@@ -191,6 +216,11 @@ fn row(
         transition_cost: MinMeanMax::of(&cost),
         smoothness: MinMeanMax::of(&smooth),
         cpu_seconds,
+        met: goal.met,
+        unreachable: goal.unreachable,
+        missed_reachable: goal.missed_reachable,
+        met_distance_relative_max: goal.met_distance_relative_max,
+        met_time_error_max: goal.met_time_error_max,
         errors,
     }
 }
@@ -221,7 +251,10 @@ pub fn smg_comparison(
     let graph = pipe.graph(params)?;
     let model = pipe.walk_model(params, None)?;
     let (graph_cached, graph, model) = (graph.from_cache && model.from_cache, graph.value, model.value);
-    let tg = TimedGraph::new(&graph, &model);
+    // Degenerate loops (too short, or too still) never pad time, as in `surfcap synth reach`.
+    let loop_rule = LoopRule::default();
+    let (tg, excluded) =
+        TimedGraph::new(&graph, &model).without_degenerate_loops(loop_rule, &|i, j| d.values[i * d.n + j]);
     let longest = tg.longest_edge();
     let precompute_seconds = t0.elapsed().as_secs_f64();
     let n = d.n;
@@ -244,17 +277,40 @@ pub fn smg_comparison(
             }
         }
         let errors = p.outcomes.iter().map(|q| (q.distance_error, q.time_error)).collect();
-        rows.push(row(SURFACE_MOTION_GRAPH, names, errors, p.cpu_seconds, &taken, None));
+        let g = &p.goal;
+        let smg_goal = Goal {
+            met: g.met,
+            unreachable: g.unreachable.clone(),
+            missed_reachable: p.queries.saturating_sub(g.met + g.unreachable.values().sum::<usize>()),
+            met_distance_relative_max: g.met_distance_relative_max,
+            met_time_error_max: g.met_time_error_max,
+        };
+        rows.push(row(SURFACE_MOTION_GRAPH, names, errors, p.cpu_seconds, &taken, None, smg_goal));
         // The essential graph on the same key frames and targets.
         let (mut errors, mut cpu, mut taken, mut first_failure) = (Vec::new(), Vec::new(), Vec::new(), None);
+        let mut goal = Goal::default();
         for &(dist, secs) in &opts.targets {
             let shown = secs * frames.fps;
             let intervals = (shown.round() as usize).saturating_sub(1).max(1);
             let t = Instant::now();
-            let found = tg.walk_with_distance_and_time(a as u32, b as u32, dist, intervals, scales, longest);
+            let tolerance = (opts.tolerance.distance_relative * dist, opts.tolerance.frames.floor() as usize);
+            let found = tg.walk_within(a as u32, b as u32, (dist, intervals), scales, tolerance, longest);
             progress.advance(1);
             let w = match found {
-                Ok((w, _)) => w,
+                Ok(r) => {
+                    match &r.unreachable {
+                        _ if r.met => {
+                            goal.met += 1;
+                            let rel = (r.walk.distance - dist).abs() / dist.max(f64::MIN_POSITIVE);
+                            goal.met_distance_relative_max = goal.met_distance_relative_max.max(rel);
+                            let t_err = ((r.walk.frames + 1) as f64 - shown).abs();
+                            goal.met_time_error_max = goal.met_time_error_max.max(t_err);
+                        }
+                        Some(why) => *goal.unreachable.entry(why.kind().to_string()).or_insert(0) += 1,
+                        None => goal.missed_reachable += 1,
+                    }
+                    r.walk
+                }
                 // A target the graph cannot meet (e.g. key frames it does not connect): counted,
                 // the first reason kept.
                 Err(e) => {
@@ -282,7 +338,7 @@ pub fn smg_comparison(
                 })?);
             }
         }
-        rows.push(row(ESSENTIAL_GRAPH, names, errors, MeanStd::of(&cpu), &taken, first_failure));
+        rows.push(row(ESSENTIAL_GRAPH, names, errors, MeanStd::of(&cpu), &taken, first_failure, goal));
     }
     progress.finish();
     Ok(SmgComparison {
@@ -297,6 +353,8 @@ pub fn smg_comparison(
             transitions: model.n_transitions(),
             precompute_seconds,
             graph_cached,
+            loop_rule,
+            excluded_loops: excluded.len(),
         },
         rows,
     })

@@ -35,6 +35,7 @@ use surfcap_mesh::FrameIndex;
 
 use crate::error::{Error, Result};
 use crate::graph::Graph;
+pub use crate::unreachable::Unreachable;
 use crate::walk_sequence::{Step, WalkModel};
 
 /// An edge as the timed search sees it.
@@ -155,6 +156,100 @@ impl TimedGraph {
         let backward = direction(|e| e.from, |e| e.to);
         TimedGraph { n, edges, out, block, forward, backward, index }
     }
+
+    /// The graph without its degenerate loops (see [`LoopRule`]): every transition that jumps
+    /// back within its own sequence (to `v <= u`), making with the frames from `v` to `u` a
+    /// loop of fewer than `rule.min_frames` frames, or one whose poses (`pose(i, j)`: the pose
+    /// distance of global frames i and j) vary less than the floor, is removed, so no search
+    /// pads time with it; the removed loops are listed. Loops through several transitions are
+    /// not examined.
+    pub fn without_degenerate_loops(
+        &self,
+        rule: LoopRule,
+        pose: &dyn Fn(usize, usize) -> f64,
+    ) -> (Self, Vec<ExcludedLoop>) {
+        // Median distance between successive frames, per sequence.
+        let typical: Vec<f64> = (0..self.index.n_sequences())
+            .map(|q| {
+                let r = self.index.range(q);
+                let mut steps: Vec<f64> = (r.start..r.end.saturating_sub(1)).map(|i| pose(i, i + 1)).collect();
+                steps.sort_by(f64::total_cmp);
+                steps.get(steps.len() / 2).copied().unwrap_or(0.0)
+            })
+            .collect();
+        let mut kept = Vec::with_capacity(self.edges.len());
+        let mut excluded = Vec::new();
+        for e in &self.edges {
+            let (u, v) = (e.from as usize, e.to as usize);
+            let looped = match (self.index.locate(u), self.index.locate(v)) {
+                (Some((qu, _)), Some((qv, _))) => e.frames > 1 && qu == qv && v <= u,
+                _ => false,
+            };
+            if looped {
+                let frames = e.frames as usize + (u - v);
+                let q = self.index.locate(u).map_or(0, |x| x.0);
+                let mut largest = 0.0f64;
+                for i in v..=u {
+                    for j in i + 1..=u {
+                        largest = largest.max(pose(i, j));
+                    }
+                }
+                let variation = if typical[q] > 0.0 { largest / typical[q] } else { f64::INFINITY };
+                let reason = if frames < rule.min_frames {
+                    Some("too_short")
+                } else if variation < rule.variation_floor {
+                    Some("too_still")
+                } else {
+                    None
+                };
+                if let Some(reason) = reason {
+                    excluded.push(ExcludedLoop {
+                        from: self.index.label(u),
+                        to: self.index.label(v),
+                        frames,
+                        variation,
+                        reason,
+                    });
+                    continue;
+                }
+            }
+            kept.push(*e);
+        }
+        (Self::from_edges(self.n, kept, self.index.clone()), excluded)
+    }
+}
+
+/// Which loops may pad time: none playing fewer frames per repetition than `min_frames`, none
+/// whose poses vary less than `variation_floor` typical frame steps (the largest pose distance
+/// among the loop's frames over the median distance between successive frames of its
+/// sequence), the words and defaults of the surface motion graph's rule.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LoopRule {
+    pub min_frames: usize,
+    pub variation_floor: f64,
+}
+
+impl Default for LoopRule {
+    /// 10 frames and 1 typical frame step.
+    fn default() -> Self {
+        LoopRule { min_frames: 10, variation_floor: 1.0 }
+    }
+}
+
+/// A loop the timed searches never play: a transition back into its own sequence, with the
+/// frames it replays and why it is excluded.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ExcludedLoop {
+    /// The transition's ends, `sequence:frame`.
+    pub from: String,
+    pub to: String,
+    /// Frames of one repetition (the transition plus the frames replayed).
+    pub frames: usize,
+    /// Largest pose distance among the loop's frames, in typical frame steps.
+    pub variation: f64,
+    /// `too_short` (fewer frames than the minimum length) or `too_still` (below the
+    /// pose-variation floor).
+    pub reason: &'static str,
 }
 
 /// A walk and what it achieved.
@@ -166,6 +261,32 @@ pub struct TimedWalk {
     pub cost: f64,
     /// Ground-plane length of the centre-of-mass path.
     pub distance: f64,
+}
+
+/// A walk with its eq. 6 cost.
+type Scored = (f64, TimedWalk);
+
+/// The answer of a distance-and-time search with a tolerance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DistanceTimeWalk {
+    pub walk: TimedWalk,
+    /// Its eq. 6 cost (realism plus weighted distance and timing errors).
+    pub total_cost: f64,
+    /// Within the tolerance of both targets.
+    pub met: bool,
+    /// When not met: why no walk can meet the targets, if the graph proves it (`None` with
+    /// `met` false: a target within the bounds the search missed).
+    pub unreachable: Option<Unreachable>,
+}
+
+/// The answer of a duration search with a tolerance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DurationWalk {
+    pub walk: TimedWalk,
+    /// Within the tolerance of the asked duration.
+    pub met: bool,
+    /// When not met: why no walk can be (`too_short`, `no_loop` or `granularity`).
+    pub unreachable: Option<Unreachable>,
 }
 
 /// Cheapest walk costs over (node, time) states, node-major: `cost[v * times + t]`, and the
@@ -316,22 +437,41 @@ fn trace(dir: &Direction, ec: &EdgeCosts, layers: &Layers, from_times: usize, t:
 /// the forward table alone.
 fn cheapest_by_duration(
     g: &TimedGraph,
+    ends: (u32, u32),
+    range: (usize, usize),
+    costs: (f64, f64),
+    score: impl Fn(f64, f64) -> f64 + Sync,
+) -> Vec<Option<(f64, Vec<u32>)>> {
+    cheapest_joined(g, ends, range, [costs, costs], score)
+}
+
+/// [`cheapest_by_duration`] with the forward half's edge costs `realism * weight + mu * length`
+/// from `costs[0]` and the backward half's from `costs[1]`: each split then joins walks
+/// cheapest under different trade-offs, whose distances lie between those of either alone.
+fn cheapest_joined(
+    g: &TimedGraph,
     (a, b): (u32, u32),
     (lo, hi): (usize, usize),
-    mu: f64,
+    costs: [(f64, f64); 2],
     score: impl Fn(f64, f64) -> f64 + Sync,
 ) -> Vec<Option<(f64, Vec<u32>)>> {
     let h = (hi / 2).max(1);
     let longest = g.longest_edge();
     let length: Vec<f64> = g.edges.iter().map(|e| e.length).collect();
-    let ec = EdgeCosts { cost: g.edges.iter().map(|e| e.weight + mu * e.length).collect(), length: &length };
+    let edge_costs = |(realism, mu): (f64, f64)| EdgeCosts {
+        cost: g.edges.iter().map(|e| realism * e.weight + mu * e.length).collect(),
+        length: &length,
+    };
+    let (ec, ecb) = (edge_costs(costs[0]), edge_costs(costs[1]));
+    let (mu, mub) = (costs[0].1, costs[1].1);
     let back_times = (hi + 1).saturating_sub(h);
     let (f, bw) = rayon::join(
         || layered(g, &g.forward, &ec, a, h + longest, h),
-        || layered(g, &g.backward, &ec, b, back_times, back_times),
+        || layered(g, &g.backward, &ecb, b, back_times, back_times),
     );
     // The realism of a state's walk is its cost minus mu times its distance.
     let judge = |cost: f64, dist: f64| score(cost - mu * dist, dist);
+    let join = |(fc, fd): (f64, f64), (bc, bd): (f64, f64)| score(fc - mu * fd + bc - mub * bd, fd + bd);
     // Per duration: (score, t, v) of the best split, smallest (t, v) on ties.
     let best: Vec<Option<(f64, usize, usize)>> = (0..=hi)
         .into_par_iter()
@@ -346,9 +486,9 @@ fn cheapest_by_duration(
             let mut best: Option<(f64, usize, usize)> = None;
             for t in h..=d.min(h + longest - 1) {
                 for v in 0..g.n {
-                    let x = f.at(t, v) + bw.at(d - t, v);
-                    if x.is_finite() {
-                        let y = judge(x, f.dist(t, v) + bw.dist(d - t, v));
+                    let (xf, xb) = (f.at(t, v), bw.at(d - t, v));
+                    if (xf + xb).is_finite() {
+                        let y = join((xf, f.dist(t, v)), (xb, bw.dist(d - t, v)));
                         if best.is_none_or(|b0| y < b0.0) {
                             best = Some((y, t, v));
                         }
@@ -365,7 +505,7 @@ fn cheapest_by_duration(
             let mut nodes = trace(&g.forward, &ec, &f, h, t, v);
             nodes.reverse();
             if d > t {
-                let back = trace(&g.backward, &ec, &bw, back_times, d - t, v);
+                let back = trace(&g.backward, &ecb, &bw, back_times, d - t, v);
                 nodes.extend_from_slice(&back[1..]);
             }
             Some((y, nodes))
@@ -373,8 +513,8 @@ fn cheapest_by_duration(
         .collect()
 }
 
-/// Bisection steps on the Lagrange multiplier of the distance term.
-const MU_STEPS: usize = 8;
+/// Bisection steps on the share of the distance term in the edge cost.
+const MU_STEPS: usize = 16;
 
 impl TimedGraph {
     /// Duration, realism cost and distance of a walk of this graph.
@@ -448,7 +588,7 @@ impl TimedGraph {
         let mut tol = 2;
         loop {
             let (lo, hi) = (target.saturating_sub(tol).max(1), (target + tol).min(widest));
-            let found = cheapest_by_duration(self, (a, b), (lo, hi), 0.0, |w, _| w);
+            let found = cheapest_by_duration(self, (a, b), (lo, hi), (1.0, 0.0), |w, _| w);
             let best = found
                 .iter()
                 .enumerate()
@@ -464,9 +604,42 @@ impl TimedGraph {
         }
     }
 
+    /// [`Self::walk_with_duration`] with a tolerance of `tol_t` frames: the walk whose duration
+    /// is closest to `frames` (which may be 0 or less when earlier keys came late), met when
+    /// within the tolerance; when not, why no walk can be, in the surface motion graph's words
+    /// ([`Unreachable`]): too short (every walk takes more frames), no loop (every walk has a
+    /// fixed length, so a longer time cannot be padded) or granularity (the cycles' durations do
+    /// not combine to it). When every walk is longer than the durations searched, the shortest
+    /// walk, too short, rather than an error.
+    pub fn walk_with_duration_within(
+        &self,
+        a: u32,
+        b: u32,
+        frames: i64,
+        tol_t: usize,
+        longest_edge: usize,
+    ) -> Result<DurationWalk> {
+        match self.walk_with_duration(a, b, frames, longest_edge) {
+            Ok(walk) => {
+                let met = (walk.frames as i64 - frames).unsigned_abs() as usize <= tol_t;
+                let unreachable = (!met).then(|| self.duration_reason((a, b), frames, tol_t));
+                Ok(DurationWalk { walk, met, unreachable })
+            }
+            Err(Error::NoWalkWithDuration { .. }) if self.least(a, b, |e| e.frames as f64).is_finite() => {
+                let shortest = self.least(a, b, |e| e.frames as f64);
+                let walk = self.walk_with_duration(a, b, shortest as i64, longest_edge)?;
+                let met = (walk.frames as i64 - frames).unsigned_abs() as usize <= tol_t;
+                let unreachable = (!met).then(|| self.duration_reason((a, b), frames, tol_t));
+                Ok(DurationWalk { walk, met, unreachable })
+            }
+            Err(e) => Err(e),
+        }
+    }
+
     /// Huang et al.'s constraint: the walk from `a` to `b` minimising
     /// C_s + |d - distance| / w_d_scale + |t - frames| / w_t_scale (eq. 6, with their weights
-    /// 1/0.3 m and 1/10 frames when the scales are 0.3 and 10).
+    /// 1/0.3 m and 1/10 frames when the scales are 0.3 and 10), among the walks within 1% of
+    /// the distance and 1 frame of the duration when there is one ([`Self::walk_within`]).
     pub fn walk_with_distance_and_time(
         &self,
         a: u32,
@@ -476,6 +649,33 @@ impl TimedGraph {
         scales: (f64, f64),
         longest_edge: usize,
     ) -> Result<(TimedWalk, f64)> {
+        let r = self.walk_within(a, b, (distance, frames), scales, (0.01 * distance, 1), longest_edge)?;
+        Ok((r.walk, r.total_cost))
+    }
+
+    /// Huang et al.'s constraint with a tolerance (`(distance, frames)`): the walk of least
+    /// eq. 6 cost among those within the tolerance of the target distance and duration; when
+    /// none is, the eq. 6 optimum found, with the reason no walk can meet the target
+    /// ([`Unreachable`]) when the graph proves it.
+    ///
+    /// The search: realism-cheapest walks of the durations near the target first (Lagrange
+    /// multiplier mu = 0); if none meets the target, the walks of least (or greatest) distance
+    /// of every duration (realism ignored), which bound what any walk can travel: if even they
+    /// miss at every duration within the tolerance, the target is unreachable and the bounds
+    /// say why. Otherwise the edge cost `(1 - s) weight + s mu_scale length` is bisected on `s`
+    /// (from the realism optimum at 0 to the distance extreme at 1, the bracket holding the
+    /// target by construction), each duration's walk chosen among its splits by realism plus
+    /// distance error (errors beyond the tolerance counted a thousand times over), until a walk
+    /// within the tolerance is found.
+    pub fn walk_within(
+        &self,
+        a: u32,
+        b: u32,
+        (distance, frames): (f64, usize),
+        scales: (f64, f64),
+        (tol_d, tol_t): (f64, usize),
+        longest_edge: usize,
+    ) -> Result<DistanceTimeWalk> {
         self.check(a, b)?;
         if !(distance.is_finite() && distance >= 0.0) {
             return Err(Error::Parameter { name: "distance", value: distance, expected: "a finite distance >= 0" });
@@ -485,68 +685,265 @@ impl TimedGraph {
                 return Err(Error::Parameter { name, value, expected: "a finite number > 0" });
             }
         }
+        if !(tol_d.is_finite() && tol_d >= 0.0) {
+            return Err(Error::Parameter {
+                name: "distance tolerance",
+                value: tol_d,
+                expected: "a finite distance >= 0",
+            });
+        }
+        let frames = frames.max(1);
         let (wd, wt) = (1.0 / scales.0, 1.0 / scales.1);
         let total =
             |w: &TimedWalk| w.cost + wd * (w.distance - distance).abs() + wt * (w.frames as f64 - frames as f64).abs();
-        // Durations near the target first (a time error of w_t^-1 frames costs as much as one
-        // unit of realism), widened when no walk has them.
-        // Each duration's walk is chosen by its realism plus distance error.
-        let score = |r: f64, dist: f64| r + wd * (dist - distance).abs();
-        let mut best: Option<(f64, TimedWalk)> = None;
-        // Every walk found is a candidate; returns the distance at the duration closest to the
-        // target, the quantity the bisection steers.
-        let mut consider = |found: Vec<Option<(f64, Vec<u32>)>>| -> Option<f64> {
-            let mut closest: Option<(usize, f64)> = None;
+        let within = |w: &TimedWalk| (w.distance - distance).abs() <= tol_d && w.frames.abs_diff(frames) <= tol_t;
+        let in_window = |d: usize| d.abs_diff(frames) <= tol_t;
+        // Each duration's walk is chosen by its realism plus distance error, an error beyond the
+        // tolerance weighing a thousand times more, so that a duration's walk is within the
+        // tolerance whenever one of its splits is.
+        let score = |r: f64, dist: f64| {
+            let e = (dist - distance).abs();
+            r + wd * e + 1e3 * wd * (e - tol_d).max(0.0)
+        };
+        // The best walk by eq. 6 among all seen, and among those within the tolerance.
+        let (mut best, mut best_met): (Option<Scored>, Option<Scored>) = (None, None);
+        // Every walk found is a candidate; returns whether any walk was found, and the distance
+        // of the walk closest to the target among the durations within the time tolerance (the
+        // quantity the bisection steers).
+        let consider = |found: &[Option<(f64, Vec<u32>)>],
+                        best: &mut Option<Scored>,
+                        best_met: &mut Option<Scored>|
+         -> (bool, Option<f64>) {
+            let (mut any, mut steer): (bool, Option<f64>) = (false, None);
             for (d, x) in found.iter().enumerate() {
                 let Some((_, walk)) = x else { continue };
+                any = true;
                 let m = self.measure(walk);
                 let c = total(&m);
-                if closest.is_none_or(|(d0, _)| d.abs_diff(frames) < d0) {
-                    closest = Some((d.abs_diff(frames), m.distance));
+                if in_window(d) && steer.is_none_or(|s| (m.distance - distance).abs() < (s - distance).abs()) {
+                    steer = Some(m.distance);
+                }
+                if within(&m) && best_met.as_ref().is_none_or(|(b0, _)| c < *b0) {
+                    *best_met = Some((c, m.clone()));
                 }
                 if best.as_ref().is_none_or(|(b0, _)| c < *b0) {
-                    best = Some((c, m));
+                    *best = Some((c, m));
                 }
             }
-            closest.map(|c| c.1)
+            (any, steer)
         };
         // mu = 0 over durations near the target first (a time error of w_t^-1 frames costs as
         // much as one unit of realism), widened when no walk has them.
         // The widest range is the one of `walk_with_duration`, so both explain it alike.
         let widest = (2 * frames).max(frames + 2 * longest_edge);
-        let mut tol = (frames / 20).max(3);
-        let (lo, hi, d0) = loop {
+        let mut tol = (frames / 20).max(3).max(tol_t);
+        let (lo, hi, steer) = loop {
             let (lo, hi) = (frames.saturating_sub(tol).max(1), (frames + tol).min(widest));
-            if let Some(d0) = consider(cheapest_by_duration(self, (a, b), (lo, hi), 0.0, score)) {
-                break (lo, hi, d0);
+            let found = cheapest_by_duration(self, (a, b), (lo, hi), (1.0, 0.0), score);
+            let (any, steer) = consider(&found, &mut best, &mut best_met);
+            if any {
+                break (lo, hi, steer);
             }
             if lo == 1 && hi == widest {
                 return Err(self.no_walk((a, b), (lo, hi), frames, longest_edge));
             }
             tol *= 3;
         };
-        // Then bisect mu so that the distance at the target duration meets the target. The
-        // distance falls with mu in steps whose sizes span orders of magnitude, so the bisection
-        // runs on log |mu|, between 2^-14 and 2^6 times the graph's realism cost per metre.
+        let done = |best_met: Option<Scored>, best: Option<Scored>, why: Option<Unreachable>| {
+            let met = best_met.is_some();
+            let (total_cost, walk) = best_met.or(best).expect("mu = 0 found a walk");
+            Ok(DistanceTimeWalk { walk, total_cost, met, unreachable: if met { None } else { why } })
+        };
+        // No walk lasts within the time tolerance: the durations say why.
+        let Some(d0) = steer else {
+            let why = self.duration_reason((a, b), frames as i64, tol_t);
+            return done(best_met, best, Some(why));
+        };
+        if best_met.is_some() {
+            return done(best_met, best, None);
+        }
+        // The distance extreme on the side of the target: the least distance of every duration
+        // when the cheapest walk travels too far, the greatest when too little.
+        let sign = if d0 > distance { 1.0 } else { -1.0 };
+        let extreme = cheapest_by_duration(self, (a, b), (lo, hi), (0.0, sign), |_, l| sign * l);
+        consider(&extreme, &mut best, &mut best_met);
+        if best_met.is_none() {
+            let bound: Vec<(usize, f64)> = extreme
+                .iter()
+                .enumerate()
+                .filter(|(d, _)| in_window(*d))
+                .filter_map(|(d, x)| x.as_ref().map(|x| (d, self.measure(&x.1).distance)))
+                .collect();
+            let misses = |x: f64| if sign > 0.0 { x > distance + tol_d } else { x < distance - tol_d };
+            if !bound.is_empty() && bound.iter().all(|&(_, x)| misses(x)) {
+                let why = self.distance_reason((a, b), (distance, frames), tol_d, sign, &bound);
+                return done(best_met, best, Some(why));
+            }
+        }
+        // Bisect s in [0, 1]: the distance of each duration's Lagrangian walk falls (sign > 0)
+        // or rises (sign < 0) with s, from the realism optimum to the extreme that meets it.
         let scale = self.edges.iter().map(|e| e.weight).sum::<f64>()
             / self.edges.iter().map(|e| e.length).sum::<f64>().max(1e-9);
-        let sign = if d0 > distance { 1.0 } else { -1.0 };
-        let (mut lo_log, mut hi_log) = (-14.0f64, 6.0f64);
-        if (d0 - distance).abs() > 0.01 * distance {
-            for _ in 0..MU_STEPS {
-                let mid = 0.5 * (lo_log + hi_log);
-                let mu = sign * scale * mid.exp2();
-                match consider(cheapest_by_duration(self, (a, b), (lo, hi), mu, score)) {
-                    Some(d) if (d - distance).abs() <= 0.01 * distance => break,
-                    // Not far enough yet: a stronger push.
-                    Some(d) if (d - distance) * sign > 0.0 => lo_log = mid,
-                    Some(_) => hi_log = mid,
-                    None => break,
+        let (mut s_lo, mut s_hi) = (0.0f64, 1.0f64);
+        for _ in 0..MU_STEPS {
+            if best_met.is_some() {
+                break;
+            }
+            let s = 0.5 * (s_lo + s_hi);
+            let found = cheapest_by_duration(self, (a, b), (lo, hi), (1.0 - s, sign * s * scale), score);
+            match consider(&found, &mut best, &mut best_met).1 {
+                // Not far enough yet (or not near enough): a stronger push.
+                Some(d) if (d - distance) * sign > 0.0 => s_lo = s,
+                Some(_) => s_hi = s,
+                None => break,
+            }
+        }
+        // The distance may jump across the target between s_lo and s_hi (the Lagrangian walks
+        // skip it): join halves cheapest under different trade-offs, whose distances fall
+        // between, from the bracket's ends and the extremes.
+        let cost_at = |s: f64| (1.0 - s, sign * s * scale);
+        for (sf, sb) in [(s_lo, s_hi), (s_hi, s_lo), (0.0, 1.0), (1.0, 0.0), (s_lo, 1.0), (1.0, s_lo)] {
+            if best_met.is_some() {
+                break;
+            }
+            let found = cheapest_joined(self, (a, b), (lo, hi), [cost_at(sf), cost_at(sb)], score);
+            consider(&found, &mut best, &mut best_met);
+        }
+        // A target within the bounds that no walk found meets: not proven unreachable (a walk
+        // between the bounds may exist), reported as missed.
+        done(best_met, best, None)
+    }
+
+    /// Why no walk lasts within `tol_t` frames of `frames`: every walk is longer, every walk
+    /// has a fixed length, or the cycles' durations do not combine to it.
+    fn duration_reason(&self, (a, b): (u32, u32), frames: i64, tol_t: usize) -> Unreachable {
+        let shortest = self.least(a, b, |e| e.frames as f64);
+        if shortest > (frames + tol_t as i64) as f64 {
+            return Unreachable::TooShort { shortest_frames: shortest };
+        }
+        if !self.has_cycle_between(a, b) {
+            return Unreachable::NoLoop;
+        }
+        Unreachable::Granularity
+    }
+
+    /// Why no walk of the durations of `bound` (each with its least distance when `sign` > 0,
+    /// its greatest when < 0, all missing the target) meets the distance.
+    fn distance_reason(
+        &self,
+        (a, b): (u32, u32),
+        (distance, frames): (f64, usize),
+        tol_d: f64,
+        sign: f64,
+        bound: &[(usize, f64)],
+    ) -> Unreachable {
+        let needed = distance / frames as f64;
+        if sign > 0.0 {
+            let shortest_distance = self.least(a, b, |e| e.length);
+            if shortest_distance > distance + tol_d {
+                return Unreachable::TooNear { shortest_distance };
+            }
+        }
+        if !self.has_cycle_between(a, b) {
+            return Unreachable::NoLoop;
+        }
+        let speeds = bound.iter().map(|&(d, x)| x / d.max(1) as f64);
+        if sign > 0.0 {
+            Unreachable::TooSlow { needed, slowest: speeds.fold(f64::INFINITY, f64::min) }
+        } else {
+            Unreachable::TooFast { needed, fastest: speeds.fold(0.0, f64::max) }
+        }
+    }
+
+    /// The least sum of `cost` (>= 0) over the walks of at least one edge from `a` to `b`
+    /// (Dijkstra); infinite when none.
+    fn least(&self, a: u32, b: u32, cost: impl Fn(&TimedEdge) -> f64) -> f64 {
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+        // Non-negative floats order as their bits.
+        let mut dist = vec![f64::INFINITY; self.n];
+        let mut heap = BinaryHeap::new();
+        let mut best = f64::INFINITY;
+        for &k in &self.out[a as usize] {
+            let e = &self.edges[k];
+            let c = cost(e).max(0.0);
+            if c < dist[e.to as usize] {
+                dist[e.to as usize] = c;
+                heap.push(Reverse((c.to_bits(), e.to)));
+            }
+        }
+        while let Some(Reverse((bits, u))) = heap.pop() {
+            let du = f64::from_bits(bits);
+            if du > dist[u as usize] {
+                continue;
+            }
+            if u == b {
+                best = du;
+                break;
+            }
+            for &k in &self.out[u as usize] {
+                let e = &self.edges[k];
+                let c = du + cost(e).max(0.0);
+                if c < dist[e.to as usize] {
+                    dist[e.to as usize] = c;
+                    heap.push(Reverse((c.to_bits(), e.to)));
                 }
             }
         }
-        let (c, w) = best.expect("mu = 0 found a walk");
-        Ok((w, c))
+        best
+    }
+
+    /// Whether some walk from `a` to `b` can repeat a cycle: a cycle among the frames both
+    /// reachable from `a` and reaching `b` (Kahn's elimination leaves a node).
+    fn has_cycle_between(&self, a: u32, b: u32) -> bool {
+        let reach = |start: u32, forward: bool| {
+            let mut seen = vec![false; self.n];
+            let mut stack = vec![start as usize];
+            seen[start as usize] = true;
+            while let Some(u) = stack.pop() {
+                let next: Vec<usize> = if forward {
+                    self.out[u].iter().map(|&k| self.edges[k].to as usize).collect()
+                } else {
+                    // Forward adjacency groups edges by destination: the predecessors of u.
+                    self.forward
+                        .long
+                        .range(u)
+                        .map(|i| self.forward.long.other[i] as usize)
+                        .chain(self.forward.short.range(u).map(|i| self.forward.short.other[i] as usize))
+                        .collect()
+                };
+                for v in next {
+                    if !seen[v] {
+                        seen[v] = true;
+                        stack.push(v);
+                    }
+                }
+            }
+            seen
+        };
+        let (from_a, to_b) = (reach(a, true), reach(b, false));
+        let useful: Vec<bool> = (0..self.n).map(|v| from_a[v] && to_b[v]).collect();
+        let mut indegree = vec![0usize; self.n];
+        for e in &self.edges {
+            if useful[e.from as usize] && useful[e.to as usize] {
+                indegree[e.to as usize] += 1;
+            }
+        }
+        let mut stack: Vec<usize> = (0..self.n).filter(|&v| useful[v] && indegree[v] == 0).collect();
+        let mut removed = 0;
+        while let Some(u) = stack.pop() {
+            removed += 1;
+            for &k in &self.out[u] {
+                let v = self.edges[k].to as usize;
+                if useful[v] {
+                    indegree[v] -= 1;
+                    if indegree[v] == 0 {
+                        stack.push(v);
+                    }
+                }
+            }
+        }
+        removed < useful.iter().filter(|&&u| u).count()
     }
 
     /// The longest edge, in frames.
@@ -612,6 +1009,44 @@ mod tests {
         );
     }
 
+    /// Key-pose times the graph cannot meet say why, in the surface motion graph's words: a
+    /// time shorter than the shortest walk is too short (and a walk longer than every duration
+    /// searched is still played), a longer one with no loop to pad it has no loop, and one the
+    /// loop's repetitions skip is granularity; a reachable time is met with no reason.
+    #[test]
+    fn duration_targets_that_cannot_be_met_say_why() {
+        let e = |from, to, frames| TimedEdge { from, to, frames, weight: 1.0, length: 1.0 };
+        // 0 -> 1 -> 2 -> 3, one frame each: every walk 0 -> 3 takes 3 frames.
+        let chain = TimedGraph::from_edges(4, vec![e(0, 1, 1), e(1, 2, 1), e(2, 3, 1)], FrameIndex::new([4]));
+        let l = chain.longest_edge();
+        let r = chain.walk_with_duration_within(0, 3, 1, 0, l).unwrap();
+        assert_eq!((r.walk.frames, r.met), (3, false));
+        assert_eq!(r.unreachable, Some(Unreachable::TooShort { shortest_frames: 3.0 }));
+        assert_eq!(r.unreachable.unwrap().to_string(), "too short: every walk takes at least 3 frames");
+        let r = chain.walk_with_duration_within(0, 3, 12, 2, l).unwrap();
+        assert_eq!((r.walk.frames, r.met, r.unreachable), (3, false, Some(Unreachable::NoLoop)));
+        let r = chain.walk_with_duration_within(0, 3, 2, 1, l).unwrap();
+        assert_eq!((r.walk.frames, r.met, r.unreachable), (3, true, None));
+        // A time earlier than the previous key (0 or less) is too short as well.
+        let r = chain.walk_with_duration_within(0, 3, -4, 1, l).unwrap();
+        assert_eq!(r.unreachable, Some(Unreachable::TooShort { shortest_frames: 3.0 }));
+        // With a loop 3 -> 1 of 4 frames, walks 0 -> 3 take 3, 9, 15, ... frames.
+        let looped =
+            TimedGraph::from_edges(4, vec![e(0, 1, 1), e(1, 2, 1), e(2, 3, 1), e(3, 1, 4)], FrameIndex::new([4]));
+        let l = looped.longest_edge();
+        let r = looped.walk_with_duration_within(0, 3, 6, 1, l).unwrap();
+        assert_eq!((r.met, r.unreachable), (false, Some(Unreachable::Granularity)));
+        let r = looped.walk_with_duration_within(0, 3, 14, 1, l).unwrap();
+        assert_eq!((r.walk.frames, r.met, r.unreachable), (15, true, None));
+        // Every walk longer than the durations searched (1..=10): the shortest, too short.
+        let long = TimedGraph::from_edges(3, vec![e(0, 1, 30), e(1, 2, 30)], FrameIndex::new([3]));
+        let r = long.walk_with_duration_within(0, 2, 5, 2, 2).unwrap();
+        assert_eq!((r.walk.walk, r.walk.frames), (vec![0, 1, 2], 60));
+        assert_eq!(r.unreachable, Some(Unreachable::TooShort { shortest_frames: 60.0 }));
+        // Ends no walk joins are still an error.
+        assert!(long.walk_with_duration_within(2, 0, 5, 2, 2).is_err());
+    }
+
     /// Every walk from a to b of duration <= max by brute force: (duration, cost, length).
     fn brute(g: &TimedGraph, a: u32, b: u32, max: usize) -> Vec<(usize, f64, f64)> {
         let mut found = Vec::new();
@@ -645,7 +1080,7 @@ mod tests {
         let g = line_graph();
         for (a, b) in [(0, 3), (1, 0), (2, 2), (0, 0)] {
             let hi = 24;
-            let got = cheapest_by_duration(&g, (a, b), (1, hi), 0.0, |w, _| w);
+            let got = cheapest_by_duration(&g, (a, b), (1, hi), (1.0, 0.0), |w, _| w);
             let all = brute(&g, a, b, hi);
             for (d, got_d) in got.iter().enumerate().skip(1) {
                 let want = all.iter().filter(|x| x.0 == d).map(|x| x.1).fold(f64::INFINITY, f64::min);
@@ -689,8 +1124,8 @@ mod tests {
             let hi = 16;
             for mu in [0.0, 0.7, -0.3] {
                 for (a, b) in [(0, 7), (3, 3), (5, 1)] {
-                    let got = cheapest_by_duration(&g, (a, b), (1, hi), mu, |r, l| r + mu * l);
-                    let scored = cheapest_by_duration(&g, (a, b), (1, hi), mu, |r, l| r + 3.0 * (l - 4.0).abs());
+                    let got = cheapest_by_duration(&g, (a, b), (1, hi), (1.0, mu), |r, l| r + mu * l);
+                    let scored = cheapest_by_duration(&g, (a, b), (1, hi), (1.0, mu), |r, l| r + 3.0 * (l - 4.0).abs());
                     let all = brute(&g, a, b, hi);
                     for d in 1..=hi {
                         let lagrangian = |x: &(usize, f64, f64)| x.1 + mu * x.2;
@@ -721,7 +1156,7 @@ mod tests {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 (
-                    cheapest_by_duration(&g, (0, 3), (1, 30), 0.3, |r, l| r + (l - 5.0).abs()),
+                    cheapest_by_duration(&g, (0, 3), (1, 30), (1.0, 0.3), |r, l| r + (l - 5.0).abs()),
                     g.walk_with_distance_and_time(0, 3, 7.0, 10, (0.3, 10.0), 5).unwrap(),
                 )
             })
@@ -745,5 +1180,66 @@ mod tests {
         // Distance 6 in 11 frames: the line twice.
         let (w, _) = g.walk_with_distance_and_time(0, 3, 6.0, 11, (0.3, 10.0), 5).unwrap();
         assert_eq!((w.frames, w.distance), (11, 6.0), "{:?}", w.walk);
+    }
+
+    /// Two walks of 20 frames from 0 to 1: the direct one (8 m, no transition cost) and one
+    /// through 2 (10 m, two costly transitions). Eq. 6 alone prefers the direct walk (its
+    /// 2 m error costs less than the transitions), so a search that keeps the eq. 6 optimum
+    /// misses a distance the graph can meet; with the tolerance the 10 m walk is returned.
+    #[test]
+    fn a_reachable_distance_is_met_even_when_eq6_prefers_a_cheaper_miss() {
+        let e = |from, to, frames, weight, length| TimedEdge { from, to, frames, weight, length };
+        let edges = vec![e(0, 1, 20, 0.0, 8.0), e(0, 2, 10, 10.0, 5.0), e(2, 1, 10, 10.0, 5.0)];
+        let g = TimedGraph::from_edges(3, edges, FrameIndex::new([3]));
+        let r = g.walk_within(0, 1, (10.0, 20), (0.3, 10.0), (0.1, 1), 20).unwrap();
+        assert_eq!((r.walk.walk.clone(), r.met, r.unreachable.clone()), (vec![0, 2, 1], true, None));
+        let (w, _) = g.walk_with_distance_and_time(0, 1, 10.0, 20, (0.3, 10.0), 20).unwrap();
+        assert_eq!((w.frames, w.distance), (20, 10.0));
+    }
+
+    /// Each reason of an unreachable target, on the line graph (durations 2, 3, 10, 11, ... and
+    /// walks of 10 frames travelling 7 m) and on the line without its loop.
+    #[test]
+    fn unreachable_targets_say_why_in_the_surface_motion_graphs_words() {
+        let g = line_graph();
+        let why = |g: &TimedGraph, d: f64, t: usize, tol: (f64, usize)| {
+            let r = g.walk_within(0, 3, (d, t), (0.3, 10.0), tol, 5).unwrap();
+            assert!(!r.met);
+            r.unreachable
+        };
+        assert_eq!(why(&g, 3.0, 1, (0.1, 0)), Some(Unreachable::TooShort { shortest_frames: 2.0 }));
+        assert_eq!(why(&g, 1.0, 10, (0.1, 0)), Some(Unreachable::TooNear { shortest_distance: 3.0 }));
+        assert_eq!(why(&g, 3.5, 10, (0.1, 0)), Some(Unreachable::TooSlow { needed: 0.35, slowest: 0.7 }));
+        assert_eq!(why(&g, 20.0, 10, (0.1, 0)), Some(Unreachable::TooFast { needed: 2.0, fastest: 0.7 }));
+        assert_eq!(why(&g, 3.0, 5, (0.1, 0)), Some(Unreachable::Granularity));
+        let e = |from, to, frames, weight, length| TimedEdge { from, to, frames, weight, length };
+        let edges = vec![e(0, 1, 1, 1.0, 1.0), e(1, 2, 1, 1.0, 1.0), e(2, 3, 1, 1.0, 1.0), e(0, 3, 2, 5.0, 4.0)];
+        let acyclic = TimedGraph::from_edges(4, edges, FrameIndex::new([4]));
+        assert_eq!(why(&acyclic, 3.0, 5, (0.1, 0)), Some(Unreachable::NoLoop));
+        assert_eq!(Unreachable::TooSlow { needed: 0.35, slowest: 0.7 }.kind(), "too_slow");
+        // Reachable targets are met, with no reason.
+        let r = g.walk_within(0, 3, (7.0, 10), (0.3, 10.0), (0.1, 0), 5).unwrap();
+        assert_eq!((r.met, r.unreachable, r.walk.frames), (true, None, 10));
+    }
+
+    /// One sequence of 20 frames whose last 5 barely move: a transition 8 -> 5 (a loop of 3 + 3
+    /// frames), one 19 -> 15 (13 frames of near-still poses) and one 19 -> 2 (a real cycle).
+    /// The first two are excluded with their reasons, the third kept.
+    #[test]
+    fn degenerate_loops_are_excluded_and_listed() {
+        let e = |from, to, frames| TimedEdge { from, to, frames, weight: 1.0, length: 0.0 };
+        let mut edges: Vec<TimedEdge> = (0..19).map(|u| e(u, u + 1, 1)).collect();
+        edges.extend([e(8, 5, 3), e(19, 15, 9), e(19, 2, 5)]);
+        let g = TimedGraph::from_edges(20, edges, FrameIndex::new([20]));
+        let f = |i: usize| if i < 15 { i as f64 } else { 15.0 + 0.01 * (i - 15) as f64 };
+        let (kept, excluded) = g.without_degenerate_loops(LoopRule::default(), &|i, j| (f(i) - f(j)).abs());
+        let got: Vec<(&str, &str, usize, &str)> =
+            excluded.iter().map(|x| (x.from.as_str(), x.to.as_str(), x.frames, x.reason)).collect();
+        assert_eq!(
+            got,
+            vec![("sequence 0:8", "sequence 0:5", 6, "too_short"), ("sequence 0:19", "sequence 0:15", 13, "too_still")]
+        );
+        assert_eq!(kept.edges.len(), 20);
+        assert!(kept.edges.iter().any(|x| (x.from, x.to) == (19, 2)));
     }
 }

@@ -1,14 +1,15 @@
 //! Key-pose timing (thesis 3.5.2, Fig. 3.18): key poses moved to new times; the walk through
 //! them meets each requested time as closely as the graph allows (`TimedGraph`, a shortest path
 //! of a given duration between consecutive keys), and the pose shown at each obtained time is
-//! compared with the key's.
+//! compared with the key's. A time no walk from the previous key can meet within the frame
+//! tolerance says why, in the surface motion graph's words (`Unreachable`).
 
 use std::time::Instant;
 
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::Progress;
-use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
+use surfcap_motion::timed_walk::{TimedGraph, Unreachable, search_table_bytes};
 use surfcap_pipeline::constraint_files::{KeyPose, read_key_poses};
 use surfcap_pipeline::{GraphParams, Pipeline};
 
@@ -31,6 +32,12 @@ pub struct KeyReport {
     pub error: i64,
     /// Pose distance (eq. 2.13) between the key's pose and the frame shown at its time.
     pub pose_distance: f64,
+    /// When the time is not met within the frame tolerance: why no walk from the previous key
+    /// can meet it (the surface motion graph's reasons: too_short, no_loop, granularity);
+    /// absent on a met time and on the first key.
+    pub unreachable: Option<Unreachable>,
+    /// The same reason in words.
+    pub unreachable_why: Option<String>,
 }
 
 /// The report of a key-pose timing run.
@@ -67,10 +74,13 @@ impl Prepared {
         let longest = tg.longest_edge();
         let mut walk = vec![keys[0].frame];
         let mut obtained = vec![keys[0].requested];
+        let mut reasons: Vec<Option<Unreachable>> = vec![None];
+        let tol_t = out.tolerances.frames().floor() as usize;
         for (k, pair) in keys.windows(2).enumerate() {
             let now = *obtained.last().expect("one key at least");
-            let w =
-                tg.walk_with_duration(pair[0].frame, pair[1].frame, pair[1].requested - now, longest).map_err(|e| {
+            let asked = pair[1].requested - now;
+            let found =
+                tg.walk_with_duration_within(pair[0].frame, pair[1].frame, asked, tol_t, longest).map_err(|e| {
                     let label = |k: &KeyPose| self.subject().frame_index().label(k.frame as usize);
                     Error::Request(format!(
                         "keys {} and {} ({} -> {}): {e}",
@@ -80,15 +90,17 @@ impl Prepared {
                         label(&pair[1])
                     ))
                 })?;
+            let w = found.walk;
             walk.extend_from_slice(&w.walk[1..]);
             obtained.push(now + w.frames as i64);
+            reasons.push(found.unreachable);
         }
         let search_seconds = t0.elapsed().as_secs_f64();
         let errors: Vec<i64> = keys.iter().zip(&obtained).map(|(k, o)| (o - k.requested).abs()).collect();
         let mean_abs_error = errors.iter().sum::<i64>() as f64 / errors.len() as f64;
         let played = play_and_write(self, &walk, &PlaneMotion::identity(self.up()), "keyposes", out, progress)?;
         let mut key_reports = Vec::with_capacity(keys.len());
-        for (k, &o) in keys.iter().zip(&obtained) {
+        for ((k, &o), why) in keys.iter().zip(&obtained).zip(reasons) {
             // The pose shown at the key's obtained time against the pose asked for there.
             let pose_distance = pose_distance_to_output(self, &played.output, k.frame, (o - obtained[0]) as usize)?;
             key_reports.push(KeyReport {
@@ -98,6 +110,8 @@ impl Prepared {
                 obtained_time: o,
                 error: (o - k.requested).abs(),
                 pose_distance,
+                unreachable_why: why.as_ref().map(|u| u.to_string()),
+                unreachable: why,
             });
         }
         let constraints: Vec<Constraint> = keys

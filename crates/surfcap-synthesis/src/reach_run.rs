@@ -8,7 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::Progress;
-use surfcap_motion::timed_walk::{TimedGraph, search_table_bytes};
+use surfcap_motion::timed_walk::{ExcludedLoop, LoopRule, TimedGraph, Unreachable, search_table_bytes};
 use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 use surfcap_pipeline::{GraphParams, Pipeline};
 
@@ -31,7 +31,8 @@ pub struct ReachQuery {
     pub to: u32,
     /// Ground-plane distance the centre of mass must travel (subject units).
     pub distance: f64,
-    /// Duration, frames of 1/fps (the animation shows one frame more).
+    /// Duration as frames shown, start included: a duration T is round(T x fps) frames (the
+    /// surface motion graph's count), so the walk takes one step fewer. At least 2.
     pub frames: usize,
     /// Distance error and timing error (frames) worth one unit of realism cost (Huang et al.:
     /// 0.3 m and 10 frames).
@@ -51,13 +52,26 @@ pub struct ReachReport {
     pub distance_error: f64,
     pub target_seconds: f64,
     pub seconds: f64,
-    /// Frames written for the asked duration and for the obtained one (both ends shown).
+    /// Frames shown for the asked duration and for the obtained one, start included: a
+    /// duration T is round(T x fps) frames, as the surface motion graph counts them
+    /// (`target_seconds` and `seconds` are these counts over fps).
     pub target_frames: usize,
     pub obtained_frames: usize,
     pub time_error_frames: usize,
     pub realism_cost: f64,
     pub total_cost: f64,
     pub search_seconds: f64,
+    /// Both targets met within the tolerances (`--tolerance`, `--frame-tolerance`).
+    pub met: bool,
+    /// When not met: why no walk of the graph can meet them (the surface motion graph's
+    /// reasons: too_short, too_near, no_loop, too_fast, too_slow, granularity), if the graph
+    /// proves it; absent on a met target or one the search missed.
+    pub unreachable: Option<Unreachable>,
+    /// The same reason in words.
+    pub unreachable_why: Option<String>,
+    /// Loops never played to pad time, and the rule that excluded them.
+    pub loop_rule: LoopRule,
+    pub excluded_loops: Vec<ExcludedLoop>,
     #[serde(flatten)]
     pub walk: WalkReport,
     #[serde(flatten)]
@@ -82,16 +96,24 @@ impl Prepared {
     /// The walk of the reach query, written with its report to `out`.
     pub fn reach(&self, q: &ReachQuery, out: &Output, progress: &dyn Progress) -> Result<ReachOutcome> {
         let t0 = Instant::now();
-        let tg = TimedGraph::new(&self.graph, &self.model);
+        // Degenerate loops (too short, or too still) never pad time.
+        let pose = self.pipe.chain_distances()?.value;
+        let loop_rule = LoopRule::default();
+        let (tg, excluded_loops) = TimedGraph::new(&self.graph, &self.model)
+            .without_degenerate_loops(loop_rule, &|i, j| pose.values[i * pose.n + j]);
         let scales = (q.distance_scale, q.time_scale);
-        let (w, cost) =
-            tg.walk_with_distance_and_time(q.from, q.to, q.distance, q.frames, scales, tg.longest_edge())?;
+        let tol = &out.tolerances;
+        let tolerance = (tol.distance(q.distance), tol.frames().floor() as usize);
+        // The duration is frames shown, start included: the walk takes one step fewer.
+        let steps = q.frames.saturating_sub(1);
+        let found = tg.walk_within(q.from, q.to, (q.distance, steps), scales, tolerance, tg.longest_edge())?;
+        let (w, cost) = (found.walk, found.total_cost);
         let search_seconds = t0.elapsed().as_secs_f64();
-        // The time asks for a duration: `frames` steps of 1/fps, so the animation that lasts it
-        // shows one frame more (both ends). Counts below are frames written, as `frames` is.
-        let (asked_frames, obtained_frames) = (q.frames + 1, w.frames + 1);
+        // Counts below are frames shown, start included, as `frames` is: a walk of n steps
+        // shows n + 1 frames.
+        let (asked_frames, obtained_frames) = (q.frames, w.frames + 1);
         let distance_error = (w.distance - q.distance).abs();
-        let time_error = w.frames.abs_diff(q.frames);
+        let time_error = obtained_frames.abs_diff(asked_frames);
         let fps = self.subject().fps;
         let played = play_and_write(self, &w.walk, &PlaneMotion::identity(self.up()), "reach", out, progress)?;
         // The viewer draws the centre track over the animation, as it does for paths.
@@ -100,7 +122,6 @@ impl Prepared {
         let last = played.output.n_frames() - 1;
         let pose_distance_from = pose_distance_to_output(self, &played.output, q.from, 0)?;
         let pose_distance_to = pose_distance_to_output(self, &played.output, q.to, last)?;
-        let tol = &out.tolerances;
         let constraints = vec![
             Constraint::new(
                 "distance",
@@ -119,7 +140,7 @@ impl Prepared {
                 time_error as f64,
                 tol.frames(),
             )
-            .relative_to(q.frames as f64),
+            .relative_to(asked_frames as f64),
         ];
         let report = ReachReport {
             constraint: "reach",
@@ -128,14 +149,19 @@ impl Prepared {
             target_distance: q.distance,
             distance: w.distance,
             distance_error,
-            target_seconds: q.frames as f64 / fps,
-            seconds: w.frames as f64 / fps,
+            target_seconds: asked_frames as f64 / fps,
+            seconds: obtained_frames as f64 / fps,
             target_frames: asked_frames,
             obtained_frames,
             time_error_frames: time_error,
             realism_cost: w.cost,
             total_cost: cost,
             search_seconds,
+            met: found.met,
+            unreachable_why: found.unreachable.as_ref().map(|u| u.to_string()),
+            unreachable: found.unreachable,
+            loop_rule,
+            excluded_loops,
             walk: played.report.clone(),
             travel,
             pose_distance_from,
@@ -162,7 +188,8 @@ pub struct ReachRequest {
     pub to: String,
     /// Ground-plane distance (subject units), >= 0.
     pub distance: f64,
-    /// Duration: seconds (bare or `3s`) or output frames (`90f`).
+    /// Duration: seconds (bare or `3s`, round(T x fps) frames shown, start included) or
+    /// frames shown (`90f`).
     pub time: TimeSpec,
     pub distance_scale: f64,
     pub time_scale: f64,
@@ -192,10 +219,12 @@ pub fn synthesize_reach(
     let s = pipe.subject();
     let playback = playback.open(s, out)?;
     let (from, to) = (s.resolve_frame(&request.from)? as u32, s.resolve_frame(&request.to)? as u32);
+    // A duration T shows round(T x fps) frames, start included (the surface motion graph's
+    // count); a walk from one frame to another shows at least two.
     let frames = match request.time.frames(s.fps, TimeUnit::Seconds) {
-        Some(f) if f >= 1 => f as usize,
+        Some(f) if f >= 2 => f as usize,
         _ => refuse!(
-            "--time {}: expected a duration of at least one whole frame (at {} fps), e.g. 90f or 3s",
+            "--time {}: expected a duration of at least two frames shown (at {} fps), e.g. 90f or 3s",
             request.time_text(),
             s.fps
         ),

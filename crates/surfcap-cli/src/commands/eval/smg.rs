@@ -312,6 +312,27 @@ fn print_comparison(c: &SmgComparison) {
             1e3 * r.cpu_seconds.std
         );
     }
+    for r in &c.rows {
+        let why: Vec<String> = r.unreachable.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        println!(
+            "{} {} -> {}: {} of {} targets met within the tolerance (worst {:.2}% and {} frame(s)); unreachable: {}; missed while reachable: {}",
+            if r.engine == ESSENTIAL_GRAPH { "EG" } else { "SMG" },
+            r.from,
+            r.to,
+            r.met,
+            r.queries + r.failed,
+            100.0 * r.met_distance_relative_max,
+            r.met_time_error_max,
+            if why.is_empty() { "none".to_string() } else { why.join(", ") },
+            r.missed_reachable
+        );
+    }
+    if eg.excluded_loops > 0 {
+        println!(
+            "the essential graph never pads time with its {} degenerate loop(s) (fewer than {} frames, or poses varying less than {} typical frame step(s))",
+            eg.excluded_loops, eg.loop_rule.min_frames, eg.loop_rule.variation_floor
+        );
+    }
     for r in c.rows.iter().filter(|r| r.failed > 0) {
         println!(
             "{} {} -> {}: {} of {} queries found no path (first: {})",

@@ -59,6 +59,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         // Pose distance (eq. 2.13) between each key's pose and the frame shown at its time.
         row("Distance", keys.iter().map(|k| format!("{:.1}", k.pose_distance)).collect());
         println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
+        for k in keys {
+            if let Some(why) = &k.unreachable_why {
+                println!(
+                    "key {} at frame {}: no walk of the graph can meet this time: {why}",
+                    k.frame, k.requested_time
+                );
+            }
+        }
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
     check_constraints(ctx, &a.out.constraints, &o.constraints)

@@ -24,8 +24,8 @@ pub struct Args {
     /// Ground-plane distance the centre of mass must travel (subject units).
     #[arg(long, value_parser = crate::options::non_negative)]
     pub distance: f64,
-    /// Duration: seconds (a bare number, e.g. 3, or 3s) or output frames (90f; seconds are
-    /// rounded to the nearest frame at the subject's rate).
+    /// Duration: seconds (a bare number, e.g. 3, or 3s) or frames shown (90f). T seconds show
+    /// round(T x fps) frames, start included, as `smg query` counts them.
     #[arg(long, value_parser = crate::options::positive_time)]
     pub time: TimeSpec,
     /// Distance error worth one unit of realism cost (Huang et al.: 0.3 m).
@@ -89,6 +89,19 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             r.realism_cost,
             r.search_seconds
         );
+        if let Some(why) = &r.unreachable_why {
+            println!("no walk of the graph can meet this target: {why}");
+        } else if !r.met {
+            println!("missed: the target lies within what the graph's walks can travel, but the search found no walk meeting it");
+        }
+        if !r.excluded_loops.is_empty() {
+            println!(
+                "{} degenerate loop(s) never played to pad time (fewer than {} frames, or poses varying less than {} typical frame step(s)); the report lists them",
+                r.excluded_loops.len(),
+                r.loop_rule.min_frames,
+                r.loop_rule.variation_floor
+            );
+        }
     });
     ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
     check_constraints(ctx, &a.out.constraints, &o.constraints)
