@@ -12,11 +12,11 @@ use surfcap_smg::motion_frames::MotionFrames;
 fn stand_walk_jog_hit_meets_reachable_targets_within_the_papers_ranges() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let s = stand_walk_jog_hit_subject(&data, 1000).unwrap();
-    let names: Vec<&str> = s.sequences.iter().map(|q| q.name.as_str()).collect();
+    let names: Vec<&str> = s.sequences().iter().map(|q| q.name.as_str()).collect();
     assert_eq!(names, ["stand", "walk", "jog", "hit"]);
     // 30 fps, the T-pose dropped: the walk's 343 frames at 120 fps are 2.85 s.
     assert_eq!(s.fps, 30.0);
-    assert_eq!(s.sequences[1].n_frames(), 86);
+    assert_eq!(s.sequences()[1].n_frames(), 86);
     let frames = MotionFrames::from_subject(&s);
     // The jog into the walk and on to the stand: the jog and walk loops lie on its way.
     let opts = SmgEvalOptions {
