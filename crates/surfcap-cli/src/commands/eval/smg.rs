@@ -151,7 +151,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     let (connections, pairs): (Pairs, Pairs) = match &input {
         None => {
-            let (c, p): (&[(&str, &str)], &[(&str, &str)]) = match set {
+            type Named<'a> = &'a [(&'a str, &'a str)];
+            let (c, p): (Named, Named) = match set {
                 ClipSet::StandWalkJogHit => (&STAND_WALK_JOG_HIT_CONNECTIONS, &STAND_WALK_JOG_HIT_KEY_PAIRS),
                 ClipSet::Locomotion => (&LOCOMOTION_CONNECTIONS, &LOCOMOTION_KEY_PAIRS),
             };
