@@ -191,6 +191,8 @@ fn eval_smg_compares_with_the_essential_graph_and_draws_heat_maps() {
         "smg",
         "--data",
         p(&data),
+        "--set",
+        "locomotion",
         "--vertices",
         "1000",
         "--pair",

@@ -24,6 +24,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::motion_plane_alignment;
 use surfcap_motion::edge_weights::Alpha;
@@ -289,13 +290,21 @@ pub fn smg_comparison(
         // The essential graph on the same key frames and targets.
         let (mut errors, mut cpu, mut taken, mut first_failure) = (Vec::new(), Vec::new(), Vec::new(), None);
         let mut goal = Goal::default();
-        for &(dist, secs) in &opts.targets {
+        // The searches in parallel, used in the targets' order (each search is deterministic).
+        let searches: Vec<_> = opts
+            .targets
+            .par_iter()
+            .map(|&(dist, secs)| {
+                let intervals = ((secs * frames.fps).round() as usize).saturating_sub(1).max(1);
+                let t = Instant::now();
+                let tolerance = (opts.tolerance.distance_relative * dist, opts.tolerance.frames.floor() as usize);
+                let found = tg.walk_within(a as u32, b as u32, (dist, intervals), scales, tolerance, longest);
+                progress.advance(1);
+                (found, t.elapsed().as_secs_f64())
+            })
+            .collect();
+        for (&(dist, secs), (found, seconds)) in opts.targets.iter().zip(searches) {
             let shown = secs * frames.fps;
-            let intervals = (shown.round() as usize).saturating_sub(1).max(1);
-            let t = Instant::now();
-            let tolerance = (opts.tolerance.distance_relative * dist, opts.tolerance.frames.floor() as usize);
-            let found = tg.walk_within(a as u32, b as u32, (dist, intervals), scales, tolerance, longest);
-            progress.advance(1);
             let w = match found {
                 Ok(r) => {
                     match &r.unreachable {
@@ -319,7 +328,7 @@ pub fn smg_comparison(
                     continue;
                 }
             };
-            cpu.push(t.elapsed().as_secs_f64());
+            cpu.push(seconds);
             errors.push(((w.distance - dist).abs(), ((w.frames + 1) as f64 - shown).abs()));
             for uv in w.walk.windows(2) {
                 let (u, v) = (uv[0], uv[1]);

@@ -8,7 +8,8 @@ use surfcap_formats::import::{ImportedData, open_any};
 
 use surfcap_eval::smg_comparison::{ESSENTIAL_GRAPH, SmgComparison, default_graph_params, smg_comparison};
 use surfcap_eval::smg_eval::{
-    LOCOMOTION_CONNECTIONS, LOCOMOTION_KEY_PAIRS, SmgEval, SmgEvalOptions, grid, locomotion_subject, smg_eval,
+    LOCOMOTION_CONNECTIONS, LOCOMOTION_KEY_PAIRS, STAND_WALK_JOG_HIT_CONNECTIONS, STAND_WALK_JOG_HIT_KEY_PAIRS,
+    SmgEval, SmgEvalOptions, grid, locomotion_subject, smg_eval, stand_walk_jog_hit_subject,
 };
 use surfcap_smg::motion_frames::MotionFrames;
 
@@ -22,11 +23,24 @@ fn split_pair(text: &str, sep: char, option: &str, expected: &str) -> anyhow::Re
         .ok_or_else(|| anyhow::anyhow!("{option} {text:?}: expected {expected}"))
 }
 
+/// The clips driving the mannequin.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClipSet {
+    /// Huang et al.'s setting: stand, walk, jog and hit loops (CMU 113_21 idle; subject 2's
+    /// walk 02_01, jog 02_03 and punch 02_05), their four key pairs.
+    StandWalkJogHit,
+    /// CMU subject 16's stand-to-walk, walk, jog, jump and jog-to-stop (no in-place loop).
+    Locomotion,
+}
+
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The shared data folder (CMU clips).
     #[arg(long, default_value = "../shared/data")]
     pub data: PathBuf,
+    /// The clips driving the mannequin (without --input).
+    #[arg(long, value_enum, default_value_t = ClipSet::StandWalkJogHit)]
+    pub set: ClipSet,
     /// Vertices of the mannequin (1000 to 20000).
     #[arg(long, default_value_t = 2000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
     pub vertices: usize,
@@ -83,6 +97,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = super::folder::claim(ctx, &a.output, &inputs, "eval-smg")?;
     let Args {
         data,
+        set,
         vertices,
         remeshed,
         transitions,
@@ -106,7 +121,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     // The subject: the CMU mannequin, or the user's; a frame set is used as it is.
     let data = match &input {
         None => ImportedData::Subject(surfcap_formats::import::Imported {
-            subject: locomotion_subject(data, vertices)?,
+            subject: match set {
+                ClipSet::StandWalkJogHit => stand_walk_jog_hit_subject(data, vertices)?,
+                ClipSet::Locomotion => locomotion_subject(data, vertices)?,
+            },
             notes: Vec::new(),
             sources: Vec::new(),
         }),
@@ -132,14 +150,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         p.iter().map(|t| split_pair(t, ',', "--pair", "FROM,TO (each sequence:frame)")).collect()
     };
     let (connections, pairs): (Pairs, Pairs) = match &input {
-        None => (
-            LOCOMOTION_CONNECTIONS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
-            if mannequin_pairs.is_empty() {
-                LOCOMOTION_KEY_PAIRS.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect()
-            } else {
-                parse_pairs(&mannequin_pairs)?
-            },
-        ),
+        None => {
+            type Named<'a> = &'a [(&'a str, &'a str)];
+            let (c, p): (Named, Named) = match set {
+                ClipSet::StandWalkJogHit => (&STAND_WALK_JOG_HIT_CONNECTIONS, &STAND_WALK_JOG_HIT_KEY_PAIRS),
+                ClipSet::Locomotion => (&LOCOMOTION_CONNECTIONS, &LOCOMOTION_KEY_PAIRS),
+            };
+            let owned = |v: &[(&str, &str)]| v.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+            (owned(c), if mannequin_pairs.is_empty() { owned(p) } else { parse_pairs(&mannequin_pairs)? })
+        }
         Some(i) => {
             if i.connect.is_empty() || i.pairs.is_empty() {
                 anyhow::bail!("--input needs --connect FROM:TO and --pair FROM,TO (each sequence:frame)");
@@ -239,6 +258,23 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 1e3 * g.cpu_seconds.mean,
                 1e3 * g.cpu_seconds.std
             );
+        }
+        println!("over the reachable targets (met within the tolerance), eq. 6's optimum (the paper's measures):");
+        for p in &r.pairs {
+            match &p.not_connected {
+                Some(why) => println!("  {} -> {}: {} targets unreachable: {why}", p.from, p.to, p.goal.met + p.goal.unreachable.values().sum::<usize>()),
+                None => println!(
+                    "  {} -> {}: {} met; distance error rms {:.2} max {:.2} m; time error rms {:.1} max {:.0} frames; cpu {:.2} ms per query",
+                    p.from,
+                    p.to,
+                    p.goal.met,
+                    p.reachable_distance_error.rms,
+                    p.reachable_distance_error.max,
+                    p.reachable_time_error_frames.rms,
+                    p.reachable_time_error_frames.max,
+                    1e3 * p.cpu_seconds.mean
+                ),
+            }
         }
         println!(
             "Huang et al. 2009 (Table 1): distance error rms 0.17-0.47 m, max < 1 m; time error max 22-25 frames; 5.7-15.0 s per query (Matlab)"
@@ -380,7 +416,12 @@ fn heat_maps(
     let (x_label, c0) = axis_label("time", "s", seconds);
     let mut written = Vec::new();
     for (k, p) in r.pairs.iter().enumerate() {
-        let smg: Vec<(f64, f64)> = p.outcomes.iter().map(|q| (q.distance_error, q.time_error)).collect();
+        // Key frames no path joins: no answer to any target (blank cells, as a failed query's).
+        let smg: Vec<(f64, f64)> = if p.outcomes.is_empty() {
+            vec![(f64::NAN, f64::NAN); distances.len() * seconds.len()]
+        } else {
+            p.outcomes.iter().map(|q| (q.distance_error, q.time_error)).collect()
+        };
         let mut engines = vec![("smg", "surface motion graph", smg)];
         if let Some(c) = comparison {
             let eg = c.rows.iter().filter(|row| row.engine == ESSENTIAL_GRAPH).nth(k).expect("one row per pair");
