@@ -30,6 +30,7 @@
 
 pub mod centroid_path_length;
 pub mod error;
+pub mod foot_skate_cleanup;
 pub mod learnt_motion;
 pub mod mean_vertex_distance;
 pub mod motion_parametrisation;
