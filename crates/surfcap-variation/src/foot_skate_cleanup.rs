@@ -11,14 +11,18 @@
 //!    step come from the shared contact detector (surfcap-geometry's `ground_contacts` and
 //!    `planted_contacts`, the group root motion and the foot-sliding measure keep still). A
 //!    planted vertex belongs to the foot of the leg part holding it; the steps where a foot has
-//!    planted vertices, runs closer than [`FootSkateParams::gap_steps`] merged, are its plants.
+//!    planted vertices, runs closer than [`FootSkateParams::gap_steps`] merged when the foot
+//!    came back down where it left ([`FootSkateParams::rejoin_distance`]), are its plants;
+//!    steps at a plant's ends moving faster than [`FootSkateParams::lift_speed`] are the foot
+//!    lifting off or landing and are left out.
 //!    A plant covers frames `a..=b` (its first step's first frame to its last step's second).
 //! 2. **Pins** (Kovar sec. 4: one position per constraint): every vertex planted at frame f of
 //!    a plant is pinned, along the ground, where it is at the plant's middle frame
 //!    `m = (a + b) / 2`: `y_v = p_v(m)`. The foot is moved rigidly along the ground to meet its
-//!    pins: the weighted 2D Procrustes fit (rotation about the up axis and translation, weights
-//!    the contact weights) of `p_v(f) -> y_v` over the planted vertices of frame f, about their
-//!    weighted centroid `c_f`: `T_f(x) = c_f + R(theta_f) (x - c_f) + t_f`. A rigid foot keeps
+//!    pins: the weighted 2D Procrustes fit (translation, and with [`FootSkateParams::fit_turn`]
+//!    the rotation about the up axis; weights the contact weights) of `p_v(f) -> y_v` over the
+//!    planted vertices of frame f, about their weighted centroid `c_f`:
+//!    `T_f(x) = c_f + R(theta_f) (x - c_f) + t_f`. A rigid foot keeps
 //!    its shape: only the leg above it bends. Frames of a plant without a planted vertex take
 //!    the fit interpolated between their neighbours.
 //! 3. **Blending** (Kovar sec. 5: adjustments blended over adjacent frames): before a plant's
@@ -74,6 +78,19 @@ pub struct FootSkateParams {
     pub blend_seconds: f64,
     /// Runs of planted steps of one foot this many steps apart or less are one plant.
     pub gap_steps: usize,
+    /// Runs closer than `gap_steps` join only when the foot's vertex mean moved at most this
+    /// fraction of the subject's height between them (0.05: 9 cm for a 1.75 m person; a
+    /// step's stride is several times that).
+    pub rejoin_distance: f64,
+    /// Steps at the ends of a plant whose planted vertices move faster than this many subject
+    /// heights per second are the foot lifting off or landing, not planted (1.0: 1.75 m/s for
+    /// a 1.75 m person; on a CMU walk's variants the toes leaving the ground moved 4 m/s, and
+    /// pinned, they dragged the swinging foot back by 0.68 m).
+    pub lift_speed: f64,
+    /// Fit the foot's turn about the up axis as well as its translation (off by default: on
+    /// a CMU walk's variants the turn fitted to a small planted patch moved a foot by up to
+    /// 0.68 m, while the translation alone pins the planted vertices within 3 mm on average).
+    pub fit_turn: bool,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -86,6 +103,9 @@ impl Default for FootSkateParams {
             hip_fraction: 0.1,
             blend_seconds: 0.15,
             gap_steps: 2,
+            rejoin_distance: 0.05,
+            lift_speed: 1.0,
+            fit_turn: false,
             contact: ContactParams::default(),
         }
     }
@@ -115,6 +135,8 @@ pub struct CleanupReport {
 pub struct FootSkateCleanup {
     up: UpAxis,
     n_vertices: usize,
+    /// The subject's height (extent of the rest pose along the up axis).
+    height: f64,
     params: FootSkateParams,
     /// Per vertex, the leg (index into the feet sets given) it belongs to, if any.
     leg_of: Vec<Option<u32>>,
@@ -262,7 +284,19 @@ impl FootSkateCleanup {
         } else {
             (None, None)
         };
-        Ok(FootSkateCleanup { up, n_vertices: n, params, leg_of, feet, free, n_free, coupling, symbolic, numeric })
+        Ok(FootSkateCleanup {
+            up,
+            n_vertices: n,
+            height,
+            params,
+            leg_of,
+            feet,
+            free,
+            n_free,
+            coupling,
+            symbolic,
+            numeric,
+        })
     }
 
     /// The feet found (vertex sets, one per leg).
@@ -333,14 +367,6 @@ impl FootSkateCleanup {
                 .iter()
                 .map(|s| s.iter().filter(|c| self.leg_of[c.vertex as usize] == Some(k as u32)).copied().collect())
                 .collect();
-            let on: Vec<usize> = (0..steps.len()).filter(|&s| !steps[s].is_empty()).collect();
-            let mut runs: Vec<(usize, usize)> = Vec::new();
-            for s in on {
-                match runs.last_mut() {
-                    Some(r) if s - r.1 <= self.params.gap_steps + 1 => r.1 = s,
-                    _ => runs.push((s, s)),
-                }
-            }
             let centroid = |f: usize| -> [f64; 2] {
                 let foot = &self.feet[k];
                 let s = foot.iter().fold([0.0; 2], |a, &v| {
@@ -350,6 +376,48 @@ impl FootSkateCleanup {
                 let c = foot.len().max(1) as f64;
                 [s[0] / c, s[1] / c]
             };
+            let on: Vec<usize> = (0..steps.len()).filter(|&s| !steps[s].is_empty()).collect();
+            let mut runs: Vec<(usize, usize)> = Vec::new();
+            // Two runs are one plant only when the foot came back down where it left: a
+            // foot that moved further (the next footfall) starts a plant of its own.
+            let rejoin = self.params.rejoin_distance * self.height;
+            for s in on {
+                match runs.last_mut() {
+                    Some(r)
+                        if s - r.1 <= self.params.gap_steps + 1 && {
+                            let (p, q) = (centroid(r.1 + 1), centroid(s));
+                            (p[0] - q[0]).hypot(p[1] - q[1]) <= rejoin
+                        } =>
+                    {
+                        r.1 = s
+                    }
+                    _ => runs.push((s, s)),
+                }
+            }
+            // A foot lifting off (or landing) fast is not planted: the ends of a run whose
+            // planted vertices move faster than the lift speed are left out.
+            let lift = self.params.lift_speed * self.height;
+            let speed = |st: usize| {
+                let (mut sum, mut wt) = (0.0, 0.0);
+                for c in &steps[st] {
+                    let (p, q) = (xy(st, c.vertex), xy(st + 1, c.vertex));
+                    sum += c.weight.max(1e-6) * (q[0] - p[0]).hypot(q[1] - p[1]);
+                    wt += c.weight.max(1e-6);
+                }
+                if wt > 0.0 { fps * sum / wt } else { 0.0 }
+            };
+            let runs: Vec<(usize, usize)> = runs
+                .into_iter()
+                .filter_map(|(mut s0, mut s1)| {
+                    while s0 <= s1 && speed(s0) > lift {
+                        s0 += 1;
+                    }
+                    while s1 > s0 && speed(s1) > lift {
+                        s1 -= 1;
+                    }
+                    (s0 <= s1 && speed(s0) <= lift).then_some((s0, s1))
+                })
+                .collect();
             for (s0, s1) in runs {
                 let (a, b) = (s0, s1 + 1);
                 let m = (a + b) / 2;
@@ -377,7 +445,7 @@ impl FootSkateCleanup {
                     .enumerate()
                     .map(|(i, vs)| {
                         let f = a + i;
-                        fit(vs, |v| xy(f, v), |v| xy(m, v)).map(|(theta, c, t)| {
+                        fit(vs, |v| xy(f, v), |v| xy(m, v), self.params.fit_turn).map(|(theta, c, t)| {
                             let g = centroid(f);
                             Correction { theta, t, r: [c[0] - g[0], c[1] - g[1]] }
                         })
@@ -522,12 +590,14 @@ impl FootSkateCleanup {
     }
 }
 
-/// The weighted rigid fit along the ground of `from(v) -> to(v)` over `vs`: (rotation angle,
+/// The weighted rigid fit along the ground of `from(v) -> to(v)` over `vs` (the rotation only
+/// when `turn`): (rotation angle,
 /// the centre (weighted centroid of `from`), translation); `None` without weight.
 fn fit(
     vs: &[GroundContact],
     from: impl Fn(u32) -> [f64; 2],
     to: impl Fn(u32) -> [f64; 2],
+    turn: bool,
 ) -> Option<(f64, [f64; 2], [f64; 2])> {
     let wsum: f64 = vs.iter().map(|c| c.weight.max(1e-6)).sum();
     if vs.is_empty() || wsum <= 0.0 {
@@ -561,7 +631,7 @@ fn fit(
         })
         .sum::<f64>()
         / wsum;
-    let theta = if spread > 1e-12 && vs.len() >= 3 { (sxy - syx).atan2(sxx + syy) } else { 0.0 };
+    let theta = if turn && spread > 1e-12 && vs.len() >= 3 { (sxy - syx).atan2(sxx + syy) } else { 0.0 };
     Some((theta, cf, [ct[0] - cf[0], ct[1] - cf[1]]))
 }
 
