@@ -260,7 +260,7 @@ impl FootSkateCleanup {
             }
         }
         // Merge the coupling's duplicates in a fixed order.
-        coupling.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+        coupling.sort_by_key(|c| (c.0, c.1));
         coupling.dedup_by(|b, a| {
             if (a.0, a.1) == (b.0, b.1) {
                 a.2 += b.2;

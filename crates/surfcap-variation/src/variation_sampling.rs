@@ -40,6 +40,11 @@
 //!   learnt trajectories do not). A triangular moving average of radius 2 frames is applied
 //!   to each sampled trajectory (`smoothing`, 0 turns it off; measured with `surfcap eval
 //!   vary`, see docs/results/variation.md).
+//! - **Foot skate**: varied leg poses on the source's path still let the planted feet drift
+//!   (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips, docs/results/
+//!   variation.md), so every variant's world frames go through the foot-skate clean-up
+//!   ([`crate::foot_skate_cleanup`], `foot_skate_cleanup` in the options, on by default); for a
+//!   source authored in place its ground is the travel its learnt motion's contacts give.
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
 //!   variant can replace its source inside a longer animation.
 
