@@ -50,6 +50,7 @@ use surfcap_transfer::BodyParts;
 use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::part_stitching::Stitcher;
 use surfcap_variation::VariationModel;
+use surfcap_variation::foot_skate_cleanup::CleanupReport;
 use surfcap_variation::motion_parametrisation::{blend_ladder, bounding_rungs, interpolate_latents};
 use surfcap_variation::motion_preparation::{
     PreparationOptions, PreparedMotions, SequenceOrigin, TimeAlignment, TrainingSequence, blend_sequences,
@@ -57,8 +58,8 @@ use surfcap_variation::motion_preparation::{
 };
 use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_sampling::{
-    ChainStart, ChainSummary, SamplingOptions, VariantPath, place_and_retime, place_by_contacts, place_on_path,
-    reconstruct_aligned, sample_variants,
+    ChainStart, ChainSummary, SamplingOptions, VariantPath, in_place_ground, place_variant, reconstruct_aligned,
+    sample_variants,
 };
 
 use crate::error::{Error, Result};
@@ -289,9 +290,19 @@ pub struct SequenceVariation {
     pub edge_distortion_input: f64,
     pub edge_distortion_learnt: f64,
     pub edge_distortion: Vec<f64>,
+    /// Edge distortion of each variant's world frames (after the foot-skate clean-up when
+    /// it is on): (iii) is judged on these and on the body-frame poses.
+    pub edge_distortion_world: Vec<f64>,
+    /// What the sliding is measured against: "the world" for a travelling capture, "the
+    /// capture's ground travel" for an in-place one (see [`sliding_ground`]).
+    pub sliding_against: &'static str,
     pub sliding_input: FootSliding,
     pub sliding_learnt: FootSliding,
     pub sliding: Vec<FootSliding>,
+    /// Per variant, the sliding before the foot-skate clean-up (empty when it is off) and
+    /// what the clean-up did (the pinned vertices' drift from their pins before and after).
+    pub sliding_before_cleanup: Vec<FootSliding>,
+    pub cleanup: Vec<CleanupReport>,
     /// Smallest distance between two variants (body frame).
     pub min_pair_distance: f64,
     pub passes: Passes,
@@ -343,6 +354,7 @@ pub struct SamplingSettings {
     pub warmup: usize,
     pub thin: usize,
     pub max_leapfrog: usize,
+    pub foot_skate_cleanup: bool,
 }
 
 /// Result of [`variation_eval`]; serialised, the report `vary.json` without `written`.
@@ -430,6 +442,51 @@ pub fn foot_sliding(frames: &[&[f32]], fps: f64, up: UpAxis, feet: &[Vec<u32>]) 
         speed: r.mean_speed,
         contact_fraction: r.contact_steps as f64 / frames.len().saturating_sub(1).max(1) as f64,
     })
+}
+
+/// The ground under a capture authored in place (the KayKit clips): per frame, the travel its
+/// own foot contacts give (surfcap-variation's `in_place_ground`: the root motion recovered
+/// from contacts, when the capture's centre does not travel); `None` for a capture that
+/// travels. Such a capture's planted feet move backwards at the walking speed in the world;
+/// measured on this ground, as a walk on a treadmill is, they are planted. The ground comes
+/// from the capture alone, so its variants are measured on the same ground: not on travel
+/// recovered from their own contacts.
+pub fn sliding_ground(frames: &[&[f32]], fps: f64, up: UpAxis, height: f64) -> Option<Vec<[f64; 2]>> {
+    let owned: Vec<Vec<f32>> = frames.iter().map(|f| f.to_vec()).collect();
+    in_place_ground(&owned, fps, up, height)
+}
+
+/// [`foot_sliding`] of a motion moved along the ground by `ground` (one offset per frame, the
+/// two ground axes), or as it is.
+pub fn foot_sliding_on(
+    frames: &[&[f32]],
+    fps: f64,
+    up: UpAxis,
+    feet: &[Vec<u32>],
+    ground: Option<&[[f64; 2]]>,
+) -> Result<FootSliding> {
+    let Some(g) = ground else { return foot_sliding(frames, fps, up, feet) };
+    if g.len() != frames.len() {
+        return Err(Error::Unsuitable(format!(
+            "foot sliding: a ground travel of {} frames for a motion of {}",
+            g.len(),
+            frames.len()
+        )));
+    }
+    let (u, v, _) = surfcap_geometry::motion_plane_alignment::plane_axes(up);
+    let moved: Vec<Vec<f32>> = frames
+        .iter()
+        .zip(g)
+        .map(|(f, o)| {
+            let mut p = f.to_vec();
+            for q in p.chunks_exact_mut(3) {
+                q[u] += o[0] as f32;
+                q[v] += o[1] as f32;
+            }
+            p
+        })
+        .collect();
+    foot_sliding(&refs(&moved), fps, up, feet)
 }
 
 /// Mean over frames of the edge-length distortion against `rest` (mean |l / l0 - 1|).
@@ -740,11 +797,8 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
         let (lp, ld) = &learnt[j];
         // The learnt motion placed as the variants are, so the world floor of (i) compares like
         // with like.
-        let learnt_world = match o.sampling.path {
-            VariantPath::Sampled => place_and_retime(lp, ld, &q.first_placement, &q.times, q.own_frames)?,
-            VariantPath::Source => place_on_path(lp, &q.path, &q.times, q.own_frames)?,
-            VariantPath::Contacts => place_by_contacts(&model, lp, &q.path, &q.times, q.own_frames)?,
-        };
+        let learnt_world =
+            place_variant(&model, o.sampling.path, lp, ld, &q.first_placement, &q.path, &q.times, q.own_frames)?;
         let learnt_error_body = motion_distance(lp, &body_src);
         let learnt_error_world = motion_distance(&learnt_world, &world_src);
         let floor_body = (c.floor_factor * learnt_error_body).max(min_floor);
@@ -768,10 +822,18 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
         let edge_distortion_input = edge_distortion(topology, rest, &world_src);
         let edge_distortion_learnt = edge_distortion(topology, rest, &refs(lp));
         let edge: Vec<f64> = variants.iter().map(|v| edge_distortion(topology, rest, &refs(&v.aligned))).collect();
-        let slide = |f: &[&[f32]]| foot_sliding(f, s.fps, up, &feet);
+        let edge_world: Vec<f64> = variants.iter().map(|v| edge_distortion(topology, rest, &refs(&v.world))).collect();
+        let ground = sliding_ground(&world_src, s.fps, up, height);
+        let slide = |f: &[&[f32]]| foot_sliding_on(f, s.fps, up, &feet, ground.as_deref());
         let sliding_input = slide(&world_src)?;
         let sliding_learnt = slide(&refs(&learnt_world))?;
         let sliding: Vec<FootSliding> = variants.iter().map(|v| slide(&refs(&v.world))).collect::<Result<_>>()?;
+        let sliding_before_cleanup: Vec<FootSliding> = variants
+            .iter()
+            .filter_map(|v| v.before_cleanup.as_ref())
+            .map(|w| slide(&refs(w)))
+            .collect::<Result<_>>()?;
+        let cleanup: Vec<CleanupReport> = variants.iter().filter_map(|v| v.cleanup).collect();
         let mut min_pair = f64::INFINITY;
         for x in 0..variants.len() {
             for y in x + 1..variants.len() {
@@ -782,7 +844,7 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
         let passes = Passes {
             differs: distance_body.iter().all(|&d| d > floor_body) && distance_world.iter().all(|&d| d > floor_world),
             closest_to_source: distance_learnt.iter().zip(&nearest_other).all(|(d, n)| *d < n.1),
-            edge_distortion: edge.iter().all(|&e| e <= limit * edge_distortion_input),
+            edge_distortion: edge.iter().chain(&edge_world).all(|&e| e <= limit * edge_distortion_input),
             foot_sliding: sliding.iter().all(|f| f.speed <= limit * sliding_input.speed),
             distinct: min_pair > min_floor,
         };
@@ -800,9 +862,13 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
             edge_distortion_input,
             edge_distortion_learnt,
             edge_distortion: edge,
+            edge_distortion_world: edge_world,
+            sliding_against: if ground.is_some() { "the capture's ground travel" } else { "the world" },
             sliding_input,
             sliding_learnt,
             sliding,
+            sliding_before_cleanup,
+            cleanup,
             min_pair_distance: min_pair,
             passes,
             chains,
@@ -880,6 +946,7 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
             warmup: o.sampling.warmup,
             thin: o.sampling.thin,
             max_leapfrog: o.sampling.max_leapfrog,
+            foot_skate_cleanup: o.sampling.foot_skate_cleanup,
         },
         criteria: o.criteria,
         missed: cases.iter().map(|c| c.missed).sum(),

@@ -69,6 +69,7 @@ pub struct OptionsReport {
     pub warmup: usize,
     pub thin: usize,
     pub max_leapfrog: usize,
+    pub foot_skate_cleanup: bool,
 }
 
 /// The report's `learnt`: the motion the variants vary.
@@ -90,6 +91,9 @@ pub struct VariantReport {
     /// Distance between its last centroid and the learnt motion's.
     pub end_distance: f64,
     pub path_length: f64,
+    /// What the foot-skate clean-up did (`None` when it was off): sliding before and after,
+    /// the pinned vertices' drift from their pins before and after.
+    pub cleanup: Option<surfcap_variation::foot_skate_cleanup::CleanupReport>,
 }
 
 /// The report of a sampling (`report.json` in the output folder).
@@ -237,6 +241,7 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
             body_frame_distance: mean_vertex_distance(&v.aligned, &learnt.aligned),
             end_distance: distance3(end, learnt_end),
             path_length: centroid_path_length(&v.world),
+            cleanup: v.cleanup,
         });
         names.push(variant_name);
     }
@@ -285,6 +290,7 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
             warmup: opts.warmup,
             thin: opts.thin,
             max_leapfrog: opts.max_leapfrog,
+            foot_skate_cleanup: opts.foot_skate_cleanup,
         },
         chains,
         learnt: LearntReport {

@@ -19,6 +19,10 @@
 //!   variant's own foot contacts) and re-timed to the sequence's own frames. A chain's seed is
 //!   derived from the seed, the sequence's name and the part, so variants do not depend on the
 //!   thread count; `variant_on_source_path` serves synthesis;
+//! - **foot-skate clean-up** ([`foot_skate_cleanup`], on by default in sampling): the planted
+//!   vertices the shared contact detector finds pinned mid-contact, the feet moved along the
+//!   ground to meet them and the legs deformed in the gradient domain (rest Laplacian factorised
+//!   once, one solve per frame), blended in and out around each contact (Kovar et al. 2002);
 //! - **parametrisation** (6.7, [`motion_parametrisation`]): variants of the two learnt
 //!   trajectories around a weight, interpolated in the latent space, with their timing;
 //! - the model folder on disk ([`variation_model_file`]: `model.json`, `faces.npy`,
@@ -30,6 +34,7 @@
 
 pub mod centroid_path_length;
 pub mod error;
+pub mod foot_skate_cleanup;
 pub mod learnt_motion;
 pub mod mean_vertex_distance;
 pub mod motion_parametrisation;

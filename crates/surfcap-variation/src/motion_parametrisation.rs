@@ -25,8 +25,8 @@ use crate::error::{Error, Result};
 use crate::motion_preparation::SequenceOrigin;
 use crate::variation_model::VariationModel;
 use crate::variation_sampling::{
-    ChainSummary, SamplingOptions, Variant, VariantPath, place_and_retime, place_by_contacts, place_on_path,
-    reconstruct_aligned, sample_latent_variants,
+    ChainSummary, SamplingOptions, Variant, clean_up_variants, place_variant, reconstruct_aligned,
+    sample_latent_variants,
 };
 
 /// A learnt trajectory on the blend ladder of a pair: its weight and sequence index.
@@ -151,20 +151,25 @@ pub fn sample_blend_variants(
     let (own, times) = interpolated_timing(model, r1, r2, w);
     let start = model.sequences[model.sequence_index(a)?].first_placement;
     let path = interpolated_path(model, r1, r2, w);
-    let variants = lower
+    let place = |aligned: &[Vec<f32>], displacements: &[[f64; 6]]| {
+        place_variant(model, opts.path, aligned, displacements, &start, &path, &times, own)
+    };
+    let mut variants: Vec<Variant> = lower
         .iter()
         .zip(&pairing)
         .map(|(x1, &m)| {
             let lat = interpolate_latents(x1, &upper[m], r1, r2, w);
             let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = match opts.path {
-                VariantPath::Sampled => place_and_retime(&aligned, &displacements, &start, &times, own)?,
-                VariantPath::Source => place_on_path(&aligned, &path, &times, own)?,
-                VariantPath::Contacts => place_by_contacts(model, &aligned, &path, &times, own)?,
-            };
-            Ok(Variant { latents: lat, aligned, displacements, world })
+            let world = place(&aligned, &displacements)?;
+            Ok(Variant { latents: lat, aligned, displacements, world, before_cleanup: None, cleanup: None })
         })
         .collect::<Result<_>>()?;
+    if opts.foot_skate_cleanup {
+        let learnt =
+            interpolate_latents(&model.learnt_latents(r1.sequence)?, &model.learnt_latents(r2.sequence)?, r1, r2, w);
+        let (la, ld) = reconstruct_aligned(model, &learnt)?;
+        clean_up_variants(model, &mut variants, &place(&la, &ld)?)?;
+    }
     Ok((variants, BlendSampling { a: a.into(), b: b.into(), w, lower: r1, upper: r2, pairing, chains }))
 }
 

@@ -346,7 +346,14 @@ mod tests {
         // The learnt trajectory put on the source's path gives the source back.
         let lat = m.learnt_latents(1).unwrap();
         let (aligned, displacements) = crate::variation_sampling::reconstruct_aligned(&m, &lat).unwrap();
-        let learnt = crate::variation_sampling::Variant { latents: lat, aligned, displacements, world: Vec::new() };
+        let learnt = crate::variation_sampling::Variant {
+            latents: lat,
+            aligned,
+            displacements,
+            world: Vec::new(),
+            before_cleanup: None,
+            cleanup: None,
+        };
         let src = &s.sequences()[1];
         let frames: Vec<&[f32]> = (0..src.n_frames()).map(|f| src.frame(f)).collect();
         let on_path = crate::variation_sampling::variant_on_source_path(&m, 1, &learnt, &frames).unwrap();

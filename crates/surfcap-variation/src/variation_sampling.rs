@@ -40,6 +40,11 @@
 //!   learnt trajectories do not). A triangular moving average of radius 2 frames is applied
 //!   to each sampled trajectory (`smoothing`, 0 turns it off; measured with `surfcap eval
 //!   vary`, see docs/results/variation.md).
+//! - **Foot skate**: varied leg poses on the source's path still let the planted feet drift
+//!   (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips, docs/results/
+//!   variation.md), so every variant's world frames go through the foot-skate clean-up
+//!   ([`crate::foot_skate_cleanup`], `foot_skate_cleanup` in the options, on by default); for a
+//!   source authored in place its ground is the travel its learnt motion's contacts give.
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
 //!   variant can replace its source inside a longer animation.
 
@@ -51,6 +56,7 @@ use surfcap_motion::sequence_time_alignment::TimeMap;
 use surfcap_transfer::pose_representation::Placement;
 
 use crate::error::{Error, Result};
+use crate::foot_skate_cleanup::{CleanupReport, FootSkateCleanup, FootSkateParams};
 use crate::motion_preparation::poses_at;
 use crate::variation_model::VariationModel;
 
@@ -94,6 +100,9 @@ pub struct SamplingOptions {
     pub thin: usize,
     /// Upper bound on leapfrog steps per HMC iteration.
     pub max_leapfrog: usize,
+    /// Pin the planted feet of every variant ([`crate::foot_skate_cleanup`]; on by default,
+    /// see the module doc).
+    pub foot_skate_cleanup: bool,
 }
 
 impl Default for SamplingOptions {
@@ -105,6 +114,7 @@ impl Default for SamplingOptions {
             warmup: 100,
             thin: 5,
             max_leapfrog: 30,
+            foot_skate_cleanup: true,
         }
     }
 }
@@ -131,8 +141,12 @@ pub struct Variant {
     pub aligned: Vec<Vec<f32>>,
     /// Per reference frame, the displacement from the previous one.
     pub displacements: Vec<[f64; 6]>,
-    /// The frames in the world, at the sequence's own timing (its frame count).
+    /// The frames in the world, at the sequence's own timing (its frame count); with the
+    /// foot-skate clean-up, the cleaned frames.
     pub world: Vec<Vec<f32>>,
+    /// With the foot-skate clean-up: the frames before it, and what it did.
+    pub before_cleanup: Option<Vec<Vec<f32>>>,
+    pub cleanup: Option<CleanupReport>,
 }
 
 /// Per variant, one latent trajectory per part.
@@ -449,21 +463,124 @@ pub fn sample_variants(
     let j = model.sequence_index(name)?;
     let (latents, chains) = sample_latent_variants(model, j, count, seed, opts)?;
     let seq = &model.sequences[j];
-    let variants = latents
+    let place = |aligned: &[Vec<f32>], displacements: &[[f64; 6]]| {
+        place_variant(
+            model,
+            opts.path,
+            aligned,
+            displacements,
+            &seq.first_placement,
+            &seq.path,
+            &seq.times,
+            seq.own_frames,
+        )
+    };
+    let mut variants: Vec<Variant> = latents
         .into_iter()
         .map(|lat| {
             let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = match opts.path {
-                VariantPath::Sampled => {
-                    place_and_retime(&aligned, &displacements, &seq.first_placement, &seq.times, seq.own_frames)?
-                }
-                VariantPath::Source => place_on_path(&aligned, &seq.path, &seq.times, seq.own_frames)?,
-                VariantPath::Contacts => place_by_contacts(model, &aligned, &seq.path, &seq.times, seq.own_frames)?,
-            };
-            Ok(Variant { latents: lat, aligned, displacements, world })
+            let world = place(&aligned, &displacements)?;
+            Ok(Variant { latents: lat, aligned, displacements, world, before_cleanup: None, cleanup: None })
         })
         .collect::<Result<_>>()?;
+    if opts.foot_skate_cleanup {
+        let (la, ld) = reconstruct_aligned(model, &model.learnt_latents(j)?)?;
+        let learnt_world = place(&la, &ld)?;
+        clean_up_variants(model, &mut variants, &learnt_world)?;
+    }
     Ok((variants, chains))
+}
+
+/// Body-frame poses (reference frames) put in the world by `path` (see [`VariantPath`]) and
+/// re-timed to `own_frames` through `times`.
+#[allow(clippy::too_many_arguments)]
+pub fn place_variant(
+    model: &VariationModel,
+    path: VariantPath,
+    aligned: &[Vec<f32>],
+    displacements: &[[f64; 6]],
+    start: &Placement,
+    placements: &[Placement],
+    times: &[f64],
+    own_frames: usize,
+) -> Result<Vec<Vec<f32>>> {
+    match path {
+        VariantPath::Sampled => place_and_retime(aligned, displacements, start, times, own_frames),
+        VariantPath::Source => place_on_path(aligned, placements, times, own_frames),
+        VariantPath::Contacts => place_by_contacts(model, aligned, placements, times, own_frames),
+    }
+}
+
+/// The ground's travel under a motion authored in place, per frame along the two ground axes:
+/// the root motion its own foot contacts give (surfcap-geometry's `root_motion_from_contacts`)
+/// when its centre's net travel is under surfcap-motion's in-place threshold
+/// (`IN_PLACE_HEIGHTS_PER_SECOND` x the subject's height per second), `None` when it travels.
+/// `height` is the subject's height, `frames` the motion's world frames.
+pub fn in_place_ground(frames: &[Vec<f32>], fps: f64, up: surfcap_mesh::UpAxis, height: f64) -> Option<Vec<[f64; 2]>> {
+    let nv = frames.first().map_or(0, |f| f.len() / 3);
+    if nv == 0 || frames.len() < 2 {
+        return None;
+    }
+    let centre = |p: &[f32]| -> [f64; 3] {
+        let s = p.chunks_exact(3).fold([0.0; 3], |a, q| [a[0] + q[0] as f64, a[1] + q[1] as f64, a[2] + q[2] as f64]);
+        [s[0] / nv as f64, s[1] / nv as f64, s[2] / nv as f64]
+    };
+    let centres = [centre(&frames[0]), centre(&frames[frames.len() - 1])];
+    let (net, _) = surfcap_motion::clip_travel::horizontal_travel(&centres, up);
+    let seconds = (frames.len() - 1) as f64 / fps;
+    if net >= surfcap_motion::clip_travel::IN_PLACE_HEIGHTS_PER_SECOND * height * seconds.max(1.0) {
+        return None;
+    }
+    let flat: Vec<f32> = frames.iter().flatten().copied().collect();
+    let params = surfcap_geometry::ground_contacts::ContactParams::default();
+    let motion = surfcap_geometry::root_motion_from_contacts::root_motion_from_contacts(&flat, nv, fps, up, &params);
+    Some(motion.offsets)
+}
+
+/// The extent of a pose along the up axis.
+pub fn pose_height(pose: &[f32], up: surfcap_mesh::UpAxis) -> f64 {
+    let (axis, sign) = up.axis_and_sign();
+    let (lo, hi) = pose
+        .chunks_exact(3)
+        .map(|p| sign * p[axis] as f64)
+        .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+    (hi - lo).max(0.0)
+}
+
+/// Pins the planted feet of every variant ([`crate::foot_skate_cleanup`], default settings,
+/// the legs being the parts named `leg*`/`foot*`), keeping the frames before in
+/// `before_cleanup`. `learnt_world` is the learnt motion the variants vary, placed as they are:
+/// when it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
+/// pinned to. A model without legs is left as it is.
+pub fn clean_up_variants(model: &VariationModel, variants: &mut [Variant], learnt_world: &[Vec<f32>]) -> Result<()> {
+    let legs = crate::motion_preparation::feet_of(&model.parts);
+    if legs.is_empty() || variants.is_empty() {
+        return Ok(());
+    }
+    let cleanup = FootSkateCleanup::new(
+        &model.topology,
+        &model.reference_pose,
+        model.up_axis,
+        &legs,
+        FootSkateParams::default(),
+    )?;
+    let height = pose_height(&model.reference_pose, model.up_axis);
+    let ground = in_place_ground(learnt_world, model.fps, model.up_axis, height);
+    for v in variants {
+        if let Some(g) = &ground
+            && g.len() != v.world.len()
+        {
+            return Err(Error::Invalid(format!(
+                "the learnt motion has {} frames and its variant {}: expected one timing",
+                g.len(),
+                v.world.len()
+            )));
+        }
+        let (cleaned, report) = cleanup.clean(&v.world, model.fps, ground.as_deref())?;
+        v.before_cleanup = Some(std::mem::replace(&mut v.world, cleaned));
+        v.cleanup = Some(report);
+    }
+    Ok(())
 }
 
 #[cfg(test)]

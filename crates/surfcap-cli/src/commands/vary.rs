@@ -112,6 +112,11 @@ pub struct SampleArgs {
     /// defaults' 3,750): larger requests are refused before any work.
     #[arg(long, default_value_t = 30, value_parser = |s: &str| whole_in(s, 1, 10_000))]
     pub max_leapfrog: usize,
+    /// Leave the planted feet as sampled: no foot-skate clean-up (by default the planted
+    /// vertices found by the shared contact detection are pinned at their position mid-contact
+    /// and the legs deformed to meet them, blended in and out around each contact).
+    #[arg(long)]
+    pub no_foot_skate_cleanup: bool,
     /// The output folder: `<name>-variant-<k>.glb` per variant and `report.json`.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -312,6 +317,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
             warmup: a.warmup,
             thin: a.thin,
             max_leapfrog: a.max_leapfrog,
+            foot_skate_cleanup: !a.no_foot_skate_cleanup,
         },
         output: a.output.clone(),
         force: ctx.force,
@@ -335,6 +341,12 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
                 "  {:<28} {:>4} frames: {:.4} {unit} per vertex from the learnt motion (body frame), ends {:.3} {unit} from its end",
                 v.sequence, v.frames, v.body_frame_distance, v.end_distance
             );
+            if let Some(c) = &v.cleanup {
+                println!(
+                    "    foot skate: sliding {:.3} -> {:.3} {unit}/s, {} contacts pinned, pinned vertices {:.4} -> {:.4} {unit} from their pins (largest correction {:.3} {unit})",
+                    c.sliding_before, c.sliding_after, c.plants, c.pinned_drift_before, c.pinned_drift_after, c.largest_correction
+                );
+            }
         }
         for c in &r.chains {
             println!(

@@ -132,7 +132,7 @@ fn print_case(c: &CaseEval, tolerance: f64) {
         100.0 * tolerance
     );
     println!(
-        "{:<18} {:>7} {:>7} {:>7} {:>7} {:>7} {:>16} {:>7} {:>7} {:>7} {:>7} {:>7}  verdict",
+        "{:<18} {:>7} {:>7} {:>7} {:>7} {:>7} {:>16} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}  verdict",
         "sequence",
         "floorB",
         "minB",
@@ -142,7 +142,9 @@ fn print_case(c: &CaseEval, tolerance: f64) {
         "nearest other",
         "edgeIn",
         "edgeMax",
+        "edgeWMx",
         "slideIn",
+        "slideB4",
         "slideMx",
         "minPair"
     );
@@ -164,7 +166,7 @@ fn print_case(c: &CaseEval, tolerance: f64) {
         .collect();
         let short: String = near.0.chars().take(9).collect();
         println!(
-            "{:<18} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>9} {:>6.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4}  {}",
+            "{:<18} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>9} {:>6.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7} {:>7.4} {:>7.4}  {}",
             v.sequence,
             v.floor_body,
             min(&v.distance_body),
@@ -175,7 +177,13 @@ fn print_case(c: &CaseEval, tolerance: f64) {
             near.1,
             v.edge_distortion_input,
             max(&v.edge_distortion),
+            max(&v.edge_distortion_world),
             v.sliding_input.speed,
+            if v.sliding_before_cleanup.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{:.4}", max(&v.sliding_before_cleanup.iter().map(|s| s.speed).collect::<Vec<_>>()))
+            },
             max(&v.sliding.iter().map(|s| s.speed).collect::<Vec<_>>()),
             v.min_pair_distance,
             if failed.is_empty() { "pass".to_string() } else { format!("MISSED: {}", failed.join(", ")) }
@@ -221,6 +229,10 @@ pub struct Args {
     /// --smoothing`).
     #[arg(long, default_value_t = 2)]
     pub smoothing: usize,
+    /// Judge the variants as sampled, without the foot-skate clean-up (`vary sample
+    /// --no-foot-skate-cleanup`).
+    #[arg(long)]
+    pub no_foot_skate_cleanup: bool,
     /// Folder for vary.json and the plots.
     #[arg(short, long, default_value = "vary-eval")]
     pub output: PathBuf,
@@ -245,6 +257,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         VariationEvalOptions { variants: a.variants, seed: a.seed, iterations: a.iterations, ..Default::default() };
     opts.sampling.path = a.path.0;
     opts.sampling.smoothing = a.smoothing;
+    opts.sampling.foot_skate_cleanup = !a.no_foot_skate_cleanup;
     let missed = evaluate(ctx, cases, &opts, &a.output)?;
     // The report is the result even when a criterion is missed: it is committed first.
     ctx.commit(outs)?;
@@ -275,8 +288,9 @@ fn evaluate(
         println!(
             "columns: floorB/floorW the floors of (i) (max({} x the learnt reconstruction error, {} x height)), minB/minW the \
              smallest variant-source distance (body frame, world), ownL the largest distance to the source's learnt \
-             reconstruction, nearest other (ii), edgeIn/edgeMax the source's and the worst variant's edge distortion (iii), \
-             slideIn/slideMx foot sliding (iv), minPair the closest two variants (v, floor {} x height)",
+             reconstruction, nearest other (ii), edgeIn/edgeMax/edgeWMx the source's and the worst variant's edge distortion \
+             (iii; body frame, and world frames as delivered), slideIn/slideB4/slideMx foot sliding (iv): the source's, the \
+             worst variant's before the foot-skate clean-up and after (on the capture's ground travel for in-place captures), minPair the closest two variants (v, floor {} x height)",
             r.criteria.floor_factor, r.criteria.min_floor, r.criteria.min_floor
         );
         println!("wrote {} and {} plots in {:.1} s", path.display(), written.len(), r.seconds);

@@ -1,0 +1,769 @@
+//! Foot-skate clean-up of varied motions, after Kovar, Schreiner and Gleicher 2002 ("Footskate
+//! cleanup for motion capture editing", SCA 2002), on meshes instead of skeletons.
+//!
+//! Varied leg poses placed on a path made for the captured ones let the planted feet drift
+//! (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips). Kovar et al. (sec. 3-5)
+//! pin each footplant at one place, move the root and solve the legs' IK to reach the pins, and
+//! blend the adjustments in and out over the frames around each plant. Here the legs are
+//! deformed in the gradient domain instead of by IK, and the root keeps its (captured) path:
+//!
+//! 1. **Plants** (Kovar sec. 3, "footplant constraints"): the planted vertices of every frame
+//!    step come from the shared contact detector (surfcap-geometry's `ground_contacts` and
+//!    `planted_contacts`, the group root motion and the foot-sliding measure keep still). A
+//!    planted vertex belongs to the foot of the leg part holding it; the steps where a foot has
+//!    planted vertices, runs closer than [`FootSkateParams::gap_steps`] merged when the foot
+//!    came back down where it left ([`FootSkateParams::rejoin_distance`]), are its plants;
+//!    steps at a plant's ends moving faster than [`FootSkateParams::lift_speed`] are the foot
+//!    lifting off or landing and are left out.
+//!    A plant covers frames `a..=b` (its first step's first frame to its last step's second).
+//! 2. **Pins** (Kovar sec. 4: one position per constraint): every vertex planted at frame f of
+//!    a plant is pinned, along the ground, where it is at the plant's middle frame
+//!    `m = (a + b) / 2`: `y_v = p_v(m)`. The foot is moved rigidly along the ground to meet its
+//!    pins: the weighted 2D Procrustes fit (translation, and with [`FootSkateParams::fit_turn`]
+//!    the rotation about the up axis; weights the contact weights) of `p_v(f) -> y_v` over the
+//!    planted vertices of frame f, about their weighted centroid `c_f`:
+//!    `T_f(x) = c_f + R(theta_f) (x - c_f) + t_f`. A rigid foot keeps
+//!    its shape: only the leg above it bends. Frames of a plant without a planted vertex take
+//!    the fit interpolated between their neighbours.
+//! 3. **Blending** (Kovar sec. 5: adjustments blended over adjacent frames): before a plant's
+//!    first frame and after its last, over [`FootSkateParams::blend_seconds`], the correction is
+//!    faded with a smoothstep, `(alpha theta, alpha t)`; between two plants of one foot closer
+//!    than twice that, it is interpolated from one plant's end to the next one's start. The
+//!    correction is therefore continuous at every plant boundary: nothing pops.
+//! 4. **Legs in the gradient domain** (thesis eq. 2.48 with positional constraints): the
+//!    displacement `d` of the frame's vertices minimises `sum_m area_m |G_m d|^2` (the change of
+//!    every triangle's gradient, G and the areas of the rest pose, so one factorisation serves
+//!    every frame), i.e. `L d = 0` on the free vertices, with hard constraints: `d = T_f(x) - x`
+//!    on the feet (every leg vertex within [`FootSkateParams::foot_height`] x the subject's
+//!    height of the leg's lowest rest vertex), `d = 0` everywhere outside the legs and on the
+//!    top [`FootSkateParams::hip_fraction`] of each leg (the hip: legs that are separate meshes,
+//!    as KayKit's, stay attached). Only the two ground coordinates are solved: the correction
+//!    is along the ground, heights are kept. The free block `L_II` (leg vertices between foot and
+//!    hip) is factorised once per subject ([`FootSkateCleanup::new`]); each frame is one sparse
+//!    solve with two right-hand sides, `L_II d_I = -L_IC d_C`, frames in parallel.
+//!
+//! **In-place clips** (authored with the root pinned, e.g. the KayKit clips): there the ground
+//! moves under the character and a planted foot slides backwards at the walking speed. Pinning
+//! it in place would stop the walk; the clean-up instead works on the frames moved by the
+//! ground's travel (`ground`, per frame, e.g. the root motion the source's own contacts give)
+//! and takes it away again afterwards: the feet are pinned to the moving ground.
+//!
+//! Deterministic: every frame's solve is independent and the fits are sums in a fixed order, so
+//! the result does not depend on the thread count.
+
+use faer::Mat;
+use faer::sparse::{SparseColMat, Triplet};
+use rayon::prelude::*;
+use serde::Serialize;
+use surfcap_geometry::foot_sliding::foot_sliding;
+use surfcap_geometry::gradient_operator::GradientOperator;
+use surfcap_geometry::ground_contacts::{ContactParams, GroundContact, ground_contacts};
+use surfcap_geometry::motion_plane_alignment::plane_axes;
+use surfcap_geometry::root_motion_from_contacts::planted_contacts;
+use surfcap_linalg::{NumericLlt, SymbolicLlt};
+use surfcap_mesh::{Topology, UpAxis};
+
+use crate::error::{Error, Result};
+
+/// Settings of the clean-up.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FootSkateParams {
+    /// A foot is the leg's vertices within this fraction of the subject's height above the
+    /// leg's lowest vertex in the rest pose (0.06: 10 cm for a 1.75 m person, sole to ankle).
+    pub foot_height: f64,
+    /// The top fraction of each leg's rest height range that stays put (the hip).
+    pub hip_fraction: f64,
+    /// The correction fades in before and out after each plant over this long (0.15 s: 5 frames
+    /// at 30 fps, 4 at 25).
+    pub blend_seconds: f64,
+    /// Runs of planted steps of one foot this many steps apart or less are one plant.
+    pub gap_steps: usize,
+    /// Runs closer than `gap_steps` join only when the foot's vertex mean moved at most this
+    /// fraction of the subject's height between them (0.05: 9 cm for a 1.75 m person; a
+    /// step's stride is several times that).
+    pub rejoin_distance: f64,
+    /// Steps at the ends of a plant whose planted vertices move faster than this many subject
+    /// heights per second are the foot lifting off or landing, not planted (1.0: 1.75 m/s for
+    /// a 1.75 m person; on a CMU walk's variants the toes leaving the ground moved 4 m/s, and
+    /// pinned, they dragged the swinging foot back by 0.68 m).
+    pub lift_speed: f64,
+    /// Fit the foot's turn about the up axis as well as its translation (off by default: on
+    /// a CMU walk's variants the turn fitted to a small planted patch moved a foot by up to
+    /// 0.68 m, while the translation alone pins the planted vertices within 3 mm on average).
+    pub fit_turn: bool,
+    /// The shared contact detection's thresholds.
+    #[serde(skip)]
+    pub contact: ContactParams,
+}
+
+impl Default for FootSkateParams {
+    fn default() -> Self {
+        FootSkateParams {
+            foot_height: 0.06,
+            hip_fraction: 0.1,
+            blend_seconds: 0.15,
+            gap_steps: 2,
+            rejoin_distance: 0.05,
+            lift_speed: 1.0,
+            fit_turn: false,
+            contact: ContactParams::default(),
+        }
+    }
+}
+
+/// What a clean-up did to one motion.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CleanupReport {
+    /// Plants found (over all feet).
+    pub plants: usize,
+    /// Foot sliding (surfcap-geometry's `foot_sliding`, subject units per second, on the
+    /// moving ground when one was given) before and after the clean-up.
+    pub sliding_before: f64,
+    pub sliding_after: f64,
+    /// Contact-weighted mean distance along the ground of the planted vertices from their
+    /// position at their plant's middle frame, over every planted vertex and frame: before the
+    /// clean-up (how far the pins had to pull) and after (what is left: the pins' actual drift).
+    pub pinned_drift_before: f64,
+    pub pinned_drift_after: f64,
+    /// The largest such distance after the clean-up.
+    pub pinned_drift_after_max: f64,
+    /// The largest displacement of a vertex by the clean-up.
+    pub largest_correction: f64,
+}
+
+/// The factorised leg deformation of one subject (see the module doc).
+pub struct FootSkateCleanup {
+    up: UpAxis,
+    n_vertices: usize,
+    /// The subject's height (extent of the rest pose along the up axis).
+    height: f64,
+    params: FootSkateParams,
+    /// Per vertex, the leg (index into the feet sets given) it belongs to, if any.
+    leg_of: Vec<Option<u32>>,
+    /// Per leg, its foot vertices (moved rigidly).
+    feet: Vec<Vec<u32>>,
+    /// Per vertex, its index among the free unknowns.
+    free: Vec<Option<usize>>,
+    n_free: usize,
+    /// L_IC restricted to foot columns: (free row, foot vertex, value).
+    coupling: Vec<(usize, u32, f64)>,
+    symbolic: Option<SymbolicLlt>,
+    numeric: Option<NumericLlt>,
+}
+
+impl std::fmt::Debug for FootSkateCleanup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FootSkateCleanup")
+            .field("n_vertices", &self.n_vertices)
+            .field("feet", &self.feet.iter().map(Vec::len).collect::<Vec<_>>())
+            .field("free", &self.n_free)
+            .finish()
+    }
+}
+
+fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// A rigid correction along the ground: rotation `theta` about `centre`, then translation.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Correction {
+    theta: f64,
+    t: [f64; 2],
+    /// The rotation centre, relative to the foot's vertex mean of the frame.
+    r: [f64; 2],
+}
+
+impl Correction {
+    fn scaled(self, a: f64) -> Correction {
+        Correction { theta: a * self.theta, t: [a * self.t[0], a * self.t[1]], r: self.r }
+    }
+    fn lerp(a: Correction, b: Correction, s: f64) -> Correction {
+        let l = |x: f64, y: f64| (1.0 - s) * x + s * y;
+        Correction {
+            theta: l(a.theta, b.theta),
+            t: [l(a.t[0], b.t[0]), l(a.t[1], b.t[1])],
+            r: [l(a.r[0], b.r[0]), l(a.r[1], b.r[1])],
+        }
+    }
+}
+
+impl FootSkateCleanup {
+    /// Factorises the leg deformation of `topology` in its rest pose `rest` (`[n][3]`); `legs`
+    /// are the legs' vertex sets (e.g. the body parts named `leg*`), disjoint or not (a vertex
+    /// is given to the first leg holding it).
+    pub fn new(
+        topology: &Topology,
+        rest: &[f32],
+        up: UpAxis,
+        legs: &[Vec<u32>],
+        params: FootSkateParams,
+    ) -> Result<Self> {
+        let n = topology.n_vertices();
+        if rest.len() != 3 * n {
+            return Err(Error::Invalid(format!(
+                "a rest pose of {} coordinates: expected 3 x {n} vertices",
+                rest.len()
+            )));
+        }
+        let (axis, sign) = up.axis_and_sign();
+        let h = |v: usize| sign * rest[3 * v + axis] as f64;
+        let (lo, hi) = (0..n).map(h).fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+        let height = (hi - lo).max(0.0);
+        let mut leg_of = vec![None; n];
+        for (k, leg) in legs.iter().enumerate() {
+            for &v in leg {
+                let slot = leg_of.get_mut(v as usize).ok_or_else(|| {
+                    Error::Invalid(format!("leg {k}: vertex {v} is not a vertex of the mesh (expected 0 to {})", n - 1))
+                })?;
+                slot.get_or_insert(k as u32);
+            }
+        }
+        // Foot, hip and free vertices of every leg.
+        let mut feet = vec![Vec::new(); legs.len()];
+        let mut free = vec![None; n];
+        let mut n_free = 0;
+        for (k, foot) in feet.iter_mut().enumerate() {
+            let members: Vec<usize> = (0..n).filter(|&v| leg_of[v] == Some(k as u32)).collect();
+            let (llo, lhi) = members.iter().map(|&v| h(v)).fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+            let foot_top = llo + params.foot_height * height;
+            let hip = lhi - params.hip_fraction * (lhi - llo);
+            for v in members {
+                if h(v) <= foot_top {
+                    foot.push(v as u32);
+                } else if h(v) < hip {
+                    free[v] = Some(n_free);
+                    n_free += 1;
+                }
+            }
+        }
+        let op = GradientOperator::new(topology, rest);
+        let is_foot = {
+            let mut m = vec![false; n];
+            for f in &feet {
+                for &v in f {
+                    m[v as usize] = true;
+                }
+            }
+            m
+        };
+        let mut lower = Vec::new();
+        let mut coupling = Vec::new();
+        for t in op.laplacian_triplets() {
+            let Some(i) = free[t.row] else { continue };
+            match free[t.col] {
+                Some(j) if i >= j => lower.push(Triplet::new(i, j, t.val)),
+                Some(_) => {}
+                None if is_foot[t.col] => coupling.push((i, t.col as u32, t.val)),
+                None => {}
+            }
+        }
+        // Merge the coupling's duplicates in a fixed order.
+        coupling.sort_by_key(|c| (c.0, c.1));
+        coupling.dedup_by(|b, a| {
+            if (a.0, a.1) == (b.0, b.1) {
+                a.2 += b.2;
+                true
+            } else {
+                false
+            }
+        });
+        let (symbolic, numeric) = if n_free > 0 {
+            let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / n_free as f64;
+            // A free piece touching no constraint (a loose fragment of a leg) stays put.
+            lower.extend((0..n_free).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
+            let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n_free, n_free, &lower)
+                .map_err(|e| Error::Invalid(format!("assembling the legs' Laplacian: {e:?}")))?;
+            let symbolic = SymbolicLlt::new(mat.symbolic())
+                .map_err(|e| Error::Invalid(format!("ordering the legs' Laplacian: {e:?}")))?;
+            let numeric = symbolic
+                .factorize(mat.as_ref())
+                .map_err(|e| Error::Invalid(format!("factorising the legs' Laplacian: {e:?}")))?;
+            (Some(symbolic), Some(numeric))
+        } else {
+            (None, None)
+        };
+        Ok(FootSkateCleanup {
+            up,
+            n_vertices: n,
+            height,
+            params,
+            leg_of,
+            feet,
+            free,
+            n_free,
+            coupling,
+            symbolic,
+            numeric,
+        })
+    }
+
+    /// The feet found (vertex sets, one per leg).
+    pub fn feet(&self) -> &[Vec<u32>] {
+        &self.feet
+    }
+
+    /// The cleaned-up frames of a motion (`frames[f]` of `[n][3]`, at `fps`) and what was done.
+    /// `ground`, when given, is per frame the ground's travel along the two ground axes (the
+    /// module doc's in-place clips): the feet are pinned to it.
+    pub fn clean(
+        &self,
+        frames: &[Vec<f32>],
+        fps: f64,
+        ground: Option<&[[f64; 2]]>,
+    ) -> Result<(Vec<Vec<f32>>, CleanupReport)> {
+        let n = self.n_vertices;
+        if let Some(f) = frames.iter().position(|p| p.len() != 3 * n) {
+            return Err(Error::Invalid(format!(
+                "frame {f} has {} coordinates: expected 3 x {n} vertices",
+                frames[f].len()
+            )));
+        }
+        if let Some(g) = ground
+            && g.len() != frames.len()
+        {
+            return Err(Error::Invalid(format!(
+                "a ground travel of {} frames for a motion of {}: expected one offset per frame",
+                g.len(),
+                frames.len()
+            )));
+        }
+        let (u, w, _) = plane_axes(self.up);
+        let nf = frames.len();
+        // Frames on the moving ground.
+        let moved: Vec<Vec<f32>> = frames
+            .iter()
+            .enumerate()
+            .map(|(f, p)| {
+                let mut p = p.clone();
+                if let Some(g) = ground {
+                    for q in p.chunks_exact_mut(3) {
+                        q[u] += g[f][0] as f32;
+                        q[w] += g[f][1] as f32;
+                    }
+                }
+                p
+            })
+            .collect();
+        let flat: Vec<f32> = moved.iter().flatten().copied().collect();
+        let fps = fps.max(f64::MIN_POSITIVE);
+        let contacts = ground_contacts(&flat, n, fps, self.up, &self.params.contact);
+        let planted = planted_contacts(&flat, n, fps, self.up, &contacts, &self.params.contact);
+        let xy = |f: usize, v: u32| -> [f64; 2] {
+            let p = &moved[f];
+            [p[3 * v as usize + u] as f64, p[3 * v as usize + w] as f64]
+        };
+        let blend = ((self.params.blend_seconds * fps).round() as usize).max(1);
+        // Per foot: plants (frame ranges with their planted vertices per frame) and per-frame
+        // corrections.
+        let legs = self.feet.len();
+        let mut corrections: Vec<Vec<Correction>> = vec![vec![Correction::default(); nf]; legs];
+        let mut active: Vec<Vec<bool>> = vec![vec![false; nf]; legs];
+        // (foot, frame range, per frame the planted vertices with weights), for the report.
+        let mut plants: Vec<(usize, usize, usize, Vec<Vec<GroundContact>>)> = Vec::new();
+        for (k, corr) in corrections.iter_mut().enumerate() {
+            let steps: Vec<Vec<GroundContact>> = planted
+                .iter()
+                .map(|s| s.iter().filter(|c| self.leg_of[c.vertex as usize] == Some(k as u32)).copied().collect())
+                .collect();
+            let centroid = |f: usize| -> [f64; 2] {
+                let foot = &self.feet[k];
+                let s = foot.iter().fold([0.0; 2], |a, &v| {
+                    let p = xy(f, v);
+                    [a[0] + p[0], a[1] + p[1]]
+                });
+                let c = foot.len().max(1) as f64;
+                [s[0] / c, s[1] / c]
+            };
+            let on: Vec<usize> = (0..steps.len()).filter(|&s| !steps[s].is_empty()).collect();
+            let mut runs: Vec<(usize, usize)> = Vec::new();
+            // Two runs are one plant only when the foot came back down where it left: a
+            // foot that moved further (the next footfall) starts a plant of its own.
+            let rejoin = self.params.rejoin_distance * self.height;
+            for s in on {
+                match runs.last_mut() {
+                    Some(r)
+                        if s - r.1 <= self.params.gap_steps + 1 && {
+                            let (p, q) = (centroid(r.1 + 1), centroid(s));
+                            (p[0] - q[0]).hypot(p[1] - q[1]) <= rejoin
+                        } =>
+                    {
+                        r.1 = s
+                    }
+                    _ => runs.push((s, s)),
+                }
+            }
+            // A foot lifting off (or landing) fast is not planted: the ends of a run whose
+            // planted vertices move faster than the lift speed are left out.
+            let lift = self.params.lift_speed * self.height;
+            let speed = |st: usize| {
+                let (mut sum, mut wt) = (0.0, 0.0);
+                for c in &steps[st] {
+                    let (p, q) = (xy(st, c.vertex), xy(st + 1, c.vertex));
+                    sum += c.weight.max(1e-6) * (q[0] - p[0]).hypot(q[1] - p[1]);
+                    wt += c.weight.max(1e-6);
+                }
+                if wt > 0.0 { fps * sum / wt } else { 0.0 }
+            };
+            let runs: Vec<(usize, usize)> = runs
+                .into_iter()
+                .filter_map(|(mut s0, mut s1)| {
+                    while s0 <= s1 && speed(s0) > lift {
+                        s0 += 1;
+                    }
+                    while s1 > s0 && speed(s1) > lift {
+                        s1 -= 1;
+                    }
+                    (s0 <= s1 && speed(s0) <= lift).then_some((s0, s1))
+                })
+                .collect();
+            for (s0, s1) in runs {
+                let (a, b) = (s0, s1 + 1);
+                let m = (a + b) / 2;
+                // Planted vertices of every frame of the plant: those of the steps it belongs to.
+                let per_frame: Vec<Vec<GroundContact>> = (a..=b)
+                    .map(|f| {
+                        let mut v: Vec<GroundContact> = Vec::new();
+                        for s in [f.checked_sub(1), Some(f)].into_iter().flatten() {
+                            if s < s0 || s > s1 {
+                                continue;
+                            }
+                            for c in &steps[s] {
+                                match v.iter_mut().find(|x| x.vertex == c.vertex) {
+                                    Some(x) => x.weight = x.weight.max(c.weight),
+                                    None => v.push(*c),
+                                }
+                            }
+                        }
+                        v.sort_by_key(|c| c.vertex);
+                        v
+                    })
+                    .collect();
+                let mut fits: Vec<Option<Correction>> = per_frame
+                    .iter()
+                    .enumerate()
+                    .map(|(i, vs)| {
+                        let f = a + i;
+                        fit(vs, |v| xy(f, v), |v| xy(m, v), self.params.fit_turn).map(|(theta, c, t)| {
+                            let g = centroid(f);
+                            Correction { theta, t, r: [c[0] - g[0], c[1] - g[1]] }
+                        })
+                    })
+                    .collect();
+                fill_gaps(&mut fits);
+                for (i, c) in fits.into_iter().enumerate() {
+                    corr[a + i] = c.unwrap_or_default();
+                    active[k][a + i] = true;
+                }
+                plants.push((k, a, b, per_frame));
+            }
+        }
+        // Fades and bridges between plants.
+        for (corr, on) in corrections.iter_mut().zip(&active) {
+            let keys: Vec<usize> = (0..nf).filter(|&f| on[f]).collect();
+            for f in 0..nf {
+                if on[f] {
+                    continue;
+                }
+                let prev = keys.iter().rev().find(|&&k| k < f).copied();
+                let next = keys.iter().find(|&&k| k > f).copied();
+                corr[f] = match (prev, next) {
+                    (Some(p), Some(q)) if q - p <= 2 * blend + 1 => {
+                        Correction::lerp(corr[p], corr[q], smoothstep((f - p) as f64 / (q - p) as f64))
+                    }
+                    _ => {
+                        let fade = |d: usize| smoothstep(1.0 - d as f64 / (blend + 1) as f64);
+                        let mut c = Correction::default();
+                        if let Some(p) = prev.filter(|&p| f - p <= blend) {
+                            c = corr[p].scaled(fade(f - p));
+                        }
+                        if let Some(q) = next.filter(|&q| q - f <= blend) {
+                            let x = corr[q].scaled(fade(q - f));
+                            c = Correction { theta: c.theta + x.theta, t: [c.t[0] + x.t[0], c.t[1] + x.t[1]], r: x.r };
+                        }
+                        c
+                    }
+                };
+            }
+        }
+        // Per frame: the feet's displacements, then the legs' solve.
+        let out: Vec<(Vec<f32>, f64)> = (0..nf)
+            .into_par_iter()
+            .map(|f| {
+                let p = &moved[f];
+                let mut d = vec![[0.0f64; 2]; n];
+                for (k, foot) in self.feet.iter().enumerate() {
+                    let c = corrections[k][f];
+                    if c == Correction::default() || foot.is_empty() {
+                        continue;
+                    }
+                    let g = foot.iter().fold([0.0; 2], |a, &v| {
+                        let q = xy(f, v);
+                        [a[0] + q[0], a[1] + q[1]]
+                    });
+                    let centre = [g[0] / foot.len() as f64 + c.r[0], g[1] / foot.len() as f64 + c.r[1]];
+                    let (s, co) = c.theta.sin_cos();
+                    for &v in foot {
+                        let q = xy(f, v);
+                        let (x, y) = (q[0] - centre[0], q[1] - centre[1]);
+                        let moved_to = [centre[0] + co * x - s * y + c.t[0], centre[1] + s * x + co * y + c.t[1]];
+                        d[v as usize] = [moved_to[0] - q[0], moved_to[1] - q[1]];
+                    }
+                }
+                if let (Some(sym), Some(num)) = (&self.symbolic, &self.numeric) {
+                    let mut rhs = Mat::<f64>::zeros(self.n_free, 2);
+                    for &(i, v, l) in &self.coupling {
+                        let dv = d[v as usize];
+                        rhs[(i, 0)] -= l * dv[0];
+                        rhs[(i, 1)] -= l * dv[1];
+                    }
+                    sym.solve_in_place(num, rhs.as_mut());
+                    for (v, slot) in self.free.iter().enumerate() {
+                        if let Some(i) = slot {
+                            d[v] = [rhs[(*i, 0)], rhs[(*i, 1)]];
+                        }
+                    }
+                }
+                let mut q = p.clone();
+                let mut largest = 0.0f64;
+                for (v, dv) in d.iter().enumerate() {
+                    q[3 * v + u] += dv[0] as f32;
+                    q[3 * v + w] += dv[1] as f32;
+                    largest = largest.max(dv[0].hypot(dv[1]));
+                }
+                (q, largest)
+            })
+            .collect();
+        let largest_correction = out.iter().map(|o| o.1).fold(0.0, f64::max);
+        let cleaned_moved: Vec<Vec<f32>> = out.into_iter().map(|o| o.0).collect();
+        // The pins' drift before and after.
+        let (mut before, mut after, mut weight, mut worst) = (0.0, 0.0, 0.0, 0.0f64);
+        for (_, a, b, per_frame) in &plants {
+            let m = (a + b) / 2;
+            for (i, vs) in per_frame.iter().enumerate() {
+                let f = a + i;
+                for c in vs {
+                    let k = c.vertex as usize;
+                    let dist = |p: &[Vec<f32>]| {
+                        ((p[f][3 * k + u] - p[m][3 * k + u]) as f64).hypot((p[f][3 * k + w] - p[m][3 * k + w]) as f64)
+                    };
+                    let wt = c.weight.max(1e-6);
+                    let x = dist(&cleaned_moved);
+                    before += wt * dist(&moved);
+                    after += wt * x;
+                    weight += wt;
+                    worst = worst.max(x);
+                }
+            }
+        }
+        let mean = |s: f64| if weight > 0.0 { s / weight } else { 0.0 };
+        let slide = |p: &[Vec<f32>]| -> Result<f64> {
+            let flat: Vec<f32> = p.iter().flatten().copied().collect();
+            let c = ground_contacts(&flat, n, fps, self.up, &self.params.contact);
+            Ok(foot_sliding(&flat, n, fps, self.up, &c, &self.params.contact, &[])?.mean_speed)
+        };
+        let report = CleanupReport {
+            plants: plants.len(),
+            sliding_before: slide(&moved)?,
+            sliding_after: slide(&cleaned_moved)?,
+            pinned_drift_before: mean(before),
+            pinned_drift_after: mean(after),
+            pinned_drift_after_max: worst,
+            largest_correction,
+        };
+        // Back off the moving ground.
+        let cleaned = cleaned_moved
+            .into_iter()
+            .enumerate()
+            .map(|(f, mut p)| {
+                if let Some(g) = ground {
+                    for q in p.chunks_exact_mut(3) {
+                        q[u] -= g[f][0] as f32;
+                        q[w] -= g[f][1] as f32;
+                    }
+                }
+                p
+            })
+            .collect();
+        Ok((cleaned, report))
+    }
+}
+
+/// The weighted rigid fit along the ground of `from(v) -> to(v)` over `vs` (the rotation only
+/// when `turn`): (rotation angle,
+/// the centre (weighted centroid of `from`), translation); `None` without weight.
+fn fit(
+    vs: &[GroundContact],
+    from: impl Fn(u32) -> [f64; 2],
+    to: impl Fn(u32) -> [f64; 2],
+    turn: bool,
+) -> Option<(f64, [f64; 2], [f64; 2])> {
+    let wsum: f64 = vs.iter().map(|c| c.weight.max(1e-6)).sum();
+    if vs.is_empty() || wsum <= 0.0 {
+        return None;
+    }
+    let mean = |g: &dyn Fn(u32) -> [f64; 2]| {
+        let s = vs.iter().fold([0.0; 2], |a, c| {
+            let p = g(c.vertex);
+            let wt = c.weight.max(1e-6);
+            [a[0] + wt * p[0], a[1] + wt * p[1]]
+        });
+        [s[0] / wsum, s[1] / wsum]
+    };
+    let (cf, ct) = (mean(&from), mean(&to));
+    let (mut sxx, mut sxy, mut syx, mut syy) = (0.0, 0.0, 0.0, 0.0);
+    for c in vs {
+        let (p, q) = (from(c.vertex), to(c.vertex));
+        let (a, b) = ([p[0] - cf[0], p[1] - cf[1]], [q[0] - ct[0], q[1] - ct[1]]);
+        let wt = c.weight.max(1e-6);
+        sxx += wt * a[0] * b[0];
+        sxy += wt * a[0] * b[1];
+        syx += wt * a[1] * b[0];
+        syy += wt * a[1] * b[1];
+    }
+    // A planted patch too small to fix a turn (one vertex, a line) only translates.
+    let spread: f64 = vs
+        .iter()
+        .map(|c| {
+            let p = from(c.vertex);
+            c.weight.max(1e-6) * ((p[0] - cf[0]).powi(2) + (p[1] - cf[1]).powi(2))
+        })
+        .sum::<f64>()
+        / wsum;
+    let theta = if turn && spread > 1e-12 && vs.len() >= 3 { (sxy - syx).atan2(sxx + syy) } else { 0.0 };
+    Some((theta, cf, [ct[0] - cf[0], ct[1] - cf[1]]))
+}
+
+/// Missing fits inside a plant interpolated between their neighbours (the ends held).
+fn fill_gaps(fits: &mut [Option<Correction>]) {
+    let known: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].is_some()).collect();
+    if known.is_empty() {
+        return;
+    }
+    for i in 0..fits.len() {
+        if fits[i].is_some() {
+            continue;
+        }
+        let p = known.iter().rev().find(|&&k| k < i).copied();
+        let q = known.iter().find(|&&k| k > i).copied();
+        fits[i] = match (p, q) {
+            (Some(p), Some(q)) => Some(Correction::lerp(
+                fits[p].expect("known"),
+                fits[q].expect("known"),
+                (i - p) as f64 / (q - p) as f64,
+            )),
+            (Some(p), None) => fits[p],
+            (None, Some(q)) => fits[q],
+            (None, None) => None,
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Heights of the rows of a ribbon "body" 2 tall, +y up, 3 vertices a row (x = 0, 0.1,
+    /// 0.2): rows 0-7 are the leg (0 and 0.02 the sole, 0.1 the ankle, 1.1 the hip), rows 8-9
+    /// the torso.
+    const ROWS: [f32; 10] = [0.0, 0.02, 0.1, 0.3, 0.5, 0.7, 0.9, 1.1, 1.5, 2.0];
+
+    fn ribbon() -> (Topology, Vec<f32>, Vec<u32>) {
+        let mut tris = Vec::new();
+        for r in 0..ROWS.len() as u32 - 1 {
+            for c in 0..2u32 {
+                let (a, b, d, e) = (3 * r + c, 3 * r + c + 1, 3 * (r + 1) + c, 3 * (r + 1) + c + 1);
+                tris.push([a, b, e]);
+                tris.push([a, e, d]);
+            }
+        }
+        let rest: Vec<f32> = ROWS.iter().flat_map(|&y| (0..3).flat_map(move |c| [0.1 * c as f32, y, 0.0])).collect();
+        (Topology::new(3 * ROWS.len(), tris, None).unwrap(), rest, (0..24).collect())
+    }
+
+    /// 30 frames at 30 fps: the body still; the foot (rows 0-2, the rows above it bending
+    /// linearly up to the hip) lifted 0.3 in the swing (frames 0-4 and 21-29) and down on the
+    /// ground at frames 5-20, where it skates along x at 0.3 per second.
+    fn skating(rest: &[f32]) -> Vec<Vec<f32>> {
+        (0..30)
+            .map(|f| {
+                let planted = (5..=20).contains(&f);
+                let (dx, lift) = if planted { (0.01 * (f as f32 - 5.0), 0.0) } else { (0.0, 0.3) };
+                let mut p = rest.to_vec();
+                for (r, &y) in ROWS.iter().enumerate().take(8) {
+                    // 1 for the foot, falling to 0 at the hip.
+                    let s = if r <= 2 { 1.0 } else { (1.1 - y) / 1.0 };
+                    for c in 0..3 {
+                        let k = 3 * (3 * r + c);
+                        p[k] += s * dx;
+                        p[k + 1] += s * lift;
+                    }
+                }
+                p
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_skating_planted_foot_is_pinned_the_rest_barely_moves_and_nothing_pops() {
+        let (t, rest, leg) = ribbon();
+        let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams::default()).unwrap();
+        assert_eq!(c.feet(), &[(0..9).collect::<Vec<u32>>()], "the sole and the ankle rows");
+        let frames = skating(&rest);
+        let (out, report) = c.clean(&frames, 30.0, None).unwrap();
+        assert_eq!(report.plants, 1);
+        // Pinned: the sole (rows 0-1) stays where it is mid-contact (frame 12) along the
+        // ground, on every frame of the contact; before, it drifted 0.3 per second.
+        for f in 5..=20 {
+            for v in 0..6 {
+                let d = (out[f][3 * v] - out[12][3 * v]).abs() + (out[f][3 * v + 2] - out[12][3 * v + 2]).abs();
+                assert!(d < 1e-5, "frame {f}, vertex {v}: {d} from its pin");
+            }
+        }
+        assert!(report.pinned_drift_before > 0.03, "{report:?}");
+        assert!(report.pinned_drift_after < 1e-5, "{report:?}");
+        assert!((report.sliding_before - 0.3).abs() < 1e-3, "{report:?}");
+        assert!(report.sliding_after < 1e-3, "{report:?}");
+        // The torso and the hip do not move; heights are kept; far from the contact nothing
+        // changes; the leg above the foot moves less than the foot.
+        for f in 0..30 {
+            let moved = |v: usize| {
+                ((out[f][3 * v] - frames[f][3 * v]) as f64).hypot((out[f][3 * v + 2] - frames[f][3 * v + 2]) as f64)
+            };
+            for v in 21..30 {
+                assert_eq!(moved(v), 0.0, "frame {f}, vertex {v}");
+            }
+            for v in 0..30 {
+                assert_eq!(out[f][3 * v + 1], frames[f][3 * v + 1], "heights are kept");
+            }
+            let foot = moved(0);
+            for v in 9..21 {
+                assert!(moved(v) <= foot + 1e-6, "frame {f}: vertex {v} moved {} > the foot's {foot}", moved(v));
+            }
+            if f >= 26 {
+                assert!(foot < 1e-9, "frame {f} is far from the contact: {foot}");
+            }
+        }
+        // No pop: the correction changes by at most 0.02 from a frame to the next (its largest
+        // is 0.08, from the last contact frame back to the middle one), across the contact's
+        // edges too.
+        let corr = |f: usize| (out[f][0] - frames[f][0]) as f64;
+        assert!((report.largest_correction - 0.08).abs() < 1e-4, "{report:?}");
+        for f in 0..29 {
+            let step = (corr(f + 1) - corr(f)).abs();
+            assert!(step <= 0.02, "frames {f} -> {}: the correction jumps by {step}", f + 1);
+        }
+        // Deterministic, and an in-place clip on a moving ground: pinned to the ground.
+        assert_eq!(c.clean(&frames, 30.0, None).unwrap().0, out);
+        let ground: Vec<[f64; 2]> = (0..30).map(|f| [-0.01 * (f as f64 - 5.0), 0.0]).collect();
+        let (on_ground, r) = c.clean(&frames, 30.0, Some(&ground)).unwrap();
+        assert!(r.sliding_before < 1e-3 && r.largest_correction < 1e-4, "the foot is still on that ground: {r:?}");
+        assert!(on_ground.iter().flatten().zip(frames.iter().flatten()).all(|(a, b)| (a - b).abs() < 1e-4));
+        // Bad input is refused by name.
+        let e = c.clean(&frames[..3], 30.0, Some(&ground)).unwrap_err();
+        assert!(e.to_string().contains("30 frames for a motion of 3"), "{e}");
+        let e = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[vec![99]], FootSkateParams::default()).unwrap_err();
+        assert!(e.to_string().contains("vertex 99"), "{e}");
+    }
+}
