@@ -379,7 +379,8 @@ fn transitions_table_and_evaluation_on_the_horse() {
     let o = surfcap!(&["transitions", p(&horse), "-o", p(&out), "--cache-dir", p(&cache), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!((v["l_min"].as_u64(), v["l_max"].as_u64()), (Some(8), Some(48)), "24 fps bounds");
+    // The gallop is one loop of 48 frames: segments of at most half of it (24 fps would give 8-48).
+    assert_eq!((v["l_min"].as_u64(), v["l_max"].as_u64()), (Some(8), Some(24)), "bounds of a 48-frame loop");
     for f in ["D.npy", "L.npy", "li.npy", "lj.npy"] {
         assert!(out.join(f).is_file(), "{f}");
     }
@@ -989,7 +990,9 @@ fn misfitting_or_nan_cache_entries_are_recomputed_with_a_note() {
         (&table_file, vec![4, n, n], &zeros, "source lengths"),
         (&graph_file, vec![2, 3], &[0.0, 1.0, f64::NAN, 1.0, 2.0, 0.5], "weight NaN"),
     ];
-    let mut fresh = 5;
+    // Segment lengths from 7 up: the cat's walk is one loop of 35 frames, so its default
+    // segments are 6-17 frames, and a table of the default lengths is cached already.
+    let mut fresh = 6;
     for (file, shape, values, problem) in cases {
         fresh += 1;
         let (l_min, alpha) = (fresh.to_string(), format!("0.0{fresh}"));

@@ -50,9 +50,10 @@ pub enum What {
     /// without body parts) and motions absent from training, on the KayKit knight to the
     /// barbarian, mage and rogue and on two mannequins driven by the same CMU clips.
     Transfer(transfer::Args),
-    /// Huang et al. 2009's Table 1: the surface motion graph of the CMU-driven
-    /// mannequin (walk, jog, jump, stop; walk and jog loops), 800 targets (1-20 m x 1-40 s) per
-    /// key-frame pair: distance and time errors, smoothness at the transitions, CPU time.
+    /// Huang et al. 2009's Table 1: the surface motion graph and the essential graph side by
+    /// side on the mannequin driven by CMU stand, walk, jog and hit loops, 800 targets (1-20 m x
+    /// 1-40 s) per key-frame pair: targets met or unreachable (and why), distance and time
+    /// errors, smoothness at the transitions, CPU time.
     Smg(smg::Args),
     /// The sparse essential graph against the exact one on the mannequin
     /// moved by every CMU clip (about 1,900 frames at 50 fps): per k, the all-pairs
