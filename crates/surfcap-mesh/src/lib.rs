@@ -32,6 +32,9 @@
 //! - `Progress`: how libraries report progress without printing; the front end draws it.
 //! - Sizing ([`sizing`]): a request's memory and disk estimated before any work and checked
 //!   against the front end's limits; fallible allocation where a size comes from input.
+//! - Reachability ([`reachability`]): the words both synthesis engines (the surface motion graph
+//!   and the essential graph's timed searches) use for a target no walk can meet, and which
+//!   loops may pad time; here because neither engine's crate may depend on the other.
 //!
 //! No function here panics on bad input, prints or exits: errors are [`Error`]s that name the file,
 //! the line or frame, and what was expected. `npyz` parses `.npy` headers and decodes data in
@@ -61,6 +64,7 @@ pub mod npy;
 pub mod output_path;
 pub mod output_set;
 pub mod progress;
+pub mod reachability;
 pub mod regular_file;
 pub mod sizing;
 pub mod subject;

@@ -65,7 +65,6 @@ pub mod timed_walk;
 pub mod transition_frames;
 pub mod transition_table;
 pub mod transition_tiles;
-pub mod unreachable;
 pub mod walk_sequence;
 
 pub use error::{Error, Result};

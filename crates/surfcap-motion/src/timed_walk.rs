@@ -35,8 +35,8 @@ use surfcap_mesh::FrameIndex;
 
 use crate::error::{Error, Result};
 use crate::graph::Graph;
-pub use crate::unreachable::Unreachable;
 use crate::walk_sequence::{Step, WalkModel};
+pub use surfcap_mesh::reachability::{LoopRule, Unreachable};
 
 /// An edge as the timed search sees it.
 #[derive(Debug, Clone, Copy)]
@@ -216,23 +216,6 @@ impl TimedGraph {
             kept.push(*e);
         }
         (Self::from_edges(self.n, kept, self.index.clone()), excluded)
-    }
-}
-
-/// Which loops may pad time: none playing fewer frames per repetition than `min_frames`, none
-/// whose poses vary less than `variation_floor` typical frame steps (the largest pose distance
-/// among the loop's frames over the median distance between successive frames of its
-/// sequence), the words and defaults of the surface motion graph's rule.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct LoopRule {
-    pub min_frames: usize,
-    pub variation_floor: f64,
-}
-
-impl Default for LoopRule {
-    /// 10 frames and 1 typical frame step.
-    fn default() -> Self {
-        LoopRule { min_frames: 10, variation_floor: 1.0 }
     }
 }
 

@@ -28,29 +28,7 @@ use std::ops::Range;
 use crate::error::{Error, Result};
 use crate::surface_motion_graph::{EdgeKind, SurfaceMotionGraph};
 
-/// When a loop may pad time.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct LoopRule {
-    /// The fewest frames a loop plays per repetition.
-    pub min_frames: usize,
-    /// The least pose variation (in typical frame-to-frame dissimilarities, see the module
-    /// documentation).
-    pub variation_floor: f64,
-}
-
-impl Default for LoopRule {
-    /// 10 frames and a variation of 1 (see the module documentation).
-    fn default() -> Self {
-        LoopRule { min_frames: 10, variation_floor: 1.0 }
-    }
-}
-
-impl LoopRule {
-    /// Every loop allowed: the paper's graph as built.
-    pub fn all() -> Self {
-        LoopRule { min_frames: 0, variation_floor: 0.0 }
-    }
-}
+pub use surfcap_mesh::reachability::LoopRule;
 
 /// Why a loop may not pad time.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]

@@ -83,64 +83,7 @@ impl Default for Tolerance {
     }
 }
 
-/// Why no path of the graph meets a query's targets within its tolerance.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-#[serde(tag = "reason", rename_all = "snake_case")]
-pub enum Unreachable {
-    /// Every path between the key frames takes more frames than the target allows.
-    TooShort { shortest_frames: f64 },
-    /// Every path travels farther than the target allows (its shortest walk already does).
-    TooNear { shortest_distance: f64 },
-    /// No loop can be repeated between the key frames: every path has a fixed length.
-    NoLoop,
-    /// The target asks for a speed (units per frame over what the walk leaves to the loops)
-    /// above what any loop travels.
-    TooFast { needed: f64, fastest: f64 },
-    /// ... or below: there is no loop slow enough (no in-place loop).
-    TooSlow { needed: f64, slowest: f64 },
-    /// The speed is in range, but no whole number of repetitions of the loops lands within the
-    /// tolerance.
-    Granularity,
-}
-
-impl Unreachable {
-    /// The reason's name, as in reports (`too_short`, `too_near`, `no_loop`, `too_fast`,
-    /// `too_slow`, `granularity`).
-    pub fn kind(&self) -> &'static str {
-        match self {
-            Unreachable::TooShort { .. } => "too_short",
-            Unreachable::TooNear { .. } => "too_near",
-            Unreachable::NoLoop => "no_loop",
-            Unreachable::TooFast { .. } => "too_fast",
-            Unreachable::TooSlow { .. } => "too_slow",
-            Unreachable::Granularity => "granularity",
-        }
-    }
-}
-
-impl std::fmt::Display for Unreachable {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Unreachable::TooShort { shortest_frames } => {
-                write!(f, "too short: every path takes at least {shortest_frames} frames")
-            }
-            Unreachable::TooNear { shortest_distance } => {
-                write!(f, "too near: every path travels at least {shortest_distance:.3} units")
-            }
-            Unreachable::NoLoop => write!(f, "no loop between the key frames: every path has a fixed length"),
-            Unreachable::TooFast { needed, fastest } => {
-                write!(f, "too fast: needs {needed:.4} units per frame, the fastest loop travels {fastest:.4}")
-            }
-            Unreachable::TooSlow { needed, slowest } => write!(
-                f,
-                "too slow: needs {needed:.4} units per frame, the slowest loop travels {slowest:.4} (no in-place loop)"
-            ),
-            Unreachable::Granularity => {
-                write!(f, "no whole number of loop repetitions lands within the tolerance")
-            }
-        }
-    }
-}
+pub use surfcap_mesh::reachability::Unreachable;
 
 impl PathQuery {
     /// A query with the paper's weights (`w_d = 1/0.3` per unit, for subjects in metres).
