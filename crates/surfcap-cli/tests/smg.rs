@@ -389,29 +389,21 @@ fn loops_too_short_or_too_still_never_pad_time_on_the_crane() {
     let d = tempfile::tempdir().unwrap();
     let crane = data.join("vlasic2008/crane");
     let cache = d.path().join("cache");
+    // The query of every run below, writing `out`.
+    let args = |out: &std::path::Path| -> Vec<String> {
+        let q = ["--connect", "crane:crane", "--from", "crane:0", "--to", "crane:174", "--distance", "3.1"];
+        ["smg", "query", p(&crane)]
+            .into_iter()
+            .chain(q)
+            .chain(["--time", "10", "-o", p(out)])
+            .map(String::from)
+            .collect()
+    };
     let query = |name: &str, extra: &[&str]| {
         let out = d.path().join(format!("{name}.glb"));
-        let mut a = vec![
-            "smg",
-            "query",
-            p(&crane),
-            "--connect",
-            "crane:crane",
-            "--from",
-            "crane:0",
-            "--to",
-            "crane:174",
-            "--distance",
-            "3.1",
-            "--time",
-            "10",
-            "--cache-dir",
-            p(&cache),
-            "-o",
-            p(&out),
-        ];
-        a.extend_from_slice(extra);
-        let o = surfcap!(&a);
+        let mut a = args(&out);
+        a.extend(["--cache-dir", p(&cache)].into_iter().chain(extra.iter().copied()).map(String::from));
+        let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
         assert!(o.status.success(), "{}", stderr(&o));
         (report(&out), String::from_utf8_lossy(&o.stdout).into_owned())
     };
@@ -438,24 +430,9 @@ fn loops_too_short_or_too_still_never_pad_time_on_the_crane() {
     let (r, _) = query("all", &["--min-loop", "1", "--loop-variation-floor", "0"]);
     assert!(r["excluded_loops"].as_array().unwrap().is_empty());
     assert!(r["loops"][0]["repetitions"].as_u64().unwrap() > 30, "{}", r["loops"]);
-    let bad = surfcap!(&[
-        "smg",
-        "query",
-        p(&crane),
-        "--connect",
-        "crane:crane",
-        "--from",
-        "crane:0",
-        "--to",
-        "crane:174",
-        "--distance",
-        "3.1",
-        "--time",
-        "10",
-        "--loop-variation-floor=-1",
-        "-o",
-        p(&d.path().join("bad.glb"))
-    ]);
+    let mut bad = args(&d.path().join("bad.glb"));
+    bad.push("--loop-variation-floor=-1".into());
+    let bad = surfcap!(&bad.iter().map(String::as_str).collect::<Vec<_>>());
     assert_eq!(bad.status.code(), Some(1), "{}", stderr(&bad));
     assert!(stderr(&bad).contains("--loop-variation-floor"), "{}", stderr(&bad));
 }
