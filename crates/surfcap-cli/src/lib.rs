@@ -139,6 +139,7 @@ impl Front for Cli {
             Command::Appearance(c) => commands::appearance::run(ctx, c),
             Command::Vary(c) => commands::vary::run(ctx, c),
             Command::Tiles(c) => commands::tiles::run(ctx, c),
+            Command::Reproduce(a) => commands::reproduce::run(ctx, a),
         }
     }
 }
@@ -206,6 +207,10 @@ enum Command {
     /// a work folder, for clusters: plan, run jobs (one, a stage, or all), status, merge.
     #[command(subcommand)]
     Tiles(commands::tiles::Cmd),
+    /// Every table and figure of the thesis and the two papers beside the published values:
+    /// runs the evals of the chosen items (resumable), then writes one HTML page with
+    /// results.json and results.csv; `--list` shows the catalogue.
+    Reproduce(commands::reproduce::Args),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line
@@ -312,6 +317,7 @@ pub fn run_front<F: Front>() -> ExitCode {
         force: g.force,
         max_memory: g.max_memory.map(|b| b.0),
         max_disk: g.max_disk.map(|b| b.0),
+        results: true,
     };
     signals::remove_temporaries_on_signals();
     // Unwind-safe enough: after a panic nothing of the run is used again (the program exits).

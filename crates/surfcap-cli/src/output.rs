@@ -23,6 +23,9 @@ pub struct Ctx {
     /// `--max-disk`, bytes: most a command may write (default the free space of its output's
     /// file system).
     pub max_disk: Option<u64>,
+    /// Whether results, `wrote` lines and narration are printed (false when a command runs
+    /// others in-process and reports them its own way: `surfcap reproduce`).
+    pub results: bool,
 }
 
 impl Ctx {
@@ -83,13 +86,16 @@ impl Ctx {
 
     /// Narration of a long job's steps; silent with --quiet or --json.
     pub fn say(&self, text: &str) {
-        if !self.quiet && !self.json {
+        if self.results && !self.quiet && !self.json {
             println!("{text}");
         }
     }
 
     /// A command's result: `value` as JSON with --json, else the human text `human` prints.
     pub fn result<T: Serialize + ?Sized>(&self, value: &T, human: impl FnOnce()) {
+        if !self.results {
+            return;
+        }
         if self.json {
             print_json(value);
         } else {
@@ -99,7 +105,7 @@ impl Ctx {
 
     /// `wrote <file>` for each file, unless --json (the JSON result lists them).
     pub fn wrote<'a>(&self, files: impl IntoIterator<Item = &'a PathBuf>) {
-        if !self.json {
+        if self.results && !self.json {
             for f in files {
                 println!("wrote {}", f.display());
             }

@@ -13,6 +13,7 @@ pub mod interpolate;
 pub mod parts;
 pub mod remesh_frames;
 pub mod report;
+pub mod reproduce;
 pub mod smg;
 pub mod synth;
 pub mod tiles;
