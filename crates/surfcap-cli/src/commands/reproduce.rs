@@ -89,7 +89,7 @@ fn recipe(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<Recipe>
                 ("interpolation", s(&[&crane, "--pair", "crane:0,crane:120"]), vec![], false, "interpolation.json", false)
             }
             "transitions" => {
-                ("transitions", s(&[&crane]), s(&["--slopes", "2,3", "--plot-pairs", "20"]), true, "transitions.json", false)
+                ("transitions", s(&[&crane]), s(&["--plot-pairs", "20"]), true, "transitions.json", false)
             }
             "graphs" => {
                 ("graphs", s(&[&crane]), s(&["--alpha", "0.05,0.1", "--plot-pairs", "20"]), true, "graphs.json", false)
@@ -254,7 +254,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let here = machine();
     // The evals to run, in the order of their first item.
     let mut evals: Vec<(&str, Vec<&PublishedItem>)> = Vec::new();
-    for it in &items {
+    for it in items.iter().copied() {
         if it.eval.is_empty() {
             continue;
         }
