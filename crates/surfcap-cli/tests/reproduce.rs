@@ -62,7 +62,8 @@ fn rendered(index: &Path) -> (usize, u64, u64) {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let dom = String::from_utf8_lossy(&o.stdout).to_string();
     let attr = |name: &str| -> u64 {
-        let at = dom.find(&format!("{name}=\"")).unwrap_or_else(|| panic!("{name} not set: the load script did not run"));
+        let at =
+            dom.find(&format!("{name}=\"")).unwrap_or_else(|| panic!("{name} not set: the load script did not run"));
         let rest = &dom[at + name.len() + 2..];
         rest[..rest.find('"').unwrap()].parse().unwrap()
     };
@@ -75,18 +76,8 @@ fn quick_run_writes_a_page_that_renders_every_figure_and_resumes() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("repro");
     let cache = tmp.path().join("cache");
-    let args = [
-        "reproduce",
-        "--figure",
-        "2.8,2.15",
-        "--quick",
-        "--data",
-        p(&data),
-        "-o",
-        p(&out),
-        "--cache-dir",
-        p(&cache),
-    ];
+    let args =
+        ["reproduce", "--figure", "2.8,2.15", "--quick", "--data", p(&data), "-o", p(&out), "--cache-dir", p(&cache)];
     let o = surfcap!(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     let e = stderr(&o);

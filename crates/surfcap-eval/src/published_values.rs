@@ -132,8 +132,8 @@ pub fn parse_catalogue(files: &[(&str, &str)]) -> Result<Catalogue, PublishedErr
     let mut cat = Catalogue::default();
     let mut owner: Vec<&str> = Vec::new();
     for (name, text) in files {
-        let f: File =
-            toml::from_str(text).map_err(|e| PublishedError::Parse { file: name.to_string(), message: e.to_string() })?;
+        let f: File = toml::from_str(text)
+            .map_err(|e| PublishedError::Parse { file: name.to_string(), message: e.to_string() })?;
         let invalid = |what: String| PublishedError::Invalid { file: name.to_string(), what };
         for it in f.item {
             if let Some(k) = cat.items.iter().position(|x| x.id == it.id) {
@@ -176,7 +176,12 @@ impl Catalogue {
     /// The items a selection names, in catalogue order, each once: every item with `all`, else
     /// those `figures` and `tables` name ([`PublishedItem::is_named_by`]). A name matching no
     /// item is refused.
-    pub fn select(&self, all: bool, figures: &[String], tables: &[String]) -> Result<Vec<&PublishedItem>, PublishedError> {
+    pub fn select(
+        &self,
+        all: bool,
+        figures: &[String],
+        tables: &[String],
+    ) -> Result<Vec<&PublishedItem>, PublishedError> {
         if all {
             return Ok(self.items.iter().collect());
         }

@@ -229,7 +229,8 @@ pub fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for c in bytes.chunks(3) {
-        let n = (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
+        let n =
+            (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
         for k in 0..4 {
             if k <= c.len() {
                 out.push(A[(n >> (18 - 6 * k)) as usize & 63] as char);
@@ -368,7 +369,9 @@ pub fn results_html(page: &Page) -> String {
             }
             h.push_str("</h3>\n");
             if it.values.is_empty() {
-                h.push_str("<p class=\"meta\">The paper gives this as a picture only: compare the figures below.</p>\n");
+                h.push_str(
+                    "<p class=\"meta\">The paper gives this as a picture only: compare the figures below.</p>\n",
+                );
                 continue;
             }
             h.push_str(

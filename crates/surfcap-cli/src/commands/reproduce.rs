@@ -19,7 +19,9 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Parser;
 use surfcap_eval::published_values::{Catalogue, PublishedItem, embedded_catalogue};
-use surfcap_eval::reproduce_report::{EvalRun, Figure, Machine, Page, item_rows, results_csv, results_html, results_json};
+use surfcap_eval::reproduce_report::{
+    EvalRun, Figure, Machine, Page, item_rows, results_csv, results_html, results_json,
+};
 use surfcap_mesh::output_set::{OutputSet, Stamped, is_own_side_file};
 
 use crate::options::CacheOpts;
@@ -85,12 +87,15 @@ fn recipe(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<Recipe>
     let crane = data.join("vlasic2008/crane").display().to_string();
     let (eval, mut args, extra, cache, report, needs_knight): (&str, Vec<String>, Vec<String>, bool, &str, bool) =
         match eval {
-            "interpolation" => {
-                ("interpolation", s(&[&crane, "--pair", "crane:0,crane:120"]), vec![], false, "interpolation.json", false)
-            }
-            "transitions" => {
-                ("transitions", s(&[&crane]), s(&["--plot-pairs", "20"]), true, "transitions.json", false)
-            }
+            "interpolation" => (
+                "interpolation",
+                s(&[&crane, "--pair", "crane:0,crane:120"]),
+                vec![],
+                false,
+                "interpolation.json",
+                false,
+            ),
+            "transitions" => ("transitions", s(&[&crane]), s(&["--plot-pairs", "20"]), true, "transitions.json", false),
             "graphs" => {
                 ("graphs", s(&[&crane]), s(&["--alpha", "0.05,0.1", "--plot-pairs", "20"]), true, "graphs.json", false)
             }
@@ -126,9 +131,14 @@ fn recipe(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<Recipe>
                 "smg.json",
                 false,
             ),
-            "sparse-graph" => {
-                ("sparse-graph", s(&["--data", &d]), s(&["--fps", "25", "--k", "2,8"]), true, "sparse-graph.json", false)
-            }
+            "sparse-graph" => (
+                "sparse-graph",
+                s(&["--data", &d]),
+                s(&["--fps", "25", "--k", "2,8"]),
+                true,
+                "sparse-graph.json",
+                false,
+            ),
             "appearance" => (
                 "appearance",
                 s(&["--data", &d]),
@@ -194,7 +204,10 @@ fn machine() -> Machine {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
-            s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split_once(':')).map(|(_, v)| v.trim().to_string())
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
         })
         .unwrap_or_else(|| "unknown CPU".into());
     let memory_bytes = std::fs::read_to_string("/proc/meminfo")
@@ -243,7 +256,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     if !a.all && a.figures.is_empty() && a.tables.is_empty() {
-        anyhow::bail!("choose the items: --all, --figure NUMBER or --table NUMBER (`surfcap reproduce --list` shows them)");
+        anyhow::bail!(
+            "choose the items: --all, --figure NUMBER or --table NUMBER (`surfcap reproduce --list` shows them)"
+        );
     }
     let items = cat.select(a.all, &a.figures, &a.tables)?;
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.data])?;
@@ -270,7 +285,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     for (k, (eval, its)) in evals.iter().enumerate() {
         let names: Vec<&str> = its.iter().map(|i| i.id.as_str()).collect();
         let Some(r) = recipe(eval, &a.data, &knight, a.quick) else {
-            progress(ctx, &format!("[{}/{n}] eval {eval} ({}): not known to surfcap reproduce", k + 1, names.join(", ")));
+            progress(
+                ctx,
+                &format!("[{}/{n}] eval {eval} ({}): not known to surfcap reproduce", k + 1, names.join(", ")),
+            );
             continue;
         };
         let folder = runs_dir.join(r.eval);
@@ -376,7 +394,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         println!("wrote {}, results.json, results.csv", index.display());
     });
     if !failed.is_empty() {
-        anyhow::bail!("{} of {n} evals failed (the page shows their items as not measured): {}", failed.len(), failed.join("; "));
+        anyhow::bail!(
+            "{} of {n} evals failed (the page shows their items as not measured): {}",
+            failed.len(),
+            failed.join("; ")
+        );
     }
     Ok(())
 }
