@@ -54,6 +54,7 @@ pub mod interchange_eval;
 pub mod interpolation_eval;
 pub mod mantel_test;
 pub mod pose_metric_eval;
+pub mod published_values;
 pub mod root_motion_eval;
 pub mod skeleton_distance;
 pub mod smg_comparison;

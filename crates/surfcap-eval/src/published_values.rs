@@ -1,0 +1,318 @@
+//! The published values of the thesis's figures and tables, Huang et al. 2009's Table 1 and the
+//! CVPR 2017 paper's figures, typed in from the papers (`crates/surfcap-eval/published/*.toml`,
+//! built into the library), and where each one's counterpart sits in the result JSON of the
+//! `surfcap eval` command that reproduces it.
+//!
+//! A file holds `[[item]]` tables (one per figure or table: id, source, kind, number, title,
+//! page, eval) and `[[value]]` tables (one per published number: the item it belongs to, label,
+//! published value, unit, whether it was read off a plot, where in the paper, the JSON pointer
+//! `measured` into the eval's result, `better` = lower | higher | closer, a relative tolerance and
+//! a note). Two optional fields turn a measurement into the published quantity:
+//! `measured_over` (a second pointer the measured value is divided by, for ratios) and
+//! `measured_scale` (a factor, for units). [`PublishedCatalogue::check`] enforces the rules a
+//! typo would break: unique item ids, every value's item present, a known source, kind and
+//! `better`, a finite published value, a tolerance > 0, pointers that are empty or start with `/`.
+
+use std::collections::HashSet;
+
+use serde::Deserialize;
+
+/// The three papers' files, built in.
+const BUILTIN: [(&str, &str); 3] = [
+    ("thesis.toml", include_str!("../published/thesis.toml")),
+    ("huang2009.toml", include_str!("../published/huang2009.toml")),
+    ("cvpr2017.toml", include_str!("../published/cvpr2017.toml")),
+];
+
+/// Why a published-values file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum PublishedValuesError {
+    /// The file is not TOML of the schema (an unknown or missing field, a wrong type).
+    #[error("{file}{}: {message}", line.map(|l| format!(", line {l}")).unwrap_or_default())]
+    Parse { file: String, line: Option<usize>, message: String },
+    /// The file parses but breaks a rule of the schema; `entry` names the item or value.
+    #[error("{file}: {entry}: {expected}")]
+    Rule { file: String, entry: String, expected: String },
+}
+
+/// Which paper a value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Source {
+    Thesis,
+    Huang2009,
+    Cvpr2017,
+}
+
+/// A figure or a table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    Figure,
+    Table,
+}
+
+/// How a measured value compares for the status "better": lower, higher, or only as close as
+/// possible (no direction is better).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Better {
+    Lower,
+    Higher,
+    Closer,
+}
+
+/// One figure or table of a paper.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PublishedItem {
+    /// Stable id, e.g. "thesis-fig-2.15" or "huang-1".
+    pub id: String,
+    pub source: Source,
+    pub kind: Kind,
+    /// The number as printed ("2.15", "1").
+    pub number: String,
+    pub title: String,
+    /// Page as printed; `None` when the text extraction does not give it.
+    #[serde(default)]
+    pub page: Option<u32>,
+    /// The `surfcap eval <name>` that reproduces it; empty when none does yet.
+    pub eval: String,
+    /// What holds for the whole item (plots without values, the data used, ...).
+    #[serde(default)]
+    pub note: String,
+}
+
+/// One published number and where its measured counterpart is.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PublishedValue {
+    /// The [`PublishedItem::id`] it belongs to.
+    pub item: String,
+    pub label: String,
+    pub published: f64,
+    pub unit: String,
+    /// Read off a plot (true) or typed from the text or a table (false).
+    pub read_off_plot: bool,
+    /// Where in the paper, with the quoted words.
+    #[serde(rename = "where")]
+    pub place: String,
+    /// JSON pointer into the eval's result; empty when nothing matches.
+    pub measured: String,
+    /// JSON pointer of a divisor (the published value is a ratio); empty for none.
+    #[serde(default)]
+    pub measured_over: String,
+    /// Factor applied to the measured value (e.g. 100 for metres against centimetres).
+    #[serde(default = "one")]
+    pub measured_scale: f64,
+    pub better: Better,
+    /// Relative tolerance for "reproduced".
+    pub tolerance: f64,
+    pub note: String,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl PublishedValue {
+    /// The measured counterpart in `result` (an eval's result JSON): the value at `measured`,
+    /// divided by the one at `measured_over` when given, times `measured_scale`. `None` when the
+    /// value has no pointer, a pointer does not resolve to a number, or the divisor is 0.
+    pub fn measure(&self, result: &serde_json::Value) -> Option<f64> {
+        if self.measured.is_empty() {
+            return None;
+        }
+        let mut x = result.pointer(&self.measured)?.as_f64()?;
+        if !self.measured_over.is_empty() {
+            let d = result.pointer(&self.measured_over)?.as_f64()?;
+            if d == 0.0 {
+                return None;
+            }
+            x /= d;
+        }
+        Some(x * self.measured_scale)
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    #[serde(default)]
+    item: Vec<PublishedItem>,
+    #[serde(default)]
+    value: Vec<PublishedValue>,
+}
+
+/// Every item and value of the three papers.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PublishedCatalogue {
+    pub items: Vec<PublishedItem>,
+    pub values: Vec<PublishedValue>,
+}
+
+impl PublishedCatalogue {
+    /// The three built-in files (thesis, Huang et al. 2009, CVPR 2017), parsed and checked.
+    pub fn load_builtin() -> Result<Self, PublishedValuesError> {
+        let mut all = PublishedCatalogue::default();
+        for (file, text) in BUILTIN {
+            let one = Self::parse(file, text)?;
+            all.items.extend(one.items);
+            all.values.extend(one.values);
+        }
+        all.check("the built-in published values")?;
+        Ok(all)
+    }
+
+    /// Parses one file's text (`file` names it in errors) and checks it.
+    pub fn parse(file: &str, text: &str) -> Result<Self, PublishedValuesError> {
+        let parsed: File = toml::from_str(text).map_err(|e| PublishedValuesError::Parse {
+            file: file.to_string(),
+            line: e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
+            message: e.message().to_string(),
+        })?;
+        let cat = PublishedCatalogue { items: parsed.item, values: parsed.value };
+        cat.check(file)?;
+        Ok(cat)
+    }
+
+    /// The schema's rules (see the module doc); `file` names the catalogue in errors.
+    pub fn check(&self, file: &str) -> Result<(), PublishedValuesError> {
+        let rule = |entry: String, expected: &str| PublishedValuesError::Rule {
+            file: file.to_string(),
+            entry,
+            expected: expected.to_string(),
+        };
+        let mut ids = HashSet::new();
+        for it in &self.items {
+            if it.id.is_empty() || !ids.insert(it.id.as_str()) {
+                return Err(rule(format!("item \"{}\"", it.id), "a non-empty id used by no other item"));
+            }
+        }
+        for (k, v) in self.values.iter().enumerate() {
+            let entry = || format!("value {} (\"{}\" of item \"{}\")", k + 1, v.label, v.item);
+            if !ids.contains(v.item.as_str()) {
+                return Err(rule(entry(), "an item id listed by an [[item]] table"));
+            }
+            if !v.published.is_finite() {
+                return Err(rule(entry(), "a finite published value"));
+            }
+            if !(v.tolerance.is_finite() && v.tolerance > 0.0) {
+                return Err(rule(entry(), "a tolerance > 0"));
+            }
+            if !(v.measured_scale.is_finite() && v.measured_scale != 0.0) {
+                return Err(rule(entry(), "a finite, non-zero measured_scale"));
+            }
+            for p in [&v.measured, &v.measured_over] {
+                if !(p.is_empty() || p.starts_with('/')) {
+                    return Err(rule(entry(), "JSON pointers that are empty or start with '/'"));
+                }
+            }
+            if v.measured.is_empty() && !v.measured_over.is_empty() {
+                return Err(rule(entry(), "measured_over only together with measured"));
+            }
+            if v.label.is_empty() || v.place.is_empty() {
+                return Err(rule(entry(), "a label and where in the paper"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The item with this id.
+    pub fn item(&self, id: &str) -> Option<&PublishedItem> {
+        self.items.iter().find(|i| i.id == id)
+    }
+
+    /// The values of one item, in file order.
+    pub fn values_of<'a>(&'a self, id: &'a str) -> impl Iterator<Item = &'a PublishedValue> + 'a {
+        self.values.iter().filter(move |v| v.item == id)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_built_in_files_parse_and_keep_the_schema() {
+        let cat = PublishedCatalogue::load_builtin().unwrap();
+        for (source, want_items) in [(Source::Thesis, 17), (Source::Huang2009, 1), (Source::Cvpr2017, 4)] {
+            assert_eq!(cat.items.iter().filter(|i| i.source == source).count(), want_items, "{source:?}");
+        }
+        // Every figure and table the reproduction covers is there.
+        for id in [
+            "thesis-fig-2.5",
+            "thesis-fig-2.6",
+            "thesis-fig-2.7",
+            "thesis-fig-2.8",
+            "thesis-fig-2.15",
+            "thesis-fig-3.2",
+            "thesis-fig-3.8",
+            "thesis-fig-3.18",
+            "thesis-fig-4.9",
+            "thesis-fig-4.10",
+            "thesis-fig-4.11",
+            "thesis-fig-4.12",
+            "thesis-fig-5.8",
+            "thesis-fig-5.9",
+            "thesis-fig-5.10",
+            "thesis-fig-6.4",
+            "thesis-fig-6.7",
+            "huang-1",
+            "cvpr2017-fig-7",
+            "cvpr2017-fig-8",
+            "cvpr2017-fig-9",
+        ] {
+            assert!(cat.item(id).is_some(), "{id} missing");
+        }
+        // Values typed from the printed tables, spot-checked against the papers.
+        let value = |item: &str, label: &str| {
+            cat.values_of(item).find(|v| v.label == label).unwrap_or_else(|| panic!("{item}: {label}")).published
+        };
+        assert_eq!(value("thesis-fig-2.15", "DTW + VLS, slope 3: mean normalised cost"), 0.1860);
+        assert_eq!(value("thesis-fig-3.8", "alpha = 0.2: essential graph, mean shortest-path cost"), 4.5102);
+        assert_eq!(value("thesis-fig-2.7", "Actor 2: Pearson, ours"), 0.9189);
+        assert_eq!(value("huang-1", "Character1 Walk#16 -> Jog#13: time error rms"), 4.81);
+        assert_eq!(cat.values_of("huang-1").count(), 12 * 10 + 1);
+        // Item evals name real `surfcap eval` subcommands.
+        let evals = ["", "pose-metric", "interpolation", "transitions", "graphs", "appearance", "transfer", "vary", "smg"];
+        for it in &cat.items {
+            assert!(evals.contains(&it.eval.as_str()), "{}: eval {:?}", it.id, it.eval);
+        }
+    }
+
+    #[test]
+    fn a_typo_in_a_file_is_an_error_naming_file_and_place() {
+        let item = "[[item]]\nid = \"a\"\nsource = \"thesis\"\nkind = \"figure\"\nnumber = \"1\"\ntitle = \"t\"\neval = \"\"\n";
+        let value = |item: &str, better: &str, tol: &str| {
+            format!(
+                "[[value]]\nitem = \"{item}\"\nlabel = \"l\"\npublished = 1.0\nunit = \"\"\nread_off_plot = false\n\
+                 where = \"Fig. 1\"\nmeasured = \"/x\"\nbetter = \"{better}\"\ntolerance = {tol}\nnote = \"\"\n"
+            )
+        };
+        assert!(PublishedCatalogue::parse("ok.toml", &format!("{item}{}", value("a", "lower", "0.1"))).is_ok());
+        let err = |text: String| PublishedCatalogue::parse("bad.toml", &text).unwrap_err().to_string();
+        let e = err(format!("{item}{item}"));
+        assert!(e.contains("bad.toml") && e.contains("item \"a\""), "{e}");
+        let e = err(format!("{item}{}", value("b", "lower", "0.1")));
+        assert!(e.contains("item id listed"), "{e}");
+        let e = err(format!("{item}{}", value("a", "smaller", "0.1")));
+        assert!(e.contains("bad.toml, line 16"), "{e}");
+        let e = err(format!("{item}{}", value("a", "lower", "0.0")));
+        assert!(e.contains("tolerance > 0"), "{e}");
+        let e = err(format!("{item}{}", value("a", "lower", "0.1")).replace("note = ", "nte = "));
+        assert!(e.contains("nte"), "{e}");
+    }
+
+    #[test]
+    fn a_measurement_is_read_divided_and_scaled() {
+        let cat = PublishedCatalogue::load_builtin().unwrap();
+        let result = serde_json::json!({"rows": [{"essential_graph": {"density": 0.02}, "motion_graph": {"density": 0.04}}]});
+        let v = cat.values_of("thesis-fig-3.2").next().unwrap();
+        assert_eq!(v.measure(&result), Some(0.5));
+        let smoothness = cat.values_of("huang-1").find(|v| v.label.ends_with("Stand#1 -> Hit#45: smoothness min")).unwrap();
+        let smg = serde_json::json!({"pairs": [{"smoothness_min": 0.0424}]});
+        assert!((smoothness.measure(&smg).unwrap() - 4.24).abs() < 1e-12);
+        assert_eq!(v.measure(&serde_json::json!({"rows": []})), None);
+    }
+}
