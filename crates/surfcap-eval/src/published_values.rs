@@ -315,4 +315,50 @@ mod tests {
         assert!((smoothness.measure(&smg).unwrap() - 4.24).abs() < 1e-12);
         assert_eq!(v.measure(&serde_json::json!({"rows": []})), None);
     }
+
+    /// The pointers of the evals cheap enough for a unit test resolve to numbers in the result
+    /// JSON those evals write with their default lists (slopes 2-5, the six alphas).
+    #[test]
+    fn the_pointers_resolve_in_the_results_of_transitions_graphs_and_interpolation() {
+        use crate::test_subjects::{pipeline, worm};
+        use surfcap_motion::dtw::FirstStep;
+        use surfcap_motion::transition_table::TableParams;
+        let cat = PublishedCatalogue::load_builtin().unwrap();
+        let transitions = crate::transition_costs_eval(
+            &pipeline(worm(9.0)),
+            &crate::TransitionCostsOptions { slopes: vec![2, 3, 4, 5], fixed: None, plot_pairs: 5, first_step: FirstStep::Straight },
+        )
+        .unwrap();
+        let alphas = [0.01, 0.02, 0.03, 0.05, 0.1, 0.2].map(|a| surfcap_motion::edge_weights::Alpha::new(a).unwrap()).to_vec();
+        let graphs = crate::graph_comparison_eval(
+            &pipeline(worm(30.0)),
+            &crate::GraphComparisonOptions { alphas, plot_pairs: 5, table: TableParams { l_min: 3, l_max: 6, slope: Some(3) } },
+        )
+        .unwrap();
+        let interpolation = crate::interpolation_eval(
+            &worm(30.0),
+            &crate::InterpolationOptions {
+                pairs: vec!["0,12".into()],
+                lambda: 0.5,
+                stretch: surfcap_geometry::pose_interpolation::StretchInterpolation::Linear,
+                sweeps: false,
+            },
+        )
+        .unwrap();
+        let results = [
+            ("transitions", serde_json::to_value(&transitions).unwrap()),
+            ("graphs", serde_json::to_value(&graphs).unwrap()),
+            ("interpolation", serde_json::to_value(&interpolation).unwrap()),
+        ];
+        let mut checked = 0;
+        for (eval, json) in &results {
+            for it in cat.items.iter().filter(|i| i.eval == *eval) {
+                for v in cat.values_of(&it.id).filter(|v| !v.measured.is_empty()) {
+                    assert!(v.measure(json).is_some(), "{}: {} ({} {})", it.id, v.label, v.measured, v.measured_over);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked >= 40, "{checked} pointers checked");
+    }
 }
