@@ -275,7 +275,8 @@ mod tests {
         assert_eq!(value("huang-1", "Character1 Walk#16 -> Jog#13: time error rms"), 4.81);
         assert_eq!(cat.values_of("huang-1").count(), 12 * 10 + 1);
         // Item evals name real `surfcap eval` subcommands.
-        let evals = ["", "pose-metric", "interpolation", "transitions", "graphs", "appearance", "transfer", "vary", "smg"];
+        let evals =
+            ["", "pose-metric", "interpolation", "transitions", "graphs", "appearance", "transfer", "vary", "smg"];
         for it in &cat.items {
             assert!(evals.contains(&it.eval.as_str()), "{}: eval {:?}", it.id, it.eval);
         }
@@ -307,10 +308,12 @@ mod tests {
     #[test]
     fn a_measurement_is_read_divided_and_scaled() {
         let cat = PublishedCatalogue::load_builtin().unwrap();
-        let result = serde_json::json!({"rows": [{"essential_graph": {"density": 0.02}, "motion_graph": {"density": 0.04}}]});
+        let result =
+            serde_json::json!({"rows": [{"essential_graph": {"density": 0.02}, "motion_graph": {"density": 0.04}}]});
         let v = cat.values_of("thesis-fig-3.2").next().unwrap();
         assert_eq!(v.measure(&result), Some(0.5));
-        let smoothness = cat.values_of("huang-1").find(|v| v.label.ends_with("Stand#1 -> Hit#45: smoothness min")).unwrap();
+        let smoothness =
+            cat.values_of("huang-1").find(|v| v.label.ends_with("Stand#1 -> Hit#45: smoothness min")).unwrap();
         let smg = serde_json::json!({"pairs": [{"smoothness_min": 0.0424}]});
         assert!((smoothness.measure(&smg).unwrap() - 4.24).abs() < 1e-12);
         assert_eq!(v.measure(&serde_json::json!({"rows": []})), None);
@@ -326,13 +329,23 @@ mod tests {
         let cat = PublishedCatalogue::load_builtin().unwrap();
         let transitions = crate::transition_costs_eval(
             &pipeline(worm(9.0)),
-            &crate::TransitionCostsOptions { slopes: vec![2, 3, 4, 5], fixed: None, plot_pairs: 5, first_step: FirstStep::Straight },
+            &crate::TransitionCostsOptions {
+                slopes: vec![2, 3, 4, 5],
+                fixed: None,
+                plot_pairs: 5,
+                first_step: FirstStep::Straight,
+            },
         )
         .unwrap();
-        let alphas = [0.01, 0.02, 0.03, 0.05, 0.1, 0.2].map(|a| surfcap_motion::edge_weights::Alpha::new(a).unwrap()).to_vec();
+        let alphas =
+            [0.01, 0.02, 0.03, 0.05, 0.1, 0.2].map(|a| surfcap_motion::edge_weights::Alpha::new(a).unwrap()).to_vec();
         let graphs = crate::graph_comparison_eval(
             &pipeline(worm(30.0)),
-            &crate::GraphComparisonOptions { alphas, plot_pairs: 5, table: TableParams { l_min: 3, l_max: 6, slope: Some(3) } },
+            &crate::GraphComparisonOptions {
+                alphas,
+                plot_pairs: 5,
+                table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
+            },
         )
         .unwrap();
         let interpolation = crate::interpolation_eval(

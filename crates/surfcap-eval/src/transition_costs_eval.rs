@@ -215,7 +215,12 @@ mod tests {
     fn variable_lengths_cost_least_and_the_report_is_the_cli_json() {
         // 9 fps: segments of 3..18 frames, standard length 9, in 24 frames.
         let pipe = pipeline(worm(9.0));
-        let o = TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step: FirstStep::default() };
+        let o = TransitionCostsOptions {
+            slopes: vec![2, 3],
+            fixed: None,
+            plot_pairs: 10,
+            first_step: FirstStep::default(),
+        };
         let r = transition_costs_eval(&pipe, &o).unwrap();
         let n = pipe.subject().n_frames();
         assert_eq!((r.frames, r.l_min, r.l_max, r.fixed_length), (n, 3, 18, 9));
