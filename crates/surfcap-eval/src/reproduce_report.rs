@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::published_values::{Catalogue, PublishedItem, PublishedValue, Status, measured_value, status};
+use crate::published_values::{PublishedCatalogue, PublishedItem, PublishedValue, Status, status};
 
 /// The machine an eval ran on.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -83,7 +83,7 @@ pub struct Page {
 
 /// The rows of `items`: each value's measured number from its item's run (by pointer) and its
 /// status; the reason is the value's note, else the item's, else what is missing.
-pub fn item_rows(cat: &Catalogue, items: &[&PublishedItem], runs: &BTreeMap<String, EvalRun>) -> Vec<ItemRow> {
+pub fn item_rows(cat: &PublishedCatalogue, items: &[&PublishedItem], runs: &BTreeMap<String, EvalRun>) -> Vec<ItemRow> {
     items
         .iter()
         .map(|it| {
@@ -91,7 +91,7 @@ pub fn item_rows(cat: &Catalogue, items: &[&PublishedItem], runs: &BTreeMap<Stri
             let values = cat
                 .values_of(&it.id)
                 .map(|v| {
-                    let ours = run.and_then(|r| r.report.as_ref()).and_then(|r| measured_value(r, &v.measured));
+                    let ours = run.and_then(|r| r.report.as_ref()).and_then(|r| v.measure(r));
                     let st = status(v, ours);
                     let note = if v.note.is_empty() { it.note.clone() } else { v.note.clone() };
                     let reason = match st {
@@ -124,10 +124,16 @@ fn not_measured_reason(it: &PublishedItem, v: &PublishedValue, run: Option<&Eval
     if v.measured.is_empty() {
         return "surfcap's report has no matching number".into();
     }
-    match report.pointer(&v.measured) {
-        None => format!("{} is not in the report of eval {}", v.measured, it.eval),
-        Some(_) => format!("{} in the report of eval {} is not a number", v.measured, it.eval),
+    for p in [&v.measured, &v.measured_over].into_iter().filter(|p| !p.is_empty()) {
+        match report.pointer(p) {
+            None => return format!("{p} is not in the report of eval {}", it.eval),
+            Some(x) if x.as_f64().is_none() && !x.is_boolean() => {
+                return format!("{p} in the report of eval {} is not a number", it.eval);
+            }
+            Some(_) => {}
+        }
     }
+    format!("{} is 0 in the report of eval {}", v.measured_over, it.eval)
 }
 
 /// The count of each status over all values of `items`.
@@ -184,8 +190,8 @@ pub fn results_csv(page: &Page) -> String {
         for v in &it.values {
             let fields = [
                 it.item.id.clone(),
-                it.item.source.clone(),
-                it.item.kind.clone(),
+                it.item.source.to_string(),
+                it.item.kind.to_string(),
                 it.item.number.clone(),
                 v.value.label.clone(),
                 fmt_num(v.value.published),
@@ -328,7 +334,7 @@ pub fn results_html(page: &Page) -> String {
     }
     for eval in order {
         let items: Vec<&ItemRow> = page.items.iter().filter(|i| i.item.eval == eval).collect();
-        let names: Vec<String> = items.iter().map(|i| item_name(&i.item)).collect();
+        let names: Vec<String> = items.iter().map(|i| i.item.display_name()).collect();
         let _ = writeln!(h, "<section class=\"run\" id=\"run-{}\">", esc(if eval.is_empty() { "none" } else { eval }));
         let _ = writeln!(h, "<h2>{}</h2>", esc(&names.join(", ")));
         let run = page.runs.get(eval);
@@ -359,13 +365,10 @@ pub fn results_html(page: &Page) -> String {
             }
         }
         for it in items {
-            let _ = write!(h, "<h3 id=\"{}\">{}: {}", esc(&it.item.id), esc(&item_name(&it.item)), esc(&it.item.title));
-            if let Some(p) = &it.item.page {
-                let page = match p {
-                    crate::published_values::Page::Number(n) => n.to_string(),
-                    crate::published_values::Page::Text(t) => t.clone(),
-                };
-                let _ = write!(h, " <span class=\"meta\">(p. {})</span>", esc(&page));
+            let _ =
+                write!(h, "<h3 id=\"{}\">{}: {}", esc(&it.item.id), esc(&it.item.display_name()), esc(&it.item.title));
+            if let Some(p) = it.item.page {
+                let _ = write!(h, " <span class=\"meta\">(p. {p})</span>");
             }
             h.push_str("</h3>\n");
             if it.values.is_empty() {
@@ -428,22 +431,9 @@ pub fn results_html(page: &Page) -> String {
     h
 }
 
-/// "Thesis Fig. 2.15", "Huang 2009 Table 1".
-fn item_name(it: &PublishedItem) -> String {
-    let source = match it.source.as_str() {
-        "thesis" => "Thesis".to_string(),
-        "huang2009" => "Huang et al. 2009".to_string(),
-        "cvpr2017" => "CVPR 2017".to_string(),
-        s => s.to_string(),
-    };
-    let kind = if it.kind == "table" { "Table" } else { "Fig." };
-    format!("{source} {kind} {}", it.number)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::published_values::parse_catalogue;
 
     const CAT: &str = r#"
 [[item]]
@@ -464,6 +454,9 @@ eval = ""
 item = "thesis-fig-2.15"
 label = "mean, \"slope\" 2"
 published = 0.2
+unit = ""
+read_off_plot = false
+where = "Fig. 2.15"
 measured = "/rows/0/mean"
 better = "lower"
 tolerance = 0.1
@@ -472,16 +465,28 @@ note = "other data"
 item = "thesis-fig-2.15"
 label = "missing"
 published = 1.0
+unit = ""
+read_off_plot = false
+where = "Fig. 2.15"
 measured = "/rows/5/mean"
+better = "closer"
+tolerance = 0.1
+note = ""
 [[value]]
 item = "thesis-fig-9.9"
 label = "x"
 published = 1.0
+unit = ""
 read_off_plot = true
+where = "Fig. 9.9"
+measured = ""
+better = "closer"
+tolerance = 0.1
+note = ""
 "#;
 
     fn page(report: Option<serde_json::Value>) -> Page {
-        let cat = parse_catalogue(&[("t.toml", CAT)]).unwrap();
+        let cat = PublishedCatalogue::parse("t.toml", CAT).unwrap();
         let items = cat.select(true, &[], &[]).unwrap();
         let svg = b"<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4\" height=\"4\"></svg>".to_vec();
         let run = EvalRun {

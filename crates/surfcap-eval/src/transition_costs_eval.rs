@@ -5,14 +5,22 @@
 //! segment lengths (the transition table), for each slope constraint. The fixed length defaults
 //! to one second of frames (clamped to the segment bounds): the thesis does not give the
 //! standard transition's length.
+//!
+//! The DTW's first step has two readings (PAPER-NOTES on eq. 2.53): surfcap's (up to p - 1
+//! straight steps may open the path, the default) and the literal one (a diagonal first);
+//! [`TransitionCostsOptions::first_step`] picks one and the report records it. The literal
+//! reading's tables are computed here, not cached by the pipeline.
 
 use std::sync::Arc;
 
 use rayon::prelude::*;
 use serde::Serialize;
-use surfcap_motion::dtw::dtw_window;
+use surfcap_mesh::NoProgress;
+use surfcap_motion::dtw::{FirstStep, dtw_window_from};
 use surfcap_motion::segment_bounds;
-use surfcap_motion::transition_table::{SegmentRoom, TableParams, fixed_length_dtw, standard_transition};
+use surfcap_motion::transition_table::{
+    SegmentRoom, TableParams, fixed_length_dtw_from, standard_transition, transition_table_from,
+};
 use surfcap_pipeline::{Pipeline, PoseDistances};
 
 use crate::MeanStd;
@@ -28,6 +36,8 @@ pub struct TransitionCostsOptions {
     pub fixed: Option<usize>,
     /// Frame pairs in the sampled curves ([`TransitionPlotData::sample`]).
     pub plot_pairs: usize,
+    /// Reading of the DTW's first step (eq. 2.53): surfcap's (the default) or the literal one.
+    pub first_step: FirstStep,
 }
 
 /// The three kinds of transition at one slope constraint, over the pairs where all exist.
@@ -95,6 +105,9 @@ pub struct TransitionCostsEval {
     pub l_max: usize,
     /// Segment length of the standard and DTW-only transitions.
     pub fixed_length: usize,
+    /// Reading of the DTW's first step: "surfcap" (up to p - 1 straight steps may open the
+    /// path) or "literal" (eq. 2.53 read from g(1, 1): a diagonal first).
+    pub dtw_first_step: &'static str,
     pub rows: Vec<SlopeRow>,
     #[serde(skip)]
     pub plot: TransitionPlotData,
@@ -119,10 +132,16 @@ pub fn transition_costs_eval(pipe: &Pipeline, o: &TransitionCostsOptions) -> Res
     let mut plot_data = None;
     for &p in &o.slopes {
         let params = TableParams { l_min, l_max, slope: Some(p) };
-        let table = pipe.table(&params)?.value;
+        let table = match o.first_step {
+            FirstStep::Straight => pipe.table(&params)?.value,
+            FirstStep::Diagonal => {
+                let t = transition_table_from(&d.values, s.frame_index(), &params, o.first_step, &NoProgress);
+                Arc::new(t.map_err(surfcap_pipeline::Error::from)?)
+            }
+        };
         let dtw: Vec<Option<(f64, u32)>> = (0..n * n)
             .into_par_iter()
-            .map(|k| fixed_length_dtw(&d.values, &room, k / n, k % n, fixed, Some(p)))
+            .map(|k| fixed_length_dtw_from(&d.values, &room, (k / n, k % n), fixed, Some(p), o.first_step))
             .collect();
         let pairs: Vec<usize> =
             (0..n * n).filter(|&k| standard[k].is_some() && dtw[k].is_some() && table.cost[k].is_finite()).collect();
@@ -169,7 +188,7 @@ pub fn transition_costs_eval(pipe: &Pipeline, o: &TransitionCostsOptions) -> Res
     }
     let (p_plot, sample, shown) = plot_data.expect("at least one slope");
     let shown = shown.and_then(|(i, li, j, lj)| {
-        let warp = dtw_window(&d.values, n, i, li, j, lj, Some(p_plot))?;
+        let warp = dtw_window_from(&d.values, n, i, li, j, lj, Some(p_plot), o.first_step)?;
         Some(ShownWarp { source: i, source_len: li, destination: j, destination_len: lj, path: warp.path })
     });
     Ok(TransitionCostsEval {
@@ -179,6 +198,7 @@ pub fn transition_costs_eval(pipe: &Pipeline, o: &TransitionCostsOptions) -> Res
         l_min,
         l_max,
         fixed_length: fixed,
+        dtw_first_step: o.first_step.name(),
         rows,
         plot: TransitionPlotData { slope: p_plot, sample, shown, distances: d },
     })
@@ -195,7 +215,12 @@ mod tests {
     fn variable_lengths_cost_least_and_the_report_is_the_cli_json() {
         // 9 fps: segments of 3..18 frames, standard length 9, in 24 frames.
         let pipe = pipeline(worm(9.0));
-        let o = TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10 };
+        let o = TransitionCostsOptions {
+            slopes: vec![2, 3],
+            fixed: None,
+            plot_pairs: 10,
+            first_step: FirstStep::default(),
+        };
         let r = transition_costs_eval(&pipe, &o).unwrap();
         let n = pipe.subject().n_frames();
         assert_eq!((r.frames, r.l_min, r.l_max, r.fixed_length), (n, 3, 18, 9));
@@ -229,7 +254,7 @@ mod tests {
             .collect();
         let cli = json!({
             "subject": r.subject, "frames": n, "fps": 9.0, "l_min": 3, "l_max": 18, "fixed_length": 9,
-            "rows": rows,
+            "dtw_first_step": "surfcap", "rows": rows,
         });
         assert_eq!(serde_json::to_value(&r).unwrap(), cli);
     }
@@ -238,11 +263,29 @@ mod tests {
     fn slopes_must_be_whole_numbers_from_one() {
         let pipe = pipeline(worm(9.0));
         for slopes in [vec![], vec![2, 0]] {
-            let o = TransitionCostsOptions { slopes, fixed: None, plot_pairs: 10 };
+            let o = TransitionCostsOptions { slopes, fixed: None, plot_pairs: 10, first_step: FirstStep::default() };
             assert_eq!(
                 transition_costs_eval(&pipe, &o).unwrap_err().to_string(),
                 "--slopes: expected whole numbers >= 1"
             );
+        }
+    }
+
+    #[test]
+    fn the_literal_dtw_first_step_changes_the_costs_and_is_recorded() {
+        let pipe = pipeline(worm(9.0));
+        let run = |first_step| {
+            let o = TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step };
+            transition_costs_eval(&pipe, &o).unwrap()
+        };
+        let (ours, literal) = (run(FirstStep::default()), run(FirstStep::Diagonal));
+        assert_eq!(FirstStep::default(), FirstStep::Straight);
+        assert_eq!((ours.dtw_first_step, literal.dtw_first_step), ("surfcap", "literal"));
+        assert_eq!(serde_json::to_value(&literal).unwrap()["dtw_first_step"], "literal");
+        for (a, b) in ours.rows.iter().zip(&literal.rows) {
+            // The standard transition has no warp; the warped ones change with the reading.
+            assert_eq!(a.standard.mean, b.standard.mean);
+            assert_ne!(a.dtw_vls.mean, b.dtw_vls.mean, "slope {}", a.slope);
         }
     }
 }

@@ -7,8 +7,11 @@
 //! Slope constraint p (PAPER-NOTES on eq. 2.53-2.54): a predecessor route of (k, l) is one
 //! diagonal step followed by q - 1 straight steps (q = 1..p), vertical or horizontal, and the cost
 //! of every cell on the route is added; so no more than p - 1 straight steps follow each other.
-//! The path may also begin with up to p - 1 straight steps from (0, 0). p = 1 allows only the
-//! diagonal (linear warping, equal lengths); p = infinity is the 3-neighbour DTW of eq. 2.52.
+//! The path may also begin with up to p - 1 straight steps from (0, 0) ([`FirstStep::Straight`],
+//! surfcap's reading of the words of 2.5.2, the default); read literally from g(1, 1), eq. 2.53
+//! makes every path begin with a diagonal step ([`FirstStep::Diagonal`], offered to reproduce the
+//! thesis's tables under that reading). p = 1 allows only the diagonal (linear warping, equal
+//! lengths); p = infinity is the 3-neighbour DTW of eq. 2.52 under either reading.
 //! eq. 2.51 starts at g(0, 0) = d(0, 0) (the printed "- 1" is a typo, PAPER-NOTES).
 //!
 //! The dynamic programme minimises the summed cost (eq. 2.52-2.54) and records the path length
@@ -17,6 +20,27 @@
 
 /// Slope constraint: `Some(p)` with p >= 1, or `None` for unconstrained (p = infinity).
 pub type Slope = Option<usize>;
+
+/// How a slope-constrained path may leave (0, 0) (PAPER-NOTES on eq. 2.53-2.54).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum FirstStep {
+    /// Up to p - 1 straight steps before the first diagonal (the words of 2.5.2: at most p - 1
+    /// straight steps in a row anywhere); surfcap's reading.
+    #[default]
+    Straight,
+    /// A diagonal step first (eq. 2.53 read literally from g(1, 1)).
+    Diagonal,
+}
+
+impl FirstStep {
+    /// The name used on the command line and in result files: "surfcap" or "literal".
+    pub fn name(self) -> &'static str {
+        match self {
+            FirstStep::Straight => "surfcap",
+            FirstStep::Diagonal => "literal",
+        }
+    }
+}
 
 /// Step recorded for warp recovery.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -103,8 +127,20 @@ impl DtwTables {
     }
 }
 
-/// Fills `t` for a `rows x cols` grid whose cell costs are `d(k, l)`.
+/// Fills `t` for a `rows x cols` grid whose cell costs are `d(k, l)` (surfcap's first step).
 pub fn dtw_fill(rows: usize, cols: usize, d: impl Fn(usize, usize) -> f64, slope: Slope, t: &mut DtwTables) {
+    dtw_fill_from(rows, cols, d, slope, FirstStep::Straight, t)
+}
+
+/// [`dtw_fill`] with the reading of the first step; `first` matters only for a finite slope.
+pub fn dtw_fill_from(
+    rows: usize,
+    cols: usize,
+    d: impl Fn(usize, usize) -> f64,
+    slope: Slope,
+    first: FirstStep,
+    t: &mut DtwTables,
+) {
     let n = rows * cols;
     t.rows = rows;
     t.cols = cols;
@@ -118,8 +154,13 @@ pub fn dtw_fill(rows: usize, cols: usize, d: impl Fn(usize, usize) -> f64, slope
         return;
     }
     let idx = |k: usize, l: usize| k * cols + l;
-    // Initial straight runs from (0, 0): at most p - 1 steps (any number when p = infinity).
-    let run = slope.map_or(usize::MAX, |p| p.saturating_sub(1));
+    // Initial straight runs from (0, 0): at most p - 1 steps (any number when p = infinity),
+    // none when the first step must be the diagonal.
+    let run = match (slope, first) {
+        (None, _) => usize::MAX,
+        (Some(_), FirstStep::Diagonal) => 0,
+        (Some(p), FirstStep::Straight) => p.saturating_sub(1),
+    };
     t.cost[0] = d(0, 0);
     t.len[0] = 1;
     for k in 1..rows.min(run.saturating_add(1)) {
@@ -203,12 +244,27 @@ pub struct Warp {
 /// DTW between source frames `src .. src + li` and destination frames `dst_end + 1 - lj ..= dst_end`
 /// of an N x N distance matrix.
 pub fn dtw_window(d: &[f64], n: usize, src: usize, li: usize, dst_end: usize, lj: usize, slope: Slope) -> Option<Warp> {
+    dtw_window_from(d, n, src, li, dst_end, lj, slope, FirstStep::Straight)
+}
+
+/// [`dtw_window`] with the reading of the first step.
+#[allow(clippy::too_many_arguments)]
+pub fn dtw_window_from(
+    d: &[f64],
+    n: usize,
+    src: usize,
+    li: usize,
+    dst_end: usize,
+    lj: usize,
+    slope: Slope,
+    first: FirstStep,
+) -> Option<Warp> {
     let dst = (dst_end + 1).checked_sub(lj)?;
     if src + li > n || dst_end >= n || li == 0 || lj == 0 {
         return None;
     }
     let mut t = DtwTables::default();
-    dtw_fill(li, lj, |k, l| d[(src + k) * n + dst + l], slope, &mut t);
+    dtw_fill_from(li, lj, |k, l| d[(src + k) * n + dst + l], slope, first, &mut t);
     let (c, len) = t.at(li - 1, lj - 1);
     if !c.is_finite() {
         return None;
@@ -222,8 +278,13 @@ mod tests {
     use super::*;
 
     /// Every monotone, continuous path with the slope rule, by brute force.
-    /// Every monotone, continuous path with the slope rule, by brute force.
     fn brute(rows: usize, cols: usize, d: &dyn Fn(usize, usize) -> f64, p: usize) -> f64 {
+        brute_from(rows, cols, d, p, FirstStep::Straight)
+    }
+
+    /// [`brute`] with the reading of the first step: a diagonal first starts as if p - 1 straight
+    /// steps had just been taken.
+    fn brute_from(rows: usize, cols: usize, d: &dyn Fn(usize, usize) -> f64, p: usize, first: FirstStep) -> f64 {
         struct Grid<'a> {
             rows: usize,
             cols: usize,
@@ -247,7 +308,8 @@ mod tests {
             }
             here + best
         }
-        go(&Grid { rows, cols, p, d }, 0, 0, 0, 0)
+        let run = if first == FirstStep::Diagonal { p.saturating_sub(1) } else { 0 };
+        go(&Grid { rows, cols, p, d }, 0, 0, run, 0)
     }
 
     #[test]
@@ -296,5 +358,41 @@ mod tests {
         let diag = |k: usize, l: usize| (k as f64 - l as f64).abs();
         dtw_fill(6, 6, diag, None, &mut t);
         assert_eq!(t.at(5, 5), (0.0, 6));
+    }
+
+    #[test]
+    fn the_literal_first_step_starts_diagonally_and_the_default_is_unchanged() {
+        // Zero cost along one horizontal step then a diagonal: the cheapest path under surfcap's
+        // reading; the literal reading of eq. 2.53 must take the diagonal first and pays 1.
+        let d = |k: usize, l: usize| if (k, l) == (0, 0) || (k, l) == (0, 1) || (k, l) == (1, 2) { 0.0 } else { 1.0 };
+        let mut t = DtwTables::default();
+        dtw_fill(2, 3, d, Some(2), &mut t);
+        assert_eq!(t.at(1, 2), (0.0, 3));
+        assert_eq!(t.path_to(1, 2), [(0, 0), (0, 1), (1, 2)]);
+        dtw_fill_from(2, 3, d, Some(2), FirstStep::Diagonal, &mut t);
+        assert_eq!(t.at(1, 2), (1.0, 3));
+        assert_eq!(t.path_to(1, 2), [(0, 0), (1, 1), (1, 2)]);
+        assert!(t.at(0, 1).0.is_infinite() && t.at(1, 0).0.is_infinite(), "no straight first step");
+        // The default is surfcap's reading, cell for cell; both readings match their brute force.
+        let g = |k: usize, l: usize| (((k * 7 + l * 13) % 11) as f64 + 0.5) * (1.0 + ((k + 2 * l) % 3) as f64);
+        let mut s = DtwTables::default();
+        for p in 1..=4 {
+            for (rows, cols) in [(1, 1), (3, 3), (4, 6), (6, 4), (5, 5), (2, 7)] {
+                dtw_fill(rows, cols, g, Some(p), &mut t);
+                dtw_fill_from(rows, cols, g, Some(p), FirstStep::Straight, &mut s);
+                assert_eq!((&t.cost, &t.len), (&s.cost, &s.len));
+                dtw_fill_from(rows, cols, g, Some(p), FirstStep::Diagonal, &mut s);
+                let want = brute_from(rows, cols, &g, p, FirstStep::Diagonal);
+                let got = s.at(rows - 1, cols - 1).0;
+                assert!((got - want).abs() < 1e-9 || (got.is_infinite() && want.is_infinite()), "p={p} {rows}x{cols}");
+            }
+        }
+        // Without a slope constraint (eq. 2.52) both readings are the 3-neighbour DTW.
+        dtw_fill_from(2, 3, d, None, FirstStep::Diagonal, &mut t);
+        assert_eq!(t.at(1, 2).0, 0.0);
+        // The window form passes the reading on.
+        let m: Vec<f64> = (0..25).map(|k| d(k / 5, k % 5)).collect();
+        assert_eq!(dtw_window_from(&m, 5, 0, 2, 2, 3, Some(2), FirstStep::Straight).unwrap().cost, 0.0);
+        assert_eq!(dtw_window_from(&m, 5, 0, 2, 2, 3, Some(2), FirstStep::Diagonal).unwrap().cost, 1.0 / 3.0);
     }
 }

@@ -17,9 +17,9 @@
 
 use surfcap_mesh::{FrameIndex, Progress};
 
-use crate::dtw::{DtwTables, Slope, dtw_fill};
+use crate::dtw::{DtwTables, FirstStep, Slope, dtw_fill_from};
 use crate::error::{Error, Result};
-use crate::transition_tiles::{DistanceBlock, TABLE_TILE, TableTile, plan_table_tiles, transition_tile};
+use crate::transition_tiles::{DistanceBlock, TABLE_TILE, TableTile, plan_table_tiles, transition_tile_from};
 
 /// Parameters of a transition table.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,11 +157,34 @@ pub fn transition_table(
     transition_table_in_tiles(d, index, p, progress, TABLE_TILE)
 }
 
+/// [`transition_table`] with the reading of the DTW's first step (eq. 2.53 read literally or
+/// surfcap's reading, PAPER-NOTES); [`FirstStep::Straight`] gives [`transition_table`]'s table.
+pub fn transition_table_from(
+    d: &[f64],
+    index: &FrameIndex,
+    p: &TableParams,
+    first: FirstStep,
+    progress: &dyn Progress,
+) -> Result<TransitionTable> {
+    table_in_tiles(d, index, p, first, progress, TABLE_TILE)
+}
+
 /// [`transition_table`] with tiles of `tile` frames (0: one tile).
 pub fn transition_table_in_tiles(
     d: &[f64],
     index: &FrameIndex,
     p: &TableParams,
+    progress: &dyn Progress,
+    tile: usize,
+) -> Result<TransitionTable> {
+    table_in_tiles(d, index, p, FirstStep::Straight, progress, tile)
+}
+
+fn table_in_tiles(
+    d: &[f64],
+    index: &FrameIndex,
+    p: &TableParams,
+    first: FirstStep,
     progress: &dyn Progress,
     tile: usize,
 ) -> Result<TransitionTable> {
@@ -180,7 +203,7 @@ pub fn transition_table_in_tiles(
         lj: vec![0; n * n],
     };
     for span in plan_table_tiles(n, tile) {
-        let t = transition_tile(&block, &after, p, &span, progress)?;
+        let t = transition_tile_from(&block, &after, p, first, &span, progress)?;
         table.place_tile(&t);
     }
     Ok(table)
@@ -217,7 +240,7 @@ pub fn naive_transition(
     for lj in (p.l_min..=p.l_max.min(before[j])).rev() {
         let js = j + 1 - lj;
         for li in p.l_min..=p.l_max.min(after[i]) {
-            dtw_fill(li, lj, |k, l| d[(i + k) * n + js + l], p.slope, &mut t);
+            dtw_fill_from(li, lj, |k, l| d[(i + k) * n + js + l], p.slope, FirstStep::Straight, &mut t);
             let (c, len) = t.at(li - 1, lj - 1);
             if c.is_finite() && best.is_none_or(|b| c / (len as f64) < b.0) {
                 best = Some((c / len as f64, len, li as u32, lj as u32));
@@ -248,6 +271,18 @@ pub fn fixed_length_dtw(
     l: usize,
     slope: Slope,
 ) -> Option<(f64, u32)> {
+    fixed_length_dtw_from(d, room, (i, j), l, slope, FirstStep::Straight)
+}
+
+/// [`fixed_length_dtw`] with the reading of the DTW's first step.
+pub fn fixed_length_dtw_from(
+    d: &[f64],
+    room: &SegmentRoom,
+    (i, j): (usize, usize),
+    l: usize,
+    slope: Slope,
+    first: FirstStep,
+) -> Option<(f64, u32)> {
     let n = room.len();
     let (after, before) = (&room.after, &room.before);
     if after[i] < l || before[j] < l {
@@ -255,7 +290,7 @@ pub fn fixed_length_dtw(
     }
     let js = j + 1 - l;
     let mut t = DtwTables::default();
-    dtw_fill(l, l, |k, m| d[(i + k) * n + js + m], slope, &mut t);
+    dtw_fill_from(l, l, |k, m| d[(i + k) * n + js + m], slope, first, &mut t);
     let (c, len) = t.at(l - 1, l - 1);
     c.is_finite().then(|| (c / len as f64, len))
 }
@@ -270,6 +305,21 @@ pub(crate) mod tests {
         // A distance between frames on two sequences of a 1D "pose" that moves at varying speed.
         let pose = |g: usize| (g as f64 * 0.37).sin() * 3.0 + (g as f64 * 0.11).cos();
         (0..n * n).map(|k| (pose(k / n) - pose(k % n)).abs() + 0.01).collect()
+    }
+
+    #[test]
+    fn the_first_step_reading_changes_the_table_only_when_asked() {
+        let index = FrameIndex::new([14, 11, 9]);
+        let d = toy(index.len());
+        for slope in [Some(2), Some(3), None] {
+            let p = TableParams { l_min: 3, l_max: 8, slope };
+            let default = transition_table(&d, &index, &p, &NoProgress).unwrap();
+            let ours = transition_table_from(&d, &index, &p, FirstStep::Straight, &NoProgress).unwrap();
+            assert_eq!(default, ours);
+            let literal = transition_table_from(&d, &index, &p, FirstStep::Diagonal, &NoProgress).unwrap();
+            // Without a slope (eq. 2.52) the readings agree; with one, some pairs change.
+            assert_eq!(literal == default, slope.is_none(), "slope {slope:?}");
+        }
     }
 
     #[test]

@@ -17,7 +17,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 use surfcap_mesh::Progress;
 
-use crate::dtw::{DtwTables, dtw_fill};
+use crate::dtw::{DtwTables, FirstStep, dtw_fill_from};
 use crate::error::{Error, Result};
 use crate::transition_table::TableParams;
 
@@ -112,6 +112,18 @@ pub fn transition_tile(
     span: &TableSpan,
     progress: &dyn Progress,
 ) -> Result<TableTile> {
+    transition_tile_from(d, after, p, FirstStep::Straight, span, progress)
+}
+
+/// [`transition_tile`] with the reading of the DTW's first step (eq. 2.53, PAPER-NOTES).
+pub fn transition_tile_from(
+    d: &DistanceBlock,
+    after: &[usize],
+    p: &TableParams,
+    first: FirstStep,
+    span: &TableSpan,
+    progress: &dyn Progress,
+) -> Result<TableTile> {
     if p.l_min < 1 || p.l_min > p.l_max {
         return Err(Error::Parameter { name: "l-min", value: p.l_min as f64, expected: "1 <= l-min <= l-max" });
     }
@@ -142,7 +154,7 @@ pub fn transition_tile(
         .enumerate()
         .for_each_init(DtwTables::default, |t, (r, ((cost, len), (li, lj)))| {
             let mut row = RowBest { cost, len, li, lj };
-            source_row(d, span.rows.start + r, &span.cols, after, p, t, &mut row);
+            source_row(d, span.rows.start + r, &span.cols, after, (p, first), t, &mut row);
             progress.advance(1);
         });
     progress.finish();
@@ -162,7 +174,7 @@ fn source_row(
     i: usize,
     cols: &Range<usize>,
     after: &[usize],
-    p: &TableParams,
+    (p, first_step): (&TableParams, FirstStep),
     t: &mut DtwTables,
     row: &mut RowBest,
 ) {
@@ -177,7 +189,7 @@ fn source_row(
         if width < p.l_min {
             continue;
         }
-        dtw_fill(rows, width, |k, l| d.at(i + k, js + l), p.slope, t);
+        dtw_fill_from(rows, width, |k, l| d.at(i + k, js + l), p.slope, first_step, t);
         for l in p.l_min - 1..width {
             let j = js + l;
             if j < cols.start {

@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use surfcap_eval::published_values::{Catalogue, PublishedItem, embedded_catalogue};
+use surfcap_eval::published_values::{PublishedCatalogue, PublishedItem};
 use surfcap_eval::reproduce_report::{
     EvalRun, Figure, Machine, Page, item_rows, results_csv, results_html, results_json,
 };
@@ -230,13 +230,13 @@ fn elapsed(s: f64) -> String {
     format!("{}:{:02}", (s / 60.0) as u64, (s as u64) % 60)
 }
 
-fn print_list(cat: &Catalogue) {
+fn print_list(cat: &PublishedCatalogue) {
     println!("{:<24} {:<7} {:<7} {:<14} {:>6}  title", "id", "kind", "number", "eval", "values");
     for it in &cat.items {
         println!(
             "{:<24} {:<7} {:<7} {:<14} {:>6}  {}",
             it.id,
-            it.kind,
+            it.kind.as_str(),
             it.number,
             if it.eval.is_empty() { "-" } else { &it.eval },
             cat.values_of(&it.id).count(),
@@ -246,7 +246,7 @@ fn print_list(cat: &Catalogue) {
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let cat = embedded_catalogue()?;
+    let cat = PublishedCatalogue::load_builtin()?;
     if a.list {
         if ctx.json {
             crate::output::print_json(&cat);

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use surfcap_eval::transition_costs_eval::{TransitionCostsOptions, transition_costs_eval};
+use surfcap_motion::dtw::FirstStep;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::folder::{claim, print_wrote, save_report};
@@ -21,6 +22,11 @@ pub struct Args {
     /// Frame pairs in the plots.
     #[arg(long, default_value_t = 100, value_parser = crate::options::count)]
     pub plot_pairs: usize,
+    /// Reading of the DTW's first step (thesis eq. 2.53): surfcap (up to p - 1 straight steps may
+    /// open the warping path, as the words of 2.5.2 allow) or literal (eq. 2.53 read from g(1, 1):
+    /// every path opens with a diagonal step); the report records which
+    #[arg(long, value_enum, default_value_t = FirstStepArg::Surfcap)]
+    pub dtw_first_step: FirstStepArg,
     /// Folder for the report and the plots.
     #[arg(short, long, default_value = "transitions-eval")]
     pub output: PathBuf,
@@ -30,9 +36,32 @@ pub struct Args {
     pub subject: SubjectArgs,
 }
 
+/// The readings of the DTW's first step, as `--dtw-first-step` names them.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FirstStepArg {
+    /// Up to p - 1 straight steps may open the path (surfcap's reading).
+    Surfcap,
+    /// A diagonal step first (eq. 2.53 read literally).
+    Literal,
+}
+
+impl From<FirstStepArg> for FirstStep {
+    fn from(a: FirstStepArg) -> Self {
+        match a {
+            FirstStepArg::Surfcap => FirstStep::Straight,
+            FirstStepArg::Literal => FirstStep::Diagonal,
+        }
+    }
+}
+
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = claim(ctx, &a.output, &[&a.subject.path], "eval-transitions")?;
-    let opts = TransitionCostsOptions { slopes: a.slopes, fixed: a.fixed, plot_pairs: a.plot_pairs };
+    let opts = TransitionCostsOptions {
+        slopes: a.slopes,
+        fixed: a.fixed,
+        plot_pairs: a.plot_pairs,
+        first_step: a.dtw_first_step.into(),
+    };
     let pipe = a.cache.pipeline(ctx, a.subject.open(ctx)?)?;
     let output = a.output.as_path();
     let r = transition_costs_eval(&pipe, &opts)?;
@@ -81,8 +110,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (report, rp) = save_report(output, "transitions.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
-            "subject {name}: {} frames at {} fps; segments {}..{}; standard and DTW-only length {fixed}",
-            r.frames, r.fps, r.l_min, r.l_max
+            "subject {name}: {} frames at {} fps; segments {}..{}; standard and DTW-only length {fixed}; DTW first step: {}",
+            r.frames, r.fps, r.l_min, r.l_max, r.dtw_first_step
         );
         println!(
             "{:>6} {:>8} {:>22} {:>22} {:>22} {:>10}",
