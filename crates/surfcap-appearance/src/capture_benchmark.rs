@@ -131,7 +131,10 @@ impl CaptureOptions {
             return bad("cameras", "expected at least 1".into());
         }
         if !(8..=4096).contains(&self.size) || !(8..=4096).contains(&self.image_size) {
-            return bad("size", format!("expected 8-4096 texels and pixels, got {} and {}", self.size, self.image_size));
+            return bad(
+                "size",
+                format!("expected 8-4096 texels and pixels, got {} and {}", self.size, self.image_size),
+            );
         }
         let finite = [
             self.ambient,
@@ -207,7 +210,7 @@ fn gaussian3(rng: &mut ChaCha8Rng) -> V3 {
 }
 
 /// Re-projects the images seen by `cameras` onto the texels of `raster` (the covered ones and
-/// `dilation` rings, those of `mask`) through the mesh at `positions`: the cosine-weighted blend
+/// `dilation` rings: the active texels of [`TexelMask::from_raster`]) through the mesh at `positions`: the cosine-weighted blend
 /// of the cameras that see each texel's point (facing it, within `depth_tolerance` scene units
 /// of the mesh's own depth map from that camera). Texels no camera sees are filled by push-pull;
 /// `seen` marks the others.
@@ -215,7 +218,6 @@ pub fn reproject(
     topology: &Topology,
     positions: &[f32],
     raster: &AtlasRaster,
-    mask: &TexelMask,
     dilation: usize,
     images: &[TextureImage],
     cameras: &[Camera],
@@ -229,7 +231,7 @@ pub fn reproject(
         )));
     }
     let (w, h) = (raster.width, raster.height);
-    mask.check_size(w, h, "the re-projection's texel mask")?;
+    let mask = TexelMask::from_raster(raster, dilation)?;
     let channels = images[0].channels();
     for (j, (im, cam)) in images.iter().zip(cameras).enumerate() {
         if im.width() != cam.lens.width || im.height() != cam.lens.height || im.channels() != channels {
@@ -506,7 +508,8 @@ impl CaptureBenchmark {
     }
 
     fn render_positions(&self, k: usize, j: usize, positions: &[f32]) -> Result<TextureImage> {
-        let cam = self.actual.get(j).ok_or_else(|| Error::Invalid(format!("camera {j}: there are {}", self.actual.len())))?;
+        let cam =
+            self.actual.get(j).ok_or_else(|| Error::Invalid(format!("camera {j}: there are {}", self.actual.len())))?;
         let frags = rasterise(&self.topology, positions, cam)?;
         let atlas = self.topology.uv().expect("checked at construction");
         let normals = vertex_normals(&self.topology, positions);
@@ -569,7 +572,8 @@ impl CaptureBenchmark {
 
     /// The clean truth of frame `k`: the albedo shaded by the true pose's diffuse term.
     pub fn clean(&self, k: usize) -> Result<TextureImage> {
-        let geometry = AtlasGeometry::new(&self.raster, &self.topology, &self.true_positions(k), self.options.dilation)?;
+        let geometry =
+            AtlasGeometry::new(&self.raster, &self.topology, &self.true_positions(k), self.options.dilation)?;
         let light = unit(self.options.light);
         let (w, h) = (self.raster.width, self.raster.height);
         let mut out = TextureImage::zeros(w, h, self.albedo.channels());
@@ -579,7 +583,8 @@ impl CaptureBenchmark {
             for i in 0..w * h {
                 if self.mask.is_active(i) && geometry.defined[i] {
                     let nl = dot(f64s(geometry.normal[i]), light).max(0.0);
-                    plane[i] = (a[i] as f64 * (self.options.ambient + self.options.diffuse * nl)).clamp(0.0, 255.0) as f32;
+                    plane[i] =
+                        (a[i] as f64 * (self.options.ambient + self.options.diffuse * nl)).clamp(0.0, 255.0) as f32;
                 }
             }
         }
@@ -596,7 +601,10 @@ impl CaptureBenchmark {
                     self.mask.is_active(i)
                         && self.rest_geometry.defined[i]
                         && (0..3)
-                            .map(|a| ((self.rest_geometry.position[i][a] as f64 - hole.center[a]) / hole.semi_axes[a]).powi(2))
+                            .map(|a| {
+                                ((self.rest_geometry.position[i][a] as f64 - hole.center[a]) / hole.semi_axes[a])
+                                    .powi(2)
+                            })
                             .sum::<f64>()
                             <= 1.0
                 })
@@ -618,7 +626,6 @@ impl CaptureBenchmark {
             &self.topology,
             &tracked,
             &self.raster,
-            &self.mask,
             self.options.dilation,
             &images,
             &self.calibrated,
@@ -694,15 +701,11 @@ mod tests {
         let raster = AtlasRaster::new(topo.uv().unwrap(), n, n).unwrap();
         let mask = TexelMask::from_raster(&raster, 0).unwrap();
         let lens = Lens { fov_y_deg: 40.0, width: 128, height: 128 };
-        let cams: Vec<Camera> = [30.0, -25.0]
-            .iter()
-            .flat_map(|&el| cameras_around([0.0; 3], [0.0, 1.0, 0.0], 6.0, 6, el, lens))
-            .collect();
-        let images: Vec<TextureImage> = cams
-            .iter()
-            .map(|c| crate::mesh_rasteriser::render(&topo, &pos, &tex, c).unwrap().image)
-            .collect();
-        let r = reproject(&topo, &pos, &raster, &mask, 0, &images, &cams, 0.02).unwrap();
+        let cams: Vec<Camera> =
+            [30.0, -25.0].iter().flat_map(|&el| cameras_around([0.0; 3], [0.0, 1.0, 0.0], 6.0, 6, el, lens)).collect();
+        let images: Vec<TextureImage> =
+            cams.iter().map(|c| crate::mesh_rasteriser::render(&topo, &pos, &tex, c).unwrap().image).collect();
+        let r = reproject(&topo, &pos, &raster, 0, &images, &cams, 0.02).unwrap();
         let mut err = 0.0f64;
         let mut count = 0usize;
         for i in 0..n * n {
@@ -726,15 +729,12 @@ mod tests {
         let n = 64;
         let tex = smooth_texture(n);
         let raster = AtlasRaster::new(topo.uv().unwrap(), n, n).unwrap();
-        let mask = TexelMask::from_raster(&raster, 0).unwrap();
         let lens = Lens { fov_y_deg: 40.0, width: 128, height: 128 };
         let cams = cameras_around([0.0; 3], [0.0, 1.0, 0.0], 6.0, 6, 30.0, lens);
         let moved: Vec<Camera> = cams.iter().map(|c| Camera { target: [0.15, 0.1, 0.0], ..*c }).collect();
-        let images: Vec<TextureImage> = moved
-            .iter()
-            .map(|c| crate::mesh_rasteriser::render(&topo, &pos, &tex, c).unwrap().image)
-            .collect();
-        let r = reproject(&topo, &pos, &raster, &mask, 0, &images, &cams, 0.02).unwrap();
+        let images: Vec<TextureImage> =
+            moved.iter().map(|c| crate::mesh_rasteriser::render(&topo, &pos, &tex, c).unwrap().image).collect();
+        let r = reproject(&topo, &pos, &raster, 0, &images, &cams, 0.02).unwrap();
         let err: f64 = (0..n * n)
             .filter(|&i| r.seen[i])
             .map(|i| (r.texture.plane(0)[i] - tex.plane(0)[i]).abs() as f64)

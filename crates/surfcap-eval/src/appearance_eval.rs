@@ -151,7 +151,12 @@ impl CaptureSequence {
             })
             .collect::<Result<_>>()?;
         progress.finish();
-        Ok(CaptureSequence { source: source.to_string(), topology: topology.clone(), positions: positions.to_vec(), frames })
+        Ok(CaptureSequence {
+            source: source.to_string(),
+            topology: topology.clone(),
+            positions: positions.to_vec(),
+            frames,
+        })
     }
 }
 
@@ -594,9 +599,9 @@ pub fn appearance_eval(
     let f = frames.frames();
     let (w, h) = (frames.width(), frames.height());
     let (topology, positions) = frames.mesh()?;
-    let atlas = topology.uv().ok_or_else(|| {
-        Error::Unsuitable(format!("{}: the mesh has no UV atlas", frames.mesh_source()))
-    })?;
+    let atlas = topology
+        .uv()
+        .ok_or_else(|| Error::Unsuitable(format!("{}: the mesh has no UV atlas", frames.mesh_source())))?;
     let mask = TexelMask::from_atlas(atlas, w, h, opts.dilation)?;
     let active: Vec<bool> = (0..w * h).map(|i| mask.is_active(i)).collect();
     let t = Instant::now();

@@ -13,9 +13,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use surfcap_appearance::TextureImage;
+use surfcap_appearance::capture_benchmark::{CaptureBenchmark, CaptureOptions};
 use surfcap_appearance::generated_frames::GeneratedFrames;
 use surfcap_appearance::image_similarity::Similarity;
-use surfcap_appearance::capture_benchmark::{CaptureBenchmark, CaptureOptions};
 use surfcap_appearance::texture_generator::{GeneratorOptions, read_uv_mesh, write_generated_frames};
 use surfcap_eval::appearance_eval::{
     AppearanceEval, AppearanceEvalOptions, AppearanceSequence, CaptureSequence, appearance_eval,
@@ -295,7 +295,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.data];
     inputs.extend(a.frames_dir.as_deref());
     let outs = super::folder::claim(ctx, &a.output, &inputs, "eval-appearance")?;
-    for (name, v) in [("--tracking", a.tracking), ("--calibration-deg", a.calibration_deg), ("--specular", a.specular)] {
+    for (name, v) in [("--tracking", a.tracking), ("--calibration-deg", a.calibration_deg), ("--specular", a.specular)]
+    {
         anyhow::ensure!(v.is_finite() && v >= 0.0, "{name} {v}: expected a finite value of at least 0");
     }
     let source = match (a.frames_dir, a.benchmark) {
