@@ -802,9 +802,9 @@ mod tests {
         let (err, seen) = measure(&base);
         // Most of the head is seen by a ring of 8 (the crown and under the chin are not).
         assert!(clean_seen > 0.75 && seen > 0.75, "{clean_seen} {seen}");
-        // Without error the capture is the truth up to resampling (measured 3.0 grey levels at
-        // 64 x 64, where a texel spans several pixels of skin detail); calibration, tracking,
-        // specular and noise take it several times further.
+        // Without error the capture is the truth up to resampling (a texel of the 64 x 64 atlas
+        // spans several pixels of skin detail); calibration, tracking, specular and noise take
+        // it further.
         assert!(clean_err < 5.0, "{clean_err}");
         assert!(err > 1.5 * clean_err, "{err} vs {clean_err}");
     }
