@@ -21,8 +21,8 @@ use surfcap_builtin::mannequin::{BodyShape, mannequin};
 use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::Subject;
-use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::loop_exclusion::{LoopFilter, LoopRule};
+use surfcap_smg::motion_frames::MotionFrames;
 use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths, plan_paths_excluding};
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{
@@ -429,13 +429,16 @@ pub fn smg_eval(
         separation: opts.separation,
     };
     let filter = match opts.loops {
-        Some(rule) => Some(
-            LoopFilter::new(rule, &similarity, &frames.sequences).map_err(|e| Error::Unsuitable(e.to_string()))?,
-        ),
+        Some(rule) => {
+            Some(LoopFilter::new(rule, &similarity, &frames.sequences).map_err(|e| Error::Unsuitable(e.to_string()))?)
+        }
         None => None,
     };
     let g = match &filter {
-        Some(filter) => build_graph_choosing(&input, &LoopChoice { filter, key_pairs: &keys, per_sequence: opts.loops_per_sequence }),
+        Some(filter) => build_graph_choosing(
+            &input,
+            &LoopChoice { filter, key_pairs: &keys, per_sequence: opts.loops_per_sequence },
+        ),
         None => build_graph(&input),
     }
     .map_err(|e| Error::Unsuitable(e.to_string()))?;

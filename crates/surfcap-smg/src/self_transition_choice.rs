@@ -91,14 +91,7 @@ pub fn spanning_self_transitions(
                     continue;
                 }
                 let cost = window_similarity(s, frames, i0, j0, &w);
-                let t = Transition {
-                    window_x: i0 - x.start,
-                    window_y: j0 - x.start,
-                    length: n,
-                    cost,
-                    last_x,
-                    first_y,
-                };
+                let t = Transition { window_x: i0 - x.start, window_y: j0 - x.start, length: n, cost, last_x, first_y };
                 let e = best.entry((last_x, first_y)).or_insert(t);
                 if cost < e.cost {
                     *e = t;
@@ -233,7 +226,8 @@ mod tests {
         let e = plan_paths(&paper, 26, 3, 1000).err().unwrap();
         assert!(e.to_string().contains("no path from frame 26 to frame 3"), "{e}");
         let filter = LoopFilter::new(LoopRule::default(), &s, &seqs).unwrap();
-        let g = build_graph_choosing(&input, &LoopChoice { filter: &filter, key_pairs: &[(26, 3)], per_sequence: 1 }).unwrap();
+        let g = build_graph_choosing(&input, &LoopChoice { filter: &filter, key_pairs: &[(26, 3)], per_sequence: 1 })
+            .unwrap();
         assert_eq!(g.transitions.len(), 1);
         let plan = plan_paths_excluding(&g, 26, 3, 1000, &filter).unwrap();
         assert_eq!((plan.walks(), plan.loops_in_graph(), plan.excluded_loops().len()), (1, 1, 0));
