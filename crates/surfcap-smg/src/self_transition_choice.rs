@@ -172,23 +172,23 @@ mod tests {
         let seqs = [0..n];
         let filter = LoopFilter::new(LoopRule::default(), &s, &seqs).unwrap();
         // Eq. 5 alone: 3 frames of the held pose, a loop too short and too still to play.
-        let literal = best_transitions(&s, n, 0..n, 0..n, 3..=5, 1, 0).unwrap()[0];
+        let literal = best_transitions(&s, n, 0..n, 0..n, 3..=3, 1, 0).unwrap()[0];
         assert!(literal.window_x >= 30 && literal.window_y >= 30 && literal.cost < 0.01, "{literal:?}");
         let admissible = filter.span_variation(0);
         assert!(!admissible.admits(literal.first_y, literal.last_x));
         // Spanning the start key frame 26 and the end key frame 3: the cycle two periods back.
         let span = Span { entries: vec![26], exits: vec![3] };
-        let t = spanning_self_transitions(&s, n, 0..n, 3..=5, &admissible, &span, 1, 0).unwrap();
+        let t = spanning_self_transitions(&s, n, 0..n, 3..=3, &admissible, &span, 1, 0).unwrap();
         assert_eq!(t.len(), 1);
         let t = t[0];
         assert_eq!((t.window_x, t.window_y, t.length, t.last_x, t.first_y), (25, 1, 3, 26, 3), "{t:?}");
         assert!((t.cost - 0.01).abs() < 1e-12 && admissible.admits(t.first_y, t.last_x));
         assert_eq!(span.spanned(t.first_y, t.last_x), 2);
         // Nothing to span: the cheapest admissible loop, one period back.
-        let free = spanning_self_transitions(&s, n, 0..n, 3..=5, &admissible, &Span::default(), 1, 0).unwrap()[0];
+        let free = spanning_self_transitions(&s, n, 0..n, 3..=3, &admissible, &Span::default(), 1, 0).unwrap()[0];
         assert_eq!(free.last_x - free.first_y + 1, 12, "{free:?}");
         // Three loops: the spanning one, then the cheapest inside it, switches 5 frames apart.
-        let three = spanning_self_transitions(&s, n, 0..n, 3..=5, &admissible, &span, 3, 5).unwrap();
+        let three = spanning_self_transitions(&s, n, 0..n, 3..=3, &admissible, &span, 3, 5).unwrap();
         assert_eq!(three.len(), 3);
         assert_eq!(three[0], t);
         for (a, b) in [(0, 1), (0, 2), (1, 2)] {
@@ -201,7 +201,7 @@ mod tests {
         }
         // No admissible loop at all (a minimum longer than the clip): eq. 5's own choice.
         let none = LoopFilter::new(LoopRule { min_frames: 41, variation_floor: 1.0 }, &s, &seqs).unwrap();
-        let kept = spanning_self_transitions(&s, n, 0..n, 3..=5, &none.span_variation(0), &span, 1, 0).unwrap();
+        let kept = spanning_self_transitions(&s, n, 0..n, 3..=3, &none.span_variation(0), &span, 1, 0).unwrap();
         assert_eq!(kept, vec![literal]);
     }
 
@@ -218,7 +218,7 @@ mod tests {
             ground: &ground,
             connections: &[(0, 0)],
             key_frames: &[26, 3],
-            lengths: 3..=5,
+            lengths: 3..=3,
             per_connection: 1,
             separation: 0,
         };
