@@ -61,6 +61,7 @@ impl Span {
 /// The `k` self-transitions of the sequence at global frames `x` (see the module
 /// documentation), with `s` the row-major `frames x frames` similarity, `admissible` the pose
 /// variation of `x`'s runs of frames under the loop rule, and `span` in frames within `x`.
+#[allow(clippy::too_many_arguments)]
 pub fn spanning_self_transitions(
     s: &[f64],
     frames: usize,
