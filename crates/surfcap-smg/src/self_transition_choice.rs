@@ -170,7 +170,7 @@ mod tests {
     #[test]
     fn the_self_transition_is_an_admissible_loop_spanning_the_key_frames() {
         let (s, n) = cyclic_then_still();
-        let seqs = [0..n];
+        let seqs: Vec<std::ops::Range<usize>> = std::iter::once(0..n).collect();
         let filter = LoopFilter::new(LoopRule::default(), &s, &seqs).unwrap();
         // Eq. 5 alone: 3 frames of the held pose, a loop too short and too still to play.
         let literal = best_transitions(&s, n, 0..n, 0..n, 3..=3, 1, 0).unwrap()[0];
@@ -211,7 +211,7 @@ mod tests {
     #[test]
     fn key_frames_the_papers_self_transition_leaves_apart_are_joined() {
         let (s, n) = cyclic_then_still();
-        let seqs = [0..n];
+        let seqs: Vec<std::ops::Range<usize>> = std::iter::once(0..n).collect();
         let ground: Vec<[f64; 2]> = (0..n).map(|f| [0.1 * f as f64, 0.0]).collect();
         let input = GraphInput {
             sequences: &seqs,
