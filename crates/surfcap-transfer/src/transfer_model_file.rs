@@ -183,9 +183,9 @@ pub struct SavedBaran {
 /// Either kind of saved model.
 pub enum SavedTransfer {
     /// GP regression on body parts.
-    Gp(SavedModel),
+    Gp(Box<SavedModel>),
     /// Baran et al. 2009.
-    Baran(SavedBaran),
+    Baran(Box<SavedBaran>),
 }
 
 /// Writes a Baran et al. model (`model.json`, `source_keys.npy`, `target_keys.npy`) into `dir`
@@ -229,7 +229,7 @@ pub fn read_any(dir: &Path) -> Result<SavedTransfer> {
     let head: Envelope<serde::de::IgnoredAny, serde::de::IgnoredAny> = serde_json::from_slice(&bytes)
         .map_err(|e| bad(format!("{e}: expected a model written by surfcap transfer train")))?;
     if head.format != BARAN_FORMAT {
-        return read_model(dir).map(SavedTransfer::Gp);
+        return read_model(dir).map(|m| SavedTransfer::Gp(Box::new(m)));
     }
     if head.version != VERSION {
         return Err(bad(format!(
@@ -268,5 +268,5 @@ pub fn read_any(dir: &Path) -> Result<SavedTransfer> {
         source_keys: read_keys("source_keys.npy", meta.source_vertices)?,
         target_keys: read_keys("target_keys.npy", meta.target_vertices)?,
     };
-    Ok(SavedTransfer::Baran(SavedBaran { model, subjects: env.subjects }))
+    Ok(SavedTransfer::Baran(Box::new(SavedBaran { model, subjects: env.subjects })))
 }
