@@ -38,8 +38,8 @@ use surfcap_mesh::FrameIndex;
 use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::walk_sequence::{Step, WalkModel};
-pub use surfcap_mesh::reachability::{LoopRule, Unreachable};
 use steered::{BUDGET as STEERED_BUDGET, Steered, ToEnd, steered_walk};
+pub use surfcap_mesh::reachability::{LoopRule, Unreachable};
 
 mod steered;
 
@@ -865,11 +865,8 @@ impl TimedGraph {
         // The distance extreme on the side of the target: the least distance of every duration
         // when the cheapest walk travels too far, the greatest when too little.
         let sign = if d0 > distance { 1.0 } else { -1.0 };
-        let extreme: Vec<Option<(f64, Vec<u32>)>> = to_end
-            .extreme_walks(self, sign, a as usize, lo..=hi)
-            .into_iter()
-            .map(|w| w.map(|w| (0.0, w)))
-            .collect();
+        let extreme: Vec<Option<(f64, Vec<u32>)>> =
+            to_end.extreme_walks(self, sign, a as usize, lo..=hi).into_iter().map(|w| w.map(|w| (0.0, w))).collect();
         consider(&extreme, &mut best, &mut best_met);
         if best_met.is_none() {
             let bound: Vec<(usize, f64)> = (lo..=hi)

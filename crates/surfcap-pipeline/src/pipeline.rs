@@ -379,11 +379,12 @@ impl Pipeline {
                     let graph = self.graph(p)?;
                     let table = self.table(&p.table)?;
                     let d = self.chain_distances()?;
-                    let rows = WalkModel::new(s, self.loops(), &graph.value, &table.value, &d.value.values, slope, tracked)
-                        .tracks_to_rows()
-                        .iter()
-                        .map(|&x| x as f32)
-                        .collect::<Vec<f32>>();
+                    let rows =
+                        WalkModel::new(s, self.loops(), &graph.value, &table.value, &d.value.values, slope, tracked)
+                            .tracks_to_rows()
+                            .iter()
+                            .map(|&x| x as f32)
+                            .collect::<Vec<f32>>();
                     Ok(NpyArray { shape: vec![rows.len() / 3, 3], data: rows })
                 },
                 |a: NpyArray<f32>| {

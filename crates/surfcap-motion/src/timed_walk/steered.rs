@@ -45,7 +45,10 @@ pub(super) struct ToEnd {
 
 impl ToEnd {
     pub(super) fn new(g: &TimedGraph, b: u32, times: usize) -> Self {
-        let costs = |f: &dyn Fn(&super::TimedEdge) -> f64| EdgeCosts { cost: g.edges.iter().map(f).collect(), length: &g.length };
+        let costs = |f: &dyn Fn(&super::TimedEdge) -> f64| EdgeCosts {
+            cost: g.edges.iter().map(f).collect(),
+            length: &g.length,
+        };
         let (near, far, real) = (costs(&|e| e.length), costs(&|e| -e.length), costs(&|e| e.weight));
         let run = |ec: &EdgeCosts| layered(g, &g.backward, ec, b, times, times);
         let ((near, far), real) = rayon::join(|| rayon::join(|| run(&near), || run(&far)), || run(&real));
