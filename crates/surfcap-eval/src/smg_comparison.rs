@@ -192,6 +192,9 @@ struct Goal {
     met_time_error_max: f64,
 }
 
+/// One essential-graph search's answer, or why there is none.
+type Answer = std::result::Result<DistanceTimeWalk, String>;
+
 /// A row from per-query errors, times and the measures of the transitions taken.
 fn row(
     engine: &'static str,
@@ -300,7 +303,7 @@ pub fn smg_comparison(
                 None => durations.push((secs, vec![i])),
             }
         }
-        let answered: Vec<Vec<(usize, std::result::Result<DistanceTimeWalk, String>, f64)>> = durations
+        let answered: Vec<Vec<(usize, Answer, f64)>> = durations
             .par_iter()
             .map(|(secs, members)| {
                 let intervals = ((secs * frames.fps).round() as usize).saturating_sub(1).max(1);
@@ -319,8 +322,7 @@ pub fn smg_comparison(
                 }
             })
             .collect();
-        let mut searches: Vec<Option<(std::result::Result<DistanceTimeWalk, String>, f64)>> =
-            (0..opts.targets.len()).map(|_| None).collect();
+        let mut searches: Vec<Option<(Answer, f64)>> = (0..opts.targets.len()).map(|_| None).collect();
         for (i, found, seconds) in answered.into_iter().flatten() {
             searches[i] = Some((found, seconds));
         }
