@@ -500,7 +500,7 @@ impl FootSkateCleanup {
                     *r = [sum[0] / count, sum[1] / count];
                 }
             }
-            bridge_and_fade(&mut root, &on, blend, |a, b, s| lerp2(a, b, s), |x, a| [a * x[0], a * x[1]], add2);
+            bridge_and_fade(&mut root, &on, blend, lerp2, |x, a| [a * x[0], a * x[1]], add2);
             for (corr, a) in corrections.iter_mut().zip(&active) {
                 for f in 0..nf {
                     if a[f] {

@@ -592,6 +592,9 @@ fn model_cleanup(model: &VariationModel) -> Result<Option<FootSkateCleanup>> {
     )?))
 }
 
+/// A variant's frames and what the foot-skate clean-up did to them (`None` when not cleaned).
+pub type CleanedVariant = (Vec<Vec<f32>>, Option<CleanupReport>);
+
 /// Variants put on their source sequence `j`'s own path ([`variant_on_source_path`], what
 /// synthesis shows), each with its planted feet pinned ([`crate::foot_skate_cleanup`]) when
 /// `cleanup` is set and the model has legs: the same clean-up as [`sample_variants`] gives,
@@ -604,7 +607,7 @@ pub fn variants_on_source_path(
     variants: &[Variant],
     source: &[&[f32]],
     cleanup: bool,
-) -> Result<Vec<(Vec<Vec<f32>>, Option<CleanupReport>)>> {
+) -> Result<Vec<CleanedVariant>> {
     let placed: Vec<Vec<Vec<f32>>> =
         variants.iter().map(|v| variant_on_source_path(model, j, v, source)).collect::<Result<_>>()?;
     let fixer = if cleanup { model_cleanup(model)? } else { None };
