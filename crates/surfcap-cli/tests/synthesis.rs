@@ -569,6 +569,13 @@ fn vary_plays_learned_variants_on_the_repeats_of_a_looping_walk() {
     let (r, bytes) = run("varied", &["--vary", "3", "--variation-model", p(&model)]);
     let v = &r["variation"];
     assert!(v["played_as_variants"].as_u64().unwrap() > 0, "{v}");
+    // The variants shown are the foot-skate cleaned ones, as `vary sample` gives them: every
+    // variant shown has its report, and the clean-up pinned planted feet.
+    let cleaned = v["foot_skate_cleanup"].as_array().expect("the clean-up's reports");
+    assert!(!cleaned.is_empty(), "{v}");
+    let total = |k: &str| cleaned.iter().map(|c| c[k].as_f64().unwrap()).sum::<f64>();
+    assert!(total("plants") > 0.0, "{v}");
+    assert!(total("pinned_drift_after") < total("pinned_drift_before"), "{v}");
     assert_eq!(r["walk"], plain["walk"], "--vary changed the walk the search found");
     assert_ne!(bytes, plain_bytes, "the varied walk shows the same poses");
     let (_, again) = run("again", &["--vary", "3", "--variation-model", p(&model)]);
