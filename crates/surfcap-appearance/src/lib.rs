@@ -31,8 +31,12 @@
 //!   known drift, shading under a moving light, blur, seeded noise, occlusion holes; clean frames
 //!   kept), [`texture_drift`] (seeded sinusoids and the true flow between two frames),
 //!   [`atlas_normals`] (normals and positions carried into the atlas), [`generated_frames`] (the
-//!   `appearance-frames` folder and its reader).
-//! - Evaluation (4.5): [`mesh_rasteriser`] (z-buffer, perspective-correct UVs, cameras on a ring),
+//!   `appearance-frames` folder and its reader); [`capture_benchmark`] (the textures multi-view
+//!   capture makes: a moving subject rendered from a camera ring with specular shading, sensor
+//!   noise, per-camera calibration error and per-frame tracking error, re-projected into the
+//!   atlas by view-weighted blending with a depth test; the clean truth kept).
+//! - Evaluation (4.5): [`mesh_rasteriser`] (z-buffer, perspective-correct barycentrics and UVs,
+//!   cameras on a ring),
 //!   [`image_similarity`] (masked MSE and SSIM).
 //! - Shape and appearance together (Fig. 7.1): [`blended_frame_textures`]: a texture for every
 //!   frame of a synthesised animation, a captured frame's reconstruction or two frames interpolated
@@ -46,6 +50,7 @@ pub mod atlas_normals;
 pub mod atlas_raster;
 pub mod bilateral_filter;
 pub mod blended_frame_textures;
+pub mod capture_benchmark;
 pub mod eigen_maps;
 pub mod error;
 pub mod flow_cache;

@@ -146,12 +146,28 @@ pub struct Render {
 /// Rows per parallel band.
 const BAND: usize = 16;
 
-/// Renders `positions` ([vertices][3]) with `topology`'s triangles and UV atlas, textured by
-/// `texture`, from `camera`.
-pub fn render(topology: &Topology, positions: &[f32], texture: &TextureImage, camera: &Camera) -> Result<Render> {
-    let atlas = topology.uv().ok_or_else(|| {
-        Error::Invalid("the mesh has no texture coordinates: expected a UV atlas to render a texture".into())
-    })?;
+/// What a camera sees per pixel (row-major): the nearest triangle (or `u32::MAX`), its depth
+/// along the view axis (infinite on the background) and the perspective-correct barycentrics
+/// of the pixel centre's ray hit in that triangle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fragments {
+    pub width: usize,
+    pub height: usize,
+    pub triangle: Vec<u32>,
+    pub depth: Vec<f64>,
+    pub barycentric: Vec<[f64; 3]>,
+}
+
+impl Fragments {
+    /// Whether pixel `i` shows a triangle.
+    pub fn covered(&self, i: usize) -> bool {
+        self.triangle[i] != u32::MAX
+    }
+}
+
+/// Rasterises `positions` ([vertices][3]) with `topology`'s triangles from `camera`: the
+/// z-buffer, the owner triangle and the perspective-correct barycentrics of every pixel.
+pub fn rasterise(topology: &Topology, positions: &[f32], camera: &Camera) -> Result<Fragments> {
     if positions.len() != topology.n_vertices() * 3 {
         return Err(Error::Mismatch(format!(
             "{} position values for a mesh of {} vertices: expected {}",
@@ -190,11 +206,8 @@ pub fn render(topology: &Topology, positions: &[f32], texture: &TextureImage, ca
             band.push(t as u32);
         }
     }
-    let channels = texture.channels();
-    let (tw, th) = (texture.width(), texture.height());
-    let mut colour = vec![0.0f32; channels * w * h];
-    let mut mask = vec![false; w * h];
-    let results: Vec<(Vec<f32>, Vec<bool>)> = (0..n_bands)
+    type Band = (Vec<f64>, Vec<u32>, Vec<[f64; 3]>);
+    let results: Vec<Band> = (0..n_bands)
         .into_par_iter()
         .map(|bi| {
             let r0 = bi * BAND;
@@ -202,11 +215,10 @@ pub fn render(topology: &Topology, positions: &[f32], texture: &TextureImage, ca
             let rows = r1 - r0;
             let mut depth = vec![f64::INFINITY; rows * w];
             let mut owner = vec![u32::MAX; rows * w];
-            let mut uv = vec![[0.0f64; 2]; rows * w];
+            let mut bary = vec![[0.0f64; 3]; rows * w];
             for &t in &bands[bi] {
                 let tri = topology.triangles()[t as usize];
                 let ps = tri.map(|v| projected[v as usize].expect("binned triangles are in front"));
-                let uvs = atlas.corners[t as usize].map(|c| atlas.coords[c as usize]);
                 let area =
                     (ps[1][0] - ps[0][0]) * (ps[2][1] - ps[0][1]) - (ps[2][0] - ps[0][0]) * (ps[1][1] - ps[0][1]);
                 if area.abs() < 1e-12 {
@@ -241,38 +253,61 @@ pub fn render(topology: &Topology, positions: &[f32], texture: &TextureImage, ca
                         if z < depth[i] || (z == depth[i] && t < owner[i]) {
                             depth[i] = z;
                             owner[i] = t;
-                            let b = [l0 * inv_z[0] * z, l1 * inv_z[1] * z, l2 * inv_z[2] * z];
-                            uv[i] = [
-                                b[0] * uvs[0][0] as f64 + b[1] * uvs[1][0] as f64 + b[2] * uvs[2][0] as f64,
-                                b[0] * uvs[0][1] as f64 + b[1] * uvs[1][1] as f64 + b[2] * uvs[2][1] as f64,
-                            ];
+                            bary[i] = [l0 * inv_z[0] * z, l1 * inv_z[1] * z, l2 * inv_z[2] * z];
                         }
                     }
                 }
             }
-            let mut col = vec![0.0f32; channels * rows * w];
-            let mut m = vec![false; rows * w];
-            for i in 0..rows * w {
-                if owner[i] == u32::MAX {
-                    continue;
-                }
-                m[i] = true;
-                let tx = (uv[i][0] * tw as f64 - 0.5) as f32;
-                let ty = ((1.0 - uv[i][1]) * th as f64 - 0.5) as f32;
-                for c in 0..channels {
-                    col[c * rows * w + i] = sample_bilinear(texture.plane(c), tw, th, tx, ty);
-                }
-            }
-            (col, m)
+            (depth, owner, bary)
         })
         .collect();
-    for (bi, (col, m)) in results.into_iter().enumerate() {
-        let r0 = bi * BAND;
-        let rows = m.len() / w;
-        mask[r0 * w..(r0 + rows) * w].copy_from_slice(&m);
-        for c in 0..channels {
-            colour[c * w * h + r0 * w..c * w * h + (r0 + rows) * w]
-                .copy_from_slice(&col[c * rows * w..(c + 1) * rows * w]);
+    let mut depth = Vec::with_capacity(w * h);
+    let mut triangle = Vec::with_capacity(w * h);
+    let mut barycentric = Vec::with_capacity(w * h);
+    for (d, o, b) in results {
+        depth.extend(d);
+        triangle.extend(o);
+        barycentric.extend(b);
+    }
+    Ok(Fragments { width: w, height: h, triangle, depth, barycentric })
+}
+
+/// Renders `positions` ([vertices][3]) with `topology`'s triangles and UV atlas, textured by
+/// `texture`, from `camera`.
+pub fn render(topology: &Topology, positions: &[f32], texture: &TextureImage, camera: &Camera) -> Result<Render> {
+    let atlas = topology.uv().ok_or_else(|| {
+        Error::Invalid("the mesh has no texture coordinates: expected a UV atlas to render a texture".into())
+    })?;
+    let frags = rasterise(topology, positions, camera)?;
+    let (w, h) = (frags.width, frags.height);
+    let channels = texture.channels();
+    let (tw, th) = (texture.width(), texture.height());
+    let values: Vec<Option<Vec<f32>>> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            if !frags.covered(i) {
+                return None;
+            }
+            let t = frags.triangle[i] as usize;
+            let uvs = atlas.corners[t].map(|c| atlas.coords[c as usize]);
+            let b = frags.barycentric[i];
+            let uv = [
+                b[0] * uvs[0][0] as f64 + b[1] * uvs[1][0] as f64 + b[2] * uvs[2][0] as f64,
+                b[0] * uvs[0][1] as f64 + b[1] * uvs[1][1] as f64 + b[2] * uvs[2][1] as f64,
+            ];
+            let tx = (uv[0] * tw as f64 - 0.5) as f32;
+            let ty = ((1.0 - uv[1]) * th as f64 - 0.5) as f32;
+            Some((0..channels).map(|c| sample_bilinear(texture.plane(c), tw, th, tx, ty)).collect())
+        })
+        .collect();
+    let mut colour = vec![0.0f32; channels * w * h];
+    let mut mask = vec![false; w * h];
+    for (i, v) in values.into_iter().enumerate() {
+        if let Some(v) = v {
+            mask[i] = true;
+            for (c, x) in v.into_iter().enumerate() {
+                colour[c * w * h + i] = x;
+            }
         }
     }
     Ok(Render { image: TextureImage::from_planes(w, h, channels, colour)?, mask })

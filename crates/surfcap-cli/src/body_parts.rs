@@ -28,6 +28,9 @@ pub fn parts_of(
         None if whole_body => BodyParts::whole_body(s.topology().n_vertices()),
         None => {
             let (parts, report) = propose(s, ProposalMethod::Auto, 5, DEFAULT_OVERLAP_RINGS)?;
+            for n in &report.notes {
+                ctx.note(n);
+            }
             let prefix = if who.is_empty() { String::new() } else { format!("{who} ") };
             ctx.note(&format!(
                 "{prefix}{:?}: no {option} given, so 5 parts were proposed from its {} ({}); `surfcap parts propose` writes them to a file you can edit",

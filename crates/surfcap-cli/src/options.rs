@@ -345,12 +345,11 @@ impl TableOpts {
         self.with_bounds(segment_bounds(fps))
     }
 
-    /// The parameters for a subject: by default segments fit its shortest looping clip
-    /// ([`surfcap_motion::clip_loops::segment_bounds_for_clips`]: a one-cycle game clip of 25
-    /// frames gets windows of 4 to 12 frames, not 10 to 60).
-    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::Subject) -> anyhow::Result<TableParams> {
-        let loops = surfcap_motion::clip_loops::clip_loops(clips);
-        self.with_bounds(surfcap_motion::clip_loops::segment_bounds_for_clips(fps, clips.frame_index(), &loops))
+    /// The parameters for a pipeline's subject: by default segments fit its shortest looping
+    /// clip ([`surfcap_pipeline::Pipeline::segment_bounds`]: a one-cycle game clip of 25 frames
+    /// gets windows of 4 to 12 frames, not 10 to 60).
+    pub fn params_for(&self, pipe: &surfcap_pipeline::Pipeline) -> anyhow::Result<TableParams> {
+        self.with_bounds(pipe.segment_bounds())
     }
 
     fn with_bounds(&self, (lo, hi): (usize, usize)) -> anyhow::Result<TableParams> {
@@ -388,8 +387,8 @@ impl GraphOpts {
     }
 
     /// [`GraphOpts::params`] with segment bounds that fit these clips ([`TableOpts::params_for`]).
-    pub fn params_for(&self, fps: f64, clips: &surfcap_mesh::Subject) -> anyhow::Result<GraphParams> {
-        self.with_table(self.table.params_for(fps, clips)?)
+    pub fn params_for(&self, pipe: &surfcap_pipeline::Pipeline) -> anyhow::Result<GraphParams> {
+        self.with_table(self.table.params_for(pipe)?)
     }
 
     fn with_table(&self, table: TableParams) -> anyhow::Result<GraphParams> {

@@ -161,3 +161,61 @@ fn a_folder_that_is_not_a_generated_sequence_is_named() {
     let e = stderr(&o);
     assert!(e.contains("frames.json") && e.contains(&d.path().display().to_string()), "{e}");
 }
+
+#[test]
+fn the_capture_benchmark_reports_both_methods_without_a_true_flow() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("eval");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_surfcap"))
+        .args([
+            "--quiet",
+            "eval",
+            "appearance",
+            "--benchmark",
+            "capture",
+            "--data",
+            p(&data),
+            "--frames",
+            "10",
+            "--size",
+            "64",
+            "--cameras",
+            "8",
+            "--components",
+            "3",
+            "--held-out",
+            "0,0.3",
+            "--image-frames",
+            "1",
+            "--image-size",
+            "64",
+            "--cache-dir",
+            p(&d.path().join("cache")),
+            "-o",
+            p(&out),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: Value = serde_json::from_slice(&std::fs::read(out.join("appearance.json")).unwrap()).unwrap();
+    assert_eq!(r["benchmark"], "capture");
+    assert_eq!(r["capture"]["cameras"], 8);
+    // The capture benchmark knows no true flow: no end-point errors, the rest as the smooth one.
+    assert!(r["flow"]["errors"].is_null(), "{}", r["flow"]);
+    let seen = f(&r["capture_seen_share"]);
+    assert!(seen > 0.7 && seen <= 1.0, "{seen}");
+    let ic = f(&r["input_vs_clean"]["ssim"]);
+    assert!(ic > 0.3 && ic < 1.0, "the captured frames differ from their truth: {ic}");
+    let c = r["compactness"].as_array().unwrap();
+    assert!(c.len() >= 2);
+    for x in c {
+        for m in ["ours", "naive"] {
+            let s = f(&x[m]["input"]["ssim"]);
+            assert!(s > 0.3 && s <= 1.0 + 1e-9, "{x}");
+        }
+        assert!(x["image"]["ours"]["ssim"].is_number(), "{x}");
+    }
+    assert_eq!(r["generalisation"].as_array().unwrap().len(), 2);
+    assert!(out.join("capture-views.png").is_file() && out.join("capture-frame-vs-clean.png").is_file());
+}

@@ -9,7 +9,7 @@ use std::process::Output;
 
 use surfcap_geometry::motion_plane_alignment::motion_plane_alignment;
 use surfcap_mesh::{Subject, UpAxis};
-use surfcap_testkit::{p, stderr, surfcap};
+use surfcap_testkit::{p, procedural_walker, stderr, surfcap};
 
 fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "{}", stderr(o));
@@ -52,20 +52,7 @@ fn kaykit_cycle(data: &Path, clip: &str, dir: &Path) -> (PathBuf, usize) {
 
 /// The procedural mannequin's walk and jog (with their own root travel), each cut to one cycle.
 fn mannequin_cycles(dir: &Path) -> (PathBuf, Vec<usize>) {
-    let long = dir.join("walker.subject");
-    let o = surfcap!(&[
-        "synth",
-        "--procedural",
-        "walk,jog",
-        "--duration",
-        "2",
-        "--vertices",
-        "1000",
-        "-o",
-        p(&long),
-        "--quiet"
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let long = procedural_walker!(dir);
     let s = surfcap_mesh::cache::read_cache(&long, &surfcap_mesh::NoProgress).unwrap();
     let per = 3 * s.topology().n_vertices();
     let mut lengths = Vec::new();

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use surfcap_testkit::{p, stderr, surfcap};
+use surfcap_testkit::{p, procedural_walker, stderr, surfcap};
 
 fn example(name: &str) -> PathBuf {
     surfcap_testkit::workspace_root().join("examples").join(name)
@@ -443,7 +443,7 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
     limits(
         &["--max-frames", "100000000000", "--max-memory", "64G"],
         &[
-            "PiB of memory (30000000000 frames x 9971 vertices and 152.8 TiB of search tables)",
+            "PiB of memory (30000000000 frames x 9971 vertices and 382.0 TiB of search tables)",
             "above the limit of 64.0 GiB (--max-memory)",
         ],
         &reach,
@@ -462,7 +462,7 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
 #[test]
 fn an_unreachable_reach_target_says_why_and_strict_exits_with_the_missed_code() {
     let tmp = tempfile::tempdir().unwrap();
-    let walker = procedural_walker(tmp.path());
+    let walker = procedural_walker!(tmp.path());
     let cache = tmp.path().join("cache");
     let out = tmp.path().join("far.glb");
     let reach = |extra: &[&str]| {
@@ -507,33 +507,13 @@ fn an_unreachable_reach_target_says_why_and_strict_exits_with_the_missed_code() 
     assert_eq!((&j["unreachable"], &j["unreachable_why"]), (u, &r["unreachable_why"]), "{j}");
 }
 
-/// A procedural walker (walk and jog of 2 s, 1,000 vertices) in `dir`: 20 m of path loop over
-/// its frames.
-fn procedural_walker(dir: &Path) -> PathBuf {
-    let walker = dir.join("walker.subject");
-    let o = surfcap!(&[
-        "synth",
-        "--procedural",
-        "walk,jog",
-        "--duration",
-        "2",
-        "--vertices",
-        "1000",
-        "-o",
-        p(&walker),
-        "--quiet"
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    walker
-}
-
 /// Learned variants' plumbing (thesis 6.6): a walk that loops reports its repeated frames; `--vary` needs
 /// `--variation-model` and a model folder that is there, refused before any search (the cache
 /// folder stays absent) and before anything is written.
 #[test]
 fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
     let tmp = tempfile::tempdir().unwrap();
-    let walker = procedural_walker(tmp.path());
+    let walker = procedural_walker!(tmp.path());
     let line = tmp.path().join("line_20m.csv");
     std::fs::write(&line, "0,0\n20,0\n").unwrap();
     let cache = tmp.path().join("cache");
@@ -569,7 +549,7 @@ fn a_looping_walk_reports_its_repeats_and_vary_options_are_checked_first() {
 #[test]
 fn vary_plays_learned_variants_on_the_repeats_of_a_looping_walk() {
     let tmp = tempfile::tempdir().unwrap();
-    let walker = procedural_walker(tmp.path());
+    let walker = procedural_walker!(tmp.path());
     let model = tmp.path().join("model");
     let o = surfcap!(&["vary", "train", p(&walker), "--iterations", "40", "-o", p(&model), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -589,6 +569,13 @@ fn vary_plays_learned_variants_on_the_repeats_of_a_looping_walk() {
     let (r, bytes) = run("varied", &["--vary", "3", "--variation-model", p(&model)]);
     let v = &r["variation"];
     assert!(v["played_as_variants"].as_u64().unwrap() > 0, "{v}");
+    // The variants shown are the foot-skate cleaned ones, as `vary sample` gives them: every
+    // variant shown has its report, and the clean-up pinned planted feet.
+    let cleaned = v["foot_skate_cleanup"].as_array().expect("the clean-up's reports");
+    assert!(!cleaned.is_empty(), "{v}");
+    let total = |k: &str| cleaned.iter().map(|c| c[k].as_f64().unwrap()).sum::<f64>();
+    assert!(total("plants") > 0.0, "{v}");
+    assert!(total("pinned_drift_after") < total("pinned_drift_before"), "{v}");
     assert_eq!(r["walk"], plain["walk"], "--vary changed the walk the search found");
     assert_ne!(bytes, plain_bytes, "the varied walk shows the same poses");
     let (_, again) = run("again", &["--vary", "3", "--variation-model", p(&model)]);

@@ -108,6 +108,35 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     let mean = (0..got.len()).map(|f| aligned_rms(&got[f], t.frame(f))).sum::<f64>() / got.len() as f64 / height;
     eprintln!("knight -> barbarian Walking_C through the CLI: {:.2}% of height", 100.0 * mean);
     assert!(mean < 0.02, "mean RMS {:.2}% of height", 100.0 * mean);
+    // No truth given: the edge-length measure is dropped rather than taken against the rest pose.
+    assert!(rep["edge_length_distortion"]["against"].as_str().unwrap().starts_with("dropped"), "{rep}");
+    // With the truth: the error beside the nearest training pose's, edges against the truth's.
+    let truth_arg = format!("{}:barbarian_Walking_C", p(&barbarian));
+    let with_truth = d.path().join("walk_truth.glb");
+    let o = surfcap!(&[
+        "--json",
+        "transfer",
+        "apply",
+        p(&model),
+        "--motion",
+        &motion,
+        "--truth",
+        &truth_arg,
+        "-o",
+        p(&with_truth)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rt: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let acc = &rt["accuracy"];
+    let err = acc["rms_percent"].as_f64().unwrap();
+    eprintln!("GP with --truth: {acc}, edges {}", rt["edge_length_distortion"]);
+    assert!((err - 100.0 * mean).abs() < 0.25 * 100.0 * mean, "{err} vs {}", 100.0 * mean);
+    assert!(acc["nearest_training_pose_percent"].as_f64().unwrap() > 0.0, "{acc}");
+    let e = &rt["edge_length_distortion"];
+    assert!(e["against"].as_str().unwrap().starts_with("the true motion"), "{e}");
+    // The knight's and barbarian's limbs are separate meshes: no overlaps, no boundary edges.
+    assert!(e["boundary_max"].is_null() || e["boundary_max"].as_f64().is_some_and(f64::is_finite), "{e}");
+    assert!(e["inside_max"].as_f64().is_some_and(|x| x.is_finite() && x < 0.5), "{e}");
 
     // The same model and motion give the same file (the model reloads deterministically).
     let again = d.path().join("again.glb");
@@ -255,4 +284,91 @@ fn transfer_errors_name_the_file_line_and_what_was_expected() {
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
     assert!(e.contains(&format!("{}:", model.join("model.json").display())), "{e}");
+}
+
+#[test]
+fn baran_trains_and_applies_from_the_command_line_and_truth_gives_the_nearest_pose_beside_it() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let clips = ["Walking_A", "Walking_C"];
+    let knight = import(&data, d.path(), "knight", &clips);
+    let barbarian = import(&data, d.path(), "barbarian", &clips);
+    let mut csv = String::from("source,target\n");
+    for k in 0..8 {
+        let f = k * 32 / 7;
+        csv.push_str(&format!("knight_Walking_A:{f}, barbarian_Walking_A:{f}\n"));
+    }
+    let pairs = d.path().join("pairs.csv");
+    std::fs::write(&pairs, csv).unwrap();
+    let model = d.path().join("baran");
+    let o = surfcap!(&[
+        "--json",
+        "transfer",
+        "train",
+        "--method",
+        "baran",
+        "--source",
+        p(&knight),
+        "--target",
+        p(&barbarian),
+        "--pairs",
+        p(&pairs),
+        "-o",
+        p(&model),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["method"], "baran");
+    assert_eq!(r["key_pairs"], 8);
+    for f in ["model.json", "source_keys.npy", "target_keys.npy", "report.json", ".surfcap-output.json"] {
+        assert!(model.join(f).is_file(), "{f}");
+    }
+    // Applied to the unseen Walking_C with the barbarian's own Walking_C as the truth.
+    let out = d.path().join("walk.glb");
+    let motion = format!("{}:knight_Walking_C", p(&knight));
+    let truth = format!("{}:barbarian_Walking_C", p(&barbarian));
+    let o =
+        surfcap!(&["--json", "transfer", "apply", p(&model), "--motion", &motion, "--truth", &truth, "-o", p(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rep: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(rep["method"], "baran");
+    assert_eq!(rep["frames"], 49);
+    let acc = &rep["accuracy"];
+    let (err, nearest) = (acc["rms_percent"].as_f64().unwrap(), acc["nearest_training_pose_percent"].as_f64().unwrap());
+    eprintln!("Baran knight -> barbarian Walking_C: {err:.2}% of height, nearest key pose {nearest:.2}%");
+    assert!(err > 0.0 && err < 5.0, "{acc}");
+    assert!(nearest > 0.0, "{acc}");
+    assert_eq!(acc["nearest_training_poses"], 8);
+    let e = &rep["edge_length_distortion"];
+    assert!(e["against"].as_str().unwrap().starts_with("the true motion"), "{e}");
+    assert!(e["boundary_max"].is_null(), "one part, no boundaries: {e}");
+    assert!(e["inside_max"].as_f64().unwrap() >= 0.0, "{e}");
+    surfcap_testkit::validate_glb(std::slice::from_ref(&out));
+    // The same output as file frames: the one the report measured (aligned onto the truth).
+    let got = glb_frames(&out);
+    let t = surfcap_formats::import::import(
+        &[data.join("kaykit_adventurers/barbarian_Walking_C")],
+        &Default::default(),
+        &surfcap_mesh::NoProgress,
+    )
+    .unwrap()
+    .subject;
+    assert_eq!(got.len(), t.sequences()[0].n_frames());
+
+    // Without the truth the edge-length measure is dropped, and says so.
+    let out2 = d.path().join("walk2.glb");
+    let o = surfcap!(&["--json", "transfer", "apply", p(&model), "--motion", &motion, "-o", p(&out2)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rep: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(rep["accuracy"].is_null());
+    let e = &rep["edge_length_distortion"];
+    assert!(e["boundary_max"].is_null() && e["inside_max"].is_null(), "{e}");
+    assert!(e["against"].as_str().unwrap().starts_with("dropped: no --truth"), "{e}");
+
+    // A truth of another length is refused before any work, naming both.
+    let short = format!("{}:barbarian_Walking_A", p(&barbarian));
+    let o = surfcap!(&["transfer", "apply", p(&model), "--motion", &motion, "--truth", &short, "-o", p(&out2)]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("barbarian_Walking_A: 33 frames, but the motion") && e.contains("has 49"), "{e}");
 }

@@ -1,8 +1,13 @@
-//! The evaluation of eigen appearance maps (thesis 4.5-4.6, Boukhayma 2017) on a generated
-//! sequence with ground truth (`surfcap_appearance::generated_frames`: the degraded frames, the
-//! clean frames, the hole masks and the true drift), as `surfcap eval appearance` runs it:
+//! The evaluation of eigen appearance maps (thesis 4.5-4.6, Boukhayma 2017) on a sequence with
+//! ground truth ([`AppearanceSequence`]: the degraded frames, the clean frames, the hole masks
+//! and, where known, the true flow), as `surfcap eval appearance` runs it. Two benchmarks
+//! implement it: the smooth one (`surfcap_appearance::generated_frames`: drift of a few
+//! texels, a moving light, blur and noise) and the capture-like one ([`CaptureSequence`],
+//! `surfcap_appearance::capture_benchmark`: camera-ring renders re-projected into the atlas
+//! through calibration and tracking error).
 //!
-//! 1. **Flow accuracy** (4.4.1): mean end-point error, over the active texels, of the forward
+//! 1. **Flow accuracy** (4.4.1, where the true flow is known): mean end-point error, over the
+//!    active texels, of the forward
 //!    flows of the Poisson build (reference to every frame, read back through the caller's
 //!    estimator, which caches them) against the true flow `true_flow(reference, k)`, beside the
 //!    error of a zero flow (the drift itself); optionally for a few frames with a second
@@ -41,6 +46,7 @@ use rand::seq::SliceRandom;
 use rayon::prelude::*;
 use serde::Serialize;
 use surfcap_appearance::appearance_model::MaskedFlowEstimator;
+use surfcap_appearance::capture_benchmark::{CaptureBenchmark, CaptureFrame};
 use surfcap_appearance::generated_frames::GeneratedFrames;
 use surfcap_appearance::image_similarity::{Similarity, similarity};
 use surfcap_appearance::mesh_rasteriser::{Camera, Lens, Render, cameras_around_mesh, render_views};
@@ -53,6 +59,146 @@ use surfcap_mesh::{Progress, Topology};
 use crate::error::{Error, Result};
 
 pub use surfcap_appearance::appearance_model::split_components;
+
+/// A sequence the evaluation runs on: per-frame input textures and their clean truth on one
+/// UV-mapped mesh, the frames with an occlusion hole, and the true flow between two frames
+/// where the benchmark knows it.
+pub trait AppearanceSequence: Sync {
+    /// Where the frames come from (a folder), for messages.
+    fn source(&self) -> String;
+    /// Where the mesh comes from, for messages.
+    fn mesh_source(&self) -> String;
+    fn frames(&self) -> usize;
+    fn width(&self) -> usize;
+    fn height(&self) -> usize;
+    /// The mesh (topology with its UV atlas, and the positions).
+    fn mesh(&self) -> Result<(Topology, Vec<f32>)>;
+    /// A name per frame (file stems).
+    fn names(&self) -> Vec<String>;
+    /// Frame `k`'s input texture and its clean truth.
+    fn frame_and_clean(&self, k: usize) -> Result<(TextureImage, TextureImage)>;
+    /// Frames with a hole, increasing.
+    fn hole_frames(&self) -> Vec<usize>;
+    /// Frame `k`'s hole mask (true in the hole), if it has one.
+    fn hole(&self, k: usize) -> Option<Vec<bool>>;
+    /// The true flow `from` -> `to` (`None`: unknown).
+    fn true_flow(&self, from: usize, to: usize) -> Option<Result<FlowField>>;
+}
+
+impl AppearanceSequence for GeneratedFrames {
+    fn source(&self) -> String {
+        self.dir().display().to_string()
+    }
+    fn mesh_source(&self) -> String {
+        self.dir().join(&self.header().mesh).display().to_string()
+    }
+    fn frames(&self) -> usize {
+        GeneratedFrames::frames(self)
+    }
+    fn width(&self) -> usize {
+        GeneratedFrames::width(self)
+    }
+    fn height(&self) -> usize {
+        GeneratedFrames::height(self)
+    }
+    fn mesh(&self) -> Result<(Topology, Vec<f32>)> {
+        Ok(GeneratedFrames::mesh(self)?)
+    }
+    fn names(&self) -> Vec<String> {
+        self.header().frame_files.iter().map(|n| n.strip_suffix(".png").unwrap_or(n).to_string()).collect()
+    }
+    fn frame_and_clean(&self, k: usize) -> Result<(TextureImage, TextureImage)> {
+        Ok((self.frame(k)?, self.clean(k)?))
+    }
+    fn hole_frames(&self) -> Vec<usize> {
+        self.header().hole_frames.clone()
+    }
+    fn hole(&self, k: usize) -> Option<Vec<bool>> {
+        GeneratedFrames::hole(self, k)
+    }
+    fn true_flow(&self, from: usize, to: usize) -> Option<Result<FlowField>> {
+        Some(GeneratedFrames::true_flow(self, from, to).map_err(Error::from))
+    }
+}
+
+/// The capture-like benchmark's frames, made in memory.
+pub struct CaptureSequence {
+    /// Where the mesh and texture came from, for messages.
+    pub source: String,
+    pub topology: Topology,
+    /// The mesh at rest (the atlas's shape).
+    pub positions: Vec<f32>,
+    pub frames: Vec<CaptureFrame>,
+}
+
+impl CaptureSequence {
+    /// Every frame of `benchmark` (in parallel; each frame is independent of the others).
+    pub fn generate(
+        benchmark: &CaptureBenchmark,
+        topology: &Topology,
+        positions: &[f32],
+        source: &str,
+        progress: &dyn Progress,
+    ) -> Result<CaptureSequence> {
+        let n = benchmark.options().frames;
+        progress.start("capture benchmark: rendering and re-projecting", n as u64);
+        let frames: Vec<CaptureFrame> = (0..n)
+            .into_par_iter()
+            .map(|k| {
+                let f = benchmark.frame(k)?;
+                progress.advance(1);
+                Ok(f)
+            })
+            .collect::<Result<_>>()?;
+        progress.finish();
+        Ok(CaptureSequence {
+            source: source.to_string(),
+            topology: topology.clone(),
+            positions: positions.to_vec(),
+            frames,
+        })
+    }
+}
+
+impl AppearanceSequence for CaptureSequence {
+    fn source(&self) -> String {
+        self.source.clone()
+    }
+    fn mesh_source(&self) -> String {
+        self.source.clone()
+    }
+    fn frames(&self) -> usize {
+        self.frames.len()
+    }
+    fn width(&self) -> usize {
+        self.frames.first().map_or(0, |f| f.frame.width())
+    }
+    fn height(&self) -> usize {
+        self.frames.first().map_or(0, |f| f.frame.height())
+    }
+    fn mesh(&self) -> Result<(Topology, Vec<f32>)> {
+        Ok((self.topology.clone(), self.positions.clone()))
+    }
+    fn names(&self) -> Vec<String> {
+        let digits = self.frames.len().saturating_sub(1).to_string().len().max(3);
+        (0..self.frames.len()).map(|k| format!("frame_{k:0digits$}")).collect()
+    }
+    fn frame_and_clean(&self, k: usize) -> Result<(TextureImage, TextureImage)> {
+        let f = self.frames.get(k).ok_or_else(|| {
+            Error::Unsuitable(format!("{}: frame {k} of a capture benchmark of {}", self.source, self.frames.len()))
+        })?;
+        Ok((f.frame.clone(), f.clean.clone()))
+    }
+    fn hole_frames(&self) -> Vec<usize> {
+        (0..self.frames.len()).filter(|&k| self.frames[k].hole.is_some()).collect()
+    }
+    fn hole(&self, k: usize) -> Option<Vec<bool>> {
+        self.frames.get(k)?.hole.clone()
+    }
+    fn true_flow(&self, _from: usize, _to: usize) -> Option<Result<FlowField>> {
+        None
+    }
+}
 
 /// What the evaluation measures and how.
 #[derive(Debug, Clone, Serialize)]
@@ -116,7 +262,8 @@ pub struct FlowAccuracy {
     /// The estimator's description (e.g. its finest scale), as the caller gives it.
     pub estimator: String,
     pub reference: String,
-    pub errors: EndPointErrors,
+    /// `None` when the benchmark does not know the true flow (the capture-like one).
+    pub errors: Option<EndPointErrors>,
     /// The second estimator's description and errors on the first frames, when run.
     pub second_estimator: Option<String>,
     pub second: Option<EndPointErrors>,
@@ -225,6 +372,9 @@ pub struct AppearanceEval {
     /// Frames every model may use (those without a hole).
     pub complete_frames: usize,
     pub hole_frames: Vec<String>,
+    /// The input frames against their clean truth (texture domain, mean over the frames without
+    /// a hole): how far the benchmark's degradation takes them.
+    pub input_vs_clean: Similarity,
     pub options: AppearanceEvalOptions,
     /// Frames of the image domain of the compactness sweep.
     pub image_frames: Vec<String>,
@@ -258,7 +408,7 @@ fn mean_scores(v: &[Scores]) -> Scores {
 
 /// The frames, clean frames and mask of a generated sequence, read once.
 struct Data<'a> {
-    frames: &'a GeneratedFrames,
+    frames: &'a dyn AppearanceSequence,
     names: Vec<String>,
     inputs: Vec<TextureImage>,
     cleans: Vec<TextureImage>,
@@ -332,7 +482,9 @@ fn flow_errors(
         .par_iter()
         .map(|&k| {
             let est = flow(&data.inputs[reference], &data.inputs[k], &data.mask)?;
-            let truth = data.frames.true_flow(reference, k)?;
+            let truth = data.frames.true_flow(reference, k).ok_or_else(|| {
+                Error::Unsuitable(format!("{}: the benchmark does not know the true flow", data.frames.source()))
+            })??;
             let zero = FlowField::zeros(truth.width, truth.height);
             progress.advance(1);
             Ok((est.end_point_error(&truth, active), zero.end_point_error(&truth, active)))
@@ -425,7 +577,7 @@ fn project_frame(
 /// for the report; `second_flow` an optional other estimator measured on the first
 /// `second_flow_frames` frames.
 pub fn appearance_eval(
-    frames: &GeneratedFrames,
+    frames: &dyn AppearanceSequence,
     opts: &AppearanceEvalOptions,
     flow: &MaskedFlowEstimator<'_>,
     flow_name: &str,
@@ -447,9 +599,9 @@ pub fn appearance_eval(
     let f = frames.frames();
     let (w, h) = (frames.width(), frames.height());
     let (topology, positions) = frames.mesh()?;
-    let atlas = topology.uv().ok_or_else(|| {
-        Error::Unsuitable(format!("{}: the mesh has no UV atlas", frames.dir().join(&frames.header().mesh).display()))
-    })?;
+    let atlas = topology
+        .uv()
+        .ok_or_else(|| Error::Unsuitable(format!("{}: the mesh has no UV atlas", frames.mesh_source())))?;
     let mask = TexelMask::from_atlas(atlas, w, h, opts.dilation)?;
     let active: Vec<bool> = (0..w * h).map(|i| mask.is_active(i)).collect();
     let t = Instant::now();
@@ -457,7 +609,7 @@ pub fn appearance_eval(
     let read: Vec<(TextureImage, TextureImage)> = (0..f)
         .into_par_iter()
         .map(|k| {
-            let pair = (frames.frame(k)?, frames.clean(k)?);
+            let pair = frames.frame_and_clean(k)?;
             progress.advance(1);
             Ok(pair)
         })
@@ -465,19 +617,24 @@ pub fn appearance_eval(
     progress.finish();
     let (inputs, cleans): (Vec<_>, Vec<_>) = read.into_iter().unzip();
     seconds.reading = t.elapsed().as_secs_f64();
-    let names: Vec<String> =
-        frames.header().frame_files.iter().map(|n| n.strip_suffix(".png").unwrap_or(n).to_string()).collect();
+    let names: Vec<String> = frames.names();
     let data = Data { frames, names, inputs, cleans, mask, active, topology, positions };
-    let hole_frames = frames.header().hole_frames.clone();
+    let hole_frames = frames.hole_frames();
     let complete: Vec<usize> = (0..f).filter(|k| !hole_frames.contains(k)).collect();
     if complete.len() < 3 {
         return Err(Error::Unsuitable(format!(
             "{}: {} frames without a hole: the evaluation needs at least 3",
-            frames.dir().display(),
+            frames.source(),
             complete.len()
         )));
     }
     let n = complete.len();
+    let input_vs_clean = mean_similarity(
+        &complete
+            .par_iter()
+            .map(|&k| Ok(similarity(&data.inputs[k], &data.cleans[k], &data.active)?))
+            .collect::<Result<Vec<_>>>()?,
+    );
 
     // 2. The full models, Poisson and direct (they share the medoid shift's direct search and
     // so its forward flows).
@@ -489,9 +646,14 @@ pub fn appearance_eval(
     // 1. Flow accuracy of the Poisson build's forward flows.
     let t = Instant::now();
     let reference = poisson.reference();
-    let errors = flow_errors(&data, reference, &complete, flow, progress, "forward flows against the truth")?;
+    let knows_flow = frames.true_flow(reference, reference).is_some();
+    let errors = if knows_flow {
+        Some(flow_errors(&data, reference, &complete, flow, progress, "forward flows against the truth")?)
+    } else {
+        None
+    };
     let (second_estimator, second) = match second_flow {
-        Some((est, name)) if opts.second_flow_frames > 0 => {
+        Some((est, name)) if opts.second_flow_frames > 0 && knows_flow => {
             let some: Vec<usize> = evenly_spaced(
                 &complete.iter().copied().filter(|&k| k != reference).collect::<Vec<_>>(),
                 opts.second_flow_frames,
@@ -753,6 +915,7 @@ pub fn appearance_eval(
         active_texels: data.mask.len(),
         complete_frames: n,
         hole_frames: hole_frames.iter().map(|&k| data.names[k].clone()).collect(),
+        input_vs_clean,
         options: opts.clone(),
         image_frames: image_slots.iter().map(|&i| data.names[complete[i]].clone()).collect(),
         flow: flow_accuracy,

@@ -29,7 +29,7 @@ use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::motion_plane_alignment;
 use surfcap_motion::edge_weights::Alpha;
 use surfcap_motion::segment_bounds;
-use surfcap_motion::timed_walk::{LoopRule, TimedGraph};
+use surfcap_motion::timed_walk::{DistanceTimeWalk, LoopRule, TimedGraph};
 use surfcap_motion::walk_sequence::{Step, WalkModel};
 use surfcap_pipeline::{GraphKind, GraphParams, Pipeline};
 use surfcap_smg::motion_frames::MotionFrames;
@@ -192,6 +192,9 @@ struct Goal {
     met_time_error_max: f64,
 }
 
+/// One essential-graph search's answer, or why there is none.
+type Answer = std::result::Result<DistanceTimeWalk, String>;
+
 /// A row from per-query errors, times and the measures of the transitions taken.
 fn row(
     engine: &'static str,
@@ -290,20 +293,41 @@ pub fn smg_comparison(
         // The essential graph on the same key frames and targets.
         let (mut errors, mut cpu, mut taken, mut first_failure) = (Vec::new(), Vec::new(), Vec::new(), None);
         let mut goal = Goal::default();
-        // The searches in parallel, used in the targets' order (each search is deterministic).
-        let searches: Vec<_> = opts
-            .targets
+        // The targets of one duration share their searches' distance-free part
+        // (`walk_within_each`); the durations in parallel, the answers used in the targets'
+        // order (each search is deterministic). A target's CPU time is its duration's share.
+        let mut durations: Vec<(f64, Vec<usize>)> = Vec::new();
+        for (i, &(_, secs)) in opts.targets.iter().enumerate() {
+            match durations.iter_mut().find(|(s, _)| *s == secs) {
+                Some((_, members)) => members.push(i),
+                None => durations.push((secs, vec![i])),
+            }
+        }
+        let answered: Vec<Vec<(usize, Answer, f64)>> = durations
             .par_iter()
-            .map(|&(dist, secs)| {
+            .map(|(secs, members)| {
                 let intervals = ((secs * frames.fps).round() as usize).saturating_sub(1).max(1);
                 let t = Instant::now();
-                let tolerance = (opts.tolerance.distance_relative * dist, opts.tolerance.frames.floor() as usize);
-                let found = tg.walk_within(a as u32, b as u32, (dist, intervals), scales, tolerance, longest);
-                progress.advance(1);
-                (found, t.elapsed().as_secs_f64())
+                let targets: Vec<(f64, f64)> = members
+                    .iter()
+                    .map(|&i| (opts.targets[i].0, opts.tolerance.distance_relative * opts.targets[i].0))
+                    .collect();
+                let tol_t = opts.tolerance.frames.floor() as usize;
+                let found = tg.walk_within_each(a as u32, b as u32, intervals, &targets, scales, tol_t, longest);
+                progress.advance(members.len() as u64);
+                let share = t.elapsed().as_secs_f64() / members.len() as f64;
+                match found {
+                    Ok(answers) => members.iter().zip(answers).map(|(&i, r)| (i, Ok(r), share)).collect(),
+                    Err(e) => members.iter().map(|&i| (i, Err(e.to_string()), share)).collect(),
+                }
             })
             .collect();
-        for (&(dist, secs), (found, seconds)) in opts.targets.iter().zip(searches) {
+        let mut searches: Vec<Option<(Answer, f64)>> = (0..opts.targets.len()).map(|_| None).collect();
+        for (i, found, seconds) in answered.into_iter().flatten() {
+            searches[i] = Some((found, seconds));
+        }
+        for (&(dist, secs), answer) in opts.targets.iter().zip(searches) {
+            let (found, seconds) = answer.expect("every target belongs to its duration");
             let shown = secs * frames.fps;
             let w = match found {
                 Ok(r) => {

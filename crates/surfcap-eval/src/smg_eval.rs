@@ -21,10 +21,13 @@ use surfcap_builtin::mannequin::{BodyShape, mannequin};
 use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::Subject;
+use surfcap_smg::loop_exclusion::{LoopFilter, LoopRule};
 use surfcap_smg::motion_frames::MotionFrames;
-use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths};
+use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths, plan_paths_excluding};
 use surfcap_smg::shape_similarity::HistogramParams;
-use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
+use surfcap_smg::surface_motion_graph::{
+    EdgeKind, GraphInput, LoopChoice, SurfaceMotionGraph, build_graph, build_graph_choosing,
+};
 
 use crate::MeanStd;
 use crate::error::{Error, Result};
@@ -135,10 +138,21 @@ pub struct SmgEvalOptions {
     pub separation: usize,
     /// The tolerance of the goal queries (1% and 1 frame).
     pub tolerance: Tolerance,
+    /// The loops the queries may play (`surfcap_smg::loop_exclusion`), and the self-transitions
+    /// chosen among them, spanning each sequence's cross transitions and key frames
+    /// (`surfcap_smg::self_transition_choice`). `None`: the paper's graph, every self-transition
+    /// by eq. 5 and every loop played.
+    pub loops: Option<LoopRule>,
+    /// With `loops`: self-transitions per sequence, the spanning one then the cheapest
+    /// admissible loops inside it (finer steps of time).
+    pub loops_per_sequence: usize,
 }
 
 impl Default for SmgEvalOptions {
-    /// The paper's: 1-20 m by 1-40 s, `w_d = 1/0.3`, `w_t = 1/10`; windows of 3 to 30 frames.
+    /// The paper's: 1-20 m by 1-40 s, `w_d = 1/0.3`, `w_t = 1/10`; windows of 3 to 30 frames;
+    /// self-transitions among the loops of at least 10 frames and one typical frame step of
+    /// pose variation (the paper's own choice of self-transitions picks a clip's stillest 3
+    /// frames, a loop no query may play), two per sequence.
     fn default() -> Self {
         SmgEvalOptions {
             targets: grid(&(1..=20).map(f64::from).collect::<Vec<_>>(), &(1..=40).map(f64::from).collect::<Vec<_>>()),
@@ -149,6 +163,8 @@ impl Default for SmgEvalOptions {
             per_connection: 1,
             separation: 15,
             tolerance: Tolerance::default(),
+            loops: Some(LoopRule::default()),
+            loops_per_sequence: 2,
         }
     }
 }
@@ -200,9 +216,11 @@ pub struct KeyPairRow {
     /// Why the key frames have no path at all (the higher-level graph's transitions do not
     /// connect them): every target is then unreachable, counted as `not_connected`.
     pub not_connected: Option<String>,
-    /// Walks between the key frames and loops in the graph.
+    /// Walks between the key frames and loops in the graph (those the queries may play), and
+    /// the loops of the graph never repeated to pad time (too short or too still).
     pub walks: usize,
     pub loops: usize,
+    pub excluded_loops: usize,
     /// Enumerating the walks and loops, once per key pair (not in `cpu_seconds`).
     pub plan_seconds: f64,
     /// ILP sub-problems given up because their feedback cuts did not settle.
@@ -262,6 +280,9 @@ pub struct SmgEval {
     pub form: String,
     /// Transitions per connection (1: the paper's).
     pub per_connection: usize,
+    /// The loops the queries may play, and the self-transitions chosen among them
+    /// ([`SmgEvalOptions::loops`]); `None`: the paper's graph.
+    pub loop_rule: Option<LoopRule>,
     pub frames: usize,
     pub vertices_min: usize,
     pub vertices_max: usize,
@@ -350,6 +371,7 @@ fn not_connected_row(from: &str, to: &str, opts: &SmgEvalOptions, why: String) -
         not_connected: Some(why),
         walks: 0,
         loops: 0,
+        excluded_loops: 0,
         plan_seconds: 0.0,
         unconverged_subproblems: 0,
         goal: GoalRow {
@@ -396,7 +418,7 @@ pub fn smg_eval(
     let key_frames: Vec<usize> = keys.iter().flat_map(|&(a, b)| [a, b]).collect();
     let ground = frames.ground_centroids();
     let t_graph = Instant::now();
-    let g = build_graph(&GraphInput {
+    let input = GraphInput {
         sequences: &frames.sequences,
         similarity: &similarity,
         ground: &ground,
@@ -405,7 +427,20 @@ pub fn smg_eval(
         lengths: opts.lengths.clone(),
         per_connection: opts.per_connection,
         separation: opts.separation,
-    })
+    };
+    let filter = match opts.loops {
+        Some(rule) => {
+            Some(LoopFilter::new(rule, &similarity, &frames.sequences).map_err(|e| Error::Unsuitable(e.to_string()))?)
+        }
+        None => None,
+    };
+    let g = match &filter {
+        Some(filter) => build_graph_choosing(
+            &input,
+            &LoopChoice { filter, key_pairs: &keys, per_sequence: opts.loops_per_sequence },
+        ),
+        None => build_graph(&input),
+    }
     .map_err(|e| Error::Unsuitable(e.to_string()))?;
     let graph_seconds = t_graph.elapsed().as_secs_f64();
     let centroids = frames.centroids();
@@ -436,13 +471,19 @@ pub fn smg_eval(
         if !connected(&g, a, b) {
             progress.advance(opts.targets.len() as u64);
             let why = format!(
-                "no path from {na} to {nb}: the transitions of the higher-level graph (one per connection: \
-                 eq. 5) do not lead from one to the other"
+                "no path from {na} to {nb}: the transitions of the higher-level graph ({} per connection) do \
+                 not lead from one to the other",
+                opts.per_connection
             );
             rows.push(not_connected_row(na, nb, opts, why));
             continue;
         }
-        let plan = plan_paths(&g, a, b, max_paths).map_err(|e| Error::Unsuitable(format!("{na} -> {nb}: {e}")))?;
+        let plan = match &filter {
+            Some(filter) => plan_paths_excluding(&g, a, b, max_paths, filter),
+            None => plan_paths(&g, a, b, max_paths),
+        }
+        .map_err(|e| Error::Unsuitable(format!("{na} -> {nb}: {e}")))?;
+        let excluded_loops = plan.excluded_loops().len();
         let plan_seconds = t.elapsed().as_secs_f64();
         // The queries in parallel, collected in the targets' order (each is deterministic).
         let answers = opts
@@ -519,6 +560,7 @@ pub fn smg_eval(
             not_connected: None,
             walks,
             loops,
+            excluded_loops,
             plan_seconds,
             unconverged_subproblems: unconverged,
             goal: GoalRow {
@@ -541,6 +583,7 @@ pub fn smg_eval(
     Ok(SmgEval {
         form: form.into(),
         per_connection: opts.per_connection,
+        loop_rule: opts.loops,
         frames: frames.n_frames(),
         vertices_min: counts.iter().copied().min().unwrap_or(0),
         vertices_max: counts.iter().copied().max().unwrap_or(0),

@@ -379,7 +379,7 @@ pub fn sparse_graph_eval(
     let union: Vec<Edge> =
         exact.graph.edges().iter().chain(sparse.iter().flat_map(|(_, g, _, _)| g.graph.edges())).copied().collect();
     let union = Graph::new(n, union);
-    let model = WalkModel::new(s, &union, &table.value, &d.value.values, p.table.slope, None);
+    let model = WalkModel::new(s, pipe.loops(), &union, &table.value, &d.value.values, p.table.slope, None);
     let model_seconds = t.elapsed().as_secs_f64();
     let (iu, iv) = model.plane();
     let curves: Vec<(String, Curve)> = opts

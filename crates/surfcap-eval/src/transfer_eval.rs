@@ -52,6 +52,10 @@ use surfcap_transfer::transfer_model::TransferKernel;
 use crate::MeanStd;
 use crate::error::{Error, Result};
 
+/// The method name of the unseen-motion rows of GP-NN on the whole body (one part, as many
+/// components as the parts have together), next to GP-NN on the parts.
+pub const WHOLE_BODY_GP_NN: &str = "GP-NN whole body";
+
 /// A pair of subjects with ground truth.
 pub struct TransferCase {
     pub name: String,
@@ -63,6 +67,26 @@ pub struct TransferCase {
     pub train: Vec<(usize, usize)>,
     /// Motions absent from training.
     pub unseen: Vec<(usize, usize)>,
+    /// Whether this is a case built the other way round by [`TransferCase::reversed`].
+    pub reversed: bool,
+}
+
+impl TransferCase {
+    /// The same case the other way round (target to source), as the thesis evaluates both
+    /// directions: subjects, parts and motion pairs swapped, named `target -> source`.
+    pub fn reversed(&self) -> TransferCase {
+        let swap = |v: &[(usize, usize)]| v.iter().map(|&(a, b)| (b, a)).collect();
+        TransferCase {
+            name: format!("{} -> {}", self.target.name, self.source.name),
+            source: self.target.clone(),
+            target: self.source.clone(),
+            source_parts: self.target_parts.clone(),
+            target_parts: self.source_parts.clone(),
+            train: swap(&self.train),
+            unseen: swap(&self.unseen),
+            reversed: !self.reversed,
+        }
+    }
 }
 
 /// A method compared in the curves.
@@ -74,10 +98,13 @@ pub enum Method {
     Linear,
     /// Baran et al. 2009, with the training pairs as its key poses (whole body).
     Baran,
+    /// The baseline every learnt method must beat: the target pose of the training pair whose
+    /// source pose is nearest (RMS over the aligned source vertices) to the source pose.
+    NearestPose,
 }
 
 impl Method {
-    pub const ALL: [Method; 4] = [Method::GpNn, Method::GpSe, Method::Linear, Method::Baran];
+    pub const ALL: [Method; 5] = [Method::GpNn, Method::GpSe, Method::Linear, Method::Baran, Method::NearestPose];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -85,6 +112,7 @@ impl Method {
             Method::GpSe => "GP-SE",
             Method::Linear => "linear",
             Method::Baran => "Baran",
+            Method::NearestPose => "nearest pose",
         }
     }
 
@@ -93,7 +121,7 @@ impl Method {
             Method::GpNn => Some(TransferKernel::NeuralNetwork),
             Method::GpSe => Some(TransferKernel::SquaredExponential),
             Method::Linear => Some(TransferKernel::Linear),
-            Method::Baran => None,
+            Method::Baran | Method::NearestPose => None,
         }
     }
 }
@@ -173,6 +201,9 @@ pub struct ReconstructionResult {
 #[derive(Debug, Clone, Serialize)]
 pub struct CaseEval {
     pub name: String,
+    /// "forward" (the case as listed: knight to the other character, average mannequin to the
+    /// heavy one) or "backward" (the other way round).
+    pub direction: String,
     pub source: String,
     pub target: String,
     pub source_vertices: usize,
@@ -270,6 +301,7 @@ pub fn kaykit_case(data: &Path, target: &str, parts: CaseParts) -> Result<Transf
         target_parts,
         train: (0..n_train).map(|k| (k, k)).collect(),
         unseen: (n_train..clips.len()).map(|k| (k, k)).collect(),
+        reversed: false,
     })
 }
 
@@ -310,6 +342,7 @@ pub fn mannequin_case(
         target_parts,
         train: (0..n_train).map(|k| (k, k)).collect(),
         unseen: (n_train..n_train + CMU_UNSEEN.len()).map(|k| (k, k)).collect(),
+        reversed: false,
     })
 }
 
@@ -430,6 +463,27 @@ impl Bench<'_> {
     ) -> Result<Vec<Vec<f32>>> {
         let unsuitable =
             |e: surfcap_transfer::Error| Error::Unsuitable(format!("{}: {}: {e}", self.case.name, method.name()));
+        if method == Method::NearestPose {
+            // The nearest training source pose (aligned, plain RMS), its partner's target pose.
+            return test
+                .iter()
+                .map(|&g| {
+                    let (pose, _) = self.src.frame(g).map_err(unsuitable)?;
+                    let Some(&first) = pairs.first() else {
+                        return Err(Error::Unsuitable(format!("{}: nearest pose: no training pair", self.case.name)));
+                    };
+                    let mut best = (f64::INFINITY, first);
+                    for &p in pairs {
+                        let (q, _) = self.src.frame(p.0).map_err(unsuitable)?;
+                        let d: f64 = pose.iter().zip(q).map(|(a, b)| ((a - b) as f64).powi(2)).sum();
+                        if d < best.0 {
+                            best = (d, p);
+                        }
+                    }
+                    Ok(self.tgt.frame(best.1.1).map_err(unsuitable)?.0.to_vec())
+                })
+                .collect();
+        }
         let Some(kernel) = method.kernel() else {
             // Baran et al.: the training pairs are its key poses; no parts, no PCA.
             let keys = |p: &PreparedSubject, f: &dyn Fn(&(usize, usize)) -> usize| -> Result<Vec<Vec<f32>>> {
@@ -629,10 +683,34 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
             }
         }
     }
+    // Whether the parts help on unseen motions: GP-NN on the whole body with as many
+    // components in all as the parts have together.
+    if case.target_parts.len() > 1 {
+        let m_whole = opts.components * case.target_parts.len();
+        for (set, pairs) in training_sets {
+            let pred = bench.fit_predict(Method::GpNn, (&whole.0, &whole.1), m_whole, pairs, &all_s)?;
+            let mut at = 0;
+            for (b, p) in &unseen_frames {
+                let t: Vec<usize> = p.iter().map(|x| x.1).collect();
+                let rms = rms_of(tgt, &pred[at..at + p.len()], &t)?;
+                at += p.len();
+                unseen.push(UnseenResult {
+                    method: WHOLE_BODY_GP_NN.into(),
+                    training: set.into(),
+                    training_pairs: pairs.len(),
+                    motion: case.target.sequences()[*b].name.clone(),
+                    frames: p.len(),
+                    rms_percent: pct(rms),
+                    rms,
+                });
+            }
+        }
+    }
     let all_t: Vec<usize> = unseen_frames.iter().flat_map(|(_, p)| p.iter().map(|x| x.1)).collect();
     let reconstruction = bench.reconstructions(parts, opts.components, &all_train, &all_s, &all_t, h)?;
     Ok(CaseEval {
         name: case.name.clone(),
+        direction: if case.reversed { "backward" } else { "forward" }.into(),
         source: case.source.name.clone(),
         target: case.target.name.clone(),
         source_vertices: case.source.topology().n_vertices(),
@@ -710,6 +788,7 @@ pub fn leave_one_out_eval(name: &str, source: &Subject, target: &Subject, seed: 
         target_parts: whole.1.clone(),
         train: vec![(0, 0)],
         unseen: vec![],
+        reversed: false,
     };
     let src = PreparedSubject::new(source, &[0]).map_err(|e| Error::Unsuitable(e.to_string()))?;
     let tgt = PreparedSubject::new(target, &[0]).map_err(|e| Error::Unsuitable(e.to_string()))?;

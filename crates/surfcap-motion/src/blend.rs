@@ -153,32 +153,20 @@ pub fn blend(
     lambda: Lambda,
     mixing: Mixing,
 ) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
-    blend_substituted(topology, up, (source, destination), (source, destination), path, lambda, mixing)
+    let segments = (source, destination);
+    blend_placed(topology, up, segments, segments, path, lambda, mixing, Placement::Aligned)
 }
 
 /// Blend whose rigid part (every alignment and translation of Algorithm 2) is computed from the
 /// segments `placed` (source, destination: the captured frames) while the poses interpolated are
 /// `played` (frames of the same vertex count shown in their stead, e.g. learned variants of
-/// those frames, thesis 6.6), each moved as its captured frame is. The
-/// transition's rigid track is then the captured one, which the walk model predicted and the
-/// constrained searches solved for; only the poses differ. With `played` = `placed` this is
-/// [`blend`], to the bit.
-pub fn blend_substituted(
-    topology: &Topology,
-    up: UpAxis,
-    placed: (&[&[f32]], &[&[f32]]),
-    played: (&[&[f32]], &[&[f32]]),
-    path: &[(usize, usize)],
-    lambda: Lambda,
-    mixing: Mixing,
-) -> Result<Vec<Vec<f32>>, surfcap_geometry::Error> {
-    blend_placed(topology, up, placed, played, path, lambda, mixing, Placement::Aligned)
-}
-
-/// [`blend_substituted`] with the rigid part chosen by `placement`: Algorithm 2's
+/// those frames, thesis 6.6), each moved as its captured frame is. The transition's rigid track
+/// is then the captured one, which the walk model predicted and the constrained searches solved
+/// for; only the poses differ. The rigid part is chosen by `placement`: Algorithm 2's
 /// re-placement ([`Placement::Aligned`]) or the frames where they were captured
 /// ([`Placement::Captured`], for a subject that does not travel, see
-/// [`crate::subject_placement`]); the poses are interpolated alike.
+/// [`crate::subject_placement`]); the poses are interpolated alike. With `played` = `placed`
+/// and [`Placement::Aligned`] this is [`blend`], to the bit.
 #[allow(clippy::too_many_arguments)]
 pub fn blend_placed(
     topology: &Topology,

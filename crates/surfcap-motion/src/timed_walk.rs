@@ -20,10 +20,12 @@
 //!   the walk, so it is handled by Lagrangian relaxation: every state carries the distance of
 //!   its cheapest walk under C_s + mu d, each duration's walk is chosen among all the splits
 //!   (t, v) of the bidirectional join by its true C (thousands of candidates with different
-//!   distances, not only the Lagrangian optimum), and mu is bisected (on a log scale) only while
-//!   the distance at the target duration misses d_T by more than 1%. The result is the walk of
-//!   least true C among every candidate seen; not a proof of optimality (C is not additive), and
-//!   the report gives the true errors of the walk found.
+//!   distances, not only the Lagrangian optimum). With a tolerance ([`TimedGraph::walk_within`]),
+//!   a walk within it that these miss (its distance lies off every trade-off's optimum) is
+//!   found by a depth-first search steered by the least and greatest distance on to the end
+//!   frame of every state ([`steered`]), which also proves a target no walk meets. The result
+//!   is not a proof of eq. 6 optimality (C is not additive), and the report gives the true
+//!   errors of the walk found.
 //!
 //! Speed: the layered tables are node-major, and edges of at least `block` frames are pulled a
 //! block of time layers at a time (see [`layered`]), so the dense 2,000-frame graph (~670k
@@ -36,7 +38,10 @@ use surfcap_mesh::FrameIndex;
 use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::walk_sequence::{Step, WalkModel};
+use steered::{BUDGET as STEERED_BUDGET, Steered, ToEnd, steered_walk};
 pub use surfcap_mesh::reachability::{LoopRule, Unreachable};
+
+mod steered;
 
 /// An edge as the timed search sees it.
 #[derive(Debug, Clone, Copy)]
@@ -105,6 +110,8 @@ struct Direction {
 pub struct TimedGraph {
     n: usize,
     edges: Vec<TimedEdge>,
+    /// Every edge's ground-plane length, in edge order.
+    length: Vec<f64>,
     out: Vec<Vec<usize>>,
     /// Width of a block of time layers: the shortest edge of more than one frame (at most 32).
     block: usize,
@@ -154,7 +161,8 @@ impl TimedGraph {
         };
         let forward = direction(|e| e.to, |e| e.from);
         let backward = direction(|e| e.from, |e| e.to);
-        TimedGraph { n, edges, out, block, forward, backward, index }
+        let length = edges.iter().map(|e| e.length).collect();
+        TimedGraph { n, edges, length, out, block, forward, backward, index }
     }
 
     /// The graph without its degenerate loops (see [`LoopRule`]): every transition that jumps
@@ -249,6 +257,15 @@ pub struct TimedWalk {
 /// A walk with its eq. 6 cost.
 type Scored = (f64, TimedWalk);
 
+/// One distance-and-time target of [`TimedGraph::walk_within_each`].
+struct Target {
+    distance: f64,
+    frames: usize,
+    tol_d: f64,
+    tol_t: usize,
+    scales: (f64, f64),
+}
+
 /// The answer of a distance-and-time search with a tolerance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DistanceTimeWalk {
@@ -313,6 +330,13 @@ fn relax(row: &mut [f64], drow: &mut [f64], src: &[f64], dsrc: &[f64], c: f64, l
 /// Callers refuse a request whose tables would not fit in memory before searching.
 pub fn search_table_bytes(nodes: usize, frames: usize) -> u64 {
     16 * nodes as u64 * 2 * frames as u64
+}
+
+/// [`search_table_bytes`] for a distance-and-time search ([`TimedGraph::walk_within`]): its
+/// steered search adds three tables over the durations searched (least and greatest distance
+/// and least realism cost on to the end frame), kept beside one bidirectional search's.
+pub fn distance_search_table_bytes(nodes: usize, frames: usize) -> u64 {
+    16 * nodes as u64 * 5 * frames as u64
 }
 
 /// Layered dynamic programme from `origin` at time 0: the cheapest cost of every (node, time)
@@ -433,67 +457,109 @@ fn cheapest_by_duration(
 /// cheapest under different trade-offs, whose distances lie between those of either alone.
 fn cheapest_joined(
     g: &TimedGraph,
-    (a, b): (u32, u32),
-    (lo, hi): (usize, usize),
+    ends: (u32, u32),
+    range: (usize, usize),
     costs: [(f64, f64); 2],
     score: impl Fn(f64, f64) -> f64 + Sync,
 ) -> Vec<Option<(f64, Vec<u32>)>> {
-    let h = (hi / 2).max(1);
-    let longest = g.longest_edge();
-    let length: Vec<f64> = g.edges.iter().map(|e| e.length).collect();
-    let edge_costs = |(realism, mu): (f64, f64)| EdgeCosts {
-        cost: g.edges.iter().map(|e| realism * e.weight + mu * e.length).collect(),
-        length: &length,
-    };
-    let (ec, ecb) = (edge_costs(costs[0]), edge_costs(costs[1]));
-    let (mu, mub) = (costs[0].1, costs[1].1);
-    let back_times = (hi + 1).saturating_sub(h);
-    let (f, bw) = rayon::join(
-        || layered(g, &g.forward, &ec, a, h + longest, h),
-        || layered(g, &g.backward, &ecb, b, back_times, back_times),
-    );
-    // The realism of a state's walk is its cost minus mu times its distance.
-    let judge = |cost: f64, dist: f64| score(cost - mu * dist, dist);
-    let join = |(fc, fd): (f64, f64), (bc, bd): (f64, f64)| score(fc - mu * fd + bc - mub * bd, fd + bd);
-    // Per duration: (score, t, v) of the best split, smallest (t, v) on ties.
-    let best: Vec<Option<(f64, usize, usize)>> = (0..=hi)
-        .into_par_iter()
-        .map(|d| {
-            if d < lo.max(1) {
-                return None;
-            }
+    JoinTables::new(g, ends, range, costs).pick(score)
+}
+
+/// The two halves of one bidirectional search (see [`cheapest_by_duration`]), from which
+/// [`JoinTables::pick`] chooses each duration's walk by any score: one search serves every
+/// distance target of the same ends and durations.
+struct JoinTables<'g> {
+    g: &'g TimedGraph,
+    ends: (u32, u32),
+    range: (usize, usize),
+    /// The middle time.
+    h: usize,
+    back_times: usize,
+    mu: (f64, f64),
+    ec: EdgeCosts<'g>,
+    ecb: EdgeCosts<'g>,
+    f: Layers,
+    bw: Layers,
+}
+
+impl<'g> JoinTables<'g> {
+    fn new(g: &'g TimedGraph, (a, b): (u32, u32), (lo, hi): (usize, usize), costs: [(f64, f64); 2]) -> Self {
+        let h = (hi / 2).max(1);
+        let longest = g.longest_edge();
+        let edge_costs = |(realism, mu): (f64, f64)| EdgeCosts {
+            cost: g.edges.iter().map(|e| realism * e.weight + mu * e.length).collect(),
+            length: &g.length,
+        };
+        let (ec, ecb) = (edge_costs(costs[0]), edge_costs(costs[1]));
+        let back_times = (hi + 1).saturating_sub(h);
+        let (f, bw) = rayon::join(
+            || layered(g, &g.forward, &ec, a, h + longest, h),
+            || layered(g, &g.backward, &ecb, b, back_times, back_times),
+        );
+        JoinTables { g, ends: (a, b), range: (lo, hi), h, back_times, mu: (costs[0].1, costs[1].1), ec, ecb, f, bw }
+    }
+
+    /// Whether some walk lasts a duration of the range.
+    fn any(&self) -> bool {
+        let (g, (_, b), (lo, hi), h) = (self.g, self.ends, self.range, self.h);
+        let longest = g.longest_edge();
+        (lo.max(1)..=hi).any(|d| {
             if d < h {
-                let x = f.at(d, b as usize);
-                return x.is_finite().then(|| (judge(x, f.dist(d, b as usize)), d, b as usize));
+                return self.f.at(d, b as usize).is_finite();
             }
-            let mut best: Option<(f64, usize, usize)> = None;
-            for t in h..=d.min(h + longest - 1) {
-                for v in 0..g.n {
-                    let (xf, xb) = (f.at(t, v), bw.at(d - t, v));
-                    if (xf + xb).is_finite() {
-                        let y = join((xf, f.dist(t, v)), (xb, bw.dist(d - t, v)));
-                        if best.is_none_or(|b0| y < b0.0) {
-                            best = Some((y, t, v));
+            (h..=d.min(h + longest - 1)).any(|t| (0..g.n).any(|v| (self.f.at(t, v) + self.bw.at(d - t, v)).is_finite()))
+        })
+    }
+
+    /// Per duration of the range, the walk of the best split by `score(realism, distance)` (the
+    /// smallest (t, v) on ties) and its score; `None` where no walk lasts that long.
+    fn pick(&self, score: impl Fn(f64, f64) -> f64 + Sync) -> Vec<Option<(f64, Vec<u32>)>> {
+        let (g, (_, b), (lo, hi), h) = (self.g, self.ends, self.range, self.h);
+        let (f, bw, (mu, mub)) = (&self.f, &self.bw, self.mu);
+        let longest = g.longest_edge();
+        // The realism of a state's walk is its cost minus mu times its distance.
+        let judge = |cost: f64, dist: f64| score(cost - mu * dist, dist);
+        let join = |(fc, fd): (f64, f64), (bc, bd): (f64, f64)| score(fc - mu * fd + bc - mub * bd, fd + bd);
+        // Per duration: (score, t, v) of the best split, smallest (t, v) on ties.
+        let best: Vec<Option<(f64, usize, usize)>> = (0..=hi)
+            .into_par_iter()
+            .map(|d| {
+                if d < lo.max(1) {
+                    return None;
+                }
+                if d < h {
+                    let x = f.at(d, b as usize);
+                    return x.is_finite().then(|| (judge(x, f.dist(d, b as usize)), d, b as usize));
+                }
+                let mut best: Option<(f64, usize, usize)> = None;
+                for t in h..=d.min(h + longest - 1) {
+                    for v in 0..g.n {
+                        let (xf, xb) = (f.at(t, v), bw.at(d - t, v));
+                        if (xf + xb).is_finite() {
+                            let y = join((xf, f.dist(t, v)), (xb, bw.dist(d - t, v)));
+                            if best.is_none_or(|b0| y < b0.0) {
+                                best = Some((y, t, v));
+                            }
                         }
                     }
                 }
-            }
-            best
-        })
-        .collect();
-    best.into_iter()
-        .enumerate()
-        .map(|(d, b0)| {
-            let (y, t, v) = b0?;
-            let mut nodes = trace(&g.forward, &ec, &f, h, t, v);
-            nodes.reverse();
-            if d > t {
-                let back = trace(&g.backward, &ecb, &bw, back_times, d - t, v);
-                nodes.extend_from_slice(&back[1..]);
-            }
-            Some((y, nodes))
-        })
-        .collect()
+                best
+            })
+            .collect();
+        best.into_iter()
+            .enumerate()
+            .map(|(d, b0)| {
+                let (y, t, v) = b0?;
+                let mut nodes = trace(&g.forward, &self.ec, f, h, t, v);
+                nodes.reverse();
+                if d > t {
+                    let back = trace(&g.backward, &self.ecb, bw, self.back_times, d - t, v);
+                    nodes.extend_from_slice(&back[1..]);
+                }
+                Some((y, nodes))
+            })
+            .collect()
+    }
 }
 
 /// Bisection steps on the share of the distance term in the edge cost.
@@ -645,11 +711,15 @@ impl TimedGraph {
     /// multiplier mu = 0); if none meets the target, the walks of least (or greatest) distance
     /// of every duration (realism ignored), which bound what any walk can travel: if even they
     /// miss at every duration within the tolerance, the target is unreachable and the bounds
-    /// say why. Otherwise the edge cost `(1 - s) weight + s mu_scale length` is bisected on `s`
-    /// (from the realism optimum at 0 to the distance extreme at 1, the bracket holding the
-    /// target by construction), each duration's walk chosen among its splits by realism plus
-    /// distance error (errors beyond the tolerance counted a thousand times over), until a walk
-    /// within the tolerance is found.
+    /// say why. Otherwise a depth-first search steered by those bounds ([`steered`]) looks for
+    /// a walk within the tolerance, duration by duration from the closest: it finds one when
+    /// one exists, and when it has ruled out every walk of every duration within the time
+    /// tolerance, the target is unreachable (granularity: no combination of the graph's walks
+    /// lands within the tolerance). Only when it runs out of budget does the older search run:
+    /// the edge cost `(1 - s) weight + s mu_scale length` bisected on `s` (from the realism
+    /// optimum at 0 to the distance extreme at 1), each duration's walk chosen among its splits
+    /// by realism plus distance error (errors beyond the tolerance counted a thousand times
+    /// over), until a walk within the tolerance is found.
     pub fn walk_within(
         &self,
         a: u32,
@@ -659,22 +729,82 @@ impl TimedGraph {
         (tol_d, tol_t): (f64, usize),
         longest_edge: usize,
     ) -> Result<DistanceTimeWalk> {
+        let mut answers = self.walk_within_each(a, b, frames, &[(distance, tol_d)], scales, tol_t, longest_edge)?;
+        Ok(answers.remove(0))
+    }
+
+    /// [`Self::walk_within`] for several targets of the same ends and duration, each a distance
+    /// and its tolerance: the searches that do not depend on the distance (the realism optimum
+    /// of every duration, the bounds on to the end frame) run once for all of them, and each
+    /// answer is the one [`Self::walk_within`] gives for its target alone.
+    #[allow(clippy::too_many_arguments)] // walk_within's arguments, with the distances as a list
+    pub fn walk_within_each(
+        &self,
+        a: u32,
+        b: u32,
+        frames: usize,
+        targets: &[(f64, f64)],
+        scales: (f64, f64),
+        tol_t: usize,
+        longest_edge: usize,
+    ) -> Result<Vec<DistanceTimeWalk>> {
         self.check(a, b)?;
-        if !(distance.is_finite() && distance >= 0.0) {
-            return Err(Error::Parameter { name: "distance", value: distance, expected: "a finite distance >= 0" });
+        for &(distance, _) in targets {
+            if !(distance.is_finite() && distance >= 0.0) {
+                return Err(Error::Parameter { name: "distance", value: distance, expected: "a finite distance >= 0" });
+            }
         }
         for (name, value) in [("distance scale", scales.0), ("time scale", scales.1)] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(Error::Parameter { name, value, expected: "a finite number > 0" });
             }
         }
-        if !(tol_d.is_finite() && tol_d >= 0.0) {
-            return Err(Error::Parameter {
-                name: "distance tolerance",
-                value: tol_d,
-                expected: "a finite distance >= 0",
-            });
+        for &(_, tol_d) in targets {
+            if !(tol_d.is_finite() && tol_d >= 0.0) {
+                return Err(Error::Parameter {
+                    name: "distance tolerance",
+                    value: tol_d,
+                    expected: "a finite distance >= 0",
+                });
+            }
         }
+        let frames = frames.max(1);
+        // mu = 0 over durations near the target first (a time error of w_t^-1 frames costs as
+        // much as one unit of realism), widened when no walk has them.
+        // The widest range is the one of `walk_with_duration`, so both explain it alike.
+        let widest = (2 * frames).max(frames + 2 * longest_edge);
+        let mut tol = (frames / 20).max(3).max(tol_t);
+        let (lo, hi, zero) = loop {
+            let (lo, hi) = (frames.saturating_sub(tol).max(1), (frames + tol).min(widest));
+            let tables = JoinTables::new(self, (a, b), (lo, hi), [(1.0, 0.0); 2]);
+            if tables.any() {
+                break (lo, hi, tables);
+            }
+            if lo == 1 && hi == widest {
+                return Err(self.no_walk((a, b), (lo, hi), frames, longest_edge));
+            }
+            tol *= 3;
+        };
+        let to_end = std::sync::OnceLock::new();
+        targets
+            .par_iter()
+            .map(|&(distance, tol_d)| {
+                let target = Target { distance, frames, tol_d, tol_t, scales };
+                Ok(self.within_target(&target, (lo, hi), &zero, &to_end))
+            })
+            .collect()
+    }
+
+    /// The rest of [`Self::walk_within`] for one target, from the realism optimum's tables
+    /// `zero` over the durations `lo..=hi` and the bounds on to the end frame (made on first use).
+    fn within_target(
+        &self,
+        &Target { distance, frames, tol_d, tol_t, scales }: &Target,
+        (lo, hi): (usize, usize),
+        zero: &JoinTables,
+        to_end: &std::sync::OnceLock<ToEnd>,
+    ) -> DistanceTimeWalk {
+        let (a, b) = zero.ends;
         let frames = frames.max(1);
         let (wd, wt) = (1.0 / scales.0, 1.0 / scales.1);
         let total =
@@ -715,27 +845,11 @@ impl TimedGraph {
             }
             (any, steer)
         };
-        // mu = 0 over durations near the target first (a time error of w_t^-1 frames costs as
-        // much as one unit of realism), widened when no walk has them.
-        // The widest range is the one of `walk_with_duration`, so both explain it alike.
-        let widest = (2 * frames).max(frames + 2 * longest_edge);
-        let mut tol = (frames / 20).max(3).max(tol_t);
-        let (lo, hi, steer) = loop {
-            let (lo, hi) = (frames.saturating_sub(tol).max(1), (frames + tol).min(widest));
-            let found = cheapest_by_duration(self, (a, b), (lo, hi), (1.0, 0.0), score);
-            let (any, steer) = consider(&found, &mut best, &mut best_met);
-            if any {
-                break (lo, hi, steer);
-            }
-            if lo == 1 && hi == widest {
-                return Err(self.no_walk((a, b), (lo, hi), frames, longest_edge));
-            }
-            tol *= 3;
-        };
+        let (_, steer) = consider(&zero.pick(score), &mut best, &mut best_met);
         let done = |best_met: Option<Scored>, best: Option<Scored>, why: Option<Unreachable>| {
             let met = best_met.is_some();
             let (total_cost, walk) = best_met.or(best).expect("mu = 0 found a walk");
-            Ok(DistanceTimeWalk { walk, total_cost, met, unreachable: if met { None } else { why } })
+            DistanceTimeWalk { walk, total_cost, met, unreachable: if met { None } else { why } }
         };
         // No walk lasts within the time tolerance: the durations say why.
         let Some(d0) = steer else {
@@ -745,22 +859,53 @@ impl TimedGraph {
         if best_met.is_some() {
             return done(best_met, best, None);
         }
+        // Per (node, remaining time) state, the least and greatest distance on to the end frame
+        // and the least realism cost, over the durations searched.
+        let to_end = to_end.get_or_init(|| ToEnd::new(self, b, hi + 1));
         // The distance extreme on the side of the target: the least distance of every duration
         // when the cheapest walk travels too far, the greatest when too little.
         let sign = if d0 > distance { 1.0 } else { -1.0 };
-        let extreme = cheapest_by_duration(self, (a, b), (lo, hi), (0.0, sign), |_, l| sign * l);
+        let extreme: Vec<Option<(f64, Vec<u32>)>> =
+            to_end.extreme_walks(self, sign, a as usize, lo..=hi).into_iter().map(|w| w.map(|w| (0.0, w))).collect();
         consider(&extreme, &mut best, &mut best_met);
         if best_met.is_none() {
-            let bound: Vec<(usize, f64)> = extreme
-                .iter()
-                .enumerate()
-                .filter(|(d, _)| in_window(*d))
-                .filter_map(|(d, x)| x.as_ref().map(|x| (d, self.measure(&x.1).distance)))
+            let bound: Vec<(usize, f64)> = (lo..=hi)
+                .filter(|&d| in_window(d))
+                .filter_map(|d| to_end.span(d, a as usize).map(|(near, far)| (d, if sign > 0.0 { near } else { far })))
                 .collect();
             let misses = |x: f64| if sign > 0.0 { x > distance + tol_d } else { x < distance - tol_d };
             if !bound.is_empty() && bound.iter().all(|&(_, x)| misses(x)) {
                 let why = self.distance_reason((a, b), (distance, frames), tol_d, sign, &bound);
                 return done(best_met, best, Some(why));
+            }
+        }
+        // The steered search, duration by duration from the closest to the target: a walk within
+        // the tolerance when one exists (and the budget allows); when every duration is
+        // exhausted, none does, and no whole number of repetitions lands within the tolerance.
+        if best_met.is_none() {
+            let mut durations: Vec<usize> = (lo..=hi).filter(|&d| in_window(d)).collect();
+            durations.sort_by_key(|&d| (d.abs_diff(frames), d));
+            let mut proved = true;
+            for d in durations {
+                match steered_walk(self, to_end, (a, b), d, (distance - tol_d, distance + tol_d), STEERED_BUDGET) {
+                    Steered::Found(walk) => {
+                        let m = self.measure(&walk);
+                        if within(&m) {
+                            let c = total(&m);
+                            best_met = Some((c, m.clone()));
+                            if best.as_ref().is_none_or(|(b0, _)| c < *b0) {
+                                best = Some((c, m));
+                            }
+                            break;
+                        }
+                        proved = false;
+                    }
+                    Steered::GaveUp => proved = false,
+                    Steered::Exhausted => {}
+                }
+            }
+            if best_met.is_none() && proved {
+                return done(best_met, best, Some(Unreachable::Granularity));
             }
         }
         // Bisect s in [0, 1]: the distance of each duration's Lagrangian walk falls (sign > 0)
@@ -1178,6 +1323,46 @@ mod tests {
         assert_eq!((r.walk.walk.clone(), r.met, r.unreachable.clone()), (vec![0, 2, 1], true, None));
         let (w, _) = g.walk_with_distance_and_time(0, 1, 10.0, 20, (0.3, 10.0), 20).unwrap();
         assert_eq!((w.frames, w.distance), (20, 10.0));
+    }
+
+    /// Three stages in a row, each a choice of three two-edge routes of 10 frames: staying (0 m,
+    /// no cost), a short step (1 m, cost 10) or a long one (4 m, cost 10.1). The short step is
+    /// never the cheapest under any trade-off of cost and distance (it lies above the line from
+    /// staying to the long step), so walks built from Lagrangian halves travel 0, 4, 8 or 12 m
+    /// and miss 2 m, which two short steps meet; 7 m no choice of three routes gives.
+    fn three_stages() -> TimedGraph {
+        let e = |from, to, weight: f64, length: f64| TimedEdge { from, to, frames: 5, weight, length };
+        let mut edges = Vec::new();
+        for stage in 0..3u32 {
+            let (start, end) = (4 * stage, 4 * stage + 4);
+            for (k, (weight, length)) in [(0.0, 0.0), (10.0, 1.0), (10.1, 4.0)].into_iter().enumerate() {
+                let mid = start + 1 + k as u32;
+                edges.push(e(start, mid, weight / 2.0, length / 2.0));
+                edges.push(e(mid, end, weight / 2.0, length / 2.0));
+            }
+        }
+        TimedGraph::from_edges(13, edges, FrameIndex::new([13]))
+    }
+
+    /// A distance only walks off every trade-off's optimum travel is met (it was missed while
+    /// reachable), and one no walk of the duration travels is proved unreachable.
+    #[test]
+    fn distances_between_the_trade_off_optima_are_met_and_gaps_proved() {
+        let g = three_stages();
+        let r = g.walk_within(0, 12, (2.0, 30), (0.3, 10.0), (0.02, 0), g.longest_edge()).unwrap();
+        assert!(r.met, "{r:?}");
+        assert_eq!((r.walk.frames, r.unreachable.clone()), (30, None));
+        assert!((r.walk.distance - 2.0).abs() < 1e-9, "{r:?}");
+        // Two short steps and a stay, the cheapest such walk first in realism order.
+        assert!((r.walk.cost - 20.0).abs() < 1e-9, "{r:?}");
+        for d in [1.0, 3.0, 5.0, 6.0, 9.0] {
+            let r = g.walk_within(0, 12, (d, 30), (0.3, 10.0), (0.01 * d, 0), g.longest_edge()).unwrap();
+            assert!(r.met && (r.walk.distance - d).abs() < 1e-9, "{d} m: {r:?}");
+        }
+        for d in [7.0, 10.0, 11.0] {
+            let r = g.walk_within(0, 12, (d, 30), (0.3, 10.0), (0.01 * d, 0), g.longest_edge()).unwrap();
+            assert_eq!((r.met, r.unreachable), (false, Some(Unreachable::Granularity)), "{d} m");
+        }
     }
 
     /// Each reason of an unreachable target, on the line graph (durations 2, 3, 10, 11, ... and

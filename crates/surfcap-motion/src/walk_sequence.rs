@@ -90,9 +90,11 @@ impl WalkModel {
     /// `tracked`: the vertices whose centre the model follows (all vertices when `None`). Inside
     /// a transition the tracked centre is the lambda-mix of the two moved frames' tracked
     /// centres: exact for the whole mesh (the non-linear interpolation keeps the mixed centre of
-    /// mass), a close approximation for a vertex subset.
+    /// mass), a close approximation for a vertex subset. `loops`: the subject's looping clips
+    /// ([`crate::clip_loops::clip_loops`]), whose wrap edges the graph may hold.
     pub fn new(
         subject: &Subject,
+        loops: &[crate::clip_loops::ClipLoop],
         graph: &Graph,
         table: &TransitionTable,
         d: &[f64],
@@ -113,7 +115,7 @@ impl WalkModel {
         let up = subject.up_axis;
         let placement = subject_travel(subject).placement;
         // Wrap edges of looping clips that the graph holds.
-        let wraps: HashMap<u32, (u32, PlaneMotion)> = crate::clip_loops::clip_loops(subject)
+        let wraps: HashMap<u32, (u32, PlaneMotion)> = loops
             .iter()
             .filter(|l| graph.find(l.last as usize, l.first as usize).is_some())
             .map(|l| (l.last, (l.first, crate::clip_loops::wrap_placement(subject, l))))
@@ -528,6 +530,7 @@ pub fn walk_sequence_with(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::clip_loops::clip_loops;
     use crate::edge_weights::{Alpha, edge_weights};
     use crate::essential_graph::essential_graph;
     use crate::transition_table::{TableParams, transition_table};
@@ -543,7 +546,7 @@ pub(crate) mod tests {
         let table = transition_table(&d.values, s.frame_index(), &p, &NoProgress).unwrap();
         let w = edge_weights(&table, s.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
         let g = essential_graph(&w, &NoProgress).graph;
-        let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
+        let model = WalkModel::new(&s, &clip_loops(&s), &g, &table, &d.values, p.slope, None);
         (s, g, model, d.values)
     }
 
@@ -600,7 +603,7 @@ pub(crate) mod tests {
         let table = transition_table(&dh, h.frame_index(), &p, &NoProgress).unwrap();
         let w = edge_weights(&table, h.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
         let gh = essential_graph(&w, &NoProgress).graph;
-        let mh = WalkModel::new(&h, &gh, &table, &dh, p.slope, None);
+        let mh = WalkModel::new(&h, &clip_loops(&h), &gh, &table, &dh, p.slope, None);
         assert_eq!(mh.placement(), Placement::Captured);
         let (u, v) = gh
             .edges()
@@ -626,7 +629,7 @@ pub(crate) mod tests {
     /// model's cache rows; a path three clips long is followed through the wraps.
     #[test]
     fn looping_clips_play_their_wrap_as_a_step_that_carries_the_travel_on() {
-        use crate::clip_loops::{add_wrap_edges, clip_loops};
+        use crate::clip_loops::add_wrap_edges;
         use surfcap_mesh::{Sequence, Topology, Units, UpAxis};
         let clip = |phase: f64| -> Vec<f32> {
             (0..8)
@@ -648,7 +651,7 @@ pub(crate) mod tests {
         let mut w = edge_weights(&table, s.frame_index(), Alpha::new(0.05).unwrap()).unwrap();
         add_wrap_edges(&mut w, &loops);
         let g = essential_graph(&w, &NoProgress).graph;
-        let model = WalkModel::new(&s, &g, &table, &d.values, p.slope, None);
+        let model = WalkModel::new(&s, &clip_loops(&s), &g, &table, &d.values, p.slope, None);
         assert_eq!(model.wraps(), vec![(7, 0), (15, 8)]);
         assert!(
             matches!(model.next(7), Some((0, Step::Wrap(_)))) && matches!(model.next(3), Some((4, Step::Original)))

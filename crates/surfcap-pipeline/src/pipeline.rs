@@ -9,6 +9,7 @@ use surfcap_geometry::distance_matrix::{DistanceParams, distance_matrix};
 use surfcap_mesh::derived_cache::{DerivedCache, subject_hash};
 use surfcap_mesh::npy::NpyArray;
 use surfcap_mesh::{Progress, Subject};
+use surfcap_motion::clip_loops::{ClipLoop, clip_loops, segment_bounds_for_clips};
 use surfcap_motion::edge_weights::{Alpha, EdgeWeights, edge_weights};
 use surfcap_motion::essential_graph::essential_graph;
 use surfcap_motion::graph::{Edge, Graph};
@@ -105,6 +106,8 @@ pub struct Pipeline {
     progress: Box<dyn Progress + Send>,
     chain_distance: DistanceParams,
     hash: OnceLock<blake3::Hash>,
+    /// The subject's looping clips, detected once.
+    loops: OnceLock<Vec<ClipLoop>>,
     distances: Memo<DistanceKey, PoseDistances>,
     tables: Memo<TableKey, TransitionTable>,
     /// The edge weights of the last (table, alpha) asked for: the essential and the motion graph
@@ -122,6 +125,7 @@ impl Pipeline {
             progress,
             chain_distance: DistanceParams::default(),
             hash: OnceLock::new(),
+            loops: OnceLock::new(),
             distances: Memo::new(),
             tables: Memo::new(),
             weights: Mutex::new(None),
@@ -138,6 +142,19 @@ impl Pipeline {
 
     pub fn subject(&self) -> &Subject {
         &self.subject
+    }
+
+    /// The subject's looping clips ([`surfcap_motion::clip_loops`]), detected on first use and
+    /// kept: the wrap edges, the walk model and every front end's defaults share them.
+    pub fn loops(&self) -> &[ClipLoop] {
+        self.loops.get_or_init(|| clip_loops(&self.subject))
+    }
+
+    /// Default segment bounds (shortest, longest window, frames) for the subject: the thesis's
+    /// third of a second to two seconds, the longest at most half the shortest looping clip
+    /// ([`segment_bounds_for_clips`]).
+    pub fn segment_bounds(&self) -> (usize, usize) {
+        segment_bounds_for_clips(self.subject.fps, self.subject.frame_index(), self.loops())
     }
 
     /// Gives the subject back (the products are dropped).
@@ -275,7 +292,7 @@ impl Pipeline {
         }
         let mut w = edge_weights(&self.table(p)?.value, self.subject.frame_index(), alpha)?;
         // Looping clips play their last frame into their start as a successive step.
-        surfcap_motion::clip_loops::add_wrap_edges(&mut w, &surfcap_motion::clip_loops::clip_loops(&self.subject));
+        surfcap_motion::clip_loops::add_wrap_edges(&mut w, self.loops());
         let w = Arc::new(w);
         *self.weights.lock().expect("weights lock") = Some((key, alpha, w.clone()));
         Ok(w)
@@ -362,11 +379,12 @@ impl Pipeline {
                     let graph = self.graph(p)?;
                     let table = self.table(&p.table)?;
                     let d = self.chain_distances()?;
-                    let rows = WalkModel::new(s, &graph.value, &table.value, &d.value.values, slope, tracked)
-                        .tracks_to_rows()
-                        .iter()
-                        .map(|&x| x as f32)
-                        .collect::<Vec<f32>>();
+                    let rows =
+                        WalkModel::new(s, self.loops(), &graph.value, &table.value, &d.value.values, slope, tracked)
+                            .tracks_to_rows()
+                            .iter()
+                            .map(|&x| x as f32)
+                            .collect::<Vec<f32>>();
                     Ok(NpyArray { shape: vec![rows.len() / 3, 3], data: rows })
                 },
                 |a: NpyArray<f32>| {

@@ -16,6 +16,8 @@
 //!   5); self-transitions jump back; the K best per connection as an opt-in extension;
 //! - [`surface_motion_graph`]: the two-level graph (3.3), sequences split at transitions and key
 //!   frames;
+//! - [`self_transition_choice`]: self-transitions chosen among the loops a query may play,
+//!   spanning the sequence's cross transitions and key frames (an extension of eq. 5);
 //! - [`loop_exclusion`]: the loops that may pad time (no shorter than a minimum length, no
 //!   less varied than a pose-variation floor), the others reported as excluded loops;
 //! - [`path_optimisation`]: walks and elementary loops by depth-first search, planned once per key
@@ -29,6 +31,7 @@ pub mod error;
 pub mod loop_exclusion;
 pub mod motion_frames;
 pub mod path_optimisation;
+pub mod self_transition_choice;
 pub mod shape_histogram;
 pub mod shape_similarity;
 pub mod surface_motion_graph;

@@ -151,6 +151,24 @@ impl<'a> LoopFilter<'a> {
         if step > 0.0 { range / step } else { f64::INFINITY }
     }
 
+    /// The pose variation of every run of consecutive frames of sequence `k` (the frames a
+    /// self-transition's loop plays: `first ..= last` within the sequence), as a table read in
+    /// constant time ([`SpanVariation::of`]): the same measure as [`LoopFilter::variation`],
+    /// the largest dissimilarity of a run built from those of its two shorter runs.
+    pub fn span_variation(&self, k: usize) -> SpanVariation {
+        let s = self.sequences.get(k).cloned().unwrap_or(0..0);
+        let (len, n) = (s.len(), self.frames);
+        let mut range = vec![0.0; len * len];
+        for d in 1..len {
+            for a in 0..len - d {
+                let b = a + d;
+                let here = self.similarity[(s.start + a) * n + s.start + b];
+                range[a * len + b] = here.max(range[(a + 1) * len + b]).max(range[a * len + b - 1]);
+            }
+        }
+        SpanVariation { len, range, step: self.steps.get(k).copied().unwrap_or(0.0), rule: self.rule }
+    }
+
     /// Why `cycle` may not pad time, or `None` when it may.
     pub fn judge(&self, g: &SurfaceMotionGraph, cycle: &[usize]) -> Option<ExcludedLoop> {
         let frames = loop_frames(g, cycle);
@@ -176,6 +194,34 @@ impl<'a> LoopFilter<'a> {
             }
         }
         (kept, excluded)
+    }
+}
+
+/// The pose variation of the runs of consecutive frames of one sequence
+/// ([`LoopFilter::span_variation`]).
+pub struct SpanVariation {
+    len: usize,
+    /// Largest dissimilarity among frames `a ..= b`, at `a * len + b`.
+    range: Vec<f64>,
+    step: f64,
+    rule: LoopRule,
+}
+
+impl SpanVariation {
+    /// The pose variation of frames `first ..= last` (within the sequence): infinite when the
+    /// sequence never changes, as [`LoopFilter::variation`] has it; 0 for a run outside it.
+    pub fn of(&self, first: usize, last: usize) -> f64 {
+        if first > last || last >= self.len {
+            return 0.0;
+        }
+        let r = self.range[first * self.len + last];
+        if self.step > 0.0 { r / self.step } else { f64::INFINITY }
+    }
+
+    /// Whether the loop playing frames `first ..= last` may pad time: the rule's minimum
+    /// length and pose-variation floor, as [`LoopFilter::judge`] applies them.
+    pub fn admits(&self, first: usize, last: usize) -> bool {
+        first <= last && last - first + 1 >= self.rule.min_frames && self.of(first, last) >= self.rule.variation_floor
     }
 }
 
@@ -257,6 +303,23 @@ mod tests {
         assert!(f.judge(&g, &[1, 3]).is_none());
         let (kept, excluded) = f.partition(&g, vec![vec![1, 3]]);
         assert_eq!((kept.len(), excluded.len()), (1, 0));
+    }
+
+    /// The table of runs gives every run's variation as the loop filter measures the frames.
+    #[test]
+    fn span_variation_agrees_with_the_filter() {
+        let (_, s, seqs) = case(30, 8..20, 6, 4);
+        let f = LoopFilter::new(LoopRule::default(), &s, &seqs).unwrap();
+        let t = f.span_variation(0);
+        for first in 0..30 {
+            for last in first..30 {
+                let played: Vec<usize> = (first..=last).collect();
+                assert!((t.of(first, last) - f.variation(&played)).abs() < 1e-12, "{first}..={last}");
+                let long = last - first + 1 >= 10;
+                assert_eq!(t.admits(first, last), long && f.variation(&played) >= 1.0, "{first}..={last}");
+            }
+        }
+        assert_eq!((t.of(5, 4), t.of(3, 30)), (0.0, 0.0));
     }
 
     #[test]

@@ -9,6 +9,12 @@
 //! 3. the transitions' ends and the key frames become nodes, splitting the sequence edges into
 //!    sub-sequences, and the transitions are inserted as edges.
 //!
+//! [`build_graph_choosing`] departs from step 2 for self-transitions only (`X -> X`): each is
+//! chosen among the loops a query may play, spanning the sequence's cross transitions and key
+//! frames ([`crate::self_transition_choice`]), after the cross transitions (eq. 5 as printed).
+//! Eq. 5 alone picks a clip's stillest 3 frames as its loop, which no query may repeat, and may
+//! put the loop where no path between the key frames passes.
+//!
 //! What each edge contributes to a path (section 4.1), made explicit:
 //! - a sub-sequence from frame `p` to frame `q` of one sequence adds the frames `p+1 ... q`
 //!   (`q - p` frames), the distance travelled between them (the centroid projected on the ground,
@@ -23,6 +29,8 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 use crate::error::{Error, Result};
+use crate::loop_exclusion::LoopFilter;
+use crate::self_transition_choice::{Span, spanning_self_transitions};
 use crate::temporal_shape_similarity::{Transition, best_transitions};
 
 /// What one lower-level edge is.
@@ -98,8 +106,32 @@ pub struct GraphInput<'a> {
     pub separation: usize,
 }
 
-/// Builds the lower-level graph (see the module documentation).
+/// How [`build_graph_choosing`] chooses self-transitions: among the loops `filter` lets pad
+/// time, spanning the key frames of `key_pairs` (global `(start, end)` frames) and the cross
+/// transitions.
+pub struct LoopChoice<'a> {
+    pub filter: &'a LoopFilter<'a>,
+    pub key_pairs: &'a [(usize, usize)],
+    /// Self-transitions per sequence (at least 1): the spanning one, then the cheapest
+    /// admissible loops inside it ([`crate::self_transition_choice`]); `per_connection` then
+    /// counts the cross transitions only.
+    pub per_sequence: usize,
+}
+
+/// Builds the lower-level graph as the paper does (see the module documentation).
 pub fn build_graph(input: &GraphInput<'_>) -> Result<SurfaceMotionGraph> {
+    build(input, None)
+}
+
+/// Builds the lower-level graph with the self-transitions chosen among the loops a query may
+/// play, spanning the sequence's cross transitions and key frames (an extension of eq. 5, see
+/// the module documentation and [`crate::self_transition_choice`]); the cross transitions are
+/// eq. 5's.
+pub fn build_graph_choosing(input: &GraphInput<'_>, loops: &LoopChoice<'_>) -> Result<SurfaceMotionGraph> {
+    build(input, Some(loops))
+}
+
+fn build(input: &GraphInput<'_>, loops: Option<&LoopChoice<'_>>) -> Result<SurfaceMotionGraph> {
     let frames = input.ground.len();
     let mut end = 0;
     for (k, s) in input.sequences.iter().enumerate() {
@@ -121,21 +153,47 @@ pub fn build_graph(input: &GraphInput<'_>) -> Result<SurfaceMotionGraph> {
     let mut transitions = Vec::new();
     let mut missing = Vec::new();
     for &(x, y) in input.connections {
-        let (Some(sx), Some(sy)) = (input.sequences.get(x), input.sequences.get(y)) else {
+        if input.sequences.get(x).is_none() || input.sequences.get(y).is_none() {
             return Err(Error::Invalid(format!(
                 "connection {x} -> {y}: expected sequences below {}",
                 input.sequences.len()
             )));
+        }
+    }
+    // With a loop choice, the cross transitions first: the self-transitions span them.
+    let order: Vec<(usize, usize)> = match loops {
+        None => input.connections.to_vec(),
+        Some(_) => {
+            let (same, cross): (Vec<_>, Vec<_>) = input.connections.iter().partition(|(x, y)| x == y);
+            cross.into_iter().chain(same).collect()
+        }
+    };
+    for (x, y) in order {
+        let (sx, sy) = (input.sequences[x].clone(), input.sequences[y].clone());
+        let found = match loops {
+            Some(choice) if x == y => {
+                let span = span_of(x, &sx, &transitions, choice.key_pairs);
+                spanning_self_transitions(
+                    input.similarity,
+                    frames,
+                    sx.clone(),
+                    input.lengths.clone(),
+                    &choice.filter.span_variation(x),
+                    &span,
+                    choice.per_sequence,
+                    input.separation,
+                )?
+            }
+            _ => best_transitions(
+                input.similarity,
+                frames,
+                sx.clone(),
+                sy.clone(),
+                input.lengths.clone(),
+                input.per_connection,
+                input.separation,
+            )?,
         };
-        let found = best_transitions(
-            input.similarity,
-            frames,
-            sx.clone(),
-            sy.clone(),
-            input.lengths.clone(),
-            input.per_connection,
-            input.separation,
-        )?;
         if found.is_empty() {
             missing.push((x, y));
         }
@@ -144,6 +202,12 @@ pub fn build_graph(input: &GraphInput<'_>) -> Result<SurfaceMotionGraph> {
             nodes.push(sy.start + t.first_y);
             transitions.push((x, y, t));
         }
+    }
+    // Reported in the order of the connections given.
+    if loops.is_some() {
+        let rank = |x: usize, y: usize| input.connections.iter().position(|&c| c == (x, y));
+        transitions.sort_by_key(|&(x, y, _)| rank(x, y));
+        missing.sort_by_key(|&(x, y)| rank(x, y));
     }
     nodes.sort_unstable();
     nodes.dedup();
@@ -178,6 +242,31 @@ pub fn build_graph(input: &GraphInput<'_>) -> Result<SurfaceMotionGraph> {
         });
     }
     Ok(SurfaceMotionGraph { nodes, edges, transitions, missing })
+}
+
+/// What the self-transition of sequence `k` (global frames `seq`) must span, within the
+/// sequence: the first frames played after the cross transitions into it and the start key
+/// frames in it (entries), the last frames played before the cross transitions out of it and
+/// the end key frames in it (exits).
+fn span_of(k: usize, seq: &Range<usize>, cross: &[(usize, usize, Transition)], key_pairs: &[(usize, usize)]) -> Span {
+    let mut span = Span::default();
+    for &(x, y, t) in cross.iter().filter(|(x, y, _)| x != y) {
+        if y == k {
+            span.entries.push(t.first_y);
+        }
+        if x == k {
+            span.exits.push(t.last_x);
+        }
+    }
+    for &(a, b) in key_pairs {
+        if seq.contains(&a) {
+            span.entries.push(a - seq.start);
+        }
+        if seq.contains(&b) {
+            span.exits.push(b - seq.start);
+        }
+    }
+    span
 }
 
 #[cfg(test)]

@@ -284,10 +284,8 @@ pub fn synthesize_path(
         crate::travel_check::require_travel(s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
     }
     let start = request.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
-    let shortest_loop = surfcap_motion::clip_loops::clip_loops(s)
-        .iter()
-        .map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps)
-        .min_by(f64::total_cmp);
+    let shortest_loop =
+        pipe.loops().iter().map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps).min_by(f64::total_cmp);
     let defaults = PathSearch::for_clips(s.fps, shortest_loop);
     let search = PathSearch {
         window: request.window.unwrap_or(defaults.window),

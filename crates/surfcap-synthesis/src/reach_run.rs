@@ -8,7 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::PlaneMotion;
 use surfcap_mesh::Progress;
-use surfcap_motion::timed_walk::{ExcludedLoop, LoopRule, TimedGraph, Unreachable, search_table_bytes};
+use surfcap_motion::timed_walk::{ExcludedLoop, LoopRule, TimedGraph, Unreachable, distance_search_table_bytes};
 use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 use surfcap_pipeline::{GraphParams, Pipeline};
 
@@ -229,7 +229,7 @@ pub fn synthesize_reach(
             s.fps
         ),
     };
-    let search_bytes = search_table_bytes(s.n_frames(), frames);
+    let search_bytes = distance_search_table_bytes(s.n_frames(), frames);
     let what = format!("--time {} at {} fps", request.time_text(), s.fps);
     limits.check(&Request { what, frames: frames as f64, subject: s, search_bytes, format: out.format() })?;
     if request.distance > 0.0 {

@@ -38,6 +38,8 @@ pub struct VariationReport {
     pub repeats: usize,
     pub played_as_variants: usize,
     pub sequences: Vec<SequenceVariation>,
+    /// Per variant shown, what the foot-skate clean-up did (its sliding before and after).
+    pub foot_skate_cleanup: Vec<crate::walk_variants::VariantCleanup>,
 }
 
 /// What every synthesis report says about the played walk (its fields sit in the report
@@ -94,9 +96,12 @@ pub fn play_and_write(
 ) -> Result<Played> {
     let s = prep.subject();
     let tracked = prep.tracked.as_deref();
-    let variants = match &prep.variation {
-        Some(v) => Some(variants_for_walk(prep, v, walk, progress)?),
-        None => None,
+    let (variants, cleanups) = match &prep.variation {
+        Some(v) => {
+            let (fv, c) = variants_for_walk(prep, v, walk, progress)?;
+            (Some(fv), c)
+        }
+        None => (None, Vec::new()),
     };
     let played = match &variants {
         Some(v) => play_walk_with(&prep.pipe, &prep.params, tracked, walk, start, name, v)?,
@@ -129,6 +134,7 @@ pub fn play_and_write(
             repeats: repeats.repeats,
             played_as_variants: repeats.played_as_variants,
             sequences: repeats.sequences.clone(),
+            foot_skate_cleanup: cleanups.clone(),
         }
     });
     let report = WalkReport {

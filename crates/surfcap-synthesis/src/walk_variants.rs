@@ -5,11 +5,13 @@
 
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
 use surfcap_mesh::Progress;
 use surfcap_pipeline::frame_variants::FrameVariants;
 use surfcap_pipeline::walk_playback::walk_passes;
 use surfcap_variation::VariationModel;
-use surfcap_variation::variation_sampling::{SamplingOptions, sample_variants, variant_on_source_path};
+use surfcap_variation::foot_skate_cleanup::CleanupReport;
+use surfcap_variation::variation_sampling::{SamplingOptions, sample_variants, variants_on_source_path};
 
 use crate::error::{Context, Result, refuse};
 use crate::prepared::Prepared;
@@ -43,24 +45,35 @@ impl Variation {
 /// bounded (about 5 s a variant on 2 cores for a 117-frame walk of 1,500 vertices).
 pub const MAX_VARIANTS_PER_SEQUENCE: usize = 5;
 
+/// What the foot-skate clean-up did to one variant shown on a walk.
+#[derive(Debug, Clone, Serialize)]
+pub struct VariantCleanup {
+    pub sequence: String,
+    pub variant: usize,
+    #[serde(flatten)]
+    pub report: CleanupReport,
+}
+
 /// The learned variants shown on a walk's repeated runs: for each sequence of the subject the
 /// walk plays more than once, as many variants as its largest pass ([`walk_passes`]), at most
 /// [`MAX_VARIANTS_PER_SEQUENCE`], sampled from the model (thesis 6.6) with the seed and put on
-/// the sequence's own path (`variant_on_source_path`: only the body's poses vary, so the walk's
-/// placement, which the search solved, holds). A sequence the model has not learnt keeps its
-/// captured frames, with a note.
+/// the sequence's own path (`variants_on_source_path`: only the body's poses vary, so the walk's
+/// placement, which the search solved, holds), their planted feet pinned by the foot-skate
+/// clean-up as `vary sample` pins them (the variants' sliding before and after is returned).
+/// A sequence the model has not learnt keeps its captured frames, with a note.
 pub fn variants_for_walk(
     prep: &Prepared,
     variation: &Variation,
     walk: &[u32],
     progress: &dyn Progress,
-) -> Result<FrameVariants> {
+) -> Result<(FrameVariants, Vec<VariantCleanup>)> {
     let (seed, model_dir) = (variation.seed, variation.model.as_path());
     let s = prep.subject();
     let needed = walk_passes(s, &prep.model, walk)?;
     let mut fv = FrameVariants::new(s);
+    let mut cleanups = Vec::new();
     if needed.iter().all(|&n| n == 0) {
-        return Ok(fv);
+        return Ok((fv, cleanups));
     }
     let model =
         VariationModel::load(model_dir).with_context(|| format!("--variation-model {}", model_dir.display()))?;
@@ -77,7 +90,8 @@ pub fn variants_for_walk(
             s.topology().triangles().len()
         );
     }
-    let opts = SamplingOptions::default();
+    // The clean-up is made on the frames shown (on the source's path), not on the sampled ones.
+    let opts = SamplingOptions { foot_skate_cleanup: false, ..SamplingOptions::default() };
     for (q, seq) in s.sequences().iter().enumerate() {
         if needed[q] == 0 {
             continue;
@@ -107,11 +121,16 @@ pub fn variants_for_walk(
         progress.advance(1);
         progress.finish();
         let source: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
-        let placed = variants
-            .iter()
-            .map(|v| Ok(variant_on_source_path(&model, j, v, &source)?.into_iter().flatten().collect::<Vec<f32>>()))
-            .collect::<Result<Vec<_>>>()?;
+        let mut placed = Vec::with_capacity(variants.len());
+        for (k, (frames, report)) in
+            variants_on_source_path(&model, j, &variants, &source, true)?.into_iter().enumerate()
+        {
+            placed.push(frames.into_iter().flatten().collect::<Vec<f32>>());
+            if let Some(report) = report {
+                cleanups.push(VariantCleanup { sequence: seq.name.clone(), variant: k, report });
+            }
+        }
         fv.add(&seq.name, placed)?;
     }
-    Ok(fv)
+    Ok((fv, cleanups))
 }

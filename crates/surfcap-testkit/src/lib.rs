@@ -106,6 +106,27 @@ fn real_data(dir: &Path, from_env: bool, found: bool, skip: bool, ci: bool) -> R
     RealData::Fail(format!("{missing}: no README.md there (it is {looked}). {what_now}"))
 }
 
+/// A procedural walker (its walk and jog clips of 2 s, 1,000 vertices) written to
+/// `dir/walker.subject` by the `surfcap` program `exe`; its clips give about 20 m of path loop
+/// over their frames. CLI tests call it through [`procedural_walker!`].
+pub fn procedural_walker_with(exe: &str, dir: &Path) -> PathBuf {
+    let walker = dir.join("walker.subject");
+    let args =
+        ["synth", "--procedural", "walk,jog", "--duration", "2", "--vertices", "1000", "-o", p(&walker), "--quiet"];
+    let o = run(exe, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    walker
+}
+
+/// [`procedural_walker_with`] run by the `surfcap` program of the test being compiled:
+/// `procedural_walker!(dir)` is the subject's path.
+#[macro_export]
+macro_rules! procedural_walker {
+    ($dir:expr $(,)?) => {
+        $crate::procedural_walker_with(env!("CARGO_BIN_EXE_surfcap"), $dir)
+    };
+}
+
 /// Runs the `surfcap` program with the given arguments (`&[&str]`) and waits for its
 /// [`Output`] (exit status, stdout, stderr).
 ///

@@ -9,11 +9,17 @@
 //!   meshes (its true parts) on its `Idle` clip alone, where the limbs barely move: motion alone
 //!   agrees on 95.9% of the vertices; adding a pull toward the joint nearest at rest (weight
 //!   0.01 or 0.0005 of the squared distance per frame) lowered that to 68.6% and 81.7% (a
-//!   torso vertex is often nearest a shoulder or hip joint), so there is none. The limbs are the *maximal chains* of
-//!   the skeleton: subtrees in which every joint has at most one child carrying vertices (at
-//!   least 1% of them), whose parent has more (on a humanoid: two arms, two legs and the head; a rig's IK controls carry
-//!   no vertex and drop out). Joints with exactly the same motion (a foot and its IK target) tie;
-//!   the lower joint index wins, which in glTF skins is the deforming bone.
+//!   torso vertex is often nearest a shoulder or hip joint), so there is none. The limbs hang
+//!   off the skeleton's *trunk*: the joints whose subtree holds at least a quarter of the
+//!   vertices (root, spine, chest); every child of the trunk outside it that carries at least
+//!   1% of the vertices is a candidate with its whole subtree (on a humanoid: two arms from the
+//!   shoulder to the fingertips, two legs and the head; a rig's IK controls carry no vertex and
+//!   drop out). Taking the skeleton's unbranched chains instead stopped an arm at a hand with
+//!   fingers or slots and left the upper arm in the torso. Joints with exactly the same motion
+//!   (a foot and its IK target) tie; the lower joint index wins, which in glTF skins is the
+//!   deforming bone. With `auto`, joints that give too few candidates (a rig without its
+//!   hierarchy: joint matrices but no parents) fall back to rigidity, with a note naming the
+//!   subject in [`ProposalReport::notes`].
 //! - **components** (KayKit meshes are separate pieces): the largest connected component is the
 //!   torso, the others are candidates. Separate pieces share no vertex, so these parts have no
 //!   overlap with their parent ([`BodyParts::check_fits`] allows that only for unjoined pieces).
@@ -23,7 +29,7 @@
 //!   vertex to the cluster whose motions best explain its trajectory; seeds by farthest-point
 //!   sampling on the template). Their connected pieces (slivers under 0.5% of the vertices
 //!   merged into the neighbour sharing most edges) form a tree, breadth-first from the largest
-//!   through shared edges, and the limbs are its maximal chains, as with joints. The brief's
+//!   through shared edges, and the limbs hang off its trunk, as with joints. The brief's
 //!   suggestion (per-triangle rotations as edge weights, then a spectral or region-growing cut
 //!   into N parts) cuts where bending is largest, which on an arm is the elbow as much as the
 //!   shoulder, so a cut into 5 does not give torso + 4 limbs; a trimmed rigid fit of the torso
@@ -35,13 +41,17 @@
 //! centroid) x how opposite the two offsets point` (arms and legs hang to both sides; the head
 //! sits on the torso's axis and pairs with nothing; small bits such as buckles have few
 //! vertices); the higher pair (along the subject's up axis) is the arms. Other candidates join
-//! the torso. Left and right come from the facing direction, horizontal and across the arms'
-//! axis. Its sign is a motion cue: every sampled frame is brought back onto the template by the
+//! the torso. Left and right come from the rig's joint names when it has any that say a side
+//! (`.l`/`.r`, `Left`/`Right`, CMU's `l`/`r` prefixes: [`side_of_joint_name`], a vote over each
+//! limb's vertices, used when both pairs come out on opposite sides); otherwise from the facing
+//! direction, horizontal and across the arms' axis. (On the knight's `Walking_A` alone the
+//! facing cue below is wrong and put `arm_left` on the rig's `.r` hand; the names are not.) Its sign is a motion cue: every sampled frame is brought back onto the template by the
 //! torso's rigid fit, and the limbs' mean displacement points forward (knees and elbows only
 //! bend forward; limbs reach forward far more than backward). Measured: right on the KayKit
 //! knight and the mannequin, where a cue from the feet' shape (toes reach further than heels)
 //! was wrong on one of them, so the feet decide only for a single-frame subject. The subject's
-//! left is `up x forward` (right-handed coordinates). For N other than 5 the limbs are the
+//! left is `up x forward` (right-handed coordinates); with named sides, forward is set to
+//! `left x up`. For N other than 5 the limbs are the
 //! `N - 1` candidates with most `vertices x horizontal offset`, named `limb_1`... in that order.
 //! Overlaps are grown by [`BodyParts::from_labels`].
 
@@ -134,6 +144,15 @@ pub struct ProposalReport {
     /// Rigidity: the rigid pieces found (the pseudo-bones of the clustering).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rigid_pieces: Option<usize>,
+    /// What told left from right with 5 parts: "joint names" (the rig's `.l`/`.r`, `Left`/
+    /// `Right`, `l`/`r` prefixes) or "facing" (the character's own facing, see the module's
+    /// doc); empty for other layouts.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub sides_from: String,
+    /// What the proposal had to work around (a method that failed and the one used instead),
+    /// each naming the subject: for a front end to show.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     pub parts: Vec<PartSummary>,
 }
 
@@ -145,13 +164,28 @@ pub fn propose(
     n_parts: usize,
     overlap_rings: usize,
 ) -> Result<(BodyParts, ProposalReport)> {
+    let mut notes = Vec::new();
+    propose_noting(subject, method, n_parts, overlap_rings, &mut notes).map_err(|e| {
+        // A fallback that failed too: say what was tried first.
+        if notes.is_empty() { e } else { Error::Invalid(format!("{}, which failed too: {e}", notes.join("; "))) }
+    })
+}
+
+fn propose_noting(
+    subject: &Subject,
+    method: Method,
+    n_parts: usize,
+    overlap_rings: usize,
+    notes: &mut Vec<String>,
+) -> Result<(BodyParts, ProposalReport)> {
     let topology = subject.topology();
     let n = topology.n_vertices();
     if n_parts == 0 {
         return Err(Error::Invalid("0 parts: expected at least 1".into()));
     }
     let n_components = connected_components(topology).count;
-    let method = match method {
+    let auto = method == Method::Auto;
+    let mut method = match method {
         Method::Auto if subject.sequences().iter().any(|s| s.joints.is_some()) => Method::Joints,
         Method::Auto if n_components >= n_parts => Method::Components,
         Method::Auto => Method::Rigidity,
@@ -175,12 +209,47 @@ pub fn propose(
     let mut rigid_pieces = None;
     let mut joint_of_vertex: Option<(Vec<usize>, Vec<String>)> = None;
     // Candidate regions (disjoint vertex lists) and the torso's seed.
-    let (candidates, torso): (Vec<Vec<u32>>, Vec<u32>) = match method {
-        Method::Components => {
+    let mut found: Option<(Vec<Vec<u32>>, Vec<u32>)> = None;
+    if method == Method::Joints {
+        let by_joints = best_joints(subject).and_then(|(best, names, parents, used)| {
+            let r = chains(&best, &parents, n);
+            if n_parts > 1 && r.0.len() < n_parts - 1 {
+                let hierarchy = if parents.iter().all(Option::is_none) {
+                    " (its joints have no parents: the rig's hierarchy is missing)"
+                } else {
+                    ""
+                };
+                return Err(Error::Invalid(format!(
+                    "found {} limb candidate{} by joints{hierarchy}: expected at least {} for {n_parts} parts",
+                    r.0.len(),
+                    if r.0.len() == 1 { "" } else { "s" },
+                    n_parts - 1
+                )));
+            }
+            Ok((r, best, names, used))
+        });
+        match by_joints {
+            Ok((r, best, names, used)) => {
+                frames_used = used;
+                joint_of_vertex = Some((best, names));
+                found = Some(r);
+            }
+            Err(e) if auto => {
+                notes.push(format!("subject \"{}\": {e}; fell back to the rigidity of the motion", subject.name));
+                method = Method::Rigidity;
+            }
+            Err(e) if e.to_string().contains(&format!("\"{}\"", subject.name)) => return Err(e),
+            Err(e) => return Err(Error::Invalid(format!("subject \"{}\": {e}", subject.name))),
+        }
+    }
+    let (candidates, torso): (Vec<Vec<u32>>, Vec<u32>) = match (found, method) {
+        (Some(r), _) => r,
+        (None, Method::Components) => {
             let c = connected_components(topology);
             if c.count < n_parts {
                 return Err(Error::Invalid(format!(
-                    "the template has {} connected component{}: expected at least {n_parts} for {n_parts} parts by components",
+                    "subject \"{}\": the template has {} connected component{}: expected at least {n_parts} for {n_parts} parts by components",
+                    subject.name,
                     c.count,
                     if c.count == 1 { "" } else { "s" }
                 )));
@@ -195,15 +264,9 @@ pub fn propose(
             groups.remove(big);
             (groups, torso)
         }
-        Method::Joints => {
-            let (best, names, parents, used) = best_joints(subject)?;
-            frames_used = used;
-            let r = chains(&best, &parents, n);
-            joint_of_vertex = Some((best, names));
-            r
-        }
-        Method::Rigidity => {
-            let (piece, parents, used) = rigid_clusters(subject)?;
+        (None, Method::Rigidity) => {
+            let (piece, parents, used) =
+                rigid_clusters(subject).map_err(|e| Error::Invalid(format!("subject \"{}\": {e}", subject.name)))?;
             frames_used = used;
             let mut used_pieces = piece.clone();
             used_pieces.sort_unstable();
@@ -211,7 +274,7 @@ pub fn propose(
             rigid_pieces = Some(used_pieces.len());
             chains(&piece, &parents, n)
         }
-        Method::Auto => unreachable!("resolved above"),
+        (None, _) => unreachable!("joints found above or fell back, auto resolved"),
     };
     let n_candidates = candidates.len();
     if n_parts == 1 {
@@ -224,13 +287,16 @@ pub fn propose(
             frames_used,
             forward: None,
             rigid_pieces,
+            sides_from: String::new(),
+            notes: notes.clone(),
             parts: summaries(&b, &vec![0; n], &joint_of_vertex),
         };
         return Ok((b, report));
     }
     if candidates.len() < n_parts - 1 {
         return Err(Error::Invalid(format!(
-            "found {} limb candidate{} by {}: expected at least {} for {n_parts} parts",
+            "subject \"{}\": found {} limb candidate{} by {}: expected at least {} for {n_parts} parts",
+            subject.name,
             candidates.len(),
             if candidates.len() == 1 { "" } else { "s" },
             method.as_str(),
@@ -254,6 +320,7 @@ pub fn propose(
     let offset: Vec<[f64; 3]> = candidates.iter().map(|r| horizontal(sub(centroid(r), tc))).collect();
     let mut names: Vec<String> = vec!["torso".into()];
     let mut forward = None;
+    let mut sides_from = "";
     let limbs: Vec<usize> = if n_parts == 5 {
         // Two mirror pairs: a pair scores min(vertices) x min(horizontal offset) x how opposite
         // the offsets point (0 when not at all: the head and an arm).
@@ -286,10 +353,44 @@ pub fn propose(
         if cue.is_some_and(|c| c < 0.0) {
             fwd = fwd.map(|x| -x);
         }
-        let left = cross(up, fwd);
-        let side = |k: usize| dot(offset[k], left);
-        let pair = |p: (f64, usize, usize)| if side(p.1) >= side(p.2) { [p.1, p.2] } else { [p.2, p.1] };
-        let (a, l) = (pair(arms), pair(legs));
+        // The rig's own names decide left and right when both pairs are named on opposite
+        // sides; the facing (subject's left = up x forward) otherwise.
+        let named_side = |k: usize| -> Option<bool> {
+            let (best, names) = joint_of_vertex.as_ref()?;
+            let vote: i64 = candidates[k]
+                .iter()
+                .map(|&v| match side_of_joint_name(&names[best[v as usize]]) {
+                    Some(true) => 1,
+                    Some(false) => -1,
+                    None => 0,
+                })
+                .sum();
+            (vote != 0).then_some(vote > 0)
+        };
+        let by_names = |p: (f64, usize, usize)| match (named_side(p.1), named_side(p.2)) {
+            (Some(true), Some(false)) => Some([p.1, p.2]),
+            (Some(false), Some(true)) => Some([p.2, p.1]),
+            _ => None,
+        };
+        let (a, l) = match (by_names(arms), by_names(legs)) {
+            (Some(a), Some(l)) => {
+                sides_from = "joint names";
+                // Forward from the named sides: left = up x forward, so forward = left x up.
+                let lateral = horizontal(sub(offset[a[0]], offset[a[1]]));
+                let f = cross(lateral, up);
+                if norm(f) > 0.0 {
+                    fwd = f.map(|x| x / norm(f));
+                }
+                (a, l)
+            }
+            _ => {
+                sides_from = "facing";
+                let left = cross(up, fwd);
+                let side = |k: usize| dot(offset[k], left);
+                let pair = |p: (f64, usize, usize)| if side(p.1) >= side(p.2) { [p.1, p.2] } else { [p.2, p.1] };
+                (pair(arms), pair(legs))
+            }
+        };
         names = HUMANOID_NAMES.iter().map(|s| s.to_string()).collect();
         forward = Some(fwd);
         vec![a[0], a[1], l[0], l[1]]
@@ -317,6 +418,8 @@ pub fn propose(
         frames_used,
         forward,
         rigid_pieces,
+        sides_from: sides_from.to_string(),
+        notes: notes.clone(),
         parts: summaries(&b, &labels, &joint_of_vertex),
     };
     Ok((b, report))
@@ -428,10 +531,21 @@ fn best_joints(subject: &Subject) -> Result<(Vec<usize>, Vec<String>, Vec<Option
     Ok((best, names, parents, frames.len()))
 }
 
-/// Limb candidates from the skeleton: the vertices of every maximal chain (see the module's doc;
-/// a branch counts only when it carries at least 1% of the vertices), and the rest (the torso).
+/// Share of the vertices a joint's subtree must hold to belong to the trunk (see [`chains`]).
+pub const TRUNK_SHARE: f64 = 0.25;
+
+/// Limb candidates from the skeleton (or the tree of rigid pieces): the *trunk* is every joint
+/// whose subtree holds at least [`TRUNK_SHARE`] of the vertices (the root, the spine and chest
+/// that carry both arms and the head: an ancestor of a trunk joint is one too, so the trunk is
+/// connected); each child of a trunk joint outside the trunk whose subtree carries at least 1%
+/// of the vertices starts a candidate, its whole subtree. So an arm runs from its first joint
+/// off the chest (clavicle or upper arm) to the fingertips whatever branches below (fingers,
+/// twist bones, weapon slots), where taking the skeleton's unbranched chains would stop at the
+/// hand's branching and leave the upper arm in the torso. Returns the candidates (in the order
+/// of their first joint) and the rest (the torso).
 fn chains(best: &[usize], parents: &[Option<usize>], n: usize) -> (Vec<Vec<u32>>, Vec<u32>) {
     let nj = parents.len();
+    let parent = |j: usize| parents[j].filter(|&p| p < nj && p != j);
     let mut count = vec![0usize; nj];
     for &j in best {
         count[j] += 1;
@@ -441,7 +555,7 @@ fn chains(best: &[usize], parents: &[Option<usize>], n: usize) -> (Vec<Vec<u32>>
     let depth: Vec<usize> = (0..nj)
         .map(|j| {
             let (mut d, mut at) = (0, j);
-            while let Some(p) = parents[at].filter(|&p| p < nj) {
+            while let Some(p) = parent(at) {
                 d += 1;
                 at = p;
                 if d > nj {
@@ -453,32 +567,19 @@ fn chains(best: &[usize], parents: &[Option<usize>], n: usize) -> (Vec<Vec<u32>>
         .collect();
     let mut by_depth: Vec<usize> = (0..nj).collect();
     by_depth.sort_by(|&a, &b| depth[b].cmp(&depth[a]).then(a.cmp(&b)));
-    // A child "carries" when its subtree holds at least 1% of the vertices: a few vertices
-    // won by a side joint (a rig's control, a clustering's sliver) do not make a branch.
-    let carrying = (n / 100).max(1);
+    // Subtree sizes, deeper joints first (every child settled before its parent).
     let mut sub = count.clone();
-    let mut carrying_children = vec![0usize; nj];
-    let mut chain_like = vec![true; nj];
     for &j in &by_depth {
-        if carrying_children[j] > 1 {
-            chain_like[j] = false;
-        }
-        if let Some(p) = parents[j].filter(|&p| p < nj && p != j) {
+        if let Some(p) = parent(j) {
             sub[p] += sub[j];
-            if sub[j] >= carrying {
-                carrying_children[p] += 1;
-                if !chain_like[j] {
-                    chain_like[p] = false;
-                }
-            }
         }
     }
-    // Deeper joints first: every child was settled before its parent is looked at.
-    let maximal: Vec<usize> = (0..nj)
-        .filter(|&j| chain_like[j] && sub[j] > 0 && parents[j].is_some_and(|p| p < nj && !chain_like[p]))
-        .collect();
+    let trunk: Vec<bool> = sub.iter().map(|&c| c as f64 >= TRUNK_SHARE * n as f64).collect();
+    let carrying = (n / 100).max(1);
+    let roots: Vec<usize> =
+        (0..nj).filter(|&j| !trunk[j] && sub[j] >= carrying && parent(j).is_some_and(|p| trunk[p])).collect();
     let mut region_of_joint = vec![usize::MAX; nj];
-    for (r, &m) in maximal.iter().enumerate() {
+    for (r, &m) in roots.iter().enumerate() {
         for (j, region) in region_of_joint.iter_mut().enumerate() {
             let mut at = j;
             for _ in 0..=nj {
@@ -486,14 +587,14 @@ fn chains(best: &[usize], parents: &[Option<usize>], n: usize) -> (Vec<Vec<u32>>
                     *region = r;
                     break;
                 }
-                match parents[at].filter(|&p| p < nj) {
+                match parent(at) {
                     Some(p) => at = p,
                     None => break,
                 }
             }
         }
     }
-    let mut regions = vec![Vec::new(); maximal.len()];
+    let mut regions = vec![Vec::new(); roots.len()];
     let mut torso = Vec::new();
     for (v, &j) in best.iter().enumerate().take(n) {
         match region_of_joint[j] {
@@ -502,6 +603,41 @@ fn chains(best: &[usize], parents: &[Option<usize>], n: usize) -> (Vec<Vec<u32>>
         }
     }
     (regions, torso)
+}
+
+/// The side a joint's name gives (`Some(true)` left, `Some(false)` right): a word `l`/`left`
+/// or `r`/`right` (`upperarm.l`, `hand_R`, `Bip01 L Hand`, `mixamorig:LeftArm`, `ArmRight`), or
+/// a lowercase `l`/`r` stuck to a bone word (`lhumerus`, `rfemur`, `lShldr`: CMU and ASF rigs);
+/// `None` when the name says neither (`spine`, `lowerarm`).
+pub fn side_of_joint_name(name: &str) -> Option<bool> {
+    let lower = name.to_lowercase();
+    let words: Vec<&str> = lower.split(|c: char| !c.is_ascii_alphanumeric()).filter(|w| !w.is_empty()).collect();
+    let (mut left, mut right) = (false, false);
+    for w in &words {
+        left |= *w == "l" || w.contains("left");
+        right |= *w == "r" || w.contains("right");
+    }
+    if left != right {
+        return Some(left);
+    }
+    if left {
+        return None;
+    }
+    const BONES: [&str; 26] = [
+        "femur", "tibia", "foot", "toe", "humerus", "radius", "wrist", "hand", "finger", "thumb", "clavicle", "collar",
+        "shldr", "shoulder", "uparm", "forearm", "lowarm", "thigh", "shin", "upleg", "leg", "arm", "knee", "ankle",
+        "elbow", "heel",
+    ];
+    let first = words.first()?;
+    let (side, rest) = first.split_at(1);
+    if BONES.iter().any(|b| rest.starts_with(b)) {
+        return match side {
+            "l" => Some(true),
+            "r" => Some(false),
+            _ => None,
+        };
+    }
+    None
 }
 
 /// Rigid clusters of the template's motion (see the module's doc): the piece of every vertex,
@@ -819,6 +955,116 @@ mod tests {
         assert!(e.contains("has no joints"), "{e}");
         // Same input, same output.
         assert_eq!(propose(&s, Method::Components, 5, 2).unwrap().0, b);
+    }
+
+    #[test]
+    fn an_arm_runs_from_its_shoulder_to_its_fingers_whatever_branches_at_the_hand() {
+        // hips(0) -> spine(1) -> chest(2) -> head(3); chest -> shoulder.l(4) -> upperarm.l(5)
+        // -> hand.l(6) -> two fingers (7, 8) and a weapon slot (9); chest -> shoulder.r(10) ->
+        // hand.r(11); hips -> leg.l(12), leg.r(13). The hand's branching made the fingers the
+        // "limbs" when limbs were the skeleton's unbranched chains.
+        let parents = vec![
+            None,
+            Some(0),
+            Some(1),
+            Some(2),
+            Some(2),
+            Some(4),
+            Some(5),
+            Some(6),
+            Some(6),
+            Some(6),
+            Some(2),
+            Some(10),
+            Some(0),
+            Some(0),
+        ];
+        // Vertices per joint (200 in all): a finger or the slot holds 1% (enough to count as a
+        // branch), the left arm 10%.
+        let per_joint = [20, 20, 40, 30, 4, 6, 4, 2, 2, 2, 8, 12, 25, 25];
+        let best: Vec<usize> = per_joint.iter().enumerate().flat_map(|(j, &c)| std::iter::repeat_n(j, c)).collect();
+        let (regions, torso) = chains(&best, &parents, best.len());
+        let joints_of = |vs: &[u32]| {
+            let mut j: Vec<usize> = vs.iter().map(|&v| best[v as usize]).collect();
+            j.dedup();
+            j
+        };
+        assert_eq!(joints_of(&torso), vec![0, 1, 2]);
+        let found: Vec<Vec<usize>> = regions.iter().map(|r| joints_of(r)).collect();
+        assert_eq!(found, vec![vec![3], vec![4, 5, 6, 7, 8, 9], vec![10, 11], vec![12], vec![13]]);
+    }
+
+    #[test]
+    fn joint_names_tell_left_from_right() {
+        for (name, side) in [
+            ("upperarm.l", Some(true)),
+            ("hand_R", Some(false)),
+            ("Bip01 L Hand", Some(true)),
+            ("mixamorig:LeftArm", Some(true)),
+            ("mixamorig:RightUpLeg", Some(false)),
+            ("ArmRight", Some(false)),
+            ("lhumerus", Some(true)),
+            ("rfemur", Some(false)),
+            ("lShldr", Some(true)),
+            ("lowerarm", None),
+            ("rotation_helper", None),
+            ("spine", None),
+            ("head", None),
+        ] {
+            assert_eq!(side_of_joint_name(name), side, "{name}");
+        }
+    }
+
+    /// [`five_pieces`] with a second frame in which each piece moves on its own joint, the
+    /// joints named `joint_k` without parents (a `meta.json` with joint matrices and no
+    /// `joint_names` or `joint_parents`).
+    fn five_pieces_with_flat_joints() -> Subject {
+        let s = five_pieces();
+        let p0 = s.frame(0).unwrap().to_vec();
+        let mut p1 = p0.clone();
+        let mut matrices = Vec::new();
+        let identity =
+            |dx: f32, dy: f32| [1.0, 0.0, 0.0, dx, 0.0, 1.0, 0.0, dy, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        for _ in 0..5 {
+            matrices.extend(identity(0.0, 0.0));
+        }
+        for k in 0..5 {
+            let (dx, dy) = (0.01 * k as f32, 0.02 * k as f32);
+            matrices.extend(identity(dx, dy));
+            for v in 4 * k..4 * k + 4 {
+                p1[3 * v] += dx;
+                p1[3 * v + 1] += dy;
+            }
+        }
+        let mut positions = p0;
+        positions.extend(p1);
+        let mut seq = surfcap_mesh::Sequence::new("moving", 20, positions).unwrap();
+        seq.joints = Some(surfcap_mesh::JointTrack {
+            names: (0..5).map(|k| format!("joint_{k}")).collect(),
+            parents: vec![None; 5],
+            matrices,
+        });
+        Subject::new("flat-rig", s.topology().clone(), vec![seq], 30.0, s.up_axis, s.units.clone()).unwrap()
+    }
+
+    #[test]
+    fn joints_without_a_hierarchy_fall_back_to_rigidity_with_a_note_naming_the_subject() {
+        let s = five_pieces_with_flat_joints();
+        let e = propose(&s, Method::Joints, 5, 2).unwrap_err().to_string();
+        assert!(e.contains("subject \"flat-rig\": found 0 limb candidates by joints"), "{e}");
+        assert!(e.contains("hierarchy is missing"), "{e}");
+        // Auto falls back to rigidity, saying so; on 20 vertices rigidity fails too, and the
+        // error says what was tried first (the mannequin's fallback that works is tested in
+        // tests/parts_real_data.rs).
+        let said = match propose(&s, Method::Auto, 5, 2) {
+            Ok((_, r)) => {
+                assert_eq!(r.method, Method::Rigidity);
+                r.notes.join("; ")
+            }
+            Err(e) => e.to_string(),
+        };
+        assert!(said.contains("subject \"flat-rig\": found 0 limb candidates by joints"), "{said}");
+        assert!(said.contains("fell back to the rigidity of the motion"), "{said}");
     }
 
     #[test]

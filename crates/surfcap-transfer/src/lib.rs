@@ -22,7 +22,8 @@
 //!   pair of sequences by [`training_pairs`];
 //! - [`transfer_model`] (the GPs with NN/SE/linear kernels and fitted hyper-parameters),
 //!   [`motion_transfer`] (training, per-frame transfer with the displacement accumulated from the
-//!   target's reference), [`semantic_deformation_transfer`] (the Baran et al. baseline);
+//!   target's reference), [`semantic_deformation_transfer`] (the Baran et al. baseline) and
+//!   [`baran_transfer`] (it as a model applied to whole motions);
 //! - reconstruction: [`part_correction`] (M nearest training meshes turned by their polar
 //!   rotations, Poisson), [`part_stitching`] (the cheapest closed cut inside each overlap by
 //!   Dijkstra, one Poisson merge, a seam measure), [`shape_reconstruction`] (ties them,
@@ -37,6 +38,7 @@
 //! without it a float read back could land one bit off, and a reloaded model predicted
 //! differently.
 
+pub mod baran_transfer;
 pub mod body_parts;
 pub mod body_parts_file;
 pub mod body_parts_from_labels;

@@ -7,12 +7,18 @@
 //!   load, a few milliseconds for hundreds of pairs), with a `format`/`version` header;
 //! - `target_training.npy`: f32 `[N, V, 3]`, the target's aligned training poses, the examples
 //!   the part correction of 5.6.1 draws its nearest meshes from (numpy opens it).
+//!
+//! A Baran et al. model ([`BaranTransfer`], `transfer train --method baran`) is a folder of the
+//! same kind holding `model.json` (format `surfcap-transfer-baran-model`: the subjects and the
+//! source's triangles) and `source_keys.npy` / `target_keys.npy`, f32 `[K, V, 3]`, the key
+//! poses. [`read_any`] reads either.
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 use surfcap_mesh::npy::{expect_shape, read_npy, write_npy};
 
+use crate::baran_transfer::BaranTransfer;
 use crate::error::{Error, Result};
 use crate::motion_transfer::MotionTransfer;
 
@@ -20,6 +26,17 @@ use crate::motion_transfer::MotionTransfer;
 pub const KIND: &str = "transfer-model";
 const FORMAT: &str = "surfcap-transfer-model";
 const VERSION: u32 = 1;
+const BARAN_FORMAT: &str = "surfcap-transfer-baran-model";
+
+/// What a Baran et al. model's `model.json` holds besides the subjects.
+#[derive(Serialize, Deserialize)]
+struct BaranMeta {
+    method: String,
+    key_pairs: usize,
+    source_vertices: usize,
+    target_vertices: usize,
+    source_triangles: Vec<[u32; 3]>,
+}
 
 #[derive(Serialize, Deserialize)]
 struct Envelope<M, S> {
@@ -155,4 +172,101 @@ pub fn read_model(dir: &Path) -> Result<SavedModel> {
     }
     let target_training = a.data.chunks_exact(3 * nv).map(<[f32]>::to_vec).collect();
     Ok(SavedModel { model, subjects: env.subjects, target_training })
+}
+
+/// A Baran et al. model read back.
+pub struct SavedBaran {
+    pub model: BaranTransfer,
+    pub subjects: SubjectsMeta,
+}
+
+/// Either kind of saved model.
+pub enum SavedTransfer {
+    /// GP regression on body parts.
+    Gp(Box<SavedModel>),
+    /// Baran et al. 2009.
+    Baran(Box<SavedBaran>),
+}
+
+/// Writes a Baran et al. model (`model.json`, `source_keys.npy`, `target_keys.npy`) into `dir`
+/// (which the caller has claimed).
+pub fn write_baran_model(dir: &Path, model: &BaranTransfer, subjects: &SubjectsMeta) -> Result<()> {
+    let (ns, nt) = (model.source_vertices(), model.target_vertices());
+    let k = model.source_keys.len();
+    if k == 0 || model.target_keys.len() != k {
+        return Err(Error::Invalid(format!(
+            "{k} source and {} target key poses: expected the same number, at least one",
+            model.target_keys.len()
+        )));
+    }
+    let meta = BaranMeta {
+        method: "baran".into(),
+        key_pairs: k,
+        source_vertices: ns,
+        target_vertices: nt,
+        source_triangles: model.source_triangles.clone(),
+    };
+    let env = Envelope { format: BARAN_FORMAT.into(), version: VERSION, subjects, model: meta };
+    surfcap_mesh::atomic::write_file(&dir.join("model.json"), |w| {
+        serde_json::to_writer(&mut *w, &env).map_err(std::io::Error::other)
+    })?;
+    for (name, keys, nv) in [("source_keys.npy", &model.source_keys, ns), ("target_keys.npy", &model.target_keys, nt)] {
+        if let Some(bad) = keys.iter().position(|p| p.len() != 3 * nv) {
+            return Err(Error::Invalid(format!("key pose {bad} of {name}: expected {nv} vertices")));
+        }
+        let flat: Vec<f32> = keys.iter().flatten().copied().collect();
+        surfcap_mesh::atomic::write_file(&dir.join(name), |w| write_npy(w, &[k, nv, 3], &flat))?;
+    }
+    Ok(())
+}
+
+/// Reads a model written by [`write_model`] or [`write_baran_model`]; errors name the file and
+/// what was expected.
+pub fn read_any(dir: &Path) -> Result<SavedTransfer> {
+    let path = dir.join("model.json");
+    let bytes = surfcap_mesh::read_regular_file(&path)?;
+    let bad = |why: String| Error::Invalid(format!("{}: {why}", path.display()));
+    let head: Envelope<serde::de::IgnoredAny, serde::de::IgnoredAny> = serde_json::from_slice(&bytes)
+        .map_err(|e| bad(format!("{e}: expected a model written by surfcap transfer train")))?;
+    if head.format != BARAN_FORMAT {
+        return read_model(dir).map(|m| SavedTransfer::Gp(Box::new(m)));
+    }
+    if head.version != VERSION {
+        return Err(bad(format!(
+            "format {:?} version {}: expected version {VERSION} (retrain with this surfcap)",
+            head.format, head.version
+        )));
+    }
+    let env: Envelope<BaranMeta, SubjectsMeta> = serde_json::from_slice(&bytes).map_err(|e| bad(format!("{e}")))?;
+    let meta = env.model;
+    let read_keys = |name: &str, nv: usize| -> Result<Vec<Vec<f32>>> {
+        let p = dir.join(name);
+        let a = read_npy::<f32>(&p)?;
+        expect_shape(&a, &[Some(meta.key_pairs), Some(nv), Some(3)], "the key poses").map_err(|e| e.in_file(&p))?;
+        if let Some(k) = a.data.iter().position(|x| !x.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "{}: key pose {}, vertex {}: coordinate {}: expected finite coordinates",
+                p.display(),
+                k / (3 * nv),
+                (k / 3) % nv,
+                a.data[k]
+            )));
+        }
+        Ok(a.data.chunks_exact(3 * nv.max(1)).map(<[f32]>::to_vec).collect())
+    };
+    for (tris, nv, who) in [
+        (&meta.source_triangles, meta.source_vertices, "source"),
+        (&env.subjects.target_triangles, meta.target_vertices, "target"),
+    ] {
+        if tris.iter().flatten().any(|&v| v as usize >= nv) {
+            return Err(bad(format!("the {who}'s triangles name vertices beyond its {nv}")));
+        }
+    }
+    let model = BaranTransfer {
+        source_triangles: meta.source_triangles.clone(),
+        target_triangles: env.subjects.target_triangles.clone(),
+        source_keys: read_keys("source_keys.npy", meta.source_vertices)?,
+        target_keys: read_keys("target_keys.npy", meta.target_vertices)?,
+    };
+    Ok(SavedTransfer::Baran(Box::new(SavedBaran { model, subjects: env.subjects })))
 }

@@ -174,3 +174,116 @@ fn knight_idle_alone_joints_agree_with_its_separate_meshes() {
     check_sides(&s, &bj, ["hand.l", "hand.r"], ["foot.l", "foot.r"]);
     assert!(a > 0.93, "knight_Idle: joints vs components agree on {a}");
 }
+
+/// The procedural mannequin (walk, jog, jump), whose rig names its sides `l`/`r` (CMU style).
+fn mannequin_subject_walking() -> Subject {
+    use surfcap_builtin::locomotion::Gait;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
+    let m = mannequin(&BodyShape::average(), 3000).unwrap();
+    let clips: Vec<Clip> = [Gait::Walk, Gait::Jog, Gait::Jump]
+        .into_iter()
+        .map(|g| Clip::procedural(&m, g, 30.0, 2.0, 3).unwrap())
+        .collect();
+    mannequin_subject("mannequin", &m, &clips, 30.0).unwrap()
+}
+
+/// The subject with its joint tracks changed by `f` (names or parents dropped).
+fn with_rig(s: &Subject, f: impl Fn(&mut surfcap_mesh::JointTrack)) -> Subject {
+    let seqs: Vec<surfcap_mesh::Sequence> = s
+        .sequences()
+        .iter()
+        .map(|q| {
+            let mut q = q.clone();
+            if let Some(j) = q.joints.as_mut() {
+                f(j);
+            }
+            q
+        })
+        .collect();
+    Subject::new(s.name.clone(), s.topology().clone(), seqs, s.fps, s.up_axis, s.units.clone()).unwrap()
+}
+
+/// Each arm's core holds the rig's shoulder-to-hand joints of its own side (named by the rig:
+/// `upper` and `hand` for the left, `upper_r`/`hand_r` for the right), and reaches from the
+/// shoulder joint to the hand joint: a core vertex within 8% of the height of each.
+fn check_arms(
+    s: &Subject,
+    b: &BodyParts,
+    r: &surfcap_transfer::body_parts_proposal::ProposalReport,
+    joints: [[&str; 2]; 2],
+) {
+    let (labels, _) = b.display_labels();
+    let p0 = s.frame(0).unwrap();
+    let (lo, hi) = surfcap_mesh::bounding_box(p0);
+    let k = s.up_axis.axis_and_sign().0;
+    let height = (hi[k] - lo[k]) as f64;
+    for (part, [upper, hand]) in [(1usize, joints[0]), (2, joints[1])] {
+        let name = &b.parts[part].name;
+        assert!(r.parts[part].joints.iter().any(|j| j == upper), "{}: {name} has {:?}", s.name, r.parts[part].joints);
+        assert!(r.parts[part].joints.iter().any(|j| j == hand), "{}: {name} has {:?}", s.name, r.parts[part].joints);
+        for j in [upper, hand] {
+            let at = joint(s, j);
+            let nearest = (0..labels.len())
+                .filter(|&v| labels[v] as usize == part)
+                .map(|v| dist(at, [p0[3 * v] as f64, p0[3 * v + 1] as f64, p0[3 * v + 2] as f64]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(nearest < 0.08 * height, "{}: {name} is {nearest} from {j} (height {height})", s.name);
+        }
+    }
+}
+
+#[test]
+fn every_kaykit_character_and_the_mannequin_get_arms_from_shoulder_to_hand_on_the_rigs_sides() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    // One walk each: on the knight's Walking_A alone the facing cue alone picks the wrong side.
+    for c in ["knight", "barbarian", "mage", "rogue"] {
+        let path = data.join("kaykit_adventurers").join(format!("{c}_Walking_A"));
+        let s = import(&[path], &ImportOptions::default(), &NoProgress).unwrap().subject;
+        let (b, r) = propose(&s, Method::Auto, 5, 2).unwrap();
+        assert_eq!(r.method, Method::Joints, "{c}");
+        assert_eq!(r.sides_from, "joint names", "{c}");
+        check_five(&s, &b);
+        check_arms(&s, &b, &r, [["upperarm.l", "hand.l"], ["upperarm.r", "hand.r"]]);
+        check_sides(&s, &b, ["hand.l", "hand.r"], ["foot.l", "foot.r"]);
+        // No joint of the other side in a limb.
+        for (k, other) in [(1, ".r"), (2, ".l"), (3, ".r"), (4, ".l")] {
+            assert!(r.parts[k].joints.iter().all(|j| !j.ends_with(other)), "{c}: {:?}", r.parts[k]);
+        }
+    }
+    let s = mannequin_subject_walking();
+    let (b, r) = propose(&s, Method::Auto, 5, 2).unwrap();
+    assert_eq!(r.sides_from, "joint names");
+    check_arms(&s, &b, &r, [["lhumerus", "lhand"], ["rhumerus", "rhand"]]);
+}
+
+#[test]
+fn without_side_names_left_is_the_mannequins_own_left_by_its_facing() {
+    let s = mannequin_subject_walking();
+    // The rig's hierarchy kept, its names replaced by numbers.
+    let unnamed = with_rig(&s, |j| j.names = (0..j.names.len()).map(|k| format!("joint_{k}")).collect());
+    let (b, r) = propose(&unnamed, Method::Auto, 5, 2).unwrap();
+    assert_eq!(r.method, Method::Joints);
+    assert_eq!(r.sides_from, "facing");
+    check_five(&unnamed, &b);
+    // The original subject's names say where its left hand and foot are.
+    check_sides(&s, &b, ["lhand", "rhand"], ["lfoot", "rfoot"]);
+}
+
+#[test]
+fn joints_without_their_hierarchy_fall_back_to_rigidity_naming_the_subject() {
+    let s = mannequin_subject_walking();
+    let flat = with_rig(&s, |j| {
+        j.parents = vec![None; j.names.len()];
+        j.names = (0..j.names.len()).map(|k| format!("joint_{k}")).collect();
+    });
+    let e = propose(&flat, Method::Joints, 5, 2).unwrap_err().to_string();
+    assert!(e.contains("subject \"mannequin\": found 0 limb candidates by joints"), "{e}");
+    let (b, r) = propose(&flat, Method::Auto, 5, 2).unwrap();
+    assert_eq!(r.method, Method::Rigidity);
+    assert_eq!(r.notes.len(), 1, "{:?}", r.notes);
+    assert!(r.notes[0].contains("subject \"mannequin\": found 0 limb candidates by joints"), "{:?}", r.notes);
+    assert!(r.notes[0].contains("fell back to the rigidity of the motion"), "{:?}", r.notes);
+    check_five(&flat, &b);
+    check_sides(&s, &b, ["lhand", "rhand"], ["lfoot", "rfoot"]);
+}

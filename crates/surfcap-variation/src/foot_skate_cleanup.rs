@@ -4,8 +4,8 @@
 //! Varied leg poses placed on a path made for the captured ones let the planted feet drift
 //! (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips). Kovar et al. (sec. 3-5)
 //! pin each footplant at one place, move the root and solve the legs' IK to reach the pins, and
-//! blend the adjustments in and out over the frames around each plant. Here the legs are
-//! deformed in the gradient domain instead of by IK, and the root keeps its (captured) path:
+//! blend the adjustments in and out over the frames around each plant. Here the root is moved
+//! along the ground and the legs are deformed in the gradient domain instead of by IK:
 //!
 //! 1. **Plants** (Kovar sec. 3, "footplant constraints"): the planted vertices of every frame
 //!    step come from the shared contact detector (surfcap-geometry's `ground_contacts` and
@@ -41,6 +41,14 @@
 //!    is along the ground, heights are kept. The free block `L_II` (leg vertices between foot and
 //!    hip) is factorised once per subject ([`FootSkateCleanup::new`]); each frame is one sparse
 //!    solve with two right-hand sides, `L_II d_I = -L_IC d_C`, frames in parallel.
+//! 5. **The root** (Kovar sec. 4, with [`FootSkateParams::move_root`], on by default): the
+//!    whole mesh is moved along the ground by `r_f`, on every frame where a foot is planted the
+//!    planted feet's mean pull (a foot's pull: its vertices' mean displacement by `T_f`),
+//!    bridged and faded between plants as the corrections are (step 3). The feet's constraints
+//!    in step 4 become what is left, `T_f(x) - x - r_f` on their plants, faded the same way:
+//!    a foot alone on the ground is reached by moving the body, without bending its leg; two
+//!    planted feet bend their legs only by how far their pulls differ; a foot in the air moves
+//!    with the body.
 //!
 //! **In-place clips** (authored with the root pinned, e.g. the KayKit clips): there the ground
 //! moves under the character and a planted foot slides backwards at the walking speed. Pinning
@@ -91,6 +99,12 @@ pub struct FootSkateParams {
     /// a CMU walk's variants the turn fitted to a small planted patch moved a foot by up to
     /// 0.68 m, while the translation alone pins the planted vertices within 3 mm on average).
     pub fit_turn: bool,
+    /// Move the whole body along the ground with the planted feet (Kovar sec. 4's root
+    /// adjustment; the module doc's step 5), so that one planted foot is reached without
+    /// bending its leg and two only bend for how far their pulls differ (on by default: with
+    /// the hips held, the legs stretched to reach the pins and the delivered frames' edge
+    /// distortion rose 20-45% above the captures').
+    pub move_root: bool,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -106,6 +120,7 @@ impl Default for FootSkateParams {
             rejoin_distance: 0.05,
             lift_speed: 1.0,
             fit_turn: false,
+            move_root: true,
             contact: ContactParams::default(),
         }
     }
@@ -176,6 +191,13 @@ struct Correction {
 }
 
 impl Correction {
+    /// The mean displacement of the points it moves, `t - (R - I) r` (the points' mean lies
+    /// at `-r` from the rotation centre).
+    fn mean_shift(self) -> [f64; 2] {
+        let (s, c) = self.theta.sin_cos();
+        let (x, y) = (-self.r[0], -self.r[1]);
+        [self.t[0] + (c * x - s * y - x), self.t[1] + (s * x + c * y - y)]
+    }
     fn scaled(self, a: f64) -> Correction {
         Correction { theta: a * self.theta, t: [a * self.t[0], a * self.t[1]], r: self.r }
     }
@@ -459,33 +481,41 @@ impl FootSkateCleanup {
                 plants.push((k, a, b, per_frame));
             }
         }
+        // The root's shift (Kovar sec. 4): on every frame where a foot is planted, the planted
+        // feet's mean pull; between plants bridged and faded as the corrections are. The feet
+        // then only need what is left of their pull (their correction less the shift).
+        let mut root = vec![[0.0f64; 2]; nf];
+        if self.params.move_root {
+            let on: Vec<bool> = (0..nf).map(|f| active.iter().any(|a| a[f])).collect();
+            for (f, r) in root.iter_mut().enumerate() {
+                let (mut sum, mut count) = ([0.0; 2], 0.0);
+                for (corr, a) in corrections.iter().zip(&active) {
+                    if a[f] {
+                        let d = corr[f].mean_shift();
+                        sum = [sum[0] + d[0], sum[1] + d[1]];
+                        count += 1.0;
+                    }
+                }
+                if count > 0.0 {
+                    *r = [sum[0] / count, sum[1] / count];
+                }
+            }
+            bridge_and_fade(&mut root, &on, blend, lerp2, |x, a| [a * x[0], a * x[1]], add2);
+            for (corr, a) in corrections.iter_mut().zip(&active) {
+                for f in 0..nf {
+                    if a[f] {
+                        corr[f].t = [corr[f].t[0] - root[f][0], corr[f].t[1] - root[f][1]];
+                    }
+                }
+            }
+        }
         // Fades and bridges between plants.
         for (corr, on) in corrections.iter_mut().zip(&active) {
-            let keys: Vec<usize> = (0..nf).filter(|&f| on[f]).collect();
-            for f in 0..nf {
-                if on[f] {
-                    continue;
-                }
-                let prev = keys.iter().rev().find(|&&k| k < f).copied();
-                let next = keys.iter().find(|&&k| k > f).copied();
-                corr[f] = match (prev, next) {
-                    (Some(p), Some(q)) if q - p <= 2 * blend + 1 => {
-                        Correction::lerp(corr[p], corr[q], smoothstep((f - p) as f64 / (q - p) as f64))
-                    }
-                    _ => {
-                        let fade = |d: usize| smoothstep(1.0 - d as f64 / (blend + 1) as f64);
-                        let mut c = Correction::default();
-                        if let Some(p) = prev.filter(|&p| f - p <= blend) {
-                            c = corr[p].scaled(fade(f - p));
-                        }
-                        if let Some(q) = next.filter(|&q| q - f <= blend) {
-                            let x = corr[q].scaled(fade(q - f));
-                            c = Correction { theta: c.theta + x.theta, t: [c.t[0] + x.t[0], c.t[1] + x.t[1]], r: x.r };
-                        }
-                        c
-                    }
-                };
-            }
+            bridge_and_fade(corr, on, blend, Correction::lerp, Correction::scaled, |c, x| Correction {
+                theta: c.theta + x.theta,
+                t: [c.t[0] + x.t[0], c.t[1] + x.t[1]],
+                r: x.r,
+            });
         }
         // Per frame: the feet's displacements, then the legs' solve.
         let out: Vec<(Vec<f32>, f64)> = (0..nf)
@@ -511,6 +541,7 @@ impl FootSkateCleanup {
                         d[v as usize] = [moved_to[0] - q[0], moved_to[1] - q[1]];
                     }
                 }
+                let root = root[f];
                 if let (Some(sym), Some(num)) = (&self.symbolic, &self.numeric) {
                     let mut rhs = Mat::<f64>::zeros(self.n_free, 2);
                     for &(i, v, l) in &self.coupling {
@@ -528,6 +559,7 @@ impl FootSkateCleanup {
                 let mut q = p.clone();
                 let mut largest = 0.0f64;
                 for (v, dv) in d.iter().enumerate() {
+                    let dv = [dv[0] + root[0], dv[1] + root[1]];
                     q[3 * v + u] += dv[0] as f32;
                     q[3 * v + w] += dv[1] as f32;
                     largest = largest.max(dv[0].hypot(dv[1]));
@@ -635,6 +667,52 @@ fn fit(
     Some((theta, cf, [ct[0] - cf[0], ct[1] - cf[1]]))
 }
 
+fn lerp2(a: [f64; 2], b: [f64; 2], s: f64) -> [f64; 2] {
+    [(1.0 - s) * a[0] + s * b[0], (1.0 - s) * a[1] + s * b[1]]
+}
+
+fn add2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] + b[0], a[1] + b[1]]
+}
+
+/// Fills the frames where `on` is false from the frames where it is true (Kovar sec. 5's
+/// blending): between two such frames at most `2 blend + 1` apart, interpolated with a
+/// smoothstep; otherwise faded to zero with a smoothstep over `blend` frames from either side
+/// (the two fades added where both reach).
+fn bridge_and_fade<T: Copy + Default>(
+    values: &mut [T],
+    on: &[bool],
+    blend: usize,
+    lerp: impl Fn(T, T, f64) -> T,
+    scale: impl Fn(T, f64) -> T,
+    add: impl Fn(T, T) -> T,
+) {
+    let keys: Vec<usize> = (0..values.len()).filter(|&f| on[f]).collect();
+    for f in 0..values.len() {
+        if on[f] {
+            continue;
+        }
+        let prev = keys.iter().rev().find(|&&k| k < f).copied();
+        let next = keys.iter().find(|&&k| k > f).copied();
+        values[f] = match (prev, next) {
+            (Some(p), Some(q)) if q - p <= 2 * blend + 1 => {
+                lerp(values[p], values[q], smoothstep((f - p) as f64 / (q - p) as f64))
+            }
+            _ => {
+                let fade = |d: usize| smoothstep(1.0 - d as f64 / (blend + 1) as f64);
+                let mut c = T::default();
+                if let Some(p) = prev.filter(|&p| f - p <= blend) {
+                    c = scale(values[p], fade(f - p));
+                }
+                if let Some(q) = next.filter(|&q| q - f <= blend) {
+                    c = add(c, scale(values[q], fade(q - f)));
+                }
+                c
+            }
+        };
+    }
+}
+
 /// Missing fits inside a plant interpolated between their neighbours (the ends held).
 fn fill_gaps(fits: &mut [Option<Correction>]) {
     let known: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].is_some()).collect();
@@ -708,7 +786,9 @@ mod tests {
     #[test]
     fn a_skating_planted_foot_is_pinned_the_rest_barely_moves_and_nothing_pops() {
         let (t, rest, leg) = ribbon();
-        let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams::default()).unwrap();
+        // The hips held: the leg alone bends to reach the pin.
+        let held = FootSkateParams { move_root: false, ..FootSkateParams::default() };
+        let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], held).unwrap();
         assert_eq!(c.feet(), &[(0..9).collect::<Vec<u32>>()], "the sole and the ankle rows");
         let frames = skating(&rest);
         let (out, report) = c.clean(&frames, 30.0, None).unwrap();
@@ -765,5 +845,62 @@ mod tests {
         assert!(e.to_string().contains("30 frames for a motion of 3"), "{e}");
         let e = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[vec![99]], FootSkateParams::default()).unwrap_err();
         assert!(e.to_string().contains("vertex 99"), "{e}");
+    }
+
+    /// Edge lengths of a ribbon frame, in a fixed order.
+    fn edge_lengths(t: &Topology, p: &[f32]) -> Vec<f64> {
+        let mut out = Vec::new();
+        for tri in t.triangles() {
+            for k in 0..3 {
+                let (a, b) = (tri[k] as usize, tri[(k + 1) % 3] as usize);
+                out.push((0..3).map(|i| ((p[3 * a + i] - p[3 * b + i]) as f64).powi(2)).sum::<f64>().sqrt());
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn with_the_root_moved_one_planted_foot_is_pinned_without_stretching_the_leg() {
+        let (t, rest, leg) = ribbon();
+        let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams::default()).unwrap();
+        let frames = skating(&rest);
+        let (out, report) = c.clean(&frames, 30.0, None).unwrap();
+        // Pinned as with the hips held.
+        for f in 5..=20 {
+            for v in 0..6 {
+                let d = (out[f][3 * v] - out[12][3 * v]).abs() + (out[f][3 * v + 2] - out[12][3 * v + 2]).abs();
+                assert!(d < 1e-5, "frame {f}, vertex {v}: {d} from its pin");
+            }
+        }
+        assert!(report.sliding_after < 1e-3, "{report:?}");
+        // One foot planted: the whole body moves with it, so no edge changes length (the hips
+        // held, the leg stretched: its edges change by up to 0.009).
+        for f in 0..30 {
+            let (before, after) = (edge_lengths(&t, &frames[f]), edge_lengths(&t, &out[f]));
+            for (e, (a, b)) in before.iter().zip(&after).enumerate() {
+                assert!((a - b).abs() < 1e-5, "frame {f}, edge {e}: {a} -> {b}");
+            }
+            for v in 0..30 {
+                assert_eq!(out[f][3 * v + 1], frames[f][3 * v + 1], "heights are kept");
+            }
+        }
+        let held = FootSkateParams { move_root: false, ..FootSkateParams::default() };
+        let (bent, _) = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[(0..24).collect()], held)
+            .unwrap()
+            .clean(&frames, 30.0, None)
+            .unwrap();
+        let stretch = |o: &[Vec<f32>]| {
+            (0..30)
+                .flat_map(|f| {
+                    edge_lengths(&t, &frames[f]).into_iter().zip(edge_lengths(&t, &o[f])).map(|(a, b)| (a - b).abs())
+                })
+                .fold(0.0, f64::max)
+        };
+        assert!(stretch(&bent) > 0.005, "the held hips make the leg stretch: {}", stretch(&bent));
+        // Nothing pops: the body's shift changes by at most 0.02 from a frame to the next.
+        for f in 0..29 {
+            let step = ((out[f + 1][3 * 29] - frames[f + 1][3 * 29]) - (out[f][3 * 29] - frames[f][3 * 29])).abs();
+            assert!(step <= 0.02, "frames {f} -> {}: the body jumps by {step}", f + 1);
+        }
     }
 }

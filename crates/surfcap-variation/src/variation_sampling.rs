@@ -553,17 +553,10 @@ pub fn pose_height(pose: &[f32], up: surfcap_mesh::UpAxis) -> f64 {
 /// when it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
 /// pinned to. A model without legs is left as it is.
 pub fn clean_up_variants(model: &VariationModel, variants: &mut [Variant], learnt_world: &[Vec<f32>]) -> Result<()> {
-    let legs = crate::motion_preparation::feet_of(&model.parts);
-    if legs.is_empty() || variants.is_empty() {
+    if variants.is_empty() {
         return Ok(());
     }
-    let cleanup = FootSkateCleanup::new(
-        &model.topology,
-        &model.reference_pose,
-        model.up_axis,
-        &legs,
-        FootSkateParams::default(),
-    )?;
+    let Some(cleanup) = model_cleanup(model)? else { return Ok(()) };
     let height = pose_height(&model.reference_pose, model.up_axis);
     let ground = in_place_ground(learnt_world, model.fps, model.up_axis, height);
     for v in variants {
@@ -581,6 +574,54 @@ pub fn clean_up_variants(model: &VariationModel, variants: &mut [Variant], learn
         v.cleanup = Some(report);
     }
     Ok(())
+}
+
+/// The foot-skate clean-up of a model's mesh (default settings, the legs being the parts
+/// named `leg*`/`foot*`); `None` for a model without legs.
+fn model_cleanup(model: &VariationModel) -> Result<Option<FootSkateCleanup>> {
+    let legs = crate::motion_preparation::feet_of(&model.parts);
+    if legs.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(FootSkateCleanup::new(
+        &model.topology,
+        &model.reference_pose,
+        model.up_axis,
+        &legs,
+        FootSkateParams::default(),
+    )?))
+}
+
+/// A variant's frames and what the foot-skate clean-up did to them (`None` when not cleaned).
+pub type CleanedVariant = (Vec<Vec<f32>>, Option<CleanupReport>);
+
+/// Variants put on their source sequence `j`'s own path ([`variant_on_source_path`], what
+/// synthesis shows), each with its planted feet pinned ([`crate::foot_skate_cleanup`]) when
+/// `cleanup` is set and the model has legs: the same clean-up as [`sample_variants`] gives,
+/// on the frames synthesis plays. For a source authored in place the feet are pinned to the
+/// ground its own contacts give ([`in_place_ground`] of `source`). Returns per variant its
+/// frames and what the clean-up did.
+pub fn variants_on_source_path(
+    model: &VariationModel,
+    j: usize,
+    variants: &[Variant],
+    source: &[&[f32]],
+    cleanup: bool,
+) -> Result<Vec<CleanedVariant>> {
+    let placed: Vec<Vec<Vec<f32>>> =
+        variants.iter().map(|v| variant_on_source_path(model, j, v, source)).collect::<Result<_>>()?;
+    let fixer = if cleanup { model_cleanup(model)? } else { None };
+    let Some(fixer) = fixer else { return Ok(placed.into_iter().map(|p| (p, None)).collect()) };
+    let owned: Vec<Vec<f32>> = source.iter().map(|p| p.to_vec()).collect();
+    let height = pose_height(&model.reference_pose, model.up_axis);
+    let ground = in_place_ground(&owned, model.fps, model.up_axis, height);
+    placed
+        .into_iter()
+        .map(|p| {
+            let (cleaned, report) = fixer.clean(&p, model.fps, ground.as_deref())?;
+            Ok((cleaned, Some(report)))
+        })
+        .collect()
 }
 
 #[cfg(test)]

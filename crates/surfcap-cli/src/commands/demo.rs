@@ -144,7 +144,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 
     // Transitions, essential graph and a path-following animation (thesis 2.5, 3.3, 3.5.1).
     let params = GraphParams {
-        table: TableOpts::default().params_for(subject.fps, &subject)?,
+        table: TableOpts::default().params_for(&pipe)?,
         kind: GraphKind::Essential,
         alpha: Alpha::new(0.05)?,
     };

@@ -45,8 +45,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let What::Build { subject, output, graph } = a.what;
     let (outs, output) = ctx.claim_dir(&output, "graph", &[&subject])?;
     let s = open(ctx, &subject, &graph.source)?;
-    let p = graph.params_for(s.fps, &s)?;
     let pipe = graph.cache.pipeline(ctx, s)?;
+    let p = graph.params_for(&pipe)?;
     let t0 = Instant::now();
     let fetched = pipe.graph(&p)?;
     let secs = t0.elapsed().as_secs_f64();

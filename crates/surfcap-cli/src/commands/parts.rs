@@ -126,6 +126,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
                 w.write_all(b"\n")
             })
             .with_context(|| format!("writing {}", output.display()))?;
+            for n in &report.notes {
+                ctx.note(n);
+            }
             let rows = rows(&b, &s);
             let result = serde_json::json!({ "output": output, "subject": s.name, "report": report, "parts": rows });
             ctx.result(&result, || {

@@ -41,9 +41,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     outs.file(&plot.with_extension("svg"))?;
     outs.file(&plot.with_extension("png"))?;
     let s = a.subject.open(ctx)?;
-    let p = a.table.params_for(s.fps, &s)?;
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let pipe = a.cache.pipeline(ctx, s)?;
+    let p = a.table.params_for(&pipe)?;
     let table = pipe.table(&p)?.value;
     let n = table.n;
     let k = i * n + j;

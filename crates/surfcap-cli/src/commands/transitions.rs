@@ -24,8 +24,8 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (outs, _) = ctx.claim_dir(&a.output, "transitions", &[&a.subject.path])?;
     let s = a.subject.open(ctx)?;
-    let p = a.table.params_for(s.fps, &s)?;
     let pipe = a.cache.pipeline(ctx, s)?;
+    let p = a.table.params_for(&pipe)?;
     let t0 = Instant::now();
     let fetched = pipe.table(&p)?;
     let secs = t0.elapsed().as_secs_f64();

@@ -4,16 +4,22 @@
 //! generalisation with held-out frames, completion of occluded texels, an interpolation example.
 //! `surfcap_eval::appearance_eval` computes it; this command generates (or reuses) the frames,
 //! writes `appearance.json`, the plots (SVG and PNG) and the example images, and prints the
-//! tables.
+//! tables. Two benchmarks: `smooth` (generated drift of a few texels, a moving light, blur,
+//! noise) and `capture` (the head rendered from a camera ring with specular shading and
+//! re-projected into the atlas through calibration and tracking error, as multi-view capture
+//! makes textures; `surfcap_appearance::capture_benchmark`).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use surfcap_appearance::TextureImage;
+use surfcap_appearance::capture_benchmark::{CaptureBenchmark, CaptureOptions};
 use surfcap_appearance::generated_frames::GeneratedFrames;
 use surfcap_appearance::image_similarity::Similarity;
-use surfcap_appearance::texture_generator::{GeneratorOptions, write_generated_frames};
-use surfcap_eval::appearance_eval::{AppearanceEval, AppearanceEvalOptions, appearance_eval};
+use surfcap_appearance::texture_generator::{GeneratorOptions, read_uv_mesh, write_generated_frames};
+use surfcap_eval::appearance_eval::{
+    AppearanceEval, AppearanceEvalOptions, AppearanceSequence, CaptureSequence, appearance_eval,
+};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use crate::options::{CacheOpts, FlowArgs};
@@ -23,6 +29,17 @@ use crate::options::{CacheOpts, FlowArgs};
 enum Frames {
     Generate { data: PathBuf, frames: usize, size: usize, seed: u64, lighting: bool },
     Existing(PathBuf),
+    Capture { data: PathBuf, options: CaptureOptions },
+}
+
+/// Which benchmark the frames come from.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Benchmark {
+    /// Generated drift of at most a few texels, a moving light, blur and noise.
+    Smooth,
+    /// Camera-ring renders (specular shading, sensor noise) re-projected into the atlas through
+    /// per-camera calibration error and per-frame tracking error.
+    Capture,
 }
 
 /// The head scan of the shared data the frames are generated from.
@@ -116,17 +133,15 @@ fn print_tables(r: &AppearanceEval) {
         r.complete_frames,
         r.hole_frames.len()
     );
+    println!("input frames vs their clean truth: {}", sim(&r.input_vs_clean));
     let f = &r.flow;
-    println!(
-        "flow accuracy ({}), reference {}: end-point error mean {:.3}, median {:.3}, max {:.3} texels over {} frames (zero flow: {:.3})",
-        f.estimator,
-        f.reference,
-        f.errors.mean,
-        f.errors.median,
-        f.errors.max,
-        f.errors.frames,
-        f.errors.zero_flow_mean
-    );
+    match &f.errors {
+        Some(e) => println!(
+            "flow accuracy ({}), reference {}: end-point error mean {:.3}, median {:.3}, max {:.3} texels over {} frames (zero flow: {:.3})",
+            f.estimator, f.reference, e.mean, e.median, e.max, e.frames, e.zero_flow_mean
+        ),
+        None => println!("flow accuracy ({}), reference {}: the benchmark has no true flow", f.estimator, f.reference),
+    }
     if let (Some(n), Some(e)) = (&f.second_estimator, &f.second) {
         println!(
             "  {n}: mean {:.3}, median {:.3}, max {:.3} texels over {} frames (zero flow: {:.3})",
@@ -213,9 +228,25 @@ pub struct Args {
     /// The shared data folder (its leeperrysmith_head: template.obj and Map-COL.jpg).
     #[arg(long, default_value = "../shared/data")]
     pub data: PathBuf,
+    /// The benchmark generated: `smooth` (drift of a few texels, a moving light) or `capture`
+    /// (camera-ring renders re-projected through calibration and tracking error).
+    #[arg(long, value_enum, default_value_t = Benchmark::Smooth)]
+    pub benchmark: Benchmark,
     /// Use this folder of `surfcap appearance generate` instead of generating one.
-    #[arg(long, conflicts_with_all = ["frames", "size"])]
+    #[arg(long, conflicts_with_all = ["frames", "size", "benchmark"])]
     pub frames_dir: Option<PathBuf>,
+    /// Capture benchmark: cameras on the ring.
+    #[arg(long, default_value_t = 12, value_parser = crate::options::count)]
+    pub cameras: usize,
+    /// Capture benchmark: RMS tracking error per frame, in radii of the head's bounding sphere.
+    #[arg(long, default_value_t = 0.02)]
+    pub tracking: f64,
+    /// Capture benchmark: per-camera calibration error (view and roll angle), degrees.
+    #[arg(long, default_value_t = 0.3)]
+    pub calibration_deg: f64,
+    /// Capture benchmark: specular strength (0: diffuse only).
+    #[arg(long, default_value_t = 0.25)]
+    pub specular: f64,
     /// Frames to generate.
     #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::options::at_least(s, 6))]
     pub frames: usize,
@@ -264,10 +295,31 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = vec![&a.data];
     inputs.extend(a.frames_dir.as_deref());
     let outs = super::folder::claim(ctx, &a.output, &inputs, "eval-appearance")?;
-    let source = match a.frames_dir {
-        Some(d) => Frames::Existing(d),
-        None => {
+    for (name, v) in [("--tracking", a.tracking), ("--calibration-deg", a.calibration_deg), ("--specular", a.specular)]
+    {
+        anyhow::ensure!(v.is_finite() && v >= 0.0, "{name} {v}: expected a finite value of at least 0");
+    }
+    let source = match (a.frames_dir, a.benchmark) {
+        (Some(d), _) => Frames::Existing(d),
+        (None, Benchmark::Smooth) => {
             Frames::Generate { data: a.data, frames: a.frames, size: a.size, seed: a.seed, lighting: !a.no_lighting }
+        }
+        (None, Benchmark::Capture) => {
+            let d = CaptureOptions::default();
+            let options = CaptureOptions {
+                frames: a.frames,
+                seed: a.seed,
+                size: a.size,
+                cameras: a.cameras,
+                image_size: a.image_size,
+                tracking: a.tracking,
+                calibration_deg: a.calibration_deg,
+                specular: a.specular,
+                ambient: if a.no_lighting { 1.0 } else { d.ambient },
+                diffuse: if a.no_lighting { 0.0 } else { d.diffuse },
+                ..d
+            };
+            Frames::Capture { data: a.data, options }
         }
     };
     let opts = AppearanceEvalOptions {
@@ -293,8 +345,24 @@ fn evaluate(
     output: &Path,
 ) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
+    let mut capture = None;
     let dir = match frames {
         Frames::Existing(d) => d,
+        Frames::Capture { data, options } => {
+            let head = data.join(HEAD);
+            anyhow::ensure!(
+                head.is_dir(),
+                "{}: no such folder: expected the shared data's head scan (give --data FOLDER)",
+                head.display()
+            );
+            let (topology, positions) = read_uv_mesh(&head.join("template.obj"))?;
+            let texture = TextureImage::read(&head.join("Map-COL.jpg"))?;
+            let bench = CaptureBenchmark::new(&topology, &positions, &texture, &options)
+                .with_context(|| format!("{}: cannot set up the capture benchmark", head.display()))?;
+            let seq = CaptureSequence::generate(&bench, &topology, &positions, &head.display().to_string(), &bar)?;
+            capture = Some((bench, seq));
+            head
+        }
         Frames::Generate { data, frames, size, seed, lighting } => {
             let head = data.join(HEAD);
             anyhow::ensure!(
@@ -328,8 +396,18 @@ fn evaluate(
     };
     // Frames generated into the output folder are read back from its temporary (the folder
     // reaches its place at the commit).
-    let generated = GeneratedFrames::open(&surfcap_mesh::output_set::write_place(&dir))
-        .with_context(|| format!("{}: not a folder of `surfcap appearance generate`", dir.display()))?;
+    let generated = match capture {
+        Some(_) => None,
+        None => Some(
+            GeneratedFrames::open(&surfcap_mesh::output_set::write_place(&dir))
+                .with_context(|| format!("{}: not a folder of `surfcap appearance generate`", dir.display()))?,
+        ),
+    };
+    let sequence: &dyn AppearanceSequence = match (&capture, &generated) {
+        (Some((_, seq)), _) => seq,
+        (None, Some(g)) => g,
+        (None, None) => unreachable!("a sequence is generated, read or made in memory"),
+    };
     let estimator = flow.estimator(cache, &bar)?;
     let estimate = |r: &TextureImage, t: &TextureImage, m: &surfcap_appearance::TexelMask| estimator.estimate(r, t, m);
     let name = format!(
@@ -347,8 +425,22 @@ fn evaluate(
         &full_estimate as &surfcap_appearance::appearance_model::MaskedFlowEstimator<'_>,
         "TV-L1 at full resolution",
     ));
-    let r = appearance_eval(&generated, &opts, &estimate, &name, second, &bar)?;
+    let r = appearance_eval(sequence, &opts, &estimate, &name, second, &bar)?;
     let mut written = plots(output, &r)?;
+    if let Some((bench, seq)) = &capture {
+        // What the capture looks like: one frame's camera images, its re-projected texture and
+        // its clean truth.
+        let k = seq.frames.len() / 2;
+        let views: Vec<TextureImage> =
+            (0..bench.actual_cameras().len().min(4)).map(|j| bench.render(k, j)).collect::<Result<_, _>>()?;
+        let refs: Vec<&TextureImage> = views.iter().collect();
+        let path = output.join("capture-views.png");
+        side_by_side(&refs)?.write_png(&path)?;
+        written.push(path);
+        let path = output.join("capture-frame-vs-clean.png");
+        side_by_side(&[&seq.frames[k].frame, &seq.frames[k].clean])?.write_png(&path)?;
+        written.push(path);
+    }
     for (stem, image) in &r.images {
         let path = output.join(format!("{stem}.png"));
         image.write_png(&path)?;
@@ -356,6 +448,20 @@ fn evaluate(
     }
     let mut report = serde_json::to_value(&r)?;
     report["frames_dir"] = serde_json::to_value(&dir)?;
+    report["benchmark"] = serde_json::to_value(if capture.is_some() { "capture" } else { "smooth" })?;
+    if let Some((bench, seq)) = &capture {
+        report["capture"] = serde_json::to_value(bench.options())?;
+        let seen: Vec<f64> = seq
+            .frames
+            .iter()
+            .map(|f| {
+                let m = bench.mask();
+                let s = (0..f.seen.len()).filter(|&i| m.is_active(i) && f.seen[i]).count();
+                s as f64 / m.len().max(1) as f64
+            })
+            .collect();
+        report["capture_seen_share"] = serde_json::to_value(seen.iter().sum::<f64>() / seen.len().max(1) as f64)?;
+    }
     report["written"] = serde_json::to_value(&written)?;
     let path = output.join("appearance.json");
     crate::output::write_json(&path, &report)?;
@@ -364,4 +470,24 @@ fn evaluate(
         super::folder::print_wrote(&path, &written);
     });
     Ok(())
+}
+
+/// Images of one height side by side.
+fn side_by_side(images: &[&TextureImage]) -> anyhow::Result<TextureImage> {
+    let h = images.iter().map(|i| i.height()).max().unwrap_or(0);
+    let c = images.first().map_or(3, |i| i.channels());
+    let w: usize = images.iter().map(|i| i.width()).sum();
+    let mut out = TextureImage::zeros(w, h, c);
+    let mut x0 = 0;
+    for img in images {
+        for ch in 0..c.min(img.channels()) {
+            let src = img.plane(ch);
+            let dst = out.plane_mut(ch);
+            for y in 0..img.height() {
+                dst[y * w + x0..y * w + x0 + img.width()].copy_from_slice(&src[y * img.width()..(y + 1) * img.width()]);
+            }
+        }
+        x0 += img.width();
+    }
+    Ok(out)
 }

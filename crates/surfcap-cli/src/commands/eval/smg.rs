@@ -52,6 +52,26 @@ pub struct Args {
     /// switches lie at least 15 frames apart (an extension).
     #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
     pub transitions: usize,
+    /// The paper's graph as printed: every self-transition by eq. 5 alone (a clip's stillest
+    /// 3 frames may be its loop) and every loop played. By default a self-transition is chosen
+    /// among the loops the queries may play (--min-loop, --loop-variation-floor), spanning the
+    /// sequence's cross transitions and key frames, and excluded loops never pad time.
+    #[arg(long)]
+    pub eq5_self_transitions: bool,
+    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
+    /// to pad time, nor chosen as a self-transition (1: no minimum).
+    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
+    pub min_loop: usize,
+    /// Excluded loops: a loop whose frames vary less than this many typical frame-to-frame
+    /// dissimilarities of their sequences is a held pose, never repeated to pad time, nor
+    /// chosen as a self-transition (0: no floor).
+    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
+    pub loop_variation_floor: f64,
+    /// Self-transitions per sequence (without --eq5-self-transitions): the loop spanning the
+    /// sequence's cross transitions and key frames, then the cheapest admissible loops inside
+    /// it, which let the queries meet times in finer steps.
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 1, 10))]
+    pub loops_per_sequence: usize,
     /// Evaluate this subject or frame set instead of the CMU mannequin (with --connect and
     /// --pair).
     #[arg(long)]
@@ -101,6 +121,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         vertices,
         remeshed,
         transitions,
+        eq5_self_transitions,
+        min_loop,
+        loop_variation_floor,
+        loops_per_sequence,
         input,
         connect,
         pairs,
@@ -174,6 +198,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let opts = SmgEvalOptions {
         per_connection: transitions,
         targets: grid(&distances, &seconds),
+        loops: (!eq5_self_transitions).then_some(surfcap_smg::loop_exclusion::LoopRule {
+            min_frames: min_loop,
+            variation_floor: loop_variation_floor,
+        }),
+        loops_per_sequence,
         ..SmgEvalOptions::default()
     };
     let r = smg_eval(&frames, &form, &connections, &pairs, &opts, Some((&store, cache.no_cache)), &bar)?;
@@ -217,6 +246,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             r.similarity_seconds,
             if r.similarity_cached { " (cached)" } else { "" }
         );
+        match r.loop_rule {
+            Some(rule) => println!(
+                "self-transitions ({} per sequence) chosen among the loops of at least {} frames varying at least {} typical frame step(s), \
+                 spanning each sequence's cross transitions and key frames; shorter or stiller loops never pad time",
+                loops_per_sequence, rule.min_frames, rule.variation_floor
+            ),
+            None => println!("self-transitions by eq. 5 alone, every loop played (--eq5-self-transitions)"),
+        }
         for t in &r.transitions {
             println!("  transition {} -> {} (window {}, cost {:.4}, smoothness {:.1} cm)", t.from, t.to, t.window, t.cost, 100.0 * t.smoothness);
         }

@@ -73,6 +73,10 @@ pub struct Args {
     /// whole-body comparison curve).
     #[arg(long)]
     pub whole_body: bool,
+    /// Directions: forward (the knight to each character, the average mannequin to the heavy
+    /// one), backward (the other way round) or both, as the thesis evaluates.
+    #[arg(long, default_value = "both", value_parser = ["forward", "backward", "both"])]
+    pub direction: String,
     /// Overlap of the proposed parts, in edge rings.
     #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::at_least(s, 1))]
     pub overlap_rings: usize,
@@ -82,7 +86,7 @@ pub struct Args {
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-transfer")?;
-    let Args { data, cases, sizes, components, seed, whole_body, overlap_rings, output } = a;
+    let Args { data, cases, sizes, components, seed, whole_body, direction, overlap_rings, output } = a;
     let parts = if whole_body { CaseParts::WholeBody } else { CaseParts::Proposed { overlap_rings } };
     let opts = TransferEvalOptions { sizes, seed, components, ..TransferEvalOptions::default() };
     let mut built = Vec::new();
@@ -103,6 +107,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             other => anyhow::bail!("--cases {other}: expected barbarian, mage, rogue, mannequins or catlion"),
         });
     }
+    built = built
+        .into_iter()
+        .flat_map(|c| match direction.as_str() {
+            "forward" => vec![c],
+            "backward" => vec![c.reversed()],
+            _ => {
+                let r = c.reversed();
+                vec![c, r]
+            }
+        })
+        .collect();
     evaluate(ctx, built, catlion, &opts, &output)?;
     ctx.commit(outs)
 }
@@ -195,10 +210,33 @@ fn evaluate(
                     100.0 * x.inside_mean
                 );
             }
+            println!("  motions absent from training, side by side (% of height; GP-NN / Baran / nearest pose):");
+            let mut keys: Vec<(&str, &str)> = Vec::new();
+            for u in &r.unseen {
+                if !keys.contains(&(u.training.as_str(), u.motion.as_str())) {
+                    keys.push((u.training.as_str(), u.motion.as_str()));
+                }
+            }
+            for (training, motion) in keys {
+                let of = |m: &str| {
+                    r.unseen
+                        .iter()
+                        .find(|u| u.method == m && u.training == training && u.motion == motion)
+                        .map_or("-".to_string(), |u| format!("{:.2}", u.rms_percent))
+                };
+                println!(
+                    "    {:<28} {:<15} {:>6} / {:>6} / {:>6}",
+                    motion,
+                    training,
+                    of("GP-NN"),
+                    of("Baran"),
+                    of("nearest pose")
+                );
+            }
             println!("  motions absent from training, % of height, by training set:");
             for u in &r.unseen {
                 println!(
-                    "    {:<8} {:<15} ({:>3} pairs) {:<28} {:>4} frames {:>6.2}%",
+                    "    {:<16} {:<15} ({:>3} pairs) {:<28} {:>4} frames {:>6.2}%",
                     u.method, u.training, u.training_pairs, u.motion, u.frames, u.rms_percent
                 );
             }

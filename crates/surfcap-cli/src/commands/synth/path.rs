@@ -58,7 +58,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(playback_inputs(&a.appearance, &a.vary));
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
-    let params = a.graph.params_for(s.fps, &s)?;
     let units = s.units.clone();
     let request = PathRequest {
         curve: a.curve.clone(),
@@ -71,6 +70,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         branching: a.branching,
     };
     let pipe = a.graph.cache.pipeline(ctx, s)?;
+    let params = a.graph.params_for(&pipe)?;
     let bar = crate::progress::Bar::new(ctx);
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_path(

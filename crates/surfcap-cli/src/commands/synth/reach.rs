@@ -49,7 +49,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(playback_inputs(&a.appearance, &a.vary));
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
-    let params = a.graph.params_for(s.fps, &s)?;
     let units = s.units.clone();
     let request = ReachRequest {
         from: a.from.clone(),
@@ -60,6 +59,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         time_scale: a.time_scale.0,
     };
     let pipe = a.graph.cache.pipeline(ctx, s)?;
+    let params = a.graph.params_for(&pipe)?;
     let bar = crate::progress::Bar::new(ctx);
     let playback = playback(&a.appearance, &a.vary);
     let o = synthesize_reach(
