@@ -600,4 +600,35 @@ note = ""
         assert_eq!(measured_value(&r, "/rows/1/x"), None);
         assert_eq!(measured_value(&r, ""), None);
     }
+
+    /// The transfer pointers name curves by index into `eval transfer`'s report: two curves
+    /// (random, key-seeded) per method of `Method::ALL` in order, then the GP-NN whole-body
+    /// curve. Each pointer's curve must be the method its label names, so that a method added
+    /// to the eval (e.g. the nearest-pose baseline) cannot silently shift a comparison.
+    #[test]
+    fn transfer_pointers_name_the_curves_their_labels_compare() {
+        use crate::transfer_eval::Method;
+        let cat = PublishedCatalogue::load_builtin().unwrap();
+        let curve_name = |k: usize| -> String {
+            if k < 2 * Method::ALL.len() {
+                Method::ALL[k / 2].name().to_string()
+            } else {
+                assert_eq!(k, 2 * Method::ALL.len(), "curve {k} is past the whole-body curve");
+                "whole body".to_string()
+            }
+        };
+        let mut checked = 0;
+        for v in &cat.values {
+            let transfer = cat.item(&v.item).is_some_and(|i| i.eval == "transfer");
+            for pointer in [&v.measured, &v.measured_over] {
+                let Some(rest) = pointer.strip_prefix("/cases/0/curves/") else { continue };
+                assert!(transfer, "{}: {pointer}", v.label);
+                let k: usize = rest.split('/').next().unwrap().parse().unwrap();
+                let name = curve_name(k);
+                assert!(v.label.contains(&name), "{} ({pointer}): curve {k} is {name}", v.label);
+                checked += 1;
+            }
+        }
+        assert!(checked >= 40, "only {checked} transfer pointers checked");
+    }
 }

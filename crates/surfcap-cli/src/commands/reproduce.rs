@@ -118,7 +118,9 @@ fn recipe(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<Recipe>
             "transfer" => (
                 "transfer",
                 s(&["--data", &d]),
-                s(&["--cases", "mannequins", "--sizes", "10,25", "--components", "5"]),
+                // Case 0 is the forward knight -> barbarian case with or without `--quick`
+                // (the published pointers read /cases/0); two sizes for their point 1.
+                s(&["--cases", "barbarian", "--direction", "forward", "--sizes", "5,10", "--components", "3"]),
                 false,
                 "transfer.json",
                 false,
@@ -165,7 +167,18 @@ fn recipe(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<Recipe>
             "vary" => (
                 "vary",
                 s(&["--data", &d]),
-                s(&["--only", "cmu", "--variants", "2", "--iterations", "20", "--vertices", "1000"]),
+                s(&[
+                    "--only",
+                    "cmu",
+                    "--cmu-clips",
+                    "16_15,16_36",
+                    "--variants",
+                    "2",
+                    "--iterations",
+                    "20",
+                    "--vertices",
+                    "1000",
+                ]),
                 false,
                 "vary.json",
                 false,
