@@ -13,7 +13,7 @@
 
 use crate::error::{Error, Result, check_positions};
 use crate::motion_transfer::TransferredMotion;
-use crate::pose_representation::{Placement, align_motion, align_to_reference};
+use crate::pose_representation::{align_motion, align_to_reference};
 use crate::semantic_deformation_transfer::SemanticDeformationTransfer;
 
 /// A trained Baran et al. transfer: corresponding key poses of the two subjects (world
@@ -105,14 +105,6 @@ impl BaranTransfer {
         }
         let displacements: Vec<[f64; 6]> =
             motion.displacements.iter().map(|d| [d[0] * scale, d[1] * scale, d[2] * scale, d[3], d[4], d[5]]).collect();
-        let mut placement = Placement::identity();
-        let mut world = Vec::with_capacity(aligned.len());
-        for (f, pose) in aligned.iter().enumerate() {
-            if f > 0 {
-                placement = placement.moved_by(&displacements[f]);
-            }
-            world.push(placement.apply(pose));
-        }
-        Ok(TransferredMotion { parts: vec![Vec::new(); aligned.len()], aligned, displacements, world })
+        Ok(TransferredMotion::placed(vec![Vec::new(); aligned.len()], aligned, displacements))
     }
 }

@@ -169,6 +169,22 @@ pub struct TransferredMotion {
     pub world: Vec<Vec<f32>>,
 }
 
+impl TransferredMotion {
+    /// The motion with its world frames: each aligned pose moved by the displacements
+    /// accumulated from the reference placement (the first frame's displacement is not applied).
+    pub fn placed(parts: Vec<Vec<Vec<f32>>>, aligned: Vec<Vec<f32>>, displacements: Vec<[f64; 6]>) -> Self {
+        let mut placement = Placement::identity();
+        let mut world = Vec::with_capacity(aligned.len());
+        for (f, pose) in aligned.iter().enumerate() {
+            if f > 0 {
+                placement = placement.moved_by(&displacements[f]);
+            }
+            world.push(placement.apply(pose));
+        }
+        TransferredMotion { parts, aligned, displacements, world }
+    }
+}
+
 /// The aligned poses of global frames.
 fn poses_of<'a>(p: &'a PreparedSubject, frames: &[usize]) -> Result<Vec<&'a [f32]>> {
     frames.iter().map(|&g| p.frame(g).map(|f| f.0)).collect()
@@ -328,14 +344,6 @@ impl MotionTransfer {
             *d = [0.0; 6];
         }
         let aligned: Vec<Vec<f32>> = parts.iter().map(|p| reconstruct(p)).collect::<Result<_>>()?;
-        let mut placement = Placement::identity();
-        let mut world = Vec::with_capacity(aligned.len());
-        for (f, pose) in aligned.iter().enumerate() {
-            if f > 0 {
-                placement = placement.moved_by(&displacements[f]);
-            }
-            world.push(placement.apply(pose));
-        }
-        Ok(TransferredMotion { parts, aligned, displacements, world })
+        Ok(TransferredMotion::placed(parts, aligned, displacements))
     }
 }
