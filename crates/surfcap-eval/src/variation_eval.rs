@@ -355,6 +355,8 @@ pub struct SamplingSettings {
     pub thin: usize,
     pub max_leapfrog: usize,
     pub foot_skate_cleanup: bool,
+    /// Whether the clean-up moved the whole body with the planted feet.
+    pub move_root: bool,
 }
 
 /// Result of [`variation_eval`]; serialised, the report `vary.json` without `written`.
@@ -947,6 +949,7 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
             thin: o.sampling.thin,
             max_leapfrog: o.sampling.max_leapfrog,
             foot_skate_cleanup: o.sampling.foot_skate_cleanup,
+            move_root: o.sampling.move_root,
         },
         criteria: o.criteria,
         missed: cases.iter().map(|c| c.missed).sum(),

@@ -105,7 +105,8 @@ pub struct FootSkateParams {
     /// the KayKit walks and runs it lowers the delivered frames' edge distortion on every clip,
     /// but on the CMU 16_15 walk it lets one variant slide 0.171 m/s where the hips held give
     /// 0.166, past the capture's 0.155 + 10% (tests/foot_skate_real_data.rs); it becomes the
-    /// default once it keeps both.
+    /// default once it keeps both. The command line's `--move-root` (`vary sample`, `eval
+    /// vary`) sets it.
     pub move_root: bool,
     /// The shared contact detection's thresholds.
     #[serde(skip)]

@@ -168,7 +168,7 @@ pub fn sample_blend_variants(
         let learnt =
             interpolate_latents(&model.learnt_latents(r1.sequence)?, &model.learnt_latents(r2.sequence)?, r1, r2, w);
         let (la, ld) = reconstruct_aligned(model, &learnt)?;
-        clean_up_variants(model, &mut variants, &place(&la, &ld)?)?;
+        clean_up_variants(model, &mut variants, &place(&la, &ld)?, opts.move_root)?;
     }
     Ok((variants, BlendSampling { a: a.into(), b: b.into(), w, lower: r1, upper: r2, pairing, chains }))
 }

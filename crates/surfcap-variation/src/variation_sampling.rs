@@ -103,6 +103,9 @@ pub struct SamplingOptions {
     /// Pin the planted feet of every variant ([`crate::foot_skate_cleanup`]; on by default,
     /// see the module doc).
     pub foot_skate_cleanup: bool,
+    /// With the clean-up, move the whole body with the planted feet as well
+    /// ([`FootSkateParams::move_root`]; off by default).
+    pub move_root: bool,
 }
 
 impl Default for SamplingOptions {
@@ -115,6 +118,7 @@ impl Default for SamplingOptions {
             thin: 5,
             max_leapfrog: 30,
             foot_skate_cleanup: true,
+            move_root: false,
         }
     }
 }
@@ -486,7 +490,7 @@ pub fn sample_variants(
     if opts.foot_skate_cleanup {
         let (la, ld) = reconstruct_aligned(model, &model.learnt_latents(j)?)?;
         let learnt_world = place(&la, &ld)?;
-        clean_up_variants(model, &mut variants, &learnt_world)?;
+        clean_up_variants(model, &mut variants, &learnt_world, opts.move_root)?;
     }
     Ok((variants, chains))
 }
@@ -552,11 +556,16 @@ pub fn pose_height(pose: &[f32], up: surfcap_mesh::UpAxis) -> f64 {
 /// `before_cleanup`. `learnt_world` is the learnt motion the variants vary, placed as they are:
 /// when it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
 /// pinned to. A model without legs is left as it is.
-pub fn clean_up_variants(model: &VariationModel, variants: &mut [Variant], learnt_world: &[Vec<f32>]) -> Result<()> {
+pub fn clean_up_variants(
+    model: &VariationModel,
+    variants: &mut [Variant],
+    learnt_world: &[Vec<f32>],
+    move_root: bool,
+) -> Result<()> {
     if variants.is_empty() {
         return Ok(());
     }
-    let Some(cleanup) = model_cleanup(model)? else { return Ok(()) };
+    let Some(cleanup) = model_cleanup(model, move_root)? else { return Ok(()) };
     let height = pose_height(&model.reference_pose, model.up_axis);
     let ground = in_place_ground(learnt_world, model.fps, model.up_axis, height);
     for v in variants {
@@ -576,9 +585,9 @@ pub fn clean_up_variants(model: &VariationModel, variants: &mut [Variant], learn
     Ok(())
 }
 
-/// The foot-skate clean-up of a model's mesh (default settings, the legs being the parts
-/// named `leg*`/`foot*`); `None` for a model without legs.
-fn model_cleanup(model: &VariationModel) -> Result<Option<FootSkateCleanup>> {
+/// The foot-skate clean-up of a model's mesh (default settings but `move_root`, the legs being
+/// the parts named `leg*`/`foot*`); `None` for a model without legs.
+fn model_cleanup(model: &VariationModel, move_root: bool) -> Result<Option<FootSkateCleanup>> {
     let legs = crate::motion_preparation::feet_of(&model.parts);
     if legs.is_empty() {
         return Ok(None);
@@ -588,7 +597,7 @@ fn model_cleanup(model: &VariationModel) -> Result<Option<FootSkateCleanup>> {
         &model.reference_pose,
         model.up_axis,
         &legs,
-        FootSkateParams::default(),
+        FootSkateParams { move_root, ..FootSkateParams::default() },
     )?))
 }
 
@@ -610,7 +619,7 @@ pub fn variants_on_source_path(
 ) -> Result<Vec<CleanedVariant>> {
     let placed: Vec<Vec<Vec<f32>>> =
         variants.iter().map(|v| variant_on_source_path(model, j, v, source)).collect::<Result<_>>()?;
-    let fixer = if cleanup { model_cleanup(model)? } else { None };
+    let fixer = if cleanup { model_cleanup(model, false)? } else { None };
     let Some(fixer) = fixer else { return Ok(placed.into_iter().map(|p| (p, None)).collect()) };
     let owned: Vec<Vec<f32>> = source.iter().map(|p| p.to_vec()).collect();
     let height = pose_height(&model.reference_pose, model.up_axis);

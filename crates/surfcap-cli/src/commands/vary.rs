@@ -117,6 +117,10 @@ pub struct SampleArgs {
     /// and the legs deformed to meet them, blended in and out around each contact).
     #[arg(long)]
     pub no_foot_skate_cleanup: bool,
+    /// Let the clean-up move the whole body with the planted feet (Kovar et al. 2002's root
+    /// adjustment), so a planted foot is reached without stretching its leg; off by default.
+    #[arg(long, conflicts_with = "no_foot_skate_cleanup")]
+    pub move_root: bool,
     /// The output folder: `<name>-variant-<k>.glb` per variant and `report.json`.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -318,6 +322,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
             thin: a.thin,
             max_leapfrog: a.max_leapfrog,
             foot_skate_cleanup: !a.no_foot_skate_cleanup,
+            move_root: a.move_root,
         },
         output: a.output.clone(),
         force: ctx.force,
