@@ -19,6 +19,17 @@ fn import(data: &Path, dir: &Path, character: &str, clips: &[&str]) -> PathBuf {
     out
 }
 
+/// The barbarian's own Walking_C clip: the truth the knight's transferred walk is judged on.
+fn barbarian_walking_c(data: &Path) -> surfcap_mesh::Subject {
+    surfcap_formats::import::import(
+        &[data.join("kaykit_adventurers/barbarian_Walking_C")],
+        &Default::default(),
+        &surfcap_mesh::NoProgress,
+    )
+    .unwrap()
+    .subject
+}
+
 /// Reads a glb's positions back through surfcap's importer (all frames of its one sequence).
 fn glb_frames(glb: &Path) -> Vec<Vec<f32>> {
     let s = surfcap_formats::import::import(&[glb.to_path_buf()], &Default::default(), &surfcap_mesh::NoProgress)
@@ -94,13 +105,7 @@ fn knight_to_barbarian_train_apply_matches_the_barbarians_own_clip() {
     assert_eq!(rep["frames"], 49);
     surfcap_testkit::validate_glb(std::slice::from_ref(&out));
     let got = glb_frames(&out);
-    let truth = surfcap_formats::import::import(
-        &[data.join("kaykit_adventurers/barbarian_Walking_C")],
-        &Default::default(),
-        &surfcap_mesh::NoProgress,
-    )
-    .unwrap()
-    .subject;
+    let truth = barbarian_walking_c(&data);
     let t = &truth.sequences()[0];
     assert_eq!(got.len(), t.n_frames());
     let (lo, hi) = surfcap_mesh::bounding_box(t.frame(0));
@@ -346,13 +351,7 @@ fn baran_trains_and_applies_from_the_command_line_and_truth_gives_the_nearest_po
     surfcap_testkit::validate_glb(std::slice::from_ref(&out));
     // The same output as file frames: the one the report measured (aligned onto the truth).
     let got = glb_frames(&out);
-    let t = surfcap_formats::import::import(
-        &[data.join("kaykit_adventurers/barbarian_Walking_C")],
-        &Default::default(),
-        &surfcap_mesh::NoProgress,
-    )
-    .unwrap()
-    .subject;
+    let t = barbarian_walking_c(&data);
     assert_eq!(got.len(), t.sequences()[0].n_frames());
 
     // Without the truth the edge-length measure is dropped, and says so.

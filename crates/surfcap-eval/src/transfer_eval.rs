@@ -663,24 +663,29 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         case.unseen.iter().map(|&(a, b)| true_pairs((a, b)).map(|p| (b, p))).collect::<Result<_>>()?;
     let all_s: Vec<usize> = unseen_frames.iter().flat_map(|(_, p)| p.iter().map(|x| x.0)).collect();
     let mut unseen = Vec::new();
+    // One row per unseen motion of a prediction over all of them (`all_s`, motion after motion).
+    let mut rows = |method: &str, set: &str, pairs: &[(usize, usize)], pred: &[Vec<f32>]| -> Result<()> {
+        let mut at = 0;
+        for (b, p) in &unseen_frames {
+            let t: Vec<usize> = p.iter().map(|x| x.1).collect();
+            let rms = rms_of(tgt, &pred[at..at + p.len()], &t)?;
+            at += p.len();
+            unseen.push(UnseenResult {
+                method: method.into(),
+                training: set.into(),
+                training_pairs: pairs.len(),
+                motion: case.target.sequences()[*b].name.clone(),
+                frames: p.len(),
+                rms_percent: pct(rms),
+                rms,
+            });
+        }
+        Ok(())
+    };
     for method in Method::ALL {
         for (set, pairs) in training_sets {
             let pred = bench.fit_predict(method, parts, opts.components, pairs, &all_s)?;
-            let mut at = 0;
-            for (b, p) in &unseen_frames {
-                let t: Vec<usize> = p.iter().map(|x| x.1).collect();
-                let rms = rms_of(tgt, &pred[at..at + p.len()], &t)?;
-                at += p.len();
-                unseen.push(UnseenResult {
-                    method: method.name().into(),
-                    training: set.into(),
-                    training_pairs: pairs.len(),
-                    motion: case.target.sequences()[*b].name.clone(),
-                    frames: p.len(),
-                    rms_percent: pct(rms),
-                    rms,
-                });
-            }
+            rows(method.name(), set, pairs, &pred)?;
         }
     }
     // Whether the parts help on unseen motions: GP-NN on the whole body with as many
@@ -689,21 +694,7 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         let m_whole = opts.components * case.target_parts.len();
         for (set, pairs) in training_sets {
             let pred = bench.fit_predict(Method::GpNn, (&whole.0, &whole.1), m_whole, pairs, &all_s)?;
-            let mut at = 0;
-            for (b, p) in &unseen_frames {
-                let t: Vec<usize> = p.iter().map(|x| x.1).collect();
-                let rms = rms_of(tgt, &pred[at..at + p.len()], &t)?;
-                at += p.len();
-                unseen.push(UnseenResult {
-                    method: WHOLE_BODY_GP_NN.into(),
-                    training: set.into(),
-                    training_pairs: pairs.len(),
-                    motion: case.target.sequences()[*b].name.clone(),
-                    frames: p.len(),
-                    rms_percent: pct(rms),
-                    rms,
-                });
-            }
+            rows(WHOLE_BODY_GP_NN, set, pairs, &pred)?;
         }
     }
     let all_t: Vec<usize> = unseen_frames.iter().flat_map(|(_, p)| p.iter().map(|x| x.1)).collect();
