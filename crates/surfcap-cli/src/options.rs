@@ -140,13 +140,7 @@ impl CacheOpts {
     /// written only under the cache's own hashed names, never into a folder of the input's.
     /// (Whether other users can write it is checked by the cache itself, when it is first used.)
     pub fn dir(&self) -> anyhow::Result<PathBuf> {
-        let dir = self.cache_dir.clone().unwrap_or_else(|| {
-            std::env::var_os("XDG_CACHE_HOME")
-                .map(PathBuf::from)
-                .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))
-                .unwrap_or_else(|| PathBuf::from(".cache"))
-                .join("surfcap")
-        });
+        let dir = self.cache_dir.clone().unwrap_or_else(surfcap_pipeline::default_cache_dir);
         let out = surfcap_mesh::output_path::resolve(&dir)?;
         for input in INPUTS.lock().unwrap_or_else(|e| e.into_inner()).iter() {
             let Ok(inp) = std::fs::canonicalize(input) else { continue };

@@ -79,7 +79,7 @@ pub use frame_set::{Correspondence, Frame, FrameSet, FrameSetSequence};
 pub use frame_textures::FrameTextures;
 pub use progress::{NoProgress, Progress};
 pub use regular_file::read_regular_file;
-pub use subject::{FrameLabel, JointTrack, Sequence, Subject, Units, UpAxis};
+pub use subject::{FrameLabel, JointTrack, PositionBuffer, Sequence, Subject, Units, UpAxis};
 pub use topology::{Topology, UvAtlas};
 pub use uv_vertices::UvVertices;
 

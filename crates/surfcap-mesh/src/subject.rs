@@ -145,13 +145,48 @@ impl JointTrack {
     }
 }
 
+/// Vertex positions of a sequence, contiguous `[frames][vertices][3]` f32, immutable once made:
+/// owned, or held by another owner and shared without a copy (a numpy array passed in from
+/// Python, kept alive by this buffer). Cloning shares the numbers.
+#[derive(Clone)]
+pub struct PositionBuffer(std::sync::Arc<dyn AsRef<[f32]> + Send + Sync>);
+
+impl PositionBuffer {
+    /// Numbers held by `owner` (which must not change them while the buffer lives).
+    pub fn shared(owner: impl AsRef<[f32]> + Send + Sync + 'static) -> Self {
+        PositionBuffer(std::sync::Arc::new(owner))
+    }
+
+    pub fn as_slice(&self) -> &[f32] {
+        (*self.0).as_ref()
+    }
+}
+
+impl From<Vec<f32>> for PositionBuffer {
+    fn from(v: Vec<f32>) -> Self {
+        PositionBuffer::shared(v)
+    }
+}
+
+impl std::fmt::Debug for PositionBuffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "PositionBuffer({} numbers)", self.as_slice().len())
+    }
+}
+
+impl PartialEq for PositionBuffer {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
 /// One named sequence of frames sharing the subject's topology.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sequence {
     pub name: String,
     pub tags: Vec<String>,
     /// Vertex positions, contiguous `[frames][vertices][3]` f32.
-    positions: Vec<f32>,
+    positions: PositionBuffer,
     n_frames: usize,
     /// One label per frame.
     pub labels: Vec<FrameLabel>,
@@ -161,7 +196,13 @@ pub struct Sequence {
 impl Sequence {
     /// A sequence of original frames. `positions.len()` must be a multiple of `3 * n_vertices`.
     pub fn new(name: impl Into<String>, n_vertices: usize, positions: Vec<f32>) -> Result<Self> {
+        Self::from_buffer(name, n_vertices, positions.into())
+    }
+
+    /// The same, on numbers held elsewhere ([`PositionBuffer::shared`]): no copy is made.
+    pub fn from_buffer(name: impl Into<String>, n_vertices: usize, buffer: PositionBuffer) -> Result<Self> {
         let name = name.into();
+        let positions = buffer.as_slice();
         let per_frame = 3 * n_vertices;
         if per_frame == 0 || !positions.len().is_multiple_of(per_frame) {
             return Err(err!(
@@ -186,7 +227,7 @@ impl Sequence {
         Ok(Sequence {
             name,
             tags: Vec::new(),
-            positions,
+            positions: buffer,
             n_frames,
             labels: vec![FrameLabel::Original; n_frames],
             joints: None,
@@ -239,18 +280,23 @@ impl Sequence {
     }
 
     pub fn n_vertices(&self) -> usize {
-        self.positions.len() / (3 * self.n_frames)
+        self.positions().len() / (3 * self.n_frames)
     }
 
     /// All positions, `[frames][vertices][3]`.
     pub fn positions(&self) -> &[f32] {
+        self.positions.as_slice()
+    }
+
+    /// The buffer holding the positions, to share them without a copy.
+    pub fn buffer(&self) -> &PositionBuffer {
         &self.positions
     }
 
     /// Positions of one frame, `[vertices][3]`.
     pub fn frame(&self, f: usize) -> &[f32] {
-        let n = self.positions.len() / self.n_frames;
-        &self.positions[f * n..(f + 1) * n]
+        let n = self.positions().len() / self.n_frames;
+        &self.positions()[f * n..(f + 1) * n]
     }
 }
 

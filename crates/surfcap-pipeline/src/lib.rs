@@ -29,4 +29,4 @@ pub mod walk_playback;
 
 pub use error::{Error, Result};
 pub use graph_kind::GraphKind;
-pub use pipeline::{CacheStore, Fetched, GraphParams, Pipeline, PoseDistances};
+pub use pipeline::{CacheStore, Fetched, GraphParams, Pipeline, PoseDistances, default_cache_dir};

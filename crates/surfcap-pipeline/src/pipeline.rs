@@ -31,6 +31,17 @@ pub struct CacheStore {
     pub refresh: bool,
 }
 
+/// The cache folder every front end uses unless told otherwise, so that the command line and
+/// the Python package share results: `$XDG_CACHE_HOME/surfcap`, else `~/.cache/surfcap`, else
+/// `.cache/surfcap` (no home).
+pub fn default_cache_dir() -> PathBuf {
+    std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .unwrap_or_else(|| PathBuf::from(".cache"))
+        .join("surfcap")
+}
+
 impl CacheStore {
     pub fn in_folder(dir: impl Into<PathBuf>, refresh: bool) -> Self {
         CacheStore { cache: Some(DerivedCache::new(dir)), refresh }

@@ -1,0 +1,146 @@
+"""Type stubs of the extension module (crates/surfcap-python). Shapes and dtypes are in the
+docstrings: F frames, V vertices, T triangles."""
+
+from __future__ import annotations
+
+from os import PathLike
+from typing import Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import reports
+
+__version__: str
+
+Frame = Union[int, str]
+"""A frame: a global index, or ``"sequence:frame"`` (0-based frame in that sequence)."""
+Path = Union[str, PathLike]
+FloatArray = npt.ArrayLike
+"""float32 or float64 numbers, any order or strides (copied once unless C-contiguous float32)."""
+IntArray = npt.ArrayLike
+
+class SurfcapError(Exception):
+    """A surfcap error with the command line's message (the file, line or frame at fault and
+    what was expected). ``causes``: the lower-level causes, outermost first."""
+
+    causes: List[str]
+
+class ConstraintsMissedWarning(UserWarning):
+    """A synthesis missed a constraint; its report says which, by how much and why."""
+
+def set_progress(enabled: bool) -> None:
+    """Show (default) or hide tqdm progress bars of long calls."""
+
+class Subject:
+    """One topology, named sequences of vertex positions, frame rate, up axis and units, with
+    its derived products (distances, tables, graphs, walk models) cached under the same keys as
+    the command line's (``cache_dir``: default ``$XDG_CACHE_HOME/surfcap`` or
+    ``~/.cache/surfcap``; ``cache=False``: memory only; ``refresh=True``: recompute)."""
+
+    @staticmethod
+    def load(
+        path: Path,
+        *,
+        fps: Optional[float] = None,
+        up_axis: Optional[str] = None,
+        units: Optional[str] = None,
+        cache_dir: Optional[Path] = None,
+        cache: bool = True,
+        refresh: bool = False,
+    ) -> Subject:
+        """Opens a subject cache or any source the command line reads."""
+    @staticmethod
+    def import_(
+        paths: Union[Path, Sequence[Path]],
+        *,
+        name: Optional[str] = None,
+        fps: Optional[float] = None,
+        up_axis: Optional[str] = None,
+        units: Optional[str] = None,
+        cache_dir: Optional[Path] = None,
+        cache: bool = True,
+        refresh: bool = False,
+    ) -> Subject:
+        """Imports one or several sources into one subject (``surfcap import``)."""
+    @staticmethod
+    def from_arrays(
+        faces: IntArray,
+        positions: FloatArray,
+        *,
+        fps: float = 30.0,
+        name: str = "subject",
+        sequences: Optional[Sequence[Tuple[str, int]]] = None,
+        up_axis: str = "+y",
+        units: str = "m",
+        copy: bool = False,
+        cache_dir: Optional[Path] = None,
+        cache: bool = True,
+        refresh: bool = False,
+    ) -> Subject:
+        """A subject from ``faces`` (T, 3) integers and ``positions`` (F, V, 3) or (V, 3) floats.
+        A C-contiguous float32 ``positions`` is read in place (no copy: do not change it while
+        the subject lives) unless ``copy=True``. ``sequences``: ``(name, frames)`` pairs that
+        split the frames (default: one sequence named ``name``)."""
+    name: str
+    fps: float
+    up_axis: str
+    """``"+x"``, ``"+y"``, ``"+z"``, ``"-x"``, ``"-y"`` or ``"-z"``."""
+    units: str
+    metres_per_unit: Optional[float]
+    n_frames: int
+    n_vertices: int
+    n_faces: int
+    sequences: List[str]
+    sequence_frames: Dict[str, int]
+    cache_dir: Optional[str]
+    faces: npt.NDArray[np.uint32]
+    """(T, 3) uint32, read-only view."""
+    positions: npt.NDArray[np.float32]
+    """(F, V, 3) float32 in global frame order: a read-only view with one sequence, a joined copy
+    with several."""
+    def __len__(self) -> int: ...
+    def sequence_positions(self, name: str) -> npt.NDArray[np.float32]:
+        """(F_seq, V, 3) float32, read-only view of one sequence."""
+    def frame(self, frame: Frame) -> npt.NDArray[np.float32]:
+        """(V, 3) float32, read-only view of one frame."""
+    def resolve_frame(self, frame: Frame) -> int:
+        """The global index of ``frame``."""
+    def frame_name(self, frame: int) -> str:
+        """``"sequence:frame"`` of a global index."""
+    def export(
+        self,
+        path: Path,
+        format: Optional[str] = None,
+        *,
+        sequences: Optional[Sequence[str]] = None,
+        ascii: bool = False,
+        force: bool = False,
+    ) -> List[str]:
+        """Writes the subject as ``surfcap export`` does (glb, obj, ply, pc2, npy, usda, abc;
+        default from the extension); returns the paths written."""
+    def save(self, path: Path, *, force: bool = False) -> None:
+        """Writes a subject cache (``surfcap import -o x.subject``)."""
+    # interop (surfcap/interop.py)
+    def to_trimesh(self, frame: Frame = 0) -> object:
+        """One frame as a ``trimesh.Trimesh`` (needs trimesh)."""
+    def to_rerun(self, application_id: str = "surfcap", entity_path: str = "subject", *, path: Optional[Path] = None) -> object:
+        """A rerun recording with every frame as ``Mesh3D`` (needs rerun-sdk)."""
+    def log_rerun(self, entity_path: str = "subject", *, timeline: str = "frame", sequence: Optional[str] = None, recording: object = None) -> None:
+        """Logs every frame as ``rerun.Mesh3D`` over a timeline (needs rerun-sdk)."""
+
+# --- distances and interpolation (thesis chapter 2) ---
+
+# --- transitions (thesis 3.2) ---
+
+# --- graphs (thesis 3.3-3.4) ---
+
+# --- synthesis (thesis 3.5) ---
+
+# --- surface motion graph (Huang et al. 2009) ---
+
+# --- transfer (thesis chapter 5) ---
+
+# --- variation (thesis chapter 6) ---
+
+# --- appearance (thesis chapter 4) ---
