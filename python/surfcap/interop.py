@@ -1,4 +1,16 @@
-"""Hand-offs to other Python tools, when they are installed: trimesh and rerun."""
+"""Hand-offs to other Python tools, when they are installed: trimesh and rerun (rerun-sdk 0.41).
+
+Neither package is a dependency of surfcap: ``pip install trimesh rerun-sdk`` (or
+``pip install ./python[interop]``). Calling one of these functions without its package raises
+``ImportError`` naming the package to install.
+
+- ``to_trimesh(subject, frame)``: one frame as a ``trimesh.Trimesh`` (float64 vertices, the
+  subject's triangles, vertex ``i`` kept as vertex ``i``).
+- ``log_rerun(subject, ...)``: every frame as a ``rerun.Mesh3D`` over a frame timeline and a
+  time timeline (seconds at the subject's fps), into the current or a given recording.
+- ``to_rerun(subject, ...)``: a new recording holding the same, saved to an ``.rrd`` file when
+  a path is given.
+"""
 
 from __future__ import annotations
 
@@ -6,20 +18,36 @@ from typing import Any, Optional, Union
 
 Frame = Union[int, str]
 
+# The pip package that provides each module (rerun's is not named after its module).
+_PIP_NAME = {"trimesh": "trimesh", "rerun": "rerun-sdk"}
+
+# The subject's up axis as rerun's view coordinates (right-handed, as surfcap's subjects are).
+_VIEW_COORDINATES = {
+    "+x": "RIGHT_HAND_X_UP",
+    "-x": "RIGHT_HAND_X_DOWN",
+    "+y": "RIGHT_HAND_Y_UP",
+    "-y": "RIGHT_HAND_Y_DOWN",
+    "+z": "RIGHT_HAND_Z_UP",
+    "-z": "RIGHT_HAND_Z_DOWN",
+}
+
 
 def _require(module: str, what: str) -> Any:
+    """Imports ``module`` or raises ImportError saying what needs it and what to install."""
     try:
         return __import__(module)
-    except ImportError as e:  # pragma: no cover - message only
-        raise ImportError(f"{what} needs the `{module}` package (pip install {module.replace('_', '-')}): {e}") from e
+    except ImportError as e:
+        pip = _PIP_NAME.get(module, module)
+        raise ImportError(f"{what} needs the `{module}` package (pip install {pip}): {e}") from e
 
 
 def to_trimesh(subject: Any, frame: Frame = 0) -> Any:
     """One frame (global index or ``"sequence:frame"``) as a ``trimesh.Trimesh``.
 
-    The vertices are a float64 copy of the frame (trimesh works in float64); the faces are the
-    subject's triangles. trimesh's processing (merging vertices) is off, so vertex ``i`` stays
-    vertex ``i``.
+    The vertices are a ``(V, 3)`` float64 copy of the frame (trimesh works in float64); the
+    faces are the subject's ``(T, 3)`` triangles (int64, trimesh's dtype). trimesh's processing
+    (merging vertices, dropping unused ones) is off, so vertex ``i`` stays vertex ``i`` and the
+    mesh's vertex count is the subject's.
     """
     trimesh = _require("trimesh", "Subject.to_trimesh")
     import numpy as np
@@ -38,44 +66,71 @@ def log_rerun(
     timeline: str = "frame",
     sequence: Optional[str] = None,
     recording: Any = None,
+    up_axis: bool = True,
 ) -> None:
-    """Logs every frame (or one sequence's) as a ``rerun.Mesh3D`` at ``entity_path`` over the
-    timeline ``timeline`` (frame numbers) and ``time`` (seconds at the subject's fps).
+    """Logs every frame (or one sequence's) as a ``rerun.Mesh3D`` at ``entity_path``.
 
-    Each frame logs its positions with the subject's triangles. Call
-    ``rerun.init(...)`` and ``rerun.spawn()``/``rerun.save(...)`` first, or pass ``recording``.
+    The triangles are logged once, as static data; the ``(V, 3)`` float32 positions of each
+    frame are sent in one column batch (``rerun.send_columns``) over two timelines: ``timeline``
+    (the global frame index, sequences back to back as ``Subject.frame_name`` counts them) and
+    ``"time"`` (that index in seconds at the subject's fps). The recording's current time is
+    left as it was. ``up_axis=True`` also logs the subject's up axis as static
+    ``rerun.ViewCoordinates`` at the root ``"/"``, so that the 3D view shows the subject
+    upright.
+
+    Logs into ``recording``, or rerun's current recording (call ``rerun.init(...)`` and
+    ``rerun.spawn()`` or ``rerun.save(...)`` first). A ``sequence`` the subject does not have
+    raises ``KeyError`` listing the ones it has.
     """
     rr = _require("rerun", "Subject.log_rerun")
     import numpy as np
 
-    names = [sequence] if sequence is not None else subject.sequences
-    faces = np.asarray(subject.faces, dtype=np.uint32)
+    names = list(subject.sequences)
+    if sequence is not None:
+        subject.sequence_positions(sequence)  # KeyError naming the sequences when unknown
+        names = [sequence]
     kw = {"recording": recording} if recording is not None else {}
+    if up_axis:
+        coords = getattr(rr.ViewCoordinates, _VIEW_COORDINATES[subject.up_axis])
+        rr.log("/", coords, static=True, **kw)
+    faces = np.asarray(subject.faces, dtype=np.uint32)
+    rr.log(entity_path, rr.Mesh3D.from_fields(triangle_indices=faces), static=True, **kw)
+    n_vertices = subject.n_vertices
     offset = 0
     for name in subject.sequences:
         n = subject.sequence_frames[name]
-        if name not in names:
-            offset += n
-            continue
-        positions = subject.sequence_positions(name)
-        for f in range(n):
-            g = offset + f
-            rr.set_time(timeline, sequence=g, **kw)
-            rr.set_time("time", duration=g / subject.fps, **kw)
-            rr.log(
+        if name in names and n > 0:
+            positions = subject.sequence_positions(name).reshape(-1, 3)
+            frames = np.arange(offset, offset + n, dtype=np.int64)
+            rr.send_columns(
                 entity_path,
-                rr.Mesh3D(vertex_positions=positions[f], triangle_indices=faces),
+                indexes=[
+                    rr.TimeColumn(timeline, sequence=frames),
+                    rr.TimeColumn("time", duration=frames / subject.fps),
+                ],
+                columns=rr.Mesh3D.columns(vertex_positions=positions).partition([n_vertices] * n),
                 **kw,
             )
         offset += n
 
 
-def to_rerun(subject: Any, application_id: str = "surfcap", entity_path: str = "subject", *, path: Optional[str] = None) -> Any:
-    """A new rerun recording holding every frame (``log_rerun``); saved to ``path`` (an ``.rrd``
-    file) when given. Returns the recording."""
+def to_rerun(
+    subject: Any,
+    application_id: str = "surfcap",
+    entity_path: str = "subject",
+    *,
+    path: Optional[str] = None,
+    sequence: Optional[str] = None,
+) -> Any:
+    """A new ``rerun.RecordingStream`` holding every frame (or one sequence's) as
+    ``log_rerun`` logs them. With ``path``, the recording is saved to that ``.rrd`` file
+    (``rerun <path>`` opens it) and flushed, so the file is complete when this returns.
+    Returns the recording (log more into it, or ``rerun.notebook_show(recording=...)``)."""
     rr = _require("rerun", "Subject.to_rerun")
     rec = rr.RecordingStream(application_id)
     if path is not None:
-        rec.save(path)
-    log_rerun(subject, entity_path, recording=rec)
+        rec.save(str(path))
+    log_rerun(subject, entity_path, recording=rec, sequence=sequence)
+    if path is not None:
+        rec.flush()
     return rec
