@@ -3,9 +3,10 @@
 //! In: any array-like of float32 or float64 (or anything `numpy.asarray` makes a float array
 //! of), C- or F-ordered or strided. A C-contiguous float32 position array is used in place: the
 //! [`PositionBuffer`] keeps a reference to the array and reads its memory, no copy is made.
-//! Anything else is copied once into a float32 buffer in C order by ndarray's iterators (a
-//! strided or F-ordered array costs one pass over its numbers, not a per-element Python call).
-//! float64 positions are rounded to float32, the precision of every surfcap subject.
+//! Anything else is copied once by numpy into a float32 array in C order, which is then read in
+//! place (a strided or F-ordered array costs numpy's one pass over its numbers, not a slow
+//! path). float64 positions are rounded to the nearest float32, the precision of every surfcap
+//! subject.
 //!
 //! Out: [`position_view`] gives a read-only numpy view of a buffer, kept alive by the view;
 //! [`matrix`] and [`vector`] hand a Rust vector over to numpy without a copy.
@@ -51,34 +52,31 @@ pub struct FloatArray {
 /// Any float array-like as float32 C-order numbers: borrowed when `borrow` and the array is a
 /// C-contiguous float32 numpy array, copied in one pass otherwise. `what` names the argument
 /// in errors.
+///
+/// The copy of a float32 or float64 array of any order or strides is numpy's own
+/// (`numpy.array(x, dtype=float32, order="C")`, a tight loop that releases the GIL), which the
+/// subject then reads in place: an F-ordered, strided or reversed array costs what numpy's
+/// single pass costs (ndarray's element iterator over a dynamic-rank view was 8 to 22 times
+/// slower; `python/bench/arrays.py` measures both).
 pub fn float_array(obj: &Bound<'_, PyAny>, what: &str, borrow: bool) -> PyResult<FloatArray> {
-    if let Ok(a) = obj.cast::<PyArrayDyn<f32>>() {
-        let shape = a.shape().to_vec();
-        if borrow && a.is_c_contiguous() {
-            let len = a.len();
-            let ptr = a.data() as *const f32;
-            let mem = NumpyMemory { _owner: a.clone().into_any().unbind(), ptr, len };
-            return Ok(FloatArray { shape, buffer: PositionBuffer::shared(mem), borrowed: true });
-        }
-        let ro = a.try_readonly().map_err(|e| PyValueError::new_err(format!("{what}: {e}")))?;
-        // (rust-numpy's `as_slice` also accepts F-ordered memory: only C order is row-major.)
-        let v: Vec<f32> = match ro.as_slice() {
-            Ok(s) if a.is_c_contiguous() => s.to_vec(),
-            _ => ro.as_array().iter().copied().collect(),
-        };
-        return Ok(FloatArray { shape, buffer: v.into(), borrowed: false });
+    if let Ok(a) = obj.cast::<PyArrayDyn<f32>>()
+        && borrow
+        && a.is_c_contiguous()
+    {
+        return Ok(FloatArray { shape: a.shape().to_vec(), buffer: numpy_memory(a), borrowed: true });
     }
-    if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
-        let shape = a.shape().to_vec();
-        let ro = a.try_readonly().map_err(|e| PyValueError::new_err(format!("{what}: {e}")))?;
-        let v: Vec<f32> = match ro.as_slice() {
-            Ok(s) if a.is_c_contiguous() => s.iter().map(|&x| x as f32).collect(),
-            _ => ro.as_array().iter().map(|&x| x as f32).collect(),
-        };
-        return Ok(FloatArray { shape, buffer: v.into(), borrowed: false });
+    let np = obj.py().import("numpy")?;
+    if obj.cast::<PyArrayDyn<f32>>().is_ok() || obj.cast::<PyArrayDyn<f64>>().is_ok() {
+        let kw = pyo3::types::PyDict::new(obj.py());
+        kw.set_item("dtype", "float32")?;
+        kw.set_item("order", "C")?;
+        kw.set_item("copy", true)?;
+        let copy =
+            np.call_method("array", (obj,), Some(&kw)).map_err(|e| PyValueError::new_err(format!("{what}: {e}")))?;
+        let copy = copy.cast::<PyArrayDyn<f32>>().map_err(|e| PyTypeError::new_err(format!("{what}: {e}")))?;
+        return Ok(FloatArray { shape: copy.shape().to_vec(), buffer: numpy_memory(copy), borrowed: false });
     }
     // Lists, integer arrays, float16...: numpy makes a float64 array of them (once).
-    let np = obj.py().import("numpy")?;
     let converted = np
         .call_method1("asarray", (obj, "float64"))
         .map_err(|e| PyTypeError::new_err(format!("{what}: expected an array of numbers (float32 or float64): {e}")))?;
@@ -86,6 +84,13 @@ pub fn float_array(obj: &Bound<'_, PyAny>, what: &str, borrow: bool) -> PyResult
         return Err(PyTypeError::new_err(format!("{what}: expected an array of numbers (float32 or float64)")));
     }
     float_array(&converted, what, false)
+}
+
+/// The numbers of a C-contiguous float32 array, read in place (the buffer keeps the array alive).
+fn numpy_memory(a: &Bound<'_, PyArrayDyn<f32>>) -> PositionBuffer {
+    debug_assert!(a.is_c_contiguous());
+    let mem = NumpyMemory { _owner: a.clone().into_any().unbind(), ptr: a.data() as *const f32, len: a.len() };
+    PositionBuffer::shared(mem)
 }
 
 /// Positions `(F, V, 3)` or one frame `(V, 3)`: the buffer and `(frames, vertices)`.
