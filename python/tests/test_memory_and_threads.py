@@ -87,6 +87,28 @@ def test_a_large_float32_array_is_passed_in_without_a_copy(large):
     assert not np.shares_memory(c.positions, p)
 
 
+@pytest.mark.parametrize(
+    "layout",
+    [
+        lambda p: np.asfortranarray(p),
+        lambda p: np.stack([p, p], axis=-1)[..., 0],
+        lambda p: p[::-1],
+        lambda p: p.astype(np.float64),
+    ],
+    ids=["f-order", "strided", "reversed", "float64"],
+)
+def test_any_other_layout_is_copied_once_by_numpy_into_what_the_subject_reads(layout, large):
+    faces, p = large
+    x = layout(p[:200])
+    size = x.size * 4  # the float32 copy
+    s, rss, traced = peak_growth(lambda: surfcap.Subject.from_arrays(faces, x, cache=False))
+    # One float32 copy, made by numpy's one-pass conversion (tracemalloc sees numpy's
+    # allocations, not Rust's), and nothing more of its size.
+    assert 0.99 * size < traced < 1.2 * size, f"numpy allocated {traced / MB:.1f} MB for a {size / MB:.1f} MB copy"
+    assert rss < 1.2 * size, f"peak resident memory grew by {rss / MB:.1f} MB for a {size / MB:.1f} MB copy"
+    np.testing.assert_array_equal(s.positions, x.astype(np.float32))
+
+
 def ticks_during(call, *, middle: float = 0.5):
     """Runs ``call()`` while another Python thread counts, and returns how many of its counts
     fell in the middle ``middle`` fraction of the call: none when the call holds the GIL (the
