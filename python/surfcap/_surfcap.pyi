@@ -126,7 +126,7 @@ class Subject:
         """One frame as a ``trimesh.Trimesh`` (needs trimesh)."""
     def to_rerun(self, application_id: str = "surfcap", entity_path: str = "subject", *, path: Optional[Path] = None, sequence: Optional[str] = None) -> object:
         """A new rerun recording with every frame as ``Mesh3D`` over the timelines ``frame`` and
-        ``time``, saved to the ``.rrd`` file ``path`` when given (needs rerun-sdk)."""
+        ``time``; with ``path``, written to that ``.rrd`` file and closed (needs rerun-sdk)."""
     def log_rerun(self, entity_path: str = "subject", *, timeline: str = "frame", sequence: Optional[str] = None, recording: object = None, up_axis: bool = True) -> None:
         """Logs the triangles once (static) and every frame's ``(V, 3)`` float32 positions as
         ``rerun.Mesh3D`` over ``timeline`` (global frame index) and ``time`` (seconds), with the

@@ -123,14 +123,17 @@ def to_rerun(
     sequence: Optional[str] = None,
 ) -> Any:
     """A new ``rerun.RecordingStream`` holding every frame (or one sequence's) as
-    ``log_rerun`` logs them. With ``path``, the recording is saved to that ``.rrd`` file
-    (``rerun <path>`` opens it) and flushed, so the file is complete when this returns.
-    Returns the recording (log more into it, or ``rerun.notebook_show(recording=...)``)."""
+    ``log_rerun`` logs them, and returns it.
+
+    With ``path``, the recording is written to that ``.rrd`` file and closed, so the file is
+    complete (with its footer) when this returns; ``rerun <path>`` opens it. To keep logging
+    into a file, make the recording yourself (``rec.save(path)``) and call ``log_rerun``.
+    Without ``path``, show the recording with ``rec.spawn()`` or ``rec.notebook_show()``."""
     rr = _require("rerun", "Subject.to_rerun")
     rec = rr.RecordingStream(application_id)
     if path is not None:
         rec.save(str(path))
     log_rerun(subject, entity_path, recording=rec, sequence=sequence)
     if path is not None:
-        rec.flush()
+        rec.disconnect()  # flushes and writes the footer
     return rec
