@@ -58,8 +58,8 @@ pub use animation_output::{
 };
 pub use constraint::{Constraint, ConstraintsMissed, Tolerances};
 pub use error::{Error, Result};
-pub use keyposes_run::{KeyposesOutcome, KeyposesReport, synthesize_keyposes};
-pub use path_run::{PathOutcome, PathQuery, PathReport, PathRequest, synthesize_path};
+pub use keyposes_run::{KeyposesOutcome, KeyposesReport, check_key_poses, synthesize_keyposes};
+pub use path_run::{CheckedPath, CurveSource, PathOutcome, PathQuery, PathReport, PathRequest, synthesize_path};
 pub use playback::{OpenedPlayback, Playback};
 pub use prepared::{Output, Prepared};
 pub use reach_run::{ReachOutcome, ReachQuery, ReachReport, ReachRequest, synthesize_reach};
