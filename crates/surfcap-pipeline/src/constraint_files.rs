@@ -94,7 +94,7 @@ pub fn curve_from_points(values: &[f64], columns: usize, source: &Path, up: UpAx
     if values.is_empty() {
         return Err(Error::file(source, None, "no curve points"));
     }
-    if values.len() % columns != 0 {
+    if !values.len().is_multiple_of(columns) {
         return Err(Error::file(source, None, format!("{} numbers do not make points of {columns}", values.len())));
     }
     if let Some(k) = values.iter().position(|x| !x.is_finite()) {

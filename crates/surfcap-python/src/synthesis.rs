@@ -349,6 +349,7 @@ impl PySynthesizer {
     /// frame an int or ``"sequence:frame"``, the time seconds (a number) or a str as in the file
     /// (``"90"``/``"90f"`` output frame, ``"3s"`` seconds). Returns ``(Subject, KeyposesReport)``.
     #[pyo3(signature = (keys, *, tolerance=None, frame_tolerance=None, output=None, format=None, force=false))]
+    #[allow(clippy::too_many_arguments)]
     fn keyposes<'py>(
         &self,
         py: Python<'py>,
