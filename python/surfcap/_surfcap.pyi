@@ -138,7 +138,112 @@ class Subject:
 
 # --- graphs (thesis 3.3-3.4) ---
 
+def graph(
+    subject: Subject,
+    *,
+    kind: str = "essential",
+    k: Optional[int] = None,
+    alpha: float = 0.05,
+    slope: Union[int, str, float] = 3,
+    l_min: Optional[int] = None,
+    l_max: Optional[int] = None,
+    output: Optional[Path] = None,
+    force: bool = False,
+) -> Dict[str, object]:
+    """The graph over the subject's frames, as ``surfcap graph build`` (``kind``: essential,
+    sparse-essential (``k`` transitions kept per frame), motion; ``slope``: int >= 1 or "inf";
+    segment bounds default from the subject's clips). Returns ``edges`` (E, 2) uint32 (from, to
+    global frames), ``weights`` (E,) float64 and graph.json's numbers (``nodes``,
+    ``frames_in_graph``, ``original_edges``, ``transition_edges``, ``density``, ``kind``,
+    ``alpha``, ``l_min``, ``l_max``, ``slope``, ``seconds``, ``cached``, ``subject``).
+    ``output``: writes edges.npy, weights.npy and graph.json there."""
+
 # --- synthesis (thesis 3.5) ---
+
+Curve = Union[Path, npt.ArrayLike]
+"""A CSV file, or an (N, 3) x,y,z / (N, 2) ground-plane array of float32 or float64 in the
+subject's units."""
+Keys = Union[Path, Sequence[Tuple[Frame, Union[float, str]]]]
+"""A key file (``frame,time`` lines), or ``(frame, time)`` pairs: time in seconds (a number) or
+a str as in the file (``"90"``/``"90f"``: output frame, ``"3s"``: seconds)."""
+
+class Synthesizer:
+    """A subject prepared for synthesis (``prepare``): its graph and walk model, built once."""
+
+    subject: Subject
+    kind: str
+    n_edges: int
+    n_transitions: int
+    prepare_seconds: float
+    def path(
+        self,
+        curve: Curve,
+        *,
+        planar: bool = False,
+        tags: Union[None, str, Sequence[str]] = None,
+        start: Optional[Frame] = None,
+        window: Optional[float] = None,
+        max_transitions: Optional[int] = None,
+        branching: int = 8,
+        tolerance: Optional[float] = None,
+        frame_tolerance: Optional[int] = None,
+        output: Optional[Path] = None,
+        format: Optional[str] = None,
+        force: bool = False,
+    ) -> Tuple[Subject, reports.PathReport]:
+        """Follows ``curve`` with the centre of mass (``surfcap synth path``). Returns the
+        animation ((F, V, 3) float32 in one sequence ``path``) and its report; ``output``
+        writes both as the command does."""
+    def keyposes(
+        self,
+        keys: Keys,
+        *,
+        tolerance: Optional[float] = None,
+        frame_tolerance: Optional[int] = None,
+        output: Optional[Path] = None,
+        format: Optional[str] = None,
+        force: bool = False,
+    ) -> Tuple[Subject, reports.KeyposesReport]:
+        """Moves key poses to new times (``surfcap synth keyposes``)."""
+    def reach(
+        self,
+        from_: Frame,
+        to: Frame,
+        distance: float,
+        time: Union[float, str],
+        *,
+        distance_scale: float = 0.3,
+        time_scale: float = 10.0,
+        tolerance: Optional[float] = None,
+        frame_tolerance: Optional[int] = None,
+        output: Optional[Path] = None,
+        format: Optional[str] = None,
+        force: bool = False,
+    ) -> Tuple[Subject, reports.ReachReport]:
+        """From one frame to another covering ``distance`` (subject units) in ``time`` (seconds,
+        or ``"90f"`` frames shown) (``surfcap synth reach``)."""
+
+def prepare(
+    subject: Subject,
+    *,
+    kind: str = "essential",
+    k: Optional[int] = None,
+    alpha: float = 0.05,
+    slope: Union[int, str, float] = 3,
+    l_min: Optional[int] = None,
+    l_max: Optional[int] = None,
+    track: Optional[Sequence[int]] = None,
+) -> Synthesizer:
+    """Reads or builds (and caches) the subject's graph and walk model once."""
+
+def synth_path(subject: Subject, curve: Curve, *, kind: str = "essential", k: Optional[int] = None, alpha: float = 0.05, slope: Union[int, str, float] = 3, l_min: Optional[int] = None, l_max: Optional[int] = None, track: Optional[Sequence[int]] = None, planar: bool = False, tags: Union[None, str, Sequence[str]] = None, start: Optional[Frame] = None, window: Optional[float] = None, max_transitions: Optional[int] = None, branching: int = 8, tolerance: Optional[float] = None, frame_tolerance: Optional[int] = None, output: Optional[Path] = None, format: Optional[str] = None, force: bool = False) -> Tuple[Subject, reports.PathReport]:
+    """``prepare(subject, ...).path(curve, ...)`` in one call (the request checked first)."""
+
+def synth_keyposes(subject: Subject, keys: Keys, *, kind: str = "essential", k: Optional[int] = None, alpha: float = 0.05, slope: Union[int, str, float] = 3, l_min: Optional[int] = None, l_max: Optional[int] = None, tolerance: Optional[float] = None, frame_tolerance: Optional[int] = None, output: Optional[Path] = None, format: Optional[str] = None, force: bool = False) -> Tuple[Subject, reports.KeyposesReport]:
+    """``prepare(subject, ...).keyposes(keys, ...)`` in one call (the keys checked first)."""
+
+def synth_reach(subject: Subject, from_: Frame, to: Frame, distance: float, time: Union[float, str], *, kind: str = "essential", k: Optional[int] = None, alpha: float = 0.05, slope: Union[int, str, float] = 3, l_min: Optional[int] = None, l_max: Optional[int] = None, distance_scale: float = 0.3, time_scale: float = 10.0, tolerance: Optional[float] = None, frame_tolerance: Optional[int] = None, output: Optional[Path] = None, format: Optional[str] = None, force: bool = False) -> Tuple[Subject, reports.ReachReport]:
+    """``prepare(subject, ...).reach(from_, to, distance, time, ...)`` in one call."""
 
 # --- surface motion graph (Huang et al. 2009) ---
 

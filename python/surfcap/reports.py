@@ -61,6 +61,74 @@ class Report:
 
 # --- synthesis (thesis 3.5) ---
 
+
+class PathReport(Report):
+    """What ``synth path`` writes as ``<output>.report.json``: the curve, the search, the walk
+    (``walk``: global frames; ``segments``; ``graph``), the centre's errors measured on the
+    animation (``per_frame.error``, ``per_frame.centre``), the ``missed_stretches`` of the curve
+    and ``constraints`` (the path, with whether it was ``missed``). Lengths in the subject's
+    units."""
+
+    constraint: str
+    curve_length: float
+    planar: bool
+    subject: str
+    fps: float
+    frames: int
+    original_frames: int
+    synthetic_frames: int
+    transitions: int
+    walk: List[int]
+    mean_error: float
+    max_error: float
+    travelled: float
+    path_length: float
+    net_displacement: float
+    constraints: List[Report]
+    missed_stretches: List[Report]
+
+
+class KeyposesReport(Report):
+    """What ``synth keyposes`` writes: per key (``keys``) the requested and obtained output frame,
+    the timing error and the pose distance at the obtained time (thesis Fig. 3.18), with why a
+    time no walk can meet is unreachable; the walk and ``constraints``."""
+
+    constraint: str
+    keys: List[Report]
+    mean_abs_error_frames: float
+    search_seconds: float
+    subject: str
+    fps: float
+    frames: int
+    transitions: int
+    walk: List[int]
+    constraints: List[Report]
+
+
+class ReachReport(Report):
+    """What ``synth reach`` writes: the distance and duration asked and obtained (frames shown,
+    start included), the realism and total cost, whether both were ``met`` and, if the graph
+    proves it, why not (``unreachable_why``); the walk and ``constraints``."""
+
+    constraint: str
+    target_distance: float
+    distance: float
+    distance_error: float
+    target_seconds: float
+    seconds: float
+    target_frames: int
+    obtained_frames: int
+    time_error_frames: int
+    realism_cost: float
+    total_cost: float
+    met: bool
+    subject: str
+    fps: float
+    frames: int
+    transitions: int
+    walk: List[int]
+    constraints: List[Report]
+
 # --- surface motion graph (Huang et al. 2009) ---
 
 # --- transfer (thesis chapter 5) ---

@@ -346,10 +346,8 @@ impl TableOpts {
         self.with_bounds(pipe.segment_bounds())
     }
 
-    fn with_bounds(&self, (lo, hi): (usize, usize)) -> anyhow::Result<TableParams> {
-        let (l_min, l_max) = (self.l_min.unwrap_or(lo), self.l_max.unwrap_or(hi));
-        anyhow::ensure!(1 <= l_min && l_min <= l_max, "segment lengths {l_min}..{l_max}: expected 1 <= l-min <= l-max");
-        Ok(TableParams { l_min, l_max, slope: self.slope.0 })
+    fn with_bounds(&self, bounds: (usize, usize)) -> anyhow::Result<TableParams> {
+        Ok(surfcap_pipeline::table_params(self.slope.0, self.l_min, self.l_max, bounds)?)
     }
 }
 
@@ -386,18 +384,7 @@ impl GraphOpts {
     }
 
     fn with_table(&self, table: TableParams) -> anyhow::Result<GraphParams> {
-        let kind = match (self.kind, self.k) {
-            (kind, None) => kind,
-            (GraphKind::SparseEssential { k }, Some(given)) => {
-                let named = self.kind != GraphKind::sparse_essential() && k != given;
-                anyhow::ensure!(!named, "--k {given}: the graph kind already says k = {k}");
-                GraphKind::SparseEssential { k: given }
-            }
-            (kind, Some(given)) => {
-                anyhow::bail!("--k {given}: only with --kind sparse-essential (the graph is {kind})")
-            }
-        };
-        Ok(GraphParams { table, kind, alpha: self.alpha.value() })
+        Ok(GraphParams { table, kind: self.kind.with_k(self.k)?, alpha: self.alpha.value() })
     }
 }
 

@@ -71,7 +71,7 @@ impl OutOpts {
     /// Where the animation goes, honouring `--force`.
     pub fn output(&self, ctx: &crate::Ctx) -> Output {
         Output {
-            path: self.output.clone(),
+            path: Some(self.output.clone()),
             format: self.format,
             force: ctx.force,
             tolerances: self.constraints.tolerances(),

@@ -58,8 +58,7 @@ pub fn parse_curve(text: &str, path: &Path, up: UpAxis, planar: bool) -> Result<
             format!("{cols} columns; expected x,y,z or two ground-plane coordinates"),
         ));
     }
-    let (iu, iv, iw) = plane_axes(up);
-    let mut points = Vec::with_capacity(rows.len());
+    let mut values = Vec::with_capacity(rows.len() * cols);
     for (line, cells) in &rows {
         if cells.len() != cols {
             return Err(Error::file(
@@ -68,29 +67,59 @@ pub fn parse_curve(text: &str, path: &Path, up: UpAxis, planar: bool) -> Result<
                 format!("{} columns, expected {cols} like the first row", cells.len()),
             ));
         }
-        let mut v = [0.0; 3];
-        for (k, c) in cells.iter().enumerate() {
-            v[k] = c
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| Error::file(path, Some(*line), format!("{c:?} is not a finite number")))?;
+        for c in cells {
+            values.push(
+                c.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| Error::file(path, Some(*line), format!("{c:?} is not a finite number")))?,
+            );
         }
-        points.push(if cols == 2 {
-            let mut p = [0.0; 3];
-            p[iu] = v[0];
-            p[iv] = v[1];
-            p[iw] = 0.0;
-            p
-        } else {
-            v
-        });
     }
-    let axes = if planar || cols == 2 { vec![iu, iv] } else { vec![0, 1, 2] };
-    let curve = Curve::new(points, axes).map_err(|e| Error::file(path, None, e.to_string()))?;
+    curve_from_points(&values, cols, path, up, planar)
+}
+
+/// A curve from points already read: `values` holds `columns` finite numbers a point, point
+/// after point (3: x,y,z in the subject's axes; 2: the ground plane's two axes of `up`, e.g.
+/// x,z for +y up); `planar` follows only the ground-plane projection (implied by two columns).
+/// `source` names the points in errors (a file, or a front end's argument).
+pub fn curve_from_points(values: &[f64], columns: usize, source: &Path, up: UpAxis, planar: bool) -> Result<Curve> {
+    if columns != 2 && columns != 3 {
+        return Err(Error::file(
+            source,
+            None,
+            format!("{columns} columns; expected x,y,z or two ground-plane coordinates"),
+        ));
+    }
+    if values.is_empty() {
+        return Err(Error::file(source, None, "no curve points"));
+    }
+    if !values.len().is_multiple_of(columns) {
+        return Err(Error::file(source, None, format!("{} numbers do not make points of {columns}", values.len())));
+    }
+    if let Some(k) = values.iter().position(|x| !x.is_finite()) {
+        return Err(Error::file(source, None, format!("point {}: {} is not a finite number", k / columns, values[k])));
+    }
+    let (iu, iv, iw) = plane_axes(up);
+    let points: Vec<[f64; 3]> = values
+        .chunks_exact(columns)
+        .map(|v| {
+            if columns == 2 {
+                let mut p = [0.0; 3];
+                p[iu] = v[0];
+                p[iv] = v[1];
+                p[iw] = 0.0;
+                p
+            } else {
+                [v[0], v[1], v[2]]
+            }
+        })
+        .collect();
+    let axes = if planar || columns == 2 { vec![iu, iv] } else { vec![0, 1, 2] };
+    let curve = Curve::new(points, axes).map_err(|e| Error::file(source, None, e.to_string()))?;
     if !curve.length().is_finite() {
         // Finite coordinates can still be too far apart for their distance to be one.
-        return Err(Error::file(path, None, "the curve's length overflows: expected coordinates below about 1e150"));
+        return Err(Error::file(source, None, "the curve's length overflows: expected coordinates below about 1e150"));
     }
     Ok(curve)
 }
@@ -167,6 +196,14 @@ pub fn parse_key_poses(text: &str, path: &Path, s: &Subject) -> Result<Vec<KeyPo
     if rows.first().is_some_and(|(_, c)| c.len() == 2 && c[1].parse::<TimeSpec>().is_err()) {
         rows.remove(0);
     }
+    key_poses_from_rows(rows, path, s)
+}
+
+/// Key poses from rows already split into cells, each with its number (a file's line, or a
+/// front end's 1-based item number), checked as [`read_key_poses`] checks a file's: `frame,time`
+/// cells, times increasing, at least two keys. `source` names the rows in errors.
+pub fn key_poses_from_rows(rows: Vec<(usize, Vec<String>)>, source: &Path, s: &Subject) -> Result<Vec<KeyPose>> {
+    let path = source;
     let mut keys: Vec<KeyPose> = Vec::new();
     for (line, cells) in rows {
         if cells.len() != 2 {

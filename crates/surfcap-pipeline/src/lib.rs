@@ -10,7 +10,10 @@
 //! changed parameter recomputes only what depends on it; an entry that does not decode (damaged,
 //! older layout) is recomputed and replaced. Each product's `.npy` layout is documented on the
 //! method that produces it (and in `docs/formats.md`). [`GraphKind`] (`essential`,
-//! `sparse-essential:K`, `motion`) is written and read in that form, so a graph's key holds k.
+//! `sparse-essential:K`, `motion`) is written and read in that form, so a graph's key holds k;
+//! [`GraphOptions`] turns the front ends' graph options into [`GraphParams`] ([`graph_options`]);
+//! [`GraphSummary`] and [`write_graph`] are what `graph build` writes about a graph
+//! ([`graph_summary`]).
 //!
 //! Beside the chain: the constraint files of synthesis ([`constraint_files`]: curves, key poses,
 //! tag restrictions, errors naming file and line); walk playback into a labelled `Sequence` with
@@ -23,10 +26,14 @@ pub mod constraint_files;
 pub mod error;
 pub mod frame_variants;
 pub mod graph_kind;
+pub mod graph_options;
+pub mod graph_summary;
 pub mod pipeline;
 pub mod product_key;
 pub mod walk_playback;
 
 pub use error::{Error, Result};
 pub use graph_kind::GraphKind;
+pub use graph_options::{GraphOptions, table_params};
+pub use graph_summary::{GraphSummary, edge_arrays, write_graph};
 pub use pipeline::{CacheStore, Fetched, GraphParams, Pipeline, PoseDistances, default_cache_dir};

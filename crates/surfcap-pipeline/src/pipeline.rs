@@ -434,7 +434,7 @@ fn check_shape(shape: &[usize], expected: &[usize], what: &'static str) -> Resul
     if shape == expected { Ok(()) } else { Err(shape_error(shape, &format!("{expected:?}"), what)) }
 }
 
-fn check_table(p: &TableParams) -> Result<()> {
+pub(crate) fn check_table(p: &TableParams) -> Result<()> {
     if 1 <= p.l_min && p.l_min <= p.l_max {
         Ok(())
     } else {

@@ -4,6 +4,7 @@
 //! compared with the key's. A time no walk from the previous key can meet within the frame
 //! tolerance says why, in the surface motion graph's words (`Unreachable`).
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -139,15 +140,39 @@ impl Prepared {
             per_frame: CentreTrack { centre: played.centres.clone() },
             constraints: constraints.clone(),
         };
-        write_report(&played.report_path, &report)?;
+        if let Some(path) = &played.report_path {
+            write_report(path, &report)?;
+        }
         Ok(KeyposesOutcome { played, report, obtained, mean_abs_error, search_seconds, constraints })
     }
 }
 
+/// Refuses, before any work, key poses whose animation (from the first key's time to the
+/// last's) or whose timed search would exceed `limits`; `source` names the keys in the message
+/// (the key file).
+pub fn check_key_poses(
+    s: &surfcap_mesh::Subject,
+    keys: &[KeyPose],
+    source: &str,
+    out: &Output,
+    limits: &SizeLimits,
+) -> Result<()> {
+    let (Some(first), Some(last)) = (keys.first(), keys.last()) else {
+        crate::error::refuse!("{source}: no key poses; expected at least two");
+    };
+    let (first, last) = (first.requested, last.requested);
+    let longest = keys.windows(2).map(|p| (p[1].requested - p[0].requested) as usize).max().unwrap_or(0);
+    let what = format!("{source}: keys from output frame {first} to {last}");
+    let frames = (last - first + 1) as f64;
+    let search_bytes = search_table_bytes(s.n_frames(), longest);
+    limits.check(&Request { what, frames, subject: s, search_bytes, format: out.format() })
+}
+
 /// One key-pose synthesis from an unprepared subject: the key file (`frame,time` lines) read,
-/// the request sized before any work, the subject prepared and the keys timed.
+/// the request sized before any work ([`check_key_poses`]), the subject prepared and the keys
+/// timed.
 pub fn synthesize_keyposes(
-    pipe: Pipeline,
+    pipe: impl Into<Arc<Pipeline>>,
     params: GraphParams,
     keys_file: &std::path::Path,
     playback: crate::Playback,
@@ -155,15 +180,11 @@ pub fn synthesize_keyposes(
     limits: &SizeLimits,
     progress: &dyn Progress,
 ) -> Result<KeyposesOutcome> {
+    let pipe: Arc<Pipeline> = pipe.into();
     let s = pipe.subject();
     let playback = playback.open(s, out)?;
     let keys = read_key_poses(keys_file, s)?;
-    let (first, last) = (keys[0].requested, keys[keys.len() - 1].requested);
-    let longest = keys.windows(2).map(|p| (p[1].requested - p[0].requested) as usize).max().unwrap_or(0);
-    let what = format!("{}: keys from output frame {first} to {last}", keys_file.display());
-    let frames = (last - first + 1) as f64;
-    let search_bytes = search_table_bytes(s.n_frames(), longest);
-    limits.check(&Request { what, frames, subject: s, search_bytes, format: out.format() })?;
+    check_key_poses(s, &keys, &keys_file.display().to_string(), out, limits)?;
     let prep = playback.prepare(pipe, params, None)?;
     prep.time_key_poses(&keys, out, progress)
 }

@@ -8,8 +8,11 @@
 //! return; they map [`ConstraintsMissed`] to their own failure (the command line: exit 3).
 //!
 //! # Where to start reading
-//! - [`Prepared`] (`prepared.rs`): a subject with its graph and walk model, answering many
-//!   queries; [`Output`] says where an animation goes and how its constraints are judged.
+//! - [`Prepared`] (`prepared.rs`): a subject with its graph and walk model (its pipeline shared
+//!   with the front end), answering many queries; [`Output`] says where an animation goes (or
+//!   that it stays in memory, [`Output::in_memory`]) and how its constraints are judged. Each
+//!   request checks itself before any work (`PathRequest::check`, [`check_key_poses`],
+//!   `ReachRequest::check`), so a prepared subject answers it as the one-call form does.
 //! - The queries, one file each, each returning a typed outcome whose report is a `Serialize`
 //!   struct written beside the animation as `<output>.report.json`:
 //!   - [`path_run`]: path following (thesis 3.5.1), [`Prepared::follow_path`];
@@ -58,8 +61,8 @@ pub use animation_output::{
 };
 pub use constraint::{Constraint, ConstraintsMissed, Tolerances};
 pub use error::{Error, Result};
-pub use keyposes_run::{KeyposesOutcome, KeyposesReport, synthesize_keyposes};
-pub use path_run::{PathOutcome, PathQuery, PathReport, PathRequest, synthesize_path};
+pub use keyposes_run::{KeyposesOutcome, KeyposesReport, check_key_poses, synthesize_keyposes};
+pub use path_run::{CheckedPath, CurveSource, PathOutcome, PathQuery, PathReport, PathRequest, synthesize_path};
 pub use playback::{OpenedPlayback, Playback};
 pub use prepared::{Output, Prepared};
 pub use reach_run::{ReachOutcome, ReachQuery, ReachReport, ReachRequest, synthesize_reach};

@@ -3,11 +3,12 @@
 //! its errors measured on the written frames.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use serde::Serialize;
 use surfcap_mesh::Progress;
 use surfcap_motion::path_following::{Curve, PathSearch, Restriction, follow_path, path_errors};
-use surfcap_pipeline::constraint_files::{parse_restriction, read_curve};
+use surfcap_pipeline::constraint_files::{curve_from_points, parse_restriction, read_curve};
 use surfcap_pipeline::{GraphParams, Pipeline};
 
 use crate::animation_output::write_report;
@@ -215,7 +216,9 @@ impl Prepared {
             constraints: constraints.clone(),
             missed_stretches: missed,
         };
-        write_report(&played.report_path, &report)?;
+        if let Some(path) = &played.report_path {
+            write_report(path, &report)?;
+        }
         Ok(PathOutcome {
             frames: errors.len(),
             played,
@@ -228,11 +231,45 @@ impl Prepared {
     }
 }
 
-/// What `synth path` asks: a curve file and how to follow it.
+/// Where a curve comes from: a CSV file (`--curve`), or points a front end already holds.
+#[derive(Debug, Clone)]
+pub enum CurveSource {
+    /// CSV of curve points (x,y,z in the subject's axes and units, or two ground-plane columns).
+    File(PathBuf),
+    /// Points of `columns` (2: ground-plane coordinates, 3: x,y,z) finite numbers each, row
+    /// after row; `name` says where they came from in messages (e.g. `curve`).
+    Points { name: String, columns: usize, values: Vec<f64> },
+}
+
+impl CurveSource {
+    /// The curve, read as `read_curve` reads a file (a two-column curve, or `planar`, follows
+    /// the ground-plane projection).
+    pub fn read(&self, up: surfcap_mesh::UpAxis, planar: bool) -> Result<Curve> {
+        Ok(match self {
+            CurveSource::File(path) => read_curve(path, up, planar)?,
+            CurveSource::Points { name, columns, values } => {
+                curve_from_points(values, *columns, std::path::Path::new(name), up, planar)?
+            }
+        })
+    }
+
+    /// How the request names the curve in messages: `--curve FILE`, or the points' name.
+    fn describe(&self) -> String {
+        match self {
+            CurveSource::File(path) => format!("--curve {}", path.display()),
+            CurveSource::Points { name, values, columns } => {
+                format!("{name} ({} points)", values.len() / (*columns).max(1))
+            }
+        }
+    }
+}
+
+/// What `synth path` asks: a curve and how to follow it.
 #[derive(Debug, Clone)]
 pub struct PathRequest {
-    /// CSV of curve points (x,y,z in the subject's axes and units, or two ground-plane columns).
-    pub curve: PathBuf,
+    /// The curve (`--curve`: a CSV file of x,y,z in the subject's axes and units, or two
+    /// ground-plane columns).
+    pub curve: CurveSource,
     /// Follow only the projection on the ground plane (implied by a two-column curve).
     pub planar: bool,
     /// Motion types on parts of the curve, `TAG:FROM-TO` (arc lengths).
@@ -248,11 +285,75 @@ pub struct PathRequest {
     pub branching: usize,
 }
 
-/// One path-following synthesis from an unprepared subject: the curve read and the request
-/// sized and checked (clips that travel, tags, start frame) before any work, then the subject
+/// A path request checked against its subject: the query's owned parts.
+#[derive(Debug, Clone)]
+pub struct CheckedPath {
+    pub curve: Curve,
+    pub restrictions: Vec<Restriction>,
+    pub start: Option<u32>,
+    pub search: PathSearch,
+}
+
+impl CheckedPath {
+    /// The query to run on the prepared subject.
+    pub fn query(&self) -> PathQuery<'_> {
+        PathQuery {
+            curve: &self.curve,
+            restrictions: &self.restrictions,
+            start: self.start,
+            search: self.search.clone(),
+        }
+    }
+}
+
+impl PathRequest {
+    /// The request checked and sized before any search: the curve read, the animation's size
+    /// estimated from the subject's fastest motion against `limits`, the tags parsed, the clips
+    /// checked to travel, the start frame resolved and the search's defaults taken from the
+    /// subject's looping clips (`pipe`'s). (`track` is the prepared subject's: see
+    /// [`synthesize_path`].)
+    pub fn check(&self, pipe: &Pipeline, out: &Output, limits: &SizeLimits) -> Result<CheckedPath> {
+        let s = pipe.subject();
+        let curve = self.curve.read(s.up_axis, self.planar)?;
+        if let Some(speed) = fastest_speed(s, curve.axes()) {
+            let what = format!(
+                "{} ({} long, the subject's fastest motion covers {} a second)",
+                self.curve.describe(),
+                length(curve.length(), &s.units, 1),
+                length(speed, &s.units, 2)
+            );
+            let frames = curve.length() / speed * s.fps;
+            limits.check(&Request { what, frames, subject: s, search_bytes: 0, format: out.format() })?;
+        }
+        let restrictions = self
+            .tags
+            .iter()
+            .map(|t| parse_restriction(s, t).with_context(|| format!("--tags {t:?}")))
+            .collect::<Result<Vec<_>>>()?;
+        let travel = surfcap_motion::clip_travel::subject_travel(s);
+        crate::travel_check::require_travel(s, &travel, "a path constraint", None)?;
+        for (t, r) in self.tags.iter().zip(&restrictions) {
+            crate::travel_check::require_travel(s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
+        }
+        let start = self.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
+        let shortest_loop =
+            pipe.loops().iter().map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps).min_by(f64::total_cmp);
+        let defaults = PathSearch::for_clips(s.fps, shortest_loop);
+        let search = PathSearch {
+            window: self.window.unwrap_or(defaults.window),
+            max_transitions: self.max_transitions.unwrap_or(defaults.max_transitions),
+            branching: self.branching,
+            ..defaults
+        };
+        Ok(CheckedPath { curve, restrictions, start, search })
+    }
+}
+
+/// One path-following synthesis from an unprepared subject: the playback opened and the
+/// request checked and sized ([`PathRequest::check`]) before any work, then the subject
 /// prepared with `prepare` (appearance and variants: [`crate::Playback`]) and the path followed.
 pub fn synthesize_path(
-    pipe: Pipeline,
+    pipe: impl Into<Arc<Pipeline>>,
     params: GraphParams,
     request: &PathRequest,
     playback: crate::Playback,
@@ -260,42 +361,12 @@ pub fn synthesize_path(
     limits: &SizeLimits,
     progress: &dyn Progress,
 ) -> Result<PathOutcome> {
-    let s = pipe.subject();
-    let playback = playback.open(s, out)?;
-    let curve = read_curve(&request.curve, s.up_axis, request.planar)?;
-    if let Some(speed) = fastest_speed(s, curve.axes()) {
-        let what = format!(
-            "--curve {} ({} long, the subject's fastest motion covers {} a second)",
-            request.curve.display(),
-            length(curve.length(), &s.units, 1),
-            length(speed, &s.units, 2)
-        );
-        let frames = curve.length() / speed * s.fps;
-        limits.check(&Request { what, frames, subject: s, search_bytes: 0, format: out.format() })?;
-    }
-    let restrictions = request
-        .tags
-        .iter()
-        .map(|t| parse_restriction(s, t).with_context(|| format!("--tags {t:?}")))
-        .collect::<Result<Vec<_>>>()?;
-    let travel = surfcap_motion::clip_travel::subject_travel(s);
-    crate::travel_check::require_travel(s, &travel, "a path constraint", None)?;
-    for (t, r) in request.tags.iter().zip(&restrictions) {
-        crate::travel_check::require_travel(s, &travel, &format!("--tags {t}"), Some(&r.allowed))?;
-    }
-    let start = request.start.as_deref().map(|x| s.resolve_frame(x)).transpose()?.map(|g| g as u32);
-    let shortest_loop =
-        pipe.loops().iter().map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps).min_by(f64::total_cmp);
-    let defaults = PathSearch::for_clips(s.fps, shortest_loop);
-    let search = PathSearch {
-        window: request.window.unwrap_or(defaults.window),
-        max_transitions: request.max_transitions.unwrap_or(defaults.max_transitions),
-        branching: request.branching,
-        ..defaults
-    };
+    let pipe: Arc<Pipeline> = pipe.into();
+    let playback = playback.open(pipe.subject(), out)?;
+    let checked = request.check(&pipe, out, limits)?;
     let tracked = (!request.track.is_empty()).then_some(request.track.as_slice());
     let prep = playback.prepare(pipe, params, tracked)?;
-    prep.follow_path(&PathQuery { curve: &curve, restrictions: &restrictions, start, search }, out, progress)
+    prep.follow_path(&checked.query(), out, progress)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 //! ([`Playback::open`]), then attached to the prepared subject ([`OpenedPlayback::prepare`]).
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use surfcap_mesh::Subject;
 use surfcap_pipeline::{GraphParams, Pipeline};
@@ -34,12 +35,16 @@ impl Playback {
     /// the subject has no UV atlas or the model's frames are not the subject's) and checks the
     /// variation model's folder, before any search.
     pub fn open(&self, subject: &Subject, out: &Output) -> Result<OpenedPlayback> {
-        let appearance = match &self.appearance {
-            Some(path) => Some(SubjectAppearance::open(path, subject, out.format(), &out.path)?),
-            None => None,
+        let appearance = match (&self.appearance, &out.path) {
+            (Some(path), Some(output)) => Some(SubjectAppearance::open(path, subject, out.format(), output)?),
+            (Some(path), None) => crate::error::refuse!(
+                "--appearance {}: a textured animation is written as a glb with a texture per frame: expected an output",
+                path.display()
+            ),
+            (None, _) => None,
         };
         if let Some(v) = &self.variation {
-            v.check(&out.path)?;
+            v.check(out.path.as_deref())?;
         }
         Ok(OpenedPlayback { appearance, variation: self.variation.clone() })
     }
@@ -47,7 +52,12 @@ impl Playback {
 
 impl OpenedPlayback {
     /// The subject of `pipe` prepared ([`Prepared::new`]) and played with this.
-    pub fn prepare(self, pipe: Pipeline, params: GraphParams, tracked: Option<&[usize]>) -> Result<Prepared> {
+    pub fn prepare(
+        self,
+        pipe: impl Into<Arc<Pipeline>>,
+        params: GraphParams,
+        tracked: Option<&[usize]>,
+    ) -> Result<Prepared> {
         Ok(Prepared::new(pipe, params, tracked)?.with_appearance(self.appearance).with_variation(self.variation))
     }
 }

@@ -3,6 +3,7 @@
 //! (`TimedGraph::walk_with_distance_and_time`: distance and timing errors weighed by their
 //! scales against the walk's transition cost).
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -168,7 +169,9 @@ impl Prepared {
             pose_distance_to,
             constraints: constraints.clone(),
         };
-        write_report(&played.report_path, &report)?;
+        if let Some(path) = &played.report_path {
+            write_report(path, &report)?;
+        }
         let index = self.subject().frame_index();
         Ok(ReachOutcome {
             played,
@@ -205,10 +208,46 @@ impl ReachRequest {
     }
 }
 
-/// One reach synthesis from an unprepared subject: the frames resolved and the request sized
-/// and checked (clips that travel) before any work, then the subject prepared and searched.
+impl ReachRequest {
+    /// The request checked and sized before any search: the frames resolved, the duration
+    /// turned into frames shown (at least two), the animation and the search's tables sized
+    /// against `limits`, and, for a distance, the clips checked to travel.
+    pub fn check(&self, s: &surfcap_mesh::Subject, out: &Output, limits: &SizeLimits) -> Result<ReachQuery> {
+        let (from, to) = (s.resolve_frame(&self.from)? as u32, s.resolve_frame(&self.to)? as u32);
+        // A duration T shows round(T x fps) frames, start included (the surface motion graph's
+        // count); a walk from one frame to another shows at least two.
+        let frames = match self.time.frames(s.fps, TimeUnit::Seconds) {
+            Some(f) if f >= 2 => f as usize,
+            _ => refuse!(
+                "--time {}: expected a duration of at least two frames shown (at {} fps), e.g. 90f or 3s",
+                self.time_text(),
+                s.fps
+            ),
+        };
+        let search_bytes = distance_search_table_bytes(s.n_frames(), frames);
+        let what = format!("--time {} at {} fps", self.time_text(), s.fps);
+        limits.check(&Request { what, frames: frames as f64, subject: s, search_bytes, format: out.format() })?;
+        if self.distance > 0.0 {
+            let travel = surfcap_motion::clip_travel::subject_travel(s);
+            crate::travel_check::require_travel(s, &travel, &format!("--distance {}", self.distance), None)?;
+        }
+        Ok(ReachQuery {
+            from_spec: self.from.clone(),
+            to_spec: self.to.clone(),
+            from,
+            to,
+            distance: self.distance,
+            frames,
+            distance_scale: self.distance_scale,
+            time_scale: self.time_scale,
+        })
+    }
+}
+
+/// One reach synthesis from an unprepared subject: the request checked and sized
+/// ([`ReachRequest::check`]) before any work, then the subject prepared and searched.
 pub fn synthesize_reach(
-    pipe: Pipeline,
+    pipe: impl Into<Arc<Pipeline>>,
     params: GraphParams,
     request: &ReachRequest,
     playback: crate::Playback,
@@ -216,36 +255,9 @@ pub fn synthesize_reach(
     limits: &SizeLimits,
     progress: &dyn Progress,
 ) -> Result<ReachOutcome> {
-    let s = pipe.subject();
-    let playback = playback.open(s, out)?;
-    let (from, to) = (s.resolve_frame(&request.from)? as u32, s.resolve_frame(&request.to)? as u32);
-    // A duration T shows round(T x fps) frames, start included (the surface motion graph's
-    // count); a walk from one frame to another shows at least two.
-    let frames = match request.time.frames(s.fps, TimeUnit::Seconds) {
-        Some(f) if f >= 2 => f as usize,
-        _ => refuse!(
-            "--time {}: expected a duration of at least two frames shown (at {} fps), e.g. 90f or 3s",
-            request.time_text(),
-            s.fps
-        ),
-    };
-    let search_bytes = distance_search_table_bytes(s.n_frames(), frames);
-    let what = format!("--time {} at {} fps", request.time_text(), s.fps);
-    limits.check(&Request { what, frames: frames as f64, subject: s, search_bytes, format: out.format() })?;
-    if request.distance > 0.0 {
-        let travel = surfcap_motion::clip_travel::subject_travel(s);
-        crate::travel_check::require_travel(s, &travel, &format!("--distance {}", request.distance), None)?;
-    }
-    let query = ReachQuery {
-        from_spec: request.from.clone(),
-        to_spec: request.to.clone(),
-        from,
-        to,
-        distance: request.distance,
-        frames,
-        distance_scale: request.distance_scale,
-        time_scale: request.time_scale,
-    };
+    let pipe: Arc<Pipeline> = pipe.into();
+    let playback = playback.open(pipe.subject(), out)?;
+    let query = request.check(pipe.subject(), out, limits)?;
     let prep = playback.prepare(pipe, params, None)?;
     prep.reach(&query, out, progress)
 }

@@ -24,7 +24,7 @@ use surfcap_smg::path_optimisation::{
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
 
-use crate::animation_output::{Animation, Travel, report_path, write_animation, write_report};
+use crate::animation_output::{Animation, Travel, write_animation, write_report};
 use crate::constraint::Constraint;
 use crate::error::{Context, Error, Result, refuse};
 use crate::prepared::Output;
@@ -329,7 +329,8 @@ pub struct SmgQueryReport {
 /// A query's outcome: the animation and report written, and the path.
 pub struct SmgQueryOutcome {
     pub report: SmgQueryReport,
-    pub report_path: PathBuf,
+    /// Where the report was written (`None`: nothing was, the output had no path).
+    pub report_path: Option<PathBuf>,
     pub written: Vec<PathBuf>,
     pub path: PathSolution,
     pub constraints: Vec<Constraint>,
@@ -431,8 +432,10 @@ impl SmgGraph {
             excluded_loops,
             travel: Travel::of(&played_centres(frames, &path), frames.up),
         };
-        let report_path = report_path(&out.path);
-        write_report(&report_path, &report)?;
+        let report_path = out.report_path();
+        if let Some(path) = &report_path {
+            write_report(path, &report)?;
+        }
         Ok(SmgQueryOutcome { report, report_path, written, path, constraints })
     }
 
@@ -446,13 +449,14 @@ impl SmgGraph {
         units: &Units,
         progress: &dyn Progress,
     ) -> Result<Vec<PathBuf>> {
+        let Some(path) = &out.path else { return Ok(Vec::new()) };
         match &self.data {
             ImportedData::Subject(i) => {
                 let s = &i.subject;
                 let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
                 let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
                 let result = s.derived(name, sequence)?;
-                write_animation(Animation::Subject(&result), out.format, &out.path, out.export_options(), progress)
+                write_animation(Animation::Subject(&result), out.format, path, out.export_options(), progress)
             }
             ImportedData::FrameSet(_) => {
                 let per_frame = played
@@ -461,7 +465,7 @@ impl SmgGraph {
                     .collect::<Result<Vec<_>>>()?;
                 let sequence = FrameSetSequence::from_frames("smg", per_frame)?;
                 let set = FrameSet::new(name, vec![sequence], self.frames.fps, self.frames.up, units.clone())?;
-                write_animation(Animation::FrameSet(&set), out.format, &out.path, out.export_options(), progress)
+                write_animation(Animation::FrameSet(&set), out.format, path, out.export_options(), progress)
             }
         }
     }

@@ -1,7 +1,7 @@
 //! A walk found by a search played (thesis Algorithm 3: original frames as captured,
 //! transitions blended), with learned variants on its repeated runs and a texture per frame
-//! when the prepared subject has them, and written; what every synthesis report says about it
-//! ([`WalkReport`]).
+//! when the prepared subject has them, and written when the output has a path (returned only,
+//! otherwise); what every synthesis report says about it ([`WalkReport`]).
 
 use std::path::PathBuf;
 
@@ -12,7 +12,7 @@ use surfcap_motion::edge_weights::Alpha;
 use surfcap_pipeline::GraphKind;
 use surfcap_pipeline::walk_playback::{SequenceVariation, WalkSegment, play_walk, play_walk_with};
 
-use crate::animation_output::{Animation, report_path, write_animation};
+use crate::animation_output::{Animation, write_animation};
 use crate::error::Result;
 use crate::frame_appearance::{AppearanceReport, write_textured};
 use crate::prepared::{Output, Prepared};
@@ -66,15 +66,15 @@ pub struct WalkReport {
     /// The walk, global frames.
     pub walk: Vec<u32>,
     pub segments: Vec<WalkSegment>,
-    /// The files written.
+    /// The files written (none when the output has no path).
     pub outputs: Vec<PathBuf>,
 }
 
-/// A played and written walk.
+/// A played (and, when the output has a path, written) walk.
 pub struct Played {
     pub written: Vec<PathBuf>,
-    /// Where the report is written.
-    pub report_path: PathBuf,
+    /// Where the report is written; `None` when nothing is.
+    pub report_path: Option<PathBuf>,
     pub report: WalkReport,
     /// Tracked centre of every output frame, from the written positions.
     pub centres: Vec<[f64; 3]>,
@@ -84,8 +84,9 @@ pub struct Played {
 }
 
 /// Plays `walk` placed by `start` as the sequence `name` and writes the animation to `out`
-/// (textured when the prepared subject has an appearance model, with variants on repeated runs
-/// when it has a variation model).
+/// when it has a path (textured when the prepared subject has an appearance model, with
+/// variants on repeated runs when it has a variation model); without a path nothing is
+/// written and [`Played::output`] is the animation.
 pub fn play_and_write(
     prep: &Prepared,
     walk: &[u32],
@@ -110,15 +111,17 @@ pub fn play_and_write(
     let repeats = played.repeat_summary(s);
     let frames = played.frames();
     let result = s.derived(format!("{}-{name}", s.name), played.sequence)?;
-    let (written, appearance) = match &prep.appearance {
+    let (written, appearance) = match (&prep.appearance, &out.path) {
         // Thesis Fig. 7.1: each frame's texture blended with the geometry's weights.
-        Some(a) => {
+        (Some(a), Some(path)) => {
             let textured = a.textures(&played.mix, progress)?;
-            (write_textured(&result, &textured, &out.path, progress)?, Some(textured.report))
+            (write_textured(&result, &textured, path, progress)?, Some(textured.report))
         }
-        None => {
-            (write_animation(Animation::Subject(&result), out.format, &out.path, out.export_options(), progress)?, None)
+        (None, Some(path)) => {
+            (write_animation(Animation::Subject(&result), out.format, path, out.export_options(), progress)?, None)
         }
+        // (An appearance model needs an output: `Playback::open` refuses it without one.)
+        (_, None) => (Vec::new(), None),
     };
     let variation = prep.variation.as_ref().map(|v| {
         progress.note(&format!(
@@ -162,7 +165,7 @@ pub fn play_and_write(
     };
     Ok(Played {
         written,
-        report_path: report_path(&out.path),
+        report_path: out.report_path(),
         report,
         centres: played.centres,
         output: result,

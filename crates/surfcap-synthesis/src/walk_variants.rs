@@ -28,8 +28,10 @@ pub struct Variation {
 
 impl Variation {
     /// Refuses, before any search, a model folder that is not there or that is the output.
-    pub fn check(&self, output: &Path) -> Result<()> {
-        surfcap_mesh::output_path::check_not_input(output, &[&self.model])?;
+    pub fn check(&self, output: Option<&Path>) -> Result<()> {
+        if let Some(output) = output {
+            surfcap_mesh::output_path::check_not_input(output, &[&self.model])?;
+        }
         if !self.model.is_dir() {
             refuse!(
                 "--variation-model {}: expected the folder of a variation model (`surfcap vary train SUBJECT -o DIR`)",

@@ -97,9 +97,10 @@ fn a_path_played_with_textures_and_variants_without_the_command_line() {
         alpha: Alpha::new(0.05).unwrap(),
     };
     let out = Output::new(dir.path().join("path.glb"));
-    let appearance = SubjectAppearance::open(&appearance_dir, &s, out.format(), &out.path).unwrap();
+    let out_path = out.path.clone().unwrap();
+    let appearance = SubjectAppearance::open(&appearance_dir, &s, out.format(), &out_path).unwrap();
     let variation = Variation { seed: 3, model: model_dir };
-    variation.check(&out.path).unwrap();
+    variation.check(Some(&out_path)).unwrap();
     let pipe = Pipeline::new(s, CacheStore::memory_only(), Box::new(NoProgress));
     let prep =
         Prepared::new(pipe, params, None).unwrap().with_appearance(Some(appearance)).with_variation(Some(variation));
@@ -127,12 +128,12 @@ fn a_path_played_with_textures_and_variants_without_the_command_line() {
     // Written: the textured glb (and its sidecar), and the report beside it, as returned.
     assert!(o.played.written.iter().all(|f| f.exists()));
     let (set, textures) =
-        surfcap_formats::glb_frame_set::parse_glb_frame_set_textured(&std::fs::read(&out.path).unwrap(), "path")
+        surfcap_formats::glb_frame_set::parse_glb_frame_set_textured(&std::fs::read(&out_path).unwrap(), "path")
             .unwrap();
     assert_eq!(set.frame_count(), o.frames);
     assert_eq!(textures.expect("a texture per frame").images().len(), a.textures);
     let mut written: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&o.played.report_path).unwrap()).unwrap();
+        serde_json::from_slice(&std::fs::read(o.played.report_path.as_ref().unwrap()).unwrap()).unwrap();
     // Stamped as surfcap's report (so a later run may replace it), then the returned report.
     let stamp = written.as_object_mut().unwrap();
     assert_eq!(stamp.remove("written_by").unwrap(), "surfcap");

@@ -166,7 +166,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     surfcap_mesh::atomic::write_file(&curve_path, |w| w.write_all(csv.as_bytes()))?;
     let curve = read_curve(&curve_path, subject.up_axis, true)?;
-    let out = Output { force: ctx.force, ..Output::new(a.output.join("export/path.glb")) };
+    let out_path = a.output.join("export/path.glb");
+    let report_path = surfcap_synthesis::report_path(&out_path);
+    let out = Output { force: ctx.force, ..Output::new(&out_path) };
     // Twice the default branching: this graph is small and the S tight (radius ~1.3 m), and the
     // wider search halves the error (0.32 -> 0.17 m) for ~1 s more.
     let search = PathSearch { branching: 16, ..PathSearch::for_fps(subject.fps) };
@@ -179,14 +181,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         path.played.transitions,
         path.mean_error,
         path.max_error,
-        out.path.display(),
-        path.played.report_path.display()
+        out_path.display(),
+        report_path.display()
     ));
     written.extend(path.played.written.iter().cloned());
-    written.push(path.played.report_path.clone());
+    written.push(report_path);
     // The report of what the demo made, and the command that plays it.
     let report_dir = a.output.join("report");
-    let include = vec![interp_path.clone(), out.path.clone()];
+    let include = vec![interp_path.clone(), out_path.clone()];
     let rep = write_report(&prep.pipe, &cache, &report_dir, &include, ctx.force)?;
     say(&format!(
         "9. wrote the report {} ({} plots, {} animations); play them in the browser with: surfcap view {}",
@@ -208,7 +210,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             report_dir.display(),
             a.output.join("export/mannequin.glb").display(),
             interp_path.display(),
-            out.path.display()
+            out_path.display()
         );
     }
     Ok(())

@@ -191,8 +191,12 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
             variation_floor: a.loop_variation_floor,
         },
     };
-    let out =
-        Output { path: a.output.clone(), format: a.format, force: ctx.force, tolerances: a.constraints.tolerances() };
+    let out = Output {
+        path: Some(a.output.clone()),
+        format: a.format,
+        force: ctx.force,
+        tolerances: a.constraints.tolerances(),
+    };
     let done = o.query(&a.graph.request(), &q, &out, &bar)?;
     drop(bar);
     ctx.commit(outs)?;
@@ -228,7 +232,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
             );
         }
         let written: Vec<String> = done.written.iter().map(|p| p.display().to_string()).collect();
-        println!("wrote {}, {}", written.join(", "), done.report_path.display());
+        println!("wrote {}, {}", written.join(", "), surfcap_synthesis::report_path(&a.output).display());
     });
     check_constraints(ctx, &a.constraints, &done.constraints)
 }

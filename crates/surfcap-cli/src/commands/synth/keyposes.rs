@@ -68,6 +68,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             }
         }
     });
-    ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
+    ctx.wrote(o.played.written.iter().chain(&o.played.report_path));
     check_constraints(ctx, &a.out.constraints, &o.constraints)
 }

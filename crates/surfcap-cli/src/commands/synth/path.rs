@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use surfcap_synthesis::{PathRequest, synthesize_path};
+use surfcap_synthesis::{CurveSource, PathRequest, synthesize_path};
 
 use crate::options::{GraphOpts, OutOpts, open};
 use crate::output::{count_of, length};
@@ -60,7 +60,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let s = open(ctx, &a.subject, &a.graph.source)?;
     let units = s.units.clone();
     let request = PathRequest {
-        curve: a.curve.clone(),
+        curve: CurveSource::File(a.curve.clone()),
         planar: a.planar,
         tags: a.tags.clone(),
         start: a.start.clone(),
@@ -109,6 +109,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             );
         }
     });
-    ctx.wrote(o.played.written.iter().chain([&o.played.report_path]));
+    ctx.wrote(o.played.written.iter().chain(&o.played.report_path));
     check_constraints(ctx, &a.out.constraints, &o.constraints)
 }
