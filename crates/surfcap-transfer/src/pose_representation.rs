@@ -73,6 +73,14 @@ impl Placement {
     }
 }
 
+/// RMS per-vertex distance between `pred` and `truth` after aligning `truth` onto `pred`
+/// (rotation + translation, [`align_to_reference`]): the error a transfer is judged by.
+pub fn aligned_rms(pred: &[f32], truth: &[f32]) -> f64 {
+    let (aligned, _) = align_to_reference(pred, truth);
+    let s: f64 = pred.iter().zip(&aligned).map(|(a, b)| ((a - b) as f64).powi(2)).sum();
+    (s / (pred.len() / 3).max(1) as f64).sqrt()
+}
+
 /// `pose` rigidly aligned onto `reference` (Kabsch, no scale), with the placement that maps
 /// it back.
 pub fn align_to_reference(reference: &[f32], pose: &[f32]) -> (Vec<f32>, Placement) {
