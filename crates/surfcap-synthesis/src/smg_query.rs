@@ -368,6 +368,7 @@ pub struct SmgPlayed {
 
 /// A query's outcome: the animation and report written, and the path.
 pub struct SmgQueryOutcome {
+    pub animation: SmgAnimation,
     pub report: SmgQueryReport,
     pub report_path: PathBuf,
     pub written: Vec<PathBuf>,
@@ -391,7 +392,7 @@ impl SmgGraph {
         report.outputs = written.clone();
         let report_path = report_path(&out.path);
         write_report(&report_path, &report)?;
-        Ok(SmgQueryOutcome { report, report_path, written, path, constraints })
+        Ok(SmgQueryOutcome { animation, report, report_path, written, path, constraints })
     }
 
     /// Answers `q` (its key frames are the graph's first two keys) and plays the path, writing
