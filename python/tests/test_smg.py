@@ -30,9 +30,10 @@ def report_of(out: Path) -> dict:
 
 
 def same_files(a: Path, b: Path):
-    """Every file of folder `a` has the same bytes in folder `b`, and they hold the same names."""
-    names = sorted(p.name for p in a.iterdir())
-    assert names == sorted(p.name for p in b.iterdir())
+    """Every file under folder `a` has the same bytes under folder `b`, and they hold the same
+    names."""
+    names = sorted(str(p.relative_to(a)) for p in a.rglob("*") if p.is_file())
+    assert names and names == sorted(str(p.relative_to(b)) for p in b.rglob("*") if p.is_file())
     for n in names:
         assert (a / n).read_bytes() == (b / n).read_bytes(), n
 

@@ -38,7 +38,10 @@ def characters(data: Path, surfcap_bin: Path, tmp_path_factory) -> dict:
 
 
 def same_files(a: Path, b: Path, names=None):
-    names = names or sorted(p.name for p in a.iterdir())
+    """The files `names` (default: every file under `a`) have the same bytes under `a` and `b`."""
+    if names is None:
+        names = sorted(str(p.relative_to(a)) for p in a.rglob("*") if p.is_file())
+        assert names and names == sorted(str(p.relative_to(b)) for p in b.rglob("*") if p.is_file())
     for n in names:
         assert (a / n).read_bytes() == (b / n).read_bytes(), n
 
