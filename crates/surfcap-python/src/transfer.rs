@@ -15,9 +15,9 @@ use surfcap_formats::export::{ExportFormat, ExportOptions};
 use surfcap_mesh::output_set::OutputSet;
 use surfcap_synthesis::transfer_run::{
     ApplyOptions, MotionOf, Reconstruction, TrainingCache, TransferApplication, TransferMethod, TransferTrainOptions,
-    TransferTraining, model_shape, train_model, write_model_files,
+    TransferTraining, model_shape, read_key_pairs, train_model, write_model_files,
 };
-use surfcap_transfer::pairs_file::{KeyPair, parse_pairs};
+use surfcap_transfer::pairs_file::KeyPair;
 use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, SavedTransfer, read_any};
 
@@ -53,14 +53,7 @@ fn key_pairs(pairs: &Bound<'_, PyAny>, source: &PySubject, target: &PySubject) -
         && !pairs.is_instance_of::<pyo3::types::PyList>()
         && !pairs.is_instance_of::<pyo3::types::PyTuple>()
     {
-        let bytes = surfcap_mesh::read_regular_file(&path).py_err()?;
-        let text = String::from_utf8(bytes).map_err(|_| {
-            crate::errors::from_messages(vec![format!(
-                "{}: not UTF-8 text: expected a CSV of frame pairs",
-                path.display()
-            )])
-        })?;
-        return parse_pairs(&text, &path.display().to_string(), source.subject(), target.subject()).py_err();
+        return read_key_pairs(&path, source.subject(), target.subject()).py_err();
     }
     let list: Vec<(Bound<'_, PyAny>, Bound<'_, PyAny>)> = pairs.extract().map_err(|_| {
         PyTypeError::new_err("pairs: expected a CSV path or a list of (source frame, target frame) pairs")

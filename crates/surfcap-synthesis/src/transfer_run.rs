@@ -16,7 +16,7 @@ use surfcap_transfer::BodyParts;
 use surfcap_transfer::baran_transfer::BaranTransfer;
 use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::{PartReport, TrainOptions};
-use surfcap_transfer::pairs_file::KeyPair;
+use surfcap_transfer::pairs_file::{KeyPair, parse_pairs};
 use surfcap_transfer::part_stitching::{EdgeDistortion, StitchReport, average_overlaps, edge_distortion_by_region};
 use surfcap_transfer::pose_representation::aligned_rms;
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
@@ -179,6 +179,14 @@ pub struct TransferTraining<'a> {
     pub keys: &'a [KeyPair],
     pub parts: Option<(&'a BodyParts, &'a BodyParts)>,
     pub options: TransferTrainOptions,
+}
+
+/// Reads the key pairs file `path` (a CSV, one `source sequence:frame, target sequence:frame`
+/// per line, [`parse_pairs`]) between `source` and `target`.
+pub fn read_key_pairs(path: &Path, source: &Subject, target: &Subject) -> Result<Vec<KeyPair>> {
+    let text = String::from_utf8(surfcap_mesh::read_regular_file(path)?)
+        .map_err(|_| Error::Request(format!("{}: not UTF-8 text: expected a CSV of frame pairs", path.display())))?;
+    Ok(parse_pairs(&text, &path.display().to_string(), source, target)?)
 }
 
 /// Where a GP training is cached: the derived-cache folder and whether to train again.

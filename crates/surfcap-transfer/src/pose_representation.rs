@@ -188,6 +188,25 @@ mod tests {
     }
 
     #[test]
+    fn aligned_rms_ignores_a_rigid_motion_and_measures_a_change_of_shape() {
+        let pose: Vec<f32> = vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 3.0];
+        let r = rot(Vector3::new(0.3, 1.0, -0.2), 1.1);
+        let moved: Vec<f32> = pose
+            .chunks_exact(3)
+            .flat_map(|p| {
+                let q = r * Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) + Vector3::new(5.0, -1.0, 2.0);
+                [q.x as f32, q.y as f32, q.z as f32]
+            })
+            .collect();
+        assert!(aligned_rms(&pose, &moved) < 1e-5, "{}", aligned_rms(&pose, &moved));
+        // One vertex pushed 0.4 off: a rigid fit cannot undo it.
+        let mut bent = pose.clone();
+        bent[9] += 0.4;
+        let e = aligned_rms(&pose, &bent);
+        assert!(e > 0.05 && e < 0.4, "{e}");
+    }
+
+    #[test]
     fn displacement_round_trips_and_is_heading_invariant() {
         let a = Placement { rotation: rot(Vector3::new(0.2, 1.0, 0.1), 0.8), translation: Vector3::new(1.0, 2.0, 3.0) };
         let b = Placement { rotation: rot(Vector3::new(0.0, 1.0, 0.3), 1.9), translation: Vector3::new(1.5, 2.1, 2.0) };

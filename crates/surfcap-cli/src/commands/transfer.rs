@@ -10,7 +10,6 @@ use surfcap_synthesis::transfer_run::{
     ApplyOptions, MotionOf, TrainingCache, TransferApplication, TransferMethod, TransferTrainOptions, TransferTraining,
     train_model, write_model_files,
 };
-use surfcap_transfer::pairs_file::parse_pairs;
 use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, read_any};
 
@@ -134,9 +133,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let source = open(ctx, &a.source, &a.source_opts)?;
     let target = open(ctx, &a.target, &a.source_opts)?;
-    let text = String::from_utf8(surfcap_mesh::read_regular_file(&a.pairs)?)
-        .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a CSV of frame pairs", a.pairs.display()))?;
-    let keys = parse_pairs(&text, &a.pairs.display().to_string(), &source, &target)?;
+    let keys = read_key_pairs(&a.pairs, &source, &target)?;
 
     let options = TransferTrainOptions {
         method: if a.method == "baran" { TransferMethod::Baran } else { TransferMethod::Gp },
