@@ -8,7 +8,7 @@ use surfcap_formats::export::export;
 pub use surfcap_synthesis::transfer_run::Reconstruction;
 use surfcap_synthesis::transfer_run::{
     ApplyOptions, MotionOf, TrainingCache, TransferApplication, TransferMethod, TransferTrainOptions, TransferTraining,
-    train_model, write_model_files,
+    read_key_pairs, train_model, write_model_files,
 };
 use surfcap_transfer::transfer_model::TransferKernel;
 use surfcap_transfer::transfer_model_file::{KIND, read_any};
