@@ -247,7 +247,148 @@ def synth_reach(subject: Subject, from_: Frame, to: Frame, distance: float, time
 
 # --- surface motion graph (Huang et al. 2009) ---
 
+class FrameSet:
+    """A frame set: named sequences of frames, each frame its own mesh (``(V_i, 3)`` float32
+    positions, ``(T_i, 3)`` uint32 triangles), with frame rate, up axis and units."""
+
+    @staticmethod
+    def load(
+        path: Path,
+        *,
+        fps: Optional[float] = None,
+        up_axis: Optional[str] = None,
+        units: Optional[str] = None,
+        cache_dir: Optional[Path] = None,
+        cache: bool = True,
+        refresh: bool = False,
+    ) -> FrameSet:
+        """Opens a ``.frames`` folder or any source the command line reads as a frame set."""
+    @staticmethod
+    def from_arrays(
+        positions: Sequence[FloatArray],
+        faces: Sequence[IntArray],
+        *,
+        fps: float = 30.0,
+        name: str = "frames",
+        sequences: Optional[Sequence[Tuple[str, int]]] = None,
+        up_axis: str = "+y",
+        units: str = "m",
+        cache_dir: Optional[Path] = None,
+        cache: bool = True,
+        refresh: bool = False,
+    ) -> FrameSet:
+        """One ``(V_i, 3)`` position array and one ``(T_i, 3)`` integer face array per frame."""
+    name: str
+    fps: float
+    up_axis: str
+    units: str
+    n_frames: int
+    sequences: List[str]
+    sequence_frames: Dict[str, int]
+    vertex_counts: List[int]
+    """The vertex count of every frame, in global frame order."""
+    cache_dir: Optional[str]
+    def __len__(self) -> int: ...
+    def frame(self, frame: Frame) -> Tuple[np.ndarray, np.ndarray]:
+        """``(positions (V_i, 3) float32, faces (T_i, 3) uint32)``, read-only views."""
+    def resolve_frame(self, frame: Frame) -> int: ...
+    def frame_name(self, frame: int) -> str: ...
+    def export(self, path: Path, format: Optional[str] = None, *, force: bool = False) -> List[str]:
+        """A ``.frames`` folder, or glb (a mesh per frame), abc or obj; returns the paths written."""
+
+def smg_query(
+    input: Union[Subject, FrameSet],
+    *,
+    connect: Union[str, Sequence[str]],
+    from_: str,
+    to: str,
+    distance: float,
+    time: float,
+    windows: str = "3-30",
+    transitions: int = 1,
+    separation: int = 15,
+    resolution: int = 64,
+    distance_weight: float = 1.0 / 0.3,
+    time_weight: float = 0.1,
+    paper_cost: bool = False,
+    min_loop: int = 10,
+    loop_variation_floor: float = 1.0,
+    tolerance: Optional[float] = None,
+    frame_tolerance: Optional[int] = None,
+    output: Optional[Path] = None,
+    format: Optional[str] = None,
+    force: bool = False,
+) -> Tuple[Union[Subject, FrameSet], reports.SmgQueryReport]:
+    """``surfcap smg query``: the path between two key frames (``"sequence:frame"``) covering
+    ``distance`` (subject units) in ``time`` seconds. Returns a ``Subject`` (one sequence
+    ``smg``, ``(F, V, 3)`` float32) for a subject, a ``FrameSet`` for a frame set, and the
+    report; a missed constraint issues ``ConstraintsMissedWarning``."""
+
+def smg_build(
+    input: Union[Subject, FrameSet],
+    *,
+    connect: Union[str, Sequence[str]],
+    keys: Sequence[str] = (),
+    windows: str = "3-30",
+    transitions: int = 1,
+    separation: int = 15,
+    resolution: int = 64,
+    output: Optional[Path] = None,
+) -> Tuple[np.ndarray, reports.SmgGraphReport]:
+    """``surfcap smg build``: the shape similarity ``(F, F)`` float64 (the matrix cached as
+    ``smg-similarity-*.npy``) and the graph's report."""
+
 # --- transfer (thesis chapter 5) ---
+
+class TransferModel:
+    """A motion transfer from a source subject to a target subject (GP regression on body
+    parts, thesis chapter 5, or Baran et al. 2009); its folder is the one ``surfcap transfer
+    train`` writes and ``surfcap transfer apply`` reads."""
+
+    @staticmethod
+    def train(
+        source: Subject,
+        target: Subject,
+        pairs: Union[Path, Sequence[Tuple[Frame, Frame]]],
+        *,
+        method: str = "gp",
+        source_parts: Optional[Path] = None,
+        target_parts: Optional[Path] = None,
+        whole_body: bool = False,
+        components: int = 20,
+        kernel: str = "nn",
+        seed: int = 0,
+        no_densify: bool = False,
+        max_straight: int = 3,
+        output: Optional[Path] = None,
+        force: bool = False,
+    ) -> TransferModel:
+        """``surfcap transfer train``: ``pairs`` a CSV path or ``(source frame, target frame)``
+        pairs; ``method`` gp or baran; ``kernel`` nn, se or linear."""
+    @staticmethod
+    def load(dir: Path) -> TransferModel:
+        """Reads a model folder written by ``surfcap transfer train`` or ``save``."""
+    def save(self, dir: Path, *, force: bool = False) -> None:
+        """Writes the model folder as ``surfcap transfer train -o dir`` does."""
+    method: str
+    source_name: str
+    target_name: str
+    report: Optional[reports.TransferTrainReport]
+    def apply(
+        self,
+        source: Subject,
+        sequence: str,
+        *,
+        reconstruction: str = "stitch",
+        truth: Optional[Tuple[Subject, str]] = None,
+        correction: bool = False,
+        nearest: int = 3,
+        output: Optional[Path] = None,
+        format: Optional[str] = None,
+        force: bool = False,
+    ) -> Tuple[Subject, reports.TransferApplyReport]:
+        """``surfcap transfer apply``: the target playing ``source``'s sequence (one sequence
+        ``<sequence>-as-<target>``, ``(F, V, 3)`` float32) and the report."""
 
 # --- variation (thesis chapter 6) ---
 

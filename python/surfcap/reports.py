@@ -8,7 +8,7 @@ the fields it always has, with their types.
 from __future__ import annotations
 
 import json
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional
 
 
 def _wrap(value: Any) -> Any:
@@ -131,7 +131,93 @@ class ReachReport(Report):
 
 # --- surface motion graph (Huang et al. 2009) ---
 
+
+class SmgQueryReport(Report):
+    """The report of ``smg_query`` (``surfcap smg query``'s ``.report.json``): the path found,
+    its cost, the distance covered and the frames played, each constraint asked and achieved,
+    and why no path meets the targets when none does (``unreachable``)."""
+
+    input: str
+    engine: str
+    fps: float
+    frames: int
+    distance: float
+    unit: str
+    transition_cost: float
+    cost: float
+    path: List[str]
+    """The path's runs, ``sequence:first-last``."""
+    loops: List[Report]
+    graph: Report
+    similarity_cached: bool
+    ilp_solves: int
+    constraints: List[Report]
+    outputs: List[str]
+    target_distance: float
+    target_seconds: float
+    seconds: float
+    transition_frames: List[int]
+    within_tolerance: Optional[bool]
+    unreachable: Optional[Report]
+    excluded_loops: List[Report]
+
+
+class SmgGraphReport(Report):
+    """The report of ``smg_build`` (``surfcap smg build``'s JSON): the two-level graph's nodes,
+    edges and transitions."""
+
+    input: str
+    frames: int
+    sequences: List[str]
+    connections: List[str]
+    key_frames: List[str]
+    similarity_cached: bool
+    nodes: List[str]
+    edges: List[Report]
+    transitions: List[Report]
+    missing_transitions: List[str]
+
 # --- transfer (thesis chapter 5) ---
+
+
+class TransferTrainReport(Report):
+    """The report of ``TransferModel.train`` (``report.json`` of the model folder): the pairs
+    trained on, and for the GP method the parts, their components and fits."""
+
+    model: Optional[str]
+    method: str
+    source: str
+    target: str
+    pairs: int
+    key_pairs: int
+    densified: bool
+    fit_seconds: float
+    total_seconds: float
+    cached: bool
+
+
+class TransferApplyReport(Report):
+    """The report of ``TransferModel.apply`` (``surfcap transfer apply``'s ``.report.json``):
+    the error against the true motion when one was given (``accuracy``, None otherwise) and the
+    edge-length change, per-frame displacements and stitching cuts."""
+
+    model: str
+    method: str
+    motion: str
+    source: str
+    target: str
+    frames: int
+    reconstruction: str
+    correction: bool
+    nearest: int
+    parts: List[str]
+    accuracy: Optional[Report]
+    edge_length_distortion: Report
+    setup_seconds: float
+    transfer_seconds: float
+    total_seconds: float
+    per_frame: Report
+    written: List[str]
 
 # --- variation (thesis chapter 6) ---
 

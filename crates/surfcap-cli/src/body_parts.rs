@@ -7,12 +7,8 @@ use std::path::Path;
 
 use surfcap_mesh::Subject;
 use surfcap_transfer::BodyParts;
-use surfcap_transfer::body_parts_file::{DEFAULT_OVERLAP_RINGS, read_parts_file};
-use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 
-/// The body parts of `s`: read from `path`, the whole body with `whole_body`, else five
-/// proposed parts (with a note naming `option`, the command's parts option). `who` names the
-/// subject in messages ("source", "target", or "" for a command's only subject).
+/// The body parts of `s` (`surfcap_synthesis::body_parts_choice::parts_of`), its notes shown.
 pub fn parts_of(
     ctx: &crate::Ctx,
     path: Option<&Path>,
@@ -21,29 +17,9 @@ pub fn parts_of(
     who: &str,
     option: &str,
 ) -> anyhow::Result<BodyParts> {
-    let subject = if who.is_empty() { "the subject".to_string() } else { format!("the {who} subject") };
-    let parts = match path {
-        Some(p) => read_parts_file(p, s.topology(), s.frame(0).unwrap_or_default())
-            .map_err(|e| anyhow::anyhow!("{e} ({subject} {:?})", s.name))?,
-        None if whole_body => BodyParts::whole_body(s.topology().n_vertices()),
-        None => {
-            let (parts, report) = propose(s, ProposalMethod::Auto, 5, DEFAULT_OVERLAP_RINGS)?;
-            for n in &report.notes {
-                ctx.note(n);
-            }
-            let prefix = if who.is_empty() { String::new() } else { format!("{who} ") };
-            ctx.note(&format!(
-                "{prefix}{:?}: no {option} given, so 5 parts were proposed from its {} ({}); `surfcap parts propose` writes them to a file you can edit",
-                s.name,
-                report.method.as_str(),
-                parts.names().join(", ")
-            ));
-            parts
-        }
-    };
-    parts.check_fits(s.topology()).map_err(|e| {
-        let file = path.map_or_else(|| "the parts".to_string(), |p| p.display().to_string());
-        anyhow::anyhow!("{file} for {subject} {:?}: {e}", s.name)
-    })?;
+    let (parts, notes) = surfcap_synthesis::body_parts_choice::parts_of(path, whole_body, s, who, option)?;
+    for n in &notes {
+        ctx.note(n);
+    }
     Ok(parts)
 }

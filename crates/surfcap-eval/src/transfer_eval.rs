@@ -43,7 +43,6 @@ use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
 use surfcap_transfer::correspondence_densification::DensifyOptions;
 use surfcap_transfer::motion_transfer::{MotionTransfer, PreparedSubject, TrainOptions};
 use surfcap_transfer::part_stitching::{EdgeDistortion, average_overlaps, edge_distortion_by_region};
-use surfcap_transfer::pose_representation::align_to_reference;
 use surfcap_transfer::semantic_deformation_transfer::SemanticDeformationTransfer;
 use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
 use surfcap_transfer::training_pairs::densified_pairs;
@@ -347,11 +346,7 @@ pub fn mannequin_case(
 }
 
 /// RMS per-vertex distance after aligning `truth` onto `pred` (rotation + translation).
-pub fn aligned_rms(pred: &[f32], truth: &[f32]) -> f64 {
-    let (aligned, _) = align_to_reference(pred, truth);
-    let s: f64 = pred.iter().zip(&aligned).map(|(a, b)| ((a - b) as f64).powi(2)).sum();
-    (s / (pred.len() / 3).max(1) as f64).sqrt()
-}
+pub use surfcap_transfer::pose_representation::aligned_rms;
 
 /// Height of a pose along the subject's up axis.
 fn height(s: &Subject, pose: &[f32]) -> f64 {

@@ -29,6 +29,9 @@ pub enum Error {
     /// The surface motion graph.
     #[error(transparent)]
     Smg(#[from] surfcap_smg::Error),
+    /// Motion transfer (body parts, training, reconstruction).
+    #[error(transparent)]
+    Transfer(#[from] surfcap_transfer::Error),
     /// A request refused before (or instead of) any work: what was asked and what was expected.
     #[error("{0}")]
     Request(String),

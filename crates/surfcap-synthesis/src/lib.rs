@@ -28,6 +28,9 @@
 //!   ([`frame_appearance`], thesis Fig. 7.1) and learned variants on its repeated runs
 //!   ([`walk_variants`], thesis chapter 6), chosen by [`Playback`]; [`walk_output::WalkReport`]
 //!   is what every report says about the walk.
+//! - [`transfer_run`]: motion transfer (thesis chapter 5): a model trained with its report, a
+//!   motion transferred with a trained model; [`body_parts_choice`]: the body parts a
+//!   per-part run learns on (a file, the whole body, or five proposed).
 //! - [`constraint`]: soft constraints and how closely they were met.
 //! - [`request_size`] and [`travel_check`]: requests refused before any work (too many frames,
 //!   too much memory, a glb over 4 GiB; a path or distance asked of clips that stay in place).
@@ -39,6 +42,7 @@
 //! expected; a message that adds context keeps the lower layer's error as its source.
 
 pub mod animation_output;
+pub mod body_parts_choice;
 pub mod constraint;
 pub mod error;
 pub mod frame_appearance;
@@ -49,6 +53,7 @@ pub mod prepared;
 pub mod reach_run;
 pub mod request_size;
 pub mod smg_query;
+pub mod transfer_run;
 pub mod travel_check;
 pub mod variant_samples;
 pub mod variation_training;

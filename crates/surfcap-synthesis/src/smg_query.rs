@@ -25,7 +25,7 @@ use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
 
 use crate::animation_output::{Animation, Travel, write_animation, write_report};
-use crate::constraint::Constraint;
+use crate::constraint::{Constraint, Tolerances};
 use crate::error::{Context, Error, Result, refuse};
 use crate::prepared::Output;
 use crate::words::unit_name;
@@ -96,17 +96,31 @@ impl SmgGraph {
         keys: &[(&str, &str)],
         progress: &dyn Progress,
     ) -> Result<Self> {
-        let lengths = windows(&request.windows)?;
+        windows(&request.windows)?;
         let data = open_any(&request.input, import, progress)?;
+        Self::from_data(data, request, Some(cache), keys, progress)
+    }
+
+    /// [`SmgGraph::open`] on data already in memory (a subject or a frame set; `request.input`
+    /// only names it in reports): the similarity is read from or stored in `cache` when there
+    /// is one, computed in memory otherwise.
+    pub fn from_data(
+        data: ImportedData,
+        request: &SmgGraphRequest,
+        cache: Option<&SimilarityCache>,
+        keys: &[(&str, &str)],
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let lengths = windows(&request.windows)?;
         let frames = match &data {
             ImportedData::Subject(i) => MotionFrames::from_subject(&i.subject),
             ImportedData::FrameSet(f) => MotionFrames::from_frame_set(&f.frame_set),
         };
         let t0 = Instant::now();
-        let store = DerivedCache::new(cache.dir.clone());
+        let store = cache.map(|c| (DerivedCache::new(c.dir.clone()), c.refresh));
         let params = HistogramParams { resolution: request.resolution, ..Default::default() };
         let (similarity, similarity_cached) =
-            frames.shape_similarity(params, Some((&store, cache.refresh)), progress)?;
+            frames.shape_similarity(params, store.as_ref().map(|(s, r)| (s, *r)), progress)?;
         let similarity_seconds = t0.elapsed().as_secs_f64();
         let seq = |name: &str| {
             frames.names.iter().position(|n| n == name).ok_or_else(|| {
@@ -326,8 +340,35 @@ pub struct SmgQueryReport {
     pub travel: Travel,
 }
 
+/// A query's animation: one sequence of the subject, or a frame set (every frame its own mesh)
+/// for a frame set's query.
+pub enum SmgAnimation {
+    Subject(surfcap_mesh::Subject),
+    FrameSet(FrameSet),
+}
+
+impl SmgAnimation {
+    /// The animation as [`write_animation`] takes it.
+    pub fn as_animation(&self) -> Animation<'_> {
+        match self {
+            SmgAnimation::Subject(s) => Animation::Subject(s),
+            SmgAnimation::FrameSet(f) => Animation::FrameSet(f),
+        }
+    }
+}
+
+/// A query answered and played, nothing written: the animation, its report (no `outputs`
+/// yet), the path and the constraints judged.
+pub struct SmgPlayed {
+    pub animation: SmgAnimation,
+    pub report: SmgQueryReport,
+    pub path: PathSolution,
+    pub constraints: Vec<Constraint>,
+}
+
 /// A query's outcome: the animation and report written, and the path.
 pub struct SmgQueryOutcome {
+    pub animation: SmgAnimation,
     pub report: SmgQueryReport,
     /// Where the report was written (`None`: nothing was, the output had no path).
     pub report_path: Option<PathBuf>,
@@ -347,6 +388,22 @@ impl SmgGraph {
         out: &Output,
         progress: &dyn Progress,
     ) -> Result<SmgQueryOutcome> {
+        let SmgPlayed { animation, mut report, path, constraints } = self.play(request, q, &out.tolerances)?;
+        let written = match &out.path {
+            Some(p) => write_animation(animation.as_animation(), out.format, p, out.export_options(), progress)?,
+            None => Vec::new(),
+        };
+        report.outputs = written.clone();
+        let report_path = out.report_path();
+        if let Some(p) = &report_path {
+            write_report(p, &report)?;
+        }
+        Ok(SmgQueryOutcome { animation, report, report_path, written, path, constraints })
+    }
+
+    /// Answers `q` (its key frames are the graph's first two keys) and plays the path, writing
+    /// nothing: the constraints judged with `tolerances`.
+    pub fn play(&self, request: &SmgGraphRequest, q: &SmgQuery, tolerances: &Tolerances) -> Result<SmgPlayed> {
         let (frames, graph) = (&self.frames, &self.graph);
         let (from, to) = (self.keys[0], self.keys[1]);
         let (set_name, units) = match &self.data {
@@ -367,7 +424,7 @@ impl SmgGraph {
             plan.excluded_loops().iter().map(|x| excluded_report(frames, &x.frames, x.variation, &x.why)).collect();
         let query_seconds = t1.elapsed().as_secs_f64();
         let played = play_path(frames, &path);
-        let written = self.write_output(out, played, format!("{set_name}-smg"), &units, progress)?;
+        let animation = self.animation(played, format!("{set_name}-smg"), &units)?;
         let unit = unit_name(&units).to_string();
         let constraints = vec![
             Constraint::new(
@@ -376,7 +433,7 @@ impl SmgGraph {
                 q.distance,
                 path.distance,
                 path.distance_error,
-                out.tolerances.distance(q.distance),
+                tolerances.distance(q.distance),
             )
             .relative_to(q.distance),
             Constraint::new(
@@ -385,7 +442,7 @@ impl SmgGraph {
                 pq.frames,
                 path.frames.len() as f64,
                 path.time_error,
-                out.tolerances.frames(),
+                tolerances.frames(),
             )
             .relative_to(pq.frames),
         ];
@@ -415,7 +472,7 @@ impl SmgGraph {
             query_seconds,
             ilp_solves: path.ilp_solves,
             constraints: constraints.clone(),
-            outputs: written.clone(),
+            outputs: Vec::new(),
             target_distance: q.distance,
             target_seconds: q.time,
             seconds: path.frames.len() as f64 / frames.fps,
@@ -432,31 +489,18 @@ impl SmgGraph {
             excluded_loops,
             travel: Travel::of(&played_centres(frames, &path), frames.up),
         };
-        let report_path = out.report_path();
-        if let Some(path) = &report_path {
-            write_report(path, &report)?;
-        }
-        Ok(SmgQueryOutcome { report, report_path, written, path, constraints })
+        Ok(SmgPlayed { animation, report, path, constraints })
     }
 
-    /// Writes the played path: a subject's frames as one sequence of the subject, a frame
-    /// set's as a frame set, in the format the output asks for.
-    fn write_output(
-        &self,
-        out: &Output,
-        played: Vec<PlayedFrame>,
-        name: String,
-        units: &Units,
-        progress: &dyn Progress,
-    ) -> Result<Vec<PathBuf>> {
-        let Some(path) = &out.path else { return Ok(Vec::new()) };
+    /// The played path as an animation: a subject's frames as one sequence of the subject, a
+    /// frame set's as a frame set.
+    fn animation(&self, played: Vec<PlayedFrame>, name: String, units: &Units) -> Result<SmgAnimation> {
         match &self.data {
             ImportedData::Subject(i) => {
                 let s = &i.subject;
                 let positions: Vec<f32> = played.iter().flat_map(|(p, _)| p.iter().copied()).collect();
                 let sequence = Sequence::new("smg", s.topology().n_vertices(), positions)?;
-                let result = s.derived(name, sequence)?;
-                write_animation(Animation::Subject(&result), out.format, path, out.export_options(), progress)
+                Ok(SmgAnimation::Subject(s.derived(name, sequence)?))
             }
             ImportedData::FrameSet(_) => {
                 let per_frame = played
@@ -464,8 +508,13 @@ impl SmgGraph {
                     .map(|(p, t)| Ok((Topology::new(p.len() / 3, t.to_vec(), None)?, p)))
                     .collect::<Result<Vec<_>>>()?;
                 let sequence = FrameSetSequence::from_frames("smg", per_frame)?;
-                let set = FrameSet::new(name, vec![sequence], self.frames.fps, self.frames.up, units.clone())?;
-                write_animation(Animation::FrameSet(&set), out.format, path, out.export_options(), progress)
+                Ok(SmgAnimation::FrameSet(FrameSet::new(
+                    name,
+                    vec![sequence],
+                    self.frames.fps,
+                    self.frames.up,
+                    units.clone(),
+                )?))
             }
         }
     }

@@ -73,6 +73,14 @@ impl Placement {
     }
 }
 
+/// RMS per-vertex distance between `pred` and `truth` after aligning `truth` onto `pred`
+/// (rotation + translation, [`align_to_reference`]): the error a transfer is judged by.
+pub fn aligned_rms(pred: &[f32], truth: &[f32]) -> f64 {
+    let (aligned, _) = align_to_reference(pred, truth);
+    let s: f64 = pred.iter().zip(&aligned).map(|(a, b)| ((a - b) as f64).powi(2)).sum();
+    (s / (pred.len() / 3).max(1) as f64).sqrt()
+}
+
 /// `pose` rigidly aligned onto `reference` (Kabsch, no scale), with the placement that maps
 /// it back.
 pub fn align_to_reference(reference: &[f32], pose: &[f32]) -> (Vec<f32>, Placement) {
@@ -177,6 +185,25 @@ mod tests {
 
     fn rot(axis: Vector3<f64>, angle: f64) -> Matrix3<f64> {
         exp_rotation(&(axis.normalize() * angle))
+    }
+
+    #[test]
+    fn aligned_rms_ignores_a_rigid_motion_and_measures_a_change_of_shape() {
+        let pose: Vec<f32> = vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 3.0];
+        let r = rot(Vector3::new(0.3, 1.0, -0.2), 1.1);
+        let moved: Vec<f32> = pose
+            .chunks_exact(3)
+            .flat_map(|p| {
+                let q = r * Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) + Vector3::new(5.0, -1.0, 2.0);
+                [q.x as f32, q.y as f32, q.z as f32]
+            })
+            .collect();
+        assert!(aligned_rms(&pose, &moved) < 1e-5, "{}", aligned_rms(&pose, &moved));
+        // One vertex pushed 0.4 off: a rigid fit cannot undo it.
+        let mut bent = pose.clone();
+        bent[9] += 0.4;
+        let e = aligned_rms(&pose, &bent);
+        assert!(e > 0.05 && e < 0.4, "{e}");
     }
 
     #[test]

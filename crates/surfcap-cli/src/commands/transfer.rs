@@ -4,21 +4,14 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::json;
 use surfcap_formats::export::export;
-use surfcap_mesh::{FrameLabel, Sequence, Subject, Topology};
-use surfcap_transfer::BodyParts;
-use surfcap_transfer::baran_transfer::BaranTransfer;
-use surfcap_transfer::correspondence_densification::DensifyOptions;
-use surfcap_transfer::motion_transfer::TrainOptions;
-use surfcap_transfer::pairs_file::parse_pairs;
-use surfcap_transfer::part_stitching::{EdgeDistortion, average_overlaps, edge_distortion_by_region};
-use surfcap_transfer::shape_reconstruction::{ReconstructionOptions, Reconstructor};
-use surfcap_transfer::transfer_model::TransferKernel;
-use surfcap_transfer::transfer_model_file::{
-    KIND, SavedTransfer, SubjectsMeta, mesh_fingerprint, read_any, write_baran_model, write_model,
+pub use surfcap_synthesis::transfer_run::Reconstruction;
+use surfcap_synthesis::transfer_run::{
+    ApplyOptions, MotionOf, TrainingCache, TransferApplication, TransferMethod, TransferTrainOptions, TransferTraining,
+    read_key_pairs, train_model, write_model_files,
 };
-use surfcap_transfer::transfer_training::{TrainingRequest, train_cached};
+use surfcap_transfer::transfer_model::TransferKernel;
+use surfcap_transfer::transfer_model_file::{KIND, read_any};
 
 use crate::body_parts::parts_of;
 use crate::limits::Request;
@@ -125,24 +118,6 @@ pub struct ApplyArgs {
     pub source_opts: SourceOpts,
 }
 
-/// See [`ApplyArgs::reconstruction`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Reconstruction {
-    Stitch,
-    Average,
-}
-
-impl std::str::FromStr for Reconstruction {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "stitch" => Ok(Reconstruction::Stitch),
-            "average" => Ok(Reconstruction::Average),
-            _ => Err(format!("{s:?}: expected stitch or average")),
-        }
-    }
-}
-
 pub fn run(ctx: &crate::Ctx, cmd: Cmd) -> anyhow::Result<()> {
     match cmd {
         Cmd::Train(a) => train(ctx, a),
@@ -158,99 +133,70 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let source = open(ctx, &a.source, &a.source_opts)?;
     let target = open(ctx, &a.target, &a.source_opts)?;
-    let text = String::from_utf8(surfcap_mesh::read_regular_file(&a.pairs)?)
-        .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text: expected a CSV of frame pairs", a.pairs.display()))?;
-    let keys = parse_pairs(&text, &a.pairs.display().to_string(), &source, &target)?;
+    let keys = read_key_pairs(&a.pairs, &source, &target)?;
 
-    let key_pairs: Vec<(usize, usize)> = keys.iter().map(|k| (k.source, k.target)).collect();
-    if a.method == "baran" {
+    let options = TransferTrainOptions {
+        method: if a.method == "baran" { TransferMethod::Baran } else { TransferMethod::Gp },
+        components: a.components,
+        kernel: a.kernel,
+        seed: a.seed,
+        densify: !a.no_densify,
+        max_straight: a.max_straight,
+    };
+    let baran = options.method == TransferMethod::Baran;
+    let parts = if baran {
         ctx.say(&format!(
             "training Baran et al. {} -> {} on {} key pairs (whole body)",
             source.name,
             target.name,
-            key_pairs.len()
+            keys.len()
         ));
-        let t_fit = Instant::now();
-        let model = BaranTransfer::train(&source, &target, &key_pairs)?;
-        let fit_seconds = t_fit.elapsed().as_secs_f64();
-        write_baran_model(&output, &model, &SubjectsMeta::new(&source, &target))?;
-        let result = json!({
-            "model": a.output, "method": "baran", "source": source.name, "target": target.name,
-            "pairs": key_pairs.len(), "key_pairs": keys.len(), "densified": false,
-            "source_vertices": model.source_vertices(), "target_vertices": model.target_vertices(),
-            "fit_seconds": fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(), "cached": false,
-        });
-        crate::output::write_json(&output.join("report.json"), &result)?;
-        ctx.commit(outs)?;
-        ctx.result(&result, || {
-            println!(
-                "{} -> {}: Baran et al. on {} key pairs, {} -> {} vertices, built in {fit_seconds:.2} s -> {}",
-                source.name,
-                target.name,
-                key_pairs.len(),
-                model.source_vertices(),
-                model.target_vertices(),
-                a.output.display()
-            )
-        });
-        return Ok(());
-    }
-    let source_parts = parts_of(ctx, a.source_parts.as_deref(), a.whole_body, &source, "source", "--source-parts")?;
-    let target_parts = parts_of(ctx, a.target_parts.as_deref(), a.whole_body, &target, "target", "--target-parts")?;
-    let mut options = TrainOptions { components: a.components, ..TrainOptions::default() };
-    options.mapping.kernel = a.kernel;
-    options.mapping.fit.seed = a.seed;
-    let req = TrainingRequest {
+        None
+    } else {
+        let source_parts = parts_of(ctx, a.source_parts.as_deref(), a.whole_body, &source, "source", "--source-parts")?;
+        let target_parts = parts_of(ctx, a.target_parts.as_deref(), a.whole_body, &target, "target", "--target-parts")?;
+        ctx.say(&format!(
+            "training {} -> {} on {} key pairs, {} parts, {} components, kernel {}",
+            source.name,
+            target.name,
+            keys.len(),
+            target_parts.len(),
+            a.components,
+            a.kernel.name()
+        ));
+        Some((source_parts, target_parts))
+    };
+    let training = TransferTraining {
         source: &source,
         target: &target,
-        source_parts: &source_parts,
-        target_parts: &target_parts,
-        keys: &key_pairs,
+        keys: &keys,
+        parts: parts.as_ref().map(|(s, t)| (s, t)),
         options,
-        densify: (!a.no_densify).then(|| DensifyOptions { max_straight: a.max_straight, ..DensifyOptions::default() }),
     };
-    ctx.say(&format!(
-        "training {} -> {} on {} key pairs, {} parts, {} components, kernel {}",
-        source.name,
-        target.name,
-        key_pairs.len(),
-        target_parts.len(),
-        a.components,
-        a.kernel.name()
-    ));
-    let trained = train_cached(&req, &a.cache.dir()?, a.cache.no_cache, &mut |n: String| ctx.note(&n))?;
-    let t = &trained.summary;
-    for g in t.groups.iter().filter(|g| !g.densified) {
-        ctx.note(&format!(
-            "{} -> {}: a single key pair, kept as it is (densification needs at least two per pair of sequences)",
-            source.sequences()[g.source_sequence].name,
-            target.sequences()[g.target_sequence].name
-        ));
-    }
-    write_model(&output, &trained.model, &trained.subjects, &trained.target_training)?;
-    let groups: Vec<serde_json::Value> = t
-        .groups
-        .iter()
-        .map(|g| {
-            json!({
-                "source_sequence": source.sequences()[g.source_sequence].name,
-                "target_sequence": target.sequences()[g.target_sequence].name,
-                "keys": g.keys, "pairs": g.pairs, "densified": g.densified, "mean_cost": g.mean_cost,
-            })
-        })
-        .collect();
-    let result = json!({
-        "model": a.output, "source": source.name, "target": target.name,
-        "pairs": t.pairs.len(), "key_pairs": keys.len(), "densified": !a.no_densify, "sequence_pairs": groups,
-        "source_sequences": t.source_sequences.iter().map(|&k| source.sequences()[k].name.clone()).collect::<Vec<_>>(),
-        "target_sequences": t.target_sequences.iter().map(|&k| target.sequences()[k].name.clone()).collect::<Vec<_>>(),
-        "method": "gp", "kernel": a.kernel.name(), "components": a.components,
-        "parts": t.report.parts, "displacement": t.report.displacement,
-        "fit_seconds": t.fit_seconds, "total_seconds": t0.elapsed().as_secs_f64(), "cached": trained.from_cache,
-    });
-    crate::output::write_json(&output.join("report.json"), &result)?;
+    let cache = TrainingCache { dir: a.cache.dir()?, refresh: a.cache.no_cache };
+    let mut trained = train_model(&training, Some(&cache), &mut |n: String| ctx.note(&n))?;
+    write_model_files(&output, &trained.model)?;
+    trained.report.set_model(&a.output);
+    trained.report.set_total_seconds(t0.elapsed().as_secs_f64());
+    let result = serde_json::to_value(&trained.report)?;
+    crate::output::write_json(&output.join("report.json"), &trained.report)?;
     ctx.commit(outs)?;
-    ctx.result(&result, || print_trained(&result));
+    ctx.result(&result, || {
+        if baran {
+            println!(
+                "{} -> {}: Baran et al. on {} key pairs, {} -> {} vertices, built in {:.2} s -> {}",
+                source.name,
+                target.name,
+                keys.len(),
+                result["source_vertices"],
+                result["target_vertices"],
+                result["fit_seconds"].as_f64().unwrap_or(0.0),
+                a.output.display()
+            )
+        } else {
+            print_trained(&result)
+        }
+    });
     Ok(())
 }
 
@@ -293,14 +239,6 @@ fn subject_and_sequence<'a>(text: &'a str, option: &str, side: &str) -> anyhow::
     Ok((PathBuf::from(path), sequence))
 }
 
-/// The sequence `name` of `subject` (read from `path`), or an error listing its sequences.
-fn sequence_of<'a>(subject: &'a Subject, path: &Path, name: &str, option: &str) -> anyhow::Result<&'a Sequence> {
-    subject.sequence(name).map(|(_, q)| q).ok_or_else(|| {
-        let known: Vec<&str> = subject.sequences().iter().map(|q| q.name.as_str()).collect();
-        anyhow::anyhow!("{option}: {} has no sequence {name:?}; it has {}", path.display(), known.join(", "))
-    })
-}
-
 fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
     let (subject_path, sequence) = subject_and_sequence(&a.motion, "--motion", "source")?;
     let truth_arg = a.truth.as_deref().map(|t| subject_and_sequence(t, "--truth", "target")).transpose()?;
@@ -315,222 +253,59 @@ fn apply(ctx: &crate::Ctx, a: ApplyArgs) -> anyhow::Result<()> {
     outs.side_file(&surfcap_synthesis::report_path(&a.out.output), surfcap_synthesis::REPORT_KIND)?;
     let t0 = Instant::now();
     let saved = read_any(&a.model)?;
-    let (meta, nv_source, nv) = match &saved {
-        SavedTransfer::Gp(m) => (&m.subjects, m.model.source.reference.len() / 3, m.model.target.reference.len() / 3),
-        SavedTransfer::Baran(b) => (&b.subjects, b.model.source_vertices(), b.model.target_vertices()),
-    };
     let source = open(ctx, &subject_path, &a.source_opts)?;
-    if source.topology().n_vertices() != nv_source {
-        anyhow::bail!(
-            "{}: {} vertices, but the model {} was trained on a source of {nv_source} vertices ({}): expected a motion of that subject",
-            subject_path.display(),
-            source.topology().n_vertices(),
-            a.model.display(),
-            meta.source_name
-        );
-    }
-    if mesh_fingerprint(source.topology()) != meta.source_mesh {
-        anyhow::bail!(
-            "{}: its mesh has the model's {nv_source} vertices but other triangles than the source {} was trained on: expected a motion of that subject",
-            subject_path.display(),
-            meta.source_name
-        );
-    }
-    if (source.fps - meta.source_fps).abs() > 1e-9 * source.fps.abs().max(1.0) {
-        ctx.note(&format!(
-            "{} plays at {} fps and the model's source at {} fps: the displacement per frame is learnt at the model's rate, so the travel scales by their ratio",
-            subject_path.display(),
-            source.fps,
-            meta.source_fps
-        ));
-    }
-    let seq = sequence_of(&source, &subject_path, sequence, "--motion")?;
-    let topology = Topology::new(nv, meta.target_triangles.clone(), None)?;
-    // The true motion, checked before any work: the target's mesh, the motion's frames.
     let truth_subject = match &truth_arg {
         Some((path, _)) => Some(open(ctx, path, &a.source_opts)?),
         None => None,
     };
-    let truth: Option<&Sequence> = match (&truth_arg, &truth_subject) {
-        (Some((path, name)), Some(t)) => {
-            if t.topology().n_vertices() != nv || mesh_fingerprint(t.topology()) != mesh_fingerprint(&topology) {
-                anyhow::bail!(
-                    "--truth {}: {} vertices and its own triangles, but the model's target {} has {nv} vertices and other triangles: expected a motion of the target",
-                    path.display(),
-                    t.topology().n_vertices(),
-                    meta.target_name
-                );
-            }
-            let q = sequence_of(t, path, name, "--truth")?;
-            if q.n_frames() != seq.n_frames() {
-                anyhow::bail!(
-                    "--truth {}:{name}: {} frames, but the motion {} has {}: expected the true partner of every frame",
-                    path.display(),
-                    q.n_frames(),
-                    a.motion,
-                    seq.n_frames()
-                );
-            }
-            Some(q)
+    let source_label = subject_path.display().to_string();
+    let motion = MotionOf { subject: &source, label: &source_label, sequence, option: "--motion", spec: &a.motion };
+    let truth_label = truth_arg.as_ref().map(|(p, _)| p.display().to_string()).unwrap_or_default();
+    let truth = match (&truth_arg, &truth_subject, &a.truth) {
+        (Some((_, name)), Some(t), Some(spec)) => {
+            Some(MotionOf { subject: t, label: &truth_label, sequence: name, option: "--truth", spec })
         }
         _ => None,
     };
-    let reference = match &saved {
-        SavedTransfer::Gp(m) => m.model.target.reference.clone(),
-        SavedTransfer::Baran(b) => b.model.target_keys[0].clone(),
-    };
+    // The model, the motion and the true motion checked before any work.
+    let application = TransferApplication::new(&saved, &a.model, motion, truth)?;
+    if let Some(n) = &application.note {
+        ctx.note(n);
+    }
     // Sized before any work: the output has the motion's frames on the target's mesh.
-    let shape = Subject::new(
-        meta.target_name.clone(),
-        topology.clone(),
-        vec![Sequence::new("size", nv, reference)?],
-        meta.target_fps,
-        meta.target_up_axis,
-        meta.target_units.clone(),
-    )?;
+    let shape = application.shape()?;
     a.out.limits.check(
         ctx,
         &a.out.output,
         &Request {
             what: format!("--motion {}", a.motion),
-            frames: seq.n_frames() as f64,
+            frames: application.frames() as f64,
             subject: &shape,
             search_bytes: 0,
             format,
         },
     )?;
-    let frames: Vec<&[f32]> = (0..seq.n_frames()).map(|f| seq.frame(f)).collect();
-    let t_setup = Instant::now();
-    let stitching = a.reconstruction == Reconstruction::Stitch;
-    let mut cuts = Vec::new();
-    let (method, correction, out, setup_seconds, transfer_seconds, target_parts, training) = match &saved {
-        SavedTransfer::Gp(saved) => {
-            let model = &saved.model;
-            let correction = stitching && a.correction;
-            let reconstructor = if stitching {
-                let opts = ReconstructionOptions { correction, m_nearest: a.nearest };
-                Some(Reconstructor::new(model, &topology, &saved.target_training, &opts)?)
-            } else {
-                None
-            };
-            let setup_seconds = t_setup.elapsed().as_secs_f64();
-            let t_transfer = Instant::now();
-            let out = model.transfer(&frames, |p| match &reconstructor {
-                Some(r) => {
-                    let (pose, report) = r.reconstruct(p)?;
-                    cuts.push(report);
-                    Ok(pose)
-                }
-                None => average_overlaps(&model.target.parts, p, false),
-            })?;
-            let parts = model.target.parts.clone();
-            ("gp", correction, out, setup_seconds, t_transfer.elapsed().as_secs_f64(), parts, &saved.target_training)
-        }
-        SavedTransfer::Baran(b) => {
-            let sdt = b.model.build()?;
-            let setup_seconds = t_setup.elapsed().as_secs_f64();
-            let t_transfer = Instant::now();
-            let out = b.model.transfer(&sdt, &frames)?;
-            let parts = BodyParts::whole_body(nv);
-            ("baran", false, out, setup_seconds, t_transfer.elapsed().as_secs_f64(), parts, &b.model.target_keys)
-        }
-    };
-    // Against the true motion when there is one: the error next to the nearest training
-    // pose's (the floor of any method that only picks a training pose), and the edge-length
-    // change |l / l_true - 1| at part boundaries and inside parts. Without it the edge measure
-    // is dropped: against the rest pose it mostly measures the motion's own stretching.
-    let (accuracy, seam_summary) = match truth {
-        Some(q) => {
-            let (lo, hi) = surfcap_mesh::bounding_box(q.frame(0));
-            let k = meta.target_up_axis.axis_and_sign().0;
-            let height = (hi[k] - lo[k]) as f64;
-            let pct = |x: f64| if height > 0.0 { 100.0 * x / height } else { f64::NAN };
-            let mut err = 0.0;
-            let mut nearest = 0.0;
-            let mut seams = Vec::new();
-            for (f, pose) in out.aligned.iter().enumerate() {
-                let t = q.frame(f);
-                err += surfcap_eval::transfer_eval::aligned_rms(pose, t).powi(2);
-                let best = training
-                    .iter()
-                    .map(|p| surfcap_eval::transfer_eval::aligned_rms(t, p))
-                    .fold(f64::INFINITY, f64::min);
-                nearest += best.powi(2);
-                seams.push(edge_distortion_by_region(&topology, &target_parts, pose, t)?);
-            }
-            let n = out.aligned.len().max(1) as f64;
-            let (err, nearest) = ((err / n).sqrt(), (nearest / n).sqrt());
-            let max_of = |f: &dyn Fn(&EdgeDistortion) -> f64| seams.iter().map(f).fold(0.0f64, f64::max);
-            let has_boundary = seams.iter().any(|e| e.boundary_edges > 0);
-            (
-                json!({
-                    "truth": a.truth, "target_height": height,
-                    "rms": err, "rms_percent": pct(err),
-                    "nearest_training_pose_rms": nearest, "nearest_training_pose_percent": pct(nearest),
-                    "nearest_training_poses": training.len(),
-                    "method": method,
-                }),
-                json!({
-                    "boundary_edges": seams.first().map_or(0, |e| e.boundary_edges),
-                    "inside_edges": seams.first().map_or(0, |e| e.inside_edges),
-                    "boundary_max": has_boundary.then(|| max_of(&|e| e.boundary_max)), "inside_max": max_of(&|e| e.inside_max),
-                    "boundary_mean": has_boundary.then(|| crate::output::mean(seams.iter().map(|e| e.boundary_mean))),
-                    "inside_mean": crate::output::mean(seams.iter().map(|e| e.inside_mean)),
-                    "against": "the true motion (--truth): |l / l_true - 1| per edge and frame",
-                }),
-            )
-        }
-        None => (
-            serde_json::Value::Null,
-            json!({
-                "boundary_edges": null, "inside_edges": null,
-                "boundary_max": null, "inside_max": null, "boundary_mean": null, "inside_mean": null,
-                "against": "dropped: no --truth (against the rest pose it measures the motion's own stretching of short edges)",
-            }),
-        ),
-    };
-    let name = format!("{}-as-{}", seq.name, meta.target_name);
-    let positions: Vec<f32> = out.world.iter().flatten().copied().collect();
-    let out_seq = Sequence::new(name.clone(), nv, positions)?
-        .with_labels(vec![FrameLabel::Synthetic; seq.n_frames()])?
-        .with_tags(vec!["transfer".into()]);
-    let out_subject = Subject::new(
-        name.clone(),
-        topology,
-        vec![out_seq],
-        meta.target_fps,
-        meta.target_up_axis,
-        meta.target_units.clone(),
-    )?;
+    let options = ApplyOptions { reconstruction: a.reconstruction, correction: a.correction, nearest: a.nearest };
+    let (out_subject, mut report) = application.run(&options, t0)?;
     let bar = crate::progress::Bar::new(ctx);
     let written = export(&out_subject, format, &a.out.output, ctx.export_options(), &bar)?;
-    let report = json!({
-        "model": a.model, "method": method, "motion": a.motion, "source": meta.source_name, "target": meta.target_name,
-        "frames": seq.n_frames(),
-        "reconstruction": if method == "baran" { "baran" } else if stitching { "stitch" } else { "average" },
-        "correction": correction,
-        "nearest": a.nearest,
-        "parts": target_parts.names(),
-        "accuracy": accuracy,
-        "edge_length_distortion": seam_summary,
-        "setup_seconds": setup_seconds, "transfer_seconds": transfer_seconds,
-        "total_seconds": t0.elapsed().as_secs_f64(),
-        "per_frame": { "displacement": out.displacements, "cuts": cuts },
-        "written": written,
-    });
+    report.written = written;
     surfcap_synthesis::write_report(&surfcap_synthesis::report_path(&a.out.output), &report)?;
     ctx.commit(outs)?;
+    let (method, correction) = (report.method, report.correction);
+    let (transfer_seconds, setup_seconds) = (report.transfer_seconds, report.setup_seconds);
+    let report = serde_json::to_value(&report)?;
     ctx.result(&report, || {
         println!(
             "{} ({} frames) transferred onto {} in {transfer_seconds:.2} s ({}; set-up {setup_seconds:.2} s) -> {}",
             a.motion,
-            seq.n_frames(),
-            meta.target_name,
+            report["frames"],
+            report["target"].as_str().unwrap_or_default(),
             if method == "baran" {
                 "Baran et al."
             } else if correction {
                 "parts corrected and stitched"
-            } else if stitching {
+            } else if a.reconstruction == Reconstruction::Stitch {
                 "parts stitched"
             } else {
                 "overlaps averaged"
