@@ -121,6 +121,33 @@ pub struct PortOpt {
     pub port: u16,
 }
 
+/// `--data`'s help for a command that reads `what` from the shared real-data folder (laid out
+/// as `../shared/data`: `<dataset>/<sequence>/...`). The option's default is
+/// [`default_data_dir`] (`default_value_os_t`), so the command runs the same from any working
+/// folder and `--help` shows the folder it resolves to.
+pub fn data_help(what: &str) -> String {
+    format!(
+        "The shared data folder ({what}); default: $SURFCAP_DATA when set, else the shared/data \
+         folder beside the checkout surfcap was built from"
+    )
+}
+
+/// The data folder when no `--data` is given: `$SURFCAP_DATA` when set (and not empty), else
+/// [`checkout_data_dir`].
+pub fn default_data_dir() -> PathBuf {
+    match std::env::var_os("SURFCAP_DATA") {
+        Some(d) if !d.is_empty() => PathBuf::from(d),
+        _ => checkout_data_dir(),
+    }
+}
+
+/// `../shared/data` next to the workspace (the checkout) this program was built from.
+pub fn checkout_data_dir() -> PathBuf {
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let workspace = crate_dir.parent().and_then(Path::parent).unwrap_or(crate_dir);
+    workspace.parent().unwrap_or(workspace).join("shared").join("data")
+}
+
 /// Where derived matrices are cached.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct CacheOpts {
