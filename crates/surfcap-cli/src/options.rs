@@ -102,7 +102,8 @@ impl DistanceOpts {
 /// The tolerance of the edge weights of a graph.
 #[derive(clap::Args, Debug, Clone, Copy)]
 pub struct AlphaOpt {
-    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
+    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); larger gives a denser graph
+    /// (more transitions are worth their cost).
     #[arg(long, default_value = "0.05")]
     pub alpha: Alpha,
 }
