@@ -129,7 +129,7 @@ pub fn unit_name(units: &surfcap_mesh::Units) -> &str {
 /// metres when that is not 1, or the source's own word for arbitrary units.
 pub fn units_line(units: &surfcap_mesh::Units) -> String {
     match units.metres_per_unit {
-        Some(m) if m == 1.0 => units.symbol().to_string(),
+        Some(1.0) => units.symbol().to_string(),
         Some(m) => format!("{} ({m} m)", units.symbol()),
         None => format!("units (not metric: {:?})", units.name),
     }
