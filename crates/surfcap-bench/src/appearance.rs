@@ -27,8 +27,8 @@ use crate::measure::{peak_rss, verdict};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (the head scan: leeperrysmith_head).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("the head scan: leeperrysmith_head"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// Texture maps in the model.
     #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::options::at_least(s, 2))]

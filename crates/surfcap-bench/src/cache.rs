@@ -27,7 +27,8 @@ use crate::measure::FpsOpt;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The subject whose distance matrix is read (default: ../shared/data/vlasic2008/crane).
+    /// The subject whose distance matrix is read (default: vlasic2008/crane in $SURFCAP_DATA, else
+    /// in the shared/data folder beside the checkout).
     #[arg(long)]
     pub subject: Option<PathBuf>,
     /// Frames of the transition table entry.
@@ -96,7 +97,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     surfcap_mesh::cache_entry::check_folder(&dir)?;
     let mut reports = Vec::new();
 
-    let subject = a.subject.clone().unwrap_or_else(|| PathBuf::from("../shared/data/vlasic2008/crane"));
+    let subject =
+        a.subject.clone().unwrap_or_else(|| crate::options::default_data_dir().join("vlasic2008").join("crane"));
     if subject.exists() {
         let s = a.fps.open_quietly(&subject)?;
         let n = s.n_frames();

@@ -29,9 +29,11 @@ mod transfer;
 mod transitions;
 mod vary;
 
-/// Measure surfcap's speed and memory against its targets (on 2 cores unless said otherwise).
+/// Measure surfcap's speed and memory against its targets (on 2 cores unless said otherwise):
+/// loading, distances, transitions, graphs, synthesis queries, the surface motion graph,
+/// appearance, learning, transfer, variation, the tiled all-pairs work, the cache and export.
 #[derive(Parser, Debug)]
-#[command(name = "surfcap-bench", version, about, long_about = None, negative_values = true)]
+#[command(name = "surfcap-bench", version, long_about = None, negative_values = true)]
 pub struct Cli {
     #[command(flatten)]
     globals: GlobalOpts,
@@ -136,4 +138,18 @@ fn check_size(ctx: &Ctx, what: String, memory: f64, disk: f64, lower: &str) -> a
 /// Runs the benchmarks' program on the process's arguments and returns its exit code.
 pub fn main() -> ExitCode {
     surfcap_cli::run_front::<Cli>()
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// `surfcap-bench --help` opens with what the program measures, not the package's one-line
+    /// description.
+    #[test]
+    fn the_summary_names_what_is_measured() {
+        let about = super::Cli::command().get_about().map(|a| a.to_string()).unwrap_or_default();
+        assert!(about.starts_with("Measure surfcap's speed and memory"), "{about}");
+        assert!(about.contains("synthesis queries") && about.contains("appearance"), "{about}");
+    }
 }

@@ -24,8 +24,8 @@ use crate::measure::{peak_rss, verdict};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (the CMU clips).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("the CMU clips"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: std::path::PathBuf,
     /// Mannequin vertices (about: the remeshing lands near it; the default gives just over
     /// 10,000).

@@ -19,8 +19,8 @@ use crate::options::SeedOpt;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (the CMU clips).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("the CMU clips"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: std::path::PathBuf,
     /// Training pairs.
     #[arg(long, default_value_t = 350, value_parser = |s: &str| crate::options::at_least(s, 2))]

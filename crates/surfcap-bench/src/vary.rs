@@ -31,8 +31,8 @@ pub const CLIPS: [&str; 4] = ["16_15", "16_17", "16_19", "16_36"];
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (the CMU clips).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("the CMU clips"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: std::path::PathBuf,
     /// Mannequin vertices (about: the remeshing lands near it).
     #[arg(long, default_value_t = 3000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]

@@ -87,10 +87,18 @@ fn json_section(title: &str, v: &Value) -> String {
 /// Files under `p` (or `p` itself) with the report's extensions, sorted.
 fn files_of(p: &Path) -> anyhow::Result<Vec<PathBuf>> {
     anyhow::ensure!(p.exists(), "--include {}: no such file or folder", p.display());
+    let shown = ["json", "svg", "png", "glb"];
     if p.is_file() {
+        // A file named on its own is shown or refused, never silently left out.
+        let ext = p.extension().and_then(|x| x.to_str()).map(str::to_ascii_lowercase);
+        anyhow::ensure!(
+            ext.as_deref().is_some_and(|x| shown.contains(&x)),
+            "--include {}: the report shows .json tables, .svg or .png plots and .glb animations (or the folders that hold them)",
+            p.display()
+        );
         return Ok(vec![p.to_path_buf()]);
     }
-    crate::files::files_under(p, &["json", "svg", "png", "glb"])
+    crate::files::files_under(p, &shown)
 }
 
 /// A unique name inside `dir` for `file` (`name`, `name-2`, ...).
@@ -275,11 +283,12 @@ pub fn write_report(
                 n_anim += 1;
             }
             Some("json")
-                if f.with_extension("glb").is_file()
+                if files.contains(&f.with_extension("glb"))
                     || (f.to_string_lossy().ends_with(".report.json")
-                        && f.with_extension("").with_extension("glb").is_file()) =>
+                        && files.contains(&f.with_extension("").with_extension("glb"))) =>
             {
-                // A glb's labels sidecar or synthesis report: shown with its animation.
+                // A glb's labels sidecar or synthesis report, when the glb is included too:
+                // shown with its animation.
             }
             Some("json") => {
                 let v: Value = serde_json::from_slice(&std::fs::read(f).with_context(|| format!("reading {name}"))?)
@@ -289,8 +298,9 @@ pub fn write_report(
                 let _ = writeln!(tables, "<p><a href=\"{}\">{}</a></p>", rel(out, &to), rel(out, &to));
                 n_tables += 1;
             }
-            // A plot: its SVG when there is one, else its PNG.
-            Some(ext @ ("svg" | "png")) if ext == "svg" || !f.with_extension("svg").is_file() => {
+            // A plot: its SVG when that is included too, else its PNG (`--include t-dtw.png`
+            // beside a t-dtw.svg shows the PNG asked for).
+            Some(ext @ ("svg" | "png")) if ext == "svg" || !files.contains(&f.with_extension("svg")) => {
                 let to = copy_into(&plots_dir, f)?;
                 let _ = writeln!(
                     images,

@@ -75,8 +75,12 @@ impl NegativeValues for clap::Command {
 }
 
 /// The options of every command of a front end (`surfcap`, `surfcap-bench`): how results are
-/// reported and whether folder outputs may replace what surfcap did not write.
+/// reported and whether folder outputs may replace what surfcap did not write. In every
+/// `--help` they come after the command's own options (`display_order` past any command's
+/// count; each flattened group numbers its options from 0, so they would otherwise be
+/// interleaved with the command's).
 #[derive(clap::Args, Debug, Clone, Copy)]
+#[command(next_display_order = 10_000)]
 pub struct GlobalOpts {
     /// No progress bars and no notes; only results and errors.
     #[arg(long, global = true)]
@@ -195,8 +199,9 @@ enum Command {
     /// distance in a time, by integer linear programming.
     #[command(subcommand)]
     Smg(commands::smg::Cmd),
-    /// Eigen appearance maps (thesis ch. 4): generate benchmark texture sequences with ground
-    /// truth (known drift, moving light, blur, noise, occlusion holes).
+    /// Eigen appearance maps (thesis ch. 4): generate texture sequences with ground truth or
+    /// paint a base texture; build the eigen textures and warps of per-frame maps; reconstruct,
+    /// interpolate or complete maps with them.
     #[command(subcommand)]
     Appearance(commands::appearance::AppearanceCmd),
     /// Motion variation (thesis ch. 6): learn a GPDM per body part from a few sequences of one

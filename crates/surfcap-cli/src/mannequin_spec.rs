@@ -67,6 +67,27 @@ pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     }
     let bvhs: Vec<_> = a.bvh.iter().map(|p| read_bvh(p)).collect::<Result<_, _>>()?;
     let fps = a.fps.unwrap_or_else(|| bvhs.first().map_or(30.0, |b| b.fps()));
+    // Clips recorded at another rate are resampled to the subject's: said aloud, with where the
+    // rate came from, so a 120 fps clip first in the list does not silently quadruple the rest.
+    let other: Vec<String> = a
+        .bvh
+        .iter()
+        .zip(&bvhs)
+        .filter(|(_, b)| (b.fps() - fps).abs() > 1e-6 * fps)
+        .map(|(p, b)| format!("{} ({} fps)", p.display(), surfcap_synthesis::words::fmt_number(b.fps())))
+        .collect();
+    if !other.is_empty() {
+        let from = match (a.fps, a.bvh.first()) {
+            (Some(_), _) => "--fps".to_string(),
+            (None, Some(first)) => format!("the first file's, {}", first.display()),
+            (None, None) => "the default".to_string(),
+        };
+        ctx.note(&format!(
+            "the clips' frame rates differ: {} resampled to {} fps ({from}); --fps sets the subject's rate",
+            other.join(", "),
+            surfcap_synthesis::words::fmt_number(fps)
+        ));
+    }
     // The subject's size before any clip is made: every clip resampled to `fps`.
     let mut frames: Vec<f64> =
         bvhs.iter().map(|b| clip_frames(b.n_frames().saturating_sub(1) as f64 * b.frame_time, fps)).collect();

@@ -102,7 +102,8 @@ impl DistanceOpts {
 /// The tolerance of the edge weights of a graph.
 #[derive(clap::Args, Debug, Clone, Copy)]
 pub struct AlphaOpt {
-    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); smaller gives a denser graph.
+    /// Tolerance alpha of the edge weights (thesis eq. 3.2-3.3); larger gives a denser graph
+    /// (more transitions are worth their cost).
     #[arg(long, default_value = "0.05")]
     pub alpha: Alpha,
 }
@@ -119,6 +120,33 @@ pub struct PortOpt {
     /// Port on 127.0.0.1 (default: any free one; the URL is printed).
     #[arg(long, default_value_t = 0)]
     pub port: u16,
+}
+
+/// `--data`'s help for a command that reads `what` from the shared real-data folder (laid out
+/// as `../shared/data`: `<dataset>/<sequence>/...`). The option's default is
+/// [`default_data_dir`] (`default_value_os_t`), so the command runs the same from any working
+/// folder and `--help` shows the folder it resolves to.
+pub fn data_help(what: &str) -> String {
+    format!(
+        "The shared data folder ({what}); default: $SURFCAP_DATA when set, else the shared/data \
+         folder beside the checkout surfcap was built from"
+    )
+}
+
+/// The data folder when no `--data` is given: `$SURFCAP_DATA` when set (and not empty), else
+/// [`checkout_data_dir`].
+pub fn default_data_dir() -> PathBuf {
+    match std::env::var_os("SURFCAP_DATA") {
+        Some(d) if !d.is_empty() => PathBuf::from(d),
+        _ => checkout_data_dir(),
+    }
+}
+
+/// `../shared/data` next to the workspace (the checkout) this program was built from.
+pub fn checkout_data_dir() -> PathBuf {
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let workspace = crate_dir.parent().and_then(Path::parent).unwrap_or(crate_dir);
+    workspace.parent().unwrap_or(workspace).join("shared").join("data")
 }
 
 /// Where derived matrices are cached.

@@ -119,9 +119,20 @@ pub fn length(x: f64, units: &surfcap_mesh::Units, decimals: usize) -> String {
     format!("{:.decimals$} {}", x + 0.0, unit_name(units))
 }
 
-/// The name lengths are given in: the subject's unit, or "units" when it has no known size.
+/// The name lengths are given in: the unit's symbol, or "units" when it has no known size
+/// ([`surfcap_mesh::Units::symbol`]).
 pub fn unit_name(units: &surfcap_mesh::Units) -> &str {
-    if units.metres_per_unit.is_some() { units.name.as_str() } else { "units" }
+    units.symbol()
+}
+
+/// The `units` line of `surfcap info`: the symbol lengths are written in, with its size in
+/// metres when that is not 1, or the source's own word for arbitrary units.
+pub fn units_line(units: &surfcap_mesh::Units) -> String {
+    match units.metres_per_unit {
+        Some(1.0) => units.symbol().to_string(),
+        Some(m) => format!("{} ({m} m)", units.symbol()),
+        None => format!("units (not metric: {:?})", units.name),
+    }
 }
 
 /// `n` and `word`, with an "s" unless `n` is 1 ("1 sequence", "2 sequences").

@@ -87,12 +87,9 @@ pub fn print_summary(s: &Subject, d: &serde_json::Value) {
             .collect();
         format!("({})", v.join(", "))
     };
-    println!("bounds      {} .. {} {}", bb("min"), bb("max"), units.name);
+    println!("bounds      {} .. {} {}", bb("min"), bb("max"), units.symbol());
     println!("up axis     {}", s.up_axis.as_str());
-    match units.metres_per_unit {
-        Some(m) => println!("units       {} ({m} m)", units.name),
-        None => println!("units       {} (not metric)", units.name),
-    }
+    println!("units       {}", crate::output::units_line(units));
     if d["frames_with_zero_area_triangles"].as_u64() != Some(0) {
         println!(
             "note        {} frames contain zero-area triangles (in the data)",

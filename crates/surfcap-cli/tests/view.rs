@@ -79,11 +79,13 @@ fn the_viewer_plays_a_real_capture_in_chromium() {
     for (x, y) in f32s(&glb_body).iter().zip(f32s(&body)) {
         assert!((x - y).abs() <= 1e-5 * (1.0 + y.abs()), "{x} vs {y}");
     }
-    // The page in headless Chromium: a capture has original frames only, no overlay, a grid in metres.
+    // The page in headless Chromium: a capture has original frames only, no overlay, a grid in
+    // metres, written with the unit's symbol as everywhere else (the capture's meta says
+    // "metres (approx.)").
     let shot = tempfile::tempdir().unwrap();
     let seen = browser_test(&url, &shot.path().join("viewer.png"));
     assert!(seen["painted"].as_f64().unwrap() > 0.001);
-    assert_eq!(seen["legend"], serde_json::json!(["original frame", "grid: 1 square = 0.2 metres"]), "{seen}");
+    assert_eq!(seen["legend"], serde_json::json!(["original frame", "grid: 1 square = 0.2 m"]), "{seen}");
     assert!(
         count(&seen, "colours/original", "green") > 1000 && count(&seen, "colours/original", "grey") > 100,
         "{seen}"

@@ -703,7 +703,7 @@ pub fn transfer_case_eval(case: &TransferCase, opts: &TransferEvalOptions) -> Re
         target_vertices: case.target.topology().n_vertices(),
         parts: case.target_parts.names().iter().map(|s| s.to_string()).collect(),
         target_height: h,
-        units: case.target.units.name.clone(),
+        units: case.target.units.symbol().to_string(),
         train_motions: case.train.iter().map(|&(_, b)| case.target.sequences()[b].name.clone()).collect(),
         unseen_motions: case.unseen.iter().map(|&(_, b)| case.target.sequences()[b].name.clone()).collect(),
         pool_pairs: pool.len(),

@@ -883,7 +883,7 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
         subject: s.name.clone(),
         vertices: topology.n_vertices(),
         height,
-        units: s.units.name.clone(),
+        units: s.units.symbol().to_string(),
         parts: case.parts.names().iter().map(|n| n.to_string()).collect(),
         sequences: model
             .sequences

@@ -94,6 +94,17 @@ impl Units {
         Units { name: "arbitrary".into(), metres_per_unit: None }
     }
 
+    /// How lengths in these units are written everywhere surfcap prints them: the unit's symbol
+    /// (`m`, `cm`, `mm`, `in`) whatever word the source used (`metres (approx.)`, `meters`), the
+    /// name of another known size as given, and `units` when the size is unknown.
+    pub fn symbol(&self) -> &str {
+        const SYMBOLS: [(f64, &str); 4] = [(1.0, "m"), (0.01, "cm"), (0.001, "mm"), (0.0254, "in")];
+        match self.metres_per_unit {
+            Some(m) => SYMBOLS.iter().find(|(size, _)| *size == m).map_or(self.name.as_str(), |(_, sym)| sym),
+            None => "units",
+        }
+    }
+
     /// Reads the leading word of a description: `m`, `metres (approx.)`, `cm`, `mm`, `inches`;
     /// anything else (`arbitrary (rescaled)`, `model units`) is kept as arbitrary units.
     pub fn parse(text: &str) -> Self {
@@ -468,6 +479,13 @@ mod tests {
     #[test]
     fn parses_units() {
         assert_eq!(Units::parse("metres (approx.)").metres_per_unit, Some(1.0));
+        // One spelling, the symbol, whatever word the source used.
+        for (text, symbol) in
+            [("metres (approx.)", "m"), ("meters", "m"), ("m", "m"), ("centimetres", "cm"), ("inches", "in")]
+        {
+            assert_eq!(Units::parse(text).symbol(), symbol, "{text}");
+        }
+        assert_eq!(Units::parse("model units (NOT meters)").symbol(), "units");
         assert_eq!(Units::parse("cm").metres_per_unit, Some(0.01));
         assert_eq!(Units::parse("arbitrary (rescaled)").metres_per_unit, None);
         assert_eq!(Units::parse("model units (NOT meters)").metres_per_unit, None);

@@ -31,7 +31,7 @@ use crate::error::{Error, Result};
 use crate::transition_table::TransitionTable;
 
 /// The tolerance alpha of eq. 3.2-3.3 between a transition's deformation and its duration: a
-/// finite number > 0 (a smaller alpha gives a denser graph).
+/// finite number > 0 (a larger alpha gives a denser graph: `graph build` measures the density).
 ///
 /// Made by [`Alpha::new`] (from a number), [`FromStr`] (from text: usable as a clap value
 /// parser) or [`Deserialize`] (from a file), each refusing 0, negative numbers, NaN and

@@ -46,17 +46,20 @@ impl Constraint {
         }
     }
 
-    /// One line for people: `distance: 3.02 m (asked 3, error 0.02)`, `missed` added when it was
-    /// (what the viewer shows beside a synthesis output).
+    /// One line for people: `distance: 3.02 m (asked 3, error 0.02 m)`, `missed` added when it
+    /// was (what the viewer shows beside a synthesis output). The error has its unit, and a
+    /// path's says it is the largest distance of the centre from the curve.
     pub fn summary(&self) -> String {
         let missed = if self.missed { ", missed" } else { "" };
+        let error = if self.name == "path" { "largest centre error" } else { "error" };
         format!(
-            "{}: {} {} (asked {}, error {}{missed})",
+            "{}: {} {} (asked {}, {error} {} {}{missed})",
             self.name,
             fmt_number(self.achieved),
             self.unit,
             fmt_number(self.asked),
-            fmt_number(self.error)
+            fmt_number(self.error),
+            self.unit
         )
     }
 
@@ -129,3 +132,18 @@ impl std::fmt::Display for ConstraintsMissed {
 }
 
 impl std::error::Error for ConstraintsMissed {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The line beside a synthesis output gives the error's unit, and a path's error says it is
+    /// the largest.
+    #[test]
+    fn the_summary_gives_the_error_with_its_unit() {
+        let path = Constraint::new("path", "m", 15.0, 15.2, 0.112, 1.5);
+        assert_eq!(path.summary(), "path: 15.2 m (asked 15, largest centre error 0.112 m)");
+        let time = Constraint::new("time", "frames", 90.0, 95.0, 5.0, 10.0);
+        assert_eq!(time.summary(), "time: 95 frames (asked 90, error 5 frames)");
+    }
+}

@@ -260,7 +260,7 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
     let report = SampleReport {
         model: r.model.clone(),
         subject: model.subject.clone(),
-        units: model.units.name.clone(),
+        units: model.units.symbol().to_string(),
         sequence: match &r.varied {
             Varied::Sequence(name) => Some(name.clone()),
             Varied::Blend { .. } => None,

@@ -19,9 +19,10 @@ pub fn fmt_percent(r: f64) -> String {
     format!("{}%", fmt_number(100.0 * r))
 }
 
-/// The name lengths are given in: the subject's unit, or "units" when it has no known size.
+/// The name lengths are given in: the unit's symbol, or "units" when it has no known size
+/// ([`surfcap_mesh::Units::symbol`]).
 pub fn unit_name(units: &Units) -> &str {
-    if units.metres_per_unit.is_some() { units.name.as_str() } else { "units" }
+    units.symbol()
 }
 
 /// The subject's length unit as reports name it.

@@ -33,7 +33,8 @@ pub struct ViewItem {
     pub fps: f64,
     /// Subject up axis as `+y`, `-z`...: the page turns it onto its own +Y.
     pub up: String,
-    /// Length unit of the positions (`m`, `cm`, or a free description): the grid is labelled in it.
+    /// Length unit of the positions as surfcap writes it (`surfcap_mesh::Units::symbol`: `m`,
+    /// `cm`, ..., or `units` when the size is unknown): the grid is labelled in it.
     pub units: String,
     /// Metres per unit, `None` for arbitrary units.
     pub metres_per_unit: Option<f64>,

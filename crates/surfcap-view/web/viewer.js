@@ -186,7 +186,8 @@ function gridStep(extent) {
 }
 
 function unitName(m, step) {
-  return m.metres_per_unit == null ? `${step} ${m.units} units` : `${step} ${m.units}`;
+  // `units` is the unit's symbol (`m`, `cm`), or `units` when the size is unknown.
+  return `${step} ${m.units}`;
 }
 
 function label(text, height) {

@@ -63,7 +63,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 fn scale(metric: PoseMetric, w: f64, triangles: usize, units: &surfcap_mesh::Units, mean: f64) -> String {
     match metric {
         PoseMetric::Euclidean => {
-            let unit = if units.metres_per_unit.is_some() { units.name.as_str() } else { "units" };
+            let unit = units.symbol();
             format!(
                 "a distance is the sum over the vertices of the squared distance between the two poses after the best rotation about the up axis and ground-plane shift (eq. 2.2), in {unit} squared"
             )

@@ -26,7 +26,8 @@ pub struct Args {
     /// triangles), as Huang et al.'s surface motion graph reads them. Implied by `-o x.frames`.
     #[arg(long)]
     pub as_frame_set: bool,
-    /// Subject name (default: from the manifest or the first source).
+    /// Subject name (default: from the manifest; else what the sources' names share, a prefix
+    /// ending at a word or the folder they lie in; else the first source's name).
     #[arg(long)]
     pub name: Option<String>,
     /// Give in-place clips (centre of mass not travelling, as game clips are authored) the
@@ -70,6 +71,13 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             src.sequence,
             crate::output::count_of(src.frames, "frame")
         ));
+    }
+    // Several sources: say which name the subject got and why, as it names every output.
+    if a.name.is_none() && a.sources.len() > 1 {
+        let (name, from) = surfcap_formats::import::default_subject_name(&a.sources);
+        if imported.subject.name == name {
+            ctx.note(&format!("subject named {name:?} after {from}; --name gives it another"));
+        }
     }
     let mut s = imported.subject;
     let mut recovered = Vec::new();

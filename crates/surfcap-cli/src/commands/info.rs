@@ -77,10 +77,7 @@ fn print_frame_set(s: &FrameSet) {
     println!("vertices    {vlo} to {vhi} per frame");
     println!("triangles   {tlo} to {thi} per frame");
     println!("up axis     {}", s.up_axis.as_str());
-    match s.units.metres_per_unit {
-        Some(m) => println!("units       {} ({m} m)", s.units.name),
-        None => println!("units       {} (not metric)", s.units.name),
-    }
+    println!("units       {}", crate::output::units_line(&s.units));
     println!("sequences");
     let w = s.sequences().iter().map(|q| q.name.len()).max().unwrap_or(4).max(4);
     for q in s.sequences() {

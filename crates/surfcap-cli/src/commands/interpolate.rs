@@ -111,13 +111,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     };
     drop(bar);
     ctx.commit(outs)?;
-    let mut result = json!({ "written": written, "from": gi, "to": gj, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() });
+    // Frames as users write them (`sequence:frame`); the JSON keeps the global numbers too.
+    let (from, to) = (s.frame_index().label(gi), s.frame_index().label(gj));
+    let mut result = json!({ "written": written, "from": gi, "to": gj, "from_frame": from, "to_frame": to, "steps": a.steps, "setup_seconds": setup, "total_seconds": t0.elapsed().as_secs_f64() });
     if let Some(t) = textures {
         result["appearance"] = serde_json::to_value(t)?;
     }
     ctx.result(&result, || {
         println!(
-            "{} interpolation of global frames {gi} -> {gj} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",
+            "{} interpolation of {from} -> {to} in {} poses -> {} (set-up {:.3} s, total {:.3} s)",
             if nonlinear { "nonlinear" } else { "linear" },
             a.steps,
             a.output.display(),

@@ -57,8 +57,8 @@ pub struct Args {
     /// Run the chosen evals again even when their finished run is there (as does `--force`).
     #[arg(long)]
     pub redo: bool,
-    /// The shared data folder (the Vlasic crane, KayKit characters, CMU clips, ...).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("the Vlasic crane, KayKit characters, CMU clips, ..."),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// Folder for the page (index.html, results.json, results.csv) and the evals' outputs.
     #[arg(short, long, default_value = "repro")]

@@ -58,6 +58,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (li, lj) = (table.li[k] as usize, table.lj[k] as usize);
     let d = pipe.chain_distances()?.value;
     let s = pipe.subject();
+    // Frames as users write them (`sequence:frame`) in the text and the plot; the report keeps
+    // the global numbers too.
+    let (from, to) = (s.frame_index().label(i), s.frame_index().label(j));
     let t0 = std::time::Instant::now();
     let t = transition_frames(s, &d.values, (i, li), (j, lj), p.slope)?
         .context("the table's warp could not be recovered")?;
@@ -72,7 +75,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(ctx);
     let mut written = export(&out, ExportFormat::Glb, &a.output, ctx.export_options(), &bar)?;
     let report = json!({
-        "from": i, "to": j, "source_length": li, "destination_length": lj, "duration": warp.len,
+        "from": i, "to": j, "from_frame": from, "to_frame": to, "source_length": li, "destination_length": lj, "duration": warp.len,
         "normalised_cost": warp.cost, "table_cost": table.cost[k], "slope": p.slope,
         "warp": warp.path, "blend_seconds": secs,
     });
@@ -85,7 +88,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (r0, r1) = (i.saturating_sub(margin), (i + li + margin).min(n));
     let (c0, c1) = ((j + 1 - lj).saturating_sub(margin), (j + 1 + margin).min(n));
     let heat = surfcap_plot::HeatMap {
-        title: format!("pose distances and DTW warp, {} -> {}", a.from, a.to),
+        title: format!("pose distances and DTW warp, {from} -> {to}"),
         x_label: "destination frame".into(),
         y_label: "source frame".into(),
         values: (r0..r1).flat_map(|r| (c0..c1).map(move |c| (r, c))).map(|(r, c)| d.values[r * n + c]).collect(),
@@ -99,7 +102,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ctx.commit(outs)?;
     ctx.result(&json!({ "transition": report, "written": written }), || {
         println!(
-            "transition {i} -> {j}: source segment {li} frames, destination {lj}, duration {} frames, normalised cost {:.3}; blended in {secs:.2} s",
+            "transition {from} -> {to}: source segment {li} frames, destination {lj}, duration {} frames, normalised cost {:.3}; blended in {secs:.2} s",
             warp.len, warp.cost
         );
     });

@@ -79,8 +79,15 @@ fn glb_textures(p: &Path) -> anyhow::Result<Option<surfcap_mesh::FrameTextures>>
 }
 
 /// The items of what `p` holds (a subject's or a frame set's), with the overlay of the report
-/// beside `output` when it has one sequence.
-fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> anyhow::Result<Vec<ViewItem>> {
+/// beside `output` when it has one sequence; the names of all its sequences are added to
+/// `names` (for the message when a `--sequences` name is none of them).
+fn open_items(
+    ctx: &crate::Ctx,
+    p: &Path,
+    a: &Args,
+    output: Option<&Path>,
+    names: &mut Vec<String>,
+) -> anyhow::Result<Vec<ViewItem>> {
     let bar = crate::progress::Bar::new(ctx);
     let mut items = match surfcap_formats::import::open_any(p, &a.source.to_import(None)?, &bar)? {
         ImportedData::Subject(i) => {
@@ -88,10 +95,12 @@ fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> an
                 ctx.note(n);
             }
             let single = i.subject.sequences().len() == 1;
+            names.extend(i.subject.sequences().iter().map(|q| q.name.clone()));
             (crate::view_items::view_items(&i.subject, &a.sequences), single)
         }
         ImportedData::FrameSet(f) => {
             let single = f.frame_set.sequences().len() == 1;
+            names.extend(f.frame_set.sequences().iter().map(|q| q.name.clone()));
             // A textured glb of a subject (every frame the same mesh, written as a frame set so
             // that each frame has its material) plays with one topology: one index array.
             match glb_textures(p)? {
@@ -112,6 +121,7 @@ fn open_items(ctx: &crate::Ctx, p: &Path, a: &Args, output: Option<&Path>) -> an
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let mut items = Vec::new();
     let mut report = None;
+    let mut names = Vec::new();
     for p in &a.paths {
         anyhow::ensure!(p.exists(), "view {}: no such file or folder", p.display());
         if is_report(p) {
@@ -119,14 +129,25 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let glbs = crate::files::files_under(p, &["glb"])?;
             anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
             for g in glbs {
-                items.extend(open_items(ctx, &g, &a, Some(&g))?);
+                items.extend(open_items(ctx, &g, &a, Some(&g), &mut names)?);
             }
             report = Some(p.clone());
         } else {
-            items.extend(open_items(ctx, p, &a, is_output(p).then_some(p.as_path()))?);
+            items.extend(open_items(ctx, p, &a, is_output(p).then_some(p.as_path()), &mut names)?);
         }
     }
-    anyhow::ensure!(!items.is_empty(), "view: no sequence named {} in what was given", a.sequences.join(", "));
+    // Every name asked for must exist: a misspelt one is named with the sequences there are,
+    // rather than silently left out.
+    let mut known: Vec<String> = Vec::new();
+    for n in names {
+        if !known.contains(&n) {
+            known.push(n);
+        }
+    }
+    if let Some(missing) = a.sequences.iter().find(|n| !known.contains(n)) {
+        anyhow::bail!("--sequences: no sequence named {missing:?} in what was given; it has {}", known.join(", "));
+    }
+    anyhow::ensure!(!items.is_empty(), "view: nothing to play in what was given");
     let n = items.len();
     let json = ctx.json;
     serve(items, ServeOptions { port: a.port.port, report }, |addr| {

@@ -1,5 +1,6 @@
 //! Turning files on disk into a [`Subject`]: detect what a path holds, read its sequences, and
-//! merge them into one subject with one topology, one frame rate, one up axis and one unit.
+//! merge them into one subject with one topology, one frame rate, one up axis and one unit,
+//! named by `--name` or after what its sources share (`subject_name.rs`).
 //!
 //! Or into a [`FrameSet`] (Huang et al. 2009 work on per-frame reconstructions whose vertices and
 //! triangles differ from frame to frame): a folder of OBJ/PLY frames whose
@@ -31,12 +32,14 @@ use crate::manifest;
 mod merge;
 mod open;
 mod sources;
+mod subject_name;
 
 pub use merge::assemble;
 use merge::assemble_frames;
 pub use open::{open_any, open_subject};
 pub use sources::read_source;
 use sources::{Piece, SourceFrames, frame_set_pieces, read_source_any, sequences_of};
+pub use subject_name::{NameFrom, default_subject_name};
 
 /// One sequence read from some source, before it is merged into a subject.
 #[derive(Debug, Clone)]
@@ -228,7 +231,8 @@ pub fn import_any(paths: &[PathBuf], opts: &ImportOptions, progress: &dyn Progre
     let mut pieces = Vec::new();
     let mut opts = opts.clone();
     let mut notes = Vec::new();
-    let mut default_name = paths.first().map(|p| file_stem(p)).unwrap_or_else(|| "subject".into());
+    // What the sources share (a manifest's or a cache's own name below wins).
+    let mut default_name = default_subject_name(paths).0;
     for p in paths {
         if let Some(m) = manifest::find_manifest(p) {
             let (m_opts, m_seqs) = manifest::read_manifest(&m, progress)?;

@@ -56,9 +56,8 @@ pub enum AppearanceCmd {
 
 #[derive(clap::Args, Debug)]
 pub struct GenerateArgs {
-    /// The shared data folder: the mesh and texture default to its leeperrysmith_head
-    /// (template.obj, Map-COL.jpg).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("the mesh and texture default to its leeperrysmith_head (template.obj, Map-COL.jpg)"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// A UV-mapped mesh instead of the head scan: an OBJ (with `vt` on every face corner), or a
     /// subject with texture coordinates (`surfcap synth --head`, `--uv-atlas`), whose first

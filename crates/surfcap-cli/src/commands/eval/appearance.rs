@@ -225,8 +225,8 @@ fn print_tables(r: &AppearanceEval) {
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (its leeperrysmith_head: template.obj and Map-COL.jpg).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("its leeperrysmith_head: template.obj and Map-COL.jpg"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// The benchmark generated: `smooth` (drift of a few texels, a moving light) or `capture`
     /// (camera-ring renders re-projected through calibration and tracking error).

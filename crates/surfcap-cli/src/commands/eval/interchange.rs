@@ -12,8 +12,8 @@ use surfcap_formats::export::ExportFormat;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The data folder (datasets as sub-folders).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("datasets as sub-folders"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// Only these datasets (folder names, comma-separated; default: all).
     #[arg(long, value_delimiter = ',')]

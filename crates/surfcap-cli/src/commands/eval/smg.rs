@@ -35,8 +35,8 @@ pub enum ClipSet {
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (CMU clips).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("CMU clips"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// The clips driving the mannequin (without --input).
     #[arg(long, value_enum, default_value_t = ClipSet::StandWalkJogHit)]

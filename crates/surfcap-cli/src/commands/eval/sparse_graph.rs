@@ -12,8 +12,8 @@ use crate::options::{AlphaOpt, CacheOpts, TableOpts};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (CMU clips).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("CMU clips"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// Vertices of the mannequin (1000 to 20000).
     #[arg(long, default_value_t = 1000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]

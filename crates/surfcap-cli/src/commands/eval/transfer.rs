@@ -52,8 +52,8 @@ fn curve_plot(dir: &Path, c: &CaseEval, variants: &[&str], stem: &str, title: &s
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (KayKit characters and CMU clips).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("KayKit characters and CMU clips"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// Cases: barbarian, mage, rogue (the KayKit knight to each), mannequins (an average
     /// mannequin of 3,000 vertices to a heavy one of 5,000) and catlion (Sumner's 9 cat and

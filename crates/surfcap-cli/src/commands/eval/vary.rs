@@ -193,8 +193,8 @@ fn print_case(c: &CaseEval, tolerance: f64) {
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The shared data folder (CMU clips and the KayKit knight).
-    #[arg(long, default_value = "../shared/data")]
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("CMU clips and the KayKit knight"),
+          default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// Only one case: cmu (the mannequin driven by CMU clips) or kaykit (the knight).
     #[arg(long)]

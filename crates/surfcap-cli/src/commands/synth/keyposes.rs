@@ -32,6 +32,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     inputs.extend(playback_inputs(&a.appearance, &a.vary));
     let outs = a.out.plan(ctx, &inputs)?;
     let s = open(ctx, &a.subject, &a.graph.source)?;
+    // The keys' poses are named `sequence:frame` in the table, however the file gave them.
+    let index = s.frame_index().clone();
     let pipe = a.graph.cache.pipeline(ctx, s)?;
     let params = a.graph.params_for(&pipe)?;
     let bar = crate::progress::Bar::new(ctx);
@@ -48,21 +50,28 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     drop(bar);
     ctx.commit(outs)?;
     ctx.result(&o.report, || {
-        // Thesis Fig. 3.18: input, requested and obtained times.
-        let row = |label: &str, v: Vec<String>| {
-            println!("{label:<10}{}", v.iter().map(|x| format!("{x:>7}")).collect::<String>())
-        };
+        // Thesis Fig. 3.18: each key's pose, the output frame asked and the one obtained, and
+        // the pose distance (eq. 2.13) between the key's pose and the frame shown at its time.
         let keys = &o.report.keys;
-        row("Input", keys.iter().map(|k| k.input_time.to_string()).collect());
-        row("Requested", keys.iter().map(|k| k.requested_time.to_string()).collect());
-        row("Obtained", o.obtained.iter().map(|x| x.to_string()).collect());
-        // Pose distance (eq. 2.13) between each key's pose and the frame shown at its time.
-        row("Distance", keys.iter().map(|k| format!("{:.1}", k.pose_distance)).collect());
+        let poses: Vec<String> = keys
+            .iter()
+            .map(|k| index.resolve(&k.frame, "subject").map(|g| index.label(g)).unwrap_or(k.frame.clone()))
+            .collect();
+        let rows = [
+            ("key pose", poses),
+            ("asked at frame", keys.iter().map(|k| k.requested_time.to_string()).collect()),
+            ("obtained at frame", o.obtained.iter().map(|x| x.to_string()).collect()),
+            ("pose distance", keys.iter().map(|k| format!("{:.1}", k.pose_distance)).collect()),
+        ];
+        let width = rows.iter().flat_map(|(_, v)| v.iter().map(String::len)).max().unwrap_or(0) + 2;
+        for (label, v) in &rows {
+            println!("{label:<18}{}", v.iter().map(|x| format!("{x:>width$}")).collect::<String>());
+        }
         println!("mean absolute timing error {:.2} frames; search {:.3} s", o.mean_abs_error, o.search_seconds);
         for k in keys {
             if let Some(why) = &k.unreachable_why {
                 println!(
-                    "key {} at frame {}: no walk of the graph can meet this time: {why}",
+                    "key {} at output frame {}: no walk of the graph can meet this time: {why}",
                     k.frame, k.requested_time
                 );
             }

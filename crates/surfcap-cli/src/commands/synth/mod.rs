@@ -20,7 +20,9 @@ mod reach;
 
 /// `surfcap synth`: build a mannequin subject (flat arguments), or one of the subcommands.
 #[derive(clap::Args, Debug)]
-#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+// With no arguments at all, the help (its subcommands path, keyposes and reach, and the
+// options that build a subject) rather than the build's "-o is required".
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true, arg_required_else_help = true)]
 pub struct Cmd {
     #[command(subcommand)]
     pub what: Option<What>,
