@@ -25,6 +25,9 @@
 //!   ([`frame_appearance`], thesis Fig. 7.1) and learned variants on its repeated runs
 //!   ([`walk_variants`], thesis chapter 6), chosen by [`Playback`]; [`walk_output::WalkReport`]
 //!   is what every report says about the walk.
+//! - [`interpolation_run`] and [`transition_run`]: poses between two frames (thesis 2.4) and
+//!   one optimal transition between two frames (2.5.4, Algorithm 2), as `surfcap interpolate`
+//!   and `surfcap transition` make them.
 //! - [`constraint`]: soft constraints and how closely they were met.
 //! - [`request_size`] and [`travel_check`]: requests refused before any work (too many frames,
 //!   too much memory, a glb over 4 GiB; a path or distance asked of clips that stay in place).
@@ -39,6 +42,7 @@ pub mod animation_output;
 pub mod constraint;
 pub mod error;
 pub mod frame_appearance;
+pub mod interpolation_run;
 pub mod keyposes_run;
 pub mod path_run;
 pub mod playback;
@@ -46,6 +50,7 @@ pub mod prepared;
 pub mod reach_run;
 pub mod request_size;
 pub mod smg_query;
+pub mod transition_run;
 pub mod travel_check;
 pub mod variant_samples;
 pub mod variation_training;
@@ -58,6 +63,7 @@ pub use animation_output::{
 };
 pub use constraint::{Constraint, ConstraintsMissed, Tolerances};
 pub use error::{Error, Result};
+pub use interpolation_run::{Interpolation, InterpolationMethod, interpolate};
 pub use keyposes_run::{KeyposesOutcome, KeyposesReport, synthesize_keyposes};
 pub use path_run::{PathOutcome, PathQuery, PathReport, PathRequest, synthesize_path};
 pub use playback::{OpenedPlayback, Playback};
@@ -65,4 +71,5 @@ pub use prepared::{Output, Prepared};
 pub use reach_run::{ReachOutcome, ReachQuery, ReachReport, ReachRequest, synthesize_reach};
 pub use request_size::SizeLimits;
 pub use smg_query::{SmgGraph, SmgQuery, SmgQueryReport};
+pub use transition_run::{Transition, TransitionReport, transition};
 pub use walk_variants::Variation;
