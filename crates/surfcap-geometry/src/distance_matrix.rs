@@ -192,7 +192,8 @@ pub fn pair_distance(subject: &Subject, params: &DistanceParams, i: usize, j: us
     }
     let (a, b) = (i.min(j), i.max(j));
     let span = TileSpan { rows: a..a + 1, cols: b..b + 1 };
-    let t = distance_tile(subject, subject.topology().triangles(), subject.up_axis, &span, params, SLAB_BYTES, &NoProgress);
+    let t =
+        distance_tile(subject, subject.topology().triangles(), subject.up_axis, &span, params, SLAB_BYTES, &NoProgress);
     Some(t.values[0])
 }
 

@@ -131,8 +131,7 @@ pub fn interpolate<'py>(
         return Err(PyValueError::new_err(format!("steps {steps}: expected a whole number >= 2")));
     }
     let method: InterpolationMethod = method.parse().map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
-    let stretch: StretchInterpolation =
-        stretch.parse().map_err(|e| PyValueError::new_err(format!("stretch: {e}")))?;
+    let stretch: StretchInterpolation = stretch.parse().map_err(|e| PyValueError::new_err(format!("stretch: {e}")))?;
     let (gi, gj) = (subject.frame_of(from_)?, subject.frame_of(to)?);
     let (from_name, to_name) = (frame_text(from_)?, frame_text(to)?);
     let pipe = subject.pipe().clone();

@@ -81,9 +81,13 @@ pub struct TableOwner {
 }
 
 /// A read-only `(n, n)` view of one layer of the table `owner` holds.
-fn layer<'py, T: Element>(owner: &Bound<'py, TableOwner>, pick: fn(&TransitionTable) -> &[T]) -> PyResult<Bound<'py, PyArray2<T>>> {
+fn layer<'py, T: Element>(
+    owner: &Bound<'py, TableOwner>,
+    pick: fn(&TransitionTable) -> &[T],
+) -> PyResult<Bound<'py, PyArray2<T>>> {
     let t = &owner.get().table;
-    let view = ndarray::ArrayView2::from_shape((t.n, t.n), pick(t)).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let view =
+        ndarray::ArrayView2::from_shape((t.n, t.n), pick(t)).map_err(|e| PyValueError::new_err(e.to_string()))?;
     // SAFETY: the numbers belong to the `Arc` that `owner` holds; `owner` becomes the array's
     // base, so it lives as long as the view, and nothing writes to a pipeline's table.
     let arr = unsafe { PyArray2::borrow_from_array(&view, owner.clone().into_any()) };

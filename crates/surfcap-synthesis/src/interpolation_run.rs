@@ -70,7 +70,10 @@ pub fn interpolate(
     }
     let frame = |g: usize, name: &str| {
         subject.frame(g).ok_or_else(|| {
-            Error::Request(format!("frame {name}: the subject has frames 0 to {}", subject.n_frames().saturating_sub(1)))
+            Error::Request(format!(
+                "frame {name}: the subject has frames 0 to {}",
+                subject.n_frames().saturating_sub(1)
+            ))
         })
     };
     let (pi, pj) = (frame(from, from_name)?, frame(to, to_name)?);
