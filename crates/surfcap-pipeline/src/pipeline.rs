@@ -528,15 +528,17 @@ mod tests {
     fn one_pose_distance_is_the_matrix_entry_before_and_after_the_matrix_is_made() {
         let pipe = Pipeline::new(worm(), CacheStore::memory_only(), Box::new(NoProgress));
         let p = DistanceParams::default();
-        let alone: Vec<f64> = (0..24).map(|j| pipe.pose_distance(&p, 3, j).unwrap()).collect();
+        let n = pipe.subject().n_frames();
+        let alone: Vec<f64> = (0..n).map(|j| pipe.pose_distance(&p, 3, j).unwrap()).collect();
         let m = pipe.distances(&p).unwrap().value;
         for (j, d) in alone.iter().enumerate() {
-            assert_eq!(d.to_bits(), m.values[3 * 24 + j].to_bits(), "pair (3, {j})");
-            assert_eq!(pipe.pose_distance(&p, j, 3).unwrap().to_bits(), m.values[j * 24 + 3].to_bits());
+            assert_eq!(d.to_bits(), m.values[3 * n + j].to_bits(), "pair (3, {j})");
+            assert_eq!(pipe.pose_distance(&p, j, 3).unwrap().to_bits(), m.values[j * n + 3].to_bits());
         }
         let bad = DistanceParams { w: f64::NAN, ..DistanceParams::default() };
         assert_eq!(pipe.pose_distance(&bad, 0, 1).unwrap_err().to_string(), "w NaN: expected a finite number >= 0");
-        assert!(pipe.pose_distance(&p, 0, 24).unwrap_err().to_string().starts_with("frame 24:"));
+        let e = pipe.pose_distance(&p, 0, n).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("frame {n}:")), "{e}");
     }
 
     /// The sparse essential graph is a product of its own, keyed by k: with every transition

@@ -137,10 +137,11 @@ mod tests {
     fn a_pair_without_room_for_its_segments_is_refused_naming_the_frames() {
         let p = pipe();
         let params = TableParams { l_min: 3, l_max: 6, slope: Some(3) };
-        // The last frame has no frames after it for a source segment.
+        // The last frame of the first sequence has no frames after it for a source segment.
         let e = transition(&p, (29, "walk:29"), (5, "5"), &params).unwrap_err();
         assert!(e.to_string().starts_with("no transition from walk:29 to 5: the source needs 3 frames"), "{e}");
-        let e = transition(&p, (30, "30"), (5, "5"), &params).unwrap_err();
-        assert!(e.to_string().contains("the subject has frames 0 to 29"), "{e}");
+        let n = p.subject().n_frames();
+        let e = transition(&p, (n, "past"), (5, "5"), &params).unwrap_err();
+        assert!(e.to_string().contains(&format!("the subject has frames 0 to {}", n - 1)), "{e}");
     }
 }
