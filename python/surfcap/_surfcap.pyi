@@ -134,7 +134,74 @@ class Subject:
 
 # --- distances and interpolation (thesis chapter 2) ---
 
+def pose_distances(subject: Subject, *, metric: str = "deformation", w: float = 0.01) -> npt.NDArray[np.float64]:
+    """All-pairs pose distances (F, F) float64 in global frame order, as ``surfcap distance``
+    writes them (same cache file, same bits): ``metric`` "deformation" (eq. 2.13),
+    "deformation-log" (eq. 2.14) or "euclidean" (eq. 2.2); ``w`` the stretch weight. A read-only
+    view of the cached matrix."""
+
+def pose_distance(subject: Subject, a: Frame, b: Frame, *, metric: str = "deformation", w: float = 0.01) -> float:
+    """One pose distance: entry (a, b) of ``pose_distances`` to the bit, computed for the pair
+    alone unless the matrix is at hand."""
+
+def interpolate(
+    subject: Subject,
+    from_: Frame,
+    to: Frame,
+    *,
+    steps: int = 10,
+    method: str = "nonlinear",
+    stretch: str = "linear",
+    output: Optional[Path] = None,
+    format: Optional[str] = None,
+    force: bool = False,
+) -> Subject:
+    """``steps`` poses (>= 2, both ends included) from ``from_`` to ``to`` as ``surfcap
+    interpolate`` makes them: ``method`` "nonlinear" (eq. 2.45-2.49; ``stretch`` "linear" or
+    "log") or "linear" (eq. 2.23). A Subject of one sequence ``<from>_to_<to>``, positions
+    (steps, V, 3) float32. ``output=`` also writes it (``format`` as ``--format``)."""
+
 # --- transitions (thesis 3.2) ---
+
+Slope = Union[int, str, float]
+"""A slope constraint p (eq. 2.53): a whole number >= 1, or ``"inf"`` / ``float("inf")`` for none."""
+
+def transition(
+    subject: Subject,
+    from_: Frame,
+    to: Frame,
+    *,
+    slope: Slope = 3,
+    l_min: Optional[int] = None,
+    l_max: Optional[int] = None,
+) -> Tuple[Subject, reports.TransitionReport]:
+    """One optimal transition from ``from_`` (source segment starts there) to ``to`` (destination
+    segment ends there), as ``surfcap transition``: the animation (duration, V, 3) float32 and
+    the report ``<output>.transition.json`` holds."""
+
+def transition_table(
+    subject: Subject,
+    *,
+    slope: Slope = 3,
+    l_min: Optional[int] = None,
+    l_max: Optional[int] = None,
+) -> Dict[str, Union[npt.NDArray[np.float64], npt.NDArray[np.uint32], int, None]]:
+    """The all-pairs transition table as ``surfcap transitions`` writes it (same cache file,
+    same numbers), read-only (F, F) views: ``"D"`` float64 normalised cost (inf where none fits),
+    ``"L"`` uint32 duration, ``"li"``, ``"lj"`` uint32 segment lengths; plus the parameters used,
+    ``"l_min"``, ``"l_max"``, ``"slope"`` (None for inf)."""
+
+def transition_costs(
+    subject: Subject,
+    *,
+    slopes: Sequence[int] = (2, 3, 4, 5),
+    fixed: Optional[int] = None,
+    plot_pairs: int = 100,
+    dtw_first_step: str = "surfcap",
+) -> reports.TransitionCostsReport:
+    """Thesis Fig. 2.15 as ``surfcap eval transitions`` computes it: per slope, mean and std of
+    the normalised costs of standard, DTW and DTW + variable-length transitions, and the sampled
+    cost and duration curves (``report.curves()``)."""
 
 # --- graphs (thesis 3.3-3.4) ---
 

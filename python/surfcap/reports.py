@@ -57,6 +57,55 @@ class Report:
 
 # --- transitions (thesis 3.2) ---
 
+
+class TransitionReport(Report):
+    """One transition, as ``surfcap transition`` writes ``<output>.transition.json``: global
+    frames ``from``/``to`` (``report["from"]``: ``from`` is a Python keyword), segment lengths,
+    the duration L (frames), the warp's normalised cost and the table's cost D(i, j), the slope
+    (None for inf), the warp as [source frame, destination frame] pairs, and the blend time."""
+
+    to: int
+    source_length: int
+    destination_length: int
+    duration: int
+    normalised_cost: float
+    table_cost: float
+    slope: Optional[int]
+    warp: List[List[int]]
+    blend_seconds: float
+
+
+class TransitionCostsReport(Report):
+    """Thesis 2.5.5, Fig. 2.15, as ``surfcap eval transitions`` writes ``transitions.json``:
+    ``rows`` (per slope: ``slope``, ``pairs``, ``standard``/``dtw``/``dtw_vls`` with ``mean`` and
+    ``std``, ``dtw_vls_mean_duration``), and ``plot``: the curves the command plots (``slope``,
+    ``sample`` of ``standard``, ``dtw_vls``, ``duration`` per sampled pair, ``shown``: the warp
+    drawn on the distance matrix, or None)."""
+
+    subject: str
+    frames: int
+    fps: float
+    l_min: int
+    l_max: int
+    fixed_length: int
+    dtw_first_step: str
+    rows: List[Report]
+    plot: Report
+
+    def curves(self) -> Dict[str, Any]:
+        """The sampled curves of Fig. 2.15 as arrays: ``standard`` and ``dtw_vls`` (P,) float64
+        normalised costs, ``duration`` (P,) uint32 frames of the variable-length transitions,
+        ``fixed_length`` (int, the standard transitions' duration)."""
+        import numpy as np
+
+        sample = self._fields["plot"]["sample"]
+        return {
+            "standard": np.array([s["standard"] for s in sample], dtype=np.float64),
+            "dtw_vls": np.array([s["dtw_vls"] for s in sample], dtype=np.float64),
+            "duration": np.array([s["duration"] for s in sample], dtype=np.uint32),
+            "fixed_length": self._fields["fixed_length"],
+        }
+
 # --- graphs (thesis 3.3-3.4) ---
 
 # --- synthesis (thesis 3.5) ---

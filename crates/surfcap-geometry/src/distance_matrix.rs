@@ -20,9 +20,9 @@
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat};
-use surfcap_mesh::{Progress, Subject};
+use surfcap_mesh::{NoProgress, Progress, Subject};
 
-use crate::distance_tiles::{DistanceTile, TRIANGLE_CHUNK, distance_tile, plan_distance_tiles};
+use crate::distance_tiles::{DistanceTile, TRIANGLE_CHUNK, TileSpan, distance_tile, plan_distance_tiles};
 use crate::motion_plane_alignment::plane_axes;
 use crate::pose_distance::{FRAME_FLOATS, PoseMetric};
 
@@ -178,6 +178,25 @@ pub fn distance_matrix_in_tiles(
     DistanceMatrix { n, values, max_skipped_triangles: max_skipped }
 }
 
+/// The distance d(i, j) of one pair of global frames alone: the one-pair tile of
+/// [`distance_tile`] (the row the smaller frame, as the matrix computes it), so the same bits as
+/// entry (i, j) of [`distance_matrix`]; 0 when `i == j`. `None` when a frame is not the
+/// subject's.
+pub fn pair_distance(subject: &Subject, params: &DistanceParams, i: usize, j: usize) -> Option<f64> {
+    let n = subject.n_frames();
+    if i >= n || j >= n {
+        return None;
+    }
+    if i == j {
+        return Some(0.0);
+    }
+    let (a, b) = (i.min(j), i.max(j));
+    let span = TileSpan { rows: a..a + 1, cols: b..b + 1 };
+    let t =
+        distance_tile(subject, subject.topology().triangles(), subject.up_axis, &span, params, SLAB_BYTES, &NoProgress);
+    Some(t.values[0])
+}
+
 /// Writes a tile and its mirror image into the row-major n x n `values`.
 pub fn place_tile(values: &mut [f64], n: usize, t: &DistanceTile) {
     let nc = t.span.cols.len();
@@ -187,5 +206,29 @@ pub fn place_tile(values: &mut [f64], n: usize, t: &DistanceTile) {
             values[i * n + j] = d;
             values[j * n + i] = d;
         }
+    }
+}
+
+#[cfg(test)]
+mod pair_tests {
+    use super::*;
+    use surfcap_builtin::{WormParams, worm_subject};
+
+    #[test]
+    fn one_pair_alone_is_the_matrix_entry_to_the_bit_for_every_metric() {
+        let s = worm_subject(&WormParams { rings: 6, segments: 5, frames: 7, ..Default::default() }).unwrap();
+        for metric in [PoseMetric::Deformation, PoseMetric::DeformationLog, PoseMetric::Euclidean] {
+            let p = DistanceParams { metric, w: 0.01, vertex_weights: None };
+            let m = distance_matrix(&s, &p, &NoProgress);
+            let n = s.n_frames();
+            assert!(n >= 7);
+            for i in 0..n {
+                for j in 0..n {
+                    let d = pair_distance(&s, &p, i, j).unwrap();
+                    assert_eq!(d.to_bits(), m.get(i, j).to_bits(), "{metric:?} ({i}, {j})");
+                }
+            }
+        }
+        assert_eq!(pair_distance(&s, &DistanceParams::default(), s.n_frames(), 0), None);
     }
 }

@@ -95,6 +95,10 @@ impl<K: PartialEq + Clone, V> Memo<K, V> {
         Memo(Mutex::new(Vec::new()))
     }
 
+    fn get(&self, key: &K) -> Option<Fetched<V>> {
+        self.0.lock().expect("memo lock").iter().find(|(k, _)| k == key).map(|(_, v)| v.clone())
+    }
+
     fn get_or_try(&self, key: &K, make: impl FnOnce() -> Result<Fetched<V>>) -> Result<Fetched<V>> {
         if let Some((_, v)) = self.0.lock().expect("memo lock").iter().find(|(k, _)| k == key) {
             return Ok(v.clone());
@@ -211,13 +215,7 @@ impl Pipeline {
 
     /// The all-pairs pose distance matrix (thesis eq. 2.2, 2.13, 2.14) with `p`.
     pub fn distances(&self, p: &DistanceParams) -> Result<Fetched<PoseDistances>> {
-        if !(p.w.is_finite() && p.w >= 0.0) {
-            return Err(Error::Parameter {
-                name: "w",
-                value: p.w.to_string(),
-                expected: "expected a finite number >= 0",
-            });
-        }
+        check_distance(p)?;
         let key = DistanceKey::new(p);
         let n = self.subject.n_frames();
         // Set once the matrix is computed here: only a matrix read from the cache is suspected
@@ -242,6 +240,25 @@ impl Pipeline {
                 },
             )
         })
+    }
+
+    /// One entry d(i, j) of [`Pipeline::distances`] with `p`, the same bits as the matrix's:
+    /// read from the matrix when this pipeline has already produced it, computed for the pair
+    /// alone otherwise ([`surfcap_geometry::distance_matrix::pair_distance`]).
+    pub fn pose_distance(&self, p: &DistanceParams, i: usize, j: usize) -> Result<f64> {
+        check_distance(p)?;
+        let n = self.subject.n_frames();
+        if i >= n || j >= n {
+            return Err(Error::Parameter {
+                name: "frame",
+                value: i.max(j).to_string(),
+                expected: "expected a frame of the subject",
+            });
+        }
+        if let Some(d) = self.distances.get(&DistanceKey::new(p)) {
+            return Ok(d.value.values[i * n + j]);
+        }
+        Ok(surfcap_geometry::distance_matrix::pair_distance(&self.subject, p, i, j).expect("frames checked"))
     }
 
     /// The chain's distance matrix (see [`Pipeline::with_chain_distance`]).
@@ -434,6 +451,15 @@ fn check_shape(shape: &[usize], expected: &[usize], what: &'static str) -> Resul
     if shape == expected { Ok(()) } else { Err(shape_error(shape, &format!("{expected:?}"), what)) }
 }
 
+/// The stretch weight of a distance: finite and >= 0.
+fn check_distance(p: &DistanceParams) -> Result<()> {
+    if p.w.is_finite() && p.w >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::Parameter { name: "w", value: p.w.to_string(), expected: "expected a finite number >= 0" })
+    }
+}
+
 pub(crate) fn check_table(p: &TableParams) -> Result<()> {
     if 1 <= p.l_min && p.l_min <= p.l_max {
         Ok(())
@@ -496,6 +522,23 @@ mod tests {
         // Refresh recomputes what is on disk.
         let refresh = Pipeline::new(worm(), CacheStore::in_folder(dir.path(), true), Box::new(NoProgress));
         assert!(!refresh.chain_distances().unwrap().from_cache);
+    }
+
+    #[test]
+    fn one_pose_distance_is_the_matrix_entry_before_and_after_the_matrix_is_made() {
+        let pipe = Pipeline::new(worm(), CacheStore::memory_only(), Box::new(NoProgress));
+        let p = DistanceParams::default();
+        let n = pipe.subject().n_frames();
+        let alone: Vec<f64> = (0..n).map(|j| pipe.pose_distance(&p, 3, j).unwrap()).collect();
+        let m = pipe.distances(&p).unwrap().value;
+        for (j, d) in alone.iter().enumerate() {
+            assert_eq!(d.to_bits(), m.values[3 * n + j].to_bits(), "pair (3, {j})");
+            assert_eq!(pipe.pose_distance(&p, j, 3).unwrap().to_bits(), m.values[j * n + 3].to_bits());
+        }
+        let bad = DistanceParams { w: f64::NAN, ..DistanceParams::default() };
+        assert_eq!(pipe.pose_distance(&bad, 0, 1).unwrap_err().to_string(), "w NaN: expected a finite number >= 0");
+        let e = pipe.pose_distance(&p, 0, n).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("frame {n}:")), "{e}");
     }
 
     /// The sparse essential graph is a product of its own, keyed by k: with every transition

@@ -31,6 +31,9 @@
 //! - [`transfer_run`]: motion transfer (thesis chapter 5): a model trained with its report, a
 //!   motion transferred with a trained model; [`body_parts_choice`]: the body parts a
 //!   per-part run learns on (a file, the whole body, or five proposed).
+//! - [`interpolation_run`] and [`transition_run`]: poses between two frames (thesis 2.4) and
+//!   one optimal transition between two frames (2.5.4, Algorithm 2), as `surfcap interpolate`
+//!   and `surfcap transition` make them.
 //! - [`constraint`]: soft constraints and how closely they were met.
 //! - [`request_size`] and [`travel_check`]: requests refused before any work (too many frames,
 //!   too much memory, a glb over 4 GiB; a path or distance asked of clips that stay in place).
@@ -46,6 +49,7 @@ pub mod body_parts_choice;
 pub mod constraint;
 pub mod error;
 pub mod frame_appearance;
+pub mod interpolation_run;
 pub mod keyposes_run;
 pub mod path_run;
 pub mod playback;
@@ -54,6 +58,7 @@ pub mod reach_run;
 pub mod request_size;
 pub mod smg_query;
 pub mod transfer_run;
+pub mod transition_run;
 pub mod travel_check;
 pub mod variant_samples;
 pub mod variation_training;
@@ -66,6 +71,7 @@ pub use animation_output::{
 };
 pub use constraint::{Constraint, ConstraintsMissed, Tolerances};
 pub use error::{Error, Result};
+pub use interpolation_run::{Interpolation, InterpolationMethod, interpolate};
 pub use keyposes_run::{KeyposesOutcome, KeyposesReport, check_key_poses, synthesize_keyposes};
 pub use path_run::{CheckedPath, CurveSource, PathOutcome, PathQuery, PathReport, PathRequest, synthesize_path};
 pub use playback::{OpenedPlayback, Playback};
@@ -73,4 +79,5 @@ pub use prepared::{Output, Prepared};
 pub use reach_run::{ReachOutcome, ReachQuery, ReachReport, ReachRequest, synthesize_reach};
 pub use request_size::SizeLimits;
 pub use smg_query::{SmgGraph, SmgQuery, SmgQueryReport};
+pub use transition_run::{Transition, TransitionReport, transition};
 pub use walk_variants::Variation;

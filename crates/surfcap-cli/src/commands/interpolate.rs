@@ -4,9 +4,8 @@ use std::path::PathBuf;
 
 use serde_json::json;
 use surfcap_formats::export::{ExportFormat, export};
-use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
-use surfcap_mesh::{FrameLabel, Sequence};
-use surfcap_motion::transition_frames::FrameMix;
+use surfcap_geometry::pose_interpolation::StretchInterpolation;
+use surfcap_synthesis::interpolation_run::{InterpolationMethod, interpolate};
 
 use crate::limits::{LimitOpts, Request};
 use crate::options::{SourceOpts, open};
@@ -26,7 +25,7 @@ pub struct Args {
     pub steps: usize,
     /// nonlinear (thesis eq. 2.45-2.49) or linear (eq. 2.23).
     #[arg(long, default_value = "nonlinear")]
-    pub method: Method,
+    pub method: InterpolationMethod,
     /// Stretch interpolation of the non-linear method: linear (eq. 2.45) or log (eq. 2.46).
     #[arg(long, default_value = "linear")]
     pub stretch: StretchInterpolation,
@@ -46,26 +45,8 @@ pub struct Args {
     pub appearance: crate::synthesis_args::AppearanceOpts,
 }
 
-/// How the poses in between are made.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
-    Nonlinear,
-    Linear,
-}
-
-impl std::str::FromStr for Method {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "nonlinear" => Ok(Method::Nonlinear),
-            "linear" => Ok(Method::Linear),
-            _ => Err(format!("{s:?}: expected nonlinear or linear")),
-        }
-    }
-}
-
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
-    let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == Method::Nonlinear);
+    let (format, stretch, nonlinear) = (a.format, a.stretch, a.method == InterpolationMethod::Nonlinear);
     let mut inputs = vec![a.subject.as_path()];
     inputs.extend(a.appearance.appearance.as_deref());
     let mut outs = surfcap_mesh::output_set::OutputSet::new(&inputs);
@@ -75,29 +56,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     a.limits.check(ctx, &a.output, &Request { what, frames: a.steps as f64, subject: &s, search_bytes: 0, format })?;
     let (gi, gj) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let appearance = a.appearance.open(&s, format, &a.output)?;
-    let (pi, pj) = (s.frame(gi).expect("resolved"), s.frame(gj).expect("resolved"));
     let t0 = std::time::Instant::now();
-    let interp = NonlinearInterpolator::new(s.topology(), pi, pj, s.up_axis)?;
-    let setup = t0.elapsed().as_secs_f64();
-    let nv = s.topology().n_vertices();
-    let mut positions = Vec::with_capacity(a.steps * 3 * nv);
-    let mut mix = Vec::with_capacity(a.steps);
-    for k in 0..a.steps {
-        let lambda = k as f64 / (a.steps - 1) as f64;
-        mix.push(FrameMix { from: gi as u32, to: gj as u32, weight: lambda as f32 });
-        let p = match (k, nonlinear) {
-            (0, _) => pi.to_vec(),
-            (k, _) if k == a.steps - 1 => interp.aligned_target().to_vec(),
-            (_, true) => interp.at(lambda, stretch),
-            (_, false) => interp.linear(lambda),
-        };
-        positions.extend_from_slice(&p);
-    }
-    let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
-    let seq = Sequence::new(name, nv, positions)?
-        .with_labels(FrameLabel::original_ends(a.steps))?
-        .with_tags(vec!["interpolation".into()]);
-    let out = s.derived(format!("{}-interpolation", s.name), seq)?;
+    let made = interpolate(&s, (gi, &a.from), (gj, &a.to), a.steps, a.method, stretch)?;
+    let (out, mix, setup) = (made.animation, made.mix, made.setup_seconds);
     let bar = crate::progress::Bar::new(ctx);
     let (written, textures) = match &appearance {
         Some(app) => {

@@ -3,11 +3,8 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use serde_json::json;
 use surfcap_formats::export::{ExportFormat, export};
-use surfcap_mesh::{FrameLabel, Sequence};
-use surfcap_motion::transition_frames::transition_frames;
 
 use crate::options::{CacheOpts, SubjectArgs, TableOpts};
 
@@ -44,41 +41,14 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (i, j) = (s.resolve_frame(&a.from)?, s.resolve_frame(&a.to)?);
     let pipe = a.cache.pipeline(ctx, s)?;
     let p = a.table.params_for(&pipe)?;
-    let table = pipe.table(&p)?.value;
-    let n = table.n;
-    let k = i * n + j;
-    anyhow::ensure!(
-        table.cost[k].is_finite(),
-        "no transition from {} to {}: the source needs {} frames after it and the destination {} before it, in their own sequences",
-        a.from,
-        a.to,
-        p.l_min,
-        p.l_min
-    );
-    let (li, lj) = (table.li[k] as usize, table.lj[k] as usize);
-    let d = pipe.chain_distances()?.value;
-    let s = pipe.subject();
+    let t = surfcap_synthesis::transition_run::transition(&pipe, (i, &a.from), (j, &a.to), &p)?;
+    let (out, report, warp, d) = (t.animation, t.report, t.warp, t.distances);
+    let (li, lj, secs, n) = (report.source_length, report.destination_length, report.blend_seconds, d.n);
     // Frames as users write them (`sequence:frame`) in the text and the plot; the report keeps
     // the global numbers too.
-    let (from, to) = (s.frame_index().label(i), s.frame_index().label(j));
-    let t0 = std::time::Instant::now();
-    let t = transition_frames(s, &d.values, (i, li), (j, lj), p.slope)?
-        .context("the table's warp could not be recovered")?;
-    let secs = t0.elapsed().as_secs_f64();
-    let (frames, warp) = (t.frames, t.warp);
-    let nv = s.topology().n_vertices();
-    let name = format!("{}_to_{}", a.from, a.to).replace(':', "_");
-    let seq = Sequence::new(name, nv, frames.concat())?
-        .with_labels(FrameLabel::original_ends(frames.len()))?
-        .with_tags(vec!["transition".into()]);
-    let out = s.derived(format!("{}-transition", s.name), seq)?;
+    let (from, to) = (report.from_frame.clone(), report.to_frame.clone());
     let bar = crate::progress::Bar::new(ctx);
     let mut written = export(&out, ExportFormat::Glb, &a.output, ctx.export_options(), &bar)?;
-    let report = json!({
-        "from": i, "to": j, "from_frame": from, "to_frame": to, "source_length": li, "destination_length": lj, "duration": warp.len,
-        "normalised_cost": warp.cost, "table_cost": table.cost[k], "slope": p.slope,
-        "warp": warp.path, "blend_seconds": secs,
-    });
     surfcap_synthesis::write_report(&rp, &report)?;
     written.push(rp);
     // The distance matrix around the transition with its DTW warp on it (thesis Fig. 2.10):
