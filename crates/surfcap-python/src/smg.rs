@@ -463,7 +463,7 @@ pub fn smg_query<'py>(
             let g = SmgGraph::from_data(inp.data, &req, cache.as_ref(), &keys, &progress)?;
             Ok(match &output {
                 Some(o) => {
-                    let out = Output { path: o.clone(), format, force, tolerances };
+                    let out = Output { path: Some(o.clone()), format, force, tolerances };
                     let done = g.query(&req, &q, &out, &progress)?;
                     outs.commit()?;
                     (done.animation, done.report, done.constraints)
