@@ -1,14 +1,21 @@
 //! A subject's body parts as the commands that learn per part take them (`transfer train`,
-//! `vary train`): the user's parts file (any form docs/formats.md, "Body parts files", describes), one part for
-//! the whole body, or five parts proposed from the subject (thesis 5.4.2 and 6.4.2: P = 5), as
-//! `surfcap parts propose` does.
+//! `vary train`): `surfcap_transfer::body_parts_choice` (a parts file, the whole body, or five
+//! proposed parts), its notes printed as the command's notes.
 
 use std::path::Path;
 
 use surfcap_mesh::Subject;
 use surfcap_transfer::BodyParts;
-use surfcap_transfer::body_parts_file::{DEFAULT_OVERLAP_RINGS, read_parts_file};
-use surfcap_transfer::body_parts_proposal::{Method as ProposalMethod, propose};
+use surfcap_transfer::body_parts_choice::choose_parts;
+
+/// Notes of the parts choice, printed as `note:` lines (`ctx.note`).
+struct Notes<'a>(&'a crate::Ctx);
+
+impl surfcap_mesh::Progress for Notes<'_> {
+    fn note(&self, text: &str) {
+        self.0.note(text);
+    }
+}
 
 /// The body parts of `s`: read from `path`, the whole body with `whole_body`, else five
 /// proposed parts (with a note naming `option`, the command's parts option). `who` names the
@@ -21,29 +28,5 @@ pub fn parts_of(
     who: &str,
     option: &str,
 ) -> anyhow::Result<BodyParts> {
-    let subject = if who.is_empty() { "the subject".to_string() } else { format!("the {who} subject") };
-    let parts = match path {
-        Some(p) => read_parts_file(p, s.topology(), s.frame(0).unwrap_or_default())
-            .map_err(|e| anyhow::anyhow!("{e} ({subject} {:?})", s.name))?,
-        None if whole_body => BodyParts::whole_body(s.topology().n_vertices()),
-        None => {
-            let (parts, report) = propose(s, ProposalMethod::Auto, 5, DEFAULT_OVERLAP_RINGS)?;
-            for n in &report.notes {
-                ctx.note(n);
-            }
-            let prefix = if who.is_empty() { String::new() } else { format!("{who} ") };
-            ctx.note(&format!(
-                "{prefix}{:?}: no {option} given, so 5 parts were proposed from its {} ({}); `surfcap parts propose` writes them to a file you can edit",
-                s.name,
-                report.method.as_str(),
-                parts.names().join(", ")
-            ));
-            parts
-        }
-    };
-    parts.check_fits(s.topology()).map_err(|e| {
-        let file = path.map_or_else(|| "the parts".to_string(), |p| p.display().to_string());
-        anyhow::anyhow!("{file} for {subject} {:?}: {e}", s.name)
-    })?;
-    Ok(parts)
+    Ok(choose_parts(path, whole_body, s, who, option, &Notes(ctx))?)
 }
