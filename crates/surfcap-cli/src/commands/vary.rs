@@ -179,11 +179,7 @@ pub struct StartArg(pub ChainStart);
 impl FromStr for StartArg {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "learnt" | "learned" => Ok(StartArg(ChainStart::Learnt)),
-            "mean" => Ok(StartArg(ChainStart::MeanPrediction)),
-            _ => Err(format!("{s:?}: expected learnt or mean")),
-        }
+        ChainStart::parse(s).map(StartArg).ok_or_else(|| format!("{s:?}: expected learnt or mean"))
     }
 }
 
