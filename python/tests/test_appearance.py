@@ -68,9 +68,25 @@ def test_build_from_the_folder_equals_the_command(generated, cli_model, workdir,
     # Saved, its files are the command's, byte for byte.
     saved = workdir / "py.appearance"
     model.save(saved)
+    files = sorted(p.name for p in cli_dir.iterdir())
+    assert {"model.json", "eigen_textures.npy", "eigen_warps.npy", "texture_coefficients.npy"} <= set(files)
+    for f in files:
+        assert (saved / f).read_bytes() == (cli_dir / f).read_bytes(), f
+
+
+def test_build_shares_the_commands_flow_cache_and_output_writes_its_folder(generated, cli_model, workdir):
+    cli_dir, _ = cli_model
+    cache = workdir / "cli-cache"
+    before = sorted(p.name for p in cache.iterdir())
+    assert before, "the command cached its flows"
+    out = workdir / "written.appearance"
+    model = surfcap.AppearanceModel.build(generated, cache_dir=cache, output=out)
+    assert sorted(p.name for p in cache.iterdir()) == before, "every flow read from the command's cache"
+    assert model.report.model == str(out)
     for f in sorted(p.name for p in cli_dir.iterdir()):
-        if f.endswith(".npy"):
-            assert (saved / f).read_bytes() == (cli_dir / f).read_bytes(), f
+        assert (out / f).read_bytes() == (cli_dir / f).read_bytes(), f
+    with pytest.raises(surfcap.SurfcapError, match="template.obj"):
+        surfcap.AppearanceModel.build(generated, cache=False, output=generated / "template.obj")
 
 
 def test_maps_as_an_array_build_the_same_model(generated, cli_model, workdir):
@@ -84,7 +100,7 @@ def test_maps_as_an_array_build_the_same_model(generated, cli_model, workdir):
     assert model.names == names
     saved = workdir / "array.appearance"
     model.save(saved)
-    for f in ("eigen_textures.npy", "eigen_warps.npy"):
+    for f in sorted(p.name for p in cli_dir.iterdir()):
         assert (saved / f).read_bytes() == (cli_dir / f).read_bytes(), f
 
 

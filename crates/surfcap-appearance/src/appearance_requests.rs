@@ -255,3 +255,33 @@ pub fn build_summary(
     }
     v
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_weights_are_all_given_or_none() {
+        let items = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let parsed = parse_frame_weights(&items(&["walk:3=0.25", "run:7=0.75"])).unwrap();
+        assert_eq!(parsed, vec![("walk:3".to_string(), Some(0.25)), ("run:7".to_string(), Some(0.75))]);
+        assert_eq!(parse_frame_weights(&items(&["a", "b"])).unwrap(), vec![("a".into(), None), ("b".into(), None)]);
+        let m = parse_frame_weights(&items(&["a=0.5", "b"])).unwrap_err().to_string();
+        assert_eq!(m, "--frames a=0.5,b: give every frame a weight (NAME=WEIGHT) or none");
+        let m = parse_frame_weights(&items(&["a=half"])).unwrap_err().to_string();
+        assert_eq!(m, "--frames a=half: the weight \"half\" is not a number");
+    }
+
+    #[test]
+    fn a_folder_without_a_mesh_names_the_missing_template() {
+        let dir = std::env::temp_dir().join(format!("surfcap-no-template-{}", std::process::id()));
+        let m = mesh_of(&dir, None).unwrap_err().to_string();
+        assert!(
+            m.ends_with("no template.obj in the folder: give the UV-mapped mesh the maps belong to with --mesh"),
+            "{m}"
+        );
+        assert_eq!(mesh_of(&dir, Some(Path::new("head.obj"))).unwrap(), PathBuf::from("head.obj"));
+        assert_eq!(parse_warping("poisson"), Some(crate::Warping::Poisson));
+        assert_eq!(parse_warping("bend"), None);
+    }
+}

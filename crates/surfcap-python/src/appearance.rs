@@ -247,10 +247,18 @@ impl PyAppearanceModel {
             None => match &folder_mesh {
                 Some(m) => open_mesh(py, m, &progress)?,
                 None => {
-                    return Err(PyTypeError::new_err("mesh: required with an array of maps (an OBJ path or a Subject)"));
+                    return Err(PyTypeError::new_err(
+                        "mesh: required with an array of maps (an OBJ path or a Subject)",
+                    ));
                 }
             },
         };
+        // The model folder may not replace an input (refused before any work).
+        if let Some(out) = &output {
+            let mut inputs: Vec<&Path> = vec![&mesh_name];
+            inputs.extend(folder.as_deref());
+            surfcap_mesh::output_path::check_not_input(out, &inputs).py_err()?;
+        }
         let (mask, subject_names) =
             req::atlas_mask(&mesh_name, &topology, subject.as_ref(), w, h, dilation, textures.len()).py_err()?;
         let names = match names {
@@ -279,9 +287,6 @@ impl PyAppearanceModel {
                 let estimate = |r: &TextureImage, t: &TextureImage| flow.estimate(r, t, &mask);
                 let (model, report) = build_appearance_model(&textures, &names, &mask, &options, &estimate, &progress)?;
                 if let Some(out) = &output {
-                    let mut inputs: Vec<&Path> = vec![&mesh_name];
-                    inputs.extend(folder.as_deref());
-                    surfcap_mesh::output_path::check_not_input(out, &inputs)?;
                     model.save(out, force)?;
                 }
                 let summary = req::build_summary(&model, &report, output.as_deref(), t0.elapsed().as_secs_f64());

@@ -472,3 +472,24 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
     let SampledVariants { report, name, unit, .. } = sampled;
     Ok(SampleOutcome { report, name, out_dir, unit })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sampling_outside_the_commands_ranges_is_refused_naming_the_option() {
+        let o = SamplingOptions::default();
+        assert!(check_sampling(5, &o).is_ok());
+        let m = check_sampling(0, &o).unwrap_err().to_string();
+        assert_eq!(m, "--count 0: expected a whole number from 1 to 1000");
+        let m = check_sampling(5, &SamplingOptions { thin: 0, ..o }).unwrap_err().to_string();
+        assert_eq!(m, "--thin 0: expected a whole number from 1 to 10000");
+        let m = check_sampling(1000, &SamplingOptions { thin: 100, ..o }).unwrap_err().to_string();
+        assert!(m.contains("leapfrog steps per body part, above the 2000000 allowed"), "{m}");
+        let m = check_sampling(5, &SamplingOptions { foot_skate_cleanup: false, move_root: true, ..o })
+            .unwrap_err()
+            .to_string();
+        assert!(m.starts_with("--move-root"), "{m}");
+    }
+}

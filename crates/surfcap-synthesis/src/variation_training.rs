@@ -279,3 +279,36 @@ pub const MAX_ITERATIONS: usize = 10_000;
 
 /// The folder kind of a model folder (its marker).
 pub const MODEL_KIND: &str = KIND;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request() -> TrainRequest {
+        TrainRequest {
+            subject_path: PathBuf::from("walk.subject"),
+            sequences: vec![],
+            reference: None,
+            blends: vec![],
+            blend_weights: vec![0.5],
+            latent_dim: 3,
+            iterations: 400,
+            output: PathBuf::new(),
+            force: false,
+        }
+    }
+
+    #[test]
+    fn a_training_outside_the_commands_ranges_is_refused_naming_the_option() {
+        assert!(check_train_request(&request()).is_ok());
+        let m = check_train_request(&TrainRequest { latent_dim: 11, ..request() }).unwrap_err().to_string();
+        assert_eq!(m, "--latent-dim 11: expected a whole number from 1 to 10");
+        let m = check_train_request(&TrainRequest { iterations: 0, ..request() }).unwrap_err().to_string();
+        assert_eq!(m, "--iterations 0: expected a whole number from 1 to 10000");
+        let blend = TrainRequest { blends: vec![("a".into(), "b".into())], blend_weights: vec![0.5, 1.0], ..request() };
+        let m = check_train_request(&blend).unwrap_err().to_string();
+        assert!(m.starts_with("--blend-weights 1: expected a number strictly between 0 and 1"), "{m}");
+        let m = check_train_request(&TrainRequest { blend_weights: vec![0.25], ..request() }).unwrap_err().to_string();
+        assert!(m.starts_with("--blend-weights needs --blend"), "{m}");
+    }
+}
