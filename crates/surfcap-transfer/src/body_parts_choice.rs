@@ -58,9 +58,8 @@ mod tests {
     fn tetra() -> Subject {
         let topology = Topology::new(4, vec![[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]], None).unwrap();
         let p = vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-        let seq = Sequence::new("still".into(), 4, p).unwrap();
-        Subject::new("tetra".into(), topology, vec![seq], 30.0, UpAxis::parse("+y").unwrap(), Units::parse("m"))
-            .unwrap()
+        let seq = Sequence::new("still", 4, p).unwrap();
+        Subject::new("tetra", topology, vec![seq], 30.0, UpAxis::parse("+y").unwrap(), Units::parse("m")).unwrap()
     }
 
     #[test]
