@@ -459,4 +459,124 @@ class TransferModel:
 
 # --- variation (thesis chapter 6) ---
 
+class VariationModel:
+    """A motion variation model (thesis 6.4-6.7): one GPDM per body part over sequences of one
+    motion type, as ``surfcap vary train`` learns it. ``save`` writes the folder the command
+    writes; ``load`` reads it."""
+
+    @staticmethod
+    def train(
+        subject: Subject,
+        sequences: Optional[Sequence[str]] = None,
+        *,
+        reference: Optional[str] = None,
+        parts: Optional[Path] = None,
+        blend: Optional[Sequence[Tuple[str, str]]] = None,
+        blend_weights: Sequence[float] = (0.5,),
+        latent_dim: int = 3,
+        iterations: int = 400,
+        output: Optional[Path] = None,
+        force: bool = False,
+    ) -> VariationModel:
+        """Learns the model as ``surfcap vary train`` (default: every sequence, the first the
+        reference, five proposed parts). ``blend``: pairs ``(A, B)`` blended at each of
+        ``blend_weights`` (strictly between 0 and 1). ``output``: also write the model folder.
+        The training's report is ``.report``."""
+    @staticmethod
+    def load(path: Path, *, cache_dir: Optional[Path] = None, cache: bool = True) -> VariationModel:
+        """Reads a model folder written by ``surfcap vary train`` or ``save``."""
+    def save(self, path: Path, *, force: bool = False) -> None:
+        """Writes the model folder as ``surfcap vary train`` does (``surfcap vary sample`` reads it)."""
+    report: Optional[reports.VariationTrainReport]
+    subject: str
+    sequences: List[str]
+    reference: str
+    frames: int
+    parts: List[str]
+    n_vertices: int
+    fps: float
+    path: Optional[str]
+    def sample(
+        self,
+        sequence: Optional[str] = None,
+        *,
+        blend: Optional[Tuple[str, str, float]] = None,
+        count: int = 5,
+        seed: int = 0,
+        start: str = "learnt",
+        path: str = "source",
+        smoothing: int = 2,
+        warmup: int = 100,
+        thin: int = 5,
+        max_leapfrog: int = 30,
+        no_foot_skate_cleanup: bool = False,
+        move_root: bool = False,
+        output: Optional[Path] = None,
+        force: bool = False,
+    ) -> Tuple[List[Subject], reports.VariationSampleReport]:
+        """``count`` variants of the learnt ``sequence`` or of ``blend`` = ``(A, B, W)``, as
+        ``surfcap vary sample`` (same seed, same variants as the command, to the bit). Each
+        variant is a ``Subject`` of one sequence ``<name>~<k>`` ((F, V, 3) float32 positions).
+        ``output``: also write the folder (one glb per variant and ``report.json``)."""
+
 # --- appearance (thesis chapter 4) ---
+
+class AppearanceModel:
+    """Eigen textures and eigen warps of per-frame texture maps (thesis 4.4), as ``surfcap
+    appearance build`` makes them. Maps out are ``(H, W, 3)`` uint8, the command's PNG bytes."""
+
+    @staticmethod
+    def build(
+        maps: Union[Path, npt.NDArray[np.uint8]],
+        mesh: Union[Path, Subject, None] = None,
+        *,
+        names: Optional[Sequence[str]] = None,
+        components: Optional[int] = None,
+        lambda_: float = 0.02,
+        warping: str = "poisson",
+        search_warping: str = "direct",
+        medoid_iterations: int = 5,
+        keep_holed: bool = False,
+        dilation: int = 1,
+        flow_scale: int = 1,
+        no_preprocess: bool = False,
+        output: Optional[Path] = None,
+        force: bool = False,
+        cache_dir: Optional[Path] = None,
+        cache: bool = True,
+        refresh: bool = False,
+    ) -> AppearanceModel:
+        """``maps``: a folder as the command reads it, or (F, H, W, 3) uint8. ``mesh``: the
+        UV-mapped mesh (OBJ path, subject source or ``Subject``; default the folder's
+        ``template.obj``). ``output``: also write the model folder. The summary is ``.report``."""
+    @staticmethod
+    def load(path: Path, *, cache_dir: Optional[Path] = None, cache: bool = True, refresh: bool = False) -> AppearanceModel:
+        """Reads a model folder written by ``surfcap appearance build`` or ``save``."""
+    def save(self, path: Path, *, force: bool = False) -> None:
+        """Writes the model folder as ``surfcap appearance build`` does."""
+    report: Optional[reports.AppearanceBuildReport]
+    names: List[str]
+    reference: str
+    n_frames: int
+    n_textures: int
+    n_warps: int
+    shape: Tuple[int, int]
+    """(height, width) of the maps."""
+    mask: npt.NDArray[np.bool_]
+    """(H, W) bool: the active texels."""
+    def reconstruct(self, frame: Union[int, str], *, components: Optional[int] = None, output: Optional[Path] = None) -> npt.NDArray[np.uint8]:
+        """(H, W, 3) uint8: a training frame rebuilt from its coefficients (``appearance reconstruct``)."""
+    def interpolate(self, frames: Sequence[Union[int, str]], weights: Optional[Sequence[float]] = None, *, output: Optional[Path] = None) -> npt.NDArray[np.uint8]:
+        """(H, W, 3) uint8 blended in the eigen spaces (``appearance interpolate``; equal weights by default)."""
+    def complete(
+        self,
+        texture: Union[Path, npt.NDArray[np.uint8]],
+        observed: Union[Path, npt.ArrayLike, None] = None,
+        *,
+        keep_observed: bool = False,
+        flow_scale: int = 1,
+        no_preprocess: bool = False,
+        output: Optional[Path] = None,
+    ) -> npt.NDArray[np.uint8]:
+        """(H, W, 3) uint8: an incomplete map completed by projection (``appearance complete``);
+        ``observed`` (H, W) bool or an image (default: the texels that are not pure black)."""

@@ -270,4 +270,68 @@ class TransferApplyReport(Report):
 
 # --- variation (thesis chapter 6) ---
 
+
+class VariationTrainReport(Report):
+    """What ``surfcap vary train`` writes as the model folder's ``report.json``: the learnt
+    sequences (``name``, ``origin``, ``frames``) and every part's GPDM fit (``part``,
+    ``vertices``, ``dimensions``, ``iterations``, ``converged``, ``objective_start``,
+    ``objective``, ``alpha`` (eq. 6.4), ``beta`` (eq. 6.6), ``seconds``). ``model`` (the folder)
+    is there once the model is saved."""
+
+    subject: str
+    subject_path: str
+    vertices: int
+    reference: str
+    frames: int
+    latent_dim: int
+    max_iterations: int
+    sequences: List[Report]
+    parts: List[Report]
+    train_seconds: float
+    total_seconds: float
+    threads: int
+
+
+class VariationSampleReport(Report):
+    """What ``surfcap vary sample`` writes as ``report.json``: the HMC chains (one per part:
+    ``acceptance_rate``, ``step_size``, ``leapfrog_steps``, ``divergences``), the learnt motion
+    varied, and per variant its ``sequence``, ``frames``, ``body_frame_distance`` (mean
+    per-vertex distance from the learnt motion, body frame), ``end_distance``, ``path_length``
+    and ``cleanup`` (the foot-skate clean-up's numbers, or None). ``sequence`` or ``blend`` says
+    what was varied. ``model``, each variant's ``file`` and ``view`` are there once written."""
+
+    subject: str
+    units: str
+    seed: int
+    count: int
+    options: Report
+    chains: List[Report]
+    learnt: Report
+    variants: List[Report]
+    load_seconds: float
+    sample_seconds: float
+    write_seconds: float
+    total_seconds: float
+
+
 # --- appearance (thesis chapter 4) ---
+
+
+class AppearanceBuildReport(Report):
+    """What ``surfcap appearance build --json`` prints of a built model: the reference frame and
+    the medoid shift's path (``medoid_references``, ``medoid_errors``), the eigen maps kept and
+    the share of the variance they explain, the stages' seconds. ``model`` (the folder) is there
+    when it was written."""
+
+    frames: int
+    size: List[int]
+    active_texels: int
+    reference: str
+    medoid_references: List[str]
+    medoid_errors: List[float]
+    eigen_textures: int
+    eigen_warps: int
+    texture_explained_variance: float
+    warp_explained_variance: float
+    stages: Report
+    seconds: float

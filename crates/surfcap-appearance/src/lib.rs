@@ -46,6 +46,7 @@
 //! `image` 0.24 with only PNG and JPEG: the version plotters already builds.
 
 pub mod appearance_model;
+pub mod appearance_requests;
 pub mod atlas_normals;
 pub mod atlas_raster;
 pub mod bilateral_filter;

@@ -1,14 +1,23 @@
 //! A subject's body parts as the commands that learn per part take them (`transfer train`,
-//! `vary train`): the user's parts file (any form docs/formats.md, "Body parts files", describes), one part for
-//! the whole body, or five parts proposed from the subject (thesis 5.4.2 and 6.4.2: P = 5), as
-//! `surfcap parts propose` does.
+//! `vary train`): `surfcap_transfer::body_parts_choice` (a parts file, the whole body, or five
+//! proposed parts), its notes printed as the command's notes.
 
 use std::path::Path;
 
 use surfcap_mesh::Subject;
 use surfcap_transfer::BodyParts;
+use surfcap_transfer::body_parts_choice::choose_parts;
 
-/// The body parts of `s` (`surfcap_synthesis::body_parts_choice::parts_of`), its notes shown.
+/// Notes of the parts choice, printed as `note:` lines (`ctx.note`).
+struct Notes<'a>(&'a crate::Ctx);
+
+impl surfcap_mesh::Progress for Notes<'_> {
+    fn note(&self, text: &str) {
+        self.0.note(text);
+    }
+}
+
+/// The body parts of `s` (`surfcap_transfer::body_parts_choice::choose_parts`), its notes shown.
 pub fn parts_of(
     ctx: &crate::Ctx,
     path: Option<&Path>,
@@ -17,9 +26,5 @@ pub fn parts_of(
     who: &str,
     option: &str,
 ) -> anyhow::Result<BodyParts> {
-    let (parts, notes) = surfcap_synthesis::body_parts_choice::parts_of(path, whole_body, s, who, option)?;
-    for n in &notes {
-        ctx.note(n);
-    }
-    Ok(parts)
+    Ok(choose_parts(path, whole_body, s, who, option, &Notes(ctx))?)
 }

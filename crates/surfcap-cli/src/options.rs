@@ -22,8 +22,7 @@
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-use surfcap_appearance::flow_cache::{FlowCache, TextureFlow};
-use surfcap_appearance::{FlowOptions, PreprocessOptions};
+use surfcap_appearance::flow_cache::TextureFlow;
 use surfcap_formats::export::ExportFormat;
 use surfcap_formats::import::ImportOptions;
 use surfcap_geometry::distance_matrix::DistanceParams;
@@ -227,9 +226,13 @@ impl FlowArgs {
         progress: &'a dyn surfcap_mesh::Progress,
     ) -> anyhow::Result<TextureFlow<'a>> {
         let dir = cache.dir()?;
-        let pre = if self.no_preprocess { PreprocessOptions::none() } else { PreprocessOptions::default() };
-        let options = FlowOptions { finest_scale: self.flow_scale, ..FlowOptions::default() };
-        Ok(TextureFlow::new(FlowCache::new(Some(&dir), cache.no_cache, progress), pre, options))
+        Ok(surfcap_appearance::appearance_requests::texture_flow(
+            Some(&dir),
+            cache.no_cache,
+            self.flow_scale,
+            self.no_preprocess,
+            progress,
+        ))
     }
 }
 
@@ -500,11 +503,8 @@ pub struct PathArg(pub surfcap_variation::variation_sampling::VariantPath);
 impl FromStr for PathArg {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "source" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Source)),
-            "sampled" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Sampled)),
-            "contacts" => Ok(PathArg(surfcap_variation::variation_sampling::VariantPath::Contacts)),
-            _ => Err(format!("{s:?}: expected source, contacts or sampled")),
-        }
+        surfcap_variation::variation_sampling::VariantPath::parse(s)
+            .map(PathArg)
+            .ok_or_else(|| format!("{s:?}: expected source, contacts or sampled"))
     }
 }

@@ -11,6 +11,17 @@ use std::time::Instant;
 
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use surfcap_transfer::body_parts_choice::choose_parts;
+
+/// Collects the notes a library call makes (to log them once the GIL is back).
+#[derive(Default)]
+struct NoteList(std::sync::Mutex<Vec<String>>);
+
+impl surfcap_mesh::Progress for NoteList {
+    fn note(&self, text: &str) {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(text.to_string());
+    }
+}
 use surfcap_formats::export::{ExportFormat, ExportOptions};
 use surfcap_mesh::output_set::OutputSet;
 use surfcap_synthesis::transfer_run::{
@@ -160,22 +171,13 @@ impl PyTransferModel {
                 let parts = match method {
                     TransferMethod::Baran => None,
                     TransferMethod::Gp => {
-                        let (sp, n1) = surfcap_synthesis::body_parts_choice::parts_of(
-                            source_parts.as_deref(),
-                            whole_body,
-                            s,
-                            "source",
-                            "source_parts",
-                        )?;
-                        let (tp, n2) = surfcap_synthesis::body_parts_choice::parts_of(
-                            target_parts.as_deref(),
-                            whole_body,
-                            t,
-                            "target",
-                            "target_parts",
-                        )?;
-                        notes.extend(n1);
-                        notes.extend(n2);
+                        // The parts' notes are collected here and logged after the GIL is back.
+                        let collected = NoteList::default();
+                        let sp =
+                            choose_parts(source_parts.as_deref(), whole_body, s, "source", "source_parts", &collected)?;
+                        let tp =
+                            choose_parts(target_parts.as_deref(), whole_body, t, "target", "target_parts", &collected)?;
+                        notes.extend(collected.0.into_inner().unwrap_or_else(|e| e.into_inner()));
                         Some((sp, tp))
                     }
                 };

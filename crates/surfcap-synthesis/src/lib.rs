@@ -29,8 +29,8 @@
 //!   ([`walk_variants`], thesis chapter 6), chosen by [`Playback`]; [`walk_output::WalkReport`]
 //!   is what every report says about the walk.
 //! - [`transfer_run`]: motion transfer (thesis chapter 5): a model trained with its report, a
-//!   motion transferred with a trained model; [`body_parts_choice`]: the body parts a
-//!   per-part run learns on (a file, the whole body, or five proposed).
+//!   motion transferred with a trained model (the body parts a per-part run learns on:
+//!   `surfcap_transfer::body_parts_choice`).
 //! - [`interpolation_run`] and [`transition_run`]: poses between two frames (thesis 2.4) and
 //!   one optimal transition between two frames (2.5.4, Algorithm 2), as `surfcap interpolate`
 //!   and `surfcap transition` make them.
@@ -45,7 +45,6 @@
 //! expected; a message that adds context keeps the lower layer's error as its source.
 
 pub mod animation_output;
-pub mod body_parts_choice;
 pub mod constraint;
 pub mod error;
 pub mod frame_appearance;

@@ -172,7 +172,7 @@ pub struct TrainedModel {
 
 /// What a training is made from: both subjects, the key pairs (read with
 /// [`surfcap_transfer::pairs_file::parse_pairs`]), and for the GP method both subjects' body
-/// parts (with the same part names; [`crate::body_parts_choice::parts_of`]).
+/// parts (with the same part names; `surfcap_transfer::body_parts_choice::choose_parts`).
 pub struct TransferTraining<'a> {
     pub source: &'a Subject,
     pub target: &'a Subject,

@@ -80,10 +80,12 @@ pub struct LearntReport {
     pub what: &'static str,
 }
 
-/// One variant written.
+/// One variant.
 #[derive(Debug, Clone, Serialize)]
 pub struct VariantReport {
-    pub file: PathBuf,
+    /// The glb written (none while the variant is only in memory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
     pub sequence: String,
     pub frames: usize,
     /// Mean per-vertex distance from the learnt motion, body frame.
@@ -99,7 +101,9 @@ pub struct VariantReport {
 /// The report of a sampling (`report.json` in the output folder).
 #[derive(Debug, Clone, Serialize)]
 pub struct SampleReport {
-    pub model: PathBuf,
+    /// The model folder (none for a model only in memory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<PathBuf>,
     pub subject: String,
     pub units: String,
     pub sequence: Option<String>,
@@ -114,8 +118,9 @@ pub struct SampleReport {
     pub sample_seconds: f64,
     pub write_seconds: f64,
     pub total_seconds: f64,
-    /// The command that shows the variants next to the source.
-    pub view: String,
+    /// The command that shows the variants next to the source (once they are written).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view: Option<String>,
 }
 
 /// A sampling's outcome.
@@ -148,29 +153,75 @@ fn shell_word(p: &str) -> String {
     }
 }
 
-/// Samples the request's variants and writes them with their report; the output folder is
-/// planned (`surfcap_mesh::output_set`) and the request checked against the model before
-/// anything is sampled. The folder is filled in its temporary and put in place whole at the end
-/// (by the caller's output set when it planned the folder, else here), so a failed run leaves
-/// the place as it was.
-pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> Result<SampleOutcome> {
-    let own = if surfcap_mesh::output_set::is_planned(&r.output) {
-        None
-    } else {
-        let mut set = surfcap_mesh::output_set::OutputSet::new(&[&r.model]);
-        set.dir(&r.output, SAMPLES_KIND, r.force)?;
-        Some(set)
-    };
-    let t0 = Instant::now();
-    let model = VariationModel::load(&r.model)?;
-    let load_seconds = t0.elapsed().as_secs_f64();
-    let (stem, name, sources) = match &r.varied {
+/// Largest leapfrog step count of one part's HMC chain: (warm-up + variants x thinning) x the
+/// longest path. The defaults take 3,750 (a few seconds a part); thesis 6.6 samples a handful of
+/// variants with short chains, so 500 times the defaults covers every use and bounds the time.
+pub const MAX_LEAPFROG_STEPS: f64 = 2_000_000.0;
+
+/// Checks a sampling's numbers as `surfcap vary sample` does before any work: the variant count
+/// (1 to 1000), the HMC settings' ranges, and the chain's length against
+/// [`MAX_LEAPFROG_STEPS`].
+pub fn check_sampling(count: usize, o: &SamplingOptions) -> Result<()> {
+    let ranges: [(&str, usize, usize, usize); 5] = [
+        ("--count", count, 1, 1000),
+        ("--smoothing", o.smoothing, 0, 1000),
+        ("--warmup", o.warmup, 1, 100_000),
+        ("--thin", o.thin, 1, 10_000),
+        ("--max-leapfrog", o.max_leapfrog, 1, 10_000),
+    ];
+    for (option, v, lo, hi) in ranges {
+        if !(lo..=hi).contains(&v) {
+            crate::error::refuse!("{option} {v}: expected a whole number from {lo} to {hi}");
+        }
+    }
+    if o.move_root && !o.foot_skate_cleanup {
+        crate::error::refuse!(
+            "--move-root moves the body with the planted feet of the foot-skate clean-up: it cannot go with --no-foot-skate-cleanup"
+        );
+    }
+    let steps = (o.warmup as f64 + count as f64 * o.thin as f64) * o.max_leapfrog as f64;
+    if steps > MAX_LEAPFROG_STEPS {
+        crate::error::refuse!(
+            "--warmup {} + --count {} x --thin {} HMC iterations of up to --max-leapfrog {} steps are {steps:.3e} leapfrog steps per body part, above the {MAX_LEAPFROG_STEPS:.0} allowed; lower --warmup, --count, --thin or --max-leapfrog",
+            o.warmup,
+            count,
+            o.thin,
+            o.max_leapfrog
+        );
+    }
+    Ok(())
+}
+
+/// Variants sampled in memory ([`sample_variants_of`]), to be returned or written
+/// ([`write_variants`]).
+pub struct SampledVariants {
+    /// One subject per variant: the model's topology, one sequence `<name>~<k>`.
+    pub variants: Vec<Subject>,
+    /// The report (no files and no view command until the variants are written).
+    pub report: SampleReport,
+    /// The varied motion's name (`walk`, `walk+jog@0.5`).
+    pub name: String,
+    /// The model's length unit, as messages give it.
+    pub unit: String,
+    /// The file names' stem, and the sequences the variants vary (for the view command).
+    stem: String,
+    sources: Vec<String>,
+}
+
+/// The file stem, name and source sequences of what `varied` asks, checked against the model
+/// (a note when a blend's pair was not learnt as one).
+fn check_varied(
+    model: &VariationModel,
+    varied: &Varied,
+    progress: &dyn Progress,
+) -> Result<(String, String, Vec<String>)> {
+    Ok(match varied {
         Varied::Sequence(name) => {
             model.sequence_index(name)?;
             (file_safe(name), name.clone(), vec![name.clone()])
         }
         Varied::Blend { a, b, w } => {
-            let ladder = blend_ladder(&model, a, b)?;
+            let ladder = blend_ladder(model, a, b)?;
             bounding_rungs(&ladder, *w)?;
             if ladder.len() == 2 && *w > 0.0 && *w < 1.0 {
                 progress.note(&format!(
@@ -179,89 +230,99 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
             }
             (file_safe(&format!("{a}-{b}-{w}")), format!("{a}+{b}@{w}"), vec![a.clone(), b.clone()])
         }
-    };
-    let out_dir = surfcap_mesh::output_path::claim_dir(&r.output, SAMPLES_KIND, r.force)?;
-    let opts = &r.options;
+    })
+}
+
+/// Samples `count` variants of `varied` from `model` with `seed` (same seed, same variants,
+/// whatever the thread count), each measured against the learnt motion it varies. `model_path`
+/// is the model's folder when it has one (the report's `model`).
+pub fn sample_variants_of(
+    model: &VariationModel,
+    model_path: Option<&Path>,
+    varied: &Varied,
+    count: usize,
+    seed: u64,
+    opts: &SamplingOptions,
+    progress: &dyn Progress,
+) -> Result<SampledVariants> {
+    check_sampling(count, opts)?;
+    let (stem, name, sources) = check_varied(model, varied, progress)?;
+    sample_checked(model, model_path, varied, count, seed, opts, (stem, name, sources), progress)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sample_checked(
+    model: &VariationModel,
+    model_path: Option<&Path>,
+    varied: &Varied,
+    count: usize,
+    seed: u64,
+    opts: &SamplingOptions,
+    (stem, name, sources): (String, String, Vec<String>),
+    progress: &dyn Progress,
+) -> Result<SampledVariants> {
     progress.start(
         &format!(
             "sampling {} of {} (seed {}, warm-up {}, thin {}) ...",
-            count_of(r.count, "variant"),
+            count_of(count, "variant"),
             name,
-            r.seed,
+            seed,
             opts.warmup,
             opts.thin
         ),
         1,
     );
     let t_sample = Instant::now();
-    let (variants, chains, blend, learnt): (_, _, _, LearntMotion) = match &r.varied {
+    let (variants, chains, blend, learnt): (_, _, _, LearntMotion) = match varied {
         Varied::Sequence(name) => {
-            let (v, c) = sample_variants(&model, name, r.count, r.seed, opts)?;
-            (v, c, None, learnt_sequence(&model, name)?)
+            let (v, c) = sample_variants(model, name, count, seed, opts)?;
+            (v, c, None, learnt_sequence(model, name)?)
         }
         Varied::Blend { a, b, w } => {
-            let (v, s) = sample_blend_variants(&model, a, b, *w, r.count, r.seed, opts)?;
+            let (v, s) = sample_blend_variants(model, a, b, *w, count, seed, opts)?;
             let chains = s.chains.clone();
-            (v, chains, Some(s), learnt_blend(&model, a, b, *w)?)
+            (v, chains, Some(s), learnt_blend(model, a, b, *w)?)
         }
     };
     progress.advance(1);
     progress.finish();
     let sample_seconds = t_sample.elapsed().as_secs_f64();
 
-    let t_write = Instant::now();
     let nv = model.topology.n_vertices();
     let learnt_end = learnt.world.last().map(|p| centroid(p)).unwrap_or_default();
-    let mut files = Vec::new();
-    let mut per_variant = Vec::new();
-    let mut names = sources;
-    let export_options = ExportOptions { force: r.force, ..Default::default() };
+    let mut subjects = Vec::with_capacity(variants.len());
+    let mut per_variant = Vec::with_capacity(variants.len());
     for (k, v) in variants.iter().enumerate() {
         let variant_name = format!("{name}~{}", k + 1);
-        let file = out_dir.join(format!("{stem}-variant-{}.glb", k + 1));
         let frames = v.world.len();
         let positions: Vec<f32> = v.world.iter().flatten().copied().collect();
         let seq = Sequence::new(variant_name.clone(), nv, positions)?
             .with_labels(vec![FrameLabel::Synthetic; frames])?
             .with_tags(vec!["variation".into()]);
-        let s = Subject::new(
+        subjects.push(Subject::new(
             variant_name.clone(),
             model.topology.clone(),
             vec![seq],
             model.fps,
             model.up_axis,
             model.units.clone(),
-        )?;
-        files.extend(export(&s, ExportFormat::Glb, &file, export_options, progress)?);
+        )?);
         let end = v.world.last().map(|p| centroid(p)).unwrap_or_default();
         per_variant.push(VariantReport {
-            file,
-            sequence: variant_name.clone(),
+            file: None,
+            sequence: variant_name,
             frames,
             body_frame_distance: mean_vertex_distance(&v.aligned, &learnt.aligned),
             end_distance: distance3(end, learnt_end),
             path_length: centroid_path_length(&v.world),
             cleanup: v.cleanup,
         });
-        names.push(variant_name);
     }
-    let write_seconds = t_write.elapsed().as_secs_f64();
-    let subject_path =
-        trained_subject_path(&r.model).map_or_else(|| "SUBJECT".to_string(), |p| p.display().to_string());
-    let mut view = vec!["surfcap".to_string(), "view".into(), shell_word(&subject_path)];
-    view.extend(
-        files
-            .iter()
-            .filter(|f| f.extension().is_some_and(|x| x == "glb"))
-            .map(|f| shell_word(&f.display().to_string())),
-    );
-    view.push("--sequences".into());
-    view.push(shell_word(&names.join(",")));
     let report = SampleReport {
-        model: r.model.clone(),
+        model: model_path.map(Path::to_path_buf),
         subject: model.subject.clone(),
         units: model.units.symbol().to_string(),
-        sequence: match &r.varied {
+        sequence: match varied {
             Varied::Sequence(name) => Some(name.clone()),
             Varied::Blend { .. } => None,
         },
@@ -275,8 +336,8 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
             lower_sequence: model.sequences[b.lower.sequence].name.clone(),
             upper_sequence: model.sequences[b.upper.sequence].name.clone(),
         }),
-        seed: r.seed,
-        count: r.count,
+        seed,
+        count,
         options: OptionsReport {
             start: match opts.start {
                 ChainStart::Learnt => "learnt",
@@ -303,16 +364,132 @@ pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> 
             },
         },
         variants: per_variant,
-        load_seconds,
+        load_seconds: 0.0,
         sample_seconds,
-        write_seconds,
-        total_seconds: t0.elapsed().as_secs_f64(),
-        view: view.join(" "),
+        write_seconds: 0.0,
+        total_seconds: sample_seconds,
+        view: None,
     };
-    write_report(&out_dir.join("report.json"), &report)?;
+    let unit = crate::words::unit_name(&model.units).to_string();
+    Ok(SampledVariants { variants: subjects, report, name, unit, stem, sources })
+}
+
+/// Writes sampled variants into the folder `output` as `surfcap vary sample` does
+/// (`<stem>-variant-<k>.glb` per variant and `report.json`, whose files and view command are
+/// filled in here). The folder is planned (`surfcap_mesh::output_set`) unless the caller planned
+/// it, filled in its temporary and put in place whole, so a failed run leaves the place as it
+/// was. `inputs` are the paths the folder must not replace; `force` lets it replace a folder
+/// surfcap did not write. Returns the resolved folder.
+pub fn write_variants(
+    s: &mut SampledVariants,
+    output: &Path,
+    inputs: &[&Path],
+    force: bool,
+    progress: &dyn Progress,
+) -> Result<PathBuf> {
+    let own = if surfcap_mesh::output_set::is_planned(output) {
+        None
+    } else {
+        let mut set = surfcap_mesh::output_set::OutputSet::new(inputs);
+        set.dir(output, SAMPLES_KIND, force)?;
+        Some(set)
+    };
+    let out_dir = write_into(s, output, force, None, progress)?;
     if let Some(set) = own {
         set.commit()?;
     }
-    let unit = crate::words::unit_name(&model.units).to_string();
+    Ok(out_dir)
+}
+
+/// [`write_variants`] into a folder already planned; the report's `total_seconds` counts from
+/// `started` (else it is the load, sampling and writing times' sum).
+fn write_into(
+    s: &mut SampledVariants,
+    output: &Path,
+    force: bool,
+    started: Option<Instant>,
+    progress: &dyn Progress,
+) -> Result<PathBuf> {
+    let out_dir = surfcap_mesh::output_path::claim_dir(output, SAMPLES_KIND, force)?;
+    let t_write = Instant::now();
+    let mut files = Vec::new();
+    let export_options = ExportOptions { force, ..Default::default() };
+    for (k, (subject, v)) in s.variants.iter().zip(&mut s.report.variants).enumerate() {
+        let file = out_dir.join(format!("{}-variant-{}.glb", s.stem, k + 1));
+        files.extend(export(subject, ExportFormat::Glb, &file, export_options, progress)?);
+        v.file = Some(file);
+    }
+    let r = &mut s.report;
+    r.write_seconds = t_write.elapsed().as_secs_f64();
+    let subject_path = r
+        .model
+        .as_deref()
+        .and_then(trained_subject_path)
+        .map_or_else(|| "SUBJECT".to_string(), |p| p.display().to_string());
+    let mut view = vec!["surfcap".to_string(), "view".into(), shell_word(&subject_path)];
+    view.extend(
+        files
+            .iter()
+            .filter(|f| f.extension().is_some_and(|x| x == "glb"))
+            .map(|f| shell_word(&f.display().to_string())),
+    );
+    let mut names = s.sources.clone();
+    names.extend(r.variants.iter().map(|v| v.sequence.clone()));
+    view.push("--sequences".into());
+    view.push(shell_word(&names.join(",")));
+    r.view = Some(view.join(" "));
+    r.total_seconds =
+        started.map_or(r.load_seconds + r.sample_seconds + r.write_seconds, |t| t.elapsed().as_secs_f64());
+    write_report(&out_dir.join("report.json"), &*r)?;
+    Ok(out_dir)
+}
+
+/// Samples the request's variants and writes them with their report; the output folder is
+/// planned (`surfcap_mesh::output_set`) and the request checked against the model before
+/// anything is sampled. The folder is filled in its temporary and put in place whole at the end
+/// (by the caller's output set when it planned the folder, else here), so a failed run leaves
+/// the place as it was.
+pub fn sample_variants_to_folder(r: &SampleRequest, progress: &dyn Progress) -> Result<SampleOutcome> {
+    check_sampling(r.count, &r.options)?;
+    let own = if surfcap_mesh::output_set::is_planned(&r.output) {
+        None
+    } else {
+        let mut set = surfcap_mesh::output_set::OutputSet::new(&[&r.model]);
+        set.dir(&r.output, SAMPLES_KIND, r.force)?;
+        Some(set)
+    };
+    let t0 = Instant::now();
+    let model = VariationModel::load(&r.model)?;
+    let load_seconds = t0.elapsed().as_secs_f64();
+    let checked = check_varied(&model, &r.varied, progress)?;
+    let mut sampled =
+        sample_checked(&model, Some(&r.model), &r.varied, r.count, r.seed, &r.options, checked, progress)?;
+    sampled.report.load_seconds = load_seconds;
+    let out_dir = write_into(&mut sampled, &r.output, r.force, Some(t0), progress)?;
+    if let Some(set) = own {
+        set.commit()?;
+    }
+    let SampledVariants { report, name, unit, .. } = sampled;
     Ok(SampleOutcome { report, name, out_dir, unit })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sampling_outside_the_commands_ranges_is_refused_naming_the_option() {
+        let o = SamplingOptions::default();
+        assert!(check_sampling(5, &o).is_ok());
+        let m = check_sampling(0, &o).unwrap_err().to_string();
+        assert_eq!(m, "--count 0: expected a whole number from 1 to 1000");
+        let m = check_sampling(5, &SamplingOptions { thin: 0, ..o }).unwrap_err().to_string();
+        assert_eq!(m, "--thin 0: expected a whole number from 1 to 10000");
+        let m = check_sampling(1000, &SamplingOptions { thin: 100, ..o }).unwrap_err().to_string();
+        assert!(m.contains("leapfrog steps per body part, above the 2000000 allowed"), "{m}");
+        let m = check_sampling(5, &SamplingOptions { foot_skate_cleanup: false, move_root: true, ..o })
+            .unwrap_err()
+            .to_string();
+        assert!(m.starts_with("--move-root"), "{m}");
+    }
 }

@@ -66,7 +66,9 @@ pub struct PartReport {
 /// The report of a training (`report.json` in the model folder).
 #[derive(Debug, Clone, Serialize)]
 pub struct TrainReport {
-    pub model: PathBuf,
+    /// The model folder (none while the model is only in memory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<PathBuf>,
     pub subject: String,
     pub subject_path: PathBuf,
     pub vertices: usize,
@@ -161,21 +163,29 @@ pub fn train_variation_model(
     started: Instant,
     progress: &dyn Progress,
 ) -> Result<TrainReport> {
+    let (model, mut report) = learn_variation_model(subject, r, chosen, parts, options, progress)?;
+    report.total_seconds = started.elapsed().as_secs_f64();
+    report.model = Some(r.output.clone());
+    save_variation_model(&model, &report, &r.output, &r.subject_path, r.force)?;
+    Ok(report)
+}
+
+/// Learns the model of the sequences `chosen` ([`train_plan`]) on `parts` with `options`, in
+/// memory, with its report (no model folder yet; `total_seconds` is the training's, for the
+/// caller to replace by the whole request's). The request's `output` and `force` are not used.
+pub fn learn_variation_model(
+    subject: &Subject,
+    r: &TrainRequest,
+    chosen: &[usize],
+    parts: &BodyParts,
+    options: &TrainOptions,
+    progress: &dyn Progress,
+) -> Result<(VariationModel, TrainReport)> {
     let t_train = Instant::now();
     let model = VariationModel::train(subject, chosen, parts, options, progress)?;
     let train_seconds = t_train.elapsed().as_secs_f64();
-    // The model and its report go in place together: in the caller's output set when it planned
-    // the folder, else in one of their own.
-    let own = if surfcap_mesh::output_set::is_planned(&r.output) {
-        None
-    } else {
-        let mut set = surfcap_mesh::output_set::OutputSet::new(&[&r.subject_path]);
-        set.dir(&r.output, KIND, r.force)?;
-        Some(set)
-    };
-    model.save(&r.output, r.force)?;
     let report = TrainReport {
-        model: r.output.clone(),
+        model: None,
         subject: model.subject.clone(),
         subject_path: std::fs::canonicalize(&r.subject_path).unwrap_or_else(|_| r.subject_path.clone()),
         vertices: model.topology.n_vertices(),
@@ -206,15 +216,99 @@ pub fn train_variation_model(
             })
             .collect(),
         train_seconds,
-        total_seconds: started.elapsed().as_secs_f64(),
+        total_seconds: train_seconds,
         threads: rayon::current_num_threads(),
     };
-    write_report(&r.output.join("report.json"), &report)?;
+    Ok((model, report))
+}
+
+/// Saves a learnt model and its report (`report.json`) in the folder `output`, together: in the
+/// caller's output set when it planned the folder, else in one of their own (a failed save
+/// leaves the place as it was). `subject_path` is the input the folder must not replace;
+/// `force` lets it replace a folder surfcap did not write.
+pub fn save_variation_model(
+    model: &VariationModel,
+    report: &TrainReport,
+    output: &Path,
+    subject_path: &Path,
+    force: bool,
+) -> Result<()> {
+    let own = if surfcap_mesh::output_set::is_planned(output) {
+        None
+    } else {
+        let mut set = surfcap_mesh::output_set::OutputSet::new(&[subject_path]);
+        set.dir(output, KIND, force)?;
+        Some(set)
+    };
+    model.save(output, force)?;
+    let report = TrainReport { model: Some(output.to_path_buf()), ..report.clone() };
+    write_report(&output.join("report.json"), &report)?;
     if let Some(set) = own {
         set.commit()?;
     }
-    Ok(report)
+    Ok(())
 }
+
+/// Checks a request's numbers as `surfcap vary train` does before any work: the latent
+/// dimension (1 to [`MAX_LATENT_DIM`]), the iterations (1 to [`MAX_ITERATIONS`]) and every
+/// blend weight strictly between 0 and 1.
+pub fn check_train_request(r: &TrainRequest) -> Result<()> {
+    if !(1..=MAX_LATENT_DIM).contains(&r.latent_dim) {
+        refuse!("--latent-dim {}: expected a whole number from 1 to {MAX_LATENT_DIM}", r.latent_dim);
+    }
+    if !(1..=MAX_ITERATIONS).contains(&r.iterations) {
+        refuse!("--iterations {}: expected a whole number from 1 to {MAX_ITERATIONS}", r.iterations);
+    }
+    for &w in &r.blend_weights {
+        if !(w > 0.0 && w < 1.0) {
+            refuse!(
+                "--blend-weights {w}: expected a number strictly between 0 and 1 (0 and 1 are the two sequences themselves)"
+            );
+        }
+    }
+    if !r.blend_weights.is_empty() && r.blends.is_empty() && r.blend_weights != [0.5] {
+        refuse!("--blend-weights needs --blend: the weights are those of the blended pairs");
+    }
+    Ok(())
+}
+
+/// Largest latent dimension of a part's GPDM.
+pub const MAX_LATENT_DIM: usize = 10;
+/// Most L-BFGS iterations of a part's fit (25 times the default 400).
+pub const MAX_ITERATIONS: usize = 10_000;
 
 /// The folder kind of a model folder (its marker).
 pub const MODEL_KIND: &str = KIND;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request() -> TrainRequest {
+        TrainRequest {
+            subject_path: PathBuf::from("walk.subject"),
+            sequences: vec![],
+            reference: None,
+            blends: vec![],
+            blend_weights: vec![0.5],
+            latent_dim: 3,
+            iterations: 400,
+            output: PathBuf::new(),
+            force: false,
+        }
+    }
+
+    #[test]
+    fn a_training_outside_the_commands_ranges_is_refused_naming_the_option() {
+        assert!(check_train_request(&request()).is_ok());
+        let m = check_train_request(&TrainRequest { latent_dim: 11, ..request() }).unwrap_err().to_string();
+        assert_eq!(m, "--latent-dim 11: expected a whole number from 1 to 10");
+        let m = check_train_request(&TrainRequest { iterations: 0, ..request() }).unwrap_err().to_string();
+        assert_eq!(m, "--iterations 0: expected a whole number from 1 to 10000");
+        let blend = TrainRequest { blends: vec![("a".into(), "b".into())], blend_weights: vec![0.5, 1.0], ..request() };
+        let m = check_train_request(&blend).unwrap_err().to_string();
+        assert!(m.starts_with("--blend-weights 1: expected a number strictly between 0 and 1"), "{m}");
+        let m = check_train_request(&TrainRequest { blend_weights: vec![0.25], ..request() }).unwrap_err().to_string();
+        assert!(m.starts_with("--blend-weights needs --blend"), "{m}");
+    }
+}

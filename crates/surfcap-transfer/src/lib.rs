@@ -12,7 +12,8 @@
 //!
 //! One algorithm per module, each citing the equations it implements:
 //! - body parts: [`body_parts`] (a tree of overlapping vertex sets with submeshes, canonical JSON),
-//!   [`body_parts_from_labels`] (grown from per-vertex labels), [`body_parts_file`] (the user's
+//!   [`body_parts_from_labels`] (grown from per-vertex labels), [`body_parts_choice`] (a file, the
+//!   whole body or a proposal, as the commands that learn per part take them), [`body_parts_file`] (the user's
 //!   files: canonical, labels, cutting planes, vertex loops), [`body_parts_proposal`] (from joints,
 //!   separate meshes or the rigidity of the motion);
 //! - [`pose_representation`]: Procrustes alignment to the subject's reference, the rigid
@@ -40,6 +41,7 @@
 
 pub mod baran_transfer;
 pub mod body_parts;
+pub mod body_parts_choice;
 pub mod body_parts_file;
 pub mod body_parts_from_labels;
 pub mod body_parts_proposal;

@@ -70,6 +70,17 @@ pub enum ChainStart {
     MeanPrediction,
 }
 
+impl ChainStart {
+    /// `learnt` (or `learned`) or `mean`, as the command line and the Python bindings take it.
+    pub fn parse(s: &str) -> Option<ChainStart> {
+        match s {
+            "learnt" | "learned" => Some(ChainStart::Learnt),
+            "mean" => Some(ChainStart::MeanPrediction),
+            _ => None,
+        }
+    }
+}
+
 /// Where a variant's frames go in the world.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -84,6 +95,18 @@ pub enum VariantPath {
     /// variant's own foot contacts (surfcap-geometry's `root_motion_from_contacts`), so that
     /// its planted feet stay put.
     Contacts,
+}
+
+impl VariantPath {
+    /// `source`, `sampled` or `contacts`, as the command line and the Python bindings take it.
+    pub fn parse(s: &str) -> Option<VariantPath> {
+        match s {
+            "source" => Some(VariantPath::Source),
+            "sampled" => Some(VariantPath::Sampled),
+            "contacts" => Some(VariantPath::Contacts),
+            _ => None,
+        }
+    }
 }
 
 /// Options of [`sample_variants`].

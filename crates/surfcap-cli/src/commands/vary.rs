@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use surfcap_synthesis::variant_samples::{SampleRequest, Varied, sample_variants_to_folder};
 use surfcap_synthesis::variation_training::{
-    MODEL_KIND, TrainReport, TrainRequest, learnt_names, train_plan, train_variation_model,
+    MODEL_KIND, TrainReport, TrainRequest, check_train_request, learnt_names, train_plan, train_variation_model,
 };
 use surfcap_variation::motion_preparation::SequenceOrigin;
 use surfcap_variation::variation_sampling::{ChainStart, SamplingOptions};
@@ -179,11 +179,7 @@ pub struct StartArg(pub ChainStart);
 impl FromStr for StartArg {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "learnt" | "learned" => Ok(StartArg(ChainStart::Learnt)),
-            "mean" => Ok(StartArg(ChainStart::MeanPrediction)),
-            _ => Err(format!("{s:?}: expected learnt or mean")),
-        }
+        ChainStart::parse(s).map(StartArg).ok_or_else(|| format!("{s:?}: expected learnt or mean"))
     }
 }
 
@@ -213,6 +209,7 @@ fn train(ctx: &crate::Ctx, a: TrainArgs) -> anyhow::Result<()> {
         output: a.output.clone(),
         force: ctx.force,
     };
+    check_train_request(&request)?;
     let bar = crate::progress::Bar::new(ctx);
     let names = learnt_names(&subject, &request, &bar);
     let (chosen, options) = train_plan(&subject, &request, &names)?;
@@ -244,7 +241,7 @@ fn print_trained(r: &TrainReport) {
         r.parts.len(),
         r.latent_dim,
         r.train_seconds,
-        r.model.display()
+        r.model.as_deref().unwrap_or(Path::new("memory")).display()
     );
     for s in &r.sequences {
         let origin = match &s.origin {
@@ -283,27 +280,7 @@ fn print_trained(r: &TrainReport) {
     }
 }
 
-/// Most leapfrog steps one part's HMC chain may take: (warm-up + variants x thinning) x the
-/// longest path. The defaults take 3,750 (a few seconds a part); thesis 6.6 samples a handful of
-/// variants with short chains, so 500 times the defaults covers every use and bounds the time.
-const MAX_LEAPFROG_STEPS: f64 = 2_000_000.0;
-
-/// Refuses HMC settings whose chain would take more than [`MAX_LEAPFROG_STEPS`].
-fn check_chain_length(a: &SampleArgs) -> anyhow::Result<()> {
-    let steps = (a.warmup as f64 + a.count as f64 * a.thin as f64) * a.max_leapfrog as f64;
-    anyhow::ensure!(
-        steps <= MAX_LEAPFROG_STEPS,
-        "--warmup {} + --count {} x --thin {} HMC iterations of up to --max-leapfrog {} steps are {steps:.3e} leapfrog steps per body part, above the {MAX_LEAPFROG_STEPS:.0} allowed; lower --warmup, --count, --thin or --max-leapfrog",
-        a.warmup,
-        a.count,
-        a.thin,
-        a.max_leapfrog
-    );
-    Ok(())
-}
-
 fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
-    check_chain_length(&a)?;
     let varied = match (&a.sequence, &a.blend) {
         (Some(name), _) => Varied::Sequence(name.clone()),
         (None, Some(b)) => Varied::Blend { a: b.a.clone(), b: b.b.clone(), w: b.w },
@@ -359,7 +336,9 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
                 c.part, c.acceptance_rate, c.step_size, c.leapfrog_steps, c.divergences, c.seconds
             );
         }
-        println!("view them next to the source: {}", r.view);
+        if let Some(view) = &r.view {
+            println!("view them next to the source: {view}");
+        }
     });
     Ok(())
 }

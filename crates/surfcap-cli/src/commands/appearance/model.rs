@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde_json::json;
-use surfcap_appearance::generated_frames::GeneratedFrames;
-use surfcap_appearance::texture_folder::{frame_name, list_textures, read_textures};
+use surfcap_appearance::appearance_requests;
+use surfcap_appearance::texture_folder::{frame_name, read_textures};
 use surfcap_appearance::{
     AppearanceModel, AppearanceOptions, TexelMask, TextureImage, Warping, build_appearance_model,
 };
@@ -16,11 +16,7 @@ use crate::options::{CacheOpts, FlowArgs, SourceOpts, open};
 
 /// Parses `poisson` or `direct`.
 pub fn parse_warping(s: &str) -> Result<Warping, String> {
-    match s {
-        "poisson" => Ok(Warping::Poisson),
-        "direct" => Ok(Warping::Direct),
-        _ => Err(format!("{s}: expected poisson (thesis eq. 4.1-4.3) or direct")),
-    }
+    appearance_requests::parse_warping(s).ok_or_else(|| format!("{s}: expected poisson (thesis eq. 4.1-4.3) or direct"))
 }
 
 #[derive(clap::Args, Debug)]
@@ -73,30 +69,19 @@ pub struct BuildArgs {
     pub source: SourceOpts,
 }
 
-/// The texture files of `dir`: a generated folder's `frame_*` maps (without the frames it
-/// says have occlusion holes, unless `keep_holed`: thesis 4.6.2 builds the model without the
-/// incomplete frames, then completes them), else every map.
+/// The texture files of `dir` (`surfcap_appearance::appearance_requests::texture_files`), its
+/// notes printed.
 pub fn texture_files(ctx: &crate::Ctx, dir: &Path, keep_holed: bool) -> anyhow::Result<Vec<PathBuf>> {
-    if dir.join("frames.json").is_file() {
-        let generated = GeneratedFrames::open(dir)?;
-        let header = generated.header();
-        let holed = &header.hole_frames;
-        if !keep_holed && !holed.is_empty() {
-            ctx.note(&format!(
-                "{} of the {} frames have occlusion holes and are left out of the model (--keep-holed keeps them)",
-                holed.len(),
-                header.frames
-            ));
-        }
-        return Ok(header
-            .frame_files
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| keep_holed || !holed.contains(k))
-            .map(|(_, f)| dir.join(f))
-            .collect());
+    Ok(appearance_requests::texture_files(dir, keep_holed, &Notes(ctx))?)
+}
+
+/// Notes of the library's request helpers, printed as `note:` lines (`ctx.note`).
+struct Notes<'a>(&'a crate::Ctx);
+
+impl surfcap_mesh::Progress for Notes<'_> {
+    fn note(&self, text: &str) {
+        self.0.note(text);
     }
-    Ok(list_textures(dir, "")?)
 }
 
 /// The active texels of `mesh`'s atlas at the maps' size, and the frame names the mesh gives
@@ -112,20 +97,12 @@ pub fn atlas_mask(
 ) -> anyhow::Result<(TexelMask, Option<Vec<String>>)> {
     // A single OBJ is a mesh, not a subject (no frame rate to ask for); anything else is
     // opened as a subject, whose frames may name the maps.
-    let (topology, names) = if mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
-        (surfcap_formats::obj::read_obj(mesh)?.topology()?, None)
-    } else {
-        let s = open(ctx, mesh, source)?;
-        let names =
-            (s.n_frames() == frames && frames > 1).then(|| (0..frames).map(|g| s.frame_index().label(g)).collect());
-        (s.topology().clone(), names)
-    };
-    let atlas = topology.uv().with_context(|| {
-        format!("{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt` and `f v/vt`)", mesh.display())
-    })?;
-    let mask = TexelMask::from_atlas(atlas, width, height, dilation)
-        .with_context(|| format!("{}: the UV atlas", mesh.display()))?;
-    Ok((mask, names))
+    if appearance_requests::is_obj(mesh) {
+        let topology = surfcap_formats::obj::read_obj(mesh)?.topology()?;
+        return Ok(appearance_requests::atlas_mask(mesh, &topology, None, width, height, dilation, frames)?);
+    }
+    let s = open(ctx, mesh, source)?;
+    Ok(appearance_requests::atlas_mask(mesh, s.topology(), Some(&s), width, height, dilation, frames)?)
 }
 
 /// Splits `k` eigen maps two thirds textures, one third warps (thesis 4.5.1).
@@ -133,16 +110,7 @@ pub use surfcap_appearance::appearance_model::split_components;
 
 /// The mesh of a texture folder: `--mesh`, else the folder's `template.obj`.
 pub fn mesh_of(textures: &Path, mesh: Option<&Path>) -> anyhow::Result<PathBuf> {
-    if let Some(m) = mesh {
-        return Ok(m.to_path_buf());
-    }
-    let own = textures.join("template.obj");
-    anyhow::ensure!(
-        own.is_file(),
-        "{}: no template.obj in the folder: give the UV-mapped mesh the maps belong to with --mesh",
-        textures.display()
-    );
-    Ok(own)
+    Ok(appearance_requests::mesh_of(textures, mesh)?)
 }
 
 pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
@@ -177,14 +145,7 @@ pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
     drop(textures);
     model.save(&a.output, ctx.force)?;
     let seconds = t0.elapsed().as_secs_f64();
-    let value = json!({
-        "model": a.output, "frames": report.frames, "size": [w, h], "active_texels": report.active_texels,
-        "reference": names[report.reference], "medoid_references": report.medoid_references.iter().map(|&k| &names[k]).collect::<Vec<_>>(),
-        "medoid_errors": report.medoid_errors, "eigen_textures": model.n_textures(), "eigen_warps": model.n_warps(),
-        "texture_explained_variance": report.texture_explained_variance.iter().sum::<f64>(),
-        "warp_explained_variance": report.warp_explained_variance.iter().sum::<f64>(),
-        "stages": report.seconds, "seconds": seconds,
-    });
+    let value = appearance_requests::build_summary(&model, &report, Some(&a.output), seconds);
     ctx.result(&value, || {
         println!(
             "reference {} (medoid shift: {} alignment{}), {} eigen textures ({:.1}% of the variance), {} eigen warps ({:.1}%)",
@@ -202,17 +163,9 @@ pub fn build(ctx: &crate::Ctx, a: &BuildArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The model's frame named `name` (as `model.json` lists them), or its number.
+/// The model's frame named `name` (as `model.json` lists them).
 pub fn frame_of(model: &AppearanceModel, name: &str) -> anyhow::Result<usize> {
-    if let Some(k) = model.names().iter().position(|n| n == name) {
-        return Ok(k);
-    }
-    let shown: Vec<&str> = model.names().iter().take(4).map(String::as_str).collect();
-    anyhow::bail!(
-        "frame {name:?}: the model has no frame of that name (its {} frames are named like {})",
-        model.n_frames(),
-        shown.join(", ")
-    )
+    Ok(appearance_requests::frame_of(model, name)?)
 }
 
 fn load(path: &Path) -> anyhow::Result<AppearanceModel> {
@@ -272,28 +225,7 @@ pub struct InterpolateArgs {
 
 /// `NAME=WEIGHT` or `NAME` items into (frame, weight), equal weights when none is given.
 pub fn parse_weights(model: &AppearanceModel, items: &[String]) -> anyhow::Result<Vec<(usize, f64)>> {
-    let weighted = items.iter().filter(|s| s.contains('=')).count();
-    anyhow::ensure!(
-        weighted == 0 || weighted == items.len(),
-        "--frames {}: give every frame a weight (NAME=WEIGHT) or none",
-        items.join(",")
-    );
-    items
-        .iter()
-        .map(|item| {
-            let (name, w) = match item.rsplit_once('=') {
-                Some((n, w)) => {
-                    let w: f64 = w
-                        .trim()
-                        .parse()
-                        .map_err(|_| anyhow::anyhow!("--frames {item}: the weight {w:?} is not a number"))?;
-                    (n.trim(), w)
-                }
-                None => (item.trim(), 1.0 / items.len() as f64),
-            };
-            Ok((frame_of(model, name)?, w))
-        })
-        .collect()
+    Ok(appearance_requests::frame_weights(model, &appearance_requests::parse_frame_weights(items)?)?)
 }
 
 pub fn interpolate(ctx: &crate::Ctx, a: &InterpolateArgs) -> anyhow::Result<()> {
@@ -345,32 +277,14 @@ pub fn complete(ctx: &crate::Ctx, a: &CompleteArgs) -> anyhow::Result<()> {
     let model = load(&a.model)?;
     let texture = TextureImage::read(&a.texture)?;
     let mask = model.mask();
-    anyhow::ensure!(
-        texture.width() == mask.width() && texture.height() == mask.height(),
-        "{}: the map is {}x{}: expected {}x{} like the model's",
-        a.texture.display(),
-        texture.width(),
-        texture.height(),
-        mask.width(),
-        mask.height()
-    );
-    let observed: Vec<bool> = match &a.observed {
-        Some(path) => {
-            let o = TextureImage::read(path)?;
-            anyhow::ensure!(
-                o.width() == texture.width() && o.height() == texture.height(),
-                "{}: the observed-texel image is {}x{}: expected {}x{} like the map",
-                path.display(),
-                o.width(),
-                o.height(),
-                texture.width(),
-                texture.height()
-            );
-            o.grey().iter().map(|&v| v > 0.5).collect()
-        }
-        None => (0..texture.texels()).map(|i| (0..texture.channels()).any(|c| texture.plane(c)[i] > 0.0)).collect(),
-    };
-    let missing = (0..texture.texels()).filter(|&i| mask.is_active(i) && !observed[i]).count();
+    let observed_image = a.observed.as_deref().map(TextureImage::read).transpose()?;
+    let observed_name = a.observed.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+    let (observed, missing) = appearance_requests::observed_texels(
+        &model,
+        &texture,
+        &a.texture.display().to_string(),
+        observed_image.as_ref().map(|o| (o, observed_name.as_str())),
+    )?;
     let bar = crate::progress::Bar::new(ctx);
     let flow = a.flow.estimator(&a.cache, &bar)?;
     let estimate = |r: &TextureImage, t: &TextureImage, m: &TexelMask| flow.estimate(r, t, m);
@@ -378,14 +292,7 @@ pub fn complete(ctx: &crate::Ctx, a: &CompleteArgs) -> anyhow::Result<()> {
     let mut out = model.complete(&texture, &observed, &estimate)?;
     let seconds = t.elapsed().as_secs_f64();
     if a.keep_observed {
-        for c in 0..out.channels() {
-            let src = texture.plane(c).to_vec();
-            for (i, o) in out.plane_mut(c).iter_mut().enumerate() {
-                if observed[i] {
-                    *o = src[i];
-                }
-            }
-        }
+        appearance_requests::keep_observed(&mut out, &texture, &observed);
     }
     out.write(&a.output)?;
     let value = json!({"missing_texels": missing, "active_texels": mask.len(), "seconds": seconds, "output": a.output});
