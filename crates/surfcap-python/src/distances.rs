@@ -162,7 +162,31 @@ pub fn write_animation(out: &Bound<'_, PySubject>, path: PathBuf, format: Option
     Ok(())
 }
 
+/// Benchmark hook (`python/bench/overhead.py`): the seconds of the library work
+/// `pose_distances(subject)` does on a subject whose products are kept in memory (a fresh
+/// pipeline, so the matrix is computed), timed in Rust around that call alone.
+#[pyfunction]
+#[pyo3(signature = (subject, *, metric="deformation", w=0.01))]
+fn _library_pose_distances_seconds(py: Python<'_>, subject: &PySubject, metric: &str, w: f64) -> PyResult<f64> {
+    let params = distance_params(metric, w)?;
+    let s = subject.subject().clone();
+    py.detach(|| {
+        let pipe = surfcap_pipeline::Pipeline::new(
+            s,
+            surfcap_pipeline::CacheStore::memory_only(),
+            Box::new(surfcap_mesh::NoProgress),
+        );
+        let t0 = std::time::Instant::now();
+        let d = pipe.distances(&params)?;
+        let secs = t0.elapsed().as_secs_f64();
+        drop(d);
+        Ok(secs)
+    })
+    .map_err(pipeline_err)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_library_pose_distances_seconds, m)?)?;
     m.add_class::<MatrixOwner>()?;
     m.add_function(wrap_pyfunction!(pose_distances, m)?)?;
     m.add_function(wrap_pyfunction!(pose_distance, m)?)?;

@@ -433,7 +433,7 @@ impl PySubject {
             s.topology().n_triangles(),
             s.n_frames(),
             s.fps,
-            s.units.name,
+            s.units.symbol(),
             sequence_list(s),
             s.up_axis.as_str()
         )

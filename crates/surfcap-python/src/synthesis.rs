@@ -598,7 +598,27 @@ pub fn synth_reach<'py>(
     finish(py, s, o.played.output, "ReachReport", &o.report, &o.constraints)
 }
 
+/// Benchmark hook (`python/bench/overhead.py`): the seconds of the library work
+/// `Synthesizer.path(curve)` does (the request checked, the path followed and played, in
+/// memory), timed in Rust around the very calls the binding makes, without the binding's
+/// conversions; the binding's overhead is its wall time minus this.
+#[pyfunction]
+fn _library_path_seconds(py: Python<'_>, synth: &PySynthesizer, curve: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let (request, _) = path_request(curve, false, None, None, Vec::new(), None, None, 8)?;
+    let out = self::output(None, None, false, None, None)?;
+    py.detach(|| -> anyhow::Result<f64> {
+        let t0 = std::time::Instant::now();
+        let checked = request.check(synth.pipe(), &out, &SizeLimits::default())?;
+        let o = synth.prep.follow_path(&checked.query(), &out, &surfcap_mesh::NoProgress)?;
+        let secs = t0.elapsed().as_secs_f64();
+        drop(o);
+        Ok(secs)
+    })
+    .map_err(anyhow_to_py)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_library_path_seconds, m)?)?;
     m.add_class::<PySynthesizer>()?;
     m.add_function(wrap_pyfunction!(prepare, m)?)?;
     m.add_function(wrap_pyfunction!(synth_path, m)?)?;
