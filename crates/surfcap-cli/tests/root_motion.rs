@@ -94,7 +94,7 @@ fn kaykit_knight_in_place_clips_travel_after_import_with_root_motion_from_contac
         p(&cache)
     ]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("knight_Walking_A (0.00 meters"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("knight_Walking_A (0.00 m in"), "{}", stderr(&o));
     // With root motion from contacts: the walks and runs travel, the idle does not.
     let moved = tmp.path().join("knight.subject");
     args.truncate(args.len() - 1);

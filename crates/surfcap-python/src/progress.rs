@@ -112,6 +112,16 @@ fn make_bar(label: &str, total: u64) -> Option<Py<PyAny>> {
     })
 }
 
+/// Logs notes a library call made (an import's assumptions, a proposed choice) to the
+/// `surfcap` logger at level WARNING, as the command line prints its `note:` lines.
+pub fn log_notes(py: Python<'_>, notes: &[String]) -> PyResult<()> {
+    let logger = py.import("logging")?.call_method1("getLogger", ("surfcap",))?;
+    for n in notes {
+        logger.call_method1("warning", (n,))?;
+    }
+    Ok(())
+}
+
 /// Logs a note to the `surfcap` logger at level WARNING.
 fn log_note(text: &str) {
     Python::attach(|py| {

@@ -94,17 +94,13 @@ impl PyFrameSet {
         cache: bool,
         refresh: bool,
     ) -> PyResult<Self> {
-        let up_axis = up_axis.map(UpAxis::parse).transpose().py_err()?;
-        if let Some(f) = fps {
-            surfcap_mesh::subject::check_frame_rate(f).map_err(|e| PyValueError::new_err(format!("fps: {e}")))?;
-        }
-        let opts = surfcap_formats::import::ImportOptions { name: None, fps, up_axis, units: units.map(Units::parse) };
+        let opts = crate::subject::import_options(None, fps, up_axis, units)?;
         let progress = PyProgress::new();
         let data = py.detach(|| surfcap_formats::import::open_any(&path, &opts, &progress)).py_err()?;
         drop(progress);
         match data {
             ImportedData::FrameSet(f) => {
-                log_notes(py, &f.notes)?;
+                crate::progress::log_notes(py, &f.notes)?;
                 Ok(PyFrameSet::new(f.frame_set, CacheChoice::new(cache_dir, cache, refresh)))
             }
             ImportedData::Subject(_) => Err(PyValueError::new_err(format!(
@@ -296,14 +292,6 @@ impl PyFrameSet {
             s.sequences().iter().map(|q| format!("{} ({})", q.name, q.n_frames())).collect::<Vec<_>>().join(", ")
         )
     }
-}
-
-fn log_notes(py: Python<'_>, notes: &[String]) -> PyResult<()> {
-    let logger = py.import("logging")?.call_method1("getLogger", ("surfcap",))?;
-    for n in notes {
-        logger.call_method1("warning", (n,))?;
-    }
-    Ok(())
 }
 
 /// The input of a query: a subject or a frame set, its data as the command opens it, and how

@@ -14,7 +14,7 @@ use pyo3::exceptions::{PyIndexError, PyKeyError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surfcap_formats::export::{ExportFormat, ExportOptions};
-use surfcap_formats::import::{ImportOptions, Imported};
+use surfcap_formats::import::ImportOptions;
 use surfcap_mesh::{PositionBuffer, Sequence, Subject, Topology, Units, UpAxis};
 use surfcap_pipeline::{CacheStore, Pipeline};
 
@@ -101,7 +101,8 @@ fn sequence_list(s: &Subject) -> String {
     s.sequences().iter().map(|q| format!("{} ({} frames)", q.name, q.n_frames())).collect::<Vec<_>>().join(", ")
 }
 
-fn import_options(
+/// What the sources do not say (`--fps`, `--up-axis`, `--units`, `--name`), checked.
+pub(crate) fn import_options(
     name: Option<String>,
     fps: Option<f64>,
     up_axis: Option<&str>,
@@ -112,14 +113,6 @@ fn import_options(
         surfcap_mesh::subject::check_frame_rate(f).map_err(|e| PyValueError::new_err(format!("fps: {e}")))?;
     }
     Ok(ImportOptions { name, fps, up_axis, units: units.map(Units::parse) })
-}
-
-fn log_notes(py: Python<'_>, imported: &Imported) -> PyResult<()> {
-    let logger = py.import("logging")?.call_method1("getLogger", ("surfcap",))?;
-    for n in &imported.notes {
-        logger.call_method1("warning", (n,))?;
-    }
-    Ok(())
 }
 
 /// Shares `len` numbers of a buffer from `start` without a copy.
@@ -156,7 +149,7 @@ impl PySubject {
         let progress = PyProgress::new();
         let imported = py.detach(|| surfcap_formats::import::open_subject(&path, &opts, &progress)).py_err()?;
         drop(progress);
-        log_notes(py, &imported)?;
+        crate::progress::log_notes(py, &imported.notes)?;
         Ok(PySubject::new(imported.subject, CacheChoice::new(cache_dir, cache, refresh)))
     }
 
@@ -186,7 +179,7 @@ impl PySubject {
         let progress = PyProgress::new();
         let imported = py.detach(|| surfcap_formats::import::import(&paths, &opts, &progress)).py_err()?;
         drop(progress);
-        log_notes(py, &imported)?;
+        crate::progress::log_notes(py, &imported.notes)?;
         Ok(PySubject::new(imported.subject, CacheChoice::new(cache_dir, cache, refresh)))
     }
 

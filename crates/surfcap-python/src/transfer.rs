@@ -85,15 +85,6 @@ fn key_pairs(pairs: &Bound<'_, PyAny>, source: &PySubject, target: &PySubject) -
         .collect()
 }
 
-/// Notes of the library to the `surfcap` logger.
-fn log_notes(py: Python<'_>, notes: &[String]) -> PyResult<()> {
-    let logger = py.import("logging")?.call_method1("getLogger", ("surfcap",))?;
-    for n in notes {
-        logger.call_method1("warning", (n,))?;
-    }
-    Ok(())
-}
-
 /// Writes the model folder `dir` as `surfcap transfer train -o dir` does: claimed (a folder
 /// surfcap did not write is replaced only with `force`), the model files and `report.json`.
 fn save_folder(
@@ -197,7 +188,7 @@ impl PyTransferModel {
                 Ok((trained, notes))
             })
             .map_err(anyhow_to_py)?;
-        log_notes(py, &notes)?;
+        crate::progress::log_notes(py, &notes)?;
         let report = serde_json::to_string(&trained.report).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(PyTransferModel { model: trained.model, report: Some(report), folder: std::sync::Mutex::new(output) })
     }
@@ -315,7 +306,7 @@ impl PyTransferModel {
             })
             .map_err(anyhow_to_py)?;
         drop(progress);
-        log_notes(py, note.as_slice())?;
+        crate::progress::log_notes(py, note.as_slice())?;
         let report = crate::reports::report(py, "TransferApplyReport", &report)?;
         Ok((Bound::new(py, src.derived(animation))?, report))
     }
