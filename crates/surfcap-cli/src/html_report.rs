@@ -275,7 +275,8 @@ pub fn write_report(
                 if let Some(v) = parsed {
                     // The report's numbers folded away (they are many); its per-frame error
                     // joins the shared chart below.
-                    let _ = write!(row, "<details><summary>synthesis report</summary>{}</details>", json_section("", &v));
+                    let _ =
+                        write!(row, "<details><summary>synthesis report</summary>{}</details>", json_section("", &v));
                     if let Some(errors) = v["per_frame"]["error"].as_array() {
                         let pts: Vec<(f64, f64)> =
                             errors.iter().enumerate().filter_map(|(k, e)| Some((k as f64, e.as_f64()?))).collect();
@@ -362,7 +363,8 @@ pub fn write_report(
             };
             let w = surfcap_plot::write_line_chart(&plots_dir.join("path-errors"), &chart)?;
             n_plots += 1;
-            let _ = writeln!(body, "<figure><img class=\"wide\" src=\"{}\" alt=\"path errors\"></figure>", rel(out, &w[0]));
+            let _ =
+                writeln!(body, "<figure><img class=\"wide\" src=\"{}\" alt=\"path errors\"></figure>", rel(out, &w[0]));
         }
         let _ = writeln!(body, "<div class=\"plots\">\n{anims}</div>");
     }

@@ -179,14 +179,29 @@ fn synth_alone_lists_its_subcommands_and_global_flags_come_last_in_help() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("is now `surfcap make mannequin --bvh | --procedural ...`"), "{}", stderr(&o));
     let new = tmp.path().join("new.subject");
-    let o = surfcap!(&["make", "mannequin", "--procedural", "walk", "--duration", "0.5", "--vertices", "1000", "-o", p(&new)]);
+    let o = surfcap!(&[
+        "make",
+        "mannequin",
+        "--procedural",
+        "walk",
+        "--duration",
+        "0.5",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&new)
+    ]);
     assert!(o.status.success() && !stderr(&o).contains("is now"), "{}", stderr(&o));
     let info = |s: &Path| stdout(&surfcap!(&["info", p(s), "--json"]));
     assert_eq!(info(&old).replace("old.subject", "x"), info(&new).replace("new.subject", "x"));
 
     let global = ["--quiet", "--json", "--force", "--max-memory", "--max-disk", "--help"];
-    for args in [&["synth", "path", "--help"][..], &["import", "--help"], &["distance", "--help"], &["make", "mannequin", "--help"]]
-    {
+    for args in [
+        &["synth", "path", "--help"][..],
+        &["import", "--help"],
+        &["distance", "--help"],
+        &["make", "mannequin", "--help"],
+    ] {
         let o = surfcap!(args);
         let help = stdout(&o);
         // The options' lines, in order: the flag each starts with.
@@ -441,21 +456,59 @@ fn report_heat_maps_carry_colour_bars_and_the_page_stays_short() {
     let tmp = tempfile::tempdir().unwrap();
     let cat = data.join("walking_cat_depraz");
     let cache = tmp.path().join("cache");
-    let o = surfcap!(&["--quiet", "distance", p(&cat), "-o", p(&tmp.path().join("d.npy")), "--cache-dir", p(&cache)]);
+    let o = surfcap!(&[
+        "--quiet",
+        "distance",
+        p(&cat),
+        "--fps",
+        "30",
+        "-o",
+        p(&tmp.path().join("d.npy")),
+        "--cache-dir",
+        p(&cache)
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     // A transition's DTW heat map, and six animations with their per-frame path errors.
     let plots = tmp.path().join("plots");
     std::fs::create_dir(&plots).unwrap();
-    let (from, to) = ("walking_cat_depraz:3", "walking_cat_depraz:25");
+    let (from, to) = ("walk:3", "walk:25");
     let t = plots.join("t.glb");
-    let o = surfcap!(&["--quiet", "transition", p(&cat), "--from", from, "--to", to, "-o", p(&t), "--cache-dir", p(&cache)]);
+    let o = surfcap!(&[
+        "--quiet",
+        "transition",
+        p(&cat),
+        "--fps",
+        "30",
+        "--from",
+        from,
+        "--to",
+        to,
+        "-o",
+        p(&t),
+        "--cache-dir",
+        p(&cache)
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     std::fs::remove_file(&t).unwrap();
     std::fs::remove_file(plots.join("t.transition.json")).ok();
     let anims = tmp.path().join("anims");
     std::fs::create_dir(&anims).unwrap();
     let blend = anims.join("walk-0.glb");
-    let o = surfcap!(&["--quiet", "interpolate", p(&cat), "--from", from, "--to", to, "--steps", "5", "-o", p(&blend)]);
+    let o = surfcap!(&[
+        "--quiet",
+        "interpolate",
+        p(&cat),
+        "--fps",
+        "30",
+        "--from",
+        from,
+        "--to",
+        to,
+        "--steps",
+        "5",
+        "-o",
+        p(&blend)
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     for k in 0..6 {
         let glb = anims.join(format!("walk-{k}.glb"));
@@ -470,6 +523,8 @@ fn report_heat_maps_carry_colour_bars_and_the_page_stays_short() {
     let o = surfcap!(&[
         "report",
         p(&cat),
+        "--fps",
+        "30",
         "-o",
         p(&out),
         "--include",

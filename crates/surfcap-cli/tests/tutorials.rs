@@ -43,12 +43,13 @@ fn tutorials_in(page: &Path, text: &str) -> Vec<Tutorial> {
     let mut lines = Vec::new();
     // The open code block: its fence and whether it is a shell (Some(console?)) block.
     let mut block: Option<(String, Option<bool>)> = None;
-    let close = |section: &Option<(usize, String, bool, bool)>, lines: &mut Vec<(usize, String)>, out: &mut Vec<Tutorial>| {
-        if let Some((_, heading, _, true)) = section {
-            out.push(Tutorial { page: page.to_path_buf(), heading: heading.clone(), lines: std::mem::take(lines) });
-        }
-        lines.clear();
-    };
+    let close =
+        |section: &Option<(usize, String, bool, bool)>, lines: &mut Vec<(usize, String)>, out: &mut Vec<Tutorial>| {
+            if let Some((_, heading, _, true)) = section {
+                out.push(Tutorial { page: page.to_path_buf(), heading: heading.clone(), lines: std::mem::take(lines) });
+            }
+            lines.clear();
+        };
     for (i, line) in text.lines().enumerate() {
         let trimmed = line.trim_start();
         if let Some((fence, kind)) = &block {
@@ -87,7 +88,8 @@ fn tutorials_in(page: &Path, text: &str) -> Vec<Tutorial> {
             continue;
         }
         if trimmed == MARK {
-            let s = section.as_mut().unwrap_or_else(|| panic!("{}:{}: {MARK} before any heading", page.display(), i + 1));
+            let s =
+                section.as_mut().unwrap_or_else(|| panic!("{}:{}: {MARK} before any heading", page.display(), i + 1));
             assert!(s.2, "{}:{}: {MARK} after the section's first code block", page.display(), i + 1);
             s.3 = true;
         }
