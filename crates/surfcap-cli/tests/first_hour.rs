@@ -529,6 +529,7 @@ fn report_heat_maps_carry_colour_bars_and_the_page_stays_short() {
         p(&out),
         "--include",
         p(&plots),
+        "--include",
         p(&anims),
         "--cache-dir",
         p(&cache)

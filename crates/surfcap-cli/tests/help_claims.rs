@@ -67,7 +67,9 @@ fn a_larger_alpha_gives_a_denser_graph() {
         v["density"].as_f64().unwrap()
     };
     let d: Vec<f64> = ["0.005", "0.05", "0.5"].iter().map(|a| density(a)).collect();
-    assert!(d[0] < d[1] && d[1] < d[2], "density at alpha 0.005, 0.05, 0.5: {d:?}");
+    // Never sparser for a larger alpha, and denser over the range (a 35-frame cycle keeps
+    // only its chain at the two smaller values).
+    assert!(d[0] <= d[1] && d[1] <= d[2] && d[0] < d[2], "density at alpha 0.005, 0.05, 0.5: {d:?}");
 }
 
 /// `smg build --transitions`: "more adds the next best windows whose switches lie at least
