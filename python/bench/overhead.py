@@ -77,7 +77,7 @@ def main() -> None:
         walker = Path(tmp) / "cmu.subject"
         bvh = [str(a.data / "cmu_bvh" / f"{c}.bvh") for c in ("16_15", "16_17", "16_19", "16_36")]
         exe = os.environ.get("SURFCAP_BIN", "surfcap")
-        subprocess.run([exe, "--quiet", "synth", "--bvh", *bvh, "--vertices", "1000", "-o", str(walker)], check=True, capture_output=True)
+        subprocess.run([exe, "--quiet", "make", "mannequin", "--bvh", *bvh, "--vertices", "1000", "-o", str(walker)], check=True, capture_output=True)
         synth = surfcap.prepare(surfcap.Subject.load(walker, cache=False))
         curve = np.loadtxt(ROOT / "examples" / "s_path_15m.csv", delimiter=",", skiprows=2)
         path_binding, path_library = [], []

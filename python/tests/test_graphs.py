@@ -18,7 +18,7 @@ import surfcap
 def walker(surfcap_bin: Path, tmp_path_factory) -> Path:
     """The procedural walker of the CLI tests: walk and jog clips of 2 s, 1,000 vertices."""
     out = tmp_path_factory.mktemp("walker") / "walker.subject"
-    args = ["synth", "--procedural", "walk,jog", "--duration", "2", "--vertices", "1000", "-o", out, "--quiet"]
+    args = ["make", "mannequin", "--procedural", "walk,jog", "--duration", "2", "--vertices", "1000", "-o", out, "--quiet"]
     subprocess.run([str(surfcap_bin), *map(str, args)], check=True, capture_output=True)
     return out
 

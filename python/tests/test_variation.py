@@ -31,7 +31,7 @@ def mannequin(data: Path, surfcap_bin: Path, workdir: Path) -> Path:
     out = workdir / "cmu.subject"
     bvh = [str(data / "cmu_bvh" / f"{c}.bvh") for c in ("16_15", "16_36")]
     p = subprocess.run(
-        [str(surfcap_bin), "--quiet", "synth", "--bvh", *bvh, "--vertices", "1000", "-o", str(out)],
+        [str(surfcap_bin), "--quiet", "make", "mannequin", "--bvh", *bvh, "--vertices", "1000", "-o", str(out)],
         capture_output=True,
         text=True,
     )

@@ -565,7 +565,7 @@ pub struct GeneratorSource<'a> {
 }
 
 /// As [`write_generated_frames`], from a mesh and texture in memory (a subject's frame: the
-/// head moved by `surfcap synth --head`, the mannequin with its atlas).
+/// head moved by `surfcap make head`, the mannequin with its atlas).
 pub fn write_generated_frames_of(
     source: &GeneratorSource,
     options: &GeneratorOptions,

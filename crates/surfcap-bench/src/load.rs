@@ -21,8 +21,7 @@ pub struct Args {
     pub frames: usize,
     #[arg(long, default_value_t = 10000, value_parser = crate::options::count)]
     pub vertices: usize,
-    /// Repetitions, 1 to 100 (the best and the median are reported; more adds time, not
-    /// precision).
+    /// Repetitions, 1 to 100 (the best and the median are reported).
     #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::options::whole_in(s, 1, 100))]
     pub repeat: usize,
     /// Measure in this process (used by the parent run).

@@ -9,9 +9,9 @@
 //!   guess, errors with their lines) retargeted by joint names with their real root travel (`retarget`) and seeded procedural walk, jog, turns, jump and idle
 //!   (`locomotion`); clips become a subject with tags and joint matrices (`mannequin_subject`);
 //! - for appearance: the mannequin's UV atlas (`mannequin_atlas`: a cylindrical chart per bone,
-//!   `surfcap synth --uv-atlas`) and a moving head from one UV-mapped scan (`head_motion`: nod,
+//!   `surfcap make mannequin --uv-atlas`) and a moving head from one UV-mapped scan (`head_motion`: nod,
 //!   turn, tilt as a smooth non-rigid bend about a pivot below the scan, topology and atlas kept,
-//!   `surfcap synth --head`);
+//!   `surfcap make head`);
 //! - a procedural tube (`worm`) whose size benchmarks choose;
 //! - frame sets with known answers (`frame_remeshing`, `surfcap remesh-frames`): every frame of a
 //!   subject re-meshed on its own (Botsch-Kobbelt split/collapse/flip/tangential smoothing projected

@@ -3,6 +3,12 @@
 //! transition table's statistics, and the evaluation outputs and animations given with
 //! `--include` (eval folders with their JSON tables and plots, synthesised .glb files with their
 //! reports and per-frame error curves). `surfcap view <dir>` plays its animations.
+//!
+//! Laid out to be read, not scrolled: every heat map carries its colour bar (surfcap-plot), the
+//! animations' per-frame path errors share one chart (one line per animation) instead of one
+//! near-identical chart each, included plots sit in a grid grouped by the folder they came
+//! from, and tables scroll sideways inside their own box (long words wrap) rather than
+//! widening the page.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -48,7 +54,7 @@ fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, Value)>) {
 
 /// A JSON evaluation as HTML: its scalars, then its `rows` (if any) as a table.
 fn json_section(title: &str, v: &Value) -> String {
-    let mut h = format!("<h3>{}</h3>\n", esc(title));
+    let mut h = if title.is_empty() { String::new() } else { format!("<h3>{}</h3>\n", esc(title)) };
     let mut scalars = Vec::new();
     flatten("", v, &mut scalars);
     if !scalars.is_empty() {
@@ -221,6 +227,7 @@ pub fn write_report(
                 origin: (0, 0),
                 range: None,
                 path: Vec::new(),
+                value_label: "deformation distance".into(),
             };
             let written = surfcap_plot::write_heat_map(&plots_dir.join("distances"), &heat)?;
             n_plots += 1;
@@ -237,13 +244,22 @@ pub fn write_report(
     }
 
     // Included evaluations and animations.
-    let (mut tables, mut images, mut anims) = (String::new(), String::new(), String::new());
+    let (mut tables, mut anims) = (String::new(), String::new());
+    // Included plots by the folder they came from (an eval's output), in the order met.
+    let mut images: Vec<(String, String)> = Vec::new();
+    // Each animation's per-frame distance from its requested path: one chart for all.
+    let mut error_series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for f in &files {
         let name = f.display().to_string();
         match f.extension().and_then(|x| x.to_str()) {
             Some("glb") => {
                 let to = copy_into(&anim_dir, f)?;
-                let mut row = format!("<h3>{}</h3><p><a href=\"{}\">{}</a>", esc(&name), rel(out, &to), rel(out, &to));
+                let mut row = format!(
+                    "<div class=\"card\"><h3>{}</h3><p><a href=\"{}\">{}</a>",
+                    esc(&name),
+                    rel(out, &to),
+                    rel(out, &to)
+                );
                 // The synthesis report and the labels sidecar travel with the animation.
                 let report = surfcap_synthesis::report_path(f);
                 let to_stem = to.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
@@ -257,28 +273,18 @@ pub fn write_report(
                 row += "</p>";
                 let parsed = std::fs::read(&report).ok().and_then(|b| serde_json::from_slice::<Value>(&b).ok());
                 if let Some(v) = parsed {
-                    row += &json_section("synthesis report", &v);
+                    // The report's numbers folded away (they are many); its per-frame error
+                    // joins the shared chart below.
+                    let _ =
+                        write!(row, "<details><summary>synthesis report</summary>{}</details>", json_section("", &v));
                     if let Some(errors) = v["per_frame"]["error"].as_array() {
                         let pts: Vec<(f64, f64)> =
                             errors.iter().enumerate().filter_map(|(k, e)| Some((k as f64, e.as_f64()?))).collect();
-                        let chart = surfcap_plot::LineChart {
-                            title: "distance from the requested path, per frame".into(),
-                            x_label: "output frame".into(),
-                            y_label: "error".into(),
-                            series: vec![surfcap_plot::Series {
-                                name: String::new(),
-                                points: pts,
-                                color: (220, 60, 30),
-                                dashed: false,
-                                markers: false,
-                            }],
-                        };
-                        let stem = plots_dir.join(format!("{}-error", to.file_stem().unwrap().to_string_lossy()));
-                        let w = surfcap_plot::write_line_chart(&stem, &chart)?;
-                        n_plots += 1;
-                        let _ = write!(row, "<img src=\"{}\" alt=\"path error\">", rel(out, &w[0]));
+                        let name = to.file_name().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
+                        error_series.push((name, pts));
                     }
                 }
+                row += "</div>";
                 anims += &row;
                 n_anim += 1;
             }
@@ -302,13 +308,18 @@ pub fn write_report(
             // beside a t-dtw.svg shows the PNG asked for).
             Some(ext @ ("svg" | "png")) if ext == "svg" || !files.contains(&f.with_extension("svg")) => {
                 let to = copy_into(&plots_dir, f)?;
-                let _ = writeln!(
-                    images,
-                    "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+                let folder = f.parent().map(|d| d.display().to_string()).unwrap_or_default();
+                let file = f.file_name().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
+                let figure = format!(
+                    "<figure><a href=\"{0}\"><img src=\"{0}\" alt=\"{1}\"></a><figcaption>{2}</figcaption></figure>\n",
                     rel(out, &to),
                     esc(&name),
-                    esc(&name)
+                    esc(&file)
                 );
+                match images.iter_mut().find(|(d, _)| *d == folder) {
+                    Some((_, figures)) => *figures += &figure,
+                    None => images.push((folder, figure)),
+                }
                 n_plots += 1;
             }
             _ => {}
@@ -319,7 +330,9 @@ pub fn write_report(
         body += "<p>None included: <code>surfcap report SUBJECT -o DIR --include EVAL_DIR</code> adds the outputs of <code>surfcap eval ...</code>.</p>\n";
     }
     body += &tables;
-    body += &images;
+    for (folder, figures) in &images {
+        let _ = write!(body, "<h3>Plots of {}</h3>\n<div class=\"plots\">\n{figures}</div>\n", esc(folder));
+    }
     body += "<h2>Animations</h2>\n";
     if anims.is_empty() {
         body += "<p>None included (<code>--include x.glb</code>).</p>\n";
@@ -329,10 +342,34 @@ pub fn write_report(
             "<p>Play them in the browser, original frames green and synthetic red, paths overlaid: <code>surfcap view {}</code> (this page is then at <code>/report/index.html</code>; <a href=\"../../\">the viewer</a> when served).</p>",
             esc(&out.display().to_string())
         );
-        body += &anims;
+        if !error_series.is_empty() {
+            const COLOURS: [(u8, u8, u8); 6] =
+                [(220, 60, 30), (30, 110, 200), (40, 150, 60), (160, 60, 170), (200, 150, 20), (60, 60, 60)];
+            let chart = surfcap_plot::LineChart {
+                title: "distance from the requested path, per frame".into(),
+                x_label: "output frame".into(),
+                y_label: format!("centre error ({})", surfcap_synthesis::words::unit_name(&s.units)),
+                series: error_series
+                    .iter()
+                    .enumerate()
+                    .map(|(k, (name, points))| surfcap_plot::Series {
+                        name: name.clone(),
+                        points: points.clone(),
+                        color: COLOURS[k % COLOURS.len()],
+                        dashed: k >= COLOURS.len(),
+                        markers: false,
+                    })
+                    .collect(),
+            };
+            let w = surfcap_plot::write_line_chart(&plots_dir.join("path-errors"), &chart)?;
+            n_plots += 1;
+            let _ =
+                writeln!(body, "<figure><img class=\"wide\" src=\"{}\" alt=\"path errors\"></figure>", rel(out, &w[0]));
+        }
+        let _ = writeln!(body, "<div class=\"plots\">\n{anims}</div>");
     }
     let html = format!(
-        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">{REPORT_MARK}<title>surfcap report: {name}</title>\n<style>\nbody {{ font: 14px system-ui, sans-serif; max-width: 60em; margin: 2em auto; color: #222; }}\ntable {{ border-collapse: collapse; margin: 0.5em 0; display: block; overflow-x: auto; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; font-variant-numeric: tabular-nums; }}\nimg {{ max-width: 100%; }}\nfigure {{ margin: 1em 0; }}\n</style></head><body>\n<h1>surfcap report: {name}</h1>\n{body}</body></html>\n",
+        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">{REPORT_MARK}<title>surfcap report: {name}</title>\n<style>\nbody {{ font: 14px system-ui, sans-serif; max-width: 60em; margin: 2em auto; color: #222; }}\ntable {{ border-collapse: collapse; margin: 0.5em 0; display: block; max-width: 100%; overflow-x: auto; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; font-variant-numeric: tabular-nums; overflow-wrap: anywhere; }}\nimg {{ max-width: 100%; }}\nimg.wide {{ max-width: 48em; }}\nfigure {{ margin: 0.5em 0; }}\nfigcaption {{ overflow-wrap: anywhere; }}\n.plots {{ display: grid; grid-template-columns: repeat(auto-fill, minmax(18em, 1fr)); gap: 0.5em 1em; }}\n.card {{ min-width: 0; }}\n</style></head><body>\n<h1>surfcap report: {name}</h1>\n{body}</body></html>\n",
         name = esc(&s.name)
     );
     let index = out.join("index.html");

@@ -132,6 +132,7 @@ impl Front for Cli {
             Command::Transitions(a) => commands::transitions::run(ctx, a),
             Command::Transition(a) => commands::transition::run(ctx, a),
             Command::Synth(a) => commands::synth::run(ctx, *a),
+            Command::Make(c) => commands::make::run(ctx, c),
             Command::Graph(a) => commands::graph::run(ctx, a),
             Command::Demo(a) => commands::demo::run(ctx, a),
             Command::View(a) => commands::view::run(ctx, a),
@@ -168,9 +169,13 @@ enum Command {
     Transition(commands::transition::Args),
     /// The essential graph or the motion-graph baseline over all frames (thesis 3.3), cached.
     Graph(commands::graph::Args),
-    /// Build the mannequin moved by BVH motion capture or procedural locomotion, as a subject;
-    /// or synthesise an animation from a subject's graph: path, keyposes, reach (thesis 3.5).
+    /// Synthesise an animation from a subject's graph: follow a path, move key poses, or reach a
+    /// frame covering a distance in a time (thesis 3.5).
     Synth(Box<commands::synth::Cmd>),
+    /// Make a built-in subject: the mannequin moved by BVH motion capture or procedural
+    /// locomotion, or a head scan bent into nod, turn and tilt.
+    #[command(subcommand)]
+    Make(commands::make::Cmd),
     /// Evaluations that produce the numbers of the thesis's tables.
     Eval(commands::eval::Args),
     /// Run the main job on built-in data: the procedural mannequin (or --bvh files), imported,

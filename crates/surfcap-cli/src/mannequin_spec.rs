@@ -1,7 +1,13 @@
-//! The built-in mannequin as the command line describes it (`surfcap synth` and `demo`): BVH
-//! files and/or procedural motions, a body shape, a vertex count; notes on guessed BVH units.
+//! The built-in subjects as the command line describes them (`surfcap make`, `demo`, and the
+//! older flat `surfcap synth --bvh | --procedural | --head`): the mannequin from BVH files and/or
+//! procedural motions, a body shape, a vertex count, with notes on guessed BVH units; the head
+//! scan bent into its sequences; and the subject cache they are written to.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde_json::json;
+use surfcap_builtin::head_motion::{head_motion_size, head_motion_subject};
 
 use surfcap_builtin::bvh::read_bvh;
 use surfcap_builtin::locomotion::Gait;
@@ -55,7 +61,7 @@ pub struct MannequinArgs {
 /// Builds the subject the arguments describe.
 pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     if a.bvh.is_empty() && a.procedural.is_empty() {
-        anyhow::bail!("nothing to synthesise: give --bvh <files...> and/or --procedural walk,jog,...");
+        anyhow::bail!("nothing to build: give --bvh <files...> and/or --procedural walk,jog,...");
     }
     let gaits: Vec<Gait> = a.procedural.iter().map(|g| Gait::parse(g)).collect::<Result<_, _>>()?;
     let shape = BodyShape::parse(&a.shape)?;
@@ -124,4 +130,85 @@ pub fn build(ctx: &crate::Ctx, a: &MannequinArgs) -> anyhow::Result<Subject> {
     }
     let default_name = format!("mannequin-{}", a.shape.split(',').next().unwrap_or("custom"));
     Ok(mannequin_subject(a.name.as_deref().unwrap_or(&default_name), &m, &clips, fps)?)
+}
+
+/// The head scan of `head` (a folder's `template.obj`, or an OBJ) bent into nod, turn and tilt
+/// sequences of `frames_per_sequence` frames (`surfcap_builtin::head_motion`), keeping its UV
+/// atlas; its size is checked against --max-memory and --max-disk before any frame is made.
+pub fn head_subject(
+    ctx: &crate::Ctx,
+    head: &Path,
+    frames_per_sequence: usize,
+    name: Option<&str>,
+    output: &Path,
+) -> anyhow::Result<Subject> {
+    let obj = if head.is_dir() { head.join("template.obj") } else { head.to_path_buf() };
+    let mesh = surfcap_formats::obj::read_obj(&obj)?;
+    let topology = mesh.topology().map_err(|e| e.in_file(&obj))?;
+    anyhow::ensure!(
+        topology.uv().is_some(),
+        "{}: the scan has no texture coordinates: expected a UV-mapped mesh (`vt` on every face corner)",
+        obj.display()
+    );
+    ctx.check_size(&head_motion_size(topology.n_vertices(), frames_per_sequence), Some(output))?;
+    let mut s = head_motion_subject(&topology, &mesh.positions, frames_per_sequence, "arbitrary")
+        .map_err(|e| e.in_file(&obj))?;
+    if let Some(n) = name {
+        s.name = n.to_string();
+    }
+    Ok(s)
+}
+
+/// What to build: the mannequin, or the head scan with its frames per sequence.
+pub enum Built<'a> {
+    Mannequin(&'a MannequinArgs),
+    Head { scan: &'a Path, frames_per_sequence: usize, name: Option<&'a str> },
+}
+
+/// Builds a built-in subject and writes it as a subject cache at `output` (never over one of
+/// its inputs), then prints what it holds (or its JSON).
+pub fn build_and_write(ctx: &crate::Ctx, what: Built, output: &Path) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = match &what {
+        Built::Mannequin(a) => a.bvh.iter().map(|p| p.as_path()).collect(),
+        Built::Head { scan, .. } => vec![*scan],
+    };
+    surfcap_mesh::output_path::check_not_input(output, &inputs)?;
+    let t0 = Instant::now();
+    let s = match what {
+        Built::Head { scan, frames_per_sequence, name } => head_subject(ctx, scan, frames_per_sequence, name, output)?,
+        Built::Mannequin(a) => build(ctx, a)?,
+    };
+    let bar = crate::progress::Bar::new(ctx);
+    surfcap_mesh::cache::write_cache(output, &s, ctx.force, &bar)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let sequences: Vec<serde_json::Value> =
+        s.sequences().iter().map(|q| json!({ "name": q.name, "frames": q.n_frames(), "tags": q.tags })).collect();
+    let result = json!({
+        "subject": s.name,
+        "output": output,
+        "fps": s.fps,
+        "vertices": s.topology().n_vertices(),
+        "triangles": s.topology().n_triangles(),
+        "sequences": sequences,
+        "seconds": secs,
+    });
+    ctx.result(&result, || {
+        println!(
+            "made {:?}: {} vertices, {} triangles, {} fps -> {} ({secs:.2} s)",
+            s.name,
+            s.topology().n_vertices(),
+            s.topology().n_triangles(),
+            s.fps,
+            output.display()
+        );
+        for q in s.sequences() {
+            println!(
+                "  {:<12} {:>12}  tags {}",
+                q.name,
+                crate::output::count_of(q.n_frames(), "frame"),
+                q.tags.join(", ")
+            );
+        }
+    });
+    Ok(())
 }

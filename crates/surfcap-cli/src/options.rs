@@ -210,7 +210,8 @@ pub fn record_input(path: &Path) {
 #[derive(clap::Args, Debug, Clone)]
 pub struct FlowArgs {
     /// Finest scale of the TV-L1 flow: 0 solves at full resolution, 1 stops at half
-    /// resolution and upsamples (4x faster; the flow between texture maps is smooth).
+    /// resolution and upsamples (a quarter of the pixels to solve at the finest scale; the flow
+    /// between texture maps is smooth).
     #[arg(long, default_value_t = 1, value_parser = |s: &str| whole_in(s, 0, 4))]
     pub flow_scale: usize,
     /// Skip the pre-processing (histogram equalisation and bilateral filter) before the flow.

@@ -283,7 +283,16 @@ fn bvh_without_frames_or_nested_deeply_is_an_error_not_a_crash() {
         (&empty, format!("{}: line 8: Frames: 0: expected at least one frame of motion", empty.display())),
         (&deep_path, "no BVH joint for the mannequin's \"pelvis\"".to_string()),
     ] {
-        let o = surfcap!(&["synth", "--bvh", p(bvh), "--vertices", "1000", "-o", p(&tmp.path().join("x.subject"))]);
+        let o = surfcap!(&[
+            "make",
+            "mannequin",
+            "--bvh",
+            p(bvh),
+            "--vertices",
+            "1000",
+            "-o",
+            p(&tmp.path().join("x.subject"))
+        ]);
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         assert!(stderr(&o).contains(&want), "{}", stderr(&o));
     }
@@ -467,7 +476,8 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
     let bvh = data.join("cmu_bvh");
     let heavy = tmp.path().join("heavy.subject");
     let o = surfcap!(&[
-        "synth",
+        "make",
+        "mannequin",
         "--bvh",
         p(&bvh.join("16_15.bvh")),
         p(&bvh.join("16_17.bvh")),
@@ -486,7 +496,19 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
     assert_eq!(v["sequences"][0]["frames"], 117);
     assert_eq!(v["sequences"][1]["tags"], serde_json::json!(["walk", "turn_left"]));
     let slim = tmp.path().join("slim.subject");
-    let args = ["synth", "--procedural", "walk,jump", "--shape", "slim", "--seed", "3", "--vertices", "1500", "-o"];
+    let args = [
+        "make",
+        "mannequin",
+        "--procedural",
+        "walk,jump",
+        "--shape",
+        "slim",
+        "--seed",
+        "3",
+        "--vertices",
+        "1500",
+        "-o",
+    ];
     let o = surfcap!(&[&args[..], &[p(&slim), "--quiet"]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     // Same seed, same subject.
@@ -512,10 +534,10 @@ fn synth_from_cmu_bvh_and_procedural_both_shapes_export_valid_glb() {
     let bad = tmp.path().join("bad.subject");
     for (args, want) in [
         (vec!["synth", "-o", p(&bad)], "--procedural"),
-        (vec!["synth", "--procedural", "walk,moonwalk", "-o", p(&bad)], "turn_left"),
-        (vec!["synth", "--procedural", "walk", "--shape", "tall", "-o", p(&bad)], "tall"),
-        (vec!["synth", "--bvh", "missing.bvh", "-o", p(&bad)], "missing.bvh"),
-        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "from 1000 to 20000"),
+        (vec!["make", "mannequin", "--procedural", "walk,moonwalk", "-o", p(&bad)], "turn_left"),
+        (vec!["make", "mannequin", "--procedural", "walk", "--shape", "tall", "-o", p(&bad)], "tall"),
+        (vec!["make", "mannequin", "--bvh", "missing.bvh", "-o", p(&bad)], "missing.bvh"),
+        (vec!["make", "mannequin", "--procedural", "walk", "--vertices", "50", "-o", p(&bad)], "from 1000 to 20000"),
     ] {
         let o = surfcap!(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
@@ -1047,7 +1069,11 @@ fn numeric_options_are_checked_when_parsed() {
         (vec!["eval", "transitions", s, "--slopes", "2,0"], "'0' for '--slopes", ">= 1"),
         (vec!["transitions", s, "-o", out, "--l-min", "0"], "--l-min", ">= 1"),
         (vec!["graph", "build", s, "--alpha=-0.1"], "--alpha", "> 0"),
-        (vec!["synth", "--procedural", "walk", "--vertices", "50", "-o", out], "--vertices", "from 1000 to 20000"),
+        (
+            vec!["make", "mannequin", "--procedural", "walk", "--vertices", "50", "-o", out],
+            "--vertices",
+            "from 1000 to 20000",
+        ),
     ] {
         let o = surfcap!(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));

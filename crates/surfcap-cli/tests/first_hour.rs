@@ -1,7 +1,7 @@
 //! What a new user meets in the first hour, end to end: data options that resolve the same
 //! from any working folder, a subject named after what its sources share, wrong sequence names
 //! answered with the ones that exist, frames written `sequence:frame`, one spelling per unit,
-//! `surfcap synth` alone listing what it does, global flags after each command's own options,
+//! `surfcap synth` alone listing what it does (built-in subjects made by `surfcap make`), global flags after each command's own options,
 //! BVH clips resampled aloud, and `report --include` that never drops a file silently.
 
 use std::path::{Path, PathBuf};
@@ -161,14 +161,47 @@ fn synth_alone_lists_its_subcommands_and_global_flags_come_last_in_help() {
     let o = surfcap!(&["synth"]);
     assert!(!o.status.success());
     let text = format!("{}{}", stdout(&o), stderr(&o));
-    for word in ["path", "keyposes", "reach", "--procedural", "--bvh"] {
+    for word in ["path", "keyposes", "reach", "surfcap make mannequin | head"] {
         assert!(text.contains(word), "{word}: {text}");
     }
-    assert!(!text.contains("is required"), "{text}");
+    assert!(!text.contains("is required") && !text.contains("--procedural"), "{text}");
+    // Built-in subjects have their own command.
+    let help = stdout(&surfcap!(&["make", "mannequin", "--help"]));
+    for word in ["--procedural", "--bvh", "--uv-atlas", "--output <OUTPUT>"] {
+        assert!(help.contains(word), "{word}: {help}");
+    }
+    let o = surfcap!(&["make", "mannequin", "--procedural", "walk"]);
+    assert!(!o.status.success() && stderr(&o).contains("--output"), "{}", stderr(&o));
+    // The older flat form still builds, with a note naming the new command.
+    let tmp = tempfile::tempdir().unwrap();
+    let old = tmp.path().join("old.subject");
+    let o = surfcap!(&["synth", "--procedural", "walk", "--duration", "0.5", "--vertices", "1000", "-o", p(&old)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("is now `surfcap make mannequin --bvh | --procedural ...`"), "{}", stderr(&o));
+    let new = tmp.path().join("new.subject");
+    let o = surfcap!(&[
+        "make",
+        "mannequin",
+        "--procedural",
+        "walk",
+        "--duration",
+        "0.5",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&new)
+    ]);
+    assert!(o.status.success() && !stderr(&o).contains("is now"), "{}", stderr(&o));
+    let info = |s: &Path| stdout(&surfcap!(&["info", p(s), "--json"]));
+    assert_eq!(info(&old).replace("old.subject", "x"), info(&new).replace("new.subject", "x"));
 
     let global = ["--quiet", "--json", "--force", "--max-memory", "--max-disk", "--help"];
-    for args in [&["synth", "path", "--help"][..], &["import", "--help"], &["distance", "--help"], &["synth", "--help"]]
-    {
+    for args in [
+        &["synth", "path", "--help"][..],
+        &["import", "--help"],
+        &["distance", "--help"],
+        &["make", "mannequin", "--help"],
+    ] {
         let o = surfcap!(args);
         let help = stdout(&o);
         // The options' lines, in order: the flag each starts with.
@@ -274,7 +307,7 @@ fn clips_at_other_rates_are_resampled_with_a_note() {
     std::fs::write(&first, cut).unwrap();
     let walk = data.join("cmu_bvh/16_36.bvh");
     let s = tmp.path().join("m.subject");
-    let o = surfcap!(&["synth", "--bvh", p(&first), p(&walk), "--vertices", "1000", "-o", p(&s)]);
+    let o = surfcap!(&["make", "mannequin", "--bvh", p(&first), p(&walk), "--vertices", "1000", "-o", p(&s)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let note = format!("{} (30 fps) resampled to 120 fps (the first file's, {})", walk.display(), first.display());
     assert!(stderr(&o).contains(&note), "{}", stderr(&o));
@@ -340,4 +373,184 @@ fn report_include_shows_a_png_named_alone_and_refuses_what_it_cannot_show() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains(&format!("--include {}: the report shows", npy.display())), "{}", stderr(&o));
+}
+
+/// The colour bars of an SVG: runs of rectangles filled with the heat maps' colour-bar ramp,
+/// top to bottom.
+fn colour_bars(svg: &str) -> usize {
+    let fills: Vec<&str> =
+        svg.lines().filter(|l| l.starts_with("<rect")).filter_map(|l| l.split("fill=\"").nth(1)?.get(..7)).collect();
+    let bar = surfcap_plot::heat_map::colour_bar_fills();
+    fills.windows(bar.len()).filter(|w| *w == bar.as_slice()).count()
+}
+
+/// The height in CSS pixels of a page laid out by headless Chromium in a 1280-pixel-wide window.
+fn page_height(index: &Path) -> u64 {
+    let page = index.with_file_name("measured.html");
+    let html = std::fs::read_to_string(index).unwrap().replace(
+        "</body>",
+        "<script>window.addEventListener('load', () => document.body.setAttribute('data-height', document.documentElement.scrollHeight));</script></body>",
+    );
+    std::fs::write(&page, html).unwrap();
+    let profile = tempfile::tempdir().unwrap();
+    let o = Command::new("/usr/bin/chromium")
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000", "--window-size=1280,900"])
+        .arg(format!("--user-data-dir={}", p(profile.path())))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", p(&page)))
+        .output()
+        .expect("/usr/bin/chromium runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dom = stdout(&o);
+    let at = dom.find("data-height=\"").unwrap_or_else(|| panic!("no height measured: {dom}")) + 13;
+    dom[at..at + dom[at..].find('"').unwrap()].parse().unwrap()
+}
+
+#[test]
+fn smg_query_says_the_subjects_unit() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let s = tmp.path().join("m.subject");
+    let bvh = data.join("cmu_bvh/16_15.bvh");
+    let o = surfcap!(&["--quiet", "make", "mannequin", "--bvh", p(&bvh), "--vertices", "1000", "-o", p(&s)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cache = tmp.path().join("cache");
+    let args = |out: &str| {
+        vec![
+            "smg".to_string(),
+            "query".into(),
+            p(&s).into(),
+            "--connect".into(),
+            "16_15:16_15".into(),
+            "--from".into(),
+            "16_15:0".into(),
+            "--to".into(),
+            "16_15:60".into(),
+            "--distance".into(),
+            "3".into(),
+            "--time".into(),
+            "4".into(),
+            "--cache-dir".into(),
+            p(&cache).into(),
+            "-o".into(),
+            p(&tmp.path().join(out)).into(),
+        ]
+    };
+    let a = args("q.glb");
+    let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = format!("{}{}", stdout(&o), stderr(&o));
+    assert!(text.contains(" m covered (asked 3 in 4 s)"), "{text}");
+    assert!(!text.contains("units"), "{text}");
+    let mut a = args("q2.glb");
+    a.insert(0, "--json".into());
+    let o = surfcap!(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["unit"], "m", "{v}");
+    assert!(v["constraints"].as_array().unwrap().iter().any(|c| c["unit"] == "m"), "{v}");
+}
+
+#[test]
+fn report_heat_maps_carry_colour_bars_and_the_page_stays_short() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let cat = data.join("walking_cat_depraz");
+    let cache = tmp.path().join("cache");
+    let o = surfcap!(&[
+        "--quiet",
+        "distance",
+        p(&cat),
+        "--fps",
+        "30",
+        "-o",
+        p(&tmp.path().join("d.npy")),
+        "--cache-dir",
+        p(&cache)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A transition's DTW heat map, and six animations with their per-frame path errors.
+    let plots = tmp.path().join("plots");
+    std::fs::create_dir(&plots).unwrap();
+    let (from, to) = ("walk:3", "walk:25");
+    let t = plots.join("t.glb");
+    let o = surfcap!(&[
+        "--quiet",
+        "transition",
+        p(&cat),
+        "--fps",
+        "30",
+        "--from",
+        from,
+        "--to",
+        to,
+        "-o",
+        p(&t),
+        "--cache-dir",
+        p(&cache)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(&t).unwrap();
+    std::fs::remove_file(plots.join("t.transition.json")).ok();
+    let anims = tmp.path().join("anims");
+    std::fs::create_dir(&anims).unwrap();
+    let blend = anims.join("walk-0.glb");
+    let o = surfcap!(&[
+        "--quiet",
+        "interpolate",
+        p(&cat),
+        "--fps",
+        "30",
+        "--from",
+        from,
+        "--to",
+        to,
+        "--steps",
+        "5",
+        "-o",
+        p(&blend)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for k in 0..6 {
+        let glb = anims.join(format!("walk-{k}.glb"));
+        if k > 0 {
+            std::fs::copy(&blend, &glb).unwrap();
+        }
+        let errors: Vec<f64> = (0..5).map(|f| 0.01 * (f + k) as f64).collect();
+        let report = serde_json::json!({ "mean_error": 0.02, "per_frame": { "error": errors } });
+        std::fs::write(anims.join(format!("walk-{k}.report.json")), report.to_string()).unwrap();
+    }
+    let out = tmp.path().join("report");
+    let o = surfcap!(&[
+        "report",
+        p(&cat),
+        "--fps",
+        "30",
+        "-o",
+        p(&out),
+        "--include",
+        p(&plots),
+        "--include",
+        p(&anims),
+        "--cache-dir",
+        p(&cache)
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    // Every heat map on the page (the distance matrix, the transition's warp) has its colour
+    // bar, named by what its colours stand for.
+    for heat in ["plots/distances.svg", "plots/t-dtw.svg"] {
+        assert!(html.contains(&format!("\"{heat}\"")), "{heat}: {html}");
+        let svg = std::fs::read_to_string(out.join(heat)).unwrap();
+        assert_eq!(colour_bars(&svg), 1, "{heat}");
+        assert!(svg.contains("distance"), "{heat}: the bar's name");
+    }
+    // The six animations' errors share one chart, one line each.
+    let chart = std::fs::read_to_string(out.join("plots/path-errors.svg")).unwrap();
+    for k in 0..6 {
+        assert!(chart.contains(&format!("walk-{k}.glb")), "{k}");
+    }
+    assert_eq!(html.matches("<img").count(), 3, "two heat maps and the shared error chart: {html}");
+    // Laid out in a 1280-pixel window, the page is a few screens, not six stacked plots.
+    let height = page_height(&out.join("index.html"));
+    assert!(height < 3000, "the report is {height} px tall");
 }

@@ -248,7 +248,7 @@ fn the_cmu_driven_mannequin_remeshed_per_frame_is_a_frame_set_with_known_answers
     let tmp = tempfile::tempdir().unwrap();
     let subject = tmp.path().join("cmu.subject");
     let bvh = data.join("cmu_bvh/16_15.bvh");
-    let o = surfcap!(&["synth", "--bvh", p(&bvh), "--vertices", "4000", "-o", p(&subject), "--quiet"]);
+    let o = surfcap!(&["make", "mannequin", "--bvh", p(&bvh), "--vertices", "4000", "-o", p(&subject), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = tmp.path().join("cmu.frames");
     let o = surfcap!(&[

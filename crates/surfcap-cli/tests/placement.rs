@@ -1,5 +1,5 @@
 //! Transitions keep the captured placement of a subject that does not travel: on the moving
-//! head (the scan bent at the neck, `synth --head`), key poses across nod, turn and tilt turn
+//! head (the scan bent at the neck, `make head`), key poses across nod, turn and tilt turn
 //! the head while the bust's bottom stays where the capture has it, as in the source.
 
 use surfcap_formats::import::{ImportOptions, open_subject};
@@ -31,8 +31,8 @@ fn key_poses_on_the_moving_head_keep_its_shoulders_in_place() {
     let dir = tmp.path();
     let (subject, cache, out) = (dir.join("head.subject"), dir.join("cache"), dir.join("keyposes"));
     let o = surfcap!(&[
-        "synth",
-        "--head",
+        "make",
+        "head",
         p(&data.join("leeperrysmith_head")),
         "--frames-per-sequence",
         "12",

@@ -53,7 +53,7 @@ fn procedural_motion_sizes_are_refused_by_name_before_any_frame_is_made() {
         (vec!["--fps", "1e9"], "--fps", "from 0.1 to 10000 fps"),
         (vec!["--bvh-units", "1e308"], "--bvh-units", "from 0.0001 to 100"),
     ] {
-        let mut a = vec!["synth", "--procedural", "walk", "-o", o];
+        let mut a = vec!["make", "mannequin", "--procedural", "walk", "-o", o];
         a.extend(args);
         refused(d.path(), &[], &a, &[option, range]);
     }
@@ -62,7 +62,20 @@ fn procedural_motion_sizes_are_refused_by_name_before_any_frame_is_made() {
     let t = refused(
         d.path(),
         &[],
-        &["synth", "--procedural", "walk", "--duration", "3600", "--fps", "1000", "--max-memory", "1G", "-o", o],
+        &[
+            "make",
+            "mannequin",
+            "--procedural",
+            "walk",
+            "--duration",
+            "3600",
+            "--fps",
+            "1000",
+            "--max-memory",
+            "1G",
+            "-o",
+            o,
+        ],
         &["synthesising 3600001 frames", "of memory", "above the limit of 1.0 GiB", "--max-memory", "--duration"],
     );
     assert!(t.contains("TiB") || t.contains("GiB"), "{t}");
@@ -70,7 +83,20 @@ fn procedural_motion_sizes_are_refused_by_name_before_any_frame_is_made() {
     refused(
         d.path(),
         &[],
-        &["synth", "--procedural", "walk", "--duration", "600", "--max-memory", "1T", "--max-disk", "10M", "-o", o],
+        &[
+            "make",
+            "mannequin",
+            "--procedural",
+            "walk",
+            "--duration",
+            "600",
+            "--max-memory",
+            "1T",
+            "--max-disk",
+            "10M",
+            "-o",
+            o,
+        ],
         &["of disk", "above --max-disk 10.0 MiB", "raise --max-disk or lower --duration"],
     );
 }
@@ -86,11 +112,16 @@ fn a_bvh_resampled_to_a_huge_frame_rate_is_refused_before_retargeting() {
     )
     .unwrap();
     let o = d.path().join("m.subject");
-    refused(d.path(), &["slow.bvh"], &["synth", "--bvh", p(&bvh), "--fps", "1e7", "-o", p(&o)], &["--fps", "10000"]);
     refused(
         d.path(),
         &["slow.bvh"],
-        &["synth", "--bvh", p(&bvh), "--fps", "10000", "--max-memory", "100M", "-o", p(&o)],
+        &["make", "mannequin", "--bvh", p(&bvh), "--fps", "1e7", "-o", p(&o)],
+        &["--fps", "10000"],
+    );
+    refused(
+        d.path(),
+        &["slow.bvh"],
+        &["make", "mannequin", "--bvh", p(&bvh), "--fps", "10000", "--max-memory", "100M", "-o", p(&o)],
         &["synthesising 50001 frames", "above the limit of 100.0 MiB", "--max-memory", "--fps"],
     );
 }
@@ -104,8 +135,8 @@ fn a_head_of_a_billion_frames_per_sequence_is_refused_with_its_size() {
         d.path(),
         &["square.obj", "tex.png"],
         &[
-            "synth",
-            "--head",
+            "make",
+            "head",
             p(&d.path().join("square.obj")),
             "--frames-per-sequence",
             "1000000000",
@@ -260,6 +291,16 @@ fn iteration_counts_have_documented_bounds() {
 fn the_limit_options_are_checked_when_parsed() {
     let d = tempfile::tempdir().unwrap();
     let o = d.path().join("m.subject");
-    refused(d.path(), &[], &["synth", "--procedural", "walk", "--max-disk", "lots", "-o", p(&o)], &["--max-disk"]);
-    refused(d.path(), &[], &["synth", "--procedural", "walk", "--max-memory=-1G", "-o", p(&o)], &["--max-memory"]);
+    refused(
+        d.path(),
+        &[],
+        &["make", "mannequin", "--procedural", "walk", "--max-disk", "lots", "-o", p(&o)],
+        &["--max-disk"],
+    );
+    refused(
+        d.path(),
+        &[],
+        &["make", "mannequin", "--procedural", "walk", "--max-memory=-1G", "-o", p(&o)],
+        &["--max-memory"],
+    );
 }

@@ -20,7 +20,8 @@ fn path_and_distance_are_refused_on_in_place_clips_naming_them_and_the_way_out()
     let tmp = tempfile::tempdir().unwrap();
     let subject = tmp.path().join("idle.subject");
     let o = surfcap!(&[
-        "synth",
+        "make",
+        "mannequin",
         "--procedural",
         "idle",
         "--duration",

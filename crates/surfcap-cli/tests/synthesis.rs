@@ -39,7 +39,7 @@ fn path_and_reach_on_cmu_locomotion() {
         .iter()
         .map(|c| data.join("cmu_bvh").join(format!("{c}.bvh")))
         .collect();
-    let mut args = vec!["synth", "--bvh"];
+    let mut args = vec!["make", "mannequin", "--bvh"];
     args.extend(bvh.iter().map(|b| p(b)));
     args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
     let o = surfcap!(&args);
@@ -392,7 +392,8 @@ fn requests_beyond_the_limits_are_refused_before_any_work() {
     std::fs::write(&keys, "frame,time\nsamba:10,0\nsamba:20,100000\n").unwrap();
     let walker = tmp.path().join("walker.subject");
     let o = surfcap!(&[
-        "synth",
+        "make",
+        "mannequin",
         "--procedural",
         "walk,jog",
         "--seed",
@@ -585,7 +586,8 @@ fn vary_plays_learned_variants_on_the_repeats_of_a_looping_walk() {
     // A model of another mesh is refused, naming the folder.
     let small = tmp.path().join("small.subject");
     let o = surfcap!(&[
-        "synth",
+        "make",
+        "mannequin",
         "--procedural",
         "walk",
         "--duration",

@@ -1,5 +1,5 @@
 //! Shape and appearance animated together (thesis Fig. 7.1), end to end on the
-//! real head scan at a tiny size: `synth --head` (the scan bent into nod, turn and tilt, its UV
+//! real head scan at a tiny size: `make head` (the scan bent into nod, turn and tilt, its UV
 //! atlas kept), `appearance generate --mesh SUBJECT` (one map per frame), `appearance build
 //! --mesh SUBJECT` (the model's frames named `sequence:frame`), then `synth keyposes` and
 //! `interpolate` with `--appearance`: a valid glb with a texture per frame, captured frames
@@ -73,7 +73,7 @@ fn keyposes_and_interpolate_on_the_textured_head() {
     let dir = tmp.path();
     let (subject, maps, model_dir, cache) =
         (dir.join("head.subject"), dir.join("gen"), dir.join("head.appearance"), dir.join("cache"));
-    let o = surfcap!(&["synth", "--head", p(&head), "--frames-per-sequence", "12", "-o", p(&subject), "--quiet"]);
+    let o = surfcap!(&["make", "head", p(&head), "--frames-per-sequence", "12", "-o", p(&subject), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let texture = head.join("Map-COL.jpg");
     let o = surfcap!(&[

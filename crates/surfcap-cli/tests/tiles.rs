@@ -85,7 +85,8 @@ fn tiled_work_on_real_data_equals_the_one_machine_matrix_and_opens_in_zarr_pytho
 fn tile_commands_refuse_bad_requests_by_name() {
     let d = tempfile::tempdir().unwrap();
     let subject = d.path().join("m.subject");
-    let o = surfcap!(&["--quiet", "synth", "--procedural", "walk", "--vertices", "1000", "-o", p(&subject)]);
+    let o =
+        surfcap!(&["--quiet", "make", "mannequin", "--procedural", "walk", "--vertices", "1000", "-o", p(&subject)]);
     assert!(o.status.success(), "{}", stderr(&o));
     // Not a subject cache.
     let o = surfcap!(&["tiles", "plan", p(&d.path().join("nothing")), "-o", p(&d.path().join("w"))]);
@@ -108,7 +109,7 @@ fn tile_commands_refuse_bad_requests_by_name() {
     // Another plan into the same folder, and a changed subject.
     let o = surfcap!(&["tiles", "plan", p(&subject), "-o", p(&work), "--tile", "31"]);
     assert!(!o.status.success() && stderr(&o).contains("another subject or other parameters"), "{}", stderr(&o));
-    let o = surfcap!(&["--quiet", "synth", "--procedural", "jog", "--vertices", "1000", "-o", p(&subject)]);
+    let o = surfcap!(&["--quiet", "make", "mannequin", "--procedural", "jog", "--vertices", "1000", "-o", p(&subject)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = surfcap!(&["tiles", "status", p(&work)]);
     assert!(!o.status.success() && stderr(&o).contains("changed since it was planned"), "{}", stderr(&o));
@@ -118,7 +119,8 @@ fn tile_commands_refuse_bad_requests_by_name() {
 fn tiles_status_and_merge_exit_non_zero_naming_a_damaged_chunk() {
     let d = tempfile::tempdir().unwrap();
     let subject = d.path().join("m.subject");
-    let o = surfcap!(&["--quiet", "synth", "--procedural", "walk", "--vertices", "1000", "-o", p(&subject)]);
+    let o =
+        surfcap!(&["--quiet", "make", "mannequin", "--procedural", "walk", "--vertices", "1000", "-o", p(&subject)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let work = d.path().join("work");
     let o = surfcap!(&["--quiet", "tiles", "plan", p(&subject), "-o", p(&work), "--tile", "16"]);

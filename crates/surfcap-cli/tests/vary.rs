@@ -11,7 +11,18 @@ use surfcap_testkit::{p, stderr, surfcap};
 fn subject(data: &Path, dir: &Path) -> PathBuf {
     let out = dir.join("cmu.subject");
     let bvh: Vec<PathBuf> = ["16_15", "16_36"].iter().map(|c| data.join(format!("cmu_bvh/{c}.bvh"))).collect();
-    let o = surfcap!(&["--quiet", "synth", "--bvh", p(&bvh[0]), p(&bvh[1]), "--vertices", "1000", "-o", p(&out)]);
+    let o = surfcap!(&[
+        "--quiet",
+        "make",
+        "mannequin",
+        "--bvh",
+        p(&bvh[0]),
+        p(&bvh[1]),
+        "--vertices",
+        "1000",
+        "-o",
+        p(&out)
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     out
 }

@@ -83,7 +83,7 @@ impl SubjectAppearance {
         if subject.topology().uv().is_none() {
             refuse!(
                 "--appearance {}: the subject {:?} has no texture coordinates: expected the UV atlas the model's maps \
-                 follow (a subject made from a UV-mapped mesh, e.g. `surfcap synth --head` or `--uv-atlas`)",
+                 follow (a subject made from a UV-mapped mesh, e.g. `surfcap make head` or `--uv-atlas`)",
                 path.display(),
                 subject.name
             );

@@ -111,8 +111,19 @@ fn real_data(dir: &Path, from_env: bool, found: bool, skip: bool, ci: bool) -> R
 /// over their frames. CLI tests call it through [`procedural_walker!`].
 pub fn procedural_walker_with(exe: &str, dir: &Path) -> PathBuf {
     let walker = dir.join("walker.subject");
-    let args =
-        ["synth", "--procedural", "walk,jog", "--duration", "2", "--vertices", "1000", "-o", p(&walker), "--quiet"];
+    let args = [
+        "make",
+        "mannequin",
+        "--procedural",
+        "walk,jog",
+        "--duration",
+        "2",
+        "--vertices",
+        "1000",
+        "-o",
+        p(&walker),
+        "--quiet",
+    ];
     let o = run(exe, &args);
     assert!(o.status.success(), "{}", stderr(&o));
     walker

@@ -10,6 +10,7 @@ pub mod graph;
 pub mod import;
 pub mod info;
 pub mod interpolate;
+pub mod make;
 pub mod parts;
 pub mod remesh_frames;
 pub mod report;

@@ -67,6 +67,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         origin: (r0, c0),
         range: None,
         path: warp.path.clone(),
+        value_label: "pose distance".into(),
     };
     written.extend(surfcap_plot::write_heat_map(&plot, &heat)?);
     ctx.commit(outs)?;

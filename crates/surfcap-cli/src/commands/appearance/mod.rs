@@ -40,7 +40,7 @@ pub enum AppearanceCmd {
     Generate(GenerateArgs),
     /// A base texture painted from a UV-mapped mesh's 3D positions (garment bands, a checker
     /// and noise, continuous across the atlas's seams): the texture of a mesh that has none,
-    /// e.g. the mannequin of `surfcap synth --uv-atlas`, for `generate --texture`.
+    /// e.g. the mannequin of `surfcap make mannequin --uv-atlas`, for `generate --texture`.
     Paint(PaintArgs),
     /// Eigen textures and eigen warps of per-frame texture maps (thesis 4.4): flows to a
     /// reference chosen by medoid shift, Poisson warping, PCA; written as a model folder.
@@ -60,7 +60,7 @@ pub struct GenerateArgs {
           default_value_os_t = crate::options::default_data_dir())]
     pub data: PathBuf,
     /// A UV-mapped mesh instead of the head scan: an OBJ (with `vt` on every face corner), or a
-    /// subject with texture coordinates (`surfcap synth --head`, `--uv-atlas`), whose first
+    /// subject with texture coordinates (`surfcap make head`, `--uv-atlas`), whose first
     /// frame is used and whose frame count is the default of --frames, so `appearance build
     /// --mesh SUBJECT` names the maps by its frames.
     #[arg(long, requires = "texture")]
@@ -160,7 +160,7 @@ fn generate(ctx: &crate::Ctx, a: GenerateArgs) -> anyhow::Result<()> {
             let (topology, positions) = (s.topology(), s.frame(0).expect("a subject has frames"));
             anyhow::ensure!(
                 topology.uv().is_some(),
-                "{}: the subject has no texture coordinates: expected a UV-mapped mesh (e.g. `surfcap synth --head` or `--uv-atlas`)",
+                "{}: the subject has no texture coordinates: expected a UV-mapped mesh (e.g. `surfcap make head` or `--uv-atlas`)",
                 mesh.display()
             );
             let mut obj = Vec::new();
@@ -247,7 +247,7 @@ fn paint(ctx: &crate::Ctx, a: &PaintArgs) -> anyhow::Result<()> {
     };
     let atlas = topology.uv().with_context(|| {
         format!(
-            "{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt`, `surfcap synth --uv-atlas`)",
+            "{}: the mesh has no texture coordinates: expected a UV atlas (OBJ `vt`, `surfcap make mannequin --uv-atlas`)",
             a.mesh.display()
         )
     })?;

@@ -36,16 +36,15 @@ pub struct BuildArgs {
     #[arg(long, value_parser = |s: &str| crate::options::at_least(s, 2))]
     pub components: Option<usize>,
     /// Weight of the intensity term of the Poisson warp (thesis eq. 4.1-4.3), above 0 and at
-    /// most 1000 (the thesis uses 0.02; far larger weights make the warp's system singular in
-    /// floating point).
+    /// most 1000 (the thesis uses 0.02).
     #[arg(long, default_value_t = 0.02, value_parser = |s: &str| crate::options::positive_at_most(s, 1000.0))]
     pub lambda: f64,
     /// How textures are warped: poisson (thesis) or direct (the baseline of Fig. 4.5).
     #[arg(long, default_value = "poisson", value_parser = parse_warping)]
     pub warping: Warping,
     /// How the medoid shift's search for the reference warps (Algorithm 4 uses --warping;
-    /// direct is 20 times cheaper per frame and the chosen reference's alignment is redone with
-    /// --warping).
+    /// direct solves no Poisson system per frame, and the chosen reference's alignment is redone
+    /// with --warping).
     #[arg(long, default_value = "direct", value_parser = parse_warping)]
     pub search_warping: Warping,
     /// Alignments the medoid shift may run (Algorithm 4).

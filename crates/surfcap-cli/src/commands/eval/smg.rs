@@ -69,7 +69,7 @@ pub struct Args {
     pub loop_variation_floor: f64,
     /// Self-transitions per sequence (without --eq5-self-transitions): the loop spanning the
     /// sequence's cross transitions and key frames, then the cheapest admissible loops inside
-    /// it, which let the queries meet times in finer steps.
+    /// it, which the queries may repeat to meet their times.
     #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 1, 10))]
     pub loops_per_sequence: usize,
     /// Evaluate this subject or frame set instead of the CMU mannequin (with --connect and
@@ -483,6 +483,7 @@ fn heat_maps(
                     origin: (r0, c0),
                     range: Some((0.0, hi.max(1e-12))),
                     path: Vec::new(),
+                    value_label: format!("{} ({unit})", measure.replace('-', " ")),
                 };
                 let stem = format!("{measure}_{tag}_{}_to_{}", file_part(&p.from), file_part(&p.to));
                 written.extend(surfcap_plot::write_heat_map(&output.join(stem), &heat)?);

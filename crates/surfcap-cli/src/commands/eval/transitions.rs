@@ -105,6 +105,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         origin: (0, 0),
         range: None,
         path: r.plot.shown.as_ref().map(|w| w.path.clone()).unwrap_or_default(),
+        value_label: "pose distance".into(),
     };
     plots.extend(surfcap_plot::write_heat_map(&output.join("distances"), &heat)?);
     let (report, rp) = save_report(output, "transitions.json", &r, "plots", &plots)?;

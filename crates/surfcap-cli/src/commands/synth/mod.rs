@@ -1,28 +1,27 @@
-//! `surfcap synth --bvh <files...> | --procedural walk,jog,... -o <subject>`: the built-in
-//! mannequin moved by motion capture or by procedural locomotion, written as a subject cache
-//! with per-sequence tags and ground-truth joints (`--uv-atlas`: with a UV atlas).
-//! `surfcap synth --head ../shared/data/leeperrysmith_head -o head.subject`: the head scan
-//! bent into three sequences (nod, turn, tilt; `surfcap_builtin::head_motion`), keeping its UV
-//! atlas, the textured subject of thesis Fig. 7.1.
+//! `surfcap synth path | keyposes | reach`: an animation synthesised from a subject's graph
+//! (thesis 3.5). The older flat form that built a subject, `surfcap synth --bvh <files...> |
+//! --procedural walk,jog,... | --head <scan> -o <subject>`, is still accepted, hidden from help,
+//! with a note naming `surfcap make mannequin | head` (see `commands/make.rs`), which builds
+//! them now.
 
-use std::path::Path;
-use std::time::Instant;
-
-use serde_json::json;
-use surfcap_builtin::head_motion::{head_motion_size, head_motion_subject};
-use surfcap_mesh::Subject;
-
-use crate::mannequin_spec::{MannequinArgs, build};
+use crate::mannequin_spec::{Built, MannequinArgs, build_and_write as build_and_write_subject};
 
 mod keyposes;
 mod path;
 mod reach;
 
-/// `surfcap synth`: build a mannequin subject (flat arguments), or one of the subcommands.
+/// `surfcap synth`: one of the subcommands (or, hidden, the older flat build of a subject).
 #[derive(clap::Args, Debug)]
-// With no arguments at all, the help (its subcommands path, keyposes and reach, and the
-// options that build a subject) rather than the build's "-o is required".
-#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true, arg_required_else_help = true)]
+// With no arguments at all, the help (its subcommands path, keyposes and reach, and where
+// subjects are built) rather than the build's "-o is required". The flat build options are
+// hidden from help (the `mut_args` runs before the global options join).
+#[command(
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    arg_required_else_help = true,
+    mut_args(|a| a.hide(true)),
+    after_help = "Built-in subjects (the mannequin moved by BVH files or procedural motions, the head scan) are made by `surfcap make mannequin | head`."
+)]
 pub struct Cmd {
     #[command(subcommand)]
     pub what: Option<What>,
@@ -65,74 +64,30 @@ pub fn run(ctx: &crate::Ctx, c: Cmd) -> anyhow::Result<()> {
     }
 }
 
-/// The head scan of `head` (a folder's `template.obj`, or an OBJ) bent into its sequences.
-fn head_subject(
-    ctx: &crate::Ctx,
-    head: &Path,
-    frames_per_sequence: usize,
-    name: Option<&str>,
-    output: &Path,
-) -> anyhow::Result<Subject> {
-    let obj = if head.is_dir() { head.join("template.obj") } else { head.to_path_buf() };
-    let mesh = surfcap_formats::obj::read_obj(&obj)?;
-    let topology = mesh.topology().map_err(|e| e.in_file(&obj))?;
-    anyhow::ensure!(
-        topology.uv().is_some(),
-        "{}: the scan has no texture coordinates: expected a UV-mapped mesh (`vt` on every face corner)",
-        obj.display()
-    );
-    ctx.check_size(&head_motion_size(topology.n_vertices(), frames_per_sequence), Some(output))?;
-    let mut s = head_motion_subject(&topology, &mesh.positions, frames_per_sequence, "arbitrary")
-        .map_err(|e| e.in_file(&obj))?;
-    if let Some(n) = name {
-        s.name = n.to_string();
-    }
-    Ok(s)
-}
-
+/// The older flat form, `surfcap synth --bvh | --procedural | --head ... -o X`: still accepted
+/// (hidden from help), with a note naming the command that now builds subjects.
 fn build_and_write(ctx: &crate::Ctx, a: MannequinArgs, head: HeadArgs) -> anyhow::Result<()> {
     let Some(output) = a.output.clone() else {
-        anyhow::bail!("-o/--output: the subject cache folder to write is required");
-    };
-    let mut inputs: Vec<&Path> = a.bvh.iter().map(|p| p.as_path()).collect();
-    inputs.extend(head.head.as_deref());
-    surfcap_mesh::output_path::check_not_input(&output, &inputs)?;
-    let t0 = Instant::now();
-    let s = match &head.head {
-        Some(h) => head_subject(ctx, h, head.frames_per_sequence, a.name.as_deref(), &output)?,
-        None => build(ctx, &a)?,
-    };
-    let bar = crate::progress::Bar::new(ctx);
-    surfcap_mesh::cache::write_cache(&output, &s, ctx.force, &bar)?;
-    let secs = t0.elapsed().as_secs_f64();
-    let sequences: Vec<serde_json::Value> =
-        s.sequences().iter().map(|q| json!({ "name": q.name, "frames": q.n_frames(), "tags": q.tags })).collect();
-    let result = json!({
-        "subject": s.name,
-        "output": output,
-        "fps": s.fps,
-        "vertices": s.topology().n_vertices(),
-        "triangles": s.topology().n_triangles(),
-        "sequences": sequences,
-        "seconds": secs,
-    });
-    ctx.result(&result, || {
-        println!(
-            "synthesised {:?}: {} vertices, {} triangles, {} fps -> {} ({secs:.2} s)",
-            s.name,
-            s.topology().n_vertices(),
-            s.topology().n_triangles(),
-            s.fps,
-            output.display()
+        anyhow::bail!(
+            "-o/--output: the subject cache folder to write is required (built-in subjects are now made by `surfcap make mannequin | head ... -o X.subject`)"
         );
-        for q in s.sequences() {
-            println!(
-                "  {:<12} {:>12}  tags {}",
-                q.name,
-                crate::output::count_of(q.n_frames(), "frame"),
-                q.tags.join(", ")
-            );
+    };
+    match &head.head {
+        Some(h) => {
+            ctx.note(&format!(
+                "`surfcap synth --head` is now `surfcap make head {} -o {}`",
+                h.display(),
+                output.display()
+            ));
+            build_and_write_subject(
+                ctx,
+                Built::Head { scan: h, frames_per_sequence: head.frames_per_sequence, name: a.name.as_deref() },
+                &output,
+            )
         }
-    });
-    Ok(())
+        None => {
+            ctx.note("`surfcap synth --bvh | --procedural` is now `surfcap make mannequin --bvh | --procedural ...`");
+            build_and_write_subject(ctx, Built::Mannequin(&a), &output)
+        }
+    }
 }
