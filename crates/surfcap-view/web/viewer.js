@@ -539,7 +539,7 @@ function buildLegend() {
 function tickText(x) {
   if (x === 0) return '0';
   const a = Math.abs(x);
-  return a >= 1000 || a < 0.01 ? x.toExponential(1) : Number(x.toPrecision(3)).toString();
+  return a >= 1e4 || a < 1e-3 ? x.toExponential(1) : Number(x.toPrecision(3)).toString();
 }
 
 // The colour bar of the colour map drawn: its name, range and unit, one range over every item
