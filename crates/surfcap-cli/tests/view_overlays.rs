@@ -15,7 +15,8 @@ use surfcap_testkit::{ViewServer, p, stderr, surfcap};
 fn views_test(url: &str, out: &Path) -> serde_json::Value {
     let tools = surfcap_testkit::workspace_root().join("tools");
     assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
-    let o = Command::new("node").arg(tools.join("viewer-views-test.mjs")).args([url, p(out)]).output().expect("node runs");
+    let o =
+        Command::new("node").arg(tools.join("viewer-views-test.mjs")).args([url, p(out)]).output().expect("node runs");
     assert!(
         o.status.success(),
         "viewer views test failed:\n{}\n{}",
@@ -37,7 +38,8 @@ fn the_centre_track_lies_on_the_ground_and_the_presets_look_as_named() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let subject = tmp.path().join("cmu.subject");
-    let bvh: Vec<String> = ["16_15", "16_17", "16_19"].iter().map(|c| p(&data.join(format!("cmu_bvh/{c}.bvh"))).to_string()).collect();
+    let bvh: Vec<String> =
+        ["16_15", "16_17", "16_19"].iter().map(|c| p(&data.join(format!("cmu_bvh/{c}.bvh"))).to_string()).collect();
     let mut args = vec!["synth", "--bvh"];
     args.extend(bvh.iter().map(String::as_str));
     args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
@@ -47,7 +49,18 @@ fn the_centre_track_lies_on_the_ground_and_the_presets_look_as_named() {
     std::fs::write(&curve, "0,0\n1,0\n2,0.3\n3,0.8\n4,1.5\n").unwrap();
     let path = tmp.path().join("path.glb");
     let cache = tmp.path().join("cache");
-    let o = surfcap!(&["synth", "path", p(&subject), "--curve", p(&curve), "-o", p(&path), "--cache-dir", p(&cache), "--quiet"]);
+    let o = surfcap!(&[
+        "synth",
+        "path",
+        p(&subject),
+        "--curve",
+        p(&curve),
+        "-o",
+        p(&path),
+        "--cache-dir",
+        p(&cache),
+        "--quiet"
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&path)]);
     let (_, items) = server.get("/api/items");
@@ -85,7 +98,10 @@ fn labels_and_a_strain_colour_map_on_two_captures() {
     let items: serde_json::Value = serde_json::from_slice(&items).unwrap();
     let it = &items["items"][0];
     assert_eq!(it["label"], "actor I (crane)");
-    assert_eq!((it["field"]["name"].as_str(), it["field"]["unit"].as_str()), (Some("edge-length strain against the first frame"), Some("%")));
+    assert_eq!(
+        (it["field"]["name"].as_str(), it["field"]["unit"].as_str()),
+        (Some("edge-length strain against the first frame"), Some("%"))
+    );
     let (status, body) = server.get("/api/items/0/field");
     assert_eq!(status, 200);
     let values = f32s(&body);
@@ -151,7 +167,10 @@ fn colour_map_and_label_mistakes_are_explained() {
     let crane = p(&crane);
     for (args, want) in [
         (vec!["view", crane, "--labels", "a,b"], "--labels: 2 given for 1 sequence"),
-        (vec!["view", crane, "--reference-sequence", "x"], "--reference-sequence: give --error-against or --distance-from"),
+        (
+            vec!["view", crane, "--reference-sequence", "x"],
+            "--reference-sequence: give --error-against or --distance-from",
+        ),
         (vec!["view", crane, "--error-against", crane, "--reference-sequence", "nope"], "no sequence \"nope\""),
         (vec!["view", crane, "--error-against", crane, "--strain"], "cannot be used with"),
     ] {

@@ -271,7 +271,11 @@ fn add_colour_maps(ctx: &crate::Ctx, a: &Args, items: &mut [ViewItem]) -> anyhow
     for it in items.iter_mut() {
         let q = match &a.reference_sequence {
             Some(n) => subject.sequence(n).map(|(_, q)| q).ok_or_else(|| {
-                anyhow::anyhow!("--reference-sequence: no sequence {n:?} in {}; it has {}", path.display(), names.join(", "))
+                anyhow::anyhow!(
+                    "--reference-sequence: no sequence {n:?} in {}; it has {}",
+                    path.display(),
+                    names.join(", ")
+                )
             })?,
             None => match subject.sequence(&it.name) {
                 Some((_, q)) => q,
