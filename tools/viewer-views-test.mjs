@@ -234,7 +234,8 @@ try {
     const lo = Math.min(...fieldItems.map((m) => m.field.range[0])), hi = Math.max(...fieldItems.map((m) => m.field.range[1]));
     const barText = await page.textContent('#colourbar');
     const barShown = await page.isVisible('#colourbar');
-    if (mode !== 'field' || !bar || bar.range[0] !== lo || bar.range[1] !== hi) fail(`colour map: mode ${mode}, bar ${JSON.stringify(bar)}, expected range ${lo}-${hi}`);
+    const max = Math.max(...fieldItems.map((m) => m.field.max));
+    if (mode !== 'field' || !bar || bar.range[0] !== lo || bar.range[1] !== hi || bar.max !== max) fail(`colour map: mode ${mode}, bar ${JSON.stringify(bar)}, expected range ${lo}-${hi}`);
     if (!barShown || !barText.includes(fieldItems[0].field.name) || !barText.includes(fieldItems[0].field.unit)) fail(`colour bar "${barText}" (shown: ${barShown})`);
     // The frame with the widest spread of values of the first item with a field.
     const k = meta.items.findIndex((m) => m.has_field);

@@ -104,19 +104,28 @@ pub struct VertexField {
     pub unit: String,
     /// How the values were computed, one sentence for the panel.
     pub about: String,
-    /// The colour bar's range: the lowest and highest value over every frame.
+    /// The colour bar's range: the lowest value over every frame and the 99th percentile, so
+    /// that a few outliers (a tracking glitch, a collapsed triangle) do not leave every other
+    /// vertex at the bottom of the scale; values above it are drawn at the top colour.
     pub range: [f32; 2],
+    /// The highest value (the bar says "≥" at its top when it is above `range[1]`).
+    pub max: f32,
     #[serde(skip)]
     pub values: Vec<f32>,
 }
 
 impl VertexField {
-    /// A field of `values` with its range set from them (finite values only).
+    /// A field of `values` with its range set from them (finite values only; NaN: no value).
     pub fn new(name: String, unit: String, about: String, values: Vec<f32>) -> VertexField {
-        let finite = values.iter().copied().filter(|v| v.is_finite());
-        let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
-        let range = if lo <= hi { [lo, hi] } else { [0.0, 0.0] };
-        VertexField { name, unit, about, range, values }
+        let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+        if finite.is_empty() {
+            return VertexField { name, unit, about, range: [0.0, 0.0], max: 0.0, values };
+        }
+        let lo = finite.iter().copied().fold(f32::INFINITY, f32::min);
+        let max = finite.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let k = ((finite.len() - 1) as f64 * 0.99).round() as usize;
+        let (_, p99, _) = finite.select_nth_unstable_by(k, f32::total_cmp);
+        VertexField { name, unit, about, range: [lo, *p99], max, values }
     }
 }
 
@@ -335,7 +344,13 @@ mod message_tests {
         set.field = field(8);
         assert!(matches!(set.check(), Err(ViewError::Field(..))));
         let f = super::VertexField::new("e".into(), "m".into(), String::new(), vec![2.0, f32::NAN, -1.0]);
-        assert_eq!(f.range, [-1.0, 2.0]);
+        assert_eq!((f.range, f.max), ([-1.0, 2.0], 2.0));
+        // One outlier in 1,000 leaves the bar's range at the 99th percentile.
+        let mut v: Vec<f32> = (0..1000).map(|i| i as f32 / 1000.0).collect();
+        v[500] = 50.0;
+        let f = super::VertexField::new("e".into(), "m".into(), String::new(), v);
+        assert_eq!((f.range[0], f.max), (0.0, 50.0));
+        assert!((f.range[1] - 0.99).abs() < 0.002, "{:?}", f.range);
     }
 
     #[test]

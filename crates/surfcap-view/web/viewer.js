@@ -550,8 +550,9 @@ function buildColourBar() {
   if (!shown.length) { el.hidden = true; state.bar = null; return; }
   const fields = shown.map((it) => it.meta.field);
   const lo = Math.min(...fields.map((f) => f.range[0])), hi = Math.max(...fields.map((f) => f.range[1]));
+  const max = Math.max(...fields.map((f) => f.max));
   const names = [...new Set(fields.map((f) => f.name))], units = [...new Set(fields.map((f) => f.unit))];
-  state.bar = { name: names.join('; '), unit: units.join(', '), range: [lo, hi], about: fields[0].about };
+  state.bar = { name: names.join('; '), unit: units.join(', '), range: [lo, hi], max, about: fields[0].about };
   $('bar-name').textContent = `${state.bar.name} (${state.bar.unit})`;
   $('bar-name').title = state.bar.about;
   const c = $('bar-gradient'), g = c.getContext('2d'), col = new THREE.Color();
@@ -561,7 +562,9 @@ function buildColourBar() {
   }
   const ticks = [0, 0.25, 0.5, 0.75, 1].map((t) => {
     const s = document.createElement('span');
-    s.textContent = tickText(lo + t * (hi - lo)) + (t === 1 ? ` ${state.bar.unit}` : '');
+    // Values above the range (the top 1%) are drawn in the top colour: the bar says so.
+    s.textContent = (t === 1 && max > hi ? '≥ ' : '') + tickText(lo + t * (hi - lo)) + (t === 1 ? ` ${state.bar.unit}` : '');
+    if (t === 1 && max > hi) s.title = `largest ${tickText(max)} ${state.bar.unit}`;
     return s;
   });
   $('bar-ticks').replaceChildren(...ticks);
