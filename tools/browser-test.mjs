@@ -100,8 +100,8 @@ try {
     ...texturedRow,
     labels.some((s) => !s) && 'original frame',
     labels.some((s) => s) && 'synthetic frame',
-    meta.items.some((m) => m.overlay && m.overlay.curve) && 'requested path',
-    meta.items.some((m) => m.overlay) && 'achieved centre of mass',
+    meta.items.some((m) => m.overlay && m.overlay.curve) && 'requested path (on the ground)',
+    meta.items.some((m) => m.overlay) && 'achieved centre of mass (on the ground)',
     meta.items.some((m) => m.overlay && m.overlay.transitions.length) && 'transition (timeline)',
   ].filter(Boolean);
   const grid = await viewer(() => window.surfcapViewer.grid);

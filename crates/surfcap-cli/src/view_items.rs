@@ -16,6 +16,7 @@ pub fn view_items(s: &Subject, only: &[String]) -> Vec<ViewItem> {
         .filter(|q| only.is_empty() || only.contains(&q.name))
         .map(|q| ViewItem {
             name: q.name.clone(),
+            label: None,
             fps: s.fps,
             up: s.up_axis.as_str().to_string(),
             units: s.units.symbol().to_string(),
@@ -33,6 +34,7 @@ pub fn view_items(s: &Subject, only: &[String]) -> Vec<ViewItem> {
             uvs: None,
             textures: Vec::new(),
             frame_textures: None,
+            field: None,
         })
         .collect()
 }
@@ -84,6 +86,7 @@ pub fn frame_set_items(
         let frames = q.frames();
         let mut item = ViewItem {
             name: q.name.clone(),
+            label: None,
             fps: s.fps,
             up: s.up_axis.as_str().to_string(),
             units: s.units.symbol().to_string(),
@@ -101,6 +104,7 @@ pub fn frame_set_items(
             uvs: None,
             textures: Vec::new(),
             frame_textures: None,
+            field: None,
         };
         if let Some(t) = textures {
             let (mut nv, mut faces, mut positions, mut uvs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());

@@ -152,7 +152,12 @@ fn the_viewer_frames_and_explains_synthesis_outputs() {
     let server = ViewServer::start(env!("CARGO_BIN_EXE_surfcap"), &[p(&path)]);
     let png = tmp.path().join("path.png");
     let seen = browser_test(&server.url, &png);
-    let legend = ["original frame", "synthetic frame", "requested path", "achieved centre of mass"];
+    let legend = [
+        "original frame",
+        "synthetic frame",
+        "requested path (on the ground)",
+        "achieved centre of mass (on the ground)",
+    ];
     assert_eq!(seen["legend"].as_array().unwrap()[..4], legend.map(serde_json::Value::from), "{seen}");
     assert!(seen["grid"]["text"].as_str().unwrap().ends_with(" m"), "{seen}");
     for (at, colour) in [
@@ -223,7 +228,7 @@ fn the_viewer_plays_a_frame_set() {
         assert!(f["distinct_vertex_counts"].as_u64().unwrap() > 1, "{seen}");
         if input == &glb {
             assert_eq!((seen["frames"].as_u64(), f["frames"].as_u64()), (Some(frames), Some(frames)), "{seen}");
-            let legend = ["original frame", "achieved centre of mass", "transition (timeline)"];
+            let legend = ["original frame", "achieved centre of mass (on the ground)", "transition (timeline)"];
             assert_eq!(seen["legend"].as_array().unwrap()[..3], legend.map(serde_json::Value::from), "{seen}");
             // The transitions on the timeline (counted as blue there: no other blue is drawn).
             assert!(count(&seen, "timeline", "blue") > 100, "{seen}");

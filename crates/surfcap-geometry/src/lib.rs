@@ -15,6 +15,9 @@
 //! - Differential operators ([`gradient_operator`]: gradient, mass, Laplacian, divergence),
 //!   [`poisson_reconstruction`] (factor once, solve many), linear and non-linear interpolation
 //!   ([`pose_interpolation`], eq. 2.45-2.49) and [`shape_distortion`] measures.
+//! - Per-vertex fields the viewer colours a mesh by: [`vertex_edge_strain`] (mean edge-length
+//!   strain against a rest pose) and [`vertex_rigid_distance`] (distance to a reference pose after
+//!   the best rigid alignment).
 //! - Ground contacts shared by everything that needs them ([`ground_contacts`]: `ContactParams`,
 //!   the ground as the 20th percentile of the per-frame lowest vertex, the subject's height from
 //!   the clip itself, per frame step the low and vertically still vertices with a lowness weight);
@@ -68,5 +71,7 @@ pub mod pose_interpolation;
 pub mod root_motion_from_contacts;
 pub mod rotation_log_exp;
 pub mod shape_distortion;
+pub mod vertex_edge_strain;
+pub mod vertex_rigid_distance;
 
 pub use error::{Error, Result};

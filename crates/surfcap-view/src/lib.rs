@@ -1,21 +1,33 @@
 //! surfcap's viewer: a local web server bound to 127.0.0.1 serving a three.js page that plays mesh
 //! sequences, colours original frames green and synthetic frames red (as the thesis's figures do),
-//! overlays a user's path and the achieved centre-of-mass trajectory, and plays several sequences
-//! side by side or overlaid.
+//! overlays a user's path and the achieved centre-of-mass trajectory on the ground, colours
+//! meshes by a per-vertex field with a colour bar, and plays several sequences side by side or
+//! overlaid.
 //!
 //! The server ([`server`], axum on a current-thread tokio runtime) answers GET only: the page, its
 //! embedded assets ([`assets`]), the items' positions, faces, optional per-vertex colours (body
-//! parts), UVs and textures as little-endian binary (`/api/...`), and the files of one report folder
-//! (`/report/...`, paths confined to it); anything else is 404. A `Host` header other than
-//! `127.0.0.1`, `localhost` or `[::1]` with its port gets 403, against DNS rebinding.
+//! parts), per-vertex scalar fields ([`VertexField`]), UVs and textures as little-endian binary
+//! (`/api/...`), and the files of one report folder (`/report/...`, paths confined to it);
+//! anything else is 404. A `Host` header other than `127.0.0.1`, `localhost` or `[::1]` with its
+//! port gets 403, against DNS rebinding.
 //!
-//! The page (`web/`): play/pause, speed, arrow-key stepping, a timeline of original and synthetic
-//! spans with transition marks, path and centre overlays and the constraints' lines from a
-//! synthesis report; frame sets (each frame's own mesh swapped in, checked frame by frame on the
-//! server); a texture per frame (each decoded once and bound at its frames); a ground grid in the
-//! subject's unit; a legend of only what is drawn. The camera fits every frame's box into the part
-//! of the view the info panel leaves free (`setViewOffset`, so orbiting still turns about the
-//! scene).
+//! The page (`web/`): play/pause, speed, arrow-key stepping, frame entry (`57` or
+//! `sequence:frame`), a loop range, a timeline of original and synthetic spans with transition
+//! marks; the requested path and the achieved centre track projected onto the ground plane (the
+//! grid's), the centre at hip height optional, the constraints' lines and the centre's distance
+//! from the path (this frame's and the largest, with the unit) from a synthesis report; view
+//! presets (top, front, side, three-quarter) and a follow camera; labels over the figures; frame
+//! colours, neutral, matcap or colour-map looks, wireframe, onion skin of neighbouring frames;
+//! frame sets (each frame's own mesh swapped in, checked frame by frame on the server); a texture
+//! per frame (each decoded once and bound at its frames); a ground grid in the subject's unit; a
+//! legend of only what is drawn. The camera fits every frame's box into the part of the view the
+//! info panel leaves free (`setViewOffset`, so orbiting still turns about the scene).
+//!
+//! For scripts (`surfcap render`, tests) the page sets `window.surfcapViewer` once everything is
+//! loaded (`ready`, `nFrames`, `fps`, `setFrame(i)` and `setView(preset)` that render before
+//! returning, `scene`, `camera`, `renderer`, `controls`, `groundY`, `unitSymbol`, `reload()`) and
+//! dispatches the `surfcap-ready` event; `?view=<preset>&frame=<i>&ui=0` (the bare scene) and
+//! `?loop=a-b` set the same from the address.
 //!
 //! three.js 0.187 is installed from npm at build time (`build.rs` runs `npm ci` against
 //! `web/package-lock.json` when missing) and embedded with `include_str!`, so the page works
@@ -27,9 +39,12 @@ pub mod server;
 use serde::Serialize;
 
 /// One playable sequence.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct ViewItem {
     pub name: String,
+    /// The figure label drawn over the item (side by side, several figures look alike); `None`:
+    /// its name.
+    pub label: Option<String>,
     pub fps: f64,
     /// Subject up axis as `+y`, `-z`...: the page turns it onto its own +Y.
     pub up: String,
@@ -74,12 +89,55 @@ pub struct ViewItem {
     /// appearance played together); `None` when the item is not textured. Drawn instead of the
     /// frame colour.
     pub frame_textures: Option<Vec<usize>>,
+    /// An optional per-frame per-vertex scalar field the page can colour the mesh by, with a
+    /// colour bar (one shared topology only).
+    pub field: Option<VertexField>,
+}
+
+/// A scalar per vertex and frame (an error, a distance, a strain) drawn as a colour map: the
+/// values are served little-endian as `/api/items/{id}/field`, `[frames][vertices]` f32.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct VertexField {
+    /// What the values are, as the colour bar says it (`transfer error against barbarian`).
+    pub name: String,
+    /// Their unit's symbol (`m`, `units`), or `%` for a ratio in percent (a strain).
+    pub unit: String,
+    /// How the values were computed, one sentence for the panel.
+    pub about: String,
+    /// The colour bar's range: the lowest value over every frame and the 99th percentile, so
+    /// that a few outliers (a tracking glitch, a collapsed triangle) do not leave every other
+    /// vertex at the bottom of the scale; values above it are drawn at the top colour.
+    pub range: [f32; 2],
+    /// The highest value (the bar says "≥" at its top when it is above `range[1]`).
+    pub max: f32,
+    #[serde(skip)]
+    pub values: Vec<f32>,
+}
+
+impl VertexField {
+    /// A field of `values` with its range set from them (finite values only; NaN: no value).
+    pub fn new(name: String, unit: String, about: String, values: Vec<f32>) -> VertexField {
+        let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+        if finite.is_empty() {
+            return VertexField { name, unit, about, range: [0.0, 0.0], max: 0.0, values };
+        }
+        let lo = finite.iter().copied().fold(f32::INFINITY, f32::min);
+        let max = finite.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let k = ((finite.len() - 1) as f64 * 0.99).round() as usize;
+        let (_, p99, _) = finite.select_nth_unstable_by(k, f32::total_cmp);
+        VertexField { name, unit, about, range: [lo, *p99], max, values }
+    }
 }
 
 impl ViewItem {
     /// Whether the item carries per-vertex colours (what the page reads to fetch them).
     pub fn has_colours(&self) -> bool {
         self.colours.is_some()
+    }
+
+    /// Whether the item carries a per-vertex scalar field (served as `/api/items/{id}/field`).
+    pub fn has_field(&self) -> bool {
+        self.field.is_some()
     }
 
     /// Whether the item carries texture coordinates (served as `/api/items/{id}/uvs`).
@@ -93,7 +151,7 @@ const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
 /// What a synthesis report adds to its animation: `centres` has one point per frame; `curve`
 /// is there only for path following (`reach` has a distance to cover, not a path).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct Overlay {
     pub curve: Option<Vec<[f64; 3]>>,
     pub centres: Vec<[f64; 3]>,
@@ -103,6 +161,9 @@ pub struct Overlay {
     /// What was asked and achieved, one line per constraint (`distance: 3.02 of 3 m asked`),
     /// shown in the panel.
     pub constraints: Vec<String>,
+    /// Per frame, the centre's distance from the requested path (path following only), in the
+    /// item's unit: the panel shows the current frame's and the largest.
+    pub centre_errors: Option<Vec<f64>>,
 }
 
 /// Why an item cannot be shown.
@@ -118,6 +179,8 @@ pub enum ViewError {
     FrameCounts(String, usize, usize),
     #[error("{0}: transition mark at frame {1}, past the last frame ({2})")]
     Transition(String, usize, usize),
+    #[error("{0}: {1} colour-map values: expected one per vertex and frame ({2}), for one shared mesh")]
+    Field(String, usize, usize),
     #[error("{0}: {1} colour values: expected 3 per vertex ({2})")]
     Colours(String, usize, usize),
     #[error("{0}: {1} texture coordinates: expected 2 per vertex ({2}), finite")]
@@ -149,6 +212,11 @@ impl ViewItem {
             return Err(ViewError::Transition(self.name.clone(), t, self.n_frames - 1));
         }
         self.check_textures()?;
+        if let Some(f) = &self.field
+            && (self.frame_vertices.is_some() || f.values.len() != self.n_vertices * self.n_frames)
+        {
+            return Err(ViewError::Field(self.name.clone(), f.values.len(), self.n_vertices * self.n_frames));
+        }
         if let (Some(nv), Some(nt)) = (&self.frame_vertices, &self.frame_triangles) {
             return self.check_frames(nv, nt);
         }
@@ -236,6 +304,7 @@ mod message_tests {
     fn frames() -> ViewItem {
         ViewItem {
             name: "set".into(),
+            label: None,
             fps: 25.0,
             up: "+y".into(),
             units: "m".into(),
@@ -253,7 +322,35 @@ mod message_tests {
             uvs: None,
             textures: Vec::new(),
             frame_textures: None,
+            field: None,
         }
+    }
+
+    #[test]
+    fn a_field_needs_one_value_per_vertex_and_frame_of_one_mesh() {
+        let field = |n: usize| Some(super::VertexField::new("e".into(), "m".into(), String::new(), vec![0.5; n]));
+        let mut one = frames();
+        (one.frame_vertices, one.frame_triangles, one.n_vertices, one.positions) = (None, None, 3, vec![0.0; 18]);
+        one.faces.truncate(3);
+        one.field = field(6);
+        one.check().unwrap();
+        assert_eq!(one.field.as_ref().unwrap().range, [0.5, 0.5]);
+        one.field = field(5);
+        assert_eq!(
+            one.check().unwrap_err().to_string(),
+            "set: 5 colour-map values: expected one per vertex and frame (6), for one shared mesh"
+        );
+        let mut set = frames();
+        set.field = field(8);
+        assert!(matches!(set.check(), Err(ViewError::Field(..))));
+        let f = super::VertexField::new("e".into(), "m".into(), String::new(), vec![2.0, f32::NAN, -1.0]);
+        assert_eq!((f.range, f.max), ([-1.0, 2.0], 2.0));
+        // One outlier in 1,000 leaves the bar's range at the 99th percentile.
+        let mut v: Vec<f32> = (0..1000).map(|i| i as f32 / 1000.0).collect();
+        v[500] = 50.0;
+        let f = super::VertexField::new("e".into(), "m".into(), String::new(), v);
+        assert_eq!((f.range[0], f.max), (0.0, 50.0));
+        assert!((f.range[1] - 0.99).abs() < 0.002, "{:?}", f.range);
     }
 
     #[test]

@@ -61,6 +61,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/items/{id}/faces", get(faces))
         .route("/api/items/{id}/colours", get(colours))
         .route("/api/items/{id}/uvs", get(uvs))
+        .route("/api/items/{id}/field", get(field))
         .route("/api/items/{id}/textures/{k}", get(texture))
         .route("/report/{*path}", get(report))
         .fallback(not_found)
@@ -126,6 +127,7 @@ async fn items(State(app): State<Arc<App>>) -> Response {
             let mut v = serde_json::to_value(it).expect("items serialise");
             v["has_colours"] = it.has_colours().into();
             v["has_uvs"] = it.has_uvs().into();
+            v["has_field"] = it.has_field().into();
             v["n_textures"] = it.textures.len().into();
             v
         })
@@ -163,6 +165,14 @@ async fn uvs(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Respo
     let Some(k) = item(&app, &id) else { return not_found().await };
     let Some(uv) = &app.items[k].uvs else { return not_found().await };
     let bytes: Vec<u8> = uv.iter().flat_map(|x| x.to_le_bytes()).collect();
+    respond("application/octet-stream", bytes)
+}
+
+/// The item's per-vertex scalar field (`[frames][vertices]` f32), when it has one (else 404).
+async fn field(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
+    let Some(k) = item(&app, &id) else { return not_found().await };
+    let Some(f) = &app.items[k].field else { return not_found().await };
+    let bytes: Vec<u8> = f.values.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 

@@ -24,6 +24,30 @@ pub struct Args {
     /// Only these sequences (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     pub sequences: Vec<String>,
+    /// The labels drawn over the figures, one per sequence shown, in order (comma-separated;
+    /// default: each sequence's name).
+    #[arg(long, value_delimiter = ',')]
+    pub labels: Vec<String>,
+    /// Colour every vertex by its distance from the same vertex of this ground truth (anything
+    /// `import` reads, same mesh), frame by frame after the rigid alignment that fits the truth
+    /// best: a transfer's error against the target's own motion. With a colour bar in the
+    /// subject's unit.
+    #[arg(long, value_name = "TRUTH", conflicts_with_all = ["distance_from", "strain"])]
+    pub error_against: Option<PathBuf>,
+    /// Colour every vertex by its distance from the same vertex of the motion it was made from
+    /// (a variant's source; same mesh), frame by frame after the best rigid alignment (the body
+    /// frame), in the subject's unit.
+    #[arg(long, value_name = "SOURCE", conflicts_with = "strain")]
+    pub distance_from: Option<PathBuf>,
+    /// The sequence of --error-against or --distance-from to compare with (default: the one of
+    /// the shown sequence's name, else its only sequence).
+    #[arg(long, value_name = "NAME")]
+    pub reference_sequence: Option<String>,
+    /// Colour every vertex by its edge-length strain against the sequence's first frame: the
+    /// mean over the edges meeting there of |length / first-frame length - 1|, in percent (10:
+    /// edges 10% longer or shorter; 0 where the surface only moves rigidly).
+    #[arg(long)]
+    pub strain: bool,
     #[command(flatten)]
     pub source: SourceOpts,
 }
@@ -44,6 +68,8 @@ fn overlay_of(output: &Path, frames: usize) -> Option<Overlay> {
     };
     let curve = points(&v["curve"]);
     let centres = points(&v["per_frame"]["centre"])?;
+    let centre_errors: Option<Vec<f64>> =
+        v["per_frame"]["error"].as_array().and_then(|e| e.iter().map(|x| x.as_f64()).collect());
     let transitions: Vec<usize> = v["transition_frames"]
         .as_array()
         .map(|t| t.iter().filter_map(|f| f.as_u64().map(|f| f as usize)).filter(|&f| f < frames).collect())
@@ -51,7 +77,8 @@ fn overlay_of(output: &Path, frames: usize) -> Option<Overlay> {
     let constraints = serde_json::from_value::<Vec<surfcap_synthesis::Constraint>>(v["constraints"].clone())
         .map(|c| c.iter().map(surfcap_synthesis::Constraint::summary).collect())
         .unwrap_or_default();
-    (centres.len() == frames).then_some(Overlay { curve, centres, transitions, constraints })
+    let centre_errors = centre_errors.filter(|e| e.len() == frames);
+    (centres.len() == frames).then_some(Overlay { curve, centres, transitions, constraints, centre_errors })
 }
 
 /// Whether `p` may be a synthesis output with a report beside it (a `.glb` or a `.frames` folder).
@@ -148,6 +175,19 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         anyhow::bail!("--sequences: no sequence named {missing:?} in what was given; it has {}", known.join(", "));
     }
     anyhow::ensure!(!items.is_empty(), "view: nothing to play in what was given");
+    if !a.labels.is_empty() {
+        anyhow::ensure!(
+            a.labels.len() == items.len(),
+            "--labels: {} given for {} (one per sequence shown, in order: {})",
+            a.labels.len(),
+            crate::output::count_of(items.len(), "sequence"),
+            items.iter().map(|it| it.name.as_str()).collect::<Vec<_>>().join(", ")
+        );
+        for (it, l) in items.iter_mut().zip(&a.labels) {
+            it.label = Some(l.clone());
+        }
+    }
+    add_colour_maps(ctx, &a, &mut items)?;
     let n = items.len();
     let json = ctx.json;
     serve(items, ServeOptions { port: a.port.port, report }, |addr| {
@@ -160,5 +200,123 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         let _ = std::io::stdout().flush();
     })?;
+    Ok(())
+}
+
+/// What the colour-map options ask for, given to every item: the distance from a reference
+/// (`--error-against`, `--distance-from`) or the edge strain (`--strain`).
+fn add_colour_maps(ctx: &crate::Ctx, a: &Args, items: &mut [ViewItem]) -> anyhow::Result<()> {
+    use rayon::prelude::*;
+    use surfcap_geometry::vertex_edge_strain::{unique_edges, vertex_edge_strain};
+    use surfcap_geometry::vertex_rigid_distance::vertex_rigid_distance;
+    use surfcap_view::VertexField;
+    let reference = match (&a.error_against, &a.distance_from) {
+        (Some(p), _) => Some(("--error-against", p, "transfer error against")),
+        (None, Some(p)) => Some(("--distance-from", p, "distance from")),
+        _ => None,
+    };
+    if reference.is_none() && a.reference_sequence.is_some() {
+        anyhow::bail!("--reference-sequence: give --error-against or --distance-from too");
+    }
+    if reference.is_none() && !a.strain {
+        return Ok(());
+    }
+    for it in items.iter() {
+        anyhow::ensure!(
+            it.frame_vertices.is_none(),
+            "{}: a colour map needs one mesh for every frame; this is a frame set (every frame its own mesh)",
+            it.name
+        );
+    }
+    let nv = |it: &ViewItem| it.n_vertices;
+    let frame = |it: &ViewItem, f: usize| -> Vec<f32> {
+        // Textured items have their vertices split along seams: colour maps use the mesh's own.
+        it.positions[3 * nv(it) * f..3 * nv(it) * (f + 1)].to_vec()
+    };
+    if a.strain {
+        for it in items.iter_mut() {
+            anyhow::ensure!(!it.faces.is_empty(), "{}: --strain needs the mesh's triangles", it.name);
+            let t = surfcap_mesh::Topology::new(
+                it.n_vertices,
+                it.faces.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                None,
+            )?;
+            let edges = unique_edges(&t);
+            let rest = frame(it, 0);
+            // In percent: 10 = edges 10% longer or shorter than at the first frame.
+            let values: Vec<f32> = (0..it.n_frames)
+                .into_par_iter()
+                .flat_map_iter(|f| vertex_edge_strain(&edges, &rest, &frame(it, f)).into_iter().map(|s| 100.0 * s))
+                .collect();
+            it.field = Some(VertexField::new(
+                "edge-length strain against the first frame".into(),
+                "%".into(),
+                format!("per vertex, the mean over its edges of |length / length at {}:0 - 1|, in percent", it.name),
+                values,
+            ));
+        }
+        return Ok(());
+    }
+    let (option, path, what) = reference.expect("checked above");
+    let bar = crate::progress::Bar::new(ctx);
+    let subject = match surfcap_formats::import::open_any(path, &a.source.to_import(None)?, &bar)
+        .map_err(|e| anyhow::anyhow!("{option} {}: {e}", path.display()))?
+    {
+        ImportedData::Subject(i) => i.subject,
+        ImportedData::FrameSet(f) => f.frame_set.into_subject().map_err(|e| {
+            anyhow::anyhow!("{option} {}: a reference must have one mesh for every frame: {e}", path.display())
+        })?,
+    };
+    let names: Vec<&str> = subject.sequences().iter().map(|q| q.name.as_str()).collect();
+    for it in items.iter_mut() {
+        let q = match &a.reference_sequence {
+            Some(n) => subject.sequence(n).map(|(_, q)| q).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--reference-sequence: no sequence {n:?} in {}; it has {}",
+                    path.display(),
+                    names.join(", ")
+                )
+            })?,
+            None => match subject.sequence(&it.name) {
+                Some((_, q)) => q,
+                None if names.len() == 1 => &subject.sequences()[0],
+                None => anyhow::bail!(
+                    "{option} {}: no sequence named {:?} there and more than one to choose from; name one with --reference-sequence ({})",
+                    path.display(),
+                    it.name,
+                    names.join(", ")
+                ),
+            },
+        };
+        anyhow::ensure!(
+            q.n_vertices() == it.n_vertices && !it.has_uvs(),
+            "{option} {}: {} has {} vertices, {} has {}: a colour map compares vertex by vertex on the same mesh",
+            path.display(),
+            q.name,
+            q.n_vertices(),
+            it.name,
+            it.n_vertices
+        );
+        let (n, m) = (it.n_frames, q.n_frames());
+        if n != m {
+            ctx.note(&format!(
+                "{}: {} frames against {} of {}: each frame is compared with the reference frame at the same fraction of the sequence",
+                it.name, n, m, q.name
+            ));
+        }
+        // Frame f of the item against the reference's frame at the same fraction of its length.
+        let at = |f: usize| if n <= 1 { 0 } else { ((f * (m - 1)) as f64 / (n - 1) as f64).round() as usize };
+        let values: Vec<f32> =
+            (0..n).into_par_iter().flat_map_iter(|f| vertex_rigid_distance(&frame(it, f), q.frame(at(f)))).collect();
+        it.field = Some(VertexField::new(
+            format!("{what} {}", q.name),
+            it.units.clone(),
+            format!(
+                "per vertex, the distance from the same vertex of {} after the rigid alignment that fits that frame best",
+                q.name
+            ),
+            values,
+        ));
+    }
     Ok(())
 }
