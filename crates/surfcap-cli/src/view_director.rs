@@ -67,7 +67,9 @@ pub fn director(
     if !ctx.quiet && !ctx.json {
         eprintln!("surfcap view: directing {} in its {} ({:.2} s to prepare)", path.display(), timeline.graph, prep.seconds);
     }
-    Ok(Some(std::sync::Arc::new(SubjectDirector { prep, limits, timeline, last: Mutex::new(None) })))
+    let d: std::sync::Arc<dyn Director> =
+        std::sync::Arc::new(SubjectDirector { prep, limits, timeline, last: Mutex::new(None) });
+    Ok(Some(d))
 }
 
 /// A prepared subject answering the page's directions.
@@ -240,7 +242,7 @@ impl SubjectDirector {
             }
             Direction::Transition { from, to } => {
                 let (i, j) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
-                let t = surfcap_synthesis::transition(&self.prep.pipe, (i, from), (j, to), &self.prep.params.table)?;
+                let t = surfcap_synthesis::transition(&self.prep.pipe, (i, from.as_str()), (j, to.as_str()), &self.prep.params.table)?;
                 let r = &t.report;
                 let summary = vec![format!(
                     "transition {} -> {}: source segment {} frames, destination {}, {} frames, normalised cost {:.3}",

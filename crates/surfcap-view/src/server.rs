@@ -252,8 +252,8 @@ fn json_answer(status: StatusCode, v: &serde_json::Value) -> Response {
 /// Refuses a direction request that does not come from this server's own page (an `Origin`
 /// of another site, or none but a browser's form content type) or whose body is not JSON.
 fn refuse_foreign(app: &App, headers: &axum::http::HeaderMap) -> Option<Response> {
-    let header = |name| headers.get(name).map(|h| h.to_str().unwrap_or("?"));
-    if let Some(origin) = header(header::ORIGIN)
+    let value = |name: header::HeaderName| headers.get(name).map(|h| h.to_str().unwrap_or("?"));
+    if let Some(origin) = value(header::ORIGIN)
         && !is_same_origin(origin, app.port)
     {
         let msg = format!(
@@ -262,7 +262,7 @@ fn refuse_foreign(app: &App, headers: &axum::http::HeaderMap) -> Option<Response
         );
         return Some(json_answer(StatusCode::FORBIDDEN, &serde_json::json!({ "error": msg })));
     }
-    if !header(header::CONTENT_TYPE).is_some_and(is_json) {
+    if !value(header::CONTENT_TYPE).is_some_and(is_json) {
         let msg = "refused: a direction's body must be JSON, sent with Content-Type: application/json";
         return Some(json_answer(StatusCode::UNSUPPORTED_MEDIA_TYPE, &serde_json::json!({ "error": msg })));
     }
