@@ -125,11 +125,18 @@ try {
   await page.screenshot({ path: join(out, 'reach.png') });
 
   // 4. Two key poses placed on the rows of the timeline, the second dragged to a new time.
+  // Two frames of the first sequence, Shift-clicked on its row (arcs may pass over it).
   const q = graph.sequences[0];
+  const picks = [];
   for (const g of [q.first + 2, q.first + Math.floor(q.frames / 2)]) {
     const p = await ev((x) => window.surfcapDirector.timeline.framePoint(x), g);
-    await page.mouse.click(p.x, p.y);
+    const h = await ev(([x, y]) => window.surfcapDirector.timeline.hitAt(x, y, true), [p.x, p.y]);
+    if (h.kind !== 'row' || h.global !== g) fail(`Shift at frame ${g} of the timeline finds ${JSON.stringify(h)}`);
+    picks.push(p);
   }
+  await page.keyboard.down('Shift');
+  for (const p of picks) await page.mouse.click(p.x, p.y);
+  await page.keyboard.up('Shift');
   const k1 = await ev(() => window.surfcapDirector.timeline.keyPoint(1));
   const target = await ev(() => window.surfcapDirector.timeline.timeX(70));
   await page.mouse.move(k1.x, k1.y);

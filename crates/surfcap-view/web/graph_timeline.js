@@ -1,7 +1,8 @@
 // The motion graph as a timeline: one row per sequence (its frames left to right), an arc per
 // transition edge from a frame of one row to a frame of another (or the same) row, and below
 // them a lane of key poses on the output's time axis. A click on an arc plays that transition;
-// a click on a row adds the frame under the pointer as a key pose; keys are dragged along the
+// a click on a row (Shift-click where arcs pass over it) adds the frame under the pointer as a
+// key pose; keys are dragged along the
 // lane to new times (thesis 3.5.2). Drawn on a canvas; everything is in CSS pixels.
 
 const ROW = 18, GAP = 6, LABEL = 120, LANE = 34, PAD = 8;
@@ -11,7 +12,7 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
   const canvas = document.createElement('canvas');
   canvas.id = 'graph-timeline';
   canvas.title = 'the motion graph: rows are sequences, arcs its transitions (click one to play it); ' +
-    'click a row to add a key pose, drag keys along the lowest lane to new times';
+    'click a row (Shift-click where arcs cross it) to add a key pose, drag keys along the lowest lane to new times';
   canvas.style.cssText = 'width: 100%; display: block; cursor: pointer; touch-action: none;';
   container.appendChild(canvas);
   const n = graph.sequences.length;
@@ -94,6 +95,8 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
     });
   }
 
+  // What lies under page point (clientX, clientY): a key on the lane, an arc (away from its
+  // ends, which sit on the rows), or a frame of a row.
   function hit(e) {
     const r = canvas.getBoundingClientRect(), x = e.clientX - r.left, y = e.clientY - r.top;
     if (y >= laneY() - 2) {
@@ -101,8 +104,9 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
       return { kind: 'lane', key: k, x };
     }
     let best = -1, bestD = 6;
-    graph.transitions.forEach((a, k) => {
-      for (const p of arcPoints(a)) {
+    // Shift: the row under the pointer, whatever arc passes there.
+    if (!e.shiftKey) graph.transitions.forEach((a, k) => {
+      for (const p of arcPoints(a).slice(3, 14)) {
         const d = Math.hypot(p.x - x, p.y - y);
         if (d < bestD) { bestD = d; best = k; }
       }
@@ -171,6 +175,7 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
     },
     framePoint(g) { const r = canvas.getBoundingClientRect(), p = point(g); return { x: r.left + p.x, y: r.top + p.y }; },
     keyPoint(i) { const r = canvas.getBoundingClientRect(); return { x: r.left + xOfTime(state.keys[i].time), y: r.top + laneY() + 12 }; },
+    hitAt(x, y, shiftKey = false) { return hit({ clientX: x, clientY: y, shiftKey }); },
     timeX(t) { return canvas.getBoundingClientRect().left + xOfTime(t); },
     get keys() { return state.keys.map((k) => ({ frame: k.frame, time: k.time })); },
     clearKeys() { state.keys = []; state.span = span(); draw(); keysChanged(); },
