@@ -42,6 +42,12 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
     }
     return pts;
   };
+  // The arcs' points for the current width, computed once per width.
+  let cached = { width: -1, arcs: [] };
+  const arcsNow = () => {
+    if (cached.width !== width()) cached = { width: width(), arcs: graph.transitions.map(arcPoints) };
+    return cached.arcs;
+  };
   const laneY = () => PAD + n * (ROW + GAP) + 4;
   const span = () => Math.max(120, ...state.keys.map((k) => k.time + 60));
   const xOfTime = (t) => LABEL + (t / state.span) * (width() - LABEL - PAD);
@@ -64,16 +70,25 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
       g.fillRect(xOfFrame(0) - 1, rowY(r) + 4, xOfFrame(q.frames - 1) - xOfFrame(0) + 2, ROW - 8);
       g.globalAlpha = 1;
     });
-    graph.transitions.forEach((a, k) => {
-      const pts = arcPoints(a);
-      g.strokeStyle = k === state.hot || k === state.playing ? ARC_HOT : ARC;
-      g.lineWidth = k === state.hot || k === state.playing ? 2.5 : 1;
-      g.globalAlpha = k === state.hot || k === state.playing ? 1 : 0.55;
-      g.beginPath();
-      pts.forEach((p, i) => (i ? g.lineTo(p.x, p.y) : g.moveTo(p.x, p.y)));
-      g.stroke();
-    });
+    // Every arc in one stroke (a dense graph has thousands: fainter the more there are), then
+    // the one pointed at or playing on top.
+    const arcs = arcsNow();
+    const trace = (pts) => pts.forEach((p, i) => (i ? g.lineTo(p.x, p.y) : g.moveTo(p.x, p.y)));
+    g.strokeStyle = ARC;
+    g.lineWidth = 1;
+    g.globalAlpha = Math.min(0.55, 6 / Math.sqrt(arcs.length || 1));
+    g.beginPath();
+    arcs.forEach(trace);
+    g.stroke();
     g.globalAlpha = 1;
+    for (const k of new Set([state.hot, state.playing])) {
+      if (k === null || k < 0 || !arcs[k]) continue;
+      g.strokeStyle = ARC_HOT;
+      g.lineWidth = 2.5;
+      g.beginPath();
+      trace(arcs[k]);
+      g.stroke();
+    }
     // The key lane: output time axis and the keys on it, each also marked on its row.
     const y = laneY();
     g.fillStyle = '#333';
@@ -105,8 +120,9 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
     }
     let best = -1, bestD = 6;
     // Shift: the row under the pointer, whatever arc passes there.
-    if (!e.shiftKey) graph.transitions.forEach((a, k) => {
-      for (const p of arcPoints(a).slice(3, 14)) {
+    if (!e.shiftKey) arcsNow().forEach((pts, k) => {
+      for (let i = 3; i < 14; i++) {
+        const p = pts[i];
         const d = Math.hypot(p.x - x, p.y - y);
         if (d < bestD) { bestD = d; best = k; }
       }
@@ -170,7 +186,7 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
     draw,
     // For tests and scripting: where an arc or a frame is drawn, in page pixels.
     arcCentre(k) {
-      const r = canvas.getBoundingClientRect(), p = arcPoints(graph.transitions[k])[8];
+      const r = canvas.getBoundingClientRect(), p = arcsNow()[k][8];
       return { x: r.left + p.x, y: r.top + p.y };
     },
     framePoint(g) { const r = canvas.getBoundingClientRect(), p = point(g); return { x: r.left + p.x, y: r.top + p.y }; },
