@@ -65,7 +65,12 @@ pub fn director(
     let limits = SizeLimits { max_memory: ctx.max_memory, ..SizeLimits::default() };
     let timeline = timeline(&prep);
     if !ctx.quiet && !ctx.json {
-        eprintln!("surfcap view: directing {} in its {} ({:.2} s to prepare)", path.display(), timeline.graph, prep.seconds);
+        eprintln!(
+            "surfcap view: directing {} in its {} ({:.2} s to prepare)",
+            path.display(),
+            timeline.graph,
+            prep.seconds
+        );
     }
     let d: std::sync::Arc<dyn Director> =
         std::sync::Arc::new(SubjectDirector { prep, limits, timeline, last: Mutex::new(None) });
@@ -142,7 +147,12 @@ fn transition_marks(labels: &[FrameLabel]) -> Vec<usize> {
 
 /// The page's item of a one-sequence animation, with its centre track, the curve asked for if
 /// any, its transitions and what was asked and achieved.
-fn item_of(animation: &Subject, centres: Option<Vec<[f64; 3]>>, curve: Option<Vec<[f64; 3]>>, constraints: &[Constraint]) -> ViewItem {
+fn item_of(
+    animation: &Subject,
+    centres: Option<Vec<[f64; 3]>>,
+    curve: Option<Vec<[f64; 3]>>,
+    constraints: &[Constraint],
+) -> ViewItem {
     let mut item = crate::view_items::view_items(animation, &[]).remove(0);
     let labels = &animation.sequences()[0].labels;
     item.overlay = centres.map(|centres| Overlay {
@@ -166,7 +176,11 @@ impl SubjectDirector {
         let length = |x: f64| crate::output::length(x, &s.units, 2);
         let (item, summary, animation) = match d {
             Direction::Path { points } => {
-                anyhow::ensure!(points.len() >= 2, "the drawn path has {} point(s); expected at least two", points.len());
+                anyhow::ensure!(
+                    points.len() >= 2,
+                    "the drawn path has {} point(s); expected at least two",
+                    points.len()
+                );
                 let request = PathRequest {
                     curve: CurveSource::Points {
                         name: "the drawn path".into(),
@@ -192,11 +206,20 @@ impl SubjectDirector {
                     crate::output::length(o.mean_error, &s.units, 3),
                     crate::output::length(o.max_error, &s.units, 3)
                 )];
-                let item = item_of(&o.played.output, Some(o.played.centres.clone()), Some(o.report.curve.clone()), &o.constraints);
+                let item = item_of(
+                    &o.played.output,
+                    Some(o.played.centres.clone()),
+                    Some(o.report.curve.clone()),
+                    &o.constraints,
+                );
                 (item, summary, o.played.output)
             }
             Direction::Keyposes { keys } => {
-                let rows = keys.iter().enumerate().map(|(k, KeyAsk { frame, time })| (k + 1, vec![frame.clone(), time.to_string()])).collect();
+                let rows = keys
+                    .iter()
+                    .enumerate()
+                    .map(|(k, KeyAsk { frame, time })| (k + 1, vec![frame.clone(), time.to_string()]))
+                    .collect();
                 let keys = key_poses_from_rows(rows, Path::new("the key poses"), s)?;
                 surfcap_synthesis::check_key_poses(s, &keys, "the key poses", &out, &self.limits)?;
                 let o = self.prep.time_key_poses(&keys, &out, &NoProgress)?;
@@ -208,7 +231,10 @@ impl SubjectDirector {
                 )];
                 for k in &o.report.keys {
                     let why = k.unreachable_why.as_deref().map(|w| format!(": {w}")).unwrap_or_default();
-                    summary.push(format!("{} asked at frame {}, shown at {}{why}", k.frame, k.requested_time, k.obtained_time));
+                    summary.push(format!(
+                        "{} asked at frame {}, shown at {}{why}",
+                        k.frame, k.requested_time, k.obtained_time
+                    ));
                 }
                 let item = item_of(&o.played.output, Some(o.played.centres.clone()), None, &o.constraints);
                 (item, summary, o.played.output)
@@ -242,7 +268,12 @@ impl SubjectDirector {
             }
             Direction::Transition { from, to } => {
                 let (i, j) = (s.resolve_frame(from)?, s.resolve_frame(to)?);
-                let t = surfcap_synthesis::transition(&self.prep.pipe, (i, from.as_str()), (j, to.as_str()), &self.prep.params.table)?;
+                let t = surfcap_synthesis::transition(
+                    &self.prep.pipe,
+                    (i, from.as_str()),
+                    (j, to.as_str()),
+                    &self.prep.params.table,
+                )?;
                 let r = &t.report;
                 let summary = vec![format!(
                     "transition {} -> {}: source segment {} frames, destination {}, {} frames, normalised cost {:.3}",
@@ -296,7 +327,8 @@ impl Director for SubjectDirector {
         let file = format!("{name}.{format}");
         let dir = tempfile::tempdir().map_err(|e| format!("export {file}: no temporary folder: {e}"))?;
         let path = dir.path().join(&file);
-        export(animation, f, &path, ExportOptions::default(), &NoProgress).map_err(|e| format!("export {file}: {e}"))?;
+        export(animation, f, &path, ExportOptions::default(), &NoProgress)
+            .map_err(|e| format!("export {file}: {e}"))?;
         let bytes = std::fs::read(&path).map_err(|e| format!("export {file}: {e}"))?;
         Ok(Exported { name: file, content_type, bytes })
     }

@@ -167,7 +167,11 @@ fn the_page_directs_a_subject_drawn_clicked_and_exported() {
     for report in surfcap_testkit::validate_glb(std::slice::from_ref(&glb)) {
         assert_eq!(report["numErrors"], 0, "{report}");
     }
+    // The last result was the key poses' walk: its frames in every format.
+    let frames = seen["keyposes"]["frames"].as_f64().unwrap();
     let usd = surfcap_testkit::read_usd(&shots.join("keyposes.usda"));
+    assert_eq!(usd["end"].as_f64(), Some(frames - 1.0), "usda from frame {} to {}", usd["start"], usd["end"]);
     let abc = surfcap_testkit::read_abc(&shots.join("keyposes.abc"));
-    eprintln!("usda: {usd}\nabc: {abc}");
+    let samples = abc["meshes"][0]["self_bounds"].as_array().map(Vec::len);
+    assert_eq!(samples, Some(frames as usize), "abc samples");
 }
