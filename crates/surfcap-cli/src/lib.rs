@@ -40,6 +40,9 @@ mod signals;
 mod subject_summary;
 mod synthesis_args;
 mod view_items;
+// ---- director ----
+mod view_director;
+// ---- end director ----
 
 pub use output::Ctx;
 

@@ -4,6 +4,10 @@
 /// (route under `/assets/`, content type, bytes).
 pub const ASSETS: &[(&str, &str, &str)] = &[
     ("viewer.js", JS, include_str!("../web/viewer.js")),
+    // ---- director ----
+    ("director.js", JS, include_str!("../web/director.js")),
+    ("graph_timeline.js", JS, include_str!("../web/graph_timeline.js")),
+    // ---- end director ----
     ("three.module.js", JS, include_str!("../web/node_modules/three/build/three.module.js")),
     ("three.core.js", JS, include_str!("../web/node_modules/three/build/three.core.js")),
     (

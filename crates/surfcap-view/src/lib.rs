@@ -4,12 +4,16 @@
 //! meshes by a per-vertex field with a colour bar, and plays several sequences side by side or
 //! overlaid.
 //!
-//! The server ([`server`], axum on a current-thread tokio runtime) answers GET only: the page, its
+//! The server ([`server`], axum on a current-thread tokio runtime) answers GET: the page, its
 //! embedded assets ([`assets`]), the items' positions, faces, optional per-vertex colours (body
 //! parts), per-vertex scalar fields ([`VertexField`]), UVs and textures as little-endian binary
 //! (`/api/...`), and the files of one report folder (`/report/...`, paths confined to it);
 //! anything else is 404. A `Host` header other than `127.0.0.1`, `localhost` or `[::1]` with its
-//! port gets 403, against DNS rebinding.
+//! port gets 403, against DNS rebinding. Given a [`direct::Director`] (`server::serve_directed`),
+//! it also takes directions as JSON POSTs from its own page only (same `Origin`, `Content-Type:
+//! application/json`): a path drawn on the ground, key poses at new times, a distance in a time,
+//! or one transition of the graph, each synthesised by the front end and played in place of the
+//! items ([`direct`]).
 //!
 //! The page (`web/`): play/pause, speed, arrow-key stepping, frame entry (`57` or
 //! `sequence:frame`), a loop range, a timeline of original and synthetic spans with transition
@@ -34,6 +38,7 @@
 //! offline. Nothing of surfcap is a dependency: the front end turns subjects into [`ViewItem`]s.
 
 pub mod assets;
+pub mod direct;
 pub mod server;
 
 use serde::Serialize;

@@ -1,21 +1,27 @@
-//! The HTTP server: GET-only routes for the page, its assets, the items and one report folder.
+//! The HTTP server: GET routes for the page, its assets, the items and one report folder; with a
+//! [`Director`], the direction routes (`/api/direct...`, see [`crate::direct`]).
 
 use std::net::SocketAddr;
 use std::path::{Component, Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, RwLock};
 
 use axum::Router;
 use axum::body::Body;
 use axum::extract::{Path as UrlPath, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use axum::routing::get;
+use axum::routing::{get, post};
 
 use crate::assets::{INDEX_HTML, asset};
+use crate::direct::{Direction, Director, is_json, is_same_origin};
 use crate::{ViewError, ViewItem};
 
 struct App {
-    items: Vec<ViewItem>,
+    /// What the page plays: the items given, or a direction's result in their place.
+    items: RwLock<Vec<Arc<ViewItem>>>,
+    /// The items given, which `POST /api/direct/reset` brings back.
+    given: Vec<Arc<ViewItem>>,
+    director: Option<Arc<dyn Director>>,
     report: Option<PathBuf>,
     /// The port the server listens on: requests must name it in their `Host` header.
     port: u16,
@@ -31,6 +37,16 @@ pub struct ServeOptions {
 
 /// Serves `items` until the process ends; `ready(address)` is called once it listens.
 pub fn serve(items: Vec<ViewItem>, opts: ServeOptions, ready: impl FnOnce(SocketAddr)) -> Result<(), ViewError> {
+    serve_directed(items, opts, None, ready)
+}
+
+/// [`serve`], with a [`Director`] answering the page's directions when one is given.
+pub fn serve_directed(
+    items: Vec<ViewItem>,
+    opts: ServeOptions,
+    director: Option<Arc<dyn Director>>,
+    ready: impl FnOnce(SocketAddr),
+) -> Result<(), ViewError> {
     if items.is_empty() {
         return Err(ViewError::NoItems);
     }
@@ -46,7 +62,8 @@ pub fn serve(items: Vec<ViewItem>, opts: ServeOptions, ready: impl FnOnce(Socket
         let addr = SocketAddr::from(([127, 0, 0, 1], opts.port));
         let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| ViewError::Bind(addr.to_string(), e))?;
         let bound = listener.local_addr().map_err(ViewError::Serve)?;
-        let app = Arc::new(App { items, report, port: bound.port() });
+        let given: Vec<Arc<ViewItem>> = items.into_iter().map(Arc::new).collect();
+        let app = Arc::new(App { items: RwLock::new(given.clone()), given, director, report, port: bound.port() });
         ready(bound);
         axum::serve(listener, router(app)).await.map_err(ViewError::Serve)
     })
@@ -64,6 +81,12 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/items/{id}/field", get(field))
         .route("/api/items/{id}/textures/{k}", get(texture))
         .route("/report/{*path}", get(report))
+        // ---- direction routes ----
+        .route("/api/direct", post(direct))
+        .route("/api/direct/reset", post(direct_reset))
+        .route("/api/direct/graph", get(direct_graph))
+        .route("/api/direct/export/{format}", get(direct_export))
+        // ---- end of direction routes ----
         .fallback(not_found)
         .layer(axum::middleware::from_fn_with_state(app.clone(), check_host))
         .with_state(app)
@@ -121,10 +144,10 @@ async fn assets(UrlPath(path): UrlPath<String>) -> Response {
 
 async fn items(State(app): State<Arc<App>>) -> Response {
     let items: Vec<serde_json::Value> = app
-        .items
+        .items()
         .iter()
         .map(|it| {
-            let mut v = serde_json::to_value(it).expect("items serialise");
+            let mut v = serde_json::to_value(&**it).expect("items serialise");
             v["has_colours"] = it.has_colours().into();
             v["has_uvs"] = it.has_uvs().into();
             v["has_field"] = it.has_field().into();
@@ -136,50 +159,59 @@ async fn items(State(app): State<Arc<App>>) -> Response {
     respond("application/json", serde_json::to_vec(&v).expect("JSON values serialise"))
 }
 
-fn item(app: &App, id: &str) -> Option<usize> {
-    id.parse::<usize>().ok().filter(|&k| k < app.items.len())
+impl App {
+    /// The items played now.
+    fn items(&self) -> Vec<Arc<ViewItem>> {
+        self.items.read().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+}
+
+/// Item `id` of those played now.
+fn item(app: &App, id: &str) -> Option<Arc<ViewItem>> {
+    let k = id.parse::<usize>().ok()?;
+    app.items().get(k).cloned()
 }
 
 async fn positions(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
-    let Some(k) = item(&app, &id) else { return not_found().await };
-    let bytes: Vec<u8> = app.items[k].positions.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let bytes: Vec<u8> = it.positions.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 
 async fn faces(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
-    let Some(k) = item(&app, &id) else { return not_found().await };
-    let bytes: Vec<u8> = app.items[k].faces.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let bytes: Vec<u8> = it.faces.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 
 /// The item's per-vertex colours, when it has some (else 404).
 async fn colours(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
-    let Some(k) = item(&app, &id) else { return not_found().await };
-    let Some(c) = &app.items[k].colours else { return not_found().await };
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let Some(c) = &it.colours else { return not_found().await };
     let bytes: Vec<u8> = c.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 
 /// The item's texture coordinates, when it has some (else 404).
 async fn uvs(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
-    let Some(k) = item(&app, &id) else { return not_found().await };
-    let Some(uv) = &app.items[k].uvs else { return not_found().await };
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let Some(uv) = &it.uvs else { return not_found().await };
     let bytes: Vec<u8> = uv.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 
 /// The item's per-vertex scalar field (`[frames][vertices]` f32), when it has one (else 404).
 async fn field(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
-    let Some(k) = item(&app, &id) else { return not_found().await };
-    let Some(f) = &app.items[k].field else { return not_found().await };
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let Some(f) = &it.field else { return not_found().await };
     let bytes: Vec<u8> = f.values.iter().flat_map(|x| x.to_le_bytes()).collect();
     respond("application/octet-stream", bytes)
 }
 
 /// Texture `t` of the item (a PNG file held in memory, never a path), else 404.
 async fn texture(State(app): State<Arc<App>>, UrlPath((id, t)): UrlPath<(String, String)>) -> Response {
-    let Some(k) = item(&app, &id) else { return not_found().await };
-    let Some(png) = t.parse::<usize>().ok().and_then(|t| app.items[k].textures.get(t)) else {
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let Some(png) = t.parse::<usize>().ok().and_then(|t| it.textures.get(t)) else {
         return not_found().await;
     };
     respond("image/png", png.clone())
@@ -217,6 +249,123 @@ async fn report(State(app): State<Arc<App>>, UrlPath(path): UrlPath<String>) -> 
         Err(_) => not_found().await,
     }
 }
+
+// ---- direction handlers (see crate::direct) ----
+
+/// A JSON answer with `status`.
+fn json_answer(status: StatusCode, v: &serde_json::Value) -> Response {
+    let mut r = respond("application/json", serde_json::to_vec(v).expect("JSON values serialise"));
+    *r.status_mut() = status;
+    r
+}
+
+/// Refuses a direction request that does not come from this server's own page (an `Origin`
+/// of another site, or none but a browser's form content type) or whose body is not JSON.
+fn refuse_foreign(app: &App, headers: &axum::http::HeaderMap) -> Option<Response> {
+    let value = |name: header::HeaderName| headers.get(name).map(|h| h.to_str().unwrap_or("?"));
+    if let Some(origin) = value(header::ORIGIN)
+        && !is_same_origin(origin, app.port)
+    {
+        let msg = format!(
+            "refused: directions are taken only from this server's own page (http://127.0.0.1:{}/); Origin was {origin:?}",
+            app.port
+        );
+        return Some(json_answer(StatusCode::FORBIDDEN, &serde_json::json!({ "error": msg })));
+    }
+    if !value(header::CONTENT_TYPE).is_some_and(is_json) {
+        let msg = "refused: a direction's body must be JSON, sent with Content-Type: application/json";
+        return Some(json_answer(StatusCode::UNSUPPORTED_MEDIA_TYPE, &serde_json::json!({ "error": msg })));
+    }
+    None
+}
+
+fn no_director() -> Response {
+    let msg = "this viewer plays only: start it with `surfcap view SUBJECT --direct` to direct a subject";
+    json_answer(StatusCode::NOT_FOUND, &serde_json::json!({ "error": msg }))
+}
+
+/// `POST /api/direct`: synthesises what the page asks (on a worker thread, so the page's other
+/// requests are answered meanwhile) and plays the result in place of the items.
+async fn direct(State(app): State<Arc<App>>, headers: axum::http::HeaderMap, body: axum::body::Bytes) -> Response {
+    if let Some(refused) = refuse_foreign(&app, &headers) {
+        return refused;
+    }
+    let Some(director) = app.director.clone() else { return no_director() };
+    let direction: Direction = match serde_json::from_slice(&body) {
+        Ok(d) => d,
+        Err(e) => {
+            let msg = format!("the direction is not one this server takes (path, keyposes, reach or transition): {e}");
+            return json_answer(StatusCode::BAD_REQUEST, &serde_json::json!({ "error": msg }));
+        }
+    };
+    let done = tokio::task::spawn_blocking(move || director.direct(&direction)).await;
+    match done {
+        Ok(Ok(d)) => {
+            if let Err(e) = d.item.check() {
+                let msg = format!("the result cannot be shown: {e}");
+                return json_answer(StatusCode::INTERNAL_SERVER_ERROR, &serde_json::json!({ "error": msg }));
+            }
+            let answer = serde_json::json!({
+                "name": d.item.name,
+                "frames": d.item.n_frames,
+                "summary": d.summary,
+                "seconds": d.seconds,
+            });
+            *app.items.write().unwrap_or_else(|e| e.into_inner()) = vec![Arc::new(d.item)];
+            json_answer(StatusCode::OK, &answer)
+        }
+        Ok(Err(msg)) => json_answer(StatusCode::UNPROCESSABLE_ENTITY, &serde_json::json!({ "error": msg })),
+        Err(e) => {
+            let msg = format!("the synthesis stopped: {e}");
+            json_answer(StatusCode::INTERNAL_SERVER_ERROR, &serde_json::json!({ "error": msg }))
+        }
+    }
+}
+
+/// `POST /api/direct/reset`: the items given play again.
+async fn direct_reset(State(app): State<Arc<App>>, headers: axum::http::HeaderMap) -> Response {
+    if let Some(refused) = refuse_foreign(&app, &headers) {
+        return refused;
+    }
+    if app.director.is_none() {
+        return no_director();
+    }
+    *app.items.write().unwrap_or_else(|e| e.into_inner()) = app.given.clone();
+    json_answer(StatusCode::OK, &serde_json::json!({ "items": app.given.len() }))
+}
+
+/// `GET /api/direct/graph`: the motion graph as a timeline (404 without a director).
+async fn direct_graph(State(app): State<Arc<App>>) -> Response {
+    match &app.director {
+        Some(d) => respond("application/json", serde_json::to_vec(d.timeline()).expect("the timeline serialises")),
+        None => no_director(),
+    }
+}
+
+/// `GET /api/direct/export/{format}`: the last result as a file to download.
+async fn direct_export(State(app): State<Arc<App>>, UrlPath(format): UrlPath<String>) -> Response {
+    let Some(director) = app.director.clone() else { return no_director() };
+    match tokio::task::spawn_blocking(move || director.export(&format)).await {
+        Ok(Ok(file)) => {
+            let name: String =
+                file.name.chars().filter(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_')).collect();
+            let disposition = format!("attachment; filename=\"{name}\"");
+            (
+                [
+                    (header::CONTENT_TYPE, file.content_type.to_string()),
+                    (header::CACHE_CONTROL, "no-store".into()),
+                    (header::CONTENT_DISPOSITION, disposition),
+                ],
+                file.bytes,
+            )
+                .into_response()
+        }
+        Ok(Err(msg)) => json_answer(StatusCode::NOT_FOUND, &serde_json::json!({ "error": msg })),
+        Err(e) => json_answer(StatusCode::INTERNAL_SERVER_ERROR, &serde_json::json!({ "error": e.to_string() })),
+    }
+}
+
+// ---- end of direction handlers ----
 
 #[cfg(test)]
 mod tests {

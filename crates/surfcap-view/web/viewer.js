@@ -972,3 +972,46 @@ start().catch((e) => {
   $('error').textContent = `could not load: ${e.message}`;
   console.error(e);
 });
+
+// ---- director ----
+// Directing from the page (web/director.js, web/graph_timeline.js), attached once the items are
+// loaded, on the viewer's contract (window.surfcapViewer). What the director needs and the
+// contract lacks is added here, only when missing: the scene's objects, the ground's height,
+// play(), reload() (refetch /api/items and rebuild) and toItem(point, k) (a world point in item
+// k's own axes, as the server's subject has them).
+import { attachDirector } from './director.js';
+{
+  const whenReady = () => new Promise((resolve) => {
+    const done = () => window.surfcapViewer && window.surfcapViewer.ready;
+    if (done()) { resolve(); return; }
+    window.addEventListener('surfcap-ready', () => resolve(), { once: true });
+    const poll = setInterval(() => { if (done()) { clearInterval(poll); resolve(); } }, 100);
+  });
+  whenReady().then(() => {
+    const v = window.surfcapViewer;
+    const add = (name, value) => { if (!(name in v)) v[name] = value; };
+    add('scene', scene);
+    add('camera', camera);
+    add('renderer', renderer);
+    add('controls', controls);
+    if (!('groundY' in v)) Object.defineProperty(v, 'groundY', { get: () => sceneBox().min.y });
+    add('play', () => setPlaying(true));
+    add('toItem', (p, k = 0) => state.items[k].turned.worldToLocal(p.clone()));
+    add('reload', async () => {
+      for (const it of state.items) {
+        scene.remove(it.placed);
+        it.geometry.dispose();
+        it.material.dispose();
+      }
+      state.items = [];
+      $('items').replaceChildren();
+      await load();
+      showFrame(0);
+    });
+    return attachDirector(v);
+  }).catch((e) => {
+    $('error').textContent = `directing is not available: ${e.message}`;
+    console.error(e);
+  });
+}
+// ---- end director ----

@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use surfcap_formats::import::ImportedData;
-use surfcap_view::server::{ServeOptions, serve};
+use surfcap_view::server::{ServeOptions, serve_directed};
 use surfcap_view::{Overlay, ViewItem};
 
 use crate::options::{PortOpt, SourceOpts};
@@ -50,6 +50,8 @@ pub struct Args {
     pub strain: bool,
     #[command(flatten)]
     pub source: SourceOpts,
+    #[command(flatten)]
+    pub direct: crate::view_director::DirectOpts,
 }
 
 /// Whether `p` is a report folder (an `index.html` and no subject cache).
@@ -190,7 +192,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     add_colour_maps(ctx, &a, &mut items)?;
     let n = items.len();
     let json = ctx.json;
-    serve(items, ServeOptions { port: a.port.port, report }, |addr| {
+    let director = crate::view_director::director(ctx, &a.direct, &a.paths, &a.source)?;
+    serve_directed(items, ServeOptions { port: a.port.port, report }, director, |addr| {
         let url = format!("http://{addr}/");
         if json {
             print_json(&serde_json::json!({ "url": url, "sequences": n }));
