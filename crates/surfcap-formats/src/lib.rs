@@ -55,6 +55,11 @@ pub mod ply;
 pub mod shared_layout;
 pub mod usda;
 pub mod usda_read;
+// ---- stream: velocities and the compact stream ----
+pub mod stream;
+pub mod stream_predict;
+pub mod stream_quantise;
+pub mod vertex_velocity;
 
 /// `base`, or `base_1`, `base_2`, ... : the first not in `taken`, which it joins (names of
 /// sibling objects in the USD and Alembic writers).
