@@ -98,7 +98,8 @@ fn a_damaged_stream_is_refused_naming_the_file_and_the_problem() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("cat.scstream");
-    let o = surfcap!(&["--quiet", "export", p(&data.join("walking_cat_depraz/walk")), "--format", "stream", "-o", p(&out)]);
+    let o =
+        surfcap!(&["--quiet", "export", p(&data.join("walking_cat_depraz/walk")), "--format", "stream", "-o", p(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let bytes = std::fs::read(&out).unwrap();
     let cut = d.path().join("cut.scstream");

@@ -72,7 +72,8 @@ fn usda_velocities_are_the_points_central_difference() {
     let u = surfcap_testkit::read_usd(&out);
     let fps = u["time_codes_per_second"].as_f64().unwrap();
     let m = &u["meshes"][0];
-    let pts = |f: usize| -> Vec<f64> { m["points"][f].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    let pts =
+        |f: usize| -> Vec<f64> { m["points"][f].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
     let v: Vec<f64> = m["velocities"][5].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     let (a, b) = (pts(4), pts(6));
     let mut moving = 0;

@@ -1202,7 +1202,11 @@ fn read_velocities(s: &Samples, n: usize, vertices: usize, name: &str, file_len:
         return Err(err!(Shape, "{}: {} samples, P has {n}: expected one per sample", s.path, s.prop.samples));
     }
     if (n as u64).saturating_mul(vertices as u64 * 12) > 16u64.saturating_mul(file_len).saturating_add(256 << 20) {
-        return Err(err!(Shape, "{}: {n} samples of {vertices} points from a file of {file_len} bytes: refused", s.path));
+        return Err(err!(
+            Shape,
+            "{}: {n} samples of {vertices} points from a file of {file_len} bytes: refused",
+            s.path
+        ));
     }
     let mut out = Vec::with_capacity(n * vertices * 3);
     for k in 0..n as u32 {
@@ -1216,7 +1220,12 @@ fn read_velocities(s: &Samples, n: usize, vertices: usize, name: &str, file_len:
         }
         let v = f32s(b);
         if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-            return Err(err!(NonFinite, "{} sample {k} (frame {name}:{k}): point {} has the velocity {x}", s.path, i / 3));
+            return Err(err!(
+                NonFinite,
+                "{} sample {k} (frame {name}:{k}): point {} has the velocity {x}",
+                s.path,
+                i / 3
+            ));
         }
         out.extend_from_slice(&v);
     }

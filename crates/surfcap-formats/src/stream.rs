@@ -216,9 +216,10 @@ fn slice<'a>(b: &'a [u8], pos: usize, len: usize, what: &str) -> Result<&'a [u8]
 
 fn inflate(b: &[u8], limit: usize, what: &str, pos: usize) -> Result<Vec<u8>> {
     let mut out = Vec::new();
-    ZlibDecoder::new(b).take(limit as u64 + 1).read_to_end(&mut out).map_err(|e| {
-        err!(Syntax, "{what}: not a zlib (deflate) block: {e}").at(Location::Byte(pos as u64))
-    })?;
+    ZlibDecoder::new(b)
+        .take(limit as u64 + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| err!(Syntax, "{what}: not a zlib (deflate) block: {e}").at(Location::Byte(pos as u64)))?;
     if out.len() > limit {
         return Err(err!(Shape, "{what}: inflates past the {limit} bytes it can hold").at(Location::Byte(pos as u64)));
     }
@@ -317,7 +318,10 @@ impl<'a> StreamFile<'a> {
                 let kind = Prediction::from_code(chunk[0])
                     .ok_or_else(|| at(format!("prediction {}: expected 0 (key), 1 or 2", chunk[0])))?;
                 if kind.history() > history.len().min(f % self.header.key_interval.max(1)) {
-                    return Err(at(format!("{kind:?} prediction needs {} earlier frames since the key frame", kind.history())));
+                    return Err(at(format!(
+                        "{kind:?} prediction needs {} earlier frames since the key frame",
+                        kind.history()
+                    )));
                 }
                 let raw = inflate(&chunk[1..], n * 3 * 10, &format!("frame {}:{f}", s.name), pos + 1)?;
                 let prev: Vec<&[u32]> = history.iter().rev().take(kind.history()).map(|v| &v[..]).collect();
@@ -383,7 +387,8 @@ mod tests {
         assert_eq!(back.topology().triangles(), s.topology().triangles());
         assert_eq!((back.fps, back.up_axis, &back.units), (30.0, UpAxis::PosY, &Units::metres()));
         let e = summary.quantiser.max_error();
-        for (a, b) in s.sequences()[0].positions().chunks_exact(3).zip(back.sequences()[0].positions().chunks_exact(3)) {
+        for (a, b) in s.sequences()[0].positions().chunks_exact(3).zip(back.sequences()[0].positions().chunks_exact(3))
+        {
             let d = (0..3).map(|k| f64::from(a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
             assert!(d <= e * 1.0001 + 1e-7, "{d} > {e}");
         }

@@ -81,7 +81,9 @@ impl Quantiser {
 
     /// The positions of grid integers `q` (`[n * 3]`).
     pub fn dequantise(&self, q: &[u32]) -> Vec<f32> {
-        q.chunks_exact(3).flat_map(|v| (0..3).map(move |a| (self.min[a] + f64::from(v[a]) * self.step[a]) as f32)).collect()
+        q.chunks_exact(3)
+            .flat_map(|v| (0..3).map(move |a| (self.min[a] + f64::from(v[a]) * self.step[a]) as f32))
+            .collect()
     }
 }
 

@@ -101,7 +101,9 @@ pub fn stream_options(
         Some(e) => {
             let h = surfcap_eval::variation_eval::subject_height(s.sequences()[0].frame(0), s.up_axis);
             if h <= 0.0 {
-                anyhow::bail!("--stream-error: the subject's first frame is flat along its up axis: give --stream-bits");
+                anyhow::bail!(
+                    "--stream-error: the subject's first frame is flat along its up axis: give --stream-bits"
+                );
             }
             Some(e / 100.0 * h)
         }
