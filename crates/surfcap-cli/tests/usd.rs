@@ -58,15 +58,15 @@ fn usda_export_reads_back_exactly_in_pixars_usd() {
     }
 }
 
-/// Velocities are the derivative of the points: on a real animation (the walking cat), as USD
+/// Velocities are the derivative of the points: on a real animation (the KayKit knight walking), as USD
 /// reads them, a middle frame's velocities are the central difference of its neighbours'
 /// points, in units per second.
 #[test]
 fn usda_velocities_are_the_points_central_difference() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let d = tempfile::tempdir().unwrap();
-    let cat = data.join("walking_cat_depraz/walk");
-    let out = d.path().join("cat.usda");
+    let cat = data.join("kaykit_adventurers/knight_Walking_A");
+    let out = d.path().join("knight.usda");
     let o = surfcap!(&["--quiet", "export", p(&cat), "--format", "usda", "-o", p(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let u = surfcap_testkit::read_usd(&out);
@@ -82,5 +82,5 @@ fn usda_velocities_are_the_points_central_difference() {
         assert!((v[i] - expected).abs() <= 1e-4 * expected.abs().max(1.0), "coordinate {i}: {} vs {expected}", v[i]);
         moving += usize::from(expected.abs() > 1e-3);
     }
-    assert!(moving > 0, "the cat moves between frames 4 and 6");
+    assert!(moving > 0, "the knight moves between frames 4 and 6");
 }
