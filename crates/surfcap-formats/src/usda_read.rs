@@ -1391,6 +1391,38 @@ mod tests {
     use surfcap_mesh::error::{ErrorKind, Location};
     use surfcap_mesh::subject::{Sequence, Subject};
 
+    /// Velocities come back per frame from `velocities.timeSamples`, a default value answers every
+    /// frame, and a sample with the wrong count or a missing time is refused with its line.
+    #[test]
+    fn velocities_are_read_per_frame_and_checked() {
+        let stage = |v: &str| {
+            format!(
+                "#usda 1.0\n(\n    timeCodesPerSecond = 30\n)\ndef Mesh \"m\"\n{{\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 2]\n    point3f[] points.timeSamples = {{\n        0: [(0, 0, 0), (1, 0, 0), (0, 1, 0)],\n        1: [(0, 0, 1), (1, 0, 1), (0, 1, 1)],\n    }}\n{v}}}\n"
+            )
+        };
+        let read = |v: &str| parse_usda(stage(v).as_bytes());
+        let samples = "    vector3f[] velocities.timeSamples = {\n        0: [(0, 0, 30), (0, 0, 30), (0, 0, 30)],\n        1: [(0, 0, 30), (0, 0, 30), (0, 0, 31)],\n    }\n";
+        let m = &read(samples).unwrap().meshes[0];
+        let v = m.velocities.as_ref().unwrap();
+        assert_eq!(v.len(), 18);
+        assert_eq!((v[2], v[17]), (30.0, 31.0));
+        let m = &read("    vector3f[] velocities = [(1, 2, 3), (1, 2, 3), (1, 2, 3)]\n").unwrap().meshes[0];
+        assert_eq!(m.velocities.as_ref().unwrap()[15..], [1.0, 2.0, 3.0]);
+        assert!(read("").unwrap().meshes[0].velocities.is_none());
+        let e = read(
+            "    vector3f[] velocities.timeSamples = {\n        0: [(0, 0, 30)],\n        1: [(0, 0, 30)],\n    }\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("line 14") && e.contains("expected one per point (3)"), "{e}");
+        let e = read(
+            "    vector3f[] velocities.timeSamples = {\n        0: [(0, 0, 30), (0, 0, 30), (0, 0, 30)],\n    }\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("no sample at time 1"), "{e}");
+    }
+
     /// The units' name comes back from `customLayerData` with the layer's scale, escapes and
     /// all; a stage without it keeps the name `metersPerUnit` gives.
     #[test]
