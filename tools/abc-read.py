@@ -1,7 +1,8 @@
 """Reads an Alembic (.abc) archive with the reference library (PyPI `alembic3d`, the PyAlembic
 bindings) and prints what a test compares, as JSON: the archive's metadata and time samplings,
 and for every PolyMesh (at any depth) its path, schema metadata, sample count, sample times,
-topology variance, every sample's face counts, face indices and positions, its UVs and normals
+topology variance, every sample's face counts, face indices, positions and velocities (None
+when absent), its UVs and normals
 (values, indices, scope) and its arbitrary geometry parameters (name, scope, values); and every Xform's local matrix
 (Imath's row-vector layout) by path."""
 import json
@@ -77,7 +78,7 @@ while stack:
     mesh = {"path": obj.getFullName(), "metadata": obj.getMetaData().serialize(), "samples": n,
             "times": [ts.getSampleTime(k) for k in range(n)],
             "topology_variance": str(schema.getTopologyVariance()),
-            "face_counts": [], "face_indices": [], "positions": [], "self_bounds": [],
+            "face_counts": [], "face_indices": [], "positions": [], "self_bounds": [], "velocities": [],
             "uvs": geom_param(schema.getUVsParam(), n), "normals": geom_param(schema.getNormalsParam(), n),
             "arb_geom_params": {}}
     for k in range(n):
@@ -85,6 +86,8 @@ while stack:
         mesh["face_counts"].append([int(x) for x in s.getFaceCounts()])
         mesh["face_indices"].append([int(x) for x in s.getFaceIndices()])
         mesh["positions"].append(vec(s.getPositions()))
+        v = s.getVelocities()
+        mesh["velocities"].append(vec(v) if v is not None and len(v) else None)
         b = s.getSelfBounds()
         mesh["self_bounds"].append([[b.min().x, b.min().y, b.min().z], [b.max().x, b.max().y, b.max().z]])
     arb = schema.getArbGeomParams()

@@ -1,6 +1,6 @@
 """Reads a .usda stage with Pixar's USD (usd-core) and prints what a test compares, as JSON:
 the stage's time codes, up axis and metres per unit, and for every mesh its path, face
-counts and indices, every time sample of its points, and the samples of its frame labels."""
+counts and indices, every time sample of its points and of its velocities, and the samples of its frame labels."""
 import json
 import sys
 
@@ -30,6 +30,7 @@ for prim in stage.Traverse():
         "face_vertex_indices": list(mesh.GetFaceVertexIndicesAttr().Get()),
         "times": list(times),
         "points": [[c for p in points.Get(t) for c in p] for t in times],
+        "velocities": [[c for p in mesh.GetVelocitiesAttr().Get(t) for c in p] for t in mesh.GetVelocitiesAttr().GetTimeSamples()],
         "labels": [int(labels.Get(t)) for t in labels.GetTimeSamples()] if labels else None,
     })
 json.dump(out, sys.stdout)

@@ -2,7 +2,8 @@
 //! sequence its object path, sample count and times, topology (faces in Alembic's clockwise
 //! order), every sample's positions to the bit, the frame box, UVs, the labels parameter, the
 //! time sampling at the subject's rate, the archive's up axis and units, and the `Xform` that
-//! turns a non-Y up axis onto +Y.
+//! turns a non-Y up axis onto +Y; every sample's velocities (units per second) to the bit, also
+//! as surfcap's own reader gives them back.
 
 use serde_json::Value;
 use surfcap_testkit::{p, stderr, surfcap};
@@ -44,6 +45,15 @@ fn check_meshes(a: &Value, s: &surfcap_mesh::Subject) {
                     .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| (l.min(v[a]), h.max(v[a])));
                 assert_eq!((b[0][a].as_f64().unwrap(), b[1][a].as_f64().unwrap()), (f64::from(lo), f64::from(hi)));
             }
+        }
+        // Velocities, units per second, as `.velocities` on every sample: the writer's finite
+        // differences to the bit.
+        let expected = surfcap_formats::vertex_velocity::vertex_velocities(q.positions(), q.n_vertices(), s.fps);
+        let stride = q.n_vertices() * 3;
+        for f in 0..q.n_frames() {
+            let got: Vec<f32> =
+                m["velocities"][f].as_array().unwrap().iter().flat_map(floats).map(|x| x as f32).collect();
+            assert!(got == expected[f * stride..(f + 1) * stride], "{} frame {f}: velocities differ", q.name);
         }
         let labels: Vec<u64> = m["arb_geom_params"]["surfcap_synthetic"]["samples"]
             .as_array()
@@ -89,6 +99,12 @@ fn abc_export_reads_back_exactly_in_the_reference_alembic_library() {
     let a = surfcap_testkit::read_abc(&out);
     let s = surfcap_mesh::cache::read_cache(&subject, &surfcap_mesh::NoProgress).unwrap();
     check_meshes(&a, &s);
+    // surfcap's own reader gives the velocities back too.
+    let archive = surfcap_formats::abc_read::read_abc(&out).unwrap();
+    for (m, q) in archive.meshes.iter().zip(s.sequences()) {
+        let expected = surfcap_formats::vertex_velocity::vertex_velocities(q.positions(), q.n_vertices(), s.fps);
+        assert!(m.velocities.as_deref() == Some(&expected[..]), "{}: velocities read back", q.name);
+    }
     let md = a["archive_metadata"].as_str().unwrap();
     assert!(md.contains("surfcap_up_axis=+y") && md.contains("surfcap_units=m"), "{md}");
     // +Y up: each sequence's Xform is the identity.
@@ -172,6 +188,8 @@ fn a_frame_set_exports_as_heterogeneous_topology_and_comes_back() {
     let a = surfcap_testkit::read_abc(&out);
     let m = &a["meshes"][0];
     assert_eq!(m["topology_variance"], "kHeterogenousTopology");
+    // Vertices do not correspond between re-meshed frames: no velocities.
+    assert!(m["velocities"].as_array().unwrap().iter().all(|v| v.is_null()), "no velocities on a frame set");
     let original = surfcap_mesh::frame_set_cache::read_frame_set(&set, &surfcap_mesh::NoProgress).unwrap();
     let frames = original.sequences()[0].frames();
     assert_eq!(m["samples"], frames.len());

@@ -12,7 +12,9 @@
 //! - The mesh has homogeneous topology: `.faceIndices` and `.faceCounts` are stored once
 //!   (constant properties with one sample per frame, as the reference writer stores a value
 //!   set repeatedly), `P` (f32 x 3) has one sample per frame, `.selfBnds` (the frame's box, f64)
-//!   too. Alembic's faces are clockwise (Maya's convention: the reference library and the DCC
+//!   too. `.velocities` (f32 x 3, units per second, one sample per frame: the finite
+//!   differences of `vertex_velocity.rs`), so renderers draw motion blur; not on a frame set's
+//!   meshes, whose vertices do not correspond between frames. Alembic's faces are clockwise (Maya's convention: the reference library and the DCC
 //!   importers reverse them), surfcap's counter-clockwise: each triangle `(a, b, c)` is written
 //!   `(c, b, a)`, so a reader that reverses the corner order gets `(a, b, c)` back exactly.
 //! - UVs, when the topology has them, as the indexed face-varying geometry parameter `uv`
@@ -46,6 +48,7 @@
 use std::io::{self, Write};
 
 use crate::ogawa_write::{Child, OgawaWriter, write_ogawa};
+use crate::vertex_velocity::frame_velocity;
 use surfcap_mesh::frame_set::FrameSet;
 use surfcap_mesh::subject::{FrameLabel, Sequence, Subject, Units, UpAxis};
 use surfcap_mesh::topology::Topology;
@@ -66,6 +69,8 @@ const LIBRARY_VERSION: i32 = 10812;
 
 const MD_POINT: &str = "geoScope=vtx;interpretation=point";
 const MD_BOX: &str = "interpretation=box";
+/// `.velocities`: a V3f array, as the reference writer's `OV3fArrayProperty` tags it.
+const MD_VECTOR: &str = "interpretation=vector";
 const MD_POLYMESH: &str = "schema=AbcGeom_PolyMesh_v1;schemaBaseType=AbcGeom_GeomBase_v1";
 const MD_POLYMESH_OBJECT: &str =
     "schema=AbcGeom_PolyMesh_v1;schemaBaseType=AbcGeom_GeomBase_v1;schemaObjTitle=AbcGeom_PolyMesh_v1:.geom";
@@ -346,6 +351,7 @@ fn polymesh_properties(
     o: &mut OgawaWriter<'_>,
     md: &mut MetaDataMap,
     seq: &SequenceView<'_>,
+    fps: f64,
     hash: &mut ObjectHash,
 ) -> io::Result<Child> {
     let frames = seq.frames.len() as u32;
@@ -404,6 +410,29 @@ fn polymesh_properties(
             ..homogeneous_samples(Kind::Array { scalar_like }, Pod::Float32, 3, MD_POINT, false)
         },
     ));
+
+    // .velocities: units per second, one sample per frame (`vertex_velocity`), for a sequence
+    // of one topology only: a frame set's vertices do not correspond between frames.
+    if !varying {
+        let positions: Vec<&[f32]> = seq.frames.iter().map(|&(_, p)| p).collect();
+        let mut velocities = Vec::with_capacity(seq.frames.len());
+        for f in 0..positions.len() {
+            let bytes = if o.writing() {
+                le_bytes(frame_velocity(&positions, f, fps).into_iter(), f32::to_le_bytes)
+            } else {
+                vec![0; positions[f].len() * 4]
+            };
+            velocities.push(sample(o, &bytes, hash)?);
+        }
+        let g = array_group(o, &velocities)?;
+        props.push((
+            g,
+            PropertyHeader {
+                name: ".velocities".into(),
+                ..homogeneous_samples(Kind::Array { scalar_like }, Pod::Float32, 3, MD_VECTOR, false)
+            },
+        ));
+    }
 
     // Topology, faces reversed to Alembic's clockwise order: stored once when every frame
     // shares it; for a frame set's sequence one sample per frame (heterogeneous topology), a
@@ -606,7 +635,7 @@ fn emit(o: &mut OgawaWriter<'_>, info: &ArchiveInfo<'_>, sequences: &[SequenceVi
         max_samples = max_samples.max(seq.frames.len() as u32);
         // The mesh object: its properties (one compound `.geom`), no children.
         let mut mesh_hash = ObjectHash::new();
-        let geom = polymesh_properties(o, &mut md, seq, &mut mesh_hash)?;
+        let geom = polymesh_properties(o, &mut md, seq, info.fps, &mut mesh_hash)?;
         let mesh_props = compound_group(o, &[(geom, PropertyHeader::compound(".geom", MD_POLYMESH))], &mut md)?;
         let mesh_hashes = if o.writing() { mesh_hash.finish(&[]) } else { [0; 32] };
         let mesh_data = o.data(&[&mesh_hashes])?;

@@ -28,8 +28,9 @@
 //! Read: every `PolyMesh` (and `SubD`, read as its control mesh) at any depth, one sequence
 //! each, from its `.geom` compound: `P` (float32 x3, one frame per sample), `.faceIndices`,
 //! `.faceCounts`, `uv` (face-varying or per vertex, indexed `.vals`/`.indices` or not), frame
-//! labels `.arbGeomParams/surfcap_synthetic` (uint8, one per sample, 0 original / 1 synthetic);
-//! the archive metadata `surfcap_up_axis` and `surfcap_units`; the mesh's time sampling.
+//! labels `.arbGeomParams/surfcap_synthetic` (uint8, one per sample, 0 original / 1 synthetic),
+//! `.velocities` (float32 x3 per point, units per second; kept on [`AbcMesh::velocities`] for a
+//! mesh of one topology, where vertices correspond between frames); the archive metadata `surfcap_up_axis` and `surfcap_units`; the mesh's time sampling.
 //!
 //! Choices where Alembic leaves room (each also said in the code):
 //! - Alembic's faces are clockwise (Maya's left-handed order): the reference library's users and
@@ -101,6 +102,9 @@ pub struct AbcMesh {
     pub fps: Option<f64>,
     /// From `.arbGeomParams/surfcap_synthetic` when present.
     pub labels: Option<Vec<FrameLabel>>,
+    /// From `.velocities` when present on a mesh of one topology: `[frames * vertices * 3]`,
+    /// units per second, as renderers read them for motion blur.
+    pub velocities: Option<Vec<f32>>,
 }
 
 impl AbcMesh {
@@ -1169,7 +1173,63 @@ fn read_mesh(r: &Reader, path: &str, geom: &Prop, depth: usize, notes: &mut Vec<
         Some(c) if !varying => AbcFrames::Constant { topology: c.topology, positions },
         _ => AbcFrames::Varying { frames },
     };
-    Ok(Some(AbcMesh { path: path.to_string(), name, frames, times, fps, labels }))
+    let velocities = match (find(".velocities"), &frames) {
+        (None, _) => None,
+        (Some(_), AbcFrames::Varying { .. }) => {
+            notes.push(format!("{path}: velocities ignored (the topology changes between samples)"));
+            None
+        }
+        (Some(_), AbcFrames::Constant { topology, .. }) => {
+            Some(read_velocities(&open(".velocities")?, n, topology.n_vertices(), &name, r.file_len)?)
+        }
+    };
+    Ok(Some(AbcMesh { path: path.to_string(), name, frames, times, fps, labels, velocities }))
+}
+
+/// The `.velocities` samples of a mesh of `n` frames and `vertices` points: one f32 x 3 per
+/// point per frame (a single stored sample answers for every frame), finite.
+fn read_velocities(s: &Samples, n: usize, vertices: usize, name: &str, file_len: u64) -> Result<Vec<f32>> {
+    if s.prop.pod != FLOAT32 || s.prop.extent != 3 || s.prop.kind != PropKind::Array {
+        return Err(err!(
+            DType,
+            "{}: {:?} property of {}: expected an array of float32 x3 (units per second)",
+            s.path,
+            s.prop.kind,
+            s.prop.type_name()
+        ));
+    }
+    if s.prop.samples as usize != n && s.prop.samples != 1 {
+        return Err(err!(Shape, "{}: {} samples, P has {n}: expected one per sample", s.path, s.prop.samples));
+    }
+    if (n as u64).saturating_mul(vertices as u64 * 12) > 16u64.saturating_mul(file_len).saturating_add(256 << 20) {
+        return Err(err!(
+            Shape,
+            "{}: {n} samples of {vertices} points from a file of {file_len} bytes: refused",
+            s.path
+        ));
+    }
+    let mut out = Vec::with_capacity(n * vertices * 3);
+    for k in 0..n as u32 {
+        let (b, count, _) = s.sample(k.min(s.prop.samples - 1))?;
+        if count != vertices {
+            return Err(err!(
+                Shape,
+                "{} sample {k} (frame {name}:{k}): {count} velocities: expected one per point ({vertices})",
+                s.path
+            ));
+        }
+        let v = f32s(b);
+        if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(err!(
+                NonFinite,
+                "{} sample {k} (frame {name}:{k}): point {} has the velocity {x}",
+                s.path,
+                i / 3
+            ));
+        }
+        out.extend_from_slice(&v);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -31,6 +31,8 @@ pub enum ExportFormat {
     Usda,
     /// One `.abc` file (Alembic, Ogawa): an `Xform` + `PolyMesh` per sequence (`abc`).
     Abc,
+    /// One `.scstream` file: the compact stream (quantised, predicted, deflated; `stream`).
+    Stream,
 }
 
 impl ExportFormat {
@@ -44,6 +46,7 @@ impl ExportFormat {
             ExportFormat::Npy => "export-npy",
             ExportFormat::Usda => "export-usda",
             ExportFormat::Abc => "export-abc",
+            ExportFormat::Stream => "export-stream",
         }
     }
 
@@ -56,6 +59,7 @@ impl ExportFormat {
             "npy" => ExportFormat::Npy,
             "usda" | "usd" => ExportFormat::Usda,
             "abc" | "alembic" => ExportFormat::Abc,
+            "stream" | "scstream" => ExportFormat::Stream,
             _ => return None,
         })
     }
@@ -67,7 +71,7 @@ impl std::str::FromStr for ExportFormat {
         ExportFormat::parse(s).ok_or_else(|| {
             surfcap_mesh::Error::new(
                 surfcap_mesh::ErrorKind::Unsupported,
-                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda or abc"),
+                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda, abc or stream"),
             )
         })
     }
@@ -126,7 +130,7 @@ fn write_sidecar(path: &Path, v: &serde_json::Value) -> Result<()> {
 /// only with `force`).
 pub fn plan_export(set: &mut OutputSet, format: ExportFormat, out: &Path, force: bool) -> Result<()> {
     match format {
-        ExportFormat::Glb | ExportFormat::Usda | ExportFormat::Abc => {
+        ExportFormat::Glb | ExportFormat::Usda | ExportFormat::Abc | ExportFormat::Stream => {
             set.file(out)?;
             set.side_file(&glb_sidecar_path(out), SIDECAR_KIND)?;
         }
@@ -241,6 +245,22 @@ pub fn export_textured_glb(
     Ok(vec![out.to_path_buf(), side])
 }
 
+/// Writes the subject to `out` as a compact stream (`stream.rs`) coded with `opts`, and its
+/// sidecar; returns the paths written.
+pub fn export_stream(
+    subject: &Subject,
+    out: &Path,
+    opts: &crate::stream::StreamOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<PathBuf>> {
+    progress.start("writing stream", 1);
+    write_file(out, |w| crate::stream::write_stream(w, subject, opts).map(|_| ()))?;
+    let side = glb_sidecar_path(out);
+    write_sidecar(&side, &sidecar(subject))?;
+    progress.finish();
+    Ok(vec![out.to_path_buf(), side])
+}
+
 /// Writes the subject to `out` and returns the paths written (outputs, then the sidecar).
 pub fn export(
     subject: &Subject,
@@ -274,6 +294,7 @@ pub fn export(
             progress.finish();
             Ok(vec![out.to_path_buf(), side])
         }
+        ExportFormat::Stream => export_stream(subject, out, &crate::stream::StreamOptions::default(), progress),
         ExportFormat::Obj | ExportFormat::Ply => {
             let ext = if format == ExportFormat::Obj { "obj" } else { "ply" };
             progress.start(&format!("writing {ext} frames"), subject.n_frames() as u64);

@@ -29,6 +29,13 @@
 //!   a reader of a USDA subset without composition (nested Xform/Scope/Mesh prims, time-sampled or
 //!   default points, fan-triangulated polygons, labels, UVs); `.usdc` refused with the `usdcat`
 //!   command to convert it. Read back by Pixar's usd-core in the tests.
+//! - **Velocities**: Alembic's `.velocities` and USD's `velocities` (units per second, finite
+//!   differences: `vertex_velocity`) written on every mesh of one topology and read back, so
+//!   renderers draw motion blur.
+//! - **Compact stream** (`.scstream`): positions quantised on a grid over the animation's box
+//!   (`stream_quantise`), predicted from earlier frames (`stream_predict`) and deflated
+//!   (`stream`, through `flate2`, which browsers inflate natively); decoded here and by the
+//!   viewer's `stream_decode.js` to the same bits.
 //! - **Manifests** (`surfcap.toml`, via `toml`): sequences from any of the above, PC2 or bare `.npy`
 //!   caches with a template, fps, up axis, units, tags.
 //! - **Import**: `open_any`/`import_any` return a subject or a frame set (a folder of frames whose
@@ -55,6 +62,11 @@ pub mod ply;
 pub mod shared_layout;
 pub mod usda;
 pub mod usda_read;
+// ---- stream: velocities and the compact stream ----
+pub mod stream;
+pub mod stream_predict;
+pub mod stream_quantise;
+pub mod vertex_velocity;
 
 /// `base`, or `base_1`, `base_2`, ... : the first not in `taken`, which it joins (names of
 /// sibling objects in the USD and Alembic writers).

@@ -1,7 +1,8 @@
 //! USD export as `.usda` text: one `Xform` per sequence under the
 //! subject's root `Xform`, each holding one `Mesh` of constant topology whose `points` (and
-//! `extent`) are time-sampled, one sample per frame at the subject's rate, and whose frame
-//! labels are the constant primvar `primvars:surfcap:synthetic` (0 original, 1 synthetic),
+//! `extent`) are time-sampled, one sample per frame at the subject's rate, whose
+//! `velocities` are time-sampled with the points (units per second: the finite differences of
+//! `vertex_velocity.rs`, for renderers' motion blur), and whose frame labels are the constant primvar `primvars:surfcap:synthetic` (0 original, 1 synthetic),
 //! time-sampled too. The stage's `timeCodesPerSecond` and `framesPerSecond` are the subject's
 //! fps; `metersPerUnit` comes from its units when known (their name, which USD has no field
 //! for, is `customLayerData.surfcap_units`); `upAxis` is `Y` or `Z` (USD knows only
@@ -16,6 +17,7 @@
 
 use std::io::Write;
 
+use crate::vertex_velocity::frame_velocity;
 use surfcap_mesh::subject::{FrameLabel, Subject, UpAxis};
 
 /// A valid, unique USD prim name for `name` among `taken`.
@@ -117,6 +119,20 @@ pub fn write_usda(w: &mut dyn Write, subject: &Subject) -> std::io::Result<()> {
             writeln!(w, "],")?;
         }
         writeln!(w, "            }}")?;
+        // Velocities (units per second, USD's unit for them): `vertex_velocity`'s differences.
+        let frames: Vec<&[f32]> = (0..s.n_frames()).map(|f| s.frame(f)).collect();
+        writeln!(w, "            vector3f[] velocities.timeSamples = {{")?;
+        for f in 0..s.n_frames() {
+            write!(w, "                {f}: [")?;
+            for (k, p) in frame_velocity(&frames, f, subject.fps).chunks_exact(3).enumerate() {
+                if k > 0 {
+                    write!(w, ", ")?;
+                }
+                point(w, p)?;
+            }
+            writeln!(w, "],")?;
+        }
+        writeln!(w, "            }}")?;
         writeln!(w, "            float3[] extent.timeSamples = {{")?;
         for f in 0..s.n_frames() {
             let (lo, hi) = surfcap_mesh::bounding_box(s.frame(f));
@@ -182,6 +198,8 @@ mod tests {
             "{t}"
         );
         assert!(t.contains("1: [(0, 0, 0), (2, 0, 0), (0, 1, 0.1)]"), "{t}");
+        // Two frames 1/24 s apart: both velocities are the forward difference times 24.
+        assert!(t.contains("vector3f[] velocities.timeSamples = {\n                0: [(0, 0, 0), (24, 0, 0), (0, -12, -3.6)],\n                1: [(0, 0, 0), (24, 0, 0), (0, -12, -3.6)],"), "{t}");
         assert!(t.contains("0: 0,\n                1: 1,"), "{t}");
         assert_eq!(prim_name("a", &mut vec!["a".into()]), "a_1");
     }

@@ -8,7 +8,8 @@
 //! `Xform`, `Scope`, `Mesh` or no type (any other type and every `class` is skipped with its
 //! braces, so a mesh inside it is not read); on each `Mesh`: `faceVertexCounts`,
 //! `faceVertexIndices`, `orientation`, `points` as a default value and/or `points.timeSamples`,
-//! `primvars:surfcap:synthetic.timeSamples` (frame labels, as surfcap writes them) and the UVs
+//! `primvars:surfcap:synthetic.timeSamples` (frame labels, as surfcap writes them),
+//! `velocities` / `velocities.timeSamples` (units per second, on a mesh of one topology) and the UVs
 //! `primvars:st` (+ `primvars:st:indices`, `faceVarying` or `vertex` interpolation). Every other
 //! attribute, relationship, `variantSet` and metadata block `( ... )` is skipped token by token
 //! (strings with escapes, triple-quoted strings, `#`, `//` and `/* */` comments, nested brackets).
@@ -70,6 +71,8 @@ pub struct UsdaMesh {
     /// every frame's own topology and points, in time order; `topology` and `positions` then
     /// hold the first frame only. Such a mesh imports as a frame set.
     pub varying: Option<Vec<(Topology, Vec<f32>)>>,
+    /// From `velocities` on a mesh of one topology: `[frames * vertices * 3]`, units per second.
+    pub velocities: Option<Vec<f32>>,
 }
 
 impl UsdaStage {
@@ -563,6 +566,9 @@ struct MeshAcc {
     indices_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
     points: Option<(Vec<f32>, usize)>,
     samples: Option<Vec<(f64, Vec<f32>, usize)>>,
+    /// `velocities` (default value) and `velocities.timeSamples`.
+    velocities: Option<(Vec<f32>, usize)>,
+    velocity_samples: Option<Vec<(f64, Vec<f32>, usize)>>,
     labels: Option<Vec<(f64, u32, usize)>>,
     st: Option<(Vec<f32>, usize)>,
     st_interpolation: Option<String>,
@@ -921,6 +927,15 @@ fn property(
             (Some(m), "faceVertexCounts") => m.counts = Some((lx.int_array(name)?, line)),
             (Some(m), "faceVertexIndices") => m.indices = Some((lx.int_array(name)?, line)),
             (Some(m), "points") => m.points = Some((lx.tuple_array(name, 3)?, line)),
+            (Some(m), "velocities") => m.velocities = Some((lx.tuple_array(name, 3)?, line)),
+            (Some(m), "velocities.timeSamples") => {
+                let mut v = Vec::new();
+                lx.time_samples(name, |l, time, tok| {
+                    v.push((time, l.tuple_array(name, 3)?, tok.line));
+                    Ok(())
+                })?;
+                m.velocity_samples = Some(v);
+            }
             (Some(m), "primvars:st") => m.st = Some((lx.tuple_array(name, 2)?, line)),
             (Some(m), "primvars:st:indices") => m.st_indices = Some(lx.int_array(name)?),
             (Some(m), "orientation") => m.left_handed = lx.string(name)? == "leftHanded",
@@ -1040,6 +1055,9 @@ fn finish_mesh(path: &str, line: usize, mut m: MeshAcc, start: f64, notes: &mut 
     }
     let n_points = frames[0].1.len() / 3;
     if m.counts_samples.is_some() || m.indices_samples.is_some() {
+        if m.velocities.is_some() || m.velocity_samples.is_some() {
+            notes.push(format!("velocities of <{path}> are ignored: its faces are time-sampled"));
+        }
         return varying_mesh(path, line, m, frames, notes);
     }
     for (t, p, l) in &frames {
@@ -1072,6 +1090,7 @@ fn finish_mesh(path: &str, line: usize, mut m: MeshAcc, start: f64, notes: &mut 
         notes,
     )?;
     let labels = frame_labels(path, line, m.labels, &frames)?;
+    let velocities = frame_velocities(path, m.velocities, m.velocity_samples, &frames)?;
     let times = frames.iter().map(|f| f.0).collect();
     let mut positions = Vec::new();
     for (_, p, _) in frames {
@@ -1081,7 +1100,64 @@ fn finish_mesh(path: &str, line: usize, mut m: MeshAcc, start: f64, notes: &mut 
             positions.extend_from_slice(&p);
         }
     }
-    Ok(UsdaMesh { path: path.to_string(), name: String::new(), topology, positions, times, labels, varying: None })
+    Ok(UsdaMesh {
+        path: path.to_string(),
+        name: String::new(),
+        topology,
+        positions,
+        times,
+        labels,
+        varying: None,
+        velocities,
+    })
+}
+
+/// A mesh's velocities, one per point per frame (`[frames * points * 3]`, units per second):
+/// `velocities.timeSamples` with a sample at every frame's time (USD's value at a time between
+/// samples is not what the writer meant: refused), else the default `velocities` at every
+/// frame, else none.
+fn frame_velocities(
+    path: &str,
+    default: Option<(Vec<f32>, usize)>,
+    samples: Option<Vec<(f64, Vec<f32>, usize)>>,
+    frames: &[(f64, Vec<f32>, usize)],
+) -> Result<Option<Vec<f32>>> {
+    let n_points = frames[0].1.len() / 3;
+    let check = |v: &[f32], t: f64, l: usize| -> Result<()> {
+        if v.len() / 3 != n_points {
+            return Err(err!(
+                Shape,
+                "Mesh <{path}>: velocities at time {t} has {} values: expected one per point ({n_points})",
+                v.len() / 3
+            )
+            .at_line(l));
+        }
+        if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(err!(NonFinite, "Mesh <{path}>: velocities at time {t}: point {} has {x}", i / 3).at_line(l));
+        }
+        Ok(())
+    };
+    let mut out = Vec::with_capacity(frames.len() * n_points * 3);
+    match (samples.filter(|s| !s.is_empty()), default) {
+        (Some(s), _) => {
+            for (t, _, l) in frames {
+                let (_, v, vl) = s.iter().find(|x| x.0 == *t).ok_or_else(|| {
+                    err!(Syntax, "Mesh <{path}>: velocities.timeSamples has no sample at time {t}: expected one per points sample")
+                        .at_line(*l)
+                })?;
+                check(v, *t, *vl)?;
+                out.extend_from_slice(v);
+            }
+        }
+        (None, Some((v, l))) => {
+            check(&v, frames[0].0, l)?;
+            for _ in frames {
+                out.extend_from_slice(&v);
+            }
+        }
+        (None, None) => return Ok(None),
+    }
+    Ok(Some(out))
 }
 
 /// The fan-triangulated topology of one set of faces (`counts`, `indices`) over `n_points`
@@ -1294,6 +1370,7 @@ fn varying_mesh(
             times,
             labels,
             varying: None,
+            velocities: None,
         });
     }
     Ok(UsdaMesh {
@@ -1304,6 +1381,7 @@ fn varying_mesh(
         times,
         labels,
         varying: Some(per_frame),
+        velocities: None,
     })
 }
 
@@ -1312,6 +1390,38 @@ mod tests {
     use super::*;
     use surfcap_mesh::error::{ErrorKind, Location};
     use surfcap_mesh::subject::{Sequence, Subject};
+
+    /// Velocities come back per frame from `velocities.timeSamples`, a default value answers every
+    /// frame, and a sample with the wrong count or a missing time is refused with its line.
+    #[test]
+    fn velocities_are_read_per_frame_and_checked() {
+        let stage = |v: &str| {
+            format!(
+                "#usda 1.0\n(\n    timeCodesPerSecond = 30\n)\ndef Mesh \"m\"\n{{\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 2]\n    point3f[] points.timeSamples = {{\n        0: [(0, 0, 0), (1, 0, 0), (0, 1, 0)],\n        1: [(0, 0, 1), (1, 0, 1), (0, 1, 1)],\n    }}\n{v}}}\n"
+            )
+        };
+        let read = |v: &str| parse_usda(stage(v).as_bytes());
+        let samples = "    vector3f[] velocities.timeSamples = {\n        0: [(0, 0, 30), (0, 0, 30), (0, 0, 30)],\n        1: [(0, 0, 30), (0, 0, 30), (0, 0, 31)],\n    }\n";
+        let m = &read(samples).unwrap().meshes[0];
+        let v = m.velocities.as_ref().unwrap();
+        assert_eq!(v.len(), 18);
+        assert_eq!((v[2], v[17]), (30.0, 31.0));
+        let m = &read("    vector3f[] velocities = [(1, 2, 3), (1, 2, 3), (1, 2, 3)]\n").unwrap().meshes[0];
+        assert_eq!(m.velocities.as_ref().unwrap()[15..], [1.0, 2.0, 3.0]);
+        assert!(read("").unwrap().meshes[0].velocities.is_none());
+        let e = read(
+            "    vector3f[] velocities.timeSamples = {\n        0: [(0, 0, 30)],\n        1: [(0, 0, 30)],\n    }\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("line 14") && e.contains("expected one per point (3)"), "{e}");
+        let e = read(
+            "    vector3f[] velocities.timeSamples = {\n        0: [(0, 0, 30), (0, 0, 30), (0, 0, 30)],\n    }\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("no sample at time 1"), "{e}");
+    }
 
     /// The units' name comes back from `customLayerData` with the layer's scale, escapes and
     /// all; a stage without it keeps the name `metersPerUnit` gives.

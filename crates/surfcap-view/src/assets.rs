@@ -15,6 +15,8 @@ pub const ASSETS: &[(&str, &str, &str)] = &[
         JS,
         include_str!("../web/node_modules/three/examples/jsm/controls/OrbitControls.js"),
     ),
+    // ---- stream: the compact stream's decoder ----
+    ("stream_decode.js", JS, include_str!("../web/stream_decode.js")),
 ];
 
 const JS: &str = "text/javascript; charset=utf-8";

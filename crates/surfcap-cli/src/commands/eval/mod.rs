@@ -12,6 +12,9 @@ mod pose_metric;
 mod root_motion;
 mod smg;
 mod sparse_graph;
+// ---- stream ----
+mod stream;
+// ---- end stream ----
 mod transfer;
 mod transitions;
 mod vary;
@@ -76,6 +79,12 @@ pub enum What {
     /// imported, exported as .abc and .usda, imported back and compared (positions to the bit,
     /// topology and UVs, names, labels, rate, up axis, units), with sizes and times.
     Interchange(interchange::Args),
+    // ---- stream ----
+    /// The compact stream of a subject (quantised, predicted, deflated): bytes per frame, Mbps
+    /// at 30 fps, error against the source in its unit and % of height, against glb morph
+    /// targets.
+    Stream(stream::Args),
+    // ---- end stream ----
 }
 
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
@@ -92,5 +101,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         What::Appearance(a) => appearance::run(ctx, a),
         What::Vary(a) => vary::run(ctx, a),
         What::Interchange(a) => interchange::run(ctx, a),
+        // ---- stream ----
+        What::Stream(a) => stream::run(ctx, a),
     }
 }
