@@ -15,7 +15,7 @@ use std::time::Instant;
 use rand::{Rng, SeedableRng};
 use serde_json::json;
 use surfcap_synthesis::controller::future_trajectory::FutureTrajectories;
-use surfcap_synthesis::controller::move_choice::{Ahead, LocalGoal, choose_move};
+use surfcap_synthesis::controller::move_choice::{Ahead, GaitAsked, LocalGoal, choose_move};
 use surfcap_synthesis::controller::{Controller, ControllerOptions, FrameMotion, Input};
 
 use crate::options::{AlphaOpt, CacheOpts, SeedOpt, TableOpts};
@@ -203,7 +203,7 @@ fn scan_everything(index: &FutureTrajectories, motion: &FrameMotion, frame: u32)
         motion,
         &Ahead { frames: &frames, centres: &centres },
         &goal,
-        None,
+        GaitAsked::Any,
         &Default::default(),
     );
     let secs = t0.elapsed().as_secs_f64();

@@ -179,3 +179,4 @@ fn the_same_inputs_give_the_same_frames_whatever_the_thread_count() {
     assert_eq!(a.0, b.0);
     assert_eq!(a.1, b.1);
 }
+

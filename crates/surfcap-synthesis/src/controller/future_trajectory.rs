@@ -85,7 +85,7 @@ impl FutureTrajectories {
                     if !live[e.to as usize] {
                         continue;
                     }
-                    if let Some(step) @ Step::Transition(_) = model.step(e.from, e.to) {
+                    if let Some(step @ Step::Transition(_)) = model.step(e.from, e.to) {
                         to.push(e.to);
                         realism.push((e.weight / median_weight) as f32);
                         features.extend(feature(model, motion, &horizons, u, Some((step, e.to))));

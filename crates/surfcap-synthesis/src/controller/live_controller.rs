@@ -11,7 +11,8 @@
 //! thesis Algorithm 3), so a decision waits for it.
 //!
 //! Placement: the first frame is shown with its centre at the origin of the ground plane,
-//! heading along the first ground axis; every frame after is placed as the walk model places
+//! heading along the first ground axis (a standing frame, which has no direction of travel,
+//! faces the way its clip's transitions into walking or running set off: [`walk_off_heading`]); every frame after is placed as the walk model places
 //! it (the rigid track of each transition, the wrap of a looping clip).
 
 use std::collections::VecDeque;
@@ -28,7 +29,7 @@ use surfcap_pipeline::{Pipeline, PoseDistances};
 use super::desired_trajectory::{TrajectoryGoal, desired_trajectory};
 use super::frame_motion::{FrameMotion, Gait};
 use super::future_trajectory::FutureTrajectories;
-use super::move_choice::{Ahead, LocalGoal, MatchWeights, Move, choose_move};
+use super::move_choice::{Ahead, GaitAsked, LocalGoal, MatchWeights, Move, choose_move};
 use crate::error::{Result, refuse};
 use crate::prepared::Prepared;
 use crate::words::length;
@@ -242,7 +243,10 @@ impl Controller {
         };
         let (iu, iv, _) = plane_axes(s.up_axis);
         let c = prep.model.centres[start as usize];
-        let theta = if motion.heading[start as usize].is_finite() { motion.heading[start as usize] } else { 0.0 };
+        let theta = match motion.heading[start as usize] {
+            h if h.is_finite() => h,
+            _ => walk_off_heading(&index, &motion, s, start).unwrap_or(0.0),
+        };
         let rot = PlaneMotion { theta, t: [0.0, 0.0], up: s.up_axis };
         let r = rot.apply_point(c);
         let g = PlaneMotion { theta, t: [-r[iu], -r[iv]], up: s.up_axis };
@@ -461,11 +465,19 @@ impl Controller {
         let here = self.g.apply_point(model.centres[self.node as usize]);
         let position = [here[iu], here[iv]];
         let (velocity, facing) = self.velocity_and_facing();
+        let goal_velocity = self.goal_velocity(input, position);
+        let moving = goal_velocity[0].hypot(goal_velocity[1])
+            >= super::frame_motion::IDLE_HEIGHTS_PER_SECOND * self.motion.height;
+        let gait = match input.gait {
+            Some(g) => GaitAsked::Exactly(g),
+            None if moving => GaitAsked::Moving,
+            None => GaitAsked::Any,
+        };
         let goal = TrajectoryGoal {
             position,
             velocity,
             facing,
-            goal_velocity: self.goal_velocity(input, position),
+            goal_velocity,
             goal_facing: input.facing,
             halflife: self.options.halflife,
         };
@@ -485,7 +497,7 @@ impl Controller {
             facing: desired.facing.iter().map(|f| f + self.g.theta).collect(),
         };
         let ahead = Ahead { frames: &frames, centres: &centres };
-        let choice = choose_move(&index, &self.motion, &ahead, &local, input.gait, &self.options.weights);
+        let choice = choose_move(&index, &self.motion, &ahead, &local, gait, &self.options.weights);
         let seconds = t0.elapsed().as_secs_f64();
         if !choice.cost.is_finite() {
             refuse!("the controller found no move from frame {}", self.label(self.node));
@@ -621,4 +633,24 @@ fn abilities(index: &FutureTrajectories, motion: &FrameMotion) -> Abilities {
                 || index.leaving(u as u32).any(|k| turns_from(u, index.feature(k))))
     });
     Abilities { turns, fastest: motion.fastest() }
+}
+
+/// The direction a standing frame faces, taken as the way its clip sets off: the mean of the
+/// one-second headings of the transitions from the frames of its sequence into travelling
+/// frames (in the sequence's captured coordinates), `None` when none leaves it.
+fn walk_off_heading(index: &FutureTrajectories, motion: &FrameMotion, s: &surfcap_mesh::Subject, f: u32) -> Option<f64> {
+    let index_of = s.frame_index();
+    let q = index_of.locate(f as usize)?.0;
+    let last = 4 * (index.horizons.len() - 1);
+    let (mut c, mut n) = (0.0, 0.0);
+    for u in index_of.range(q) {
+        for k in index.leaving(u as u32) {
+            if motion.gait[index.to[k] as usize] != Gait::Idle {
+                let feature = index.feature(k);
+                c += feature[last + 2] as f64;
+                n += feature[last + 3] as f64;
+            }
+        }
+    }
+    (c.hypot(n) > 1e-9).then(|| n.atan2(c))
 }

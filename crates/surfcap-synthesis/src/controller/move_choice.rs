@@ -11,7 +11,8 @@
 //!
 //! (the facing term only where both have a direction), plus `w_r` times the transition's
 //! realism (its edge weight over the median transition's; 0 for continuing the clip), plus
-//! `w_g` when the move's destination frame does not show an asked gait. The scan is linear over
+//! `w_g` when the move's destination frame does not show an asked gait (or stands while the
+//! input asks to move). The scan is linear over
 //! the moves of the next frames (the index is the graph's adjacency; see
 //! [`super::future_trajectory`]); ties go to the earlier candidate, so a decision is the same
 //! whatever the thread count.
@@ -77,14 +78,26 @@ pub struct Ahead<'a> {
     pub centres: &'a [[f64; 2]],
 }
 
+/// What the input asks of the destination frame's gait.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GaitAsked {
+    /// Nothing.
+    Any,
+    /// This gait.
+    Exactly(Gait),
+    /// Any gait but idle: the input asks to move (a standing frame would stall a walk that has
+    /// to turn first: from a stand the data sets off only the way the body faces).
+    Moving,
+}
+
 /// The best move from the frames `ahead` for the asked trajectory `goal` (which must hold
-/// samples up to `ahead.len() - 1 +` the last horizon); `gait` the asked gait, if any.
+/// samples up to `ahead.len() - 1 +` the last horizon); `gait` what the input asks of the gait.
 pub fn choose_move(
     index: &FutureTrajectories,
     motion: &FrameMotion,
     ahead: &Ahead<'_>,
     goal: &LocalGoal,
-    gait: Option<Gait>,
+    gait: GaitAsked,
     w: &MatchWeights,
 ) -> Choice {
     let inv_h2 = 1.0 / (motion.height * motion.height);
@@ -104,9 +117,13 @@ pub fn choose_move(
                 cost += w.facing * (a * a + b * b);
             }
         }
-        if let Some(g) = gait
-            && motion.gait[dest as usize] != g
-        {
+        let shown = motion.gait[dest as usize];
+        let wrong = match gait {
+            GaitAsked::Any => false,
+            GaitAsked::Exactly(g) => shown != g,
+            GaitAsked::Moving => shown == Gait::Idle,
+        };
+        if wrong {
             cost += w.gait;
         }
         cost

@@ -46,7 +46,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-play")?;
     let scripts: Vec<Script> = a.scripts.iter().filter_map(|s| Script::parse(s)).collect();
     let opts = PlayEvalOptions { scripts, offline: !a.no_offline, ..Default::default() };
-    let mut results = Vec::new();
+    let (mut results, mut failed) = (Vec::new(), Vec::new());
     for name in &a.subjects {
         let subject = match name.as_str() {
             "cmu" => cmu_play_subject(&a.data, a.vertices)?,
@@ -64,13 +64,26 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             GraphParams { table: a.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
         let pipe = a.cache.pipeline(ctx, subject)?;
         let prep = surfcap_synthesis::Prepared::new(pipe, params, None)?;
-        results.push(play_eval(&prep, &opts)?);
+        // A subject the controller cannot play at all (no frame from which a walk goes on) is
+        // reported as such; the others are still evaluated.
+        match play_eval(&prep, &opts) {
+            Ok(r) => results.push(r),
+            Err(surfcap_eval::Error::Synthesis(e)) => {
+                failed.push(serde_json::json!({ "subject": name, "why": e.to_string() }));
+            }
+            Err(e) => return Err(e.into()),
+        }
     }
     let output = a.output.as_path();
     std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
     let (report, path) =
-        super::folder::save_report(output, "play.json", &serde_json::json!({ "subjects": &results }), "written", &[])?;
-    ctx.result(&report, || print_table(&results, &path));
+        super::folder::save_report(output, "play.json", &serde_json::json!({ "subjects": &results, "not_evaluated": &failed }), "written", &[])?;
+    ctx.result(&report, || {
+        print_table(&results, &path);
+        for f in &failed {
+            println!("{}: not evaluated: {}", f["subject"].as_str().unwrap_or("?"), f["why"].as_str().unwrap_or("?"));
+        }
+    });
     ctx.commit(outs)
 }
 
