@@ -69,7 +69,8 @@ pub enum Script {
 }
 
 impl Script {
-    pub const ALL: [Script; 5] = [Script::StraightRun, Script::TurnLeft, Script::StopAndIdle, Script::ZigZag, Script::Circle];
+    pub const ALL: [Script; 5] =
+        [Script::StraightRun, Script::TurnLeft, Script::StopAndIdle, Script::ZigZag, Script::Circle];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -337,7 +338,14 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
     })
 }
 
-fn run_script(prep: &Prepared, mut c: Controller, script: Script, walk: f64, run: f64, offline: bool) -> Result<ScriptResult> {
+fn run_script(
+    prep: &Prepared,
+    mut c: Controller,
+    script: Script,
+    walk: f64,
+    run: f64,
+    offline: bool,
+) -> Result<ScriptResult> {
     let s = prep.subject();
     let (fps, up) = (s.fps, s.up_axis);
     let (iu, iv, _) = plane_axes(up);
@@ -379,9 +387,8 @@ fn run_script(prep: &Prepared, mut c: Controller, script: Script, walk: f64, run
     let commanded_speed: Vec<f64> = commands.iter().map(|(v, _)| v[0].hypot(v[1])).collect();
     let commanded_heading: Vec<f64> = commands.iter().map(|(v, _)| v[1].atan2(v[0])).collect();
     let moving = |k: usize| commanded_speed[k] > 0.0 && speed[k] >= IDLE_HEIGHTS_PER_SECOND * height;
-    let heading_error: Vec<Option<f64>> = (0..n)
-        .map(|k| moving(k).then(|| wrap_angle(heading[k] - commanded_heading[k]).abs().to_degrees()))
-        .collect();
+    let heading_error: Vec<Option<f64>> =
+        (0..n).map(|k| moving(k).then(|| wrap_angle(heading[k] - commanded_heading[k]).abs().to_degrees())).collect();
     let errors: Vec<f64> = heading_error.iter().flatten().copied().collect();
     let speed_error_mean = mean((0..n).map(|k| (speed[k] - commanded_speed[k]).abs())).unwrap_or(0.0);
     // Response latencies at every change of the commands.
@@ -398,8 +405,8 @@ fn run_script(prep: &Prepared, mut c: Controller, script: Script, walk: f64, run
             let hb = before.0[1].atan2(before.0[0]);
             let change = wrap_angle(commanded_heading[k] - hb);
             if change.abs() > 20f64.to_radians() {
-                let reached = (k..n)
-                    .find(|&j| moving(j) && wrap_angle(heading[j] - hb) * change.signum() >= 0.5 * change.abs());
+                let reached =
+                    (k..n).find(|&j| moving(j) && wrap_angle(heading[j] - hb) * change.signum() >= 0.5 * change.abs());
                 heading_latency.push(reached.map(|j| (j - k) as f64 / fps));
             }
         }
@@ -469,15 +476,11 @@ fn offline_path(prep: &Prepared, curve: &Curve, start: Option<u32>) -> std::resu
     let travel = surfcap_motion::clip_travel::subject_travel(s);
     surfcap_synthesis::travel_check::require_travel(s, &travel, "offline path following", None)
         .map_err(|e| e.to_string())?;
-    let shortest_loop = prep
-        .pipe
-        .loops()
-        .iter()
-        .map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps)
-        .min_by(f64::total_cmp);
-    let query =
-        PathQuery { curve, restrictions: &[], start, search: PathSearch::for_clips(s.fps, shortest_loop) };
-    let o = prep.follow_path(&query, &Output::in_memory(Tolerances::default()), &NoProgress).map_err(|e| e.to_string())?;
+    let shortest_loop =
+        prep.pipe.loops().iter().map(|l| s.frame_index().range(l.sequence).len() as f64 / s.fps).min_by(f64::total_cmp);
+    let query = PathQuery { curve, restrictions: &[], start, search: PathSearch::for_clips(s.fps, shortest_loop) };
+    let o =
+        prep.follow_path(&query, &Output::in_memory(Tolerances::default()), &NoProgress).map_err(|e| e.to_string())?;
     let walk = &o.report.walk.walk;
     let cost: f64 = walk
         .windows(2)
@@ -512,7 +515,8 @@ mod tests {
         assert!(v[0].abs() < 1e-12 && (v[1] + 1.0).abs() < 1e-12 && g == Gait::Walk);
         let (v, g) = Script::StopAndIdle.command(5.0, 1.0, 2.0, -1.0, 3.0);
         assert!(v == [0.0, 0.0] && g == Gait::Idle);
-        let (a, b) = (Script::ZigZag.command(1.0, 1.0, 2.0, 1.0, 3.0).0, Script::ZigZag.command(3.0, 1.0, 2.0, 1.0, 3.0).0);
+        let (a, b) =
+            (Script::ZigZag.command(1.0, 1.0, 2.0, 1.0, 3.0).0, Script::ZigZag.command(3.0, 1.0, 2.0, 1.0, 3.0).0);
         assert!((a[1] - b[1] * -1.0).abs() < 1e-12 && a[1] > 0.0);
         assert_eq!(Script::parse("zig-zag"), Some(Script::ZigZag));
         let v = velocities(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]], 1, 10.0);

@@ -19,11 +19,8 @@ use surfcap_synthesis::controller::{Controller, ControllerOptions, Gait, Input, 
 /// The mannequin (1,000 vertices) in 2 s clips at 30 fps of the given gaits.
 fn subject(gaits: &[Procedural]) -> Subject {
     let m = mannequin(&BodyShape::average(), 1000).unwrap();
-    let clips: Vec<Clip> = gaits
-        .iter()
-        .enumerate()
-        .map(|(k, &g)| Clip::procedural(&m, g, 30.0, 2.0, k as u64).unwrap())
-        .collect();
+    let clips: Vec<Clip> =
+        gaits.iter().enumerate().map(|(k, &g)| Clip::procedural(&m, g, 30.0, 2.0, k as u64).unwrap()).collect();
     mannequin_subject("walker", &m, &clips, 30.0).unwrap()
 }
 
@@ -76,11 +73,7 @@ fn goes_where_asked_turns_stops_and_never_enters_a_dead_end() {
     let walk = c.motion().typical_speed(Gait::Walk).unwrap();
     assert!(walk > 0.5 && walk < 2.5, "walking speed {walk} m/s");
     // Along +x, then along +z (a quarter turn), then stop: 4 s each.
-    let script = [
-        (4.0, Input::velocity([walk, 0.0])),
-        (4.0, Input::velocity([0.0, walk])),
-        (4.0, Input::stop()),
-    ];
+    let script = [(4.0, Input::velocity([walk, 0.0])), (4.0, Input::velocity([0.0, walk])), (4.0, Input::stop())];
     let (frames, decisions) = play(&mut c, &script);
     assert_eq!(frames.len(), c.shown());
     assert!((frames.len() as i64 - 361).abs() <= 1, "{} frames in 12 s at 30 fps", frames.len());
@@ -179,4 +172,3 @@ fn the_same_inputs_give_the_same_frames_whatever_the_thread_count() {
     assert_eq!(a.0, b.0);
     assert_eq!(a.1, b.1);
 }
-

@@ -230,9 +230,10 @@ impl Controller {
                 s.frame_index().label(f as usize)
             ),
             Some(f) => refuse!("start frame {f}: the subject has frames 0 to {}", n - 1),
-            None => match (0..n as u32).filter(|&u| index.live[u as usize]).min_by(|&a, &b| {
-                motion.speed[a as usize].total_cmp(&motion.speed[b as usize]).then(a.cmp(&b))
-            }) {
+            None => match (0..n as u32)
+                .filter(|&u| index.live[u as usize])
+                .min_by(|&a, &b| motion.speed[a as usize].total_cmp(&motion.speed[b as usize]).then(a.cmp(&b)))
+            {
                 Some(u) => u,
                 None => refuse!(
                     "{}: no frame from which a walk can go on (no clip loops and no transition leads back): \
@@ -364,7 +365,14 @@ impl Controller {
 
     /// Queues the frames edge `u` -> `v` (played by `step`) adds after `u` placed by `g`, and
     /// returns v's placement.
-    fn queue_edge(&mut self, step: EdgeStep<'_>, u: u32, v: u32, g: &PlaneMotion, committed: bool) -> Result<PlaneMotion> {
+    fn queue_edge(
+        &mut self,
+        step: EdgeStep<'_>,
+        u: u32,
+        v: u32,
+        g: &PlaneMotion,
+        committed: bool,
+    ) -> Result<PlaneMotion> {
         let model = self.model.clone();
         match step {
             EdgeStep::Original | EdgeStep::Wrap(_) => {
@@ -578,7 +586,11 @@ impl Controller {
         }
         if asked == 0.0 && !m.has(Gait::Idle) {
             let slowest = m.speed.iter().copied().fold(f64::INFINITY, f64::min);
-            notes.push(format!("cannot stop: {} has no idle frame (the slowest moves {})", s.name, speed_text(slowest)));
+            notes.push(format!(
+                "cannot stop: {} has no idle frame (the slowest moves {})",
+                s.name,
+                speed_text(slowest)
+            ));
         }
         if !self.abilities.turns {
             let (_, facing) = self.velocity_and_facing();
@@ -638,7 +650,12 @@ fn abilities(index: &FutureTrajectories, motion: &FrameMotion) -> Abilities {
 /// The direction a standing frame faces, taken as the way its clip sets off: the mean of the
 /// one-second headings of the transitions from the frames of its sequence into travelling
 /// frames (in the sequence's captured coordinates), `None` when none leaves it.
-fn walk_off_heading(index: &FutureTrajectories, motion: &FrameMotion, s: &surfcap_mesh::Subject, f: u32) -> Option<f64> {
+fn walk_off_heading(
+    index: &FutureTrajectories,
+    motion: &FrameMotion,
+    s: &surfcap_mesh::Subject,
+    f: u32,
+) -> Option<f64> {
     let index_of = s.frame_index();
     let q = index_of.locate(f as usize)?.0;
     let last = 4 * (index.horizons.len() - 1);

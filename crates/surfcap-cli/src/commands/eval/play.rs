@@ -76,8 +76,13 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     }
     let output = a.output.as_path();
     std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
-    let (report, path) =
-        super::folder::save_report(output, "play.json", &serde_json::json!({ "subjects": &results, "not_evaluated": &failed }), "written", &[])?;
+    let (report, path) = super::folder::save_report(
+        output,
+        "play.json",
+        &serde_json::json!({ "subjects": &results, "not_evaluated": &failed }),
+        "written",
+        &[],
+    )?;
     ctx.result(&report, || {
         print_table(&results, &path);
         for f in &failed {
