@@ -22,6 +22,7 @@ mod interpolate;
 mod learn;
 mod load;
 mod measure;
+mod play;
 mod scale;
 mod smg;
 mod synth;
@@ -92,6 +93,10 @@ enum Command {
     Export(export::Args),
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate(interpolate::Args),
+    /// The interactive controller (motion matching on the essential graph): decision latency
+    /// on --frames nodes, single-threaded (target: p99 under 2 ms on 2,000 frames), the 60 Hz
+    /// step's latency with and without meshes, and the moves' precomputation.
+    Play(play::Args),
     /// `surfcap tiles`, for `scale`'s child processes (each tile job's peak memory its own).
     #[command(subcommand, hide = true)]
     Tiles(surfcap_cli::commands::tiles::Cmd),
@@ -120,6 +125,7 @@ impl surfcap_cli::Front for Cli {
             Command::Cache(a) => cache::run(ctx, a),
             Command::Export(a) => export::run(ctx, a),
             Command::Interpolate(a) => interpolate::run(ctx, a),
+            Command::Play(a) => play::run(ctx, a),
             Command::Tiles(c) => surfcap_cli::commands::tiles::run(ctx, c),
         }
     }

@@ -36,30 +36,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     crate::check_size(ctx, what, f * v * 12.0 + f * f * 8.0 * 4.0, f * f * 8.0 * 3.0, "--frames or --vertices")?;
     let (alpha, seed) = (alpha.value(), seed.seed);
     use rand::{Rng, SeedableRng};
-    use surfcap_builtin::locomotion::Gait;
-    use surfcap_builtin::mannequin::{BodyShape, mannequin};
-    use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
     use surfcap_motion::path_following::{Curve, PathSearch, follow_path};
     use surfcap_motion::timed_walk::TimedGraph;
     anyhow::ensure!(frames >= 200, "--frames {frames}: expected at least 200");
     let t0 = Instant::now();
-    let m = mannequin(&BodyShape::average(), vertices)?;
-    let gaits = [Gait::Walk, Gait::Jog, Gait::TurnLeft, Gait::TurnRight, Gait::Jump, Gait::Idle];
-    let mut clips = Vec::new();
-    let mut total = 0;
-    for k in 0.. {
-        if total >= frames {
-            break;
-        }
-        let g = gaits[k % gaits.len()];
-        let mut c = Clip::procedural(&m, g, 30.0, g.duration(), seed + k as u64)?;
-        c.name = format!("{}_{k}", c.name);
-        // The last clip is cut so the graph has exactly --frames nodes.
-        c.poses.truncate(frames - total);
-        total += c.poses.len();
-        clips.push(c);
-    }
-    let s = mannequin_subject("bench", &m, &clips, 30.0)?;
+    let s = gaits_subject(frames, vertices, seed)?;
     let build_secs = t0.elapsed().as_secs_f64();
     let tmp = tempfile::TempDir::new()?;
     let params = surfcap_pipeline::GraphParams {
@@ -149,4 +130,30 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     });
     Ok(())
+}
+
+/// The bench subject: the procedural mannequin of about `vertices` vertices walking, jogging,
+/// turning left and right, jumping and idling (clips of each gait's default duration at 30 fps,
+/// seeds `seed`, `seed + 1`, ...) until it has exactly `frames` frames (the last clip cut).
+pub(crate) fn gaits_subject(frames: usize, vertices: usize, seed: u64) -> anyhow::Result<surfcap_mesh::Subject> {
+    use surfcap_builtin::locomotion::Gait;
+    use surfcap_builtin::mannequin::{BodyShape, mannequin};
+    use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
+    let m = mannequin(&BodyShape::average(), vertices)?;
+    let gaits = [Gait::Walk, Gait::Jog, Gait::TurnLeft, Gait::TurnRight, Gait::Jump, Gait::Idle];
+    let mut clips = Vec::new();
+    let mut total = 0;
+    for k in 0.. {
+        if total >= frames {
+            break;
+        }
+        let g = gaits[k % gaits.len()];
+        let mut c = Clip::procedural(&m, g, 30.0, g.duration(), seed + k as u64)?;
+        c.name = format!("{}_{k}", c.name);
+        // The last clip is cut so the graph has exactly `frames` nodes.
+        c.poses.truncate(frames - total);
+        total += c.poses.len();
+        clips.push(c);
+    }
+    Ok(mannequin_subject("bench", &m, &clips, 30.0)?)
 }

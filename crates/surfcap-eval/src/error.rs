@@ -18,6 +18,9 @@ pub enum Error {
     /// Motion variation (thesis chapter 6): preparation, training, sampling.
     #[error(transparent)]
     Variation(#[from] surfcap_variation::Error),
+    /// The interactive controller and offline synthesis (`surfcap eval play`).
+    #[error(transparent)]
+    Synthesis(#[from] surfcap_synthesis::Error),
     /// A learning step failed; `context` says which (e.g. "fitting the GPDM").
     #[error("{context}")]
     Learn {

@@ -39,7 +39,10 @@
 //! - [`variation_eval()`]: motion variation (6.5-6.8): Fig. 6.4 per part and stitched, on training
 //!   and held-out frames; Fig. 6.7 guided vs direct latent interpolation; seeded variants against
 //!   five criteria (distance to the source, nearest to its source, edge distortion, foot sliding, no
-//!   two alike).
+//!   two alike);
+//! - [`play_eval`]: the interactive controller on scripted inputs (heading and speed errors,
+//!   response latency, foot sliding, transitions) against offline path following on the same
+//!   trajectories.
 //!
 //! Randomness comes from ChaCha8 streams, so a seed gives the same permutations on every platform
 //! and thread count. One [`Error`] (thiserror); option errors are worded as the command line's
@@ -53,6 +56,7 @@ pub mod graph_comparison_eval;
 pub mod interchange_eval;
 pub mod interpolation_eval;
 pub mod mantel_test;
+pub mod play_eval;
 pub mod pose_metric_eval;
 pub mod published_values;
 pub mod reproduce_report;

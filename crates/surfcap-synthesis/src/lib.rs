@@ -35,6 +35,8 @@
 //!   one optimal transition between two frames (2.5.4, Algorithm 2), as `surfcap interpolate`
 //!   and `surfcap transition` make them.
 //! - [`constraint`]: soft constraints and how closely they were met.
+//! - [`controller`]: a character steered live by a stream of inputs (motion matching on the
+//!   essential graph): [`controller::Controller::step`] gives the frames to show.
 //! - [`request_size`] and [`travel_check`]: requests refused before any work (too many frames,
 //!   too much memory, a glb over 4 GiB; a path or distance asked of clips that stay in place).
 //! - [`variation_training`] and [`variant_samples`]: a variation model learnt from a subject
@@ -46,6 +48,7 @@
 
 pub mod animation_output;
 pub mod constraint;
+pub mod controller;
 pub mod error;
 pub mod frame_appearance;
 pub mod interpolation_run;

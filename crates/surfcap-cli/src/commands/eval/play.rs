@@ -1,0 +1,171 @@
+//! `surfcap eval play`: the interactive controller on scripted inputs against offline path
+//! following on the same trajectories (`surfcap_eval::play_eval` computes it; this command
+//! builds the subjects, writes play.json and prints the table).
+
+use std::path::PathBuf;
+
+use surfcap_eval::play_eval::{
+    PlayEval, PlayEvalOptions, Script, cmu_play_subject, knight_play_subject, play_eval, vlasic_play_subject,
+};
+use surfcap_pipeline::{GraphKind, GraphParams};
+
+use crate::options::{AlphaOpt, CacheOpts, TableOpts};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[arg(long, value_name = "DIR", help = crate::options::data_help("CMU clips, the KayKit knight and the Vlasic capture"),
+          default_value_os_t = crate::options::default_data_dir())]
+    pub data: PathBuf,
+    /// Subjects: `cmu` (the mannequin moved by CMU walks, turns, jog, stop and a stand),
+    /// `knight` (the KayKit knight's idle, walk and run with root motion from contacts),
+    /// `vlasic` (the crane capture).
+    #[arg(long, value_delimiter = ',', default_value = "cmu,knight,vlasic", value_parser = ["cmu", "knight", "vlasic"])]
+    pub subjects: Vec<String>,
+    /// Scripts: straight-run, turn-left, stop-and-idle, zig-zag, circle.
+    #[arg(long, value_delimiter = ',', default_value = "straight-run,turn-left,stop-and-idle,zig-zag,circle",
+          value_parser = ["straight-run", "turn-left", "stop-and-idle", "zig-zag", "circle"])]
+    pub scripts: Vec<String>,
+    /// Vertices of the mannequin (1000 to 20000).
+    #[arg(long, default_value_t = 1000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
+    pub vertices: usize,
+    /// Do not follow the trajectories offline.
+    #[arg(long)]
+    pub no_offline: bool,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+    /// Folder for the report (play.json).
+    #[arg(short, long, default_value = "play-eval")]
+    pub output: PathBuf,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let outs = super::folder::claim(ctx, &a.output, &[&a.data], "eval-play")?;
+    let scripts: Vec<Script> = a.scripts.iter().filter_map(|s| Script::parse(s)).collect();
+    let opts = PlayEvalOptions { scripts, offline: !a.no_offline, ..Default::default() };
+    let (mut results, mut failed) = (Vec::new(), Vec::new());
+    for name in &a.subjects {
+        let subject = match name.as_str() {
+            "cmu" => cmu_play_subject(&a.data, a.vertices)?,
+            "knight" => knight_play_subject(&a.data)?,
+            _ => vlasic_play_subject(&a.data)?,
+        };
+        ctx.note(&format!(
+            "{name}: {} ({} frames of {} vertices at {} fps)",
+            subject.name,
+            subject.n_frames(),
+            subject.topology().n_vertices(),
+            subject.fps
+        ));
+        let params =
+            GraphParams { table: a.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
+        let pipe = a.cache.pipeline(ctx, subject)?;
+        let prep = surfcap_synthesis::Prepared::new(pipe, params, None)?;
+        // A subject the controller cannot play at all (no frame from which a walk goes on) is
+        // reported as such; the others are still evaluated.
+        match play_eval(&prep, &opts) {
+            Ok(r) => results.push(r),
+            Err(surfcap_eval::Error::Synthesis(e)) => {
+                failed.push(serde_json::json!({ "subject": name, "why": e.to_string() }));
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    let output = a.output.as_path();
+    std::fs::create_dir_all(output).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
+    let (report, path) = super::folder::save_report(
+        output,
+        "play.json",
+        &serde_json::json!({ "subjects": &results, "not_evaluated": &failed }),
+        "written",
+        &[],
+    )?;
+    ctx.result(&report, || {
+        print_table(&results, &path);
+        for f in &failed {
+            println!("{}: not evaluated: {}", f["subject"].as_str().unwrap_or("?"), f["why"].as_str().unwrap_or("?"));
+        }
+    });
+    ctx.commit(outs)
+}
+
+fn opt(x: Option<f64>, decimals: usize) -> String {
+    x.map_or_else(|| "-".into(), |v| format!("{v:.decimals$}"))
+}
+
+/// Latencies as `0.37` or `0.37/0.40/-` (one per change; `-` never reached), `-` when none.
+fn latencies(v: &[Option<f64>]) -> String {
+    if v.is_empty() { "-".into() } else { v.iter().map(|x| opt(*x, 2)).collect::<Vec<_>>().join("/") }
+}
+
+fn print_table(results: &[PlayEval], path: &std::path::Path) {
+    for r in results {
+        let u = &r.unit;
+        println!(
+            "{}: {} frames x {} vertices at {} fps, height {:.2} {u}; walk {} {u}/s, run {} {u}/s; {} moves, precomputed in {:.2} s \
+             (errors and sliding in {u} and {u}/s)",
+            r.subject,
+            r.frames,
+            r.vertices,
+            r.fps,
+            r.height,
+            opt(r.walk_speed, 2),
+            opt(r.run_speed, 2),
+            r.moves,
+            r.precompute_seconds
+        );
+        println!(
+            "  {:<14} {:>8} {:>9} {:>11} {:>13} {:>8} {:>12} {:>9} | {:>9} {:>12} {:>8}",
+            "script",
+            "head err",
+            "speed err",
+            "head lat s",
+            "speed lat s",
+            "sliding",
+            "trans (cost)",
+            "path err",
+            "offline",
+            "trans (cost)",
+            "sliding"
+        );
+        for s in &r.scripts {
+            let (off_err, off_trans, off_slide) = match &s.offline {
+                Some(o) => (
+                    format!("{:.3}", o.mean_path_error),
+                    format!("{} ({:.2})", o.transitions, o.transition_cost),
+                    opt(o.foot_sliding, 3),
+                ),
+                None => ("-".into(), "-".into(), "-".into()),
+            };
+            println!(
+                "  {:<14} {:>6} d {:>9.3} {:>11} {:>13} {:>8} {:>12} {:>9.3} | {:>9} {:>12} {:>8}",
+                s.script.name(),
+                opt(s.heading_error_mean, 1),
+                s.speed_error_mean,
+                latencies(&s.heading_latency),
+                latencies(&s.speed_latency),
+                opt(s.foot_sliding, 3),
+                format!("{} ({:.2})", s.transitions, s.transition_cost),
+                s.mean_path_error,
+                off_err,
+                off_trans,
+                off_slide
+            );
+            for n in &s.cannot_follow {
+                println!("      cannot follow: {n}");
+            }
+            if let Some(why) = &s.offline_refused {
+                println!("      offline walk not made: {why}");
+            }
+        }
+    }
+    println!(
+        "head err: mean heading error, degrees; speed err: mean; lat: seconds to half of each commanded change (- never); \
+         sliding: foot sliding; path err: mean distance to the commanded trajectory at the same arc length; offline: \
+         path following on the same trajectory"
+    );
+    println!("wrote {}", path.display());
+}

@@ -1,0 +1,174 @@
+//! The interactive controller on the procedural mannequin (walk, jog, turns, idle): it goes
+//! where it is asked, turns, stops, decides at least every 0.1 s while no transition plays,
+//! never shows a frame the walk cannot go on from, plays transitions with the Blend offline
+//! synthesis uses, says what the data cannot follow, and decides the same whatever the thread
+//! count.
+
+use std::sync::Arc;
+
+use surfcap_builtin::locomotion::Gait as Procedural;
+use surfcap_builtin::mannequin::{BodyShape, mannequin};
+use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
+use surfcap_mesh::{NoProgress, Subject};
+use surfcap_motion::edge_weights::Alpha;
+use surfcap_motion::transition_table::TableParams;
+use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
+use surfcap_synthesis::Prepared;
+use surfcap_synthesis::controller::{Controller, ControllerOptions, Gait, Input, Move, ShownFrame};
+
+/// The mannequin (1,000 vertices) in 2 s clips at 30 fps of the given gaits.
+fn subject(gaits: &[Procedural]) -> Subject {
+    let m = mannequin(&BodyShape::average(), 1000).unwrap();
+    let clips: Vec<Clip> =
+        gaits.iter().enumerate().map(|(k, &g)| Clip::procedural(&m, g, 30.0, 2.0, k as u64).unwrap()).collect();
+    mannequin_subject("walker", &m, &clips, 30.0).unwrap()
+}
+
+fn prepared(s: Subject) -> Prepared {
+    let (l_min, l_max) = surfcap_motion::segment_bounds(s.fps);
+    let params = GraphParams {
+        table: TableParams { l_min, l_max, slope: Some(3) },
+        kind: GraphKind::Essential,
+        alpha: Alpha::new(0.05).unwrap(),
+    };
+    let pipe = Arc::new(Pipeline::new(s, CacheStore::memory_only(), Box::new(NoProgress)));
+    Prepared::new(pipe, params, None).unwrap()
+}
+
+fn all_gaits() -> Prepared {
+    prepared(subject(&[
+        Procedural::Walk,
+        Procedural::Jog,
+        Procedural::TurnLeft,
+        Procedural::TurnRight,
+        Procedural::Idle,
+    ]))
+}
+
+/// Plays `script` (seconds, input) at 60 Hz; returns every frame shown and every decision.
+fn play(
+    c: &mut Controller,
+    script: &[(f64, Input)],
+) -> (Vec<ShownFrame>, Vec<surfcap_synthesis::controller::Decision>) {
+    let (mut frames, mut decisions) = (Vec::new(), Vec::new());
+    for (seconds, input) in script {
+        for _ in 0..(seconds * 60.0).round() as usize {
+            let out = c.step(input, 1.0 / 60.0).unwrap();
+            frames.extend(out.frames);
+            decisions.extend(out.decisions);
+        }
+    }
+    (frames, decisions)
+}
+
+/// Ground displacement (x, z) between output frames `a` and `b`.
+fn moved(frames: &[ShownFrame], a: usize, b: usize) -> [f64; 2] {
+    [frames[b].centre[0] - frames[a].centre[0], frames[b].centre[2] - frames[a].centre[2]]
+}
+
+#[test]
+fn goes_where_asked_turns_stops_and_never_enters_a_dead_end() {
+    let prep = all_gaits();
+    let mut c = Controller::new(&prep, ControllerOptions::default()).unwrap();
+    let walk = c.motion().typical_speed(Gait::Walk).unwrap();
+    assert!(walk > 0.5 && walk < 2.5, "walking speed {walk} m/s");
+    // Along +x, then along +z (a quarter turn), then stop: 4 s each.
+    let script = [(4.0, Input::velocity([walk, 0.0])), (4.0, Input::velocity([0.0, walk])), (4.0, Input::stop())];
+    let (frames, decisions) = play(&mut c, &script);
+    assert_eq!(frames.len(), c.shown());
+    assert!((frames.len() as i64 - 361).abs() <= 1, "{} frames in 12 s at 30 fps", frames.len());
+    // Each phase's last 2 s (frames 60-120, 180-240, 300-360).
+    let x = moved(&frames, 60, 120);
+    assert!(x[0] > 0.5 * walk * 2.0 && x[1].abs() < 0.5 * x[0], "walking along +x moved {x:?}");
+    let z = moved(&frames, 180, 240);
+    assert!(z[1] > 0.5 * walk * 2.0 && z[0].abs() < 0.5 * z[1], "walking along +z moved {z:?}");
+    let stop = moved(&frames, 300, 360);
+    assert!(stop[0].hypot(stop[1]) < 0.2 * walk * 2.0, "standing moved {stop:?}");
+    // Every frame shown is one the walk can go on from.
+    let live = &c.index().live;
+    assert!(frames.iter().filter_map(|f| f.frame).all(|f| live[f as usize]));
+    // Decisions at least every 0.1 s (3 frames at 30 fps), except while a transition plays.
+    for w in decisions.windows(2) {
+        let gap = w[1].time - w[0].time;
+        match w[0].chosen {
+            Move::Continue => assert!(gap <= 0.1 + 1e-9, "{gap} s after a decision at {}", w[0].time),
+            Move::Transition { after, from, to, .. } => {
+                let t = prep.model.walk_duration(&[from, to]).unwrap() + after;
+                assert!(gap <= (t as f64 + 3.0) / 30.0 + 1e-9, "{gap} s after a transition of {t} frames");
+            }
+        }
+    }
+    assert!(decisions.iter().any(|d| matches!(d.chosen, Move::Transition { .. })), "no transition taken");
+    assert!(decisions.iter().all(|d| d.candidates >= 1 && d.cost.is_finite()));
+    let (n, cost) = c.transitions();
+    assert!(n >= 1 && cost > 0.0);
+}
+
+#[test]
+fn meshes_are_the_blended_walk_and_their_centres_the_predicted_ones() {
+    let prep = all_gaits();
+    let mut c = Controller::new(&prep, ControllerOptions { meshes: true, ..Default::default() }).unwrap();
+    let walk = c.motion().typical_speed(Gait::Walk).unwrap();
+    let script = [(2.0, Input::velocity([walk, 0.0])), (3.0, Input::velocity([-walk, 0.0]))];
+    let (frames, _) = play(&mut c, &script);
+    let nv = prep.subject().topology().n_vertices();
+    let mut blended = 0;
+    for (k, f) in frames.iter().enumerate() {
+        let p = f.positions.as_ref().expect("meshes asked");
+        assert_eq!(p.len(), 3 * nv);
+        let centre = surfcap_motion::blend::centre(p);
+        let e = (0..3).map(|a| (centre[a] - f.centre[a]).abs()).fold(0.0, f64::max);
+        assert!(e < 1e-3, "frame {k}: centre {centre:?}, predicted {:?}", f.centre);
+        let mix = f.mix.expect("meshes give every frame's mix");
+        if f.frame.is_none() {
+            blended += 1;
+            assert!(mix.from != mix.to && mix.weight > 0.0 && mix.weight < 1.0, "{mix:?}");
+        }
+    }
+    assert!(blended > 0, "turning back blends a transition");
+}
+
+#[test]
+fn inputs_the_data_cannot_follow_are_named() {
+    let prep = prepared(subject(&[Procedural::Walk]));
+    let mut c = Controller::new(&prep, ControllerOptions::default()).unwrap();
+    let run = c.step(&Input::velocity([1.0, 0.0]).with_gait(Gait::Run), 0.1).unwrap();
+    assert!(run.cannot_follow.iter().any(|n| n.starts_with("no run clip")), "{:?}", run.cannot_follow);
+    // The same input again says nothing new.
+    assert!(c.step(&Input::velocity([1.0, 0.0]).with_gait(Gait::Run), 0.1).unwrap().cannot_follow.is_empty());
+    let fast = c.step(&Input::velocity([20.0, 0.0]), 0.1).unwrap();
+    assert!(
+        fast.cannot_follow.iter().any(|n| n.starts_with("asked 20.00 m/s") && n.contains("fastest")),
+        "{:?}",
+        fast.cannot_follow
+    );
+    let stop = c.step(&Input::stop(), 0.1).unwrap();
+    assert!(stop.cannot_follow.iter().any(|n| n.starts_with("cannot stop")), "{:?}", stop.cannot_follow);
+    let bad = c.step(&Input::velocity([f64::NAN, 0.0]), 0.1).unwrap_err().to_string();
+    assert!(bad.contains("expected finite numbers"), "{bad}");
+    assert!(c.step(&Input::stop(), -1.0).unwrap_err().to_string().contains("non-negative"));
+    let opts = ControllerOptions { start: Some(10_000), ..Default::default() };
+    let e = Controller::new(&prep, opts).err().expect("start past the frames").to_string();
+    assert!(e.contains("start frame 10000"), "{e}");
+}
+
+#[test]
+fn the_same_inputs_give_the_same_frames_whatever_the_thread_count() {
+    let prep = all_gaits();
+    let script = [
+        (2.0, Input::velocity([1.0, 0.0])),
+        (2.0, Input::target([0.0, 3.0])),
+        (1.0, Input::velocity([0.0, -2.5]).with_gait(Gait::Run)),
+    ];
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut c = Controller::new(&prep, ControllerOptions::default()).unwrap();
+            let (frames, decisions) = play(&mut c, &script);
+            (frames, decisions.iter().map(|d| (d.frame, d.chosen)).collect::<Vec<_>>())
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.0, b.0);
+    assert_eq!(a.1, b.1);
+}
