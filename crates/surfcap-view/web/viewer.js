@@ -506,3 +506,98 @@ load().then(() => {
   $('error').textContent = `could not load: ${e.message}`;
   console.error(e);
 });
+
+// ---- render contract (minimal; the viewer part's replaces it) ----
+// What `surfcap render` (and other scripts) rely on: `?ui=0` shows the bare scene (no panel,
+// legend or timeline); `?view=<preset>` and `?frame=<i>` are applied once every item is loaded;
+// window.surfcapViewer gains nFrames, fps, setFrame(i) (pause, show frame i, render it now),
+// setView('top'|'front'|'side'|'three-quarter'|'follow'), scene, camera, renderer, controls,
+// groundY, unitSymbol and reload(); `ready` turns true, and the window gets a 'surfcap-ready'
+// event, only after the URL's view and frame are applied.
+{
+  const params = new URLSearchParams(location.search);
+  if (params.get('ui') === '0') {
+    for (const id of ['panel', 'bar']) $(id).style.display = 'none';
+    $('view').style.inset = '0';
+    resize();
+  }
+  const api = window.surfcapViewer;
+  // Directions the camera looks from, towards the scene's centre (+Y up; front looks along -Z).
+  const presets = { top: [0, 1, 1e-3], front: [0, 0.2, 1], side: [1, 0.2, 0], 'three-quarter': [1, 0.6, 1], follow: [1, 0.45, 1] };
+  let follow = null;  // the follow camera's offset from the first item's centre
+  // The centre of the first item's mesh as drawn now, in the scene's coordinates.
+  const itemCentre = () => {
+    const it = state.items[0];
+    it.geometry.computeBoundingBox();
+    it.mesh.updateMatrixWorld(true);
+    return it.geometry.boundingBox.clone().applyMatrix4(it.mesh.matrixWorld);
+  };
+  // Puts the camera on `dir` from `box`'s centre, far enough to see a sphere around the box.
+  function lookFrom(dir, box) {
+    const v = $('view'), c = box.getCenter(new THREE.Vector3());
+    const radius = box.getSize(new THREE.Vector3()).length() / 2 || 1e-3;
+    camera.clearViewOffset();
+    camera.aspect = v.clientWidth / Math.max(1, v.clientHeight);
+    camera.fov = 40;
+    const half = THREE.MathUtils.degToRad(20), across = Math.atan(Math.tan(half) * camera.aspect);
+    const d = radius / Math.sin(Math.min(half, across));
+    camera.position.copy(c).addScaledVector(new THREE.Vector3(...dir).normalize(), d);
+    camera.up.set(0, 1, 0);
+    camera.near = Math.max(radius / 1000, (d - radius) / 10);
+    camera.far = d + 100 * radius;
+    camera.lookAt(c);
+    camera.updateProjectionMatrix();
+    controls.target.copy(c);
+    controls.update();
+  }
+  function setView(preset) {
+    if (!presets[preset]) throw new Error(`unknown view ${preset}: expected ${Object.keys(presets).join(', ')}`);
+    if (preset === 'follow') {
+      const box = itemCentre();
+      lookFrom(presets.follow, box.expandByScalar(box.getSize(new THREE.Vector3()).length() * 0.3));
+      follow = camera.position.clone().sub(controls.target);
+    } else {
+      follow = null;
+      lookFrom(presets[preset], sceneBox());
+    }
+    renderer.render(scene, camera);
+  }
+  function setFrame(i) {
+    seek(Math.max(0, Math.min(state.frames - 1, Math.round(i))));
+    if (follow) {
+      const c = itemCentre().getCenter(new THREE.Vector3());
+      controls.target.copy(c);
+      camera.position.copy(c).add(follow);
+      camera.lookAt(c);
+    }
+    controls.update();
+    renderer.render(scene, camera);
+  }
+  function reload() {
+    for (const it of state.items) scene.remove(it.placed);
+    state.items = [];
+    $('items').replaceChildren();
+    api.ready = false;
+    return load().then(() => { showFrame(0); api.ready = true; });
+  }
+  let ready = false;
+  Object.defineProperty(api, 'ready', {
+    get: () => ready,
+    // The page's loader sets it once the items are in: apply the URL's view and frame first.
+    set(on) {
+      if (on && !ready) {
+        if (params.get('view')) setView(params.get('view'));
+        if (params.get('frame') !== null) setFrame(Number(params.get('frame')));
+      }
+      ready = !!on;
+      if (ready) window.dispatchEvent(new Event('surfcap-ready'));
+    },
+  });
+  Object.defineProperties(api, {
+    nFrames: { get: () => state.frames },
+    fps: { get: () => state.fps },
+    groundY: { get: () => sceneBox().min.y },
+    unitSymbol: { get: () => (state.items[0] ? state.items[0].meta.units : null) },
+  });
+  Object.assign(api, { setFrame, setView, reload, scene, camera, renderer, controls });
+}

@@ -12,6 +12,7 @@ pub mod info;
 pub mod interpolate;
 pub mod parts;
 pub mod remesh_frames;
+pub mod render;
 pub mod report;
 pub mod reproduce;
 pub mod smg;

@@ -118,7 +118,9 @@ fn open_items(
     Ok(items.0)
 }
 
-pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+/// The items of what `a` names and the report folder among them, if any: what `surfcap view`
+/// serves and `surfcap render` renders.
+pub fn load(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<(Vec<ViewItem>, Option<PathBuf>)> {
     let mut items = Vec::new();
     let mut report = None;
     let mut names = Vec::new();
@@ -129,11 +131,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let glbs = crate::files::files_under(p, &["glb"])?;
             anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
             for g in glbs {
-                items.extend(open_items(ctx, &g, &a, Some(&g), &mut names)?);
+                items.extend(open_items(ctx, &g, a, Some(&g), &mut names)?);
             }
             report = Some(p.clone());
         } else {
-            items.extend(open_items(ctx, p, &a, is_output(p).then_some(p.as_path()), &mut names)?);
+            items.extend(open_items(ctx, p, a, is_output(p).then_some(p.as_path()), &mut names)?);
         }
     }
     // Every name asked for must exist: a misspelt one is named with the sequences there are,
@@ -148,6 +150,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         anyhow::bail!("--sequences: no sequence named {missing:?} in what was given; it has {}", known.join(", "));
     }
     anyhow::ensure!(!items.is_empty(), "view: nothing to play in what was given");
+    Ok((items, report))
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let (items, report) = load(ctx, &a)?;
     let n = items.len();
     let json = ctx.json;
     serve(items, ServeOptions { port: a.port.port, report }, |addr| {
