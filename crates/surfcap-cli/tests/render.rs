@@ -11,7 +11,10 @@ use surfcap_testkit::{p, stderr, surfcap};
 /// with `channels` bytes a pixel.
 fn changed_pixels(a: &[u8], b: &[u8], channels: usize) -> usize {
     assert_eq!(a.len(), b.len());
-    a.chunks_exact(channels).zip(b.chunks_exact(channels)).filter(|(x, y)| (0..3).any(|c| x[c].abs_diff(y[c]) > 30)).count()
+    a.chunks_exact(channels)
+        .zip(b.chunks_exact(channels))
+        .filter(|(x, y)| (0..3).any(|c| x[c].abs_diff(y[c]) > 30))
+        .count()
 }
 
 /// Pixels that are not the page's background (#f4f4f2) nor near it: the drawn scene.
@@ -137,7 +140,13 @@ fn render_writes_numbered_png_frames_and_keeps_a_users_folder() {
     assert!(changed_pixels(pics[0].as_raw(), pics[4].as_raw(), 4) > 20);
     // Again into surfcap's own folder: replaced.
     render(&[p(&crane), "-o", p(&dir), "--size", "200x150", "--frames", "0-1"]);
-    assert_eq!(std::fs::read_dir(&dir).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png")).count(), 2);
+    assert_eq!(
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png"))
+            .count(),
+        2
+    );
     // A folder of the user's: refused before any work, its file untouched.
     let mine = tmp.path().join("mine");
     std::fs::create_dir(&mine).unwrap();

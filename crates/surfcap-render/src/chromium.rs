@@ -131,14 +131,22 @@ impl Page {
             s = opts.timeout.as_secs()
         );
         let ready = evaluate(&tab, &wait).map_err(&page_error)?;
-        let v: serde_json::Value =
-            serde_json::from_str(ready.as_str().unwrap_or("")).map_err(|e| page_error(format!("unreadable state: {e}")))?;
+        let v: serde_json::Value = serde_json::from_str(ready.as_str().unwrap_or(""))
+            .map_err(|e| page_error(format!("unreadable state: {e}")))?;
         let n_frames = v["nFrames"].as_u64().filter(|&n| n > 0);
         let fps = v["fps"].as_f64().filter(|f| f.is_finite() && *f > 0.0);
         let (Some(n_frames), Some(fps)) = (n_frames, fps) else {
             return Err(page_error(format!("expected nFrames > 0 and fps > 0 from window.surfcapViewer, got {v}")));
         };
-        Ok(Page { _browser: browser, tab, url, n_frames: n_frames as usize, fps, width: opts.width, height: opts.height })
+        Ok(Page {
+            _browser: browser,
+            tab,
+            url,
+            n_frames: n_frames as usize,
+            fps,
+            width: opts.width,
+            height: opts.height,
+        })
     }
 
     /// Frame `f` of the animation, as the page draws it.

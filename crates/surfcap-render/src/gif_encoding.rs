@@ -38,7 +38,9 @@ impl GifEncoder {
         if !(fps > 0.0 && fps <= MAX_GIF_FPS) {
             return Err(RenderError::Rate(
                 fps,
-                format!("a GIF plays at most {MAX_GIF_FPS} frames per second (delays are in hundredths, and browsers draw those under 2 as 10); choose --fps {MAX_GIF_FPS} or less, or MP4"),
+                format!(
+                    "a GIF plays at most {MAX_GIF_FPS} frames per second (delays are in hundredths, and browsers draw those under 2 as 10); choose --fps {MAX_GIF_FPS} or less, or MP4"
+                ),
             ));
         }
         let (w, h) = match (u16::try_from(width), u16::try_from(height)) {

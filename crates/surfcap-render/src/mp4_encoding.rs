@@ -130,7 +130,8 @@ impl FrameSink for Mp4Encoder {
                 self.frames, frame.width, frame.height, self.width, self.height
             )));
         }
-        let yuv = YUVBuffer::from_rgb_source(RgbaSliceU8::new(&frame.data, (self.width as usize, self.height as usize)));
+        let yuv =
+            YUVBuffer::from_rgb_source(RgbaSliceU8::new(&frame.data, (self.width as usize, self.height as usize)));
         let stream = self.encoder.encode(&yuv).map_err(mp4_error)?.to_vec();
         let (mut sps, mut pps, mut sample, mut sync) = (None, None, Vec::new(), false);
         for nal in annex_b_nal_units(&stream) {

@@ -78,7 +78,8 @@ impl FromStr for Size {
     fn from_str(s: &str) -> Result<Self, String> {
         let bad = || format!("expected WIDTHxHEIGHT in pixels, 16 to 8192 each (e.g. 960x540), got {s:?}");
         let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-        let (width, height) = (w.trim().parse::<u32>().map_err(|_| bad())?, h.trim().parse::<u32>().map_err(|_| bad())?);
+        let (width, height) =
+            (w.trim().parse::<u32>().map_err(|_| bad())?, h.trim().parse::<u32>().map_err(|_| bad())?);
         if !(16..=surfcap_render::chromium::MAX_SIDE).contains(&width)
             || !(16..=surfcap_render::chromium::MAX_SIDE).contains(&height)
         {
@@ -100,7 +101,8 @@ impl FromStr for FrameRange {
     fn from_str(s: &str) -> Result<Self, String> {
         let bad = || format!("expected A-B, the first and last frame (from 0, A at most B), e.g. 0-99, got {s:?}");
         let (a, b) = s.split_once('-').ok_or_else(bad)?;
-        let (first, last) = (a.trim().parse::<usize>().map_err(|_| bad())?, b.trim().parse::<usize>().map_err(|_| bad())?);
+        let (first, last) =
+            (a.trim().parse::<usize>().map_err(|_| bad())?, b.trim().parse::<usize>().map_err(|_| bad())?);
         if first > last {
             return Err(bad());
         }
