@@ -67,7 +67,13 @@ fn mp4_error(e: impl std::fmt::Display) -> RenderError {
 impl Mp4Encoder {
     /// A video of `width x height` pixels (even, as 4:2:0 needs, at least 16) at `fps`.
     pub fn new(width: u32, height: u32, fps: f64) -> Result<Self, RenderError> {
-        if width % 2 != 0 || height % 2 != 0 || width < 16 || height < 16 || width > 4096 || height > 4096 {
+        if !width.is_multiple_of(2)
+            || !height.is_multiple_of(2)
+            || width < 16
+            || height < 16
+            || width > 4096
+            || height > 4096
+        {
             return Err(RenderError::Size(
                 width,
                 height,

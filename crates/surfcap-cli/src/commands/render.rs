@@ -205,7 +205,7 @@ fn explain(e: RenderError) -> anyhow::Error {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let kind = Kind::of(&a.output)?;
     let chromium = chromium_path(a.chromium.as_deref())?;
-    if kind == Kind::Mp4 && (a.size.width % 2 != 0 || a.size.height % 2 != 0) {
+    if kind == Kind::Mp4 && (!a.size.width.is_multiple_of(2) || !a.size.height.is_multiple_of(2)) {
         anyhow::bail!(
             "--size {}x{}: an MP4 (H.264, 4:2:0) needs an even width and height",
             a.size.width,
