@@ -148,6 +148,7 @@ impl Front for Cli {
             Command::Vary(c) => commands::vary::run(ctx, c),
             Command::Tiles(c) => commands::tiles::run(ctx, c),
             Command::Reproduce(a) => commands::reproduce::run(ctx, a),
+            Command::Render(a) => commands::render::run(ctx, a),
         }
     }
 }
@@ -224,6 +225,9 @@ enum Command {
     /// runs the evals of the chosen items (resumable), then writes one HTML page with
     /// results.json and results.csv; `--list` shows the catalogue.
     Reproduce(commands::reproduce::Args),
+    /// Pictures to share: what `view` plays, rendered headless in Chromium at a chosen size,
+    /// view and frame rate, to an MP4 video, an animated GIF or a folder of PNG frames.
+    Render(commands::render::Args),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line

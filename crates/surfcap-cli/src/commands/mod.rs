@@ -13,6 +13,7 @@ pub mod interpolate;
 pub mod make;
 pub mod parts;
 pub mod remesh_frames;
+pub mod render;
 pub mod report;
 pub mod reproduce;
 pub mod smg;

@@ -16,11 +16,22 @@ use crate::output::print_json;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    #[command(flatten)]
+    pub shown: Shown,
+    #[command(flatten)]
+    pub port: PortOpt,
+    #[command(flatten)]
+    pub source: SourceOpts,
+    #[command(flatten)]
+    pub direct: crate::view_director::DirectOpts,
+}
+
+/// What is shown and how it is coloured: the options `view` and `render` share.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Shown {
     /// What to play: .glb files, subject caches, frame sets (.frames), capture folders, or a report folder.
     #[arg(required = true)]
     pub paths: Vec<PathBuf>,
-    #[command(flatten)]
-    pub port: PortOpt,
     /// Only these sequences (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     pub sequences: Vec<String>,
@@ -48,10 +59,6 @@ pub struct Args {
     /// edges 10% longer or shorter; 0 where the surface only moves rigidly).
     #[arg(long)]
     pub strain: bool,
-    #[command(flatten)]
-    pub source: SourceOpts,
-    #[command(flatten)]
-    pub direct: crate::view_director::DirectOpts,
 }
 
 /// Whether `p` is a report folder (an `index.html` and no subject cache).
@@ -113,12 +120,13 @@ fn glb_textures(p: &Path) -> anyhow::Result<Option<surfcap_mesh::FrameTextures>>
 fn open_items(
     ctx: &crate::Ctx,
     p: &Path,
-    a: &Args,
+    a: &Shown,
+    source: &SourceOpts,
     output: Option<&Path>,
     names: &mut Vec<String>,
 ) -> anyhow::Result<Vec<ViewItem>> {
     let bar = crate::progress::Bar::new(ctx);
-    let mut items = match surfcap_formats::import::open_any(p, &a.source.to_import(None)?, &bar)? {
+    let mut items = match surfcap_formats::import::open_any(p, &source.to_import(None)?, &bar)? {
         ImportedData::Subject(i) => {
             for n in &i.notes {
                 ctx.note(n);
@@ -147,7 +155,9 @@ fn open_items(
     Ok(items.0)
 }
 
-pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+/// The items of what `a` names and the report folder among them, if any: what `surfcap view`
+/// serves and `surfcap render` renders.
+pub fn load(ctx: &crate::Ctx, a: &Shown, source: &SourceOpts) -> anyhow::Result<(Vec<ViewItem>, Option<PathBuf>)> {
     let mut items = Vec::new();
     let mut report = None;
     let mut names = Vec::new();
@@ -158,11 +168,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             let glbs = crate::files::files_under(p, &["glb"])?;
             anyhow::ensure!(!glbs.is_empty(), "view {}: the report folder holds no .glb animation", p.display());
             for g in glbs {
-                items.extend(open_items(ctx, &g, &a, Some(&g), &mut names)?);
+                items.extend(open_items(ctx, &g, a, source, Some(&g), &mut names)?);
             }
             report = Some(p.clone());
         } else {
-            items.extend(open_items(ctx, p, &a, is_output(p).then_some(p.as_path()), &mut names)?);
+            items.extend(open_items(ctx, p, a, source, is_output(p).then_some(p.as_path()), &mut names)?);
         }
     }
     // Every name asked for must exist: a misspelt one is named with the sequences there are,
@@ -189,10 +199,15 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             it.label = Some(l.clone());
         }
     }
-    add_colour_maps(ctx, &a, &mut items)?;
+    add_colour_maps(ctx, a, source, &mut items)?;
+    Ok((items, report))
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let (items, report) = load(ctx, &a.shown, &a.source)?;
     let n = items.len();
     let json = ctx.json;
-    let director = crate::view_director::director(ctx, &a.direct, &a.paths, &a.source)?;
+    let director = crate::view_director::director(ctx, &a.direct, &a.shown.paths, &a.source)?;
     serve_directed(items, ServeOptions { port: a.port.port, report }, director, |addr| {
         let url = format!("http://{addr}/");
         if json {
@@ -208,7 +223,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
 
 /// What the colour-map options ask for, given to every item: the distance from a reference
 /// (`--error-against`, `--distance-from`) or the edge strain (`--strain`).
-fn add_colour_maps(ctx: &crate::Ctx, a: &Args, items: &mut [ViewItem]) -> anyhow::Result<()> {
+fn add_colour_maps(ctx: &crate::Ctx, a: &Shown, source: &SourceOpts, items: &mut [ViewItem]) -> anyhow::Result<()> {
     use rayon::prelude::*;
     use surfcap_geometry::vertex_edge_strain::{unique_edges, vertex_edge_strain};
     use surfcap_geometry::vertex_rigid_distance::vertex_rigid_distance;
@@ -262,7 +277,7 @@ fn add_colour_maps(ctx: &crate::Ctx, a: &Args, items: &mut [ViewItem]) -> anyhow
     }
     let (option, path, what) = reference.expect("checked above");
     let bar = crate::progress::Bar::new(ctx);
-    let subject = match surfcap_formats::import::open_any(path, &a.source.to_import(None)?, &bar)
+    let subject = match surfcap_formats::import::open_any(path, &source.to_import(None)?, &bar)
         .map_err(|e| anyhow::anyhow!("{option} {}: {e}", path.display()))?
     {
         ImportedData::Subject(i) => i.subject,
