@@ -23,6 +23,7 @@ mod learn;
 mod load;
 mod measure;
 mod scale;
+mod rig;
 mod smg;
 mod synth;
 mod transfer;
@@ -92,6 +93,10 @@ enum Command {
     Export(export::Args),
     /// One non-linear interpolation (thesis eq. 2.45-2.49): factorisation and per-lambda times.
     Interpolate(interpolate::Args),
+    /// Skinned rigs (Smooth Skinning Decomposition with Rigid Bones) of a real subject (default
+    /// the crane) at several bone counts: decomposition time, error, glb size; with
+    /// --segment-frames also a rig per segment beside one rig for the whole subject.
+    Rig(rig::Args),
     /// `surfcap tiles`, for `scale`'s child processes (each tile job's peak memory its own).
     #[command(subcommand, hide = true)]
     Tiles(surfcap_cli::commands::tiles::Cmd),
@@ -120,6 +125,7 @@ impl surfcap_cli::Front for Cli {
             Command::Cache(a) => cache::run(ctx, a),
             Command::Export(a) => export::run(ctx, a),
             Command::Interpolate(a) => interpolate::run(ctx, a),
+            Command::Rig(a) => rig::run(ctx, a),
             Command::Tiles(c) => surfcap_cli::commands::tiles::run(ctx, c),
         }
     }

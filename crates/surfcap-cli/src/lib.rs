@@ -144,6 +144,7 @@ impl Front for Cli {
             Command::Vary(c) => commands::vary::run(ctx, c),
             Command::Tiles(c) => commands::tiles::run(ctx, c),
             Command::Reproduce(a) => commands::reproduce::run(ctx, a),
+            Command::Rig(a) => commands::rig::run(ctx, a),
         }
     }
 }
@@ -216,6 +217,10 @@ enum Command {
     /// runs the evals of the chosen items (resumable), then writes one HTML page with
     /// results.json and results.csv; `--list` shows the catalogue.
     Reproduce(commands::reproduce::Args),
+    /// A subject as a skinned character (Smooth Skinning Decomposition with Rigid Bones, Le and
+    /// Deng 2012): bones, sparse weights and one bone animation per sequence as a glTF skin,
+    /// with the reconstruction error per frame, the size and the time.
+    Rig(commands::rig::Args),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line

@@ -14,6 +14,7 @@ pub mod parts;
 pub mod remesh_frames;
 pub mod report;
 pub mod reproduce;
+pub mod rig;
 pub mod smg;
 pub mod synth;
 pub mod tiles;
