@@ -74,23 +74,18 @@ pub fn rigid_clusters(rest: &[Vector3<f64>], frames: &DMatrix<f64>, n_bones: usi
     let mut labels: Vec<usize> = nearest.iter().map(|n| n.1).collect();
     let n_bones = seeds.len();
 
-    // 2. Rigid k-means rounds.
+    // 2. Rigid k-means rounds. The sampled frames as a V x 3Ts matrix, so that every vertex's
+    // fit error to every cluster comes from one matrix product (see `fit_errors`).
+    let sub = DMatrix::from_fn(nv, 3 * ts.len(), |i, c| frames[(i, 3 * ts[c / 3] + c % 3)]);
     for _ in 0..rounds {
         let fits = cluster_transforms(rest, frames, &ts, &labels, n_bones);
-        let errs: Vec<Vec<f64>> = (0..nv)
-            .into_par_iter()
-            .map(|i| {
-                (0..n_bones)
-                    .map(|j| ts.iter().enumerate().map(|(k, &t)| (fits[k * n_bones + j].apply(&rest[i]) - at(frames, i, t)).norm_squared()).sum())
-                    .collect()
-            })
-            .collect();
+        let errs = fit_errors(rest, &sub, &fits, n_bones);
         let mut new: Vec<usize> = errs
             .iter()
             .map(|e| (0..n_bones).min_by(|&a, &b| e[a].total_cmp(&e[b]).then(a.cmp(&b))).unwrap_or(0))
             .collect();
         // 3. Every bone keeps enough vertices: split the worst cluster for each one short.
-        loop {
+        for _ in 0..2 * n_bones {
             let mut count = vec![0usize; n_bones];
             new.iter().for_each(|&l| count[l] += 1);
             let Some(short) = (0..n_bones).find(|&j| count[j] < MIN_BONE_VERTICES) else { break };
@@ -130,6 +125,66 @@ pub fn rigid_clusters(rest: &[Vector3<f64>], frames: &DMatrix<f64>, n_bones: usi
         }
     }
     labels
+}
+
+/// `errs[i][j] = sum_t || M_j^t p_i - v_i^t ||^2` over the sampled frames (`sub`, V x 3Ts),
+/// expanded as `p~^T (sum_t M_j^tT M_j^t) p~ - 2 p~ . (sum_t M_j^tT v_i^t) + sum_t |v_i^t|^2`
+/// with `M = [R | T]` and `p~ = (p, 1)`: the middle sums for every vertex and cluster are one
+/// matrix product.
+fn fit_errors(rest: &[Vector3<f64>], sub: &DMatrix<f64>, fits: &[BoneTransform], n_bones: usize) -> Vec<Vec<f64>> {
+    let nt = sub.ncols() / 3;
+    let mut mbig = DMatrix::zeros(3 * nt, 4 * n_bones);
+    let mut h = vec![[0.0f64; 16]; n_bones];
+    for k in 0..nt {
+        for j in 0..n_bones {
+            let b = &fits[k * n_bones + j];
+            let mut m = [[0.0; 4]; 3];
+            for r in 0..3 {
+                for c in 0..3 {
+                    m[r][c] = b.rotation[(r, c)];
+                }
+                m[r][3] = b.translation[r];
+                for c in 0..4 {
+                    mbig[(3 * k + r, 4 * j + c)] = m[r][c];
+                }
+            }
+            for a in 0..4 {
+                for c in 0..4 {
+                    h[j][a * 4 + c] += m[0][a] * m[0][c] + m[1][a] * m[1][c] + m[2][a] * m[2][c];
+                }
+            }
+        }
+    }
+    const BLOCK: usize = 512;
+    let nv = rest.len();
+    let blocks: Vec<DMatrix<f64>> = (0..nv.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let lo = b * BLOCK;
+            sub.rows(lo, (lo + BLOCK).min(nv) - lo) * &mbig
+        })
+        .collect();
+    (0..nv)
+        .into_par_iter()
+        .map(|i| {
+            let pt = [rest[i].x, rest[i].y, rest[i].z, 1.0];
+            let vv: f64 = sub.row(i).iter().map(|x| x * x).sum();
+            let cm = &blocks[i / BLOCK];
+            let row = i % BLOCK;
+            (0..n_bones)
+                .map(|j| {
+                    let mut quad = 0.0;
+                    for a in 0..4 {
+                        for c in 0..4 {
+                            quad += pt[a] * h[j][a * 4 + c] * pt[c];
+                        }
+                    }
+                    let lin: f64 = (0..4).map(|c| pt[c] * cm[(row, 4 * j + c)]).sum();
+                    (quad - 2.0 * lin + vv).max(0.0)
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Each cluster's unit-weight rigid transform at each of the frames `ts`, `[k][bone]`.

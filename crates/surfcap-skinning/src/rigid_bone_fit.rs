@@ -67,7 +67,7 @@ impl RigidFitSums {
     /// The minimising rotation and translation, or `None` when the points do not fix one (no
     /// weight, or all at one point).
     pub fn solve(&self) -> Option<BoneTransform> {
-        if !(self.ww > 1e-12) {
+        if self.ww.is_nan() || self.ww <= 1e-12 {
             return None;
         }
         let p_star = self.wwp / self.ww;

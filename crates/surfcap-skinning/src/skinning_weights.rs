@@ -179,7 +179,7 @@ pub fn affine_sparse_weights(g: &DMatrix<f64>, c: &DVector<f64>, max_influences:
     let sub_c = DVector::from_fn(order.len(), |a, _| ca[order[a]]);
     let sub_w = nonnegative_least_squares(&sub_g, &sub_c);
     let total: f64 = sub_w.iter().sum();
-    if !(total > 0.0) || !total.is_finite() {
+    if !total.is_finite() || total <= 0.0 {
         return None;
     }
     let mut out: Vec<(usize, f64)> =

@@ -109,8 +109,8 @@ fn frame_matrix(frames: &[&[f32]], nv: usize) -> DMatrix<f64> {
     let mut m = DMatrix::zeros(nv, 3 * frames.len());
     for (t, f) in frames.iter().enumerate() {
         for r in 0..3 {
-            let col = m.column_mut(3 * t + r);
-            for (i, x) in col.into_iter().enumerate() {
+            let mut col = m.column_mut(3 * t + r);
+            for (i, x) in col.iter_mut().enumerate() {
                 *x = f64::from(f[3 * i + r]);
             }
         }
