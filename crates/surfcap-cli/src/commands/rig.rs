@@ -2,7 +2,6 @@
 //! character (Smooth Skinning Decomposition with Rigid Bones, Le and Deng 2012) written as a glTF
 //! skin, with a report of its reconstruction error per frame, size and time.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use serde_json::json;
