@@ -103,6 +103,23 @@ fn a_synthesised_path_animation_as_a_skinned_rig_plays_in_three_js() {
     let three = play_in_three(&glb, &[seqs[0].join("positions.npy")], rms * 1.02 + 1e-4, max * 1.02 + 1e-4);
     // The walker travels: its skinned mesh moves metres along the path.
     assert!(three["animations"][0]["moved"].as_f64().unwrap() > 2.0, "{three}");
+
+    // The same animation straight from synthesis as a rig: its errors are in the file's extras.
+    let direct = d.path().join("walk-rig.glb");
+    let o = surfcap!(&["synth", "path", p(&walker), "--curve", p(&curve), "--format", "rig-glb", "-o", p(&direct), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    surfcap_testkit::validate_glb(std::slice::from_ref(&direct));
+    let bytes = std::fs::read(&direct).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let doc: Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    let rig = &doc["extras"]["surfcap"]["rig"];
+    let (rms, max) = (rig["rms"].as_f64().unwrap(), rig["max"].as_f64().unwrap());
+    assert_eq!(rig["bones"], 32, "{rig}");
+    play_in_three(&direct, &[seqs[0].join("positions.npy")], rms * 1.02 + 1e-4, max * 1.02 + 1e-4);
+    // Not an exporter's format: `surfcap export` says where rigs come from.
+    let o = surfcap!(&["export", p(&walk), "--format", "rig-glb", "-o", p(&d.path().join("x.glb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("surfcap rig SUBJECT"), "{}", stderr(&o));
 }
 
 #[test]
