@@ -198,7 +198,7 @@ mod tests {
         let g = DMatrix::identity(3, 3);
         let c = DVector::from_vec(vec![1.0, -2.0, 3.0]);
         let w = nonnegative_least_squares(&g, &c);
-        assert!((w - DVector::from_vec(vec![1.0, 0.0, 3.0])).norm() < 1e-12, "{w}");
+        assert!((&w - DVector::from_vec(vec![1.0, 0.0, 3.0])).norm() < 1e-12, "{w}");
     }
 
     #[test]
