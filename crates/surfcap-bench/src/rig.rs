@@ -51,7 +51,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     ctx.say(&format!("{}: {nf} frames of {nv} vertices, {} threads", path.display(), rayon::current_num_threads()));
     let mut rows = Vec::new();
     for &bones in &a.bones {
-        let opts = SsdrOptions { bones, max_influences: a.max_influences, iterations: a.iterations, ..Default::default() };
+        let opts =
+            SsdrOptions { bones, max_influences: a.max_influences, iterations: a.iterations, ..Default::default() };
         let r = surfcap_synthesis::rig_run::rig_subject(&s, &opts, &NoProgress)?.report;
         ctx.say(&format!(
             "{bones} bones, one rig: decomposition {:.2} s; RMS {:.5} {unit} ({:.3}% of height), max {:.4} {unit} ({:.2}%); {} bytes (morph-target glb {} bytes)",

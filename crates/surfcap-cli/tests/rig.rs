@@ -86,7 +86,8 @@ fn a_synthesised_path_animation_as_a_skinned_rig_plays_in_three_js() {
     let walker = surfcap_testkit::procedural_walker!(d.path());
     let curve = surfcap_testkit::workspace_root().join("examples/s_path_15m.csv");
     let walk = d.path().join("walk");
-    let o = surfcap!(&["synth", "path", p(&walker), "--curve", p(&curve), "--format", "npy", "-o", p(&walk), "--quiet"]);
+    let o =
+        surfcap!(&["synth", "path", p(&walker), "--curve", p(&curve), "--format", "npy", "-o", p(&walk), "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let seqs: Vec<PathBuf> = std::fs::read_dir(&walk)
         .unwrap()
@@ -106,7 +107,18 @@ fn a_synthesised_path_animation_as_a_skinned_rig_plays_in_three_js() {
 
     // The same animation straight from synthesis as a rig: its errors are in the file's extras.
     let direct = d.path().join("walk-rig.glb");
-    let o = surfcap!(&["synth", "path", p(&walker), "--curve", p(&curve), "--format", "rig-glb", "-o", p(&direct), "--quiet"]);
+    let o = surfcap!(&[
+        "synth",
+        "path",
+        p(&walker),
+        "--curve",
+        p(&curve),
+        "--format",
+        "rig-glb",
+        "-o",
+        p(&direct),
+        "--quiet"
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     surfcap_testkit::validate_glb(std::slice::from_ref(&direct));
     let bytes = std::fs::read(&direct).unwrap();
@@ -136,6 +148,11 @@ fn bad_requests_say_what_was_expected() {
     let o = surfcap!(&["rig", p(&walker), "--bones", "400", "-o", p(&out)]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("400 bones for") && e.contains("vertices: each bone needs at least 4") && e.contains("ask for at most"), "{e}");
+    assert!(
+        e.contains("400 bones for")
+            && e.contains("vertices: each bone needs at least 4")
+            && e.contains("ask for at most"),
+        "{e}"
+    );
     assert!(!out.exists());
 }

@@ -77,7 +77,11 @@ impl SkinnedGlb<'_> {
         }
         for s in &self.sequences {
             if s.n_frames == 0 || s.rotations.len() != s.n_frames * nj || s.translations.len() != s.n_frames * nj {
-                return Err(err!(Unsupported, "skinned glb: sequence {:?}'s animation does not match {nj} joints", s.name));
+                return Err(err!(
+                    Unsupported,
+                    "skinned glb: sequence {:?}'s animation does not match {nj} joints",
+                    s.name
+                ));
             }
         }
         Ok(())
@@ -149,7 +153,8 @@ pub fn skinned_glb_bytes(g: &SkinnedGlb) -> Result<Vec<u8>> {
     let joint_nodes: Vec<json::Index<json::Node>> = (0..nj)
         .map(|j| {
             // The joint's pose at the first key, so that the scene is right before animations play.
-            let (r, t) = first_seq.map_or(([0.0, 0.0, 0.0, 1.0], g.bind_centres[j]), |s| (s.rotations[j], s.translations[j]));
+            let (r, t) =
+                first_seq.map_or(([0.0, 0.0, 0.0, 1.0], g.bind_centres[j]), |s| (s.rotations[j], s.translations[j]));
             root.push(json::Node {
                 name: Some(format!("bone{j}")),
                 rotation: Some(json::scene::UnitQuaternion(r)),
@@ -179,7 +184,8 @@ pub fn skinned_glb_bytes(g: &SkinnedGlb) -> Result<Vec<u8>> {
         name: Some(g.name.clone()),
         skeleton: Some(rig_root),
     });
-    let mesh_node = root.push(json::Node { mesh: Some(mesh), skin: Some(skin), name: Some(g.name.clone()), ..Default::default() });
+    let mesh_node =
+        root.push(json::Node { mesh: Some(mesh), skin: Some(skin), name: Some(g.name.clone()), ..Default::default() });
     root.push(json::Scene { extensions: None, extras: None, name: None, nodes: vec![rig_root, mesh_node] });
     root.scene = Some(json::Index::new(0));
 
@@ -199,7 +205,9 @@ pub fn skinned_glb_bytes(g: &SkinnedGlb) -> Result<Vec<u8>> {
             let rot = f32_bytes((0..n).flat_map(|f| s.rotations[f * nj + j]));
             let rov = view(&mut root, rot, None);
             let ro_acc = root.push(accessor(rov, n, ComponentType::F32, Type::Vec4, None));
-            for (out, path) in [(tr_acc, json::animation::Property::Translation), (ro_acc, json::animation::Property::Rotation)] {
+            for (out, path) in
+                [(tr_acc, json::animation::Property::Translation), (ro_acc, json::animation::Property::Rotation)]
+            {
                 channels.push(json::animation::Channel {
                     sampler: json::Index::new(samplers.len() as u32),
                     target: json::animation::Target { extensions: None, extras: None, node, path: Valid(path) },
@@ -216,7 +224,13 @@ pub fn skinned_glb_bytes(g: &SkinnedGlb) -> Result<Vec<u8>> {
             }
         }
         let meta = json!({ "sequence": s.name, "tags": s.tags, "fps": g.fps, "frames": n });
-        root.push(json::Animation { extensions: None, extras: raw(json!({ "surfcap": meta })), channels, name: Some(s.name.clone()), samplers });
+        root.push(json::Animation {
+            extensions: None,
+            extras: raw(json!({ "surfcap": meta })),
+            channels,
+            name: Some(s.name.clone()),
+            samplers,
+        });
         seq_meta.push(json!({ "name": s.name, "frames": n, "tags": s.tags }));
     }
     root.extras = raw(json!({ "surfcap": {
@@ -287,7 +301,8 @@ mod tests {
         let anim = doc.animations().next().unwrap();
         assert_eq!(anim.name(), Some("wave"));
         assert_eq!(anim.channels().count(), 4);
-        let ibm: Vec<[[f32; 4]; 4]> = skin.reader(|b| Some(&buffers[b.index()])).read_inverse_bind_matrices().unwrap().collect();
+        let ibm: Vec<[[f32; 4]; 4]> =
+            skin.reader(|b| Some(&buffers[b.index()])).read_inverse_bind_matrices().unwrap().collect();
         assert_eq!(ibm[1][3], [-1.0, -1.0, 0.0, 1.0]);
     }
 
@@ -302,7 +317,13 @@ mod tests {
             joints: vec![0; 16],
             weights: vec![0.25; 16],
             bind_centres: vec![[0.0; 3]],
-            sequences: vec![JointSequence { name: "s".into(), tags: vec![], n_frames: 2, rotations: vec![], translations: vec![] }],
+            sequences: vec![JointSequence {
+                name: "s".into(),
+                tags: vec![],
+                n_frames: 2,
+                rotations: vec![],
+                translations: vec![],
+            }],
             fps: 30.0,
             up_axis: UpAxis::PosY,
             units: Units::metres(),

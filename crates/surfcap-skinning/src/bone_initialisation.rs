@@ -45,12 +45,19 @@ fn at(frames: &DMatrix<f64>, i: usize, t: usize) -> Vector3<f64> {
 }
 
 /// Labels (bone of each vertex) of `n_bones` rigid clusters.
-pub fn rigid_clusters(rest: &[Vector3<f64>], frames: &DMatrix<f64>, n_bones: usize, rounds: usize, seed: u64) -> Vec<usize> {
+pub fn rigid_clusters(
+    rest: &[Vector3<f64>],
+    frames: &DMatrix<f64>,
+    n_bones: usize,
+    rounds: usize,
+    seed: u64,
+) -> Vec<usize> {
     let nv = rest.len();
     let n_frames = frames.ncols() / 3;
     let ts = sample_frames(n_frames, MAX_INIT_FRAMES);
     // Trajectory distance between two vertices over the sampled frames.
-    let dist2 = |a: usize, b: usize| -> f64 { ts.iter().map(|&t| (at(frames, a, t) - at(frames, b, t)).norm_squared()).sum() };
+    let dist2 =
+        |a: usize, b: usize| -> f64 { ts.iter().map(|&t| (at(frames, a, t) - at(frames, b, t)).norm_squared()).sum() };
 
     // 1. Farthest-point seeds.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -100,7 +107,10 @@ pub fn rigid_clusters(rest: &[Vector3<f64>], frames: &DMatrix<f64>, n_bones: usi
                 break; // nothing left to split: fewer bones end up used
             };
             let members: Vec<usize> = (0..nv).filter(|&i| new[i] == big).collect();
-            let worst = *members.iter().max_by(|&&a, &&b| errs[a][big].total_cmp(&errs[b][big]).then(b.cmp(&a))).unwrap_or(&members[0]);
+            let worst = *members
+                .iter()
+                .max_by(|&&a, &&b| errs[a][big].total_cmp(&errs[b][big]).then(b.cmp(&a)))
+                .unwrap_or(&members[0]);
             let centre = members.iter().fold(Vector3::zeros(), |s, &i| s + rest[i]) / members.len() as f64;
             let mut moved = 0;
             for &i in &members {
@@ -112,7 +122,12 @@ pub fn rigid_clusters(rest: &[Vector3<f64>], frames: &DMatrix<f64>, n_bones: usi
             if moved < MIN_BONE_VERTICES {
                 // The split did not separate enough: take the nearest members to the worst vertex.
                 let mut by_dist = members.clone();
-                by_dist.sort_by(|&a, &b| (rest[a] - rest[worst]).norm_squared().total_cmp(&(rest[b] - rest[worst]).norm_squared()).then(a.cmp(&b)));
+                by_dist.sort_by(|&a, &b| {
+                    (rest[a] - rest[worst])
+                        .norm_squared()
+                        .total_cmp(&(rest[b] - rest[worst]).norm_squared())
+                        .then(a.cmp(&b))
+                });
                 for &i in by_dist.iter().take(members.len() / 2) {
                     new[i] = short;
                 }
@@ -188,7 +203,13 @@ fn fit_errors(rest: &[Vector3<f64>], sub: &DMatrix<f64>, fits: &[BoneTransform],
 }
 
 /// Each cluster's unit-weight rigid transform at each of the frames `ts`, `[k][bone]`.
-fn cluster_transforms(rest: &[Vector3<f64>], frames: &DMatrix<f64>, ts: &[usize], labels: &[usize], n_bones: usize) -> Vec<BoneTransform> {
+fn cluster_transforms(
+    rest: &[Vector3<f64>],
+    frames: &DMatrix<f64>,
+    ts: &[usize],
+    labels: &[usize],
+    n_bones: usize,
+) -> Vec<BoneTransform> {
     ts.par_iter()
         .flat_map_iter(|&t| {
             let mut sums = vec![RigidFitSums::default(); n_bones];
@@ -215,7 +236,9 @@ mod tests {
     #[test]
     fn two_rigid_parts_are_found() {
         // Two blocks of 20 points; the second rotates about z over the frames, the first stays.
-        let rest: Vec<Vector3<f64>> = (0..40).map(|i| Vector3::new((i % 20) as f64 * 0.1, if i < 20 { 0.0 } else { 1.0 }, (i % 3) as f64 * 0.2)).collect();
+        let rest: Vec<Vector3<f64>> = (0..40)
+            .map(|i| Vector3::new((i % 20) as f64 * 0.1, if i < 20 { 0.0 } else { 1.0 }, (i % 3) as f64 * 0.2))
+            .collect();
         let n_frames = 8;
         let frames = DMatrix::from_fn(40, 3 * n_frames, |i, c| {
             let (t, r) = (c / 3, c % 3);

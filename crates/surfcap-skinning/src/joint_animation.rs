@@ -19,12 +19,25 @@ pub fn bone_centres(rig: &SkinnedRig) -> Vec<[f64; 3]> {
             sum[j].1 += x;
         }
     }
-    sum.iter().map(|(s, w)| if *w > 0.0 { let c = s / *w; [c.x, c.y, c.z] } else { [0.0; 3] }).collect()
+    sum.iter()
+        .map(|(s, w)| {
+            if *w > 0.0 {
+                let c = s / *w;
+                [c.x, c.y, c.z]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
 }
 
 /// Joint poses of frames `range` (of the rig's frames): `[frame][bone]` quaternions (x, y, z, w)
 /// and translations.
-pub fn joint_poses(rig: &SkinnedRig, centres: &[[f64; 3]], range: std::ops::Range<usize>) -> (Vec<[f32; 4]>, Vec<[f32; 3]>) {
+pub fn joint_poses(
+    rig: &SkinnedRig,
+    centres: &[[f64; 3]],
+    range: std::ops::Range<usize>,
+) -> (Vec<[f32; 4]>, Vec<[f32; 3]>) {
     let nb = rig.n_bones;
     let mut rot = Vec::with_capacity(range.len() * nb);
     let mut tr = Vec::with_capacity(range.len() * nb);
@@ -70,7 +83,12 @@ mod tests {
         assert_eq!(c[0], [2.0, 1.0, 0.0]);
         let (q, t) = joint_poses(&rig, &c, 0..2);
         assert_eq!(q.len(), 2);
-        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0][3] as f64, q[0][0] as f64, q[0][1] as f64, q[0][2] as f64));
+        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            q[0][3] as f64,
+            q[0][0] as f64,
+            q[0][1] as f64,
+            q[0][2] as f64,
+        ));
         // joint(p - c) == b(p) for a rest point p
         let p = Vector3::new(0.4, -0.7, 1.1);
         let via_joint = q * (p - Vector3::from(c[0])) + Vector3::new(t[0][0] as f64, t[0][1] as f64, t[0][2] as f64);

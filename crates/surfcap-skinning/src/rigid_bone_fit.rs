@@ -126,7 +126,8 @@ mod tests {
 
     #[test]
     fn a_mirrored_target_gives_a_rotation_not_a_reflection() {
-        let pts = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0), Vector3::new(0.0, 0.0, 1.0), Vector3::zeros()];
+        let pts =
+            [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0), Vector3::new(0.0, 0.0, 1.0), Vector3::zeros()];
         let mut s = RigidFitSums::default();
         for p in &pts {
             s.add(p, &Vector3::new(-p.x, p.y, p.z), 1.0);

@@ -31,7 +31,11 @@ pub struct BonePairSums {
 fn affine(b: &BoneTransform) -> [[f64; 4]; 3] {
     let r = &b.rotation;
     let t = &b.translation;
-    [[r[(0, 0)], r[(0, 1)], r[(0, 2)], t[0]], [r[(1, 0)], r[(1, 1)], r[(1, 2)], t[1]], [r[(2, 0)], r[(2, 1)], r[(2, 2)], t[2]]]
+    [
+        [r[(0, 0)], r[(0, 1)], r[(0, 2)], t[0]],
+        [r[(1, 0)], r[(1, 1)], r[(1, 2)], t[1]],
+        [r[(2, 0)], r[(2, 1)], r[(2, 2)], t[2]],
+    ]
 }
 
 impl BonePairSums {
@@ -107,7 +111,9 @@ pub fn nonnegative_least_squares(g: &DMatrix<f64>, c: &DVector<f64>) -> DVector<
     let tol = 1e-12 * scale * (1.0 + c.amax());
     for _outer in 0..3 * n + 10 {
         let grad = c - g * &w;
-        let next = (0..n).filter(|&i| !passive[i] && grad[i] > tol).max_by(|&a, &b| grad[a].total_cmp(&grad[b]).then(b.cmp(&a)));
+        let next = (0..n)
+            .filter(|&i| !passive[i] && grad[i] > tol)
+            .max_by(|&a, &b| grad[a].total_cmp(&grad[b]).then(b.cmp(&a)));
         let Some(j) = next else { break };
         passive[j] = true;
         for _inner in 0..3 * n + 10 {
@@ -215,7 +221,9 @@ mod tests {
     fn recovers_a_blend_of_two_bones_out_of_four() {
         // Bone columns (3 rows per "frame"): the vertex is 0.3 of bone 1 and 0.7 of bone 3.
         let cols: Vec<DVector<f64>> = (0..4)
-            .map(|j| DVector::from_fn(12, |r, _| ((r * 7 + j * 3) as f64 * 0.37).sin() + if r % 4 == j { 2.0 } else { 0.0 }))
+            .map(|j| {
+                DVector::from_fn(12, |r, _| ((r * 7 + j * 3) as f64 * 0.37).sin() + if r % 4 == j { 2.0 } else { 0.0 })
+            })
             .collect();
         let a = DMatrix::from_columns(&cols);
         let b = &cols[1] * 0.3 + &cols[3] * 0.7;
@@ -227,7 +235,8 @@ mod tests {
 
     #[test]
     fn at_most_k_weights_summing_to_one() {
-        let cols: Vec<DVector<f64>> = (0..6).map(|j| DVector::from_fn(9, |r, _| ((r + 1) as f64 * (j + 2) as f64).cos())).collect();
+        let cols: Vec<DVector<f64>> =
+            (0..6).map(|j| DVector::from_fn(9, |r, _| ((r + 1) as f64 * (j + 2) as f64).cos())).collect();
         let a = DMatrix::from_columns(&cols);
         let b = DVector::from_fn(9, |r, _| (r as f64).sin());
         for k in 1..=4 {

@@ -125,7 +125,11 @@ pub fn decompose(frames: &[&[f32]], n_vertices: usize, opts: &SsdrOptions) -> Re
         return Err(Error::Invalid("no frames or no vertices to decompose".into()));
     }
     if let Some(t) = frames.iter().position(|f| f.len() != 3 * nv) {
-        return Err(Error::Invalid(format!("frame {t} has {} numbers, expected {} (3 per vertex)", frames[t].len(), 3 * nv)));
+        return Err(Error::Invalid(format!(
+            "frame {t} has {} numbers, expected {} (3 per vertex)",
+            frames[t].len(),
+            3 * nv
+        )));
     }
     if let Some(t) = frames.iter().position(|f| f.iter().any(|x| !x.is_finite())) {
         return Err(Error::Invalid(format!("frame {t} has a position that is not a finite number")));
@@ -142,7 +146,10 @@ pub fn decompose(frames: &[&[f32]], n_vertices: usize, opts: &SsdrOptions) -> Re
         )));
     }
     if opts.max_influences == 0 || opts.max_influences > MAX_INFLUENCES {
-        return Err(Error::Invalid(format!("{} influences per vertex: expected 1 to {MAX_INFLUENCES}", opts.max_influences)));
+        return Err(Error::Invalid(format!(
+            "{} influences per vertex: expected 1 to {MAX_INFLUENCES}",
+            opts.max_influences
+        )));
     }
     let rest: Vec<Vector3<f64>> =
         frames[0].chunks_exact(3).map(|p| Vector3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))).collect();
@@ -180,8 +187,9 @@ fn update_transforms(rig: &mut SkinnedRig, vmat: &DMatrix<f64>, sweeps: usize) {
     let weights = &rig.weights;
     rig.transforms.par_chunks_mut(nb).enumerate().for_each(|(t, m)| {
         let v = |i: usize| Vector3::new(vmat[(i, 3 * t)], vmat[(i, 3 * t + 1)], vmat[(i, 3 * t + 2)]);
-        let mut resid: Vec<Vector3<f64>> =
-            (0..nv).map(|i| v(i) - weights[i].iter().fold(Vector3::zeros(), |s, &(j, x)| s + x * m[j].apply(&rest[i]))).collect();
+        let mut resid: Vec<Vector3<f64>> = (0..nv)
+            .map(|i| v(i) - weights[i].iter().fold(Vector3::zeros(), |s, &(j, x)| s + x * m[j].apply(&rest[i])))
+            .collect();
         for _ in 0..sweeps {
             for j in 0..nb {
                 if members[j].is_empty() {
@@ -282,7 +290,11 @@ mod tests {
                 rest.iter()
                     .flat_map(|p| {
                         let x = p[0] - 1.5;
-                        let q = if x <= 0.0 { [p[0], p[1], 0.0] } else { [1.5 + a.cos() * x - a.sin() * p[1], a.sin() * x + a.cos() * p[1], 0.0] };
+                        let q = if x <= 0.0 {
+                            [p[0], p[1], 0.0]
+                        } else {
+                            [1.5 + a.cos() * x - a.sin() * p[1], a.sin() * x + a.cos() * p[1], 0.0]
+                        };
                         [q[0] as f32 + 0.05 * t as f32, q[1] as f32, q[2] as f32]
                     })
                     .collect()
@@ -317,7 +329,11 @@ mod tests {
         let refs: Vec<&[f32]> = frames.iter().map(|f| f.as_slice()).collect();
         let opts = SsdrOptions { bones: 3, max_influences: 2, iterations: 3, seed: 11, ..Default::default() };
         let a = decompose(&refs, nv, &opts).unwrap();
-        let b = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| decompose(&refs, nv, &opts).unwrap());
+        let b = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| decompose(&refs, nv, &opts).unwrap());
         assert_eq!(a.weights, b.weights);
         assert_eq!(a.transforms, b.transforms);
     }
@@ -328,7 +344,9 @@ mod tests {
         let refs: Vec<&[f32]> = frames.iter().map(|f| f.as_slice()).collect();
         let too_many = decompose(&refs, nv, &SsdrOptions { bones: 40, ..Default::default() }).unwrap_err().to_string();
         assert!(too_many.contains("ask for at most 15"), "{too_many}");
-        let k = decompose(&refs, nv, &SsdrOptions { bones: 2, max_influences: 9, ..Default::default() }).unwrap_err().to_string();
+        let k = decompose(&refs, nv, &SsdrOptions { bones: 2, max_influences: 9, ..Default::default() })
+            .unwrap_err()
+            .to_string();
         assert!(k.contains("expected 1 to 8"), "{k}");
         let short = [&frames[0][..6]];
         assert!(decompose(&short, nv, &SsdrOptions::default()).unwrap_err().to_string().contains("frame 0"));

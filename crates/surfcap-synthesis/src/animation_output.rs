@@ -54,7 +54,8 @@ pub fn write_animation(
         // rig command's defaults): engines play it as a character.
         let Animation::Subject(s) = animation else {
             return Err(crate::Error::Request(
-                "--format rig-glb: a frame set (every frame its own topology) cannot be skinned; write glb, abc or obj".into(),
+                "--format rig-glb: a frame set (every frame its own topology) cannot be skinned; write glb, abc or obj"
+                    .into(),
             ));
         };
         let rigged = crate::rig_run::rig_subject(s, &surfcap_skinning::SsdrOptions::default(), progress)?;

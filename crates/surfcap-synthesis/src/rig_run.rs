@@ -77,7 +77,10 @@ pub struct RiggedSubject {
 /// Extent of a pose along the up axis.
 fn height(pose: &[f32], up: UpAxis) -> f64 {
     let (axis, sign) = up.axis_and_sign();
-    let (lo, hi) = pose.chunks_exact(3).map(|p| sign * f64::from(p[axis])).fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+    let (lo, hi) = pose
+        .chunks_exact(3)
+        .map(|p| sign * f64::from(p[axis]))
+        .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
     (hi - lo).max(0.0)
 }
 
@@ -85,7 +88,8 @@ fn height(pose: &[f32], up: UpAxis) -> f64 {
 pub fn rig_subject(subject: &Subject, opts: &SsdrOptions, progress: &dyn Progress) -> Result<RiggedSubject> {
     let start = Instant::now();
     let nv = subject.topology().n_vertices();
-    let frames: Vec<&[f32]> = subject.sequences().iter().flat_map(|s| (0..s.n_frames()).map(move |f| s.frame(f))).collect();
+    let frames: Vec<&[f32]> =
+        subject.sequences().iter().flat_map(|s| (0..s.n_frames()).map(move |f| s.frame(f))).collect();
     progress.start("skinning decomposition", 1);
     let rig = surfcap_skinning::decompose(&frames, nv, opts)
         .map_err(|e| Error::Request(format!("rigging {:?}: {e}", subject.name)))?;
@@ -129,8 +133,15 @@ pub fn rig_subject(subject: &Subject, opts: &SsdrOptions, progress: &dyn Progres
     let mut first = 0;
     for s in subject.sequences() {
         let n = s.n_frames();
-        let (rotations, translations) = surfcap_skinning::joint_animation::joint_poses(&rig, &centres, first..first + n);
-        sequences.push(JointSequence { name: s.name.clone(), tags: s.tags.clone(), n_frames: n, rotations, translations });
+        let (rotations, translations) =
+            surfcap_skinning::joint_animation::joint_poses(&rig, &centres, first..first + n);
+        sequences.push(JointSequence {
+            name: s.name.clone(),
+            tags: s.tags.clone(),
+            n_frames: n,
+            rotations,
+            translations,
+        });
         first += n;
     }
     let options = serde_json::json!({
