@@ -22,6 +22,7 @@ Writes a Markdown table (docs/results/rig.md) with the command that made it.
 """
 
 import argparse
+import hashlib
 import json
 import os
 import struct
@@ -143,6 +144,32 @@ def load_npy_subject(folder, seqs):
     return np.concatenate(frames), faces, [len(f) for f in frames], seqs
 
 
+def dembones(frames, faces, b, sizes, cache, args, name):
+    """Dem Bones on the frames (or its cached result for the same frames and bone count)."""
+    import py_dem_bones
+
+    key = f"{hashlib.sha1(np.ascontiguousarray(frames, dtype=np.float32).tobytes()).hexdigest()}-{b}"
+    if key in cache:
+        return cache[key]
+    nf, nv = frames.shape[:2]
+    t0 = time.perf_counter()
+    r = py_dem_bones.solve_skinning(frames[0], frames, b, faces=faces, max_influences=4)
+    secs = time.perf_counter() - t0
+    w, m = r.weights, r.transforms
+    restp = np.c_[frames[0], np.ones(nv)]
+    rec = np.einsum("bv,fbij,vj->fvi", w, m[:, :, :3, :], restp)
+    e = np.linalg.norm(rec - frames, axis=2)
+    used = int((w.sum(1) > 0).sum())
+    out = {"rms": float(np.sqrt((e**2).mean())), "max": float(e.max()), "seconds": secs,
+           "bytes": skin_glb_bytes(nv, len(faces), used, nf, len(sizes)), "bones": used,
+           "measured": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "load": os.getloadavg()[0]}
+    print(json.dumps({"dembones": name, "bones": b, **out}), flush=True)
+    cache[key] = out
+    if args.dembones_cache:
+        Path(args.dembones_cache).write_text(json.dumps(cache, indent=1))
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--surfcap", default="target/release/surfcap")
@@ -150,7 +177,14 @@ def main():
     ap.add_argument("--bones", default="16,32")
     ap.add_argument("--subjects", default="crane,samba,knight,cmu-mannequin")
     ap.add_argument("--iterations", type=int, default=None, help="our iterations (default: surfcap rig's)")
+    ap.add_argument("--dembones-cache", default=None,
+                    help="JSON file of Dem Bones results by frames hash and bone count: reused when the frames are the same")
+    ap.add_argument("--only-dembones", action="store_true",
+                    help="run Dem Bones only (frames in the subjects' own order) and fill --dembones-cache")
     args = ap.parse_args()
+    cache = {}
+    if args.dembones_cache and Path(args.dembones_cache).exists():
+        cache = json.loads(Path(args.dembones_cache).read_text())
     import py_dem_bones
 
     data = data_dir()
@@ -178,7 +212,15 @@ def main():
         npy = tmp / f"{name}-npy"
         run([exe, "--quiet", "export", *src, "--format", "npy", "-o", str(npy)])
         frames = None
+        if args.only_dembones:
+            meta = json.loads((npy / "meta.json").read_text())
+            order = list(meta["sequences"])  # folders in the subject's order
+            frames, faces, sizes, seqs = load_npy_subject(npy, order)
+            height = None
         for b in [int(x) for x in args.bones.split(",")]:
+            if args.only_dembones:
+                dembones(frames, faces, b, sizes, cache, args, name)
+                continue
             glb = tmp / f"{name}-{b}.glb"
             cmd = [exe, "--json", "rig", *src, "--bones", str(b), "--max-influences", "4", "-o", str(glb)]
             if args.iterations is not None:
@@ -197,20 +239,14 @@ def main():
             assert abs(ours["rms"] - rep["rms"]) <= 1e-3 * height, (ours, rep["rms"])
             ours.update(seconds=rep["decomposition_seconds"], wall=wall, bytes=glb.stat().st_size, bones=rep["bones"])
 
-            t0 = time.perf_counter()
-            r = py_dem_bones.solve_skinning(frames[0], frames, b, faces=faces, max_influences=4)
-            secs = time.perf_counter() - t0
-            w, m = r.weights, r.transforms
-            restp = np.c_[frames[0], np.ones(nv)]
-            db_rec = np.einsum("bv,fbij,vj->fvi", w, m[:, :, :3, :], restp)
-            db = errors(db_rec, frames, height)
-            used = int((w.sum(1) > 0).sum())
-            db.update(seconds=secs, bytes=skin_glb_bytes(nv, len(faces), used, nf, len(sizes)), bones=used)
+            db = dict(dembones(frames, faces, b, sizes, cache, args, name))
+            db.update(rms_pct=100 * db["rms"] / height, max_pct=100 * db["max"] / height)
             row = dict(subject=name, frames=nf, vertices=nv, bones=b, height=height, units=rep["units"],
                        morph=rep["morph_glb_bytes"], ours=ours, dembones=db)
             print(json.dumps(row), flush=True)
             rows.append(row)
-    write_table(rows, args)
+    if not args.only_dembones:
+        write_table(rows, args)
 
 
 def write_table(rows, args):
