@@ -245,6 +245,7 @@ def main():
                        morph=rep["morph_glb_bytes"], ours=ours, dembones=db)
             print(json.dumps(row), flush=True)
             rows.append(row)
+            write_table(rows, args)  # after every row: a long run leaves what it measured
     if not args.only_dembones:
         write_table(rows, args)
 
@@ -257,6 +258,8 @@ def write_table(rows, args):
         cmd += f" --subjects {args.subjects}"
     if args.iterations is not None:
         cmd += f" --iterations {args.iterations}"
+    if args.dembones_cache:
+        cmd += f" --dembones-cache {args.dembones_cache}"
     lines = [
         "# Skinned rigs: surfcap (SSDR in Rust) beside Dem Bones",
         "",
@@ -287,6 +290,13 @@ def write_table(rows, args):
             f"| {o['seconds']:.1f} s ({o['wall']:.1f} s) | {d['seconds']:.1f} s | {d['seconds'] / o['seconds']:.1f}x "
             f"| {o['bytes'] / 1e6:.2f} MB | {d['bytes'] / 1e6:.2f} MB | {r['morph'] / 1e6:.1f} MB |"
         )
+    lines.append("")
+    lines.append("Dem Bones runs (measured when, and the machine's 1-minute load average then):")
+    lines.append("")
+    for r in rows:
+        d = r["dembones"]
+        if "measured" in d:
+            lines.append(f"- {r['subject']}, {r['bones']} bones: {d['measured']}, load {d['load']:.1f}")
     lines.append("")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text("\n".join(lines) + "\n")

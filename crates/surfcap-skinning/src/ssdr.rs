@@ -13,8 +13,10 @@
 //! 2. the weights update, one vertex at a time with the transforms fixed
 //!    ([`crate::skinning_weights`]; vertices are independent).
 //!
-//! The rest pose `p` is the first frame given. Each step lowers (or keeps) the error, so the
-//! error after each iteration is non-increasing up to the soft affinity constraint.
+//! The rest pose `p` is the first frame given. Each step lowers (or keeps) the error: the bone
+//! update exactly (each bone's fit is the minimum with the rest fixed), the weight update because
+//! a vertex keeps its weights unless the new ones fit it better; so the error never grows from
+//! one iteration to the next.
 //!
 //! Bones per clip, not per segment: one rig (one set of bones and weights) covers every frame
 //! of every sequence; only the bone transforms change per frame. A rig per segment of N frames
@@ -239,6 +241,7 @@ fn update_weights(rig: &mut SkinnedRig, vmat: &DMatrix<f64>, k: usize) {
         })
         .collect();
     let rest = &rig.rest;
+    let old = &rig.weights;
     let new: Vec<Option<Vec<(usize, f64)>>> = (0..nv)
         .into_par_iter()
         .map(|i| {
@@ -249,7 +252,14 @@ fn update_weights(rig: &mut SkinnedRig, vmat: &DMatrix<f64>, k: usize) {
             let c = DVector::from_fn(nb, |j, _| {
                 cm[(row, 4 * j)] * p.x + cm[(row, 4 * j + 1)] * p.y + cm[(row, 4 * j + 2)] * p.z + cm[(row, 4 * j + 3)]
             });
-            affine_sparse_weights(&g, &c, k)
+            // Kept only when it fits better than the vertex's current weights: keeping the K
+            // largest of the non-negative solution is not always the best K-sparse choice, and
+            // this keeps every iteration from raising the error.
+            let objective = |w: &[(usize, f64)]| -> f64 {
+                let quad: f64 = w.iter().map(|&(a, x)| w.iter().map(|&(b, y)| x * y * g[(a, b)]).sum::<f64>()).sum();
+                quad - 2.0 * w.iter().map(|&(a, x)| x * c[a]).sum::<f64>()
+            };
+            affine_sparse_weights(&g, &c, k).filter(|w| objective(w) < objective(&old[i]))
         })
         .collect();
     for (w, n) in rig.weights.iter_mut().zip(new) {
