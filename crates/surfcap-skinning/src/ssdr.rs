@@ -323,7 +323,7 @@ mod tests {
         let last = *rig.rms_history.last().unwrap();
         assert!(last < 1e-6, "rms {:?}", rig.rms_history);
         for w in rig.rms_history.windows(2) {
-            assert!(w[1] <= w[0] * (1.0 + 1e-6) + 1e-9, "error grew: {:?}", rig.rms_history);
+            assert!(w[1] <= w[0] * (1.0 + 1e-6) + 1e-7, "error grew beyond f32 rounding: {:?}", rig.rms_history);
         }
         for w in &rig.weights {
             assert!((w.iter().map(|x| x.1).sum::<f64>() - 1.0).abs() < 1e-9 && w.len() <= 2);
