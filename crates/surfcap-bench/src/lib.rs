@@ -23,6 +23,7 @@ mod learn;
 mod load;
 mod measure;
 mod play;
+mod rig;
 mod scale;
 mod smg;
 mod synth;
@@ -97,6 +98,10 @@ enum Command {
     /// on --frames nodes, single-threaded (target: p99 under 2 ms on 2,000 frames), the 60 Hz
     /// step's latency with and without meshes, and the moves' precomputation.
     Play(play::Args),
+    /// Skinned rigs (Smooth Skinning Decomposition with Rigid Bones) of a real subject (default
+    /// the crane) at several bone counts: decomposition time, error, glb size; with
+    /// --segment-frames also a rig per segment beside one rig for the whole subject.
+    Rig(rig::Args),
     /// `surfcap tiles`, for `scale`'s child processes (each tile job's peak memory its own).
     #[command(subcommand, hide = true)]
     Tiles(surfcap_cli::commands::tiles::Cmd),
@@ -126,6 +131,7 @@ impl surfcap_cli::Front for Cli {
             Command::Export(a) => export::run(ctx, a),
             Command::Interpolate(a) => interpolate::run(ctx, a),
             Command::Play(a) => play::run(ctx, a),
+            Command::Rig(a) => rig::run(ctx, a),
             Command::Tiles(c) => surfcap_cli::commands::tiles::run(ctx, c),
         }
     }

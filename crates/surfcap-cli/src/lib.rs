@@ -149,6 +149,7 @@ impl Front for Cli {
             Command::Tiles(c) => commands::tiles::run(ctx, c),
             Command::Reproduce(a) => commands::reproduce::run(ctx, a),
             Command::Render(a) => commands::render::run(ctx, a),
+            Command::Rig(a) => commands::rig::run(ctx, a),
         }
     }
 }
@@ -228,6 +229,10 @@ enum Command {
     /// Pictures to share: what `view` plays, rendered headless in Chromium at a chosen size,
     /// view and frame rate, to an MP4 video, an animated GIF or a folder of PNG frames.
     Render(commands::render::Args),
+    /// A subject as a skinned character (Smooth Skinning Decomposition with Rigid Bones, Le and
+    /// Deng 2012): bones, sparse weights and one bone animation per sequence as a glTF skin,
+    /// with the reconstruction error per frame, the size and the time.
+    Rig(commands::rig::Args),
 }
 
 /// `surfcap info x | head` must end quietly when `head` closes the pipe, as other command-line

@@ -427,7 +427,8 @@ pub struct OutOpts {
     /// beside it as <output>.report.json.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// glb, obj, ply, pc2, npy, usda or abc (default: from the output's extension, else glb).
+    /// glb, obj, ply, pc2, npy, usda or abc (default: from the output's extension, else glb); or
+    /// rig-glb: a skinned character (bones and weights, as `surfcap rig` makes it) in a .glb.
     #[arg(long)]
     pub format: Option<ExportFormat>,
     #[command(flatten)]

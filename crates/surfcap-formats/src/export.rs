@@ -33,6 +33,10 @@ pub enum ExportFormat {
     Abc,
     /// One `.scstream` file: the compact stream (quantised, predicted, deflated; `stream`).
     Stream,
+    /// One `.glb` file: a skinned rig (bones, weights, a bone animation per sequence) made by
+    /// the skinning decomposition (`rig-glb`); written by the synthesis layer and `surfcap rig`,
+    /// not by these exporters, which only have frames.
+    RigGlb,
 }
 
 impl ExportFormat {
@@ -47,6 +51,7 @@ impl ExportFormat {
             ExportFormat::Usda => "export-usda",
             ExportFormat::Abc => "export-abc",
             ExportFormat::Stream => "export-stream",
+            ExportFormat::RigGlb => "export-rig-glb",
         }
     }
 
@@ -60,6 +65,7 @@ impl ExportFormat {
             "usda" | "usd" => ExportFormat::Usda,
             "abc" | "alembic" => ExportFormat::Abc,
             "stream" | "scstream" => ExportFormat::Stream,
+            "rig-glb" => ExportFormat::RigGlb,
             _ => return None,
         })
     }
@@ -71,7 +77,7 @@ impl std::str::FromStr for ExportFormat {
         ExportFormat::parse(s).ok_or_else(|| {
             surfcap_mesh::Error::new(
                 surfcap_mesh::ErrorKind::Unsupported,
-                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda, abc or stream"),
+                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda, abc, stream or rig-glb"),
             )
         })
     }
@@ -136,6 +142,9 @@ pub fn plan_export(set: &mut OutputSet, format: ExportFormat, out: &Path, force:
         }
         ExportFormat::Obj | ExportFormat::Ply | ExportFormat::Pc2 | ExportFormat::Npy => {
             set.dir(out, format.output_kind(), force)?;
+        }
+        ExportFormat::RigGlb => {
+            set.file(out)?;
         }
     }
     Ok(())
@@ -272,6 +281,10 @@ pub fn export(
     let topo = subject.topology();
     let meta = sidecar(subject);
     match format {
+        ExportFormat::RigGlb => Err(surfcap_mesh::Error::new(
+            surfcap_mesh::ErrorKind::Unsupported,
+            "rig-glb: a skinned rig is made by the skinning decomposition, not written from frames: run `surfcap rig SUBJECT -o OUT.glb` (or `synth ... --format rig-glb`)".to_string(),
+        )),
         ExportFormat::Glb => {
             progress.start("writing glb", 1);
             write_file(out, |w| glb::write_glb(w, subject))?;

@@ -17,6 +17,8 @@
 //!   material of their texture (a subject with textures is written as a frame set: morph targets
 //!   cannot switch textures). Read back into a subject or a `FrameSet` with UVs and textures.
 //!   Writing uses `gltf-json`'s typed structs, reading the `gltf` crate.
+//! - **skinned glb** ([`glb_skin`]): a skinned rig (mesh, `JOINTS_0`/`WEIGHTS_0`, joints with
+//!   inverse bind matrices, one joint animation per sequence) for engines to play as a character.
 //! - **Alembic**: the Ogawa container written in two streamed passes (counting, then writing,
 //!   since the root's offset precedes everything and the atomic writer cannot seek); the Abc/AbcGeom
 //!   layers as the reference library lays them out, an `Xform` + `PolyMesh` per sequence,
@@ -52,6 +54,7 @@ pub mod export;
 pub mod frame_folder;
 pub mod glb;
 pub mod glb_frame_set;
+pub mod glb_skin;
 pub mod import;
 pub mod manifest;
 pub mod obj;

@@ -49,6 +49,19 @@ pub fn write_animation(
         return Ok(vec![output.to_path_buf()]);
     }
     let format = output_format(format, output);
+    if format == ExportFormat::RigGlb {
+        // A skinned rig of the animation (Smooth Skinning Decomposition with Rigid Bones, the
+        // rig command's defaults): engines play it as a character.
+        let Animation::Subject(s) = animation else {
+            return Err(crate::Error::Request(
+                "--format rig-glb: a frame set (every frame its own topology) cannot be skinned; write glb, abc or obj"
+                    .into(),
+            ));
+        };
+        let rigged = crate::rig_run::rig_subject(s, &surfcap_skinning::SsdrOptions::default(), progress)?;
+        surfcap_mesh::atomic::write_file(output, |w| w.write_all(&rigged.glb))?;
+        return Ok(vec![output.to_path_buf()]);
+    }
     Ok(match animation {
         Animation::Subject(s) => export(s, format, output, options, progress)?,
         Animation::FrameSet(set) => export_frame_set(set, format, output, options, progress)?,

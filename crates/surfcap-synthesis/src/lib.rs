@@ -34,6 +34,8 @@
 //! - [`interpolation_run`] and [`transition_run`]: poses between two frames (thesis 2.4) and
 //!   one optimal transition between two frames (2.5.4, Algorithm 2), as `surfcap interpolate`
 //!   and `surfcap transition` make them.
+//! - [`rig_run`]: a subject as a skinned rig (`surfcap_skinning`'s SSDR) written as a glTF
+//!   skin, with per-frame reconstruction errors, size and time.
 //! - [`constraint`]: soft constraints and how closely they were met.
 //! - [`controller`]: a character steered live by a stream of inputs (motion matching on the
 //!   essential graph): [`controller::Controller::step`] gives the frames to show.
@@ -58,6 +60,7 @@ pub mod playback;
 pub mod prepared;
 pub mod reach_run;
 pub mod request_size;
+pub mod rig_run;
 pub mod smg_query;
 pub mod transfer_run;
 pub mod transition_run;

@@ -16,6 +16,7 @@ pub mod remesh_frames;
 pub mod render;
 pub mod report;
 pub mod reproduce;
+pub mod rig;
 pub mod smg;
 pub mod synth;
 pub mod tiles;
