@@ -3,7 +3,7 @@
 (PyPI `py-dem-bones`, the C++ SSDR library's bindings) on the same frames and bone counts.
 
 Subjects: the crane and samba (vlasic2008), the KayKit knight (all its clips, one subject), the
-CMU-driven mannequin (`surfcap synth --bvh` on subject 16's walk and jog). For each subject and
+CMU-driven mannequin (`surfcap make mannequin --bvh` on subject 16's walk and jog). For each subject and
 bone count:
 
 - ours: `surfcap rig SUBJECT --bones B --max-influences 4 -o X.glb --json`; its error is measured
@@ -203,7 +203,7 @@ def main():
         elif name == "cmu-mannequin":
             subj = tmp / "cmu.subject"
             bvh = data / "cmu_bvh"
-            run([exe, "--quiet", "synth", "--bvh", str(bvh / "16_15.bvh"), str(bvh / "16_36.bvh"), "-o", str(subj)])
+            run([exe, "--quiet", "make", "mannequin", "--bvh", str(bvh / "16_15.bvh"), str(bvh / "16_36.bvh"), "-o", str(subj)])
             subjects[name] = [str(subj)]
         else:
             sys.exit(f"unknown subject {name}")

@@ -35,7 +35,7 @@ fn mannequin(dir: &Path, data: &Path) -> std::path::PathBuf {
     let subject = dir.join("cmu.subject");
     let bvh: Vec<String> =
         ["16_15", "16_17", "16_19"].iter().map(|c| p(&data.join(format!("cmu_bvh/{c}.bvh"))).to_string()).collect();
-    let mut args = vec!["synth", "--bvh"];
+    let mut args = vec!["make", "mannequin", "--bvh"];
     args.extend(bvh.iter().map(String::as_str));
     args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
     let o = surfcap!(&args);

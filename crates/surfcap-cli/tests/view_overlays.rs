@@ -40,7 +40,7 @@ fn the_centre_track_lies_on_the_ground_and_the_presets_look_as_named() {
     let subject = tmp.path().join("cmu.subject");
     let bvh: Vec<String> =
         ["16_15", "16_17", "16_19"].iter().map(|c| p(&data.join(format!("cmu_bvh/{c}.bvh"))).to_string()).collect();
-    let mut args = vec!["synth", "--bvh"];
+    let mut args = vec!["make", "mannequin", "--bvh"];
     args.extend(bvh.iter().map(String::as_str));
     args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
     let o = surfcap!(&args);

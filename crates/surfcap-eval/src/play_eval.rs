@@ -517,7 +517,7 @@ mod tests {
         assert!(v == [0.0, 0.0] && g == Gait::Idle);
         let (a, b) =
             (Script::ZigZag.command(1.0, 1.0, 2.0, 1.0, 3.0).0, Script::ZigZag.command(3.0, 1.0, 2.0, 1.0, 3.0).0);
-        assert!((a[1] - b[1] * -1.0).abs() < 1e-12 && a[1] > 0.0);
+        assert!((a[1] + b[1]).abs() < 1e-12 && a[1] > 0.0);
         assert_eq!(Script::parse("zig-zag"), Some(Script::ZigZag));
         let v = velocities(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]], 1, 10.0);
         assert!(v.iter().all(|x| (x[0] - 10.0).abs() < 1e-12 && x[1] == 0.0));

@@ -49,27 +49,33 @@ impl Unreachable {
     }
 }
 
-impl std::fmt::Display for Unreachable {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl Unreachable {
+    /// The reason in words, lengths and speeds in `unit` (the subject's symbol, `m`; "units"
+    /// only when its size is unknown): "too fast: needs 0.0119 m per frame, ...".
+    pub fn in_unit(&self, unit: &str) -> String {
         match self {
             Unreachable::TooShort { shortest_frames } => {
-                write!(f, "too short: every walk takes at least {shortest_frames} frames")
+                format!("too short: every walk takes at least {shortest_frames} frames")
             }
             Unreachable::TooNear { shortest_distance } => {
-                write!(f, "too near: every walk travels at least {shortest_distance:.3} units")
+                format!("too near: every walk travels at least {shortest_distance:.3} {unit}")
             }
-            Unreachable::NoLoop => write!(f, "no loop between the key frames: every walk has a fixed length"),
+            Unreachable::NoLoop => "no loop between the key frames: every walk has a fixed length".to_string(),
             Unreachable::TooFast { needed, fastest } => {
-                write!(f, "too fast: needs {needed:.4} units per frame, the fastest the graph offers is {fastest:.4}")
+                format!("too fast: needs {needed:.4} {unit} per frame, the fastest the graph offers is {fastest:.4}")
             }
-            Unreachable::TooSlow { needed, slowest } => write!(
-                f,
-                "too slow: needs {needed:.4} units per frame, the slowest the graph offers is {slowest:.4} (no in-place loop)"
+            Unreachable::TooSlow { needed, slowest } => format!(
+                "too slow: needs {needed:.4} {unit} per frame, the slowest the graph offers is {slowest:.4} (no in-place loop)"
             ),
-            Unreachable::Granularity => {
-                write!(f, "no whole number of loop repetitions lands within the tolerance")
-            }
+            Unreachable::Granularity => "no whole number of loop repetitions lands within the tolerance".to_string(),
         }
+    }
+}
+
+/// In "units": reports that know the subject's unit use [`Unreachable::in_unit`].
+impl std::fmt::Display for Unreachable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.in_unit("units"))
     }
 }
 
@@ -119,6 +125,7 @@ mod tests {
         assert_eq!(all.iter().map(Unreachable::kind).collect::<Vec<_>>(), REASONS);
         assert_eq!(all[0].to_string(), "too short: every walk takes at least 3 frames");
         assert!(all[3].to_string().starts_with("too fast: needs 0.5000 units per frame"));
+        assert!(all[3].in_unit("m").starts_with("too fast: needs 0.5000 m per frame"));
         let json = serde_json::to_value(&all[4]).unwrap();
         assert_eq!(json["reason"], "too_slow");
         assert_eq!(json["slowest"], 0.02);

@@ -110,6 +110,9 @@ impl Page {
             device_posture: None,
         })
         .map_err(|e| page_error(format!("could not set the size: {e:#}")))?;
+        // The navigation's wait uses the tab's default timeout (20 s in headless_chrome): a
+        // loaded machine takes longer, so the user's --timeout bounds it as every other wait.
+        tab.set_default_timeout(opts.timeout);
         tab.navigate_to(&url)
             .and_then(|t| t.wait_until_navigated())
             .map_err(|e| page_error(format!("could not load: {e:#}")))?;

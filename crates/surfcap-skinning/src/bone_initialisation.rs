@@ -154,13 +154,13 @@ fn fit_errors(rest: &[Vector3<f64>], sub: &DMatrix<f64>, fits: &[BoneTransform],
         for j in 0..n_bones {
             let b = &fits[k * n_bones + j];
             let mut m = [[0.0; 4]; 3];
-            for r in 0..3 {
-                for c in 0..3 {
-                    m[r][c] = b.rotation[(r, c)];
+            for (r, row) in m.iter_mut().enumerate() {
+                for (c, x) in row.iter_mut().take(3).enumerate() {
+                    *x = b.rotation[(r, c)];
                 }
-                m[r][3] = b.translation[r];
-                for c in 0..4 {
-                    mbig[(3 * k + r, 4 * j + c)] = m[r][c];
+                row[3] = b.translation[r];
+                for (c, &x) in row.iter().enumerate() {
+                    mbig[(3 * k + r, 4 * j + c)] = x;
                 }
             }
             for a in 0..4 {

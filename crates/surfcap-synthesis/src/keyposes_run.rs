@@ -111,7 +111,7 @@ impl Prepared {
                 obtained_time: o,
                 error: (o - k.requested).abs(),
                 pose_distance,
-                unreachable_why: why.as_ref().map(|u| u.to_string()),
+                unreachable_why: why.as_ref().map(|u| u.in_unit(&crate::words::length_unit(self.subject()))),
                 unreachable: why,
             });
         }

@@ -159,7 +159,7 @@ impl Prepared {
             total_cost: cost,
             search_seconds,
             met: found.met,
-            unreachable_why: found.unreachable.as_ref().map(|u| u.to_string()),
+            unreachable_why: found.unreachable.as_ref().map(|u| u.in_unit(&length_unit(self.subject()))),
             unreachable: found.unreachable,
             loop_rule,
             excluded_loops,

@@ -231,29 +231,11 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
                 a.distance,
                 r.unit,
                 a.time,
-                unreachable_in(u, &r.unit)
+                u.in_unit(&r.unit)
             );
         }
         let written: Vec<String> = done.written.iter().map(|p| p.display().to_string()).collect();
         println!("wrote {}, {}", written.join(", "), surfcap_synthesis::report_path(&a.output).display());
     });
     check_constraints(ctx, &a.constraints, &done.constraints)
-}
-
-/// Why no walk meets the target, its lengths and speeds in the subject's unit (`m`, `m per
-/// frame`; "units" only when the subject's size is unknown), as the rest of the query's text.
-fn unreachable_in(u: &surfcap_mesh::reachability::Unreachable, unit: &str) -> String {
-    use surfcap_mesh::reachability::Unreachable as U;
-    match u {
-        U::TooNear { shortest_distance } => {
-            format!("too near: every walk travels at least {shortest_distance:.3} {unit}")
-        }
-        U::TooFast { needed, fastest } => {
-            format!("too fast: needs {needed:.4} {unit} per frame, the fastest the graph offers is {fastest:.4}")
-        }
-        U::TooSlow { needed, slowest } => format!(
-            "too slow: needs {needed:.4} {unit} per frame, the slowest the graph offers is {slowest:.4} (no in-place loop)"
-        ),
-        other => other.to_string(),
-    }
 }
