@@ -155,7 +155,13 @@ async fn items(State(app): State<Arc<App>>) -> Response {
             v
         })
         .collect();
-    let v = serde_json::json!({ "items": items, "report": app.report.as_ref().map(|_| "/report/index.html") });
+    // `direct`: whether the direction routes answer (the page asks for the graph only then, so a
+    // viewer that only plays makes no request that fails).
+    let v = serde_json::json!({
+        "items": items,
+        "report": app.report.as_ref().map(|_| "/report/index.html"),
+        "direct": app.director.is_some(),
+    });
     respond("application/json", serde_json::to_vec(&v).expect("JSON values serialise"))
 }
 

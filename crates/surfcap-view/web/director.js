@@ -16,8 +16,11 @@ function el(tag, props = {}, ...children) {
 }
 
 export async function attachDirector(viewer) {
+  // A viewer that only plays (no --direct) has no direction routes: ask nothing of them.
+  const listed = await fetch('/api/items');
+  if (!listed.ok || !(await listed.json()).direct) return null;
   const r = await fetch('/api/direct/graph');
-  if (!r.ok) return null;  // a viewer that only plays
+  if (!r.ok) return null;
   const graph = await r.json();
   const status = { busy: false, last: null, error: null, requests: 0 };
 
