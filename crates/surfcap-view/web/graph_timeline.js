@@ -53,13 +53,19 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
   const xOfTime = (t) => LABEL + (t / state.span) * (width() - LABEL - PAD);
   const timeOfX = (x) => Math.max(0, Math.round(((x - LABEL) / (width() - LABEL - PAD)) * state.span));
 
-  function draw() {
-    const dpr = window.devicePixelRatio || 1;
-    canvas.width = Math.round(width() * dpr);
-    canvas.height = Math.round(height * dpr);
-    const g = canvas.getContext('2d');
+  // The rows and every arc, rasterised once per size into a picture of their own that each draw
+  // copies: a dense graph has thousands of arcs, and stroking them on every hover or click kept
+  // the browser's rasteriser busy for seconds (a software-rendered page stalled its next WebGL
+  // frame behind it, 9-16 s after a click on a graph of 10,220 transitions).
+  let base = { key: '', canvas: null };
+  function baseLayer(dpr) {
+    const key = `${width()}x${height}@${dpr}`;
+    if (base.key === key) return base.canvas;
+    const c = document.createElement('canvas');
+    c.width = Math.round(width() * dpr);
+    c.height = Math.round(height * dpr);
+    const g = c.getContext('2d');
     g.setTransform(dpr, 0, 0, dpr, 0, 0);
-    g.clearRect(0, 0, width(), height);
     g.font = '12px system-ui, sans-serif';
     g.textBaseline = 'middle';
     graph.sequences.forEach((q, r) => {
@@ -70,17 +76,33 @@ export function attachGraphTimeline(container, graph, { onTransition, onKeysChan
       g.fillRect(xOfFrame(0) - 1, rowY(r) + 4, xOfFrame(q.frames - 1) - xOfFrame(0) + 2, ROW - 8);
       g.globalAlpha = 1;
     });
-    // Every arc in one stroke (a dense graph has thousands: fainter the more there are), then
-    // the one pointed at or playing on top.
+    // Every arc in one stroke, fainter the more there are.
     const arcs = arcsNow();
-    const trace = (pts) => pts.forEach((p, i) => (i ? g.lineTo(p.x, p.y) : g.moveTo(p.x, p.y)));
     g.strokeStyle = ARC;
     g.lineWidth = 1;
     g.globalAlpha = Math.min(0.55, 6 / Math.sqrt(arcs.length || 1));
     g.beginPath();
-    arcs.forEach(trace);
+    arcs.forEach((pts) => pts.forEach((p, i) => (i ? g.lineTo(p.x, p.y) : g.moveTo(p.x, p.y))));
     g.stroke();
-    g.globalAlpha = 1;
+    base = { key, canvas: c };
+    return c;
+  }
+
+  function draw() {
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.round(width() * dpr), h = Math.round(height * dpr);
+    if (canvas.width !== w) canvas.width = w;
+    if (canvas.height !== h) canvas.height = h;
+    const g = canvas.getContext('2d');
+    g.setTransform(1, 0, 0, 1, 0, 0);
+    g.clearRect(0, 0, w, h);
+    g.drawImage(baseLayer(dpr), 0, 0);
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.font = '12px system-ui, sans-serif';
+    g.textBaseline = 'middle';
+    // The arc pointed at or playing, on top.
+    const arcs = arcsNow();
+    const trace = (pts) => pts.forEach((p, i) => (i ? g.lineTo(p.x, p.y) : g.moveTo(p.x, p.y)));
     for (const k of new Set([state.hot, state.playing])) {
       if (k === null || k < 0 || !arcs[k]) continue;
       g.strokeStyle = ARC_HOT;
