@@ -928,14 +928,6 @@ fn property(
             (Some(m), "faceVertexIndices") => m.indices = Some((lx.int_array(name)?, line)),
             (Some(m), "points") => m.points = Some((lx.tuple_array(name, 3)?, line)),
             (Some(m), "velocities") => m.velocities = Some((lx.tuple_array(name, 3)?, line)),
-            (Some(m), "velocities.timeSamples") => {
-                let mut v = Vec::new();
-                lx.time_samples(name, |l, time, tok| {
-                    v.push((time, l.tuple_array(name, 3)?, tok.line));
-                    Ok(())
-                })?;
-                m.velocity_samples = Some(v);
-            }
             (Some(m), "primvars:st") => m.st = Some((lx.tuple_array(name, 2)?, line)),
             (Some(m), "primvars:st:indices") => m.st_indices = Some(lx.int_array(name)?),
             (Some(m), "orientation") => m.left_handed = lx.string(name)? == "leftHanded",
@@ -951,13 +943,17 @@ fn property(
                     m.indices_samples = Some(v);
                 }
             }
-            (Some(m), "points.timeSamples") => {
+            (Some(m), "points.timeSamples" | "velocities.timeSamples") => {
                 let mut v = Vec::new();
                 lx.time_samples(name, |l, time, tok| {
                     v.push((time, l.tuple_array(name, 3)?, tok.line));
                     Ok(())
                 })?;
-                m.samples = Some(v);
+                if name.starts_with("points") {
+                    m.samples = Some(v);
+                } else {
+                    m.velocity_samples = Some(v);
+                }
             }
             (Some(m), "primvars:surfcap:synthetic.timeSamples") => {
                 let mut v = Vec::new();
