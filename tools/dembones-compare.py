@@ -149,6 +149,9 @@ def dembones(frames, faces, b, sizes, cache, args, name):
     import py_dem_bones
 
     key = f"{hashlib.sha1(np.ascontiguousarray(frames, dtype=np.float32).tobytes()).hexdigest()}-{b}"
+    if key not in cache and args.dembones_cache and Path(args.dembones_cache).exists():
+        # An --only-dembones run started beside this one may have filled it since.
+        cache.update(json.loads(Path(args.dembones_cache).read_text()))
     if key in cache:
         return cache[key]
     nf, nv = frames.shape[:2]

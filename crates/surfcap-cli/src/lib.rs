@@ -43,6 +43,9 @@ mod view_items;
 // ---- director ----
 mod view_director;
 // ---- end director ----
+// ---- played files ----
+mod view_played;
+// ---- end played files ----
 
 pub use output::Ctx;
 

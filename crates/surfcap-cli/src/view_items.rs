@@ -35,6 +35,7 @@ pub fn view_items(s: &Subject, only: &[String]) -> Vec<ViewItem> {
             textures: Vec::new(),
             frame_textures: None,
             field: None,
+            played: None,
         })
         .collect()
 }
@@ -105,6 +106,7 @@ pub fn frame_set_items(
             textures: Vec::new(),
             frame_textures: None,
             field: None,
+            played: None,
         };
         if let Some(t) = textures {
             let (mut nv, mut faces, mut positions, mut uvs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());

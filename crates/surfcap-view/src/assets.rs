@@ -17,6 +17,23 @@ pub const ASSETS: &[(&str, &str, &str)] = &[
     ),
     // ---- stream: the compact stream's decoder ----
     ("stream_decode.js", JS, include_str!("../web/stream_decode.js")),
+    // ---- played files: streams and skinned rigs decoded by the page ----
+    ("formats_player.js", JS, include_str!("../web/formats_player.js")),
+    (
+        "addons/loaders/GLTFLoader.js",
+        JS,
+        include_str!("../web/node_modules/three/examples/jsm/loaders/GLTFLoader.js"),
+    ),
+    (
+        "addons/utils/BufferGeometryUtils.js",
+        JS,
+        include_str!("../web/node_modules/three/examples/jsm/utils/BufferGeometryUtils.js"),
+    ),
+    (
+        "addons/utils/SkeletonUtils.js",
+        JS,
+        include_str!("../web/node_modules/three/examples/jsm/utils/SkeletonUtils.js"),
+    ),
 ];
 
 const JS: &str = "text/javascript; charset=utf-8";

@@ -97,6 +97,10 @@ pub struct ViewItem {
     /// An optional per-frame per-vertex scalar field the page can colour the mesh by, with a
     /// colour bar (one shared topology only).
     pub field: Option<VertexField>,
+    /// A file the page decodes and plays itself; then `positions` and `faces` are empty (the
+    /// file holds them) and the item has no colours, UVs, field or frame set.
+    #[serde(skip)]
+    pub played: Option<PlayedFile>,
 }
 
 /// A scalar per vertex and frame (an error, a distance, a strain) drawn as a colour map: the
@@ -117,6 +121,33 @@ pub struct VertexField {
     pub max: f32,
     #[serde(skip)]
     pub values: Vec<f32>,
+}
+
+/// A file the page decodes and plays itself, instead of positions decoded here: a compact
+/// stream (`.scstream`, decoded frame by frame by `web/stream_decode.js`, so the first frames
+/// play before the whole file is decoded) or a skinned rig (a glb with a skin, played by
+/// three.js as a skinned mesh: its joint animation evaluated at each frame). Served as
+/// `/api/items/{id}/file`; items of one file share its bytes and the page fetches them once.
+#[derive(Debug, Clone, Serialize)]
+pub struct PlayedFile {
+    /// `stream` or `rig`.
+    pub kind: PlayedKind,
+    /// Which of the file's sequences (a stream's) or animations (a rig's) the item plays.
+    pub index: usize,
+    /// The grid box of a stream (`[min, max]` in the item's coordinates, every frame inside
+    /// it), which the page frames before any frame is decoded; `None` for a rig (the page
+    /// measures its frames).
+    pub bounds: Option<[[f64; 3]; 2]>,
+    #[serde(skip)]
+    pub bytes: std::sync::Arc<Vec<u8>>,
+}
+
+/// The kinds of [`PlayedFile`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlayedKind {
+    Stream,
+    Rig,
 }
 
 impl VertexField {
@@ -192,6 +223,8 @@ pub enum ViewError {
     Uvs(String, usize, usize),
     #[error("{0}: {1}")]
     Textures(String, String),
+    #[error("{0}: a file the page plays itself (a stream or a rig) carries its own positions and faces; {1}")]
+    Played(String, String),
     #[error("{0}: the sequence has no frames")]
     Empty(String),
     #[error("nothing to show: no sequence was given")]
@@ -215,6 +248,9 @@ impl ViewItem {
             && let Some(&t) = o.transitions.iter().find(|&&t| t >= self.n_frames)
         {
             return Err(ViewError::Transition(self.name.clone(), t, self.n_frames - 1));
+        }
+        if let Some(p) = &self.played {
+            return self.check_played(p);
         }
         self.check_textures()?;
         if let Some(f) = &self.field
@@ -241,6 +277,28 @@ impl ViewItem {
             && (c.len() != per_frame || c.iter().any(|x| !x.is_finite()))
         {
             return Err(ViewError::Colours(self.name.clone(), c.len(), per_frame));
+        }
+        Ok(())
+    }
+
+    /// [`ViewItem::check`] for an item whose file the page plays: its counts and labels, and
+    /// nothing the file does not carry.
+    fn check_played(&self, p: &PlayedFile) -> Result<(), ViewError> {
+        let bad = |why: &str| Err(ViewError::Played(self.name.clone(), why.to_string()));
+        if self.n_vertices == 0 || p.bytes.is_empty() {
+            return bad("expected vertices and the file's bytes");
+        }
+        if !self.positions.is_empty() || !self.faces.is_empty() {
+            return bad("expected no positions or faces beside it");
+        }
+        if self.colours.is_some() || self.uvs.is_some() || self.field.is_some() || !self.textures.is_empty() {
+            return bad("colours, texture coordinates, textures and colour maps are not played from it");
+        }
+        if self.frame_vertices.is_some() || self.frame_triangles.is_some() {
+            return bad("a frame set is not played from it");
+        }
+        if self.synthetic.len() != self.n_frames {
+            return Err(ViewError::Labels(self.name.clone(), self.synthetic.len(), self.n_frames));
         }
         Ok(())
     }
@@ -328,6 +386,7 @@ mod message_tests {
             textures: Vec::new(),
             frame_textures: None,
             field: None,
+            played: None,
         }
     }
 

@@ -78,6 +78,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/items/{id}/faces", get(faces))
         .route("/api/items/{id}/colours", get(colours))
         .route("/api/items/{id}/uvs", get(uvs))
+        .route("/api/items/{id}/file", get(played_file))
         .route("/api/items/{id}/field", get(field))
         .route("/api/items/{id}/textures/{k}", get(texture))
         .route("/report/{*path}", get(report))
@@ -143,8 +144,8 @@ async fn assets(UrlPath(path): UrlPath<String>) -> Response {
 }
 
 async fn items(State(app): State<Arc<App>>) -> Response {
-    let items: Vec<serde_json::Value> = app
-        .items()
+    let all = app.items();
+    let items: Vec<serde_json::Value> = all
         .iter()
         .map(|it| {
             let mut v = serde_json::to_value(&**it).expect("items serialise");
@@ -152,6 +153,7 @@ async fn items(State(app): State<Arc<App>>) -> Response {
             v["has_uvs"] = it.has_uvs().into();
             v["has_field"] = it.has_field().into();
             v["n_textures"] = it.textures.len().into();
+            v["played"] = played_json(&all, it);
             v
         })
         .collect();
@@ -177,6 +179,34 @@ fn item(app: &App, id: &str) -> Option<Arc<ViewItem>> {
     let k = id.parse::<usize>().ok()?;
     app.items().get(k).cloned()
 }
+
+// ---- played files: streams and rigs the page decodes itself (see crate::PlayedFile) ----
+
+/// An item's played file as the page reads it: kind, index in the file, a stream's box, and
+/// the address of its bytes (the first item's of the same file, so the page fetches it once).
+fn played_json(all: &[Arc<ViewItem>], it: &ViewItem) -> serde_json::Value {
+    let Some(p) = &it.played else { return serde_json::Value::Null };
+    let first = all
+        .iter()
+        .position(|o| o.played.as_ref().is_some_and(|q| Arc::ptr_eq(&q.bytes, &p.bytes)))
+        .expect("the item is one of them");
+    let mut v = serde_json::to_value(p).expect("a played file serialises");
+    v["url"] = format!("/api/items/{first}/file").into();
+    v
+}
+
+/// The bytes of the file the item's page decodes (a stream or a rig), else 404.
+async fn played_file(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
+    let Some(it) = item(&app, &id) else { return not_found().await };
+    let Some(p) = &it.played else { return not_found().await };
+    let kind = match p.kind {
+        crate::PlayedKind::Stream => "application/octet-stream",
+        crate::PlayedKind::Rig => "model/gltf-binary",
+    };
+    respond(kind, p.bytes.as_ref().clone())
+}
+
+// ---- end played files ----
 
 async fn positions(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Response {
     let Some(it) = item(&app, &id) else { return not_found().await };

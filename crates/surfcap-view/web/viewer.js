@@ -164,9 +164,10 @@ async function load() {
   const list = [];
   for (let k = 0; k < meta.items.length; k++) {
     const m = meta.items[k];
+    const played = m.played ? await openPlayed(m, k) : null;  // a stream or rig the page decodes (formats_player.js)
     const [pos, faces, colours, uvBytes, textures, field] = await Promise.all([
-      fetchBytes(`/api/items/${k}/positions`),
-      fetchBytes(`/api/items/${k}/faces`),
+      played ? played.positions.buffer : fetchBytes(`/api/items/${k}/positions`),
+      played ? played.faces.buffer : fetchBytes(`/api/items/${k}/faces`),
       m.has_colours ? fetchBytes(`/api/items/${k}/colours`) : null,
       m.has_uvs ? fetchBytes(`/api/items/${k}/uvs`) : null,
       loadTextures(k, m.n_textures),
@@ -226,9 +227,10 @@ async function load() {
     const placed = new THREE.Group();  // moved aside for side-by-side playback
     placed.add(turned);
     scene.add(placed);
+    if (played) played.attach(group, mesh);
     const hue = new THREE.Color().setHSL((k * 0.61803) % 1, 0.6, 0.5);
-    const { box, largest } = animationBox(m, positions, frameSet);
-    list.push({ meta: m, positions, faces: faceArray, frameSet, nv: m.n_vertices, geometry, material, looks, mesh, group, placed,
+    const { box, largest } = played && played.box ? played.box : animationBox(m, positions, frameSet);
+    list.push({ meta: m, played, positions, faces: faceArray, frameSet, nv: m.n_vertices, geometry, material, looks, mesh, group, placed,
       turned, hue, uvs, textures, box, largest, hip, partColours, fieldValues, fieldColours, ghosts: [], label: null, errorRow: null });
     const vertices = frameSet ? `${m.frame_vertices.reduce((a, b) => Math.min(a, b))}-${m.n_vertices} vertices (a mesh per frame)` : `${m.n_vertices} vertices`;
     const row = document.createElement('div');
@@ -665,7 +667,8 @@ function paintField(it, k) {
 function showFrame(f) {
   state.frame = f;
   for (const it of state.items) {
-    const m = it.meta, k = f % m.n_frames, n = 3 * m.n_vertices;  // shorter sequences loop
+    const m = it.meta, n = 3 * m.n_vertices;
+    const k = it.played ? it.played.frame(f % m.n_frames) : f % m.n_frames;  // shorter sequences loop
     const attr = it.geometry.getAttribute('position');
     if (it.frameSet) {
       // This frame's own mesh: its vertices and triangles at the start of the arrays, the rest
@@ -1015,3 +1018,11 @@ import { attachDirector } from './director.js';
   });
 }
 // ---- end director ----
+
+// ---- played files ----
+// Streams and skinned rigs the page decodes itself (formats_player.js): `load` takes an item's
+// positions and faces from `openPlayed` when the server marks it `played`, frames a stream by
+// its grid box, lets the file attach what it draws to the item's group, and `showFrame` asks it
+// which frame to draw (a rig poses its skeleton there; a stream holds its last decoded frame).
+import { openPlayed } from './formats_player.js';
+// ---- end played files ----

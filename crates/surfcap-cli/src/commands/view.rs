@@ -2,7 +2,9 @@
 //! `surfcap import` reads (a glb, a subject cache, a capture folder, a frame set: a `.frames`
 //! folder or its glb, every frame its own mesh) and report folders written by `surfcap report`
 //! or `surfcap demo`; several at once play side by side. A synthesis output (`x.glb`,
-//! `x.frames`) shows what its report `x.report.json` holds (see [`overlay_of`]).
+//! `x.frames`) shows what its report `x.report.json` holds (see [`overlay_of`]). A compact
+//! stream (`.scstream`) or a skinned rig (`surfcap rig`'s glb) is decoded and played by the
+//! page itself (see `view_played`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -29,7 +31,7 @@ pub struct Args {
 /// What is shown and how it is coloured: the options `view` and `render` share.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Shown {
-    /// What to play: .glb files, subject caches, frame sets (.frames), capture folders, or a report folder.
+    /// What to play: .glb files (skinned rigs too), compact streams (.scstream), subject caches, frame sets (.frames), capture folders, or a report folder.
     #[arg(required = true)]
     pub paths: Vec<PathBuf>,
     /// Only these sequences (comma-separated names).
@@ -171,6 +173,13 @@ pub fn load(ctx: &crate::Ctx, a: &Shown, source: &SourceOpts) -> anyhow::Result<
                 items.extend(open_items(ctx, &g, a, source, Some(&g), &mut names)?);
             }
             report = Some(p.clone());
+        } else if let Some(played) = crate::view_played::played_items(p, &a.sequences, &mut names)? {
+            // A stream or a rig, decoded by the page; a rig from synthesis shows its report.
+            let single = played.len() == 1 && is_output(p);
+            items.extend(played.into_iter().map(|mut it| {
+                it.overlay = overlay_of(p, it.n_frames).filter(|_| single);
+                it
+            }));
         } else {
             items.extend(open_items(ctx, p, a, source, is_output(p).then_some(p.as_path()), &mut names)?);
         }
@@ -240,6 +249,11 @@ fn add_colour_maps(ctx: &crate::Ctx, a: &Shown, source: &SourceOpts, items: &mut
         return Ok(());
     }
     for it in items.iter() {
+        anyhow::ensure!(
+            it.played.is_none(),
+            "{}: a colour map is computed from positions decoded here; a stream or a rig is decoded by the page (view its source instead)",
+            it.name
+        );
         anyhow::ensure!(
             it.frame_vertices.is_none(),
             "{}: a colour map needs one mesh for every frame; this is a frame set (every frame its own mesh)",
