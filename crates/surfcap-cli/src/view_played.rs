@@ -64,12 +64,8 @@ fn stream_items(p: &Path, bytes: Vec<u8>, only: &[String], names: &mut Vec<Strin
         }
         let synthetic = q.labels.iter().map(|l| *l == FrameLabel::Synthetic).collect();
         let mut it = item(&q.name, h.fps, h.up_axis.as_str(), &h.units, h.vertices, synthetic);
-        it.played = Some(PlayedFile {
-            kind: PlayedKind::Stream,
-            index,
-            bounds: Some([h.min, max]),
-            bytes: bytes.clone(),
-        });
+        it.played =
+            Some(PlayedFile { kind: PlayedKind::Stream, index, bounds: Some([h.min, max]), bytes: bytes.clone() });
         items.push(it);
     }
     Ok(items)
@@ -98,7 +94,8 @@ fn rig_items(
     let meta = &doc["extras"]["surfcap"];
     let fps = meta["fps"].as_f64().filter(|f| *f > 0.0).ok_or_else(|| bad("extras.surfcap.fps is not a frame rate"))?;
     let up = meta["up_axis"].as_str().ok_or_else(|| bad("extras.surfcap.up_axis is missing"))?;
-    let units: Units = serde_json::from_value(meta["units"].clone()).map_err(|e| bad(&format!("units cannot be read: {e}")))?;
+    let units: Units =
+        serde_json::from_value(meta["units"].clone()).map_err(|e| bad(&format!("units cannot be read: {e}")))?;
     let prim = &doc["meshes"][0]["primitives"][0]["attributes"];
     if !prim["JOINTS_1"].is_null() {
         anyhow::bail!(

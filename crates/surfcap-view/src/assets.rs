@@ -19,11 +19,7 @@ pub const ASSETS: &[(&str, &str, &str)] = &[
     ("stream_decode.js", JS, include_str!("../web/stream_decode.js")),
     // ---- played files: streams and skinned rigs decoded by the page ----
     ("formats_player.js", JS, include_str!("../web/formats_player.js")),
-    (
-        "addons/loaders/GLTFLoader.js",
-        JS,
-        include_str!("../web/node_modules/three/examples/jsm/loaders/GLTFLoader.js"),
-    ),
+    ("addons/loaders/GLTFLoader.js", JS, include_str!("../web/node_modules/three/examples/jsm/loaders/GLTFLoader.js")),
     (
         "addons/utils/BufferGeometryUtils.js",
         JS,

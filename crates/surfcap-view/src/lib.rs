@@ -13,7 +13,10 @@
 //! it also takes directions as JSON POSTs from its own page only (same `Origin`, `Content-Type:
 //! application/json`): a path drawn on the ground, key poses at new times, a distance in a time,
 //! or one transition of the graph, each synthesised by the front end and played in place of the
-//! items ([`direct`]).
+//! items ([`direct`]). An item may instead carry a file the page decodes and plays itself
+//! ([`PlayedFile`], served as `/api/items/{id}/file`): a compact stream, decoded frame by frame
+//! so the first frames play before the rest is decoded, or a skinned rig, played by three.js as
+//! a skinned mesh (`web/formats_player.js`).
 //!
 //! The page (`web/`): play/pause, speed, arrow-key stepping, frame entry (`57` or
 //! `sequence:frame`), a loop range, a timeline of original and synthetic spans with transition
