@@ -20,7 +20,8 @@
 // For tests and scripts, `window.surfcapPlayed[k]` describes played item k: `kind`, `total`
 // frames, frames `decoded` so far, `decodedWhenShown` (how many were decoded when its first
 // frame was drawn) and `vertices()`, the vertices drawn now in the item's own coordinates
-// (a rig's from three.js's own skinning, SkinnedMesh.applyBoneTransform).
+// (a rig's from three.js's own skinning, SkinnedMesh.applyBoneTransform). The viewer's
+// `window.surfcapViewer.ready` turns true only once every played file is fully decoded.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { parseStream, decodeTriangles, frameDecoder } from './stream_decode.js';
@@ -125,6 +126,7 @@ async function openRig(m, bytes) {
   // Every frame skinned on the CPU, in the scene's coordinates (the scene is not placed yet).
   const g = skinned.geometry, nv = g.getAttribute('position').count;
   if (nv !== m.n_vertices) throw new Error(`${m.name}: the skinned mesh has ${nv} vertices, the item ${m.n_vertices}`);
+  if (!g.getAttribute('normal')) g.computeVertexNormals();  // the rest pose's; skinning turns them
   const rest = g.getAttribute('position'), si = g.getAttribute('skinIndex'), sw = g.getAttribute('skinWeight');
   const joints = new Uint16Array(4 * nv), weights = new Float32Array(4 * nv), base = new Float32Array(3 * nv);
   const v = new THREE.Vector3();

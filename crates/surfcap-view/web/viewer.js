@@ -1024,5 +1024,18 @@ import { attachDirector } from './director.js';
 // positions and faces from `openPlayed` when the server marks it `played`, frames a stream by
 // its grid box, lets the file attach what it draws to the item's group, and `showFrame` asks it
 // which frame to draw (a rig poses its skeleton there; a stream holds its last decoded frame).
+// `ready` (what `surfcap render` and tests wait for) also waits until every frame of every
+// played file is decoded, so a script that sets frames gets each one; the page itself plays
+// from the first decoded frame on.
 import { openPlayed } from './formats_player.js';
+{
+  const v = window.surfcapViewer;
+  let loaded = v.ready;
+  Object.defineProperty(v, 'ready', {
+    get: () => loaded && (window.surfcapPlayed || []).every((p) => !p || p.decoded === p.total),
+    set: (x) => { loaded = x; },
+    enumerable: true,
+    configurable: true,
+  });
+}
 // ---- end played files ----
