@@ -25,6 +25,7 @@ import argparse
 import hashlib
 import json
 import os
+import resource
 import struct
 import subprocess
 import sys
@@ -155,15 +156,15 @@ def dembones(frames, faces, b, sizes, cache, args, name):
     if key in cache:
         return cache[key]
     nf, nv = frames.shape[:2]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     r = py_dem_bones.solve_skinning(frames[0], frames, b, faces=faces, max_influences=4)
-    secs = time.perf_counter() - t0
+    secs, cpu = time.perf_counter() - t0, time.process_time() - c0
     w, m = r.weights, r.transforms
     restp = np.c_[frames[0], np.ones(nv)]
     rec = np.einsum("bv,fbij,vj->fvi", w, m[:, :, :3, :], restp)
     e = np.linalg.norm(rec - frames, axis=2)
     used = int((w.sum(1) > 0).sum())
-    out = {"rms": float(np.sqrt((e**2).mean())), "max": float(e.max()), "seconds": secs,
+    out = {"rms": float(np.sqrt((e**2).mean())), "max": float(e.max()), "seconds": secs, "cpu_seconds": cpu,
            "bytes": skin_glb_bytes(nv, len(faces), used, nf, len(sizes)), "bones": used,
            "measured": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "load": os.getloadavg()[0]}
     print(json.dumps({"dembones": name, "bones": b, **out}), flush=True)
@@ -171,6 +172,12 @@ def dembones(frames, faces, b, sizes, cache, args, name):
     if args.dembones_cache:
         Path(args.dembones_cache).write_text(json.dumps(cache, indent=1))
     return out
+
+
+def children_cpu():
+    """CPU seconds (user and system, every thread) of the finished child processes."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def main():
@@ -228,9 +235,9 @@ def main():
             cmd = [exe, "--json", "rig", *src, "--bones", str(b), "--max-influences", "4", "-o", str(glb)]
             if args.iterations is not None:
                 cmd += ["--iterations", str(args.iterations)]
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), children_cpu()
             rep = json.loads(run(cmd))["rig"]
-            wall = time.perf_counter() - t0
+            wall, cpu = time.perf_counter() - t0, children_cpu() - c0
             height = rep["height"]
             if frames is None:
                 # The subject's sequences in the order the rig's animations have them.
@@ -240,7 +247,7 @@ def main():
             rec = glb_skinned_frames(glb)
             ours = errors(rec, frames, height)
             assert abs(ours["rms"] - rep["rms"]) <= 1e-3 * height, (ours, rep["rms"])
-            ours.update(seconds=rep["decomposition_seconds"], wall=wall, bytes=glb.stat().st_size, bones=rep["bones"])
+            ours.update(seconds=rep["decomposition_seconds"], wall=wall, cpu_seconds=cpu, bytes=glb.stat().st_size, bones=rep["bones"])
 
             db = dict(dembones(frames, faces, b, sizes, cache, args, name))
             db.update(rms_pct=100 * db["rms"] / height, max_pct=100 * db["max"] / height)
@@ -251,6 +258,10 @@ def main():
             write_table(rows, args)  # after every row: a long run leaves what it measured
     if not args.only_dembones:
         write_table(rows, args)
+
+
+def cpu_text(d):
+    return f"{d['cpu_seconds']:.1f} s" if "cpu_seconds" in d else "-"
 
 
 def write_table(rows, args):
@@ -280,9 +291,12 @@ def write_table(rows, args):
         "command, loading and writing included, in brackets), Dem Bones the `solve_skinning` call",
         "(its default 30 iterations). Size: ours the glb file; Dem Bones writes no file, so the binary",
         "payload of the same skin layout for its bones and frames. Morph: `surfcap export --format glb`.",
+        "CPU: processor time of every thread (ours of the whole command; Dem Bones' of the call), which",
+        "depends far less on the machine's load than wall time; '-' for Dem Bones runs cached before",
+        "it was recorded.",
         "",
-        "| subject | frames x vertices | bones | ours RMS | Dem Bones RMS | ours max | Dem Bones max | ours time | Dem Bones time | speed-up | ours size | Dem Bones size | morph glb |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| subject | frames x vertices | bones | ours RMS | Dem Bones RMS | ours max | Dem Bones max | ours time | Dem Bones time | speed-up | ours CPU | Dem Bones CPU | ours size | Dem Bones size | morph glb |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         o, d, u = r["ours"], r["dembones"], r["units"]
@@ -291,6 +305,7 @@ def write_table(rows, args):
             f"| {o['rms']:.4f} {u} ({o['rms_pct']:.2f}%) | {d['rms']:.4f} {u} ({d['rms_pct']:.2f}%) "
             f"| {o['max']:.3f} {u} ({o['max_pct']:.1f}%) | {d['max']:.3f} {u} ({d['max_pct']:.1f}%) "
             f"| {o['seconds']:.1f} s ({o['wall']:.1f} s) | {d['seconds']:.1f} s | {d['seconds'] / o['seconds']:.1f}x "
+            f"| {o['cpu_seconds']:.1f} s | {cpu_text(d)} "
             f"| {o['bytes'] / 1e6:.2f} MB | {d['bytes'] / 1e6:.2f} MB | {r['morph'] / 1e6:.1f} MB |"
         )
     lines.append("")

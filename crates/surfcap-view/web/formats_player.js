@@ -46,6 +46,12 @@ function statusLine() {
   return row;
 }
 
+// Adds the status line once the viewer has added the item's row (in the same step of `load`,
+// after `attach`): at its next pause.
+function placeStatus(status) {
+  queueMicrotask(() => document.getElementById('items').appendChild(status));
+}
+
 /// Item `k` (`m` its /api/items entry, `m.played` its file): `{ positions, faces, box, attach,
 /// frame, ... }` as described above.
 export async function openPlayed(m, k) {
@@ -90,7 +96,7 @@ async function openStream(m, bytes) {
     attach(group, mesh) {
       info.mesh = mesh;
       info.vertices = () => Array.from(mesh.geometry.getAttribute('position').array.subarray(0, n));
-      document.getElementById('items').appendChild(status);
+      placeStatus(status);
     },
     // The frame to draw for frame `k`: itself once decoded, else the last decoded one.
     frame(k) {
@@ -191,7 +197,7 @@ async function openRig(m, bytes) {
         }
         return out;
       };
-      document.getElementById('items').appendChild(status);
+      placeStatus(status);
     },
     // Poses the skeleton at frame `k`'s time.
     frame(k) {
