@@ -458,6 +458,33 @@ mod message_tests {
     }
 
     #[test]
+    fn a_played_item_carries_no_positions_of_its_own() {
+        let mut it = frames();
+        (it.frame_vertices, it.frame_triangles, it.positions, it.faces) = (None, None, Vec::new(), Vec::new());
+        let file = super::PlayedFile {
+            kind: super::PlayedKind::Stream,
+            index: 0,
+            bounds: Some([[0.0; 3], [1.0; 3]]),
+            bytes: std::sync::Arc::new(b"SCSTRM".to_vec()),
+        };
+        it.played = Some(file.clone());
+        it.check().unwrap();
+        assert_eq!(serde_json::to_value(&file).unwrap()["kind"], "stream");
+        let mut both = it.clone();
+        both.positions = vec![0.0; 24];
+        assert_eq!(
+            both.check().unwrap_err().to_string(),
+            "set: a file the page plays itself (a stream or a rig) carries its own positions and faces; expected no positions or faces beside it"
+        );
+        let mut labels = it.clone();
+        labels.synthetic.pop();
+        assert!(matches!(labels.check(), Err(ViewError::Labels(..))));
+        let mut empty = it;
+        empty.played = Some(super::PlayedFile { bytes: std::sync::Arc::new(Vec::new()), ..file });
+        assert!(matches!(empty.check(), Err(ViewError::Played(..))));
+    }
+
+    #[test]
     fn a_bad_face_index_names_the_last_valid_vertex() {
         let e = ViewError::Face("crane".into(), 494, 494);
         assert_eq!(e.to_string(), "crane: face index 494 is not a vertex (expected 0 to 493)");
