@@ -17,6 +17,8 @@ pub const ASSETS: &[(&str, &str, &str)] = &[
     ),
     // ---- stream: the compact stream's decoder ----
     ("stream_decode.js", JS, include_str!("../web/stream_decode.js")),
+    // ---- play: the live play page's script ----
+    ("play.js", JS, include_str!("../web/play.js")),
 ];
 
 const JS: &str = "text/javascript; charset=utf-8";

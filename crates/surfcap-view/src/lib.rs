@@ -39,6 +39,9 @@
 
 pub mod assets;
 pub mod direct;
+// ---- live play ----
+pub mod play;
+// ---- end live play ----
 pub mod server;
 
 use serde::Serialize;
