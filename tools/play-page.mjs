@@ -1,9 +1,10 @@
 // Drives `surfcap play`'s page in headless Chromium (Debian's /usr/bin/chromium, driven by
 // playwright-core) with scripted key presses, and prints one JSON line of what the page's state
 // (window.surfcapPlay) said. Usage:
-//   node play-page.mjs URL steer [SCREENSHOT.png]   walk right (D), then up the screen (W), then
-//                                                   stop (space); samples the centre track's
-//                                                   heading and speed after each
+//   node play-page.mjs URL steer [SCREENSHOT.png]   walk right (D), then up and right (W and D:
+//                                                   a left turn of 45 degrees), then stop
+//                                                   (space); samples the centre track's heading
+//                                                   and speed after each
 //   node play-page.mjs URL measure [SECONDS]        time to the first played frame and to every
 //                                                   frame decoded, bytes received (total and per
 //                                                   second of play), late frames, frame rate and
@@ -25,12 +26,12 @@ try {
   const page = await browser.newPage({ viewport: { width: 960, height: 640 } });
   page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
   page.on('pageerror', (e) => errors.push(String(e)));
-  page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()}`));
+  page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()}: ${r.failure() ? r.failure().errorText : '?'}`));
   const state = () => page.evaluate(() => JSON.parse(JSON.stringify(window.surfcapPlay)));
   const check = async () => {
     const s = await state();
     if (s.error) fail(`the page failed: ${s.error}`);
-    if (errors.length) fail(`console errors: ${errors.join(' | ')}`);
+    if (errors.length) fail(`console errors: ${errors.join(' | ')} (page state: ${JSON.stringify(s)})`);
     return s;
   };
   await page.goto(url, { waitUntil: 'load' });
@@ -47,10 +48,10 @@ try {
     return s;
   };
   if (mode === 'steer') {
-    // Let the start settle, then: right, up the screen (a left turn of 90 degrees), stop.
+    // Let the start settle, then: right, up and right (a left turn of 45 degrees), stop.
     await wait(1000);
     const right = await hold(['KeyD'], 5000);
-    const up = await hold(['KeyW'], 5000);
+    const up = await hold(['KeyW', 'KeyD'], 5000);
     await page.keyboard.press('Space');
     await wait(3500);
     const stopped = await check();
@@ -72,13 +73,15 @@ try {
     for (let k = 0; Date.now() - t < seconds * 1000; k++) await hold(script[k % script.length], 3000);
     const played = (Date.now() - t) / 1000;
     const end = await check();
+    const info = await page.evaluate(() => fetch('/api/play/info').then((r) => r.json()));
     const during = (end.bytes.blends - before.blends) + (end.bytes.steps - before.steps);
     console.log(JSON.stringify({
       firstFrameMs: first.firstFrameMs, allDecodedMs: decoded.allDecodedMs, frames: end.totalFrames,
       streamBytes: end.bytes.stream, playedSeconds: played, blendBytes: end.bytes.blends - before.blends,
       stepBytes: end.bytes.steps - before.steps, bytesPerSecond: during / played, late: end.late,
       framesShown: end.framesShown, blendsShown: end.blendsShown, transitions: end.transitions,
-      fps: end.fps, frameMs: end.frameMs, rttMs: end.rttMs,
+      fps: end.fps, frameMs: end.frameMs, rttMs: end.rttMs, delayMs: end.delayMs, blendsMade: info.blends_made,
+      vertices: info.vertices, subject: info.subject,
     }));
   }
 } finally {

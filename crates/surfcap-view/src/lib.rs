@@ -15,6 +15,10 @@
 //! or one transition of the graph, each synthesised by the front end and played in place of the
 //! items ([`direct`]).
 //!
+//! [`play::serve_play`] serves another page, `web/play.html`, on which a keyboard or a gamepad
+//! steers a captured character live: a front end's [`play::Player`] decides and blends, the
+//! page streams the meshes (see [`play`]).
+//!
 //! The page (`web/`): play/pause, speed, arrow-key stepping, frame entry (`57` or
 //! `sequence:frame`), a loop range, a timeline of original and synthetic spans with transition
 //! marks; the requested path and the achieved centre track projected onto the ground plane (the

@@ -96,21 +96,20 @@ class CapturedStream {
     if (!r.ok) throw new Error(`/api/play/stream: HTTP ${r.status}`);
     const length = Number(r.headers.get('content-length'));
     this.buf = new Uint8Array(length > 0 ? length : this.info.stream.bytes);
-    const reader = r.body.getReader();
-    for (;;) {
-      const { done, value } = await reader.read();
-      if (done) break;
-      if (this.got + value.length > this.buf.length) {
-        const bigger = new Uint8Array(Math.max(this.buf.length * 2, this.got + value.length));
-        bigger.set(this.buf.subarray(0, this.got));
-        this.buf = bigger;
-      }
-      this.buf.set(value, this.got);
-      this.got += value.length;
-      state.bytes.stream = this.got;
-      if (!this.head) this.parseHead();
-      this.poke();
-    }
+    await r.body.pipeTo(new WritableStream({
+      write: (value) => {
+        if (this.got + value.length > this.buf.length) {
+          const bigger = new Uint8Array(Math.max(this.buf.length * 2, this.got + value.length));
+          bigger.set(this.buf.subarray(0, this.got));
+          this.buf = bigger;
+        }
+        this.buf.set(value, this.got);
+        this.got += value.length;
+        state.bytes.stream = this.got;
+        if (!this.head) this.parseHead();
+        this.poke();
+      },
+    }));
     if (!this.head) throw new Error('the captured stream ended before its frame table');
     if (this.got !== this.head.end) throw new Error(`the captured stream has ${this.got} bytes, its table says ${this.head.end}`);
   }
@@ -283,6 +282,9 @@ function percentile(v, q) {
 }
 
 async function main() {
+  // A new page starts a new walk from the start frame.
+  const restarted = await fetch('/api/play/restart', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: '{}' });
+  if (!restarted.ok) throw new Error(`/api/play/restart: HTTP ${restarted.status}: ${await restarted.text()}`);
   const info = await (await fetch('/api/play/info')).json();
   $('subject').textContent = `${info.subject} (${info.frames} frames of ${info.vertices} vertices, ${info.fps} fps)`;
   const [iu, iv] = info.ground_axes;
@@ -368,6 +370,7 @@ async function main() {
   };
 
   const blends = new Map(); // id -> Float32Array[] once decoded
+  const requested = new Set();
   const fetchBlend = async (id) => {
     const r = await fetch(`/api/play/blend/${id}`);
     if (!r.ok) throw new Error(`/api/play/blend/${id}: HTTP ${r.status}: ${await r.text()}`);
@@ -417,6 +420,11 @@ async function main() {
     state.centre = [b.x, b.z];
   };
 
+  // Frames are shown `delay` ms after their step's answer (?delay=ms, default 100): the time a
+  // transition's blend has to arrive before its first frame is due.
+  const delay = Number(new URLSearchParams(location.search).get('delay') ?? 100);
+  state.delayMs = delay;
+  const pending = [];
   const rtts = [];
   const frameTimes = [];
   let lastStep = null;
@@ -462,9 +470,13 @@ async function main() {
     if (!r.ok) throw new Error(`/api/play/step: HTTP ${r.status}: ${text}`);
     const s = JSON.parse(text);
     state.steps++;
-    for (const b of s.blends) fetchBlend(b.id).catch(fail);
-    for (const f of s.frames) show(f);
-    motion();
+    for (const b of s.blends) {
+      if (requested.has(b.id)) continue;
+      requested.add(b.id);
+      fetchBlend(b.id).catch(fail);
+    }
+    const due = performance.now() + delay;
+    for (const f of s.frames) pending.push({ f, due });
     state.decisions += s.decisions.length;
     state.transitions = s.transitions;
     if (s.decisions.length) {
@@ -511,6 +523,12 @@ async function main() {
       $('late').textContent = `${state.late.blend + state.late.captured} (blended ${state.late.blend}, captured ${state.late.captured})`;
     }
     if (!inFlight) step(now).catch((e) => { inFlight = false; fail(e); });
+    let shown = false;
+    while (pending.length && pending[0].due <= performance.now()) {
+      show(pending.shift().f);
+      shown = true;
+    }
+    if (shown) motion();
     if (shownCentre) {
       const c = toPage(shownCentre);
       camera.position.set(c.x, groundY + 1.1 * h, c.z + 3.2 * h);

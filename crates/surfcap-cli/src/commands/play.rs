@@ -123,6 +123,8 @@ enum BlendState {
 struct Blends {
     state: Mutex<(HashMap<u64, BlendState>, HashMap<(u32, u32), u64>)>,
     changed: Condvar,
+    /// Seconds each blend took to make and code.
+    seconds: Mutex<Vec<f64>>,
 }
 
 /// The controller's walk as the page sees it.
@@ -207,7 +209,10 @@ impl LivePlayer {
             .name("blend".into())
             .spawn(move || {
                 for (id, from, to) in rx {
-                    let state = match worker.blend(from, to) {
+                    let t = Instant::now();
+                    let made = worker.blend(from, to);
+                    worker.blends.seconds.lock().unwrap_or_else(|e| e.into_inner()).push(t.elapsed().as_secs_f64());
+                    let state = match made {
                         Ok(bytes) => BlendState::Ready(Arc::new(bytes)),
                         Err(e) => BlendState::Failed(e),
                     };
@@ -246,10 +251,10 @@ impl LivePlayer {
     }
 
     /// The blend id of transition `from` -> `to`, asking the worker for it the first time.
-    fn blend_id(&self, from: u32, to: u32) -> (u64, bool) {
+    fn blend_id(&self, from: u32, to: u32) -> u64 {
         let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(&id) = st.1.get(&(from, to)) {
-            return (id, false);
+            return id;
         }
         let id = st.1.len() as u64;
         st.1.insert((from, to), id);
@@ -260,7 +265,7 @@ impl LivePlayer {
             let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
             st.0.insert(id, BlendState::Failed("the blending thread stopped".into()));
         }
-        (id, true)
+        id
     }
 
     fn label(&self, f: u32) -> String {
@@ -314,7 +319,12 @@ impl BlendWorker {
 
 impl Player for LivePlayer {
     fn info(&self) -> serde_json::Value {
-        self.info.clone()
+        let mut info = self.info.clone();
+        let mut t = self.blends.seconds.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        t.sort_by(f64::total_cmp);
+        let at = |q: f64| t.get(((t.len() as f64 - 1.0) * q).round() as usize).map(|s| s * 1e3);
+        info["blends_made"] = serde_json::json!({ "count": t.len(), "p50_ms": at(0.5), "p99_ms": at(0.99) });
+        info
     }
 
     fn captured_stream(&self) -> Arc<Vec<u8>> {
@@ -348,10 +358,10 @@ impl Player for LivePlayer {
                 let chosen = match d.chosen {
                     Move::Continue => serde_json::json!("continue"),
                     Move::Transition { from, to, .. } => {
-                        let (id, new) = self.blend_id(from, to);
-                        if new {
-                            blends.push(serde_json::json!({ "id": id, "from": self.label(from), "to": self.label(to) }));
-                        }
+                        // Every transition chosen is listed (also one blended before, which a
+                        // new page has not fetched yet).
+                        let id = self.blend_id(from, to);
+                        blends.push(serde_json::json!({ "id": id, "from": self.label(from), "to": self.label(to) }));
                         serde_json::json!({ "from": self.label(from), "to": self.label(to), "blend": id })
                     }
                 };
@@ -370,7 +380,7 @@ impl Player for LivePlayer {
                     }
                     None => {
                         let (u, v) = f.transition.ok_or("a blended frame outside a transition")?;
-                        let (id, _) = self.blend_id(u, v);
+                        let id = self.blend_id(u, v);
                         let k = session.in_blend;
                         session.in_blend += 1;
                         serde_json::json!({ "blend": id, "k": k, "label": format!("{} -> {} ({})", self.label(u), self.label(v), k + 1) })
