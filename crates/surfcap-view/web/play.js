@@ -35,6 +35,7 @@ const state = {
   frameMs: { p50: null, p99: null },
   rttMs: { p50: null, p99: null },
   bytes: { stream: 0, blends: 0, steps: 0 },
+  streamComplete: false,
   late: { blend: 0, captured: 0 },
   blendsShown: 0,
   transitions: 0,
@@ -112,6 +113,7 @@ class CapturedStream {
     }));
     if (!this.head) throw new Error('the captured stream ended before its frame table');
     if (this.got !== this.head.end) throw new Error(`the captured stream has ${this.got} bytes, its table says ${this.head.end}`);
+    state.streamComplete = true;
   }
 
   // The header, topology and frame table once their bytes are in (the layout parseStream reads).

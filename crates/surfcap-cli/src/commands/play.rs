@@ -52,8 +52,7 @@ pub struct Args {
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let subject = crate::options::open(ctx, &a.subject, &a.source)?;
     let pipe = a.cache.pipeline(ctx, subject)?;
-    let params =
-        GraphParams { table: a.table.params_for(&pipe)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
+    let params = GraphParams { table: a.table.params_for(&pipe)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
     let prep = Prepared::new(pipe, params, None)?;
     let t0 = Instant::now();
     let options = ControllerOptions::default();
@@ -83,7 +82,9 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             print_json(&serde_json::json!({ "url": url }));
         } else {
             println!("{url}");
-            eprintln!("surfcap play: steer with WASD or the arrows (shift: run, space: stop) at {url} (Ctrl-C to stop)");
+            eprintln!(
+                "surfcap play: steer with WASD or the arrows (shift: run, space: stop) at {url} (Ctrl-C to stop)"
+            );
         }
         let _ = std::io::stdout().flush();
         if open {
@@ -118,10 +119,17 @@ enum BlendState {
     Failed(String),
 }
 
-/// The transitions blended so far, by id and by (source, destination) frame.
+/// The blends asked for, by id, and the id of each (source, destination) frame pair.
+#[derive(Default)]
+struct BlendTable {
+    by_id: HashMap<u64, BlendState>,
+    by_pair: HashMap<(u32, u32), u64>,
+}
+
+/// The transitions blended so far.
 #[derive(Default)]
 struct Blends {
-    state: Mutex<(HashMap<u64, BlendState>, HashMap<(u32, u32), u64>)>,
+    state: Mutex<BlendTable>,
     changed: Condvar,
     /// Seconds each blend took to make and code.
     seconds: Mutex<Vec<f64>>,
@@ -217,7 +225,7 @@ impl LivePlayer {
                         Err(e) => BlendState::Failed(e),
                     };
                     let mut st = worker.blends.state.lock().unwrap_or_else(|e| e.into_inner());
-                    st.0.insert(id, state);
+                    st.by_id.insert(id, state);
                     worker.blends.changed.notify_all();
                 }
             })
@@ -253,17 +261,17 @@ impl LivePlayer {
     /// The blend id of transition `from` -> `to`, asking the worker for it the first time.
     fn blend_id(&self, from: u32, to: u32) -> u64 {
         let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(&id) = st.1.get(&(from, to)) {
+        if let Some(&id) = st.by_pair.get(&(from, to)) {
             return id;
         }
-        let id = st.1.len() as u64;
-        st.1.insert((from, to), id);
-        st.0.insert(id, BlendState::Pending);
+        let id = st.by_pair.len() as u64;
+        st.by_pair.insert((from, to), id);
+        st.by_id.insert(id, BlendState::Pending);
         drop(st);
         let sent = self.jobs.lock().unwrap_or_else(|e| e.into_inner()).send((id, from, to));
         if sent.is_err() {
             let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
-            st.0.insert(id, BlendState::Failed("the blending thread stopped".into()));
+            st.by_id.insert(id, BlendState::Failed("the blending thread stopped".into()));
         }
         id
     }
@@ -301,8 +309,9 @@ impl BlendWorker {
         let s = &self.subject;
         let label = |f: u32| s.frame_index().label(f as usize);
         let why = |e: &dyn std::fmt::Display| format!("blending {} -> {}: {e}", label(from), label(to));
-        let played = walk_sequence(s, &self.model, &self.distances.values, &[from, to], &PlaneMotion::identity(s.up_axis))
-            .map_err(|e| why(&e))?;
+        let played =
+            walk_sequence(s, &self.model, &self.distances.values, &[from, to], &PlaneMotion::identity(s.up_axis))
+                .map_err(|e| why(&e))?;
         let n = s.topology().n_vertices();
         let per = 3 * n;
         let frames = played.positions.len() / per;
@@ -411,9 +420,8 @@ impl Player for LivePlayer {
             .map(|k| index.feature(k))
             .unwrap_or_else(|| &index.continuation[node as usize * per..(node as usize + 1) * per]);
         let here = g.apply_point(self.prep.model.centres[node as usize]);
-        let predicted: Vec<[f64; 3]> = std::iter::once(here)
-            .chain(feature.chunks_exact(4).map(|q| self.placed(&g, node, [q[0], q[1]])))
-            .collect();
+        let predicted: Vec<[f64; 3]> =
+            std::iter::once(here).chain(feature.chunks_exact(4).map(|q| self.placed(&g, node, [q[0], q[1]]))).collect();
         let (iu, iv, _) = plane_axes(self.prep.subject().up_axis);
         let goal = match input.goal {
             surfcap_synthesis::controller::Goal::Velocity(v) => v,
@@ -447,8 +455,10 @@ impl Player for LivePlayer {
         let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
         let deadline = Instant::now() + std::time::Duration::from_secs(60);
         loop {
-            match st.0.get(&id).cloned() {
-                None => return Err(format!("no blend {id}: the controller has chosen {} transitions", st.1.len())),
+            match st.by_id.get(&id).cloned() {
+                None => {
+                    return Err(format!("no blend {id}: the controller has chosen {} transitions", st.by_pair.len()));
+                }
                 Some(BlendState::Ready(b)) => return Ok(b),
                 Some(BlendState::Failed(why)) => return Err(why),
                 Some(BlendState::Pending) => {
@@ -468,8 +478,7 @@ impl Player for LivePlayer {
         let controller =
             Controller::with_index(&self.prep, index, motion, self.options.clone()).map_err(|e| e.to_string())?;
         let placement = controller.current().1;
-        *session =
-            Session { controller, placement, in_blend: 0, last_input: None, chosen: None };
+        *session = Session { controller, placement, in_blend: 0, last_input: None, chosen: None };
         Ok(())
     }
 }
