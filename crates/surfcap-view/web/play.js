@@ -341,9 +341,12 @@ async function main() {
     q.y = groundY + 0.002 * h;
     return q;
   };
-  const setLine = (l, points) => {
-    l.geometry.setFromPoints(points.map(onGround));
+  // A line's points replaced (a new geometry: a buffer keeps the size it was made with).
+  const setPoints = (l, points) => {
+    l.geometry.dispose();
+    l.geometry = new THREE.BufferGeometry().setFromPoints(points);
   };
+  const setLine = (l, points) => setPoints(l, points.map(onGround));
 
   // What is shown: the last mesh's positions (subject coordinates, placed) and centre.
   let shownCentre = null;
@@ -536,7 +539,7 @@ async function main() {
       camera.position.set(c.x, groundY + 1.1 * h, c.z + 3.2 * h);
       camera.lookAt(c.x, groundY + 0.45 * h, c.z);
     }
-    if (track.length > 1) trackLine.geometry.setFromPoints(track.map((p) => new THREE.Vector3(p.x, groundY + 0.001 * h, p.z)));
+    if (track.length > 1 && shown) setPoints(trackLine, track.map((p) => new THREE.Vector3(p.x, groundY + 0.001 * h, p.z)));
     drawGraph();
     renderer.render(scene, camera);
   };
