@@ -142,6 +142,9 @@ impl Front for Cli {
             Command::Graph(a) => commands::graph::run(ctx, a),
             Command::Demo(a) => commands::demo::run(ctx, a),
             Command::View(a) => commands::view::run(ctx, a),
+            // ---- live play ----
+            Command::Play(a) => commands::play::run(ctx, a),
+            // ---- end live play ----
             Command::Report(a) => commands::report::run(ctx, a),
             Command::Transfer(c) => commands::transfer::run(ctx, c),
             Command::Parts(a) => commands::parts::run(ctx, a),
@@ -193,6 +196,12 @@ enum Command {
     /// Play sequences in the browser: a local server (127.0.0.1) with a three.js page; original
     /// frames green, synthetic red, paths and centre trajectories overlaid, side by side.
     View(commands::view::Args),
+    // ---- live play ----
+    /// Steer a captured character live in the browser: keyboard (WASD or arrows, shift to
+    /// run, space to stop) or a gamepad; the interactive controller decides on the subject's
+    /// essential graph and the meshes are streamed quantised and delta-coded.
+    Play(commands::play::Args),
+    // ---- end live play ----
     /// Body parts for motion transfer (thesis 5.4.2): propose them (joints, components or the
     /// rigidity of the motion), check a user's file, or show them in the browser.
     Parts(commands::parts::Args),

@@ -30,6 +30,8 @@ pub const ASSETS: &[(&str, &str, &str)] = &[
         JS,
         include_str!("../web/node_modules/three/examples/jsm/utils/SkeletonUtils.js"),
     ),
+    // ---- play: the live play page's script ----
+    ("play.js", JS, include_str!("../web/play.js")),
 ];
 
 const JS: &str = "text/javascript; charset=utf-8";

@@ -18,6 +18,10 @@
 //! so the first frames play before the rest is decoded, or a skinned rig, played by three.js as
 //! a skinned mesh (`web/formats_player.js`).
 //!
+//! [`play::serve_play`] serves another page, `web/play.html`, on which a keyboard or a gamepad
+//! steers a captured character live: a front end's [`play::Player`] decides and blends, the
+//! page streams the meshes (see [`play`]).
+//!
 //! The page (`web/`): play/pause, speed, arrow-key stepping, frame entry (`57` or
 //! `sequence:frame`), a loop range, a timeline of original and synthetic spans with transition
 //! marks; the requested path and the achieved centre track projected onto the ground plane (the
@@ -42,6 +46,9 @@
 
 pub mod assets;
 pub mod direct;
+// ---- live play ----
+pub mod play;
+// ---- end live play ----
 pub mod server;
 
 use serde::Serialize;

@@ -12,6 +12,9 @@ pub mod info;
 pub mod interpolate;
 pub mod make;
 pub mod parts;
+// ---- live play ----
+pub mod play;
+// ---- end live play ----
 pub mod remesh_frames;
 pub mod render;
 pub mod report;

@@ -1,0 +1,484 @@
+//! `surfcap play <subject>`: steer a captured character live in the browser. The subject's
+//! essential graph and walk model are read from the cache or built (as `synth` does), the
+//! interactive controller (`surfcap_synthesis::controller`) is set up on them, every captured
+//! frame is coded once as a compact stream, and the play page (`surfcap_view::play`) is served:
+//! keyboard (WASD or arrows, shift to run, space to stop) or a gamepad steer the character, the
+//! controller decides here at the page's 60 steps a second, and each transition it chooses is
+//! blended on a worker thread ahead of display and sent as a stream of its own (the design, and
+//! why decisions are made server-side: `surfcap_view::play`'s documentation).
+
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::mpsc;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Instant;
+
+use surfcap_formats::stream::{StreamOptions, encode_stream};
+use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
+use surfcap_mesh::{Sequence, Subject, Topology};
+use surfcap_motion::walk_sequence::{WalkModel, walk_sequence};
+use surfcap_pipeline::{GraphKind, GraphParams, PoseDistances};
+use surfcap_synthesis::Prepared;
+use surfcap_synthesis::controller::{Controller, ControllerOptions, Gait, Input, Move};
+use surfcap_view::play::{Player, StepAsk, serve_play};
+
+use crate::options::{AlphaOpt, CacheOpts, PortOpt, SourceOpts, TableOpts};
+use crate::output::print_json;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The subject to steer (anything `view` plays as one subject: a subject cache, a glb, a
+    /// capture folder). It needs clips the walk can go on from (loops or transitions back).
+    pub subject: PathBuf,
+    #[command(flatten)]
+    pub port: PortOpt,
+    /// Open the page in the default browser.
+    #[arg(long)]
+    pub open: bool,
+    /// Bits per coordinate of the streamed meshes (8 to 16; fewer: smaller and coarser).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(8..=16))]
+    pub bits: u32,
+    #[command(flatten)]
+    pub source: SourceOpts,
+    #[command(flatten)]
+    pub alpha: AlphaOpt,
+    #[command(flatten)]
+    pub table: TableOpts,
+    #[command(flatten)]
+    pub cache: CacheOpts,
+}
+
+pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
+    let subject = crate::options::open(ctx, &a.subject, &a.source)?;
+    let pipe = a.cache.pipeline(ctx, subject)?;
+    let params = GraphParams { table: a.table.params_for(&pipe)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
+    let prep = Prepared::new(pipe, params, None)?;
+    let t0 = Instant::now();
+    let options = ControllerOptions::default();
+    let controller = Controller::new(&prep, options.clone())?;
+    let precompute = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let (stream, summary) =
+        encode_stream(prep.subject(), &StreamOptions { bits: a.bits, max_error: None, key_interval: 60 });
+    let coding = t1.elapsed().as_secs_f64();
+    let distances = prep.pipe.chain_distances()?.value;
+    let player = LivePlayer::new(prep, controller, distances, Arc::new(stream), precompute, coding, a.bits)?;
+    if !ctx.quiet && !ctx.json {
+        eprintln!(
+            "surfcap play: {} moves precomputed in {precompute:.2} s; {} frames streamed in {:.1} MB ({:.2} s to code, {} bits)",
+            player.moves,
+            summary.frame_bytes.len(),
+            summary.bytes as f64 / 1e6,
+            coding,
+            a.bits
+        );
+    }
+    let json = ctx.json;
+    let open = a.open;
+    serve_play(Arc::new(player), a.port.port, |addr| {
+        let url = format!("http://{addr}/");
+        if json {
+            print_json(&serde_json::json!({ "url": url }));
+        } else {
+            println!("{url}");
+            eprintln!(
+                "surfcap play: steer with WASD or the arrows (shift: run, space: stop) at {url} (Ctrl-C to stop)"
+            );
+        }
+        let _ = std::io::stdout().flush();
+        if open {
+            open_in_browser(&url);
+        }
+    })?;
+    Ok(())
+}
+
+/// Opens `url` with the desktop's opener (`xdg-open`, `open` on macOS, `start` on Windows); a
+/// failure only prints a note, the URL is printed anyway.
+fn open_in_browser(url: &str) {
+    let mut cmd = if cfg!(target_os = "macos") {
+        std::process::Command::new("open")
+    } else if cfg!(windows) {
+        let mut c = std::process::Command::new("cmd");
+        c.args(["/C", "start", ""]);
+        c
+    } else {
+        std::process::Command::new("xdg-open")
+    };
+    if let Err(e) = cmd.arg(url).spawn() {
+        eprintln!("surfcap play: could not open a browser ({e}); open {url} yourself");
+    }
+}
+
+/// A blend on its way: being made, made (its stream), or failed (why).
+#[derive(Clone)]
+enum BlendState {
+    Pending,
+    Ready(Arc<Vec<u8>>),
+    Failed(String),
+}
+
+/// The blends asked for, by id, and the id of each (source, destination) frame pair.
+#[derive(Default)]
+struct BlendTable {
+    by_id: HashMap<u64, BlendState>,
+    by_pair: HashMap<(u32, u32), u64>,
+}
+
+/// The transitions blended so far.
+#[derive(Default)]
+struct Blends {
+    state: Mutex<BlendTable>,
+    changed: Condvar,
+    /// Seconds each blend took to make and code.
+    seconds: Mutex<Vec<f64>>,
+}
+
+/// The controller's walk as the page sees it.
+struct Session {
+    controller: Controller,
+    /// The placement of the last captured frame shown (a transition's frames are placed by it).
+    placement: PlaneMotion,
+    /// Frames shown of the transition playing (its blended frames' index).
+    in_blend: usize,
+    last_input: Option<Input>,
+    /// The transition the last decision chose, if it chose one.
+    chosen: Option<(u32, u32)>,
+}
+
+/// [`Player`] on a prepared subject with the interactive controller.
+struct LivePlayer {
+    prep: Prepared,
+    options: ControllerOptions,
+    session: Mutex<Session>,
+    stream: Arc<Vec<u8>>,
+    blends: Arc<Blends>,
+    jobs: Mutex<mpsc::Sender<(u64, u32, u32)>>,
+    info: serde_json::Value,
+    walk_speed: f64,
+    run_speed: f64,
+    moves: usize,
+}
+
+impl LivePlayer {
+    fn new(
+        prep: Prepared,
+        controller: Controller,
+        distances: Arc<PoseDistances>,
+        stream: Arc<Vec<u8>>,
+        precompute: f64,
+        coding: f64,
+        bits: u32,
+    ) -> anyhow::Result<Self> {
+        let s = prep.subject();
+        let motion = controller.motion().clone();
+        let walk_speed = motion
+            .typical_speed(Gait::Walk)
+            .or_else(|| motion.typical_speed(Gait::Run))
+            .unwrap_or_else(|| motion.fastest());
+        let run_speed = motion.typical_speed(Gait::Run).unwrap_or_else(|| motion.fastest()).max(walk_speed);
+        let moves = controller.index().to.len() + controller.index().continues.iter().filter(|c| **c).count();
+        let (start, _) = controller.current();
+        let (iu, iv, _) = plane_axes(s.up_axis);
+        let index = s.frame_index();
+        let info = serde_json::json!({
+            "subject": s.name,
+            "fps": s.fps,
+            "up": s.up_axis.as_str(),
+            "ground_axes": [iu, iv],
+            "units": s.units.symbol(),
+            "metres_per_unit": s.units.metres_per_unit,
+            "vertices": s.topology().n_vertices(),
+            "frames": s.n_frames(),
+            "sequences": s.sequences().iter().enumerate().map(|(k, q)| serde_json::json!({
+                "name": q.name, "first": index.range(k).start, "frames": q.n_frames(),
+            })).collect::<Vec<_>>(),
+            "start": { "frame": start, "label": index.label(start as usize) },
+            "gaits": Gait::ALL.iter().filter(|g| motion.has(**g)).map(|g| g.name()).collect::<Vec<_>>(),
+            "walk_speed": walk_speed,
+            "run_speed": run_speed,
+            "height": motion.height,
+            "moves": moves,
+            "precompute_seconds": precompute,
+            "stream": { "bytes": stream.len(), "bits": bits, "coding_seconds": coding },
+            "decision_interval": ControllerOptions::default().decision_interval,
+        });
+        let blends = Arc::new(Blends::default());
+        let (tx, rx) = mpsc::channel::<(u64, u32, u32)>();
+        let worker = BlendWorker {
+            subject: Arc::new(s.clone()),
+            model: prep.model.clone(),
+            distances,
+            blends: blends.clone(),
+            bits,
+        };
+        std::thread::Builder::new()
+            .name("blend".into())
+            .spawn(move || {
+                for (id, from, to) in rx {
+                    let t = Instant::now();
+                    let made = worker.blend(from, to);
+                    worker.blends.seconds.lock().unwrap_or_else(|e| e.into_inner()).push(t.elapsed().as_secs_f64());
+                    let state = match made {
+                        Ok(bytes) => BlendState::Ready(Arc::new(bytes)),
+                        Err(e) => BlendState::Failed(e),
+                    };
+                    let mut st = worker.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+                    st.by_id.insert(id, state);
+                    worker.blends.changed.notify_all();
+                }
+            })
+            .map_err(|e| anyhow::anyhow!("cannot start the blending thread: {e}"))?;
+        let placement = controller.current().1;
+        Ok(LivePlayer {
+            options: ControllerOptions::default(),
+            session: Mutex::new(Session { controller, placement, in_blend: 0, last_input: None, chosen: None }),
+            prep,
+            stream,
+            blends,
+            jobs: Mutex::new(tx),
+            info,
+            walk_speed,
+            run_speed,
+            moves,
+        })
+    }
+
+    /// The controller's input for what the page asks.
+    fn input(&self, ask: &StepAsk) -> Input {
+        let [x, y] = ask.direction;
+        let amount = x.hypot(y).min(1.0);
+        if amount < 1e-3 {
+            return Input::stop();
+        }
+        let speed = if ask.run { self.run_speed } else { self.walk_speed } * amount;
+        let v = [x / x.hypot(y) * speed, y / x.hypot(y) * speed];
+        let input = Input::velocity(v);
+        if ask.run { input.with_gait(Gait::Run) } else { input }
+    }
+
+    /// The blend id of transition `from` -> `to`, asking the worker for it the first time.
+    fn blend_id(&self, from: u32, to: u32) -> u64 {
+        let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(&id) = st.by_pair.get(&(from, to)) {
+            return id;
+        }
+        let id = st.by_pair.len() as u64;
+        st.by_pair.insert((from, to), id);
+        st.by_id.insert(id, BlendState::Pending);
+        drop(st);
+        let sent = self.jobs.lock().unwrap_or_else(|e| e.into_inner()).send((id, from, to));
+        if sent.is_err() {
+            let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+            st.by_id.insert(id, BlendState::Failed("the blending thread stopped".into()));
+        }
+        id
+    }
+
+    fn label(&self, f: u32) -> String {
+        self.prep.subject().frame_index().label(f as usize)
+    }
+
+    /// A point of the walk model's future of frame `u` (`d`: offset on the ground axes from
+    /// its centre) placed by `g`.
+    fn placed(&self, g: &PlaneMotion, u: u32, d: [f32; 2]) -> [f64; 3] {
+        let (iu, iv, _) = plane_axes(self.prep.subject().up_axis);
+        let mut p = self.prep.model.centres[u as usize];
+        p[iu] += f64::from(d[0]);
+        p[iv] += f64::from(d[1]);
+        g.apply_point(p)
+    }
+}
+
+/// Blends transitions on its own thread.
+struct BlendWorker {
+    subject: Arc<Subject>,
+    model: Arc<WalkModel>,
+    distances: Arc<PoseDistances>,
+    blends: Arc<Blends>,
+    bits: u32,
+}
+
+impl BlendWorker {
+    /// Transition `from` -> `to` played by Blend as offline synthesis plays it
+    /// (`surfcap_motion::walk_sequence`, thesis Algorithm 3) with `from` unmoved: its frames
+    /// after `from` (the last one is `to`, placed), coded as a compact stream. The stream's
+    /// topology is one placeholder triangle: the page draws the captured stream's triangles.
+    fn blend(&self, from: u32, to: u32) -> Result<Vec<u8>, String> {
+        let s = &self.subject;
+        let label = |f: u32| s.frame_index().label(f as usize);
+        let why = |e: &dyn std::fmt::Display| format!("blending {} -> {}: {e}", label(from), label(to));
+        let played =
+            walk_sequence(s, &self.model, &self.distances.values, &[from, to], &PlaneMotion::identity(s.up_axis))
+                .map_err(|e| why(&e))?;
+        let n = s.topology().n_vertices();
+        let per = 3 * n;
+        let frames = played.positions.len() / per;
+        if frames < 2 || n < 3 {
+            return Err(why(&format!("{frames} frames of {n} vertices played")));
+        }
+        let positions = played.positions[per..].to_vec();
+        let topo = Topology::new(n, vec![[0, 1, 2]], None).map_err(|e| why(&e))?;
+        let seq = Sequence::new(format!("{}->{}", label(from), label(to)), n, positions).map_err(|e| why(&e))?;
+        let blend = Subject::new("blend", topo, vec![seq], s.fps, s.up_axis, s.units.clone()).map_err(|e| why(&e))?;
+        Ok(encode_stream(&blend, &StreamOptions { bits: self.bits, max_error: None, key_interval: 60 }).0)
+    }
+}
+
+impl Player for LivePlayer {
+    fn info(&self) -> serde_json::Value {
+        let mut info = self.info.clone();
+        let mut t = self.blends.seconds.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        t.sort_by(f64::total_cmp);
+        let at = |q: f64| t.get(((t.len() as f64 - 1.0) * q).round() as usize).map(|s| s * 1e3);
+        info["blends_made"] = serde_json::json!({ "count": t.len(), "p50_ms": at(0.5), "p99_ms": at(0.99) });
+        info
+    }
+
+    fn captured_stream(&self) -> Arc<Vec<u8>> {
+        self.stream.clone()
+    }
+
+    fn step(&self, ask: &StepAsk) -> Result<serde_json::Value, String> {
+        let input = self.input(ask);
+        let t0 = Instant::now();
+        let mut session = self.session.lock().unwrap_or_else(|e| e.into_inner());
+        let notes = (session.last_input != Some(input)).then(Vec::new);
+        let mut notes = notes;
+        session.last_input = Some(input);
+        // Steps of at most one output frame each, so that the controller's placement after a
+        // step is the one of the frame it showed.
+        let h = 0.999 / self.prep.model.fps;
+        let mut remaining = ask.dt;
+        let (mut frames, mut decisions, mut blends) = (Vec::new(), Vec::new(), Vec::new());
+        loop {
+            let dt = remaining.min(h);
+            remaining -= dt;
+            let step = session.controller.step(&input, dt).map_err(|e| e.to_string())?;
+            if let Some(n) = notes.as_mut() {
+                n.extend(step.cannot_follow.iter().cloned());
+            }
+            for d in &step.decisions {
+                session.chosen = match d.chosen {
+                    Move::Continue => None,
+                    Move::Transition { from, to, .. } => Some((from, to)),
+                };
+                let chosen = match d.chosen {
+                    Move::Continue => serde_json::json!("continue"),
+                    Move::Transition { from, to, .. } => {
+                        // Every transition chosen is listed (also one blended before, which a
+                        // new page has not fetched yet).
+                        let id = self.blend_id(from, to);
+                        blends.push(serde_json::json!({ "id": id, "from": self.label(from), "to": self.label(to) }));
+                        serde_json::json!({ "from": self.label(from), "to": self.label(to), "blend": id })
+                    }
+                };
+                decisions.push(serde_json::json!({
+                    "time": d.time, "frame": self.label(d.frame), "chosen": chosen, "cost": d.cost,
+                    "candidates": d.candidates, "ms": d.seconds * 1e3,
+                }));
+            }
+            for f in &step.frames {
+                let transition = f.transition.map(|(u, v)| [self.label(u), self.label(v)]);
+                let frame = match f.frame {
+                    Some(v) => {
+                        session.placement = session.controller.current().1;
+                        session.in_blend = 0;
+                        serde_json::json!({ "frame": v, "label": self.label(v) })
+                    }
+                    None => {
+                        let (u, v) = f.transition.ok_or("a blended frame outside a transition")?;
+                        let id = self.blend_id(u, v);
+                        let k = session.in_blend;
+                        session.in_blend += 1;
+                        serde_json::json!({ "blend": id, "k": k, "label": format!("{} -> {} ({})", self.label(u), self.label(v), k + 1) })
+                    }
+                };
+                let g = session.placement;
+                let mut frame = frame;
+                frame["theta"] = g.theta.into();
+                frame["t"] = serde_json::json!(g.t);
+                frame["centre"] = serde_json::json!(f.centre);
+                frame["transition"] = serde_json::json!(transition);
+                frames.push(frame);
+            }
+            if remaining <= 0.0 {
+                break;
+            }
+        }
+        let c = &session.controller;
+        let (node, g) = c.current();
+        let index = c.index();
+        // The walk model's future of what plays now: the transition chosen from this frame, or
+        // the clip going on.
+        let per = surfcap_synthesis::controller::future_trajectory::FEATURE;
+        let feature = session
+            .chosen
+            .filter(|(from, _)| *from == node)
+            .and_then(|(from, to)| index.leaving(from).find(|&k| index.to[k] == to))
+            .map(|k| index.feature(k))
+            .unwrap_or_else(|| &index.continuation[node as usize * per..(node as usize + 1) * per]);
+        let here = g.apply_point(self.prep.model.centres[node as usize]);
+        let predicted: Vec<[f64; 3]> =
+            std::iter::once(here).chain(feature.chunks_exact(4).map(|q| self.placed(&g, node, [q[0], q[1]]))).collect();
+        let (iu, iv, _) = plane_axes(self.prep.subject().up_axis);
+        let goal = match input.goal {
+            surfcap_synthesis::controller::Goal::Velocity(v) => v,
+            surfcap_synthesis::controller::Goal::Target(_) => [0.0, 0.0],
+        };
+        let desired: Vec<[f64; 3]> = (0..=3)
+            .map(|k| {
+                let t = k as f64 / 3.0;
+                let mut p = here;
+                p[iu] += goal[0] * t;
+                p[iv] += goal[1] * t;
+                p
+            })
+            .collect();
+        let (transitions, realism) = c.transitions();
+        Ok(serde_json::json!({
+            "frames": frames,
+            "decisions": decisions,
+            "blends": blends,
+            "cannot_follow": notes,
+            "predicted": predicted,
+            "desired": desired,
+            "asked_speed": goal[0].hypot(goal[1]),
+            "transitions": transitions,
+            "realism": realism,
+            "server_ms": t0.elapsed().as_secs_f64() * 1e3,
+        }))
+    }
+
+    fn blend(&self, id: u64) -> Result<Arc<Vec<u8>>, String> {
+        let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+        let deadline = Instant::now() + std::time::Duration::from_secs(60);
+        loop {
+            match st.by_id.get(&id).cloned() {
+                None => {
+                    return Err(format!("no blend {id}: the controller has chosen {} transitions", st.by_pair.len()));
+                }
+                Some(BlendState::Ready(b)) => return Ok(b),
+                Some(BlendState::Failed(why)) => return Err(why),
+                Some(BlendState::Pending) => {
+                    let now = Instant::now();
+                    if now >= deadline {
+                        return Err(format!("blend {id} is still being made after 60 s"));
+                    }
+                    st = self.blends.changed.wait_timeout(st, deadline - now).unwrap_or_else(|e| e.into_inner()).0;
+                }
+            }
+        }
+    }
+
+    fn restart(&self) -> Result<(), String> {
+        let mut session = self.session.lock().unwrap_or_else(|e| e.into_inner());
+        let (index, motion) = (session.controller.index().clone(), session.controller.motion().clone());
+        let controller =
+            Controller::with_index(&self.prep, index, motion, self.options.clone()).map_err(|e| e.to_string())?;
+        let placement = controller.current().1;
+        *session = Session { controller, placement, in_blend: 0, last_input: None, chosen: None };
+        Ok(())
+    }
+}
