@@ -97,12 +97,14 @@ struct Recipe {
 }
 
 /// Readings of the papers that change numbers and have a cheap switch: for an eval, (folder
-/// suffix, the default's reading, the other reading, the arguments that choose it).
+/// suffix, the default's reading, the other reading, the arguments that choose it). The DTW's
+/// first step (PAPER-NOTES): surfcap lets up to p - 1 straight steps open the warping path, the
+/// literal eq. 2.53 takes a diagonal step first.
 const READINGS: [(&str, &str, &str, &str, [&str; 2]); 1] = [(
     "transitions",
     "literal",
-    "surfcap's reading of eq. 2.53: up to p - 1 straight steps open the path",
-    "eq. 2.53 read literally: a diagonal step first",
+    "surfcap's reading of eq. 2.53",
+    "eq. 2.53 read literally",
     ["--dtw-first-step", "literal"],
 )];
 
