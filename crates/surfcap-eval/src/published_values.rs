@@ -408,7 +408,9 @@ mod tests {
     #[test]
     fn the_built_in_files_parse_and_keep_the_schema() {
         let cat = PublishedCatalogue::load_builtin().unwrap();
-        for (source, want_items) in [(Source::Thesis, 17), (Source::Huang2009, 1), (Source::Cvpr2017, 4), (Source::Surfcap, 2)] {
+        for (source, want_items) in
+            [(Source::Thesis, 17), (Source::Huang2009, 1), (Source::Cvpr2017, 4), (Source::Surfcap, 2)]
+        {
             assert_eq!(cat.items.iter().filter(|i| i.source == source).count(), want_items, "{source:?}");
         }
         // Every figure and table the reproduction covers is there.

@@ -314,7 +314,9 @@ note = ""
             assert_eq!(row[7], v["reason"].as_str().unwrap());
         }
         assert_eq!((rows[0][4].as_str(), rows[0][6].as_str()), ("better", "reproduced"));
-        assert!(md.contains("| value | published | ours (surfcap's reading) | unit | status | ours (eq. 2.53 literally) |"));
+        assert!(
+            md.contains("| value | published | ours (surfcap's reading) | unit | status | ours (eq. 2.53 literally) |")
+        );
         // Both runs' printed tables, the literal bar kept inside the fence.
         assert!(md.contains("## What `surfcap eval transitions` printed\n\n```text\nslope mean\n2 0.12\n```"));
         assert!(md.contains("printed (eq. 2.53 literally)\n\n```text\nslope | mean\n"));
@@ -322,7 +324,10 @@ note = ""
         let index = &pages[0].1;
         let row = cells(index.lines().find(|l| l.starts_with("| Thesis Fig. 2.15")).unwrap());
         let c = &json["counts"];
-        assert_eq!(row[3..7], [&c["reproduced"], &c["better"], &c["differs"], &c["not measured"]].map(|x| x.to_string()));
+        assert_eq!(
+            row[3..7],
+            [&c["reproduced"], &c["better"], &c["differs"], &c["not measured"]].map(|x| x.to_string())
+        );
         assert!(index.contains("[reproduce-transitions.md](reproduce-transitions.md)"));
     }
 

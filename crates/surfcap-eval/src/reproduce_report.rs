@@ -129,7 +129,11 @@ pub fn item_rows(cat: &PublishedCatalogue, items: &[&PublishedItem], runs: &BTre
                         .iter()
                         .map(|alt| {
                             let ours = alt.report.as_ref().and_then(|r| v.measure(r));
-                            OtherReading { reading: alt.reading.clone().unwrap_or_default(), ours, status: status(v, ours) }
+                            OtherReading {
+                                reading: alt.reading.clone().unwrap_or_default(),
+                                ours,
+                                status: status(v, ours),
+                            }
                         })
                         .collect();
                     ValueRow { value: v.clone(), ours, status: st, reason, other_readings }
@@ -671,7 +675,10 @@ note = ""
         assert!(csv.lines().next().unwrap().ends_with(",other_reading,other_ours,other_status"));
         assert!(csv.contains(",reproduced,,false,Fig. 2.15,transitions,3.0,literal,0.5,differs\n"), "{csv}");
         let html = results_html(&p);
-        assert!(html.contains("<th>ours (surfcap&#39;s reading)</th>") || html.contains("<th>ours (surfcap's reading)</th>"));
+        assert!(
+            html.contains("<th>ours (surfcap&#39;s reading)</th>")
+                || html.contains("<th>ours (surfcap's reading)</th>")
+        );
         assert!(html.contains("<th>ours (literal)</th><th>status</th>"), "{html}");
         assert!(html.contains("<pre>slope  mean\n2      &lt;0.19&gt;\n</pre>"), "printed tables escaped");
         assert!(html.contains("--dtw-first-step literal</code> (literal)"));

@@ -382,7 +382,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut runs: BTreeMap<String, EvalRun> = BTreeMap::new();
     let mut failed: Vec<String> = Vec::new();
-    let step = Step { ctx, runs_dir: &runs_dir, knight: &knight, data: &a.data, cache: &a.cache, quick: a.quick, redo, here: &here, start };
+    let step = Step {
+        ctx,
+        runs_dir: &runs_dir,
+        knight: &knight,
+        data: &a.data,
+        cache: &a.cache,
+        quick: a.quick,
+        redo,
+        here: &here,
+        start,
+    };
     for (k, (eval, its)) in evals.iter().enumerate() {
         let names: Vec<&str> = its.iter().map(|i| i.id.as_str()).collect();
         let Some((main, others)) = recipes(eval, &a.data, &knight, a.quick) else {
@@ -523,10 +533,7 @@ impl Step<'_> {
         };
         let done = (!self.redo).then(|| finished(&record_path, &folder, r, self.quick)).flatten();
         if let Some(rec) = done {
-            progress(
-                ctx,
-                &format!("{label}: finished earlier in {:.1} s, kept (--redo runs it again)", rec.seconds),
-            );
+            progress(ctx, &format!("{label}: finished earlier in {:.1} s, kept (--redo runs it again)", rec.seconds));
             run.seconds = Some(rec.seconds);
             run.machine = Some(rec.machine);
             run.error = rec.error;
