@@ -449,8 +449,19 @@ mod tests {
         assert_eq!(value("huang-1", "Character1 Walk#16 -> Jog#13: time error rms"), 4.81);
         assert_eq!(cat.values_of("huang-1").count(), 12 * 10 + 1);
         // Item evals name real `surfcap eval` subcommands.
-        let evals =
-            ["", "pose-metric", "interpolation", "transitions", "graphs", "appearance", "transfer", "vary", "smg"];
+        let evals = [
+            "",
+            "pose-metric",
+            "interpolation",
+            "transitions",
+            "graphs",
+            "appearance",
+            "transfer",
+            "vary",
+            "smg",
+            "root-motion",
+            "interchange",
+        ];
         for it in &cat.items {
             assert!(evals.contains(&it.eval.as_str()), "{}: eval {:?}", it.id, it.eval);
         }

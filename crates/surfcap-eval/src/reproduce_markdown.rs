@@ -318,7 +318,7 @@ note = ""
             md.contains("| value | published | ours (surfcap's reading) | unit | status | ours (eq. 2.53 literally) |")
         );
         // Both runs' printed tables, the literal bar kept inside the fence.
-        assert!(md.contains("## What `surfcap eval transitions` printed\n\n```text\nslope mean\n2 0.12\n```"));
+        assert!(md.contains("printed (surfcap's reading)\n\n```text\nslope mean\n2 0.12\n```"), "{md}");
         assert!(md.contains("printed (eq. 2.53 literally)\n\n```text\nslope | mean\n"));
         // The index counts the statuses as the JSON does.
         let index = &pages[0].1;
