@@ -44,6 +44,11 @@
 //!   response latency, foot sliding, transitions) against offline path following on the same
 //!   trajectories.
 //!
+//! Reproduction (`surfcap reproduce`): [`published_values`] (the papers' numbers, typed in,
+//! and surfcap's own checks), [`reproduce_report`] (each value beside ours with a status, the
+//! HTML page, JSON and CSV, a column per other paper reading) and [`reproduce_markdown`] (the
+//! same tables as markdown pages for docs/results).
+//!
 //! Randomness comes from ChaCha8 streams, so a seed gives the same permutations on every platform
 //! and thread count. One [`Error`] (thiserror); option errors are worded as the command line's
 //! `--option value: expected ...`.
@@ -59,6 +64,7 @@ pub mod mantel_test;
 pub mod play_eval;
 pub mod pose_metric_eval;
 pub mod published_values;
+pub mod reproduce_markdown;
 pub mod reproduce_report;
 pub mod root_motion_eval;
 pub mod skeleton_distance;

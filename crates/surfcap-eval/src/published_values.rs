@@ -1,7 +1,10 @@
 //! The published values of the thesis's figures and tables, Huang et al. 2009's Table 1 and the
 //! CVPR 2017 paper's figures, typed in from the papers (`crates/surfcap-eval/published/*.toml`,
 //! built into the library), and where each one's counterpart sits in the result JSON of the
-//! `surfcap eval` command that reproduces it.
+//! `surfcap eval` command that reproduces it. Beside them, surfcap's own checks
+//! (`published/surfcap.toml`, source `surfcap`, kind `check`): evals with no paper figure
+//! (root motion from contacts, the interchange round trips) that the page lists with their
+//! printed tables and no published value.
 //!
 //! A file holds `[[item]]` tables (one per figure or table: id, source, kind, number, title,
 //! page, eval) and `[[value]]` tables (one per published number: the item it belongs to, label,
@@ -22,11 +25,12 @@ use std::collections::HashSet;
 
 use serde::{Deserialize, Serialize};
 
-/// The three papers' files, built in.
-const BUILTIN: [(&str, &str); 3] = [
+/// The three papers' files and surfcap's own checks, built in.
+const BUILTIN: [(&str, &str); 4] = [
     ("thesis.toml", include_str!("../published/thesis.toml")),
     ("huang2009.toml", include_str!("../published/huang2009.toml")),
     ("cvpr2017.toml", include_str!("../published/cvpr2017.toml")),
+    ("surfcap.toml", include_str!("../published/surfcap.toml")),
 ];
 
 /// Why a published-values file cannot be used.
@@ -38,54 +42,59 @@ pub enum PublishedValuesError {
     /// The file parses but breaks a rule of the schema; `entry` names the item or value.
     #[error("{file}: {entry}: {expected}")]
     Rule { file: String, entry: String, expected: String },
-    /// A `--figure` / `--table` value that names no item.
+    /// A `--figure` / `--table` / `--check` value that names no item.
     #[error("--{option} {value}: no such {option} in the catalogue (see `surfcap reproduce --list`)")]
     NoSuchItem { option: &'static str, value: String },
 }
 
-/// Which paper a value comes from.
+/// Which paper a value comes from (or `surfcap` for its own checks, which have no paper).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Source {
     Thesis,
     Huang2009,
     Cvpr2017,
+    Surfcap,
 }
 
-/// A figure or a table.
+/// A figure, a table, or one of surfcap's own checks (no paper figure).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Kind {
     Figure,
     Table,
+    Check,
 }
 
 impl Source {
-    /// As written in the files: "thesis", "huang2009", "cvpr2017".
+    /// As written in the files: "thesis", "huang2009", "cvpr2017", "surfcap".
     pub fn as_str(self) -> &'static str {
         match self {
             Source::Thesis => "thesis",
             Source::Huang2009 => "huang2009",
             Source::Cvpr2017 => "cvpr2017",
+            Source::Surfcap => "surfcap",
         }
     }
 
-    /// As a reader names it: "Thesis", "Huang et al. 2009", "CVPR 2017".
+    /// As a reader names it: "Thesis", "Huang et al. 2009", "CVPR 2017", "surfcap".
     pub fn title(self) -> &'static str {
         match self {
             Source::Thesis => "Thesis",
             Source::Huang2009 => "Huang et al. 2009",
             Source::Cvpr2017 => "CVPR 2017",
+            Source::Surfcap => "surfcap",
         }
     }
 }
 
 impl Kind {
-    /// As written in the files: "figure", "table".
+    /// As written in the files: "figure", "table", "check".
     pub fn as_str(self) -> &'static str {
         match self {
             Kind::Figure => "figure",
             Kind::Table => "table",
+            Kind::Check => "check",
         }
     }
 }
@@ -239,6 +248,12 @@ impl PublishedCatalogue {
             if it.id.is_empty() || !ids.insert(it.id.as_str()) {
                 return Err(rule(format!("item \"{}\"", it.id), "a non-empty id used by no other item"));
             }
+            if (it.kind == Kind::Check) != (it.source == Source::Surfcap) {
+                return Err(rule(format!("item \"{}\"", it.id), "kind \"check\" exactly for source \"surfcap\""));
+            }
+            if it.kind == Kind::Check && it.eval.is_empty() {
+                return Err(rule(format!("item \"{}\"", it.id), "a check names the eval that makes it"));
+            }
         }
         for (k, v) in self.values.iter().enumerate() {
             let entry = || format!("value {} (\"{}\" of item \"{}\")", k + 1, v.label, v.item);
@@ -280,19 +295,22 @@ impl PublishedCatalogue {
     }
 
     /// The items a selection names, in catalogue order, each once: every item with `all`, else
-    /// those `figures` and `tables` name ([`PublishedItem::is_named_by`]). A name matching no
-    /// item is refused.
+    /// those `figures`, `tables` and `checks` name ([`PublishedItem::is_named_by`]). A name
+    /// matching no item is refused.
     pub fn select(
         &self,
         all: bool,
         figures: &[String],
         tables: &[String],
+        checks: &[String],
     ) -> Result<Vec<&PublishedItem>, PublishedValuesError> {
         if all {
             return Ok(self.items.iter().collect());
         }
         let mut chosen = vec![false; self.items.len()];
-        for (option, kind, names) in [("figure", Kind::Figure, figures), ("table", Kind::Table, tables)] {
+        for (option, kind, names) in
+            [("figure", Kind::Figure, figures), ("table", Kind::Table, tables), ("check", Kind::Check, checks)]
+        {
             for name in names {
                 let mut found = false;
                 for (k, it) in self.items.iter().enumerate() {
@@ -327,6 +345,7 @@ impl PublishedItem {
         let kind = match self.kind {
             Kind::Table => "Table",
             Kind::Figure => "Fig.",
+            Kind::Check => return format!("surfcap's own check: {}", self.number),
         };
         format!("{} {kind} {}", self.source.title(), self.number)
     }
@@ -389,7 +408,9 @@ mod tests {
     #[test]
     fn the_built_in_files_parse_and_keep_the_schema() {
         let cat = PublishedCatalogue::load_builtin().unwrap();
-        for (source, want_items) in [(Source::Thesis, 17), (Source::Huang2009, 1), (Source::Cvpr2017, 4)] {
+        for (source, want_items) in
+            [(Source::Thesis, 17), (Source::Huang2009, 1), (Source::Cvpr2017, 4), (Source::Surfcap, 2)]
+        {
             assert_eq!(cat.items.iter().filter(|i| i.source == source).count(), want_items, "{source:?}");
         }
         // Every figure and table the reproduction covers is there.
@@ -428,8 +449,19 @@ mod tests {
         assert_eq!(value("huang-1", "Character1 Walk#16 -> Jog#13: time error rms"), 4.81);
         assert_eq!(cat.values_of("huang-1").count(), 12 * 10 + 1);
         // Item evals name real `surfcap eval` subcommands.
-        let evals =
-            ["", "pose-metric", "interpolation", "transitions", "graphs", "appearance", "transfer", "vary", "smg"];
+        let evals = [
+            "",
+            "pose-metric",
+            "interpolation",
+            "transitions",
+            "graphs",
+            "appearance",
+            "transfer",
+            "vary",
+            "smg",
+            "root-motion",
+            "interchange",
+        ];
         for it in &cat.items {
             assert!(evals.contains(&it.eval.as_str()), "{}: eval {:?}", it.id, it.eval);
         }
@@ -578,17 +610,35 @@ note = ""
         c.items.extend(h.items);
         c.values.extend(h.values);
         let ids = |s: Vec<&PublishedItem>| s.iter().map(|i| i.id.clone()).collect::<Vec<_>>();
-        assert_eq!(ids(c.select(false, &["2.15".into()], &[]).unwrap()), ["thesis-fig-2.15"]);
-        assert_eq!(ids(c.select(false, &[], &["huang-1".into()]).unwrap()), ["huang2009-table-1"]);
-        assert_eq!(ids(c.select(false, &[], &["huang2009-table-1".into()]).unwrap()), ["huang2009-table-1"]);
-        assert_eq!(c.select(true, &[], &[]).unwrap().len(), 2);
-        let e = c.select(false, &["1".into()], &[]).unwrap_err().to_string();
+        assert_eq!(ids(c.select(false, &["2.15".into()], &[], &[]).unwrap()), ["thesis-fig-2.15"]);
+        assert_eq!(ids(c.select(false, &[], &["huang-1".into()], &[]).unwrap()), ["huang2009-table-1"]);
+        assert_eq!(ids(c.select(false, &[], &["huang2009-table-1".into()], &[]).unwrap()), ["huang2009-table-1"]);
+        assert_eq!(c.select(true, &[], &[], &[]).unwrap().len(), 2);
+        let e = c.select(false, &["1".into()], &[], &[]).unwrap_err().to_string();
         assert!(e.contains("--figure 1") && e.contains("--list"), "{e}");
         // The built-in files answer the names the brief uses.
         let cat = PublishedCatalogue::load_builtin().unwrap();
-        assert_eq!(ids(cat.select(false, &[], &["huang-1".into()]).unwrap()), ["huang-1"]);
-        assert_eq!(ids(cat.select(false, &["2.15".into()], &[]).unwrap()), ["thesis-fig-2.15"]);
+        assert_eq!(ids(cat.select(false, &[], &["huang-1".into()], &[]).unwrap()), ["huang-1"]);
+        assert_eq!(ids(cat.select(false, &["2.15".into()], &[], &[]).unwrap()), ["thesis-fig-2.15"]);
         assert_eq!(cat.item("huang-1").unwrap().display_name(), "Huang et al. 2009 Table 1");
+        // surfcap's own checks: by --check name, with --all, never by --figure.
+        assert_eq!(ids(cat.select(false, &[], &[], &["root-motion".into()]).unwrap()), ["surfcap-check-root-motion"]);
+        assert!(cat.select(false, &["interchange".into()], &[], &[]).is_err());
+        let all = ids(cat.select(true, &[], &[], &[]).unwrap());
+        assert!(all.contains(&"surfcap-check-interchange".to_string()), "{all:?}");
+        assert_eq!(cat.item("surfcap-check-interchange").unwrap().display_name(), "surfcap's own check: interchange");
+    }
+
+    #[test]
+    fn a_check_is_surfcaps_and_names_its_eval() {
+        let check = "[[item]]\nid = \"c\"\nsource = \"surfcap\"\nkind = \"check\"\nnumber = \"c\"\ntitle = \"t\"\neval = \"e\"\n";
+        assert!(PublishedCatalogue::parse("s.toml", check).is_ok());
+        let e = PublishedCatalogue::parse("s.toml", &check.replace("\"surfcap\"", "\"thesis\"")).unwrap_err();
+        assert!(e.to_string().contains("s.toml: item \"c\": kind \"check\" exactly for source"), "{e}");
+        let e = PublishedCatalogue::parse("s.toml", &check.replace("\"check\"", "\"figure\"")).unwrap_err();
+        assert!(e.to_string().contains("exactly for source"), "{e}");
+        let e = PublishedCatalogue::parse("s.toml", &check.replace("eval = \"e\"", "eval = \"\"")).unwrap_err();
+        assert!(e.to_string().contains("names the eval"), "{e}");
     }
 
     #[test]

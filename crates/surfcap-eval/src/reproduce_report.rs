@@ -1,14 +1,17 @@
 //! The page of `surfcap reproduce`: each selected item of the published-values catalogue with its
 //! values beside ours (read by JSON pointer from the report of the eval that reproduces it) and a
-//! status per value, the figures that eval drew, the machine and the time each eval took; as
-//! one self-contained HTML page (figures embedded as data URIs), a JSON document and a CSV table.
+//! status per value, the figures that eval drew, its own printed tables, the machine and the
+//! time each eval took; as one self-contained HTML page (figures embedded as data URIs), a JSON
+//! document and a CSV table. Where a paper reading that changes numbers has a switch (the DTW's
+//! first step of thesis eq. 2.53), the eval also runs under the other reading and each value
+//! shows both: surfcap's reading as "ours", the other in its own column ([`OtherReading`]).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::published_values::{PublishedCatalogue, PublishedItem, PublishedValue, Status, status};
+use crate::published_values::{Kind, PublishedCatalogue, PublishedItem, PublishedValue, Status, status};
 
 /// The machine an eval ran on.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -49,6 +52,22 @@ pub struct EvalRun {
     /// Why it has no report, or what it reported as missed after writing one.
     pub error: Option<String>,
     pub figures: Vec<Figure>,
+    /// What the eval printed (its tables), as it printed it; None when not captured.
+    pub printed: Option<String>,
+    /// The paper reading this run uses, when the page shows another beside it
+    /// ("surfcap's reading of eq. 2.53").
+    pub reading: Option<String>,
+    /// The same eval under other readings (each with its `reading` set), shown beside this one.
+    pub alternates: Vec<EvalRun>,
+}
+
+/// One value under another reading of the paper (another run of the same eval).
+#[derive(Debug, Clone, Serialize)]
+pub struct OtherReading {
+    /// The reading, as its run names it.
+    pub reading: String,
+    pub ours: Option<f64>,
+    pub status: Status,
 }
 
 /// One value beside ours.
@@ -60,6 +79,8 @@ pub struct ValueRow {
     pub status: Status,
     /// Why it differs or is not measured ("" when reproduced or better).
     pub reason: String,
+    /// The value under the other readings of its eval's alternate runs (empty when none).
+    pub other_readings: Vec<OtherReading>,
 }
 
 /// One item with its values.
@@ -102,7 +123,20 @@ pub fn item_rows(cat: &PublishedCatalogue, items: &[&PublishedItem], runs: &BTre
                         Status::Differs => note,
                         Status::NotMeasured => not_measured_reason(it, v, run),
                     };
-                    ValueRow { value: v.clone(), ours, status: st, reason }
+                    let other_readings = run
+                        .map(|r| r.alternates.as_slice())
+                        .unwrap_or_default()
+                        .iter()
+                        .map(|alt| {
+                            let ours = alt.report.as_ref().and_then(|r| v.measure(r));
+                            OtherReading {
+                                reading: alt.reading.clone().unwrap_or_default(),
+                                ours,
+                                status: status(v, ours),
+                            }
+                        })
+                        .collect();
+                    ValueRow { value: v.clone(), ours, status: st, reason, other_readings }
                 })
                 .collect();
             ItemRow { item: (*it).clone(), values }
@@ -165,6 +199,15 @@ pub fn results_json(page: &Page) -> serde_json::Value {
                     "machine": r.machine,
                     "error": r.error,
                     "figures": r.figures.iter().map(|f| &f.name).collect::<Vec<_>>(),
+                    "printed": r.printed,
+                    "reading": r.reading,
+                    "alternates": r.alternates.iter().map(|a| serde_json::json!({
+                        "reading": a.reading,
+                        "args": a.args,
+                        "folder": a.folder,
+                        "seconds": a.seconds,
+                        "error": a.error,
+                    })).collect::<Vec<_>>(),
                 }),
             )
         })
@@ -173,17 +216,24 @@ pub fn results_json(page: &Page) -> serde_json::Value {
         "quick": page.quick,
         "machine": page.machine,
         "counts": status_counts(&page.items),
-        "total_seconds": page.runs.values().filter_map(|r| r.seconds).sum::<f64>(),
+        "total_seconds": total_seconds(page),
         "items": page.items,
         "runs": runs,
     })
 }
 
+/// The time of every run, alternates included.
+pub fn total_seconds(page: &Page) -> f64 {
+    page.runs.values().flat_map(|r| std::iter::once(r).chain(&r.alternates)).filter_map(|r| r.seconds).sum()
+}
+
 /// results.csv: one row per value (item, source, kind, number, label, published, ours, unit,
-/// status, reason, read off plot, where, eval, seconds), RFC 4180 quoting.
+/// status, reason, read off plot, where, eval, seconds, then the other reading, its number and
+/// its status, `;`-separated when there are several), RFC 4180 quoting.
 pub fn results_csv(page: &Page) -> String {
     let mut s = String::from(
-        "item,source,kind,number,label,published,ours,unit,status,reason,read_off_plot,where,eval,seconds\n",
+        "item,source,kind,number,label,published,ours,unit,status,reason,read_off_plot,where,eval,seconds,\
+         other_reading,other_ours,other_status\n",
     );
     for it in &page.items {
         let secs = page.runs.get(&it.item.eval).and_then(|r| r.seconds).map(|x| format!("{x:.1}")).unwrap_or_default();
@@ -203,6 +253,9 @@ pub fn results_csv(page: &Page) -> String {
                 v.value.place.clone(),
                 it.item.eval.clone(),
                 secs.clone(),
+                v.other_readings.iter().map(|o| o.reading.as_str()).collect::<Vec<_>>().join(";"),
+                v.other_readings.iter().map(|o| o.ours.map(fmt_num).unwrap_or_default()).collect::<Vec<_>>().join(";"),
+                v.other_readings.iter().map(|o| o.status.label()).collect::<Vec<_>>().join(";"),
             ];
             let row: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
             s.push_str(&row.join(","));
@@ -217,7 +270,7 @@ fn csv_field(f: &str) -> String {
 }
 
 /// A number with up to four significant decimals, no trailing zeros.
-fn fmt_num(x: f64) -> String {
+pub fn fmt_num(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
     }
@@ -274,19 +327,65 @@ pub fn shown_figures(figures: &[Figure]) -> Vec<&Figure> {
         .collect()
 }
 
-fn duration(s: f64) -> String {
+/// "12.3 s" under a minute, else "m:ss min".
+pub fn duration(s: f64) -> String {
     if s < 60.0 { format!("{s:.1} s") } else { format!("{}:{:02} min", (s / 60.0) as u64, (s as u64) % 60) }
+}
+
+fn status_class(s: Status) -> &'static str {
+    match s {
+        Status::Reproduced => "reproduced",
+        Status::Better => "better",
+        Status::Differs => "differs",
+        Status::NotMeasured => "not_measured",
+    }
+}
+
+/// A run's command line, output folder, time, machine and error.
+fn run_meta(h: &mut String, r: &EvalRun) {
+    let _ = write!(
+        h,
+        "<p class=\"meta\"><code>surfcap eval {} {}</code>{}<br>output: <a href=\"{}/\">{}</a>",
+        esc(&r.eval),
+        esc(&r.args.join(" ")),
+        r.reading.as_ref().map(|x| format!(" ({})", esc(x))).unwrap_or_default(),
+        esc(&r.folder),
+        esc(&r.folder)
+    );
+    if let Some(s) = r.seconds {
+        let _ = write!(h, "; took {}", duration(s));
+    }
+    if let Some(m) = &r.machine {
+        let _ = write!(h, " on {}", esc(&m.describe()));
+    }
+    h.push_str("</p>\n");
+    if let Some(e) = &r.error {
+        let _ = writeln!(h, "<p class=\"differs\">{}</p>", esc(e));
+    }
+}
+
+/// What a run printed, under a heading naming the command (collapsed: the tables can be long).
+fn printed_tables(h: &mut String, r: &EvalRun) {
+    let Some(text) = r.printed.as_deref().filter(|t| !t.trim().is_empty()) else { return };
+    let _ = writeln!(
+        h,
+        "<details class=\"printed\"><summary>What <code>surfcap eval {}</code> printed{}</summary><pre>{}</pre></details>",
+        esc(&r.eval),
+        r.reading.as_ref().map(|x| format!(" ({})", esc(x))).unwrap_or_default(),
+        esc(text)
+    );
 }
 
 /// The page: a summary (counts, machine, total time, the quick-mode warning), then one section
 /// per eval run: its items' tables (published beside ours, status and reason, where in the
-/// paper, read off a plot or not), the run's machine, time and folder, and its figures embedded.
+/// paper, read off a plot or not; a column per other reading), the run's machine, time and
+/// folder, its figures embedded and what it printed.
 /// An onload script records in `body[data-images-loaded|broken]` how many images loaded, for
 /// headless checks.
 pub fn results_html(page: &Page) -> String {
     let mut h = String::new();
     let counts = status_counts(&page.items);
-    let total: f64 = page.runs.values().filter_map(|r| r.seconds).sum();
+    let total = total_seconds(page);
     h.push_str(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
          <title>surfcap: the papers' tables and figures reproduced</title>\n<style>\
@@ -297,6 +396,7 @@ pub fn results_html(page: &Page) -> String {
          .not_measured{background:#eee;color:#666}.quick{background:#fff3b0;padding:.5em;border:1px solid #d9b800}\
          figure{display:inline-block;margin:.3em;vertical-align:top}figure img{max-width:560px;border:1px solid #ddd}\
          figcaption{font-size:80%;color:#555}.meta{color:#555;font-size:90%}\
+         pre{background:#f8f8f8;border:1px solid #ddd;padding:.5em;overflow-x:auto;font-size:85%}\
          </style></head>\n<body>\n<h1>The papers' tables and figures, reproduced by surfcap</h1>\n",
     );
     if page.quick {
@@ -340,23 +440,9 @@ pub fn results_html(page: &Page) -> String {
         let run = page.runs.get(eval);
         match run {
             Some(r) => {
-                let _ = write!(
-                    h,
-                    "<p class=\"meta\"><code>surfcap eval {} {}</code><br>output: <a href=\"{}/\">{}</a>",
-                    esc(&r.eval),
-                    esc(&r.args.join(" ")),
-                    esc(&r.folder),
-                    esc(&r.folder)
-                );
-                if let Some(s) = r.seconds {
-                    let _ = write!(h, "; took {}", duration(s));
-                }
-                if let Some(m) = &r.machine {
-                    let _ = write!(h, " on {}", esc(&m.describe()));
-                }
-                h.push_str("</p>\n");
-                if let Some(e) = &r.error {
-                    let _ = writeln!(h, "<p class=\"differs\">{}</p>", esc(e));
+                run_meta(&mut h, r);
+                for alt in &r.alternates {
+                    run_meta(&mut h, alt);
                 }
             }
             None if eval.is_empty() => h.push_str("<p class=\"meta\">No surfcap eval reproduces these yet.</p>\n"),
@@ -364,6 +450,7 @@ pub fn results_html(page: &Page) -> String {
                 let _ = writeln!(h, "<p class=\"meta\">eval {} is not known to surfcap reproduce.</p>", esc(eval));
             }
         }
+        let alternates: &[EvalRun] = run.map(|r| r.alternates.as_slice()).unwrap_or_default();
         for it in items {
             let _ =
                 write!(h, "<h3 id=\"{}\">{}: {}", esc(&it.item.id), esc(&it.item.display_name()), esc(&it.item.title));
@@ -371,36 +458,55 @@ pub fn results_html(page: &Page) -> String {
                 let _ = write!(h, " <span class=\"meta\">(p. {p})</span>");
             }
             h.push_str("</h3>\n");
+            if it.item.kind == Kind::Check {
+                let _ = writeln!(
+                    h,
+                    "<p class=\"meta check\">surfcap's own check, no paper figure: {} Its tables are below.</p>",
+                    esc(&it.item.note)
+                );
+                continue;
+            }
             if it.values.is_empty() {
                 h.push_str(
                     "<p class=\"meta\">The paper gives this as a picture only: compare the figures below.</p>\n",
                 );
                 continue;
             }
-            h.push_str(
-                "<table><tr><th>value</th><th>published</th><th>ours</th><th>unit</th><th>status</th>\
-                 <th>reason</th><th>where</th></tr>\n",
-            );
-            for v in &it.values {
-                let _ = writeln!(
+            h.push_str("<table><tr><th>value</th><th>published</th><th>ours");
+            if let Some(reading) = run.and_then(|r| r.reading.as_ref()) {
+                let _ = write!(h, " ({})", esc(reading));
+            }
+            h.push_str("</th><th>unit</th><th>status</th>");
+            for alt in alternates {
+                let _ = write!(
                     h,
-                    "<tr class=\"{cls}\"><td>{}</td><td class=\"n\">{}{}</td><td class=\"n\">{}</td><td>{}</td>\
-                     <td>{}</td><td>{}</td><td>{}</td></tr>",
+                    "<th>ours ({})</th><th>status</th>",
+                    esc(alt.reading.as_deref().unwrap_or("another reading"))
+                );
+            }
+            h.push_str("<th>reason</th><th>where</th></tr>\n");
+            for v in &it.values {
+                let _ = write!(
+                    h,
+                    "<tr class=\"{}\"><td>{}</td><td class=\"n\">{}{}</td><td class=\"n\">{}</td><td>{}</td><td>{}</td>",
+                    status_class(v.status),
                     esc(&v.value.label),
                     if v.value.read_off_plot { "&#8776; " } else { "" },
                     fmt_num(v.value.published),
                     v.ours.map(fmt_num).unwrap_or_else(|| "&mdash;".into()),
                     esc(&v.value.unit),
                     v.status.label(),
-                    esc(&v.reason),
-                    esc(&v.value.place),
-                    cls = match v.status {
-                        Status::Reproduced => "reproduced",
-                        Status::Better => "better",
-                        Status::Differs => "differs",
-                        Status::NotMeasured => "not_measured",
-                    }
                 );
+                for o in &v.other_readings {
+                    let _ = write!(
+                        h,
+                        "<td class=\"n {c}\">{}</td><td class=\"{c}\">{}</td>",
+                        o.ours.map(fmt_num).unwrap_or_else(|| "&mdash;".into()),
+                        o.status.label(),
+                        c = status_class(o.status)
+                    );
+                }
+                let _ = writeln!(h, "<td>{}</td><td>{}</td></tr>", esc(&v.reason), esc(&v.value.place));
             }
             h.push_str("</table>\n");
         }
@@ -418,6 +524,9 @@ pub fn results_html(page: &Page) -> String {
                     );
                 }
                 h.push_str("</div>\n");
+            }
+            for one in std::iter::once(r).chain(&r.alternates) {
+                printed_tables(&mut h, one);
             }
         }
         h.push_str("</section>\n");
@@ -487,7 +596,7 @@ note = ""
 
     fn page(report: Option<serde_json::Value>) -> Page {
         let cat = PublishedCatalogue::parse("t.toml", CAT).unwrap();
-        let items = cat.select(true, &[], &[]).unwrap();
+        let items = cat.select(true, &[], &[], &[]).unwrap();
         let svg = b"<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4\" height=\"4\"></svg>".to_vec();
         let run = EvalRun {
             eval: "transitions".into(),
@@ -539,6 +648,44 @@ note = ""
         assert!(html.contains("data:image/svg+xml;base64,"));
         assert!(html.contains("id=\"quick-mode\""));
         assert!(html.contains("&#8776; 1"));
+    }
+
+    #[test]
+    fn another_reading_gets_its_own_columns_and_printed_tables_show() {
+        let mut p = page(Some(serde_json::json!({"rows": [{"mean": 0.19}]})));
+        let cat = PublishedCatalogue::parse("t.toml", CAT).unwrap();
+        let items = cat.select(true, &[], &[], &[]).unwrap();
+        let run = p.runs.get_mut("transitions").unwrap();
+        run.reading = Some("surfcap's reading".into());
+        run.printed = Some("slope  mean\n2      <0.19>\n".into());
+        run.alternates.push(EvalRun {
+            eval: "transitions".into(),
+            args: vec!["crane".into(), "--dtw-first-step".into(), "literal".into()],
+            folder: "runs/transitions-literal".into(),
+            seconds: Some(4.0),
+            report: Some(serde_json::json!({"rows": [{"mean": 0.5}]})),
+            reading: Some("literal".into()),
+            ..Default::default()
+        });
+        p.items = item_rows(&cat, &items, &p.runs);
+        let v = &p.items[0].values[0];
+        assert_eq!((v.status, v.other_readings.len()), (Status::Reproduced, 1));
+        assert_eq!((v.other_readings[0].ours, v.other_readings[0].status), (Some(0.5), Status::Differs));
+        let csv = results_csv(&p);
+        assert!(csv.lines().next().unwrap().ends_with(",other_reading,other_ours,other_status"));
+        assert!(csv.contains(",reproduced,,false,Fig. 2.15,transitions,3.0,literal,0.5,differs\n"), "{csv}");
+        let html = results_html(&p);
+        assert!(
+            html.contains("<th>ours (surfcap&#39;s reading)</th>")
+                || html.contains("<th>ours (surfcap's reading)</th>")
+        );
+        assert!(html.contains("<th>ours (literal)</th><th>status</th>"), "{html}");
+        assert!(html.contains("<pre>slope  mean\n2      &lt;0.19&gt;\n</pre>"), "printed tables escaped");
+        assert!(html.contains("--dtw-first-step literal</code> (literal)"));
+        let j = results_json(&p);
+        assert_eq!(j["total_seconds"], 7.0);
+        assert_eq!(j["items"][0]["values"][0]["other_readings"][0]["status"], "differs");
+        assert_eq!(j["runs"]["transitions"]["alternates"][0]["reading"], "literal");
     }
 
     #[test]

@@ -1,16 +1,20 @@
-//! `surfcap reproduce [--all | --figure 2.15 | --table huang-1 ...] -o repro/`: every table and
-//! figure of the thesis and the two papers beside the published values
-//! (`surfcap_eval::published_values`, embedded in the program).
+//! `surfcap reproduce [--all | --figure 2.15 | --table huang-1 | --check root-motion ...] -o
+//! repro/`: every table and figure of the thesis and the two papers beside the published values
+//! (`surfcap_eval::published_values`, embedded in the program), and surfcap's own checks.
 //!
 //! The chosen items are grouped by the `surfcap eval` that reproduces them; each eval runs once,
-//! in this process (the eval commands' own `run`, with their progress bars), into its own folder
-//! `runs/<eval>/` (the eval's all-or-nothing folder output), and a run record
-//! `runs/<eval>.run.json` (time, machine, settings) is committed after it as the completion
-//! marker. A run whose record is there with the same settings is not redone (unless `--redo`);
-//! derived matrices go through the cache as for the evals themselves. Then the page
-//! (`surfcap_eval::reproduce_report`): index.html, results.json and results.csv, committed
-//! together. The output folder is surfcap's own (its marker, kind `reproduce`); a folder surfcap
-//! did not write is refused.
+//! in this process (the eval commands' own `run`, with their progress bars; what it prints, its
+//! tables, is captured for the page), into its own folder `runs/<eval>/` (the eval's
+//! all-or-nothing folder output), and a run record `runs/<eval>.run.json` (time, machine,
+//! settings, printed text) is committed after it as the completion marker. An eval with a paper
+//! reading that has a switch (the DTW's first step of `eval transitions`) runs once more under
+//! the other reading, into `runs/<eval>-<reading>/`, shown beside it. A run whose record is there
+//! with the same settings is not redone (unless `--redo`); derived matrices go through the cache
+//! as for the evals themselves. Then the page (`surfcap_eval::reproduce_report`): index.html,
+//! results.json and results.csv, committed together, and with `--results-dir` the same tables
+//! as markdown pages (`surfcap_eval::reproduce_markdown`). The output folder is surfcap's own
+//! (its marker, kind `reproduce`); a folder surfcap did not write is refused, and so is a
+//! markdown page it did not write.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -19,6 +23,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Parser;
 use surfcap_eval::published_values::{PublishedCatalogue, PublishedItem};
+use surfcap_eval::reproduce_markdown;
 use surfcap_eval::reproduce_report::{
     EvalRun, Figure, Machine, Page, item_rows, results_csv, results_html, results_json,
 };
@@ -39,7 +44,7 @@ const MAX_FIGURE_BYTES: u64 = 8 << 20;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Every item of the catalogue.
-    #[arg(long, conflicts_with_all = ["figures", "tables"])]
+    #[arg(long, conflicts_with_all = ["figures", "tables", "checks"])]
     pub all: bool,
     /// Figures by number ("2.15"), source and number ("cvpr2017-3", "cvpr-3") or id; repeatable
     /// or comma-separated.
@@ -48,6 +53,10 @@ pub struct Args {
     /// Tables by number, source and number ("huang-1") or id; repeatable or comma-separated.
     #[arg(long = "table", value_delimiter = ',')]
     pub tables: Vec<String>,
+    /// surfcap's own checks (no paper figure) by name: root-motion, interchange; repeatable or
+    /// comma-separated.
+    #[arg(long = "check", value_delimiter = ',')]
+    pub checks: Vec<String>,
     /// Print the catalogue (items, their eval and how many published values) and stop.
     #[arg(long)]
     pub list: bool,
@@ -63,19 +72,77 @@ pub struct Args {
     /// Folder for the page (index.html, results.json, results.csv) and the evals' outputs.
     #[arg(short, long, default_value = "repro")]
     pub output: PathBuf,
+    /// Also write the page's tables as markdown into this folder (e.g. docs/results):
+    /// reproduce.md (the index) and reproduce-<eval>.md per eval, each with this command. Only
+    /// pages written by `surfcap reproduce` are replaced.
+    #[arg(long, value_name = "DIR")]
+    pub results_dir: Option<PathBuf>,
     #[command(flatten)]
     pub cache: CacheOpts,
 }
 
 /// How one eval is run: its arguments after `surfcap eval <name>` (without `-o` and the cache
-/// folder), whether it reads the cache, the report it writes and whether it needs the knight
-/// subject (imported once into `subjects/`).
+/// folder), whether it reads the cache, the report it writes, whether it needs the knight
+/// subject (imported once into `subjects/`), its folder's name under `runs/`, and the paper
+/// reading it uses when the page shows another beside it.
+#[derive(Clone)]
 struct Recipe {
     eval: &'static str,
     args: Vec<String>,
     cache: bool,
     report: &'static str,
     knight: bool,
+    folder: String,
+    reading: Option<&'static str>,
+}
+
+/// Readings of the papers that change numbers and have a cheap switch: for an eval, (folder
+/// suffix, the default's reading, the other reading, the arguments that choose it). The DTW's
+/// first step (PAPER-NOTES): surfcap lets up to p - 1 straight steps open the warping path, the
+/// literal eq. 2.53 takes a diagonal step first.
+const READINGS: [(&str, &str, &str, &str, [&str; 2]); 1] = [(
+    "transitions",
+    "literal",
+    "surfcap's reading of eq. 2.53",
+    "eq. 2.53 read literally",
+    ["--dtw-first-step", "literal"],
+)];
+
+/// The recipe of `eval` and those of its other readings ([`READINGS`]).
+fn recipes(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<(Recipe, Vec<Recipe>)> {
+    let mut main = recipe(eval, data, knight, quick)?;
+    let mut others = Vec::new();
+    for (e, suffix, ours, other, args) in READINGS {
+        if e == eval {
+            main.reading = Some(ours);
+            let mut alt = main.clone();
+            alt.args.extend(args.iter().map(|a| a.to_string()));
+            alt.folder = format!("{eval}-{suffix}");
+            alt.reading = Some(other);
+            others.push(alt);
+        }
+    }
+    Some((main, others))
+}
+
+/// The BVH clips of `eval root-motion`: every .bvh in the data's cmu_bvh, sorted (the folder
+/// itself when it holds none, so that the eval names it in its error).
+fn cmu_clips(data: &Path) -> Vec<String> {
+    let dir = data.join("cmu_bvh");
+    let mut v: Vec<String> = std::fs::read_dir(&dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .map(|e| e.path())
+                .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
+                .map(|p| p.display().to_string())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    if v.is_empty() {
+        v.push(dir.display().to_string());
+    }
+    v
 }
 
 /// The KayKit knight's clips of the pose-metric subject (ground-truth joints).
@@ -183,12 +250,25 @@ fn recipe(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<Recipe>
                 "vary.json",
                 false,
             ),
+            "root-motion" => {
+                let mut bvh = s(&["--bvh"]);
+                bvh.extend(cmu_clips(data));
+                ("root-motion", bvh, s(&["--vertices", "1000"]), false, "root-motion.json", false)
+            }
+            "interchange" => (
+                "interchange",
+                s(&["--data", &d]),
+                s(&["--datasets", "walking_cat_depraz,threejs_morph_animals"]),
+                false,
+                "interchange.json",
+                false,
+            ),
             _ => return None,
         };
     if quick {
         args.extend(extra);
     }
-    Some(Recipe { eval, args, cache, report, knight: needs_knight })
+    Some(Recipe { eval, args, cache, report, knight: needs_knight, folder: eval.to_string(), reading: None })
 }
 
 /// `surfcap eval <name> ...` parsed in-process.
@@ -209,6 +289,9 @@ struct RunRecord {
     machine: Machine,
     /// What the eval reported as missed after writing its report (e.g. `eval vary`'s criteria).
     error: Option<String>,
+    /// What the eval printed (its tables); absent in records of earlier versions.
+    #[serde(default)]
+    printed: Option<String>,
 }
 
 /// This machine: cores, CPU model (/proc/cpuinfo) and memory (/proc/meminfo).
@@ -268,13 +351,17 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
         return Ok(());
     }
-    if !a.all && a.figures.is_empty() && a.tables.is_empty() {
+    if !a.all && a.figures.is_empty() && a.tables.is_empty() && a.checks.is_empty() {
         anyhow::bail!(
-            "choose the items: --all, --figure NUMBER or --table NUMBER (`surfcap reproduce --list` shows them)"
+            "choose the items: --all, --figure NUMBER, --table NUMBER or --check NAME (`surfcap reproduce --list` shows them)"
         );
     }
-    let items = cat.select(a.all, &a.figures, &a.tables)?;
+    let items = cat.select(a.all, &a.figures, &a.tables, &a.checks)?;
     surfcap_mesh::output_path::check_not_input(&a.output, &[&a.data])?;
+    if let Some(dir) = &a.results_dir {
+        surfcap_mesh::output_path::check_not_input(dir, &[&a.data])?;
+        check_results_dir(dir)?;
+    }
     let out = surfcap_mesh::output_path::claim_dir(&a.output, KIND, false)?;
     let runs_dir = out.join("runs");
     let knight = out.join("subjects/knight.subject");
@@ -295,90 +382,34 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut runs: BTreeMap<String, EvalRun> = BTreeMap::new();
     let mut failed: Vec<String> = Vec::new();
+    let step = Step {
+        ctx,
+        runs_dir: &runs_dir,
+        knight: &knight,
+        data: &a.data,
+        cache: &a.cache,
+        quick: a.quick,
+        redo,
+        here: &here,
+        start,
+    };
     for (k, (eval, its)) in evals.iter().enumerate() {
         let names: Vec<&str> = its.iter().map(|i| i.id.as_str()).collect();
-        let Some(r) = recipe(eval, &a.data, &knight, a.quick) else {
+        let Some((main, others)) = recipes(eval, &a.data, &knight, a.quick) else {
             progress(
                 ctx,
                 &format!("[{}/{n}] eval {eval} ({}): not known to surfcap reproduce", k + 1, names.join(", ")),
             );
             continue;
         };
-        let folder = runs_dir.join(r.eval);
-        let record_path = runs_dir.join(format!("{}.run.json", r.eval));
-        let mut run = EvalRun {
-            eval: r.eval.into(),
-            args: r.args.clone(),
-            folder: format!("runs/{}", r.eval),
-            ..Default::default()
+        let label = |r: &Recipe| match r.reading {
+            Some(x) if r.folder != r.eval => format!("[{}/{n}] eval {eval} ({}; {x})", k + 1, names.join(", ")),
+            _ => format!("[{}/{n}] eval {eval} ({})", k + 1, names.join(", ")),
         };
-        let done = (!redo).then(|| finished(&record_path, &folder, &r, a.quick)).flatten();
-        if let Some(rec) = done {
-            progress(
-                ctx,
-                &format!(
-                    "[{}/{n}] eval {eval} ({}): finished earlier in {:.1} s, kept (--redo runs it again)",
-                    k + 1,
-                    names.join(", "),
-                    rec.seconds
-                ),
-            );
-            run.seconds = Some(rec.seconds);
-            run.machine = Some(rec.machine);
-            run.error = rec.error;
-        } else {
-            progress(
-                ctx,
-                &format!(
-                    "[{}/{n}] eval {eval} ({}): running, {} elapsed",
-                    k + 1,
-                    names.join(", "),
-                    elapsed(start.elapsed().as_secs_f64())
-                ),
-            );
-            let t0 = Instant::now();
-            let result = (|| {
-                if r.knight && !knight.join("subject.json").is_file() {
-                    import_knight(ctx, &a.data, &knight)?;
-                }
-                run_eval(ctx, &r, &folder, &a.cache)
-            })();
-            let seconds = t0.elapsed().as_secs_f64();
-            let report_written = surfcap_mesh::output_path::has_marker(&folder) && folder.join(r.report).is_file();
-            let error = result.err().map(|e| crate::messages(&e).join(": "));
-            if report_written && (error.is_none() || fresh(&folder, r.report, t0)) {
-                let rec = RunRecord {
-                    eval: r.eval.into(),
-                    args: r.args.clone(),
-                    quick: a.quick,
-                    seconds,
-                    machine: here.clone(),
-                    error: error.clone(),
-                };
-                let mut set = OutputSet::new(&[]);
-                let p = set.side_file(&record_path, RUN_KIND)?;
-                write_json(&p, &Stamped::new(RUN_KIND, &rec))?;
-                ctx.commit(set)?;
-                run.seconds = Some(seconds);
-                run.machine = Some(here.clone());
-                run.error = error.clone();
-                progress(
-                    ctx,
-                    &format!(
-                        "[{}/{n}] eval {eval}: done in {seconds:.1} s{}",
-                        k + 1,
-                        error.as_ref().map(|e| format!(" (it reported: {e})")).unwrap_or_default()
-                    ),
-                );
-            } else {
-                let e = error.unwrap_or_else(|| format!("{} was not written", r.report));
-                progress(ctx, &format!("[{}/{n}] eval {eval}: failed after {seconds:.1} s: {e}", k + 1));
-                failed.push(format!("eval {eval}: {e}"));
-                run.error = Some(e);
-            }
-        }
-        if run.error.is_none() || folder.join(r.report).is_file() {
-            load_outputs(&mut run, &folder, r.report)?;
+        let mut run = step.run(&main, &label(&main), &mut failed)?;
+        for alt in &others {
+            let other = step.run(alt, &label(alt), &mut failed)?;
+            run.alternates.push(other);
         }
         runs.insert(eval.to_string(), run);
     }
@@ -387,25 +418,47 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let html = set.file(&out.join("index.html"))?;
     let json = set.file(&out.join("results.json"))?;
     let csv = set.file(&out.join("results.csv"))?;
+    let pages = match &a.results_dir {
+        Some(dir) => {
+            check_results_dir(dir)?;
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            let mut v = Vec::new();
+            for (name, md) in reproduce_markdown::results_markdown(&page, &command_line()) {
+                v.push((set.file(&dir.join(&name))?, md));
+            }
+            v
+        }
+        None => Vec::new(),
+    };
     surfcap_mesh::atomic::write_file(&html, |w| w.write_all(results_html(&page).as_bytes()))?;
     let results = results_json(&page);
     write_json(&json, &results)?;
     surfcap_mesh::atomic::write_file(&csv, |w| w.write_all(results_csv(&page).as_bytes()))?;
+    for (path, md) in &pages {
+        surfcap_mesh::atomic::write_file(path, |w| w.write_all(md.as_bytes()))?;
+    }
     ctx.commit(set)?;
     let index = out.join("index.html");
-    ctx.result(&serde_json::json!({ "page": index, "counts": results["counts"], "failed": failed }), || {
-        let c = &results["counts"];
-        println!(
-            "{} items: {} reproduced, {} better, {} differs, {} not measured{}",
-            page.items.len(),
-            c["reproduced"],
-            c["better"],
-            c["differs"],
-            c["not measured"],
-            if a.quick { " (quick mode)" } else { "" }
-        );
-        println!("wrote {}, results.json, results.csv", index.display());
-    });
+    let written: Vec<&PathBuf> = pages.iter().map(|(p, _)| p).collect();
+    ctx.result(
+        &serde_json::json!({ "page": index, "counts": results["counts"], "failed": failed, "results_pages": written }),
+        || {
+            let c = &results["counts"];
+            println!(
+                "{} items: {} reproduced, {} better, {} differs, {} not measured{}",
+                page.items.len(),
+                c["reproduced"],
+                c["better"],
+                c["differs"],
+                c["not measured"],
+                if a.quick { " (quick mode)" } else { "" }
+            );
+            println!("wrote {}, results.json, results.csv", index.display());
+            for p in &written {
+                println!("wrote {}", p.display());
+            }
+        },
+    );
     if !failed.is_empty() {
         anyhow::bail!(
             "{} of {n} evals failed (the page shows their items as not measured): {}",
@@ -414,6 +467,154 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Refuses a results folder holding a page `surfcap reproduce` would replace but did not write
+/// (a hand-written reproduce.md or reproduce-<eval>.md), naming it.
+fn check_results_dir(dir: &Path) -> anyhow::Result<()> {
+    let Ok(rd) = std::fs::read_dir(dir) else { return Ok(()) };
+    for e in rd.filter_map(|e| e.ok()) {
+        let name = e.file_name().to_string_lossy().to_string();
+        let ours = name == reproduce_markdown::INDEX || (name.starts_with("reproduce-") && name.ends_with(".md"));
+        if ours {
+            let text = std::fs::read_to_string(e.path()).unwrap_or_default();
+            if !reproduce_markdown::is_own_page(&text) {
+                anyhow::bail!(
+                    "{}: not written by surfcap reproduce (its first line is not the marker \"{}\"); \
+                     move it away or choose another --results-dir",
+                    e.path().display(),
+                    reproduce_markdown::MARKER
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// This command as typed (program name `surfcap`), for the markdown pages.
+fn command_line() -> String {
+    let mut parts = vec!["surfcap".to_string()];
+    for a in std::env::args().skip(1) {
+        if a.is_empty() || a.contains(|c: char| c.is_whitespace() || "'\"$`\\*?;&|<>()".contains(c)) {
+            parts.push(format!("'{}'", a.replace('\'', "'\\''")));
+        } else {
+            parts.push(a);
+        }
+    }
+    parts.join(" ")
+}
+
+/// What every run of one `surfcap reproduce` shares.
+struct Step<'a> {
+    ctx: &'a crate::Ctx,
+    runs_dir: &'a Path,
+    knight: &'a Path,
+    data: &'a Path,
+    cache: &'a CacheOpts,
+    quick: bool,
+    redo: bool,
+    here: &'a Machine,
+    start: Instant,
+}
+
+impl Step<'_> {
+    /// Runs one recipe into `runs/<folder>/` (or keeps its finished run) and reads its outputs;
+    /// a failure is added to `failed` and shown on the page.
+    fn run(&self, r: &Recipe, label: &str, failed: &mut Vec<String>) -> anyhow::Result<EvalRun> {
+        let ctx = self.ctx;
+        let folder = self.runs_dir.join(&r.folder);
+        let record_path = self.runs_dir.join(format!("{}.run.json", r.folder));
+        let mut run = EvalRun {
+            eval: r.eval.into(),
+            args: r.args.clone(),
+            folder: format!("runs/{}", r.folder),
+            reading: r.reading.map(str::to_string),
+            ..Default::default()
+        };
+        let done = (!self.redo).then(|| finished(&record_path, &folder, r, self.quick)).flatten();
+        if let Some(rec) = done {
+            progress(ctx, &format!("{label}: finished earlier in {:.1} s, kept (--redo runs it again)", rec.seconds));
+            run.seconds = Some(rec.seconds);
+            run.machine = Some(rec.machine);
+            run.error = rec.error;
+            run.printed = rec.printed;
+        } else {
+            progress(ctx, &format!("{label}: running, {} elapsed", elapsed(self.start.elapsed().as_secs_f64())));
+            let t0 = Instant::now();
+            let (result, printed) = captured_stdout(|| {
+                if r.knight && !self.knight.join("subject.json").is_file() {
+                    import_knight(ctx, self.data, self.knight)?;
+                }
+                run_eval(ctx, r, &folder, self.cache)
+            });
+            let seconds = t0.elapsed().as_secs_f64();
+            let report_written = surfcap_mesh::output_path::has_marker(&folder) && folder.join(r.report).is_file();
+            let error = result.err().map(|e| crate::messages(&e).join(": "));
+            if report_written && (error.is_none() || fresh(&folder, r.report, t0)) {
+                let rec = RunRecord {
+                    eval: r.eval.into(),
+                    args: r.args.clone(),
+                    quick: self.quick,
+                    seconds,
+                    machine: self.here.clone(),
+                    error: error.clone(),
+                    printed: printed.clone(),
+                };
+                let mut set = OutputSet::new(&[]);
+                let p = set.side_file(&record_path, RUN_KIND)?;
+                write_json(&p, &Stamped::new(RUN_KIND, &rec))?;
+                ctx.commit(set)?;
+                run.seconds = Some(seconds);
+                run.machine = Some(self.here.clone());
+                run.error = error.clone();
+                run.printed = printed;
+                progress(
+                    ctx,
+                    &format!(
+                        "{label}: done in {seconds:.1} s{}",
+                        error.as_ref().map(|e| format!(" (it reported: {e})")).unwrap_or_default()
+                    ),
+                );
+            } else {
+                let e = error.unwrap_or_else(|| format!("{} was not written", r.report));
+                progress(ctx, &format!("{label}: failed after {seconds:.1} s: {e}"));
+                failed.push(format!("eval {} ({}): {e}", r.eval, run.folder));
+                run.error = Some(e);
+            }
+        }
+        if run.error.is_none() || folder.join(r.report).is_file() {
+            load_outputs(&mut run, &folder, r.report)?;
+        }
+        Ok(run)
+    }
+}
+
+/// Runs `f` with this process's standard output going to a temporary file, and returns what
+/// was printed (None when the redirection could not be set up: then `f` prints as usual).
+/// The evals print their tables with `println!`; the page shows them.
+fn captured_stdout<T>(f: impl FnOnce() -> T) -> (T, Option<String>) {
+    use std::io::{Read, Seek, Write};
+    use std::os::fd::AsRawFd;
+    let Ok(mut file) = tempfile::tempfile() else { return (f(), None) };
+    let _ = std::io::stdout().flush();
+    // SAFETY: plain descriptor calls on descriptors this function owns (the duplicate of 1 and
+    // the temporary file, which outlives the redirection); 1 is restored before returning.
+    let saved = unsafe { libc::dup(1) };
+    if saved < 0 || unsafe { libc::dup2(file.as_raw_fd(), 1) } < 0 {
+        if saved >= 0 {
+            unsafe { libc::close(saved) };
+        }
+        return (f(), None);
+    }
+    let out = f();
+    let _ = std::io::stdout().flush();
+    unsafe {
+        libc::dup2(saved, 1);
+        libc::close(saved);
+    }
+    let mut text = String::new();
+    let read = file.seek(std::io::SeekFrom::Start(0)).is_ok() && file.read_to_string(&mut text).is_ok();
+    (out, read.then_some(text))
 }
 
 /// Whether the report in `folder` was written by this run (not left by an earlier one).
@@ -437,7 +638,7 @@ fn finished(path: &Path, folder: &Path, r: &Recipe, quick: bool) -> Option<RunRe
 }
 
 /// Runs `surfcap eval <r.eval> <r.args> -o folder [--cache-dir ...]` in this process: progress
-/// bars and notes as usual, its printed table left out (the page shows the comparison).
+/// bars and notes as usual, its printed tables on standard output (captured for the page).
 fn run_eval(ctx: &crate::Ctx, r: &Recipe, folder: &Path, cache: &CacheOpts) -> anyhow::Result<()> {
     let mut line: Vec<String> = vec![r.eval.into()];
     line.extend(r.args.iter().cloned());
@@ -451,7 +652,7 @@ fn run_eval(ctx: &crate::Ctx, r: &Recipe, folder: &Path, cache: &CacheOpts) -> a
         }
     }
     let parsed = EvalLine::try_parse_from(&line).with_context(|| format!("surfcap eval {}", line.join(" ")))?;
-    let inner = crate::Ctx { results: false, json: false, quiet: ctx.quiet || ctx.json, force: false, ..*ctx };
+    let inner = crate::Ctx { results: true, json: false, quiet: ctx.quiet || ctx.json, force: false, ..*ctx };
     super::eval::run(&inner, super::eval::Args { what: parsed.what })
 }
 
