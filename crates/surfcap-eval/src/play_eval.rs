@@ -123,11 +123,19 @@ pub struct PlayEvalOptions {
     pub controller: ControllerOptions,
     /// Also follow each script's trajectory offline.
     pub offline: bool,
+    /// When the controller blends ([`ControllerOptions::parametric`]), also play each script
+    /// without blending, for the comparison.
+    pub compare_parametric: bool,
 }
 
 impl Default for PlayEvalOptions {
     fn default() -> Self {
-        PlayEvalOptions { scripts: Script::ALL.to_vec(), controller: ControllerOptions::default(), offline: true }
+        PlayEvalOptions {
+            scripts: Script::ALL.to_vec(),
+            controller: ControllerOptions::default(),
+            offline: true,
+            compare_parametric: true,
+        }
     }
 }
 
@@ -152,14 +160,24 @@ pub struct OverTime {
     pub commanded: Vec<[f64; 2]>,
     /// Degrees; `None` where either stands.
     pub heading_error: Vec<Option<f64>>,
+    /// The character's and the commanded heading, degrees, unwrapped over time (`None` where
+    /// it stands or is asked to stand).
+    pub heading: Vec<Option<f64>>,
+    pub commanded_heading: Vec<Option<f64>>,
     pub speed: Vec<f64>,
     pub commanded_speed: Vec<f64>,
+    /// The parametric blend's weight at each frame (0: a captured frame or a transition).
+    pub blend_weight: Vec<f64>,
 }
 
 /// One script on one subject.
 #[derive(Debug, Clone, Serialize)]
 pub struct ScriptResult {
     pub script: Script,
+    /// Whether the controller could blend clips parametrically.
+    pub parametric: bool,
+    /// Output frames that were parametric blends (weight above 0).
+    pub blended_frames: usize,
     pub seconds: f64,
     pub frames: usize,
     /// Mean and 90th percentile heading error, degrees (`None`: never both moving).
@@ -186,6 +204,8 @@ pub struct ScriptResult {
     /// Why the offline walk was not made, if it was asked and not made.
     pub offline_refused: Option<String>,
     pub over_time: OverTime,
+    /// Every decision: when, from which frame, the move or blend chosen and its cost.
+    pub decision_log: Vec<surfcap_synthesis::controller::Decision>,
 }
 
 /// One subject's results.
@@ -201,6 +221,11 @@ pub struct PlayEval {
     pub run_speed: Option<f64>,
     pub moves: usize,
     pub precompute_seconds: f64,
+    /// The clip pairs parametric blending may mix: (clip, partner clip, frames of the clip
+    /// with a partner in it).
+    pub blend_pairs: Vec<(String, String, usize)>,
+    /// Why no pair qualifies, when none does.
+    pub no_blend_pairs: Option<String>,
     pub scripts: Vec<ScriptResult>,
     pub seconds: f64,
 }
@@ -317,10 +342,25 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
     let (walk_speed, run_speed) = (motion.typical_speed(Gait::Walk), motion.typical_speed(Gait::Run));
     let walk = walk_speed.unwrap_or(0.8 * height);
     let run = run_speed.unwrap_or(1.6 * height);
+    let modes: Vec<bool> = if controller_options.parametric && opts.compare_parametric {
+        vec![false, true]
+    } else {
+        vec![controller_options.parametric]
+    };
     let mut scripts = Vec::new();
+    let (mut blend_pairs, mut no_blend_pairs) = (Vec::new(), None);
     for &script in &opts.scripts {
-        let c = Controller::with_index(prep, index.clone(), motion.clone(), controller_options.clone())?;
-        scripts.push(run_script(prep, c, script, walk, run, opts.offline)?);
+        // The offline walk is the same for both modes: made once.
+        let mut offline: Option<(Option<OfflineWalk>, Option<String>)> = None;
+        for &parametric in &modes {
+            let options = ControllerOptions { parametric, ..controller_options.clone() };
+            let c = Controller::with_index(prep, index.clone(), motion.clone(), options)?;
+            if parametric {
+                blend_pairs = c.partners().pairs(s);
+                no_blend_pairs = c.partners().none_because.clone();
+            }
+            scripts.push(run_script(prep, c, script, walk, run, opts.offline, &mut offline)?);
+        }
     }
     Ok(PlayEval {
         subject: s.name.clone(),
@@ -333,6 +373,8 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
         run_speed,
         moves: index.n_transitions(),
         precompute_seconds,
+        blend_pairs,
+        no_blend_pairs,
         scripts,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -345,7 +387,9 @@ fn run_script(
     walk: f64,
     run: f64,
     offline: bool,
+    offline_made: &mut Option<(Option<OfflineWalk>, Option<String>)>,
 ) -> Result<ScriptResult> {
+    let parametric = c.partners().frames_with_partners() > 0;
     let s = prep.subject();
     let (fps, up) = (s.fps, s.up_axis);
     let (iu, iv, _) = plane_axes(up);
@@ -414,7 +458,7 @@ fn run_script(
     let meshes: Vec<&[f32]> = frames.iter().filter_map(|f| f.positions.as_deref()).collect();
     let sliding = if meshes.len() == n && n > 2 { Some(foot_sliding(&meshes, fps, up, &[])?.speed) } else { None };
     let (transitions, transition_cost) = c.transitions();
-    let mut latencies: Vec<f64> = decisions.iter().map(|d| d.seconds).collect();
+    let mut latencies: Vec<f64> = decisions.iter().map(|d: &surfcap_synthesis::controller::Decision| d.seconds).collect();
     latencies.sort_by(f64::total_cmp);
     let decision_p99_ms = 1e3 * quantile(latencies, 0.99).unwrap_or(f64::NAN);
     // The commanded trajectory's moving part as a ground curve at the start's height.
@@ -437,16 +481,40 @@ fn run_script(
     let mean_path_error = mean(path_error.iter().copied()).unwrap_or(0.0);
     let max_path_error = path_error.iter().copied().fold(0.0, f64::max);
     let start = frames.first().and_then(|f| f.frame);
-    let (offline_walk, offline_refused) = if offline {
-        match offline_path(prep, &curve, start) {
-            Ok(w) => (Some(w), None),
-            Err(e) => (None, Some(e)),
+    let (offline_walk, offline_refused) = match offline_made {
+        Some(made) => made.clone(),
+        None if offline => {
+            let made = match offline_path(prep, &curve, start) {
+                Ok(w) => (Some(w), None),
+                Err(e) => (None, Some(e)),
+            };
+            *offline_made = Some(made.clone());
+            made
         }
-    } else {
-        (None, None)
+        None => (None, None),
     };
+    let blend_weight: Vec<f64> =
+        frames.iter().map(|f| f.mix.filter(|_| f.transition.is_none()).map_or(0.0, |m| m.weight as f64)).collect();
+    let unwrapped = |h: &[f64], keep: &dyn Fn(usize) -> bool| -> Vec<Option<f64>> {
+        let mut last: Option<f64> = None;
+        (0..n)
+            .map(|k| {
+                if !keep(k) {
+                    return None;
+                }
+                let d = h[k].to_degrees();
+                let u = last.map_or(d, |l| l + wrap_angle((d - l).to_radians()).to_degrees());
+                last = Some(u);
+                Some(u)
+            })
+            .collect()
+    };
+    let heading_deg = unwrapped(&heading, &|k| speed[k] >= IDLE_HEIGHTS_PER_SECOND * height);
+    let commanded_heading_deg = unwrapped(&commanded_heading, &|k| commanded_speed[k] > 0.0);
     Ok(ScriptResult {
         script,
+        parametric,
+        blended_frames: c.blended(),
         seconds: script.seconds(),
         frames: n,
         heading_error_mean: mean(errors.iter().copied()),
@@ -465,7 +533,18 @@ fn run_script(
         cannot_follow: notes,
         offline: offline_walk,
         offline_refused,
-        over_time: OverTime { time, centre, commanded, heading_error, speed, commanded_speed },
+        over_time: OverTime {
+            time,
+            centre,
+            commanded,
+            heading_error,
+            heading: heading_deg,
+            commanded_heading: commanded_heading_deg,
+            speed,
+            commanded_speed,
+            blend_weight,
+        },
+        decision_log: decisions,
     })
 }
 
