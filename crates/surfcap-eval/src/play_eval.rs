@@ -8,7 +8,10 @@
 //! - `turn-left`: walk forward 3 s, then walk to the left (90 degrees) for 4 s;
 //! - `stop-and-idle`: walk forward 3 s, then stop and stand for 4 s;
 //! - `zig-zag`: walk 45 degrees to the left, then to the right, changing every 2 s, for 8 s;
-//! - `circle`: walk around a circle of radius 1.5 subject heights, turning left, for 10 s.
+//! - `circle`: walk around a circle of radius 1.5 subject heights, turning left, for 10 s;
+//! - `speed-ramp`: walk forward 2 s, then speed up evenly to the running speed over 4 s and
+//!   run 2 s, no gait asked (the speeds between a walk's and a run's, which parametric
+//!   blending is for).
 //!
 //! Walking and running speeds are the subject's own (the median speed of its walking and
 //! running frames, [`surfcap_synthesis::controller::FrameMotion::typical_speed`]); a gait the
@@ -66,11 +69,18 @@ pub enum Script {
     StopAndIdle,
     ZigZag,
     Circle,
+    SpeedRamp,
 }
 
 impl Script {
-    pub const ALL: [Script; 5] =
-        [Script::StraightRun, Script::TurnLeft, Script::StopAndIdle, Script::ZigZag, Script::Circle];
+    pub const ALL: [Script; 6] = [
+        Script::StraightRun,
+        Script::TurnLeft,
+        Script::StopAndIdle,
+        Script::ZigZag,
+        Script::Circle,
+        Script::SpeedRamp,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -79,6 +89,7 @@ impl Script {
             Script::StopAndIdle => "stop-and-idle",
             Script::ZigZag => "zig-zag",
             Script::Circle => "circle",
+            Script::SpeedRamp => "speed-ramp",
         }
     }
 
@@ -91,7 +102,7 @@ impl Script {
         match self {
             Script::StraightRun => 6.0,
             Script::TurnLeft | Script::StopAndIdle => 7.0,
-            Script::ZigZag => 8.0,
+            Script::ZigZag | Script::SpeedRamp => 8.0,
             Script::Circle => 10.0,
         }
     }
@@ -111,6 +122,10 @@ impl Script {
                 (at(side * quarter / 2.0, walk), Gait::Walk)
             }
             Script::Circle => (at(left * walk / radius * t, walk), Gait::Walk),
+            Script::SpeedRamp => {
+                let x = ((t - 2.0) / 4.0).clamp(0.0, 1.0);
+                (at(0.0, walk + x * (run - walk)), if x < 0.5 { Gait::Walk } else { Gait::Run })
+            }
         }
     }
 }
@@ -226,6 +241,11 @@ pub struct PlayEval {
     pub blend_pairs: Vec<(String, String, usize)>,
     /// Why no pair qualifies, when none does.
     pub no_blend_pairs: Option<String>,
+    /// The data's quickest turns: seconds for the heading of a captured clip to change by 45
+    /// and by 90 degrees ([`quickest_turn`]; `None`: no clip turns that far). A response
+    /// latency to half of a 90-degree command cannot beat the first by playing captured frames.
+    pub quickest_turn_45: Option<f64>,
+    pub quickest_turn_90: Option<f64>,
     pub scripts: Vec<ScriptResult>,
     pub seconds: f64,
 }
@@ -328,6 +348,37 @@ fn velocities(track: &[[f64; 2]], half: usize, fps: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The shortest time, over the frames of every clip as captured, for the heading
+/// ([`surfcap_synthesis::controller::FrameMotion`]) to change by `degrees` while moving
+/// (every frame in between has a heading), in seconds; `None` when no clip turns that far.
+pub fn quickest_turn(s: &Subject, motion: &surfcap_synthesis::controller::FrameMotion, degrees: f64) -> Option<f64> {
+    let index = s.frame_index();
+    let mut best: Option<usize> = None;
+    for q in 0..index.n_sequences() {
+        let r = index.range(q);
+        for a in r.clone() {
+            if !motion.heading[a].is_finite() {
+                continue;
+            }
+            // Unwrapped heading change from frame a on, until a frame without heading.
+            let (mut turned, mut last) = (0.0f64, motion.heading[a]);
+            for b in a + 1..r.end {
+                let h = motion.heading[b];
+                if !h.is_finite() || best.is_some_and(|x| b - a >= x) {
+                    break;
+                }
+                turned += wrap_angle(h - last);
+                last = h;
+                if turned.abs().to_degrees() >= degrees {
+                    best = Some(b - a);
+                    break;
+                }
+            }
+        }
+    }
+    best.map(|f| f as f64 / s.fps)
+}
+
 /// Runs the scripts of `opts` on `prep` (see the module doc).
 pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
     let t0 = Instant::now();
@@ -336,13 +387,14 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
     let tp = Instant::now();
     let probe = Controller::new(prep, controller_options.clone())?;
     let (index, motion) = (probe.index().clone(), probe.motion().clone());
+    let has_pairs = probe.partners().frames_with_partners() > 0;
     let precompute_seconds = tp.elapsed().as_secs_f64();
     drop(probe);
     let height = motion.height;
     let (walk_speed, run_speed) = (motion.typical_speed(Gait::Walk), motion.typical_speed(Gait::Run));
     let walk = walk_speed.unwrap_or(0.8 * height);
     let run = run_speed.unwrap_or(1.6 * height);
-    let modes: Vec<bool> = if controller_options.parametric && opts.compare_parametric {
+    let modes: Vec<bool> = if controller_options.parametric && opts.compare_parametric && has_pairs {
         vec![false, true]
     } else {
         vec![controller_options.parametric]
@@ -375,6 +427,8 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
         precompute_seconds,
         blend_pairs,
         no_blend_pairs,
+        quickest_turn_45: quickest_turn(s, &motion, 45.0),
+        quickest_turn_90: quickest_turn(s, &motion, 90.0),
         scripts,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -402,7 +456,12 @@ fn run_script(
     for i in 0..steps {
         let t = i as f64 * dt;
         let (v, gait) = script.command(t, walk, run, left, radius);
-        let input = if gait == Gait::Idle { Input::stop() } else { Input::velocity(v).with_gait(gait) };
+        let input = match gait {
+            Gait::Idle => Input::stop(),
+            // Speeds between the gaits': no gait asked.
+            _ if script == Script::SpeedRamp => Input::velocity(v),
+            _ => Input::velocity(v).with_gait(gait),
+        };
         let out = c.step(&input, dt)?;
         for n in out.cannot_follow {
             if !notes.contains(&n) {
@@ -600,5 +659,37 @@ mod tests {
         assert_eq!(Script::parse("zig-zag"), Some(Script::ZigZag));
         let v = velocities(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]], 1, 10.0);
         assert!(v.iter().all(|x| (x[0] - 10.0).abs() < 1e-12 && x[1] == 0.0));
+    }
+
+    /// A quad walking a circle at 90 degrees per second turns 45 degrees in half a second and
+    /// 90 in one; one walking straight never turns.
+    #[test]
+    fn the_quickest_turn_of_a_circling_walk() {
+        use surfcap_mesh::{Sequence, Topology, Units};
+        let quad = |x: f32, z: f32| vec![x, 0.0, z, x + 0.1, 1.0, z, x, 0.0, z + 0.1, x + 0.1, 0.0, z + 0.1];
+        let fps = 30.0f64;
+        let circle: Vec<f32> = (0..90)
+            .flat_map(|f| {
+                let a = std::f64::consts::FRAC_PI_2 * f as f64 / fps;
+                quad(a.sin() as f32, (1.0 - a.cos()) as f32)
+            })
+            .collect();
+        let straight: Vec<f32> = (0..90).flat_map(|f| quad(f as f32 / 30.0, 0.0)).collect();
+        let topology = Topology::new(4, vec![[0, 1, 2], [1, 3, 2]], None).unwrap();
+        let subject = |p: Vec<f32>| {
+            Subject::new("q", topology.clone(), vec![Sequence::new("a", 4, p).unwrap()], fps, UpAxis::PosY, Units::metres())
+                .unwrap()
+        };
+        let (s, flat) = (subject(circle), subject(straight));
+        let centres = |s: &Subject| -> Vec<[f64; 3]> {
+            (0..s.n_frames()).map(|g| surfcap_motion::blend::centre(s.frame(g).unwrap())).collect()
+        };
+        let m = surfcap_synthesis::controller::FrameMotion::new(&s, &centres(&s));
+        let t45 = quickest_turn(&s, &m, 45.0).unwrap();
+        let t90 = quickest_turn(&s, &m, 90.0).unwrap();
+        assert!((t45 - 0.5).abs() <= 1.0 / fps + 1e-9, "{t45}");
+        assert!((t90 - 1.0).abs() <= 1.0 / fps + 1e-9, "{t90}");
+        let m = surfcap_synthesis::controller::FrameMotion::new(&flat, &centres(&flat));
+        assert_eq!(quickest_turn(&flat, &m, 45.0), None);
     }
 }

@@ -582,10 +582,9 @@ impl Controller {
         let seconds = t0.elapsed().as_secs_f64();
         let blending = self.blend.is_some_and(|(st, _)| st.lambda > 0.0);
         let played = match candidate {
-            // A transition is taken from the clip itself: the blend first fades out.
-            Some(b) if blending && matches!(choice.chosen, Move::Transition { .. }) && choice.cost < b.cost => {
-                Some(BlendCandidate { target: 0.0, ..b })
-            }
+            // A blend is kept while it beats the graph's moves; otherwise it fades out first (a
+            // transition is taken from the clip itself).
+            Some(b) if blending && choice.cost < b.cost => Some(BlendCandidate { target: 0.0, ..b }),
             Some(b) if blending || b.cost < choice.cost => Some(b),
             _ => None,
         };

@@ -23,9 +23,9 @@ pub struct Args {
     /// `vlasic` (the crane capture).
     #[arg(long, value_delimiter = ',', default_value = "cmu,knight,vlasic", value_parser = ["cmu", "knight", "vlasic"])]
     pub subjects: Vec<String>,
-    /// Scripts: straight-run, turn-left, stop-and-idle, zig-zag, circle.
-    #[arg(long, value_delimiter = ',', default_value = "straight-run,turn-left,stop-and-idle,zig-zag,circle",
-          value_parser = ["straight-run", "turn-left", "stop-and-idle", "zig-zag", "circle"])]
+    /// Scripts: straight-run, turn-left, stop-and-idle, zig-zag, circle, speed-ramp.
+    #[arg(long, value_delimiter = ',', default_value = "straight-run,turn-left,stop-and-idle,zig-zag,circle,speed-ramp",
+          value_parser = ["straight-run", "turn-left", "stop-and-idle", "zig-zag", "circle", "speed-ramp"])]
     pub scripts: Vec<String>,
     /// Vertices of the mannequin (1000 to 20000).
     #[arg(long, default_value_t = 1000, value_parser = |s: &str| crate::options::whole_in(s, 1000, 20000))]
@@ -212,6 +212,11 @@ fn print_table(results: &[PlayEval], path: &std::path::Path) {
             opt(r.run_speed, 2),
             r.moves,
             r.precompute_seconds
+        );
+        println!(
+            "  the data's quickest turns (captured clips): 45 degrees in {} s, 90 degrees in {} s",
+            opt(r.quickest_turn_45, 2),
+            opt(r.quickest_turn_90, 2)
         );
         match &r.no_blend_pairs {
             Some(why) => println!("  parametric blending: no clip pair qualifies: {why}"),
