@@ -73,14 +73,8 @@ pub enum Script {
 }
 
 impl Script {
-    pub const ALL: [Script; 6] = [
-        Script::StraightRun,
-        Script::TurnLeft,
-        Script::StopAndIdle,
-        Script::ZigZag,
-        Script::Circle,
-        Script::SpeedRamp,
-    ];
+    pub const ALL: [Script; 6] =
+        [Script::StraightRun, Script::TurnLeft, Script::StopAndIdle, Script::ZigZag, Script::Circle, Script::SpeedRamp];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -517,7 +511,8 @@ fn run_script(
     let meshes: Vec<&[f32]> = frames.iter().filter_map(|f| f.positions.as_deref()).collect();
     let sliding = if meshes.len() == n && n > 2 { Some(foot_sliding(&meshes, fps, up, &[])?.speed) } else { None };
     let (transitions, transition_cost) = c.transitions();
-    let mut latencies: Vec<f64> = decisions.iter().map(|d: &surfcap_synthesis::controller::Decision| d.seconds).collect();
+    let mut latencies: Vec<f64> =
+        decisions.iter().map(|d: &surfcap_synthesis::controller::Decision| d.seconds).collect();
     latencies.sort_by(f64::total_cmp);
     let decision_p99_ms = 1e3 * quantile(latencies, 0.99).unwrap_or(f64::NAN);
     // The commanded trajectory's moving part as a ground curve at the start's height.
@@ -677,8 +672,15 @@ mod tests {
         let straight: Vec<f32> = (0..90).flat_map(|f| quad(f as f32 / 30.0, 0.0)).collect();
         let topology = Topology::new(4, vec![[0, 1, 2], [1, 3, 2]], None).unwrap();
         let subject = |p: Vec<f32>| {
-            Subject::new("q", topology.clone(), vec![Sequence::new("a", 4, p).unwrap()], fps, UpAxis::PosY, Units::metres())
-                .unwrap()
+            Subject::new(
+                "q",
+                topology.clone(),
+                vec![Sequence::new("a", 4, p).unwrap()],
+                fps,
+                UpAxis::PosY,
+                Units::metres(),
+            )
+            .unwrap()
         };
         let (s, flat) = (subject(circle), subject(straight));
         let centres = |s: &Subject| -> Vec<[f64; 3]> {

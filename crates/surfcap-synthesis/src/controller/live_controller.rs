@@ -31,8 +31,8 @@ use surfcap_pipeline::{Pipeline, PoseDistances};
 
 use super::desired_trajectory::{TrajectoryGoal, desired_trajectory};
 use super::frame_motion::{FrameMotion, Gait};
-use super::future_trajectory::FutureTrajectories;
 use super::future_trajectory::FEATURE;
+use super::future_trajectory::FutureTrajectories;
 use super::move_choice::{Ahead, GaitAsked, LocalGoal, MatchWeights, Move, choose_move, feature_cost, gait_mismatch};
 use super::parametric_blend::{BlendContext, BlendPartners, BlendState, frame_angle, weight_towards};
 use crate::error::{Result, refuse};
@@ -667,7 +667,12 @@ impl Controller {
         for st in states {
             let frame = self.blend_frame(&st, &b.g0)?;
             let at = Some((st.a, b.g0.after(&st.gs)));
-            self.queue.push_back(Queued { frame, committed: false, at, blend: (st.lambda > 0.0).then_some((st, b.g0)) });
+            self.queue.push_back(Queued {
+                frame,
+                committed: false,
+                at,
+                blend: (st.lambda > 0.0).then_some((st, b.g0)),
+            });
         }
         Ok(Some(BlendChoice { frame: b.start.a, partner: b.start.b, weight: b.target }))
     }
@@ -725,17 +730,17 @@ impl Controller {
         let starts: Vec<(BlendState, PlaneMotion, f64)> = match self.blend {
             Some((st, g0)) => {
                 let n = model.centres.len();
-                let dist = partners
-                    .of(st.a)
-                    .find(|&k| partners.partner[k] == st.b)
-                    .map_or(d.values[st.a as usize * n + st.b as usize] / partners.median.max(f64::MIN_POSITIVE), |k| {
-                        partners.distance[k] as f64
-                    });
+                let dist = partners.of(st.a).find(|&k| partners.partner[k] == st.b).map_or(
+                    d.values[st.a as usize * n + st.b as usize] / partners.median.max(f64::MIN_POSITIVE),
+                    |k| partners.distance[k] as f64,
+                );
                 vec![(st, g0, dist)]
             }
             None => partners
                 .of(self.node)
-                .map(|k| (BlendState::begin(&cx, self.node, partners.partner[k], 0.0), self.g, partners.distance[k] as f64))
+                .map(|k| {
+                    (BlendState::begin(&cx, self.node, partners.partner[k], 0.0), self.g, partners.distance[k] as f64)
+                })
                 .collect(),
         };
         let horizons = index.horizons;

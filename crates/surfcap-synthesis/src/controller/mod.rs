@@ -33,5 +33,5 @@ pub mod parametric_blend;
 pub use frame_motion::{FrameMotion, Gait};
 pub use future_trajectory::FutureTrajectories;
 pub use live_controller::{BlendChoice, Controller, ControllerOptions, Decision, Goal, Input, ShownFrame, Step};
-pub use parametric_blend::BlendPartners;
 pub use move_choice::{MatchWeights, Move};
+pub use parametric_blend::BlendPartners;

@@ -102,7 +102,16 @@ pub fn choose_move(
     w: &MatchWeights,
 ) -> Choice {
     let score = |j: usize, feature: &[f32], dest: u32| -> f64 {
-        feature_cost(index, motion, ahead.centres[j], j, goal, feature, gait_mismatch(gait, motion.gait[dest as usize]), w)
+        feature_cost(
+            index,
+            motion,
+            ahead.centres[j],
+            j,
+            goal,
+            feature,
+            gait_mismatch(gait, motion.gait[dest as usize]),
+            w,
+        )
     };
     debug_assert_eq!(FEATURE, 4 * HORIZONS.len());
     let u = ahead.frames[0];

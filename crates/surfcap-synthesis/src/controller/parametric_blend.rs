@@ -79,7 +79,8 @@ impl BlendPartners {
         d: &[f64],
     ) -> BlendPartners {
         let n = model.centres.len();
-        let none = |why: String| BlendPartners { offsets: vec![0; n + 1], none_because: Some(why), ..Default::default() };
+        let none =
+            |why: String| BlendPartners { offsets: vec![0; n + 1], none_because: Some(why), ..Default::default() };
         if model.placement() != surfcap_motion::subject_placement::Placement::Aligned {
             return none(format!(
                 "{} does not travel (its transitions keep the frames where they were captured), so a blend has no track",

@@ -139,13 +139,22 @@ fn write_plots(output: &std::path::Path, r: &PlayEval) -> anyhow::Result<Vec<Pat
         for (k, pts) in stretches(&first.over_time.commanded_heading, t).into_iter().enumerate() {
             heading.push(series(if k == 0 { "command".into() } else { String::new() }, pts, (0, 0, 0), true));
         }
-        let mut speed =
-            vec![series("command".into(), t.iter().copied().zip(first.over_time.commanded_speed.iter().copied()).collect(), (0, 0, 0), true)];
+        let mut speed = vec![series(
+            "command".into(),
+            t.iter().copied().zip(first.over_time.commanded_speed.iter().copied()).collect(),
+            (0, 0, 0),
+            true,
+        )];
         for (i, run) in runs.iter().enumerate() {
             let color = palette[i % palette.len()];
             let time = &run.over_time.time;
             for (k, pts) in stretches(&run.over_time.heading, time).into_iter().enumerate() {
-                heading.push(series(if k == 0 { mode(run.parametric).into() } else { String::new() }, pts, color, false));
+                heading.push(series(
+                    if k == 0 { mode(run.parametric).into() } else { String::new() },
+                    pts,
+                    color,
+                    false,
+                ));
             }
             speed.push(series(
                 mode(run.parametric).into(),
