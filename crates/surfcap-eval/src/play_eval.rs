@@ -35,6 +35,11 @@
 //! with its travel recovered from ground contacts ([`knight_play_subject`]) and a Vlasic et al.
 //! capture ([`vlasic_play_subject`]).
 //!
+//! Parametric blending (`surfcap_synthesis::controller::parametric_blend`): when the
+//! controller blends and the subject has clip pairs, each script is played twice, with the
+//! captured clips only and with blending, and the pairs are listed. The subject's quickest
+//! captured turns ([`quickest_turn`]) bound how fast a turn can be answered.
+//!
 //! Offline comparison: the commanded trajectory's moving part as a ground curve, followed by
 //! `Prepared::follow_path` (thesis 3.5.1) from the same start frame with the subject's default
 //! search: its path error, transitions and cost, and foot sliding, beside the controller's.

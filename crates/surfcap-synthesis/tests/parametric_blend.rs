@@ -140,10 +140,7 @@ fn a_walk_blended_with_a_jog_reaches_the_speeds_between() {
     };
     let probe = Controller::new(&prep, options(false)).unwrap();
     let (walk, jog) = (probe.motion().typical_speed(Gait::Walk).unwrap(), probe.motion().typical_speed(Gait::Run));
-    let jog = jog.unwrap_or_else(|| {
-        let m = probe.motion();
-        m.fastest()
-    });
+    let jog = jog.unwrap_or_else(|| probe.motion().fastest());
     assert!(jog > 1.3 * walk, "walk {walk} m/s, jog {jog} m/s");
     let asked = 0.5 * (walk + jog);
     let (with, blended, n) = run(true, asked);

@@ -230,7 +230,7 @@ impl BlendState {
         let n = cx.model.centres.len();
         let id = PlaneMotion::identity(cx.model.up);
         let (b1, w1) = next_frame(cx, self.b)?;
-        let g1 = w1.map_or(id, |w| w);
+        let g1 = w1.unwrap_or(id);
         let mut best = (cx.d[a2 as usize * n + b1 as usize], b1, g1);
         let hold = cx.d[a2 as usize * n + self.b as usize];
         if let Some((b2, w2)) = next_frame(cx, b1).filter(|x| cx.index.continues[x.0 as usize]) {
