@@ -6,7 +6,8 @@
 //! inputs (every 0.5 to 2 s a new ground velocity: a random direction at a walking or running
 //! speed, or a stop), on one thread. Measured: the precomputation (frame motion and the moves'
 //! future-trajectory features), every decision's latency (the asked trajectory and the scan),
-//! every 60 Hz step's latency without and with meshes (with: transitions blended as they are
+//! every 60 Hz step's latency without meshes (with the graph's moves only, and with parametric
+//! blending) and with meshes and blending (transitions and blends interpolated as they are
 //! queued), and, for comparison, the same decisions scanning every move of the graph (what a
 //! search without the graph's adjacency as its index would scan).
 
@@ -98,8 +99,10 @@ fn measure(ctx: &crate::Ctx, prep: &surfcap_synthesis::Prepared, seconds: f64, s
     let dt = 1.0 / 60.0;
     let steps = (seconds / dt).round() as usize;
     let mut results = Vec::new();
-    for meshes in [false, true] {
-        let options = ControllerOptions { meshes, ..Default::default() };
+    // Without meshes, with the graph's moves only and with parametric blending; with meshes,
+    // with blending.
+    for (meshes, parametric) in [(false, false), (false, true), (true, true)] {
+        let options = ControllerOptions { meshes, parametric, ..Default::default() };
         let mut c = Controller::with_index(prep, index.clone(), motion.clone(), options)?;
         let (mut decisions, mut step_times, mut candidates) = (Vec::new(), Vec::new(), Vec::new());
         let mut full_scan = Vec::new();
@@ -115,7 +118,7 @@ fn measure(ctx: &crate::Ctx, prep: &surfcap_synthesis::Prepared, seconds: f64, s
             for d in &out.decisions {
                 decisions.push(d.seconds);
                 candidates.push(d.candidates as f64);
-                if !meshes {
+                if !meshes && !parametric {
                     full_scan.push(scan_everything(&index, &motion, d.frame));
                 }
             }
@@ -125,6 +128,8 @@ fn measure(ctx: &crate::Ctx, prep: &surfcap_synthesis::Prepared, seconds: f64, s
         let mean_candidates = candidates.iter().sum::<f64>() / candidates.len().max(1) as f64;
         results.push(json!({
             "meshes": meshes,
+            "parametric": parametric,
+            "blended_frames": c.blended(),
             "decisions": n_decisions,
             "frames_shown": c.shown(),
             "transitions": transitions,
@@ -133,7 +138,7 @@ fn measure(ctx: &crate::Ctx, prep: &surfcap_synthesis::Prepared, seconds: f64, s
             "candidates_max": quantile(&mut candidates, 1.0),
             "decision_ms": { "p50": 1e3 * quantile(&mut decisions, 0.5), "p99": 1e3 * quantile(&mut decisions, 0.99), "max": 1e3 * quantile(&mut decisions, 1.0) },
             "step_ms": { "p50": 1e3 * quantile(&mut step_times, 0.5), "p99": 1e3 * quantile(&mut step_times, 0.99), "max": 1e3 * quantile(&mut step_times, 1.0) },
-            "scan_every_move_ms": if meshes { serde_json::Value::Null } else {
+            "scan_every_move_ms": if meshes || parametric { serde_json::Value::Null } else {
                 json!({ "p50": 1e3 * quantile(&mut full_scan, 0.5), "p99": 1e3 * quantile(&mut full_scan, 0.99) })
             },
         }));
@@ -163,9 +168,11 @@ fn measure(ctx: &crate::Ctx, prep: &surfcap_synthesis::Prepared, seconds: f64, s
         for r in &results {
             let ms = |k: &str, q: &str| r[k][q].as_f64().unwrap_or(f64::NAN);
             println!(
-                "{} meshes: {} decisions over {seconds} s ({} inputs), {:.0} moves compared on average (max {:.0}); \
-                 decision p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms; 60 Hz step p99 {:.3} ms, max {:.3} ms; {} transitions",
+                "{} meshes, {}: {} decisions over {seconds} s ({} inputs), {:.0} moves compared on average (max {:.0}); \
+                 decision p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms; 60 Hz step p99 {:.3} ms, max {:.3} ms; {} transitions, \
+                 {} frames blended",
                 if r["meshes"].as_bool() == Some(true) { "with" } else { "without" },
+                if r["parametric"].as_bool() == Some(true) { "parametric blending" } else { "graph moves only" },
                 r["decisions"],
                 script.len(),
                 r["candidates_mean"].as_f64().unwrap_or(0.0),
@@ -175,9 +182,10 @@ fn measure(ctx: &crate::Ctx, prep: &surfcap_synthesis::Prepared, seconds: f64, s
                 ms("decision_ms", "max"),
                 ms("step_ms", "p99"),
                 ms("step_ms", "max"),
-                r["transitions"]
+                r["transitions"],
+                r["blended_frames"]
             );
-            if r["meshes"].as_bool() == Some(false) {
+            if r["scan_every_move_ms"].is_object() {
                 println!(
                     "  the same decisions scanning every move of the graph (no index): p50 {:.3} ms, p99 {:.3} ms",
                     ms("scan_every_move_ms", "p50"),

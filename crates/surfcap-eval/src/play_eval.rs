@@ -8,7 +8,10 @@
 //! - `turn-left`: walk forward 3 s, then walk to the left (90 degrees) for 4 s;
 //! - `stop-and-idle`: walk forward 3 s, then stop and stand for 4 s;
 //! - `zig-zag`: walk 45 degrees to the left, then to the right, changing every 2 s, for 8 s;
-//! - `circle`: walk around a circle of radius 1.5 subject heights, turning left, for 10 s.
+//! - `circle`: walk around a circle of radius 1.5 subject heights, turning left, for 10 s;
+//! - `speed-ramp`: walk forward 2 s, then speed up evenly to the running speed over 4 s and
+//!   run 2 s, no gait asked (the speeds between a walk's and a run's, which parametric
+//!   blending is for).
 //!
 //! Walking and running speeds are the subject's own (the median speed of its walking and
 //! running frames, [`surfcap_synthesis::controller::FrameMotion::typical_speed`]); a gait the
@@ -31,6 +34,11 @@
 //! Subjects: the mannequin moved by real CMU clips ([`cmu_play_subject`]), the KayKit knight
 //! with its travel recovered from ground contacts ([`knight_play_subject`]) and a Vlasic et al.
 //! capture ([`vlasic_play_subject`]).
+//!
+//! Parametric blending (`surfcap_synthesis::controller::parametric_blend`): when the
+//! controller blends and the subject has clip pairs, each script is played twice, with the
+//! captured clips only and with blending, and the pairs are listed. The subject's quickest
+//! captured turns ([`quickest_turn`]) bound how fast a turn can be answered.
 //!
 //! Offline comparison: the commanded trajectory's moving part as a ground curve, followed by
 //! `Prepared::follow_path` (thesis 3.5.1) from the same start frame with the subject's default
@@ -66,11 +74,12 @@ pub enum Script {
     StopAndIdle,
     ZigZag,
     Circle,
+    SpeedRamp,
 }
 
 impl Script {
-    pub const ALL: [Script; 5] =
-        [Script::StraightRun, Script::TurnLeft, Script::StopAndIdle, Script::ZigZag, Script::Circle];
+    pub const ALL: [Script; 6] =
+        [Script::StraightRun, Script::TurnLeft, Script::StopAndIdle, Script::ZigZag, Script::Circle, Script::SpeedRamp];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -79,6 +88,7 @@ impl Script {
             Script::StopAndIdle => "stop-and-idle",
             Script::ZigZag => "zig-zag",
             Script::Circle => "circle",
+            Script::SpeedRamp => "speed-ramp",
         }
     }
 
@@ -91,7 +101,7 @@ impl Script {
         match self {
             Script::StraightRun => 6.0,
             Script::TurnLeft | Script::StopAndIdle => 7.0,
-            Script::ZigZag => 8.0,
+            Script::ZigZag | Script::SpeedRamp => 8.0,
             Script::Circle => 10.0,
         }
     }
@@ -111,6 +121,10 @@ impl Script {
                 (at(side * quarter / 2.0, walk), Gait::Walk)
             }
             Script::Circle => (at(left * walk / radius * t, walk), Gait::Walk),
+            Script::SpeedRamp => {
+                let x = ((t - 2.0) / 4.0).clamp(0.0, 1.0);
+                (at(0.0, walk + x * (run - walk)), if x < 0.5 { Gait::Walk } else { Gait::Run })
+            }
         }
     }
 }
@@ -123,11 +137,19 @@ pub struct PlayEvalOptions {
     pub controller: ControllerOptions,
     /// Also follow each script's trajectory offline.
     pub offline: bool,
+    /// When the controller blends ([`ControllerOptions::parametric`]), also play each script
+    /// without blending, for the comparison.
+    pub compare_parametric: bool,
 }
 
 impl Default for PlayEvalOptions {
     fn default() -> Self {
-        PlayEvalOptions { scripts: Script::ALL.to_vec(), controller: ControllerOptions::default(), offline: true }
+        PlayEvalOptions {
+            scripts: Script::ALL.to_vec(),
+            controller: ControllerOptions::default(),
+            offline: true,
+            compare_parametric: true,
+        }
     }
 }
 
@@ -152,14 +174,24 @@ pub struct OverTime {
     pub commanded: Vec<[f64; 2]>,
     /// Degrees; `None` where either stands.
     pub heading_error: Vec<Option<f64>>,
+    /// The character's and the commanded heading, degrees, unwrapped over time (`None` where
+    /// it stands or is asked to stand).
+    pub heading: Vec<Option<f64>>,
+    pub commanded_heading: Vec<Option<f64>>,
     pub speed: Vec<f64>,
     pub commanded_speed: Vec<f64>,
+    /// The parametric blend's weight at each frame (0: a captured frame or a transition).
+    pub blend_weight: Vec<f64>,
 }
 
 /// One script on one subject.
 #[derive(Debug, Clone, Serialize)]
 pub struct ScriptResult {
     pub script: Script,
+    /// Whether the controller could blend clips parametrically.
+    pub parametric: bool,
+    /// Output frames that were parametric blends (weight above 0).
+    pub blended_frames: usize,
     pub seconds: f64,
     pub frames: usize,
     /// Mean and 90th percentile heading error, degrees (`None`: never both moving).
@@ -186,6 +218,8 @@ pub struct ScriptResult {
     /// Why the offline walk was not made, if it was asked and not made.
     pub offline_refused: Option<String>,
     pub over_time: OverTime,
+    /// Every decision: when, from which frame, the move or blend chosen and its cost.
+    pub decision_log: Vec<surfcap_synthesis::controller::Decision>,
 }
 
 /// One subject's results.
@@ -201,6 +235,16 @@ pub struct PlayEval {
     pub run_speed: Option<f64>,
     pub moves: usize,
     pub precompute_seconds: f64,
+    /// The clip pairs parametric blending may mix: (clip, partner clip, frames of the clip
+    /// with a partner in it).
+    pub blend_pairs: Vec<(String, String, usize)>,
+    /// Why no pair qualifies, when none does.
+    pub no_blend_pairs: Option<String>,
+    /// The data's quickest turns: seconds for the heading of a captured clip to change by 45
+    /// and by 90 degrees ([`quickest_turn`]; `None`: no clip turns that far). A response
+    /// latency to half of a 90-degree command cannot beat the first by playing captured frames.
+    pub quickest_turn_45: Option<f64>,
+    pub quickest_turn_90: Option<f64>,
     pub scripts: Vec<ScriptResult>,
     pub seconds: f64,
 }
@@ -303,6 +347,37 @@ fn velocities(track: &[[f64; 2]], half: usize, fps: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The shortest time, over the frames of every clip as captured, for the heading
+/// ([`surfcap_synthesis::controller::FrameMotion`]) to change by `degrees` while moving
+/// (every frame in between has a heading), in seconds; `None` when no clip turns that far.
+pub fn quickest_turn(s: &Subject, motion: &surfcap_synthesis::controller::FrameMotion, degrees: f64) -> Option<f64> {
+    let index = s.frame_index();
+    let mut best: Option<usize> = None;
+    for q in 0..index.n_sequences() {
+        let r = index.range(q);
+        for a in r.clone() {
+            if !motion.heading[a].is_finite() {
+                continue;
+            }
+            // Unwrapped heading change from frame a on, until a frame without heading.
+            let (mut turned, mut last) = (0.0f64, motion.heading[a]);
+            for b in a + 1..r.end {
+                let h = motion.heading[b];
+                if !h.is_finite() || best.is_some_and(|x| b - a >= x) {
+                    break;
+                }
+                turned += wrap_angle(h - last);
+                last = h;
+                if turned.abs().to_degrees() >= degrees {
+                    best = Some(b - a);
+                    break;
+                }
+            }
+        }
+    }
+    best.map(|f| f as f64 / s.fps)
+}
+
 /// Runs the scripts of `opts` on `prep` (see the module doc).
 pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
     let t0 = Instant::now();
@@ -311,16 +386,32 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
     let tp = Instant::now();
     let probe = Controller::new(prep, controller_options.clone())?;
     let (index, motion) = (probe.index().clone(), probe.motion().clone());
+    let has_pairs = probe.partners().frames_with_partners() > 0;
     let precompute_seconds = tp.elapsed().as_secs_f64();
     drop(probe);
     let height = motion.height;
     let (walk_speed, run_speed) = (motion.typical_speed(Gait::Walk), motion.typical_speed(Gait::Run));
     let walk = walk_speed.unwrap_or(0.8 * height);
     let run = run_speed.unwrap_or(1.6 * height);
+    let modes: Vec<bool> = if controller_options.parametric && opts.compare_parametric && has_pairs {
+        vec![false, true]
+    } else {
+        vec![controller_options.parametric]
+    };
     let mut scripts = Vec::new();
+    let (mut blend_pairs, mut no_blend_pairs) = (Vec::new(), None);
     for &script in &opts.scripts {
-        let c = Controller::with_index(prep, index.clone(), motion.clone(), controller_options.clone())?;
-        scripts.push(run_script(prep, c, script, walk, run, opts.offline)?);
+        // The offline walk is the same for both modes: made once.
+        let mut offline: Option<(Option<OfflineWalk>, Option<String>)> = None;
+        for &parametric in &modes {
+            let options = ControllerOptions { parametric, ..controller_options.clone() };
+            let c = Controller::with_index(prep, index.clone(), motion.clone(), options)?;
+            if parametric {
+                blend_pairs = c.partners().pairs(s);
+                no_blend_pairs = c.partners().none_because.clone();
+            }
+            scripts.push(run_script(prep, c, script, walk, run, opts.offline, &mut offline)?);
+        }
     }
     Ok(PlayEval {
         subject: s.name.clone(),
@@ -333,6 +424,10 @@ pub fn play_eval(prep: &Prepared, opts: &PlayEvalOptions) -> Result<PlayEval> {
         run_speed,
         moves: index.n_transitions(),
         precompute_seconds,
+        blend_pairs,
+        no_blend_pairs,
+        quickest_turn_45: quickest_turn(s, &motion, 45.0),
+        quickest_turn_90: quickest_turn(s, &motion, 90.0),
         scripts,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -345,7 +440,9 @@ fn run_script(
     walk: f64,
     run: f64,
     offline: bool,
+    offline_made: &mut Option<(Option<OfflineWalk>, Option<String>)>,
 ) -> Result<ScriptResult> {
+    let parametric = c.partners().frames_with_partners() > 0;
     let s = prep.subject();
     let (fps, up) = (s.fps, s.up_axis);
     let (iu, iv, _) = plane_axes(up);
@@ -358,9 +455,19 @@ fn run_script(
     for i in 0..steps {
         let t = i as f64 * dt;
         let (v, gait) = script.command(t, walk, run, left, radius);
-        let input = if gait == Gait::Idle { Input::stop() } else { Input::velocity(v).with_gait(gait) };
+        let input = match gait {
+            Gait::Idle => Input::stop(),
+            // Speeds between the gaits': no gait asked.
+            _ if script == Script::SpeedRamp => Input::velocity(v),
+            _ => Input::velocity(v).with_gait(gait),
+        };
         let out = c.step(&input, dt)?;
         for n in out.cannot_follow {
+            // A speed asked beyond the data's is said once, at its largest (the speed ramp
+            // changes the input every step).
+            if n.starts_with("asked ") {
+                notes.retain(|x: &String| !x.starts_with("asked "));
+            }
             if !notes.contains(&n) {
                 notes.push(n);
             }
@@ -414,7 +521,8 @@ fn run_script(
     let meshes: Vec<&[f32]> = frames.iter().filter_map(|f| f.positions.as_deref()).collect();
     let sliding = if meshes.len() == n && n > 2 { Some(foot_sliding(&meshes, fps, up, &[])?.speed) } else { None };
     let (transitions, transition_cost) = c.transitions();
-    let mut latencies: Vec<f64> = decisions.iter().map(|d| d.seconds).collect();
+    let mut latencies: Vec<f64> =
+        decisions.iter().map(|d: &surfcap_synthesis::controller::Decision| d.seconds).collect();
     latencies.sort_by(f64::total_cmp);
     let decision_p99_ms = 1e3 * quantile(latencies, 0.99).unwrap_or(f64::NAN);
     // The commanded trajectory's moving part as a ground curve at the start's height.
@@ -437,16 +545,40 @@ fn run_script(
     let mean_path_error = mean(path_error.iter().copied()).unwrap_or(0.0);
     let max_path_error = path_error.iter().copied().fold(0.0, f64::max);
     let start = frames.first().and_then(|f| f.frame);
-    let (offline_walk, offline_refused) = if offline {
-        match offline_path(prep, &curve, start) {
-            Ok(w) => (Some(w), None),
-            Err(e) => (None, Some(e)),
+    let (offline_walk, offline_refused) = match offline_made {
+        Some(made) => made.clone(),
+        None if offline => {
+            let made = match offline_path(prep, &curve, start) {
+                Ok(w) => (Some(w), None),
+                Err(e) => (None, Some(e)),
+            };
+            *offline_made = Some(made.clone());
+            made
         }
-    } else {
-        (None, None)
+        None => (None, None),
     };
+    let blend_weight: Vec<f64> =
+        frames.iter().map(|f| f.mix.filter(|_| f.transition.is_none()).map_or(0.0, |m| m.weight as f64)).collect();
+    let unwrapped = |h: &[f64], keep: &dyn Fn(usize) -> bool| -> Vec<Option<f64>> {
+        let mut last: Option<f64> = None;
+        (0..n)
+            .map(|k| {
+                if !keep(k) {
+                    return None;
+                }
+                let d = h[k].to_degrees();
+                let u = last.map_or(d, |l| l + wrap_angle((d - l).to_radians()).to_degrees());
+                last = Some(u);
+                Some(u)
+            })
+            .collect()
+    };
+    let heading_deg = unwrapped(&heading, &|k| speed[k] >= IDLE_HEIGHTS_PER_SECOND * height);
+    let commanded_heading_deg = unwrapped(&commanded_heading, &|k| commanded_speed[k] > 0.0);
     Ok(ScriptResult {
         script,
+        parametric,
+        blended_frames: c.blended(),
         seconds: script.seconds(),
         frames: n,
         heading_error_mean: mean(errors.iter().copied()),
@@ -465,7 +597,18 @@ fn run_script(
         cannot_follow: notes,
         offline: offline_walk,
         offline_refused,
-        over_time: OverTime { time, centre, commanded, heading_error, speed, commanded_speed },
+        over_time: OverTime {
+            time,
+            centre,
+            commanded,
+            heading_error,
+            heading: heading_deg,
+            commanded_heading: commanded_heading_deg,
+            speed,
+            commanded_speed,
+            blend_weight,
+        },
+        decision_log: decisions,
     })
 }
 
@@ -521,5 +664,44 @@ mod tests {
         assert_eq!(Script::parse("zig-zag"), Some(Script::ZigZag));
         let v = velocities(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]], 1, 10.0);
         assert!(v.iter().all(|x| (x[0] - 10.0).abs() < 1e-12 && x[1] == 0.0));
+    }
+
+    /// A quad walking a circle at 90 degrees per second turns 45 degrees in half a second and
+    /// 90 in one; one walking straight never turns.
+    #[test]
+    fn the_quickest_turn_of_a_circling_walk() {
+        use surfcap_mesh::{Sequence, Topology, Units};
+        let quad = |x: f32, z: f32| vec![x, 0.0, z, x + 0.1, 1.0, z, x, 0.0, z + 0.1, x + 0.1, 0.0, z + 0.1];
+        let fps = 30.0f64;
+        let circle: Vec<f32> = (0..90)
+            .flat_map(|f| {
+                let a = std::f64::consts::FRAC_PI_2 * f as f64 / fps;
+                quad(a.sin() as f32, (1.0 - a.cos()) as f32)
+            })
+            .collect();
+        let straight: Vec<f32> = (0..90).flat_map(|f| quad(f as f32 / 30.0, 0.0)).collect();
+        let topology = Topology::new(4, vec![[0, 1, 2], [1, 3, 2]], None).unwrap();
+        let subject = |p: Vec<f32>| {
+            Subject::new(
+                "q",
+                topology.clone(),
+                vec![Sequence::new("a", 4, p).unwrap()],
+                fps,
+                UpAxis::PosY,
+                Units::metres(),
+            )
+            .unwrap()
+        };
+        let (s, flat) = (subject(circle), subject(straight));
+        let centres = |s: &Subject| -> Vec<[f64; 3]> {
+            (0..s.n_frames()).map(|g| surfcap_motion::blend::centre(s.frame(g).unwrap())).collect()
+        };
+        let m = surfcap_synthesis::controller::FrameMotion::new(&s, &centres(&s));
+        let t45 = quickest_turn(&s, &m, 45.0).unwrap();
+        let t90 = quickest_turn(&s, &m, 90.0).unwrap();
+        assert!((t45 - 0.5).abs() <= 1.0 / fps + 1e-9, "{t45}");
+        assert!((t90 - 1.0).abs() <= 1.0 / fps + 1e-9, "{t90}");
+        let m = surfcap_synthesis::controller::FrameMotion::new(&flat, &centres(&flat));
+        assert_eq!(quickest_turn(&flat, &m, 45.0), None);
     }
 }

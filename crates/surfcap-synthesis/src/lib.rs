@@ -38,7 +38,8 @@
 //!   skin, with per-frame reconstruction errors, size and time.
 //! - [`constraint`]: soft constraints and how closely they were met.
 //! - [`controller`]: a character steered live by a stream of inputs (motion matching on the
-//!   essential graph): [`controller::Controller::step`] gives the frames to show.
+//!   essential graph, with parametric blending of same-kind clips for in-between speeds and
+//!   turn rates): [`controller::Controller::step`] gives the frames to show.
 //! - [`request_size`] and [`travel_check`]: requests refused before any work (too many frames,
 //!   too much memory, a glb over 4 GiB; a path or distance asked of clips that stay in place).
 //! - [`variation_training`] and [`variant_samples`]: a variation model learnt from a subject

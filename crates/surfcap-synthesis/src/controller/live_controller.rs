@@ -15,12 +15,15 @@
 //! faces the way its clip's transitions into walking or running set off: [`walk_off_heading`]); every frame after is placed as the walk model places
 //! it (the rigid track of each transition, the wrap of a looping clip).
 
-use std::collections::VecDeque;
+use std::cell::RefCell;
+use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
+use surfcap_geometry::poisson_reconstruction::PoissonPattern;
+use surfcap_geometry::pose_interpolation::{NonlinearInterpolator, StretchInterpolation};
 use surfcap_mesh::UpAxis;
 use surfcap_motion::transition_frames::FrameMix;
 use surfcap_motion::walk_sequence::{Step as EdgeStep, WalkModel, walk_sequence};
@@ -28,8 +31,10 @@ use surfcap_pipeline::{Pipeline, PoseDistances};
 
 use super::desired_trajectory::{TrajectoryGoal, desired_trajectory};
 use super::frame_motion::{FrameMotion, Gait};
+use super::future_trajectory::FEATURE;
 use super::future_trajectory::FutureTrajectories;
-use super::move_choice::{Ahead, GaitAsked, LocalGoal, MatchWeights, Move, choose_move};
+use super::move_choice::{Ahead, GaitAsked, LocalGoal, MatchWeights, Move, choose_move, feature_cost, gait_mismatch};
+use super::parametric_blend::{BlendContext, BlendPartners, BlendState, frame_angle, weight_towards};
 use crate::error::{Result, refuse};
 use crate::prepared::Prepared;
 use crate::words::length;
@@ -47,6 +52,10 @@ pub struct ControllerOptions {
     pub start: Option<u32>,
     /// Return every output frame's vertex positions (off: frames, centres and placements only).
     pub meshes: bool,
+    /// Parametric blending: mix a partner clip of the same kind into the clip played, at a
+    /// continuous weight, to reach speeds and turn rates between the captured ones
+    /// ([`super::parametric_blend`]; off by default, [`PARAMETRIC_BY_DEFAULT`]).
+    pub parametric: bool,
 }
 
 impl Default for ControllerOptions {
@@ -57,6 +66,7 @@ impl Default for ControllerOptions {
             weights: MatchWeights::default(),
             start: None,
             meshes: false,
+            parametric: PARAMETRIC_BY_DEFAULT,
         }
     }
 }
@@ -123,6 +133,22 @@ pub struct ShownFrame {
     pub positions: Option<Vec<f32>>,
 }
 
+/// Whether [`ControllerOptions::parametric`] is on by default: off, because a decision with
+/// blending has not yet been measured under the 2 ms p99 of `surfcap-bench play` (each new
+/// partner chain computes eq. 2.3 angles over the mesh), and it helps some scripts and not
+/// others (docs/results/play.md).
+pub const PARAMETRIC_BY_DEFAULT: bool = false;
+
+/// A parametric blend a decision chose: the partner frame mixed in and the weight aimed at.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BlendChoice {
+    /// The clip's frame (global) and its partner's.
+    pub frame: u32,
+    pub partner: u32,
+    /// The weight aimed at (reached at [`super::parametric_blend::WEIGHT_PER_SECOND`]).
+    pub weight: f64,
+}
+
 /// What one decision saw and chose.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Decision {
@@ -136,6 +162,9 @@ pub struct Decision {
     pub candidates: usize,
     /// How long the decision took (seconds; the asked trajectory and the scan).
     pub seconds: f64,
+    /// The parametric blend played instead of `chosen`, if one was (`chosen` then says what
+    /// the graph's moves alone would have done).
+    pub blend: Option<BlendChoice>,
 }
 
 /// What [`Controller::step`] returns: the frames that fell due, the decisions made and, when
@@ -156,6 +185,8 @@ struct Queued {
     /// Part of a chosen transition (its lead-in or blend): not replaced by a new decision.
     committed: bool,
     at: Option<(u32, PlaneMotion)>,
+    /// The blend after this frame, and where the blend's coordinates are placed.
+    blend: Option<(BlendState, PlaneMotion)>,
 }
 
 /// What the data allows, found once.
@@ -191,6 +222,15 @@ pub struct Controller {
     input: Option<Input>,
     transitions: usize,
     realism: f64,
+    /// Partner frames for parametric blending (empty when it is off).
+    partners: Arc<BlendPartners>,
+    /// The blend playing after the frame shown, if any.
+    blend: Option<(BlendState, PlaneMotion)>,
+    /// Eq. 2.3 angles between frames the blends have paired so far.
+    angles: HashMap<(u32, u32), f64>,
+    /// Blended frames played so far.
+    blended: usize,
+    pattern: Option<Arc<PoissonPattern>>,
 }
 
 impl Controller {
@@ -251,7 +291,17 @@ impl Controller {
         let rot = PlaneMotion { theta, t: [0.0, 0.0], up: s.up_axis };
         let r = rot.apply_point(c);
         let g = PlaneMotion { theta, t: [-r[iu], -r[iv]], up: s.up_axis };
-        let distances = if options.meshes { Some(prep.pipe.chain_distances()?.value) } else { None };
+        let distances =
+            if options.meshes || options.parametric { Some(prep.pipe.chain_distances()?.value) } else { None };
+        let partners = match (&distances, options.parametric) {
+            (Some(d), true) => Arc::new(BlendPartners::new(s, &prep.model, &motion, &index, &d.values)),
+            _ => Arc::new(BlendPartners::default()),
+        };
+        let pattern = if options.meshes && options.parametric && partners.frames_with_partners() > 0 {
+            Some(Arc::new(PoissonPattern::new(s.topology())?))
+        } else {
+            None
+        };
         let abilities = abilities(&index, &motion);
         let mut c = Controller {
             pipe: prep.pipe.clone(),
@@ -270,10 +320,15 @@ impl Controller {
             input: None,
             transitions: 0,
             realism: 0.0,
+            partners,
+            blend: None,
+            angles: HashMap::new(),
+            blended: 0,
+            pattern,
         };
         // The first frame is shown at time 0.
         let first = c.original(start, &g);
-        c.queue.push_back(Queued { frame: first, committed: true, at: Some((start, g)) });
+        c.queue.push_back(Queued { frame: first, committed: true, at: Some((start, g)), blend: None });
         Ok(c)
     }
 
@@ -303,6 +358,16 @@ impl Controller {
 
     pub fn up(&self) -> UpAxis {
         self.model.up
+    }
+
+    /// The partner frames parametric blending may mix in (none when it is off).
+    pub fn partners(&self) -> &Arc<BlendPartners> {
+        &self.partners
+    }
+
+    /// Output frames shown so far that were parametric blends (weight above 0).
+    pub fn blended(&self) -> usize {
+        self.blended
     }
 
     /// Advances the clock by `dt` seconds under `input` and returns the frames that fell due
@@ -336,6 +401,8 @@ impl Controller {
                 self.node = node;
                 self.g = g;
             }
+            self.blend = q.blend;
+            self.blended += usize::from(q.blend.is_some());
             self.shown += 1;
             out.frames.push(q.frame);
         }
@@ -378,15 +445,17 @@ impl Controller {
             EdgeStep::Original | EdgeStep::Wrap(_) => {
                 let g2 = model.advance(step, g, v, |_, _| {});
                 let frame = self.original(v, &g2);
-                self.queue.push_back(Queued { frame, committed, at: Some((v, g2)) });
+                self.queue.push_back(Queued { frame, committed, at: Some((v, g2)), blend: None });
                 Ok(g2)
             }
             EdgeStep::Transition(_) => {
                 let mut centres = Vec::new();
                 let g2 = model.advance(step, g, v, |c, _| centres.push(c));
                 let played = match &self.distances {
-                    Some(d) => Some(walk_sequence(self.pipe.subject(), &model, &d.values, &[u, v], g)?),
-                    None => None,
+                    Some(d) if self.options.meshes => {
+                        Some(walk_sequence(self.pipe.subject(), &model, &d.values, &[u, v], g)?)
+                    }
+                    _ => None,
                 };
                 let per = 3 * self.pipe.subject().topology().n_vertices();
                 for (k, c) in centres.iter().enumerate() {
@@ -401,7 +470,7 @@ impl Controller {
                         transition: Some((u, v)),
                         positions,
                     };
-                    self.queue.push_back(Queued { frame, committed, at: last.then_some((v, g2)) });
+                    self.queue.push_back(Queued { frame, committed, at: last.then_some((v, g2)), blend: None });
                 }
                 Ok(g2)
             }
@@ -410,6 +479,13 @@ impl Controller {
 
     /// The current ground velocity and facing of the character, from the frame shown.
     fn velocity_and_facing(&self) -> ([f64; 2], f64) {
+        if let Some((st, g0)) = &self.blend {
+            let h = st.facing(&self.motion) - g0.theta;
+            if h.is_finite() {
+                let v = st.speed(&self.motion);
+                return ([v * h.cos(), v * h.sin()], h);
+            }
+        }
         let u = self.node as usize;
         let h = self.motion.heading[u] - self.g.theta;
         if self.motion.heading[u].is_finite() {
@@ -506,10 +582,45 @@ impl Controller {
         };
         let ahead = Ahead { frames: &frames, centres: &centres };
         let choice = choose_move(&index, &self.motion, &ahead, &local, gait, &self.options.weights);
+        let candidate =
+            if self.partners.frames_with_partners() > 0 { self.best_blend(&local, gait, centres[0]) } else { None };
         let seconds = t0.elapsed().as_secs_f64();
+        let blending = self.blend.is_some_and(|(st, _)| st.lambda > 0.0);
+        let played = match candidate {
+            // A blend is kept while it beats the graph's moves; otherwise it fades out first (a
+            // transition is taken from the clip itself).
+            Some(b) if blending && choice.cost < b.cost => Some(BlendCandidate { target: 0.0, ..b }),
+            Some(b) if blending || b.cost < choice.cost => Some(b),
+            _ => None,
+        };
+        let mut blend_choice = None;
+        if let Some(b) = played {
+            blend_choice = self.queue_blend(&b)?;
+        }
+        if blend_choice.is_none() {
+            // No blend plays (or its partner cannot go on: it ends here).
+            self.blend = None;
+            self.queue_move(&choice, &frames, lookahead)?;
+        }
+        self.last_decision = Some(now);
+        Ok(Decision {
+            time: now,
+            frame: self.node,
+            chosen: choice.chosen,
+            cost: blend_choice.map_or(choice.cost, |_| played.map_or(choice.cost, |b| b.cost)),
+            candidates: choice.candidates + played.map_or(0, |b| b.candidates),
+            seconds,
+            blend: blend_choice,
+        })
+    }
+
+    /// Queues the frames of the graph move `choice` from the frames `frames` about to be shown.
+    fn queue_move(&mut self, choice: &super::move_choice::Choice, frames: &[u32], lookahead: usize) -> Result<()> {
         if !choice.cost.is_finite() {
             refuse!("the controller found no move from frame {}", self.label(self.node));
         }
+        let model = self.model.clone();
+        let index = self.index.clone();
         let mut g = self.g;
         match choice.chosen {
             Move::Continue => {
@@ -532,15 +643,182 @@ impl Controller {
                 self.realism += weight;
             }
         }
-        self.last_decision = Some(now);
-        Ok(Decision {
-            time: now,
-            frame: self.node,
-            chosen: choice.chosen,
-            cost: choice.cost,
-            candidates: choice.candidates,
-            seconds,
+        Ok(())
+    }
+
+    /// Queues the blend `b` for the next decision interval: returns what was chosen, `None`
+    /// when the partner cannot go on from the first frame (nothing queued).
+    fn queue_blend(&mut self, b: &BlendCandidate) -> Result<Option<BlendChoice>> {
+        let model = self.model.clone();
+        let index = self.index.clone();
+        let Some(d) = self.distances.clone() else { return Ok(None) };
+        let fps = model.fps;
+        let lookahead = (self.options.decision_interval * fps).ceil().max(1.0) as usize;
+        let memo = RefCell::new(std::mem::take(&mut self.angles));
+        let pipe = self.pipe.clone();
+        let angle = |a: u32, x: u32| cached_angle(&memo, pipe.subject(), a, x);
+        let cx = BlendContext { model: &model, index: &index, d: &d.values, angle: &angle };
+        let mut states = Vec::with_capacity(lookahead);
+        let mut st = b.start;
+        for _ in 0..lookahead {
+            let Some(next) = st.advance(&cx, weight_towards(st.lambda, b.target, fps)) else { break };
+            st = next;
+            states.push(st);
+        }
+        self.angles = memo.into_inner();
+        if states.is_empty() {
+            return Ok(None);
+        }
+        for st in states {
+            let frame = self.blend_frame(&st, &b.g0)?;
+            let at = Some((st.a, b.g0.after(&st.gs)));
+            self.queue.push_back(Queued {
+                frame,
+                committed: false,
+                at,
+                blend: (st.lambda > 0.0).then_some((st, b.g0)),
+            });
+        }
+        Ok(Some(BlendChoice { frame: b.start.a, partner: b.start.b, weight: b.target }))
+    }
+
+    /// One output frame of a blend: A's and B's frames moved where the blend put them and
+    /// mixed by the non-linear interpolation (when meshes are returned).
+    fn blend_frame(&self, st: &BlendState, g0: &PlaneMotion) -> Result<ShownFrame> {
+        let s = self.pipe.subject();
+        let positions = match &self.pattern {
+            Some(pattern) => {
+                let frame = |f: u32| s.frame(f as usize).expect("graph nodes are frames");
+                let (mut a, mut b) = (frame(st.a).to_vec(), frame(st.b).to_vec());
+                g0.after(&st.gs).apply(&mut a);
+                g0.after(&st.gd).apply(&mut b);
+                Some(if st.lambda > 0.0 {
+                    NonlinearInterpolator::with_pattern(pattern, s.topology(), &a, &b, s.up_axis)?
+                        .at(st.lambda, StretchInterpolation::Linear)
+                } else {
+                    a
+                })
+            }
+            None => None,
+        };
+        let mix = FrameMix { from: st.a, to: st.b, weight: st.lambda as f32 };
+        Ok(ShownFrame {
+            frame: (st.lambda == 0.0).then_some(st.a),
+            mix: Some(if st.lambda > 0.0 { mix } else { FrameMix::original(st.a) }),
+            centre: g0.apply_point(st.p),
+            transition: None,
+            positions,
         })
+    }
+
+    /// The best parametric blend from the frame shown for the asked trajectory `goal` (local
+    /// coordinates, as the graph's moves are scored; `origin` the frame's ground centre): the
+    /// blend playing, or a new one with each partner of the frame, at the weights of a grid of
+    /// [`WEIGHT_STEPS`] steps refined by a parabola through the best and its neighbours (the
+    /// weight is continuous). Its cost is the graph moves' matching cost of its predicted
+    /// future (the blend played forward, the weight moving to the target) plus the realism
+    /// weight times the change of weight times the pair's pose distance (in units of the
+    /// median partner distance).
+    fn best_blend(&mut self, goal: &LocalGoal, gait: GaitAsked, origin: [f64; 2]) -> Option<BlendCandidate> {
+        let model = self.model.clone();
+        let index = self.index.clone();
+        let motion = self.motion.clone();
+        let d = self.distances.clone()?;
+        let partners = self.partners.clone();
+        let fps = model.fps;
+        let (iu, iv, _) = plane_axes(model.up);
+        let memo = RefCell::new(std::mem::take(&mut self.angles));
+        let pipe = self.pipe.clone();
+        let angle = |a: u32, x: u32| cached_angle(&memo, pipe.subject(), a, x);
+        let cx = BlendContext { model: &model, index: &index, d: &d.values, angle: &angle };
+        // (the blend's state at the frame shown, where its coordinates are placed, pose distance)
+        let starts: Vec<(BlendState, PlaneMotion, f64)> = match self.blend {
+            Some((st, g0)) => {
+                let n = model.centres.len();
+                let dist = partners.of(st.a).find(|&k| partners.partner[k] == st.b).map_or(
+                    d.values[st.a as usize * n + st.b as usize] / partners.median.max(f64::MIN_POSITIVE),
+                    |k| partners.distance[k] as f64,
+                );
+                vec![(st, g0, dist)]
+            }
+            None => partners
+                .of(self.node)
+                .map(|k| {
+                    (BlendState::begin(&cx, self.node, partners.partner[k], 0.0), self.g, partners.distance[k] as f64)
+                })
+                .collect(),
+        };
+        let horizons = index.horizons;
+        let last = horizons[horizons.len() - 1];
+        let w = self.options.weights;
+        let mut candidates = 0;
+        let mut best: Option<BlendCandidate> = None;
+        for (start, g0, dist) in starts {
+            let gs0 = start.gs;
+            let (sn, cs) = gs0.theta.sin_cos();
+            let cost_of = |target: f64| -> Option<f64> {
+                let mut feature = [0f32; FEATURE];
+                let mut st = start;
+                let mut k = 0;
+                for f in 1..=last {
+                    st = st.advance(&cx, weight_towards(st.lambda, target, fps))?;
+                    if f == horizons[k] {
+                        // Blend coordinates to the frame shown's captured ones: gs0^-1.
+                        let (a, b) = (st.p[iu] - gs0.t[0], st.p[iv] - gs0.t[1]);
+                        let local = [cs * a - sn * b, sn * a + cs * b];
+                        feature[4 * k] = (local[0] - origin[0]) as f32;
+                        feature[4 * k + 1] = (local[1] - origin[1]) as f32;
+                        let h = st.facing(&motion) + gs0.theta;
+                        if h.is_finite() {
+                            feature[4 * k + 2] = h.cos() as f32;
+                            feature[4 * k + 3] = h.sin() as f32;
+                        }
+                        k += 1;
+                    }
+                }
+                let shown = if target >= 0.5 { motion.gait[st.b as usize] } else { motion.gait[st.a as usize] };
+                Some(
+                    feature_cost(&index, &motion, origin, 0, goal, &feature, gait_mismatch(gait, shown), &w)
+                        + w.realism * (target - start.lambda).abs() * dist,
+                )
+            };
+            let grid: Vec<(f64, Option<f64>)> = (0..=WEIGHT_STEPS)
+                .map(|i| i as f64 / WEIGHT_STEPS as f64)
+                .filter(|&t| t > 0.0 || start.lambda > 0.0)
+                .map(|t| (t, cost_of(t)))
+                .collect();
+            candidates += grid.len();
+            let Some(i) = (0..grid.len())
+                .filter(|&i| grid[i].1.is_some())
+                .min_by(|&x, &y| grid[x].1.unwrap().total_cmp(&grid[y].1.unwrap()))
+            else {
+                continue;
+            };
+            let (mut target, mut cost) = (grid[i].0, grid[i].1.unwrap_or(f64::INFINITY));
+            if i > 0
+                && i + 1 < grid.len()
+                && let (Some(c0), Some(c2)) = (grid[i - 1].1, grid[i + 1].1)
+            {
+                let (t0, t2) = (grid[i - 1].0, grid[i + 1].0);
+                let h = t2 - target;
+                let curvature = c0 - 2.0 * cost + c2;
+                if curvature > 0.0 && (target - t0 - h).abs() < 1e-12 {
+                    let t = (target + h * (c0 - c2) / (2.0 * curvature)).clamp(t0, t2);
+                    candidates += 1;
+                    if let Some(c) = cost_of(t).filter(|c| *c < cost) {
+                        (target, cost) = (t, c);
+                    }
+                }
+            }
+            if best.is_none_or(|b| cost < b.cost) {
+                best = Some(BlendCandidate { start, g0, target, cost, candidates: 0 });
+            }
+        }
+        self.angles = memo.into_inner();
+        if self.angles.len() > ANGLE_CACHE {
+            self.angles.clear();
+        }
+        best.map(|b| BlendCandidate { candidates, ..b })
     }
 
     /// What of `input` the data cannot follow, and why.
@@ -610,6 +888,32 @@ impl Controller {
         }
         notes
     }
+}
+
+/// Weights compared per blend before the parabolic refinement: 0, 1/4, ..., 1.
+const WEIGHT_STEPS: usize = 4;
+/// Frame-pair angles kept between decisions at most (then forgotten).
+const ANGLE_CACHE: usize = 1 << 20;
+
+/// A blend a decision may play: from `start` (placed by `g0`) towards weight `target`.
+#[derive(Debug, Clone, Copy)]
+struct BlendCandidate {
+    start: BlendState,
+    g0: PlaneMotion,
+    target: f64,
+    cost: f64,
+    /// Weights compared.
+    candidates: usize,
+}
+
+/// Eq. 2.3's angle between frames `a` and `b`, computed once.
+fn cached_angle(memo: &RefCell<HashMap<(u32, u32), f64>>, s: &surfcap_mesh::Subject, a: u32, b: u32) -> f64 {
+    if let Some(x) = memo.borrow().get(&(a, b)) {
+        return *x;
+    }
+    let x = frame_angle(s, a, b);
+    memo.borrow_mut().insert((a, b), x);
+    x
 }
 
 /// Within this many subject heights of a target, the character has arrived.

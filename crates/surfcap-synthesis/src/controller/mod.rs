@@ -12,6 +12,9 @@
 //! - [`desired_trajectory`]: the trajectory an input asks for over the next second.
 //! - [`move_choice`]: one decision, the move whose predicted future best matches the asked one
 //!   plus its realism cost.
+//! - [`parametric_blend`]: a partner clip of the same kind mixed into the clip played at a
+//!   continuous weight (Casas et al. 2012), for speeds and turn rates between the captured
+//!   ones; a decision compares it with the graph's moves.
 //! - [`live_controller`]: [`Controller::new`] (`&Prepared`, [`ControllerOptions`]) and
 //!   [`Controller::step`] (`&Input`, `dt`) returning the frames to show and the decisions
 //!   made ([`Step`]), deciding at least every 0.1 s, and saying when an input cannot be
@@ -25,8 +28,10 @@ pub mod frame_motion;
 pub mod future_trajectory;
 pub mod live_controller;
 pub mod move_choice;
+pub mod parametric_blend;
 
 pub use frame_motion::{FrameMotion, Gait};
 pub use future_trajectory::FutureTrajectories;
-pub use live_controller::{Controller, ControllerOptions, Decision, Goal, Input, ShownFrame, Step};
+pub use live_controller::{BlendChoice, Controller, ControllerOptions, Decision, Goal, Input, ShownFrame, Step};
 pub use move_choice::{MatchWeights, Move};
+pub use parametric_blend::BlendPartners;

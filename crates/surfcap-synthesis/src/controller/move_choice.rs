@@ -9,7 +9,8 @@
 //!
 //! `w_p |F_pos(h) - D_pos(j + h)|^2 / height^2 + w_f |F_dir(h) - D_dir(j + h)|^2`
 //!
-//! (the facing term only where both have a direction), plus `w_r` times the transition's
+//! (the facing term where both have a direction; where the asked trajectory has one and the
+//! move's future stands, [`STANDING_FACING`]), plus `w_r` times the transition's
 //! realism (its edge weight over the median transition's; 0 for continuing the clip), plus
 //! `w_g` when the move's destination frame does not show an asked gait (or stands while the
 //! input asks to move). The scan is linear over
@@ -100,33 +101,17 @@ pub fn choose_move(
     gait: GaitAsked,
     w: &MatchWeights,
 ) -> Choice {
-    let inv_h2 = 1.0 / (motion.height * motion.height);
-    let horizons = index.horizons;
     let score = |j: usize, feature: &[f32], dest: u32| -> f64 {
-        let origin = ahead.centres[j];
-        let mut cost = 0.0;
-        for (k, &h) in horizons.iter().enumerate() {
-            let at = (j + h).min(goal.positions.len() - 1);
-            let d = goal.positions[at];
-            let f = &feature[4 * k..4 * k + 4];
-            let (du, dv) = (f[0] as f64 - (d[0] - origin[0]), f[1] as f64 - (d[1] - origin[1]));
-            cost += w.position * (du * du + dv * dv) * inv_h2;
-            let df = goal.facing[at];
-            if df.is_finite() && (f[2] != 0.0 || f[3] != 0.0) {
-                let (a, b) = (f[2] as f64 - df.cos(), f[3] as f64 - df.sin());
-                cost += w.facing * (a * a + b * b);
-            }
-        }
-        let shown = motion.gait[dest as usize];
-        let wrong = match gait {
-            GaitAsked::Any => false,
-            GaitAsked::Exactly(g) => shown != g,
-            GaitAsked::Moving => shown == Gait::Idle,
-        };
-        if wrong {
-            cost += w.gait;
-        }
-        cost
+        feature_cost(
+            index,
+            motion,
+            ahead.centres[j],
+            j,
+            goal,
+            feature,
+            gait_mismatch(gait, motion.gait[dest as usize]),
+            w,
+        )
     };
     debug_assert_eq!(FEATURE, 4 * HORIZONS.len());
     let u = ahead.frames[0];
@@ -148,4 +133,60 @@ pub fn choose_move(
         }
     }
     best
+}
+
+/// The facing term of a future that stands (has no heading) where the asked trajectory has a
+/// direction: the mean of `|u - d|^2` over every unit facing `u`, i.e. as if it faced 90
+/// degrees off. Without it a future that stops pays no facing error while every walk that
+/// does not yet face the asked way pays one, and a turn asked while walking was answered by
+/// stopping (and, from a stand the data sets off only the way the body faces, staying).
+pub const STANDING_FACING: f64 = 2.0;
+
+/// Whether a destination showing `shown` misses what the input asks of the gait.
+pub fn gait_mismatch(gait: GaitAsked, shown: Gait) -> bool {
+    match gait {
+        GaitAsked::Any => false,
+        GaitAsked::Exactly(g) => shown != g,
+        GaitAsked::Moving => shown == Gait::Idle,
+    }
+}
+
+/// The matching cost of a predicted future `feature` (the layout of
+/// [`super::future_trajectory`], relative to `origin`, the centre of the frame it leaves
+/// `j` frames from now) against `goal`, plus the gait term when `wrong_gait` (the module
+/// doc's cost without the realism term).
+#[allow(clippy::too_many_arguments)]
+pub fn feature_cost(
+    index: &FutureTrajectories,
+    motion: &FrameMotion,
+    origin: [f64; 2],
+    j: usize,
+    goal: &LocalGoal,
+    feature: &[f32],
+    wrong_gait: bool,
+    w: &MatchWeights,
+) -> f64 {
+    let inv_h2 = 1.0 / (motion.height * motion.height);
+    let mut cost = 0.0;
+    for (k, &h) in index.horizons.iter().enumerate() {
+        let at = (j + h).min(goal.positions.len() - 1);
+        let d = goal.positions[at];
+        let f = &feature[4 * k..4 * k + 4];
+        let (du, dv) = (f[0] as f64 - (d[0] - origin[0]), f[1] as f64 - (d[1] - origin[1]));
+        cost += w.position * (du * du + dv * dv) * inv_h2;
+        let df = goal.facing[at];
+        if df.is_finite() {
+            if f[2] != 0.0 || f[3] != 0.0 {
+                let (a, b) = (f[2] as f64 - df.cos(), f[3] as f64 - df.sin());
+                cost += w.facing * (a * a + b * b);
+            } else {
+                // Standing where a direction is asked: no better than any facing.
+                cost += w.facing * STANDING_FACING;
+            }
+        }
+    }
+    if wrong_gait {
+        cost += w.gait;
+    }
+    cost
 }
