@@ -576,8 +576,10 @@ pub fn pose_height(pose: &[f32], up: surfcap_mesh::UpAxis) -> f64 {
 
 /// Pins the planted feet of every variant ([`crate::foot_skate_cleanup`], default settings,
 /// the legs being the parts named `leg*`/`foot*`), keeping the frames before in
-/// `before_cleanup`. `learnt_world` is the learnt motion the variants vary, placed as they are:
-/// when it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
+/// `before_cleanup`. `learnt_world` is the motion the variants vary, in the world with their
+/// frame count: the learnt motion placed as they are ([`sample_variants`]), or the captured
+/// source when it is at hand (`surfcap eval vary`: the ground its sliding is measured on).
+/// When it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
 /// pinned to. A model without legs is left as it is.
 pub fn clean_up_variants(
     model: &VariationModel,
