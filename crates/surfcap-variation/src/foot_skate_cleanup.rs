@@ -109,10 +109,9 @@ pub struct FootSkateParams {
     /// When set, steps at the ends of a plant whose planted vertices move faster than this
     /// many subject heights per second are taken for the foot lifting off or landing and are
     /// not pinned. Unset (the default), a plant is every step the shared contact detector
-    /// plants, the steps the foot-sliding measure counts: trimmed ends (1.0 heights per
-    /// second) stayed planted for the measure and kept 1-2 m/s of sliding on the KayKit runs
-    /// (`surfcap eval vary`), while pinned, and detected and cleaned again
-    /// ([`FootSkateParams::passes`]), they fall to 0.1-0.5 m/s.
+    /// plants, the steps the foot-sliding measure counts: trimmed at 1.0 heights per second,
+    /// such ends stayed planted for the measure and kept 1-2 m/s of sliding on the KayKit
+    /// runs' variants (`surfcap eval vary`, docs/results/variation.md).
     pub lift_speed: Option<f64>,
     /// Detections and clean-ups in turn: each pass detects the plants of the previous one's
     /// output with the shared detector and pins them (pinning changes which contacts move
@@ -262,7 +261,7 @@ impl FootSkateCleanup {
         if params.passes == 0 {
             return Err(Error::Invalid("0 clean-up passes: expected at least 1".into()));
         }
-        if let Some(l) = params.lift_speed.filter(|l| !(*l > 0.0)) {
+        if let Some(l) = params.lift_speed.filter(|l| l.is_nan() || *l <= 0.0) {
             return Err(Error::Invalid(format!("a lift-off speed of {l} heights per second: expected more than 0")));
         }
         if rest.len() != 3 * n {
