@@ -437,9 +437,9 @@ impl FootSkateCleanup {
                 .iter()
                 .zip(&out)
                 .flat_map(|(a, b)| {
-                    a.chunks_exact(3).zip(b.chunks_exact(3)).map(|(p, q)| {
-                        (0..3).map(|k| ((q[k] - p[k]) as f64).powi(2)).sum::<f64>().sqrt()
-                    })
+                    a.chunks_exact(3)
+                        .zip(b.chunks_exact(3))
+                        .map(|(p, q)| (0..3).map(|k| ((q[k] - p[k]) as f64).powi(2)).sum::<f64>().sqrt())
                 })
                 .fold(0.0, f64::max);
         }
@@ -1030,8 +1030,9 @@ mod tests {
         let e = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg.clone()], FootSkateParams { passes: 0, ..once })
             .unwrap_err();
         assert!(e.to_string().contains("0 clean-up passes"), "{e}");
-        let e = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams { lift_speed: Some(0.0), ..once })
-            .unwrap_err();
+        let e =
+            FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams { lift_speed: Some(0.0), ..once })
+                .unwrap_err();
         assert!(e.to_string().contains("lift-off speed of 0"), "{e}");
     }
 
@@ -1063,7 +1064,8 @@ mod tests {
         // Pinned as before: the sole stays where it is mid-contact.
         for f in 5..=20 {
             for v in 0..6 {
-                let d = (turned[f][3 * v] - turned[12][3 * v]).abs() + (turned[f][3 * v + 2] - turned[12][3 * v + 2]).abs();
+                let d =
+                    (turned[f][3 * v] - turned[12][3 * v]).abs() + (turned[f][3 * v + 2] - turned[12][3 * v + 2]).abs();
                 assert!(d < 1e-5, "frame {f}, vertex {v}: {d} from its pin");
             }
         }

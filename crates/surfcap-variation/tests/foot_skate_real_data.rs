@@ -75,7 +75,10 @@ fn cleaned_variants_of_a_cmu_walk_slide_no_more_than_the_capture_and_keep_their_
             edges(&h.world.iter().map(Vec::as_slice).collect::<Vec<_>>()),
             edges(&m.world.iter().map(Vec::as_slice).collect::<Vec<_>>()),
         );
-        eprintln!("variant {k}, hips held: sliding {:.3} m/s, edges {e_held:.4} (root moved {e_moved:.4})", r.sliding_after);
+        eprintln!(
+            "variant {k}, hips held: sliding {:.3} m/s, edges {e_held:.4} (root moved {e_moved:.4})",
+            r.sliding_after
+        );
         assert!(e_moved < e_held, "variant {k}: edges {e_moved} with the root moved, {e_held} with the hips held");
     }
 }
