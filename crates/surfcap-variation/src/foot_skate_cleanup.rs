@@ -1027,8 +1027,14 @@ mod tests {
         let twice = c1.clean(&c1.clean(&frames, 30.0, None).unwrap().0, 30.0, None).unwrap().0;
         assert_eq!(twice, shared);
         // Settings that make no sense are refused by name.
-        let e = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg.clone()], FootSkateParams { passes: 0, ..once })
-            .unwrap_err();
+        let e = FootSkateCleanup::new(
+            &t,
+            &rest,
+            UpAxis::PosY,
+            std::slice::from_ref(&leg),
+            FootSkateParams { passes: 0, ..once },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("0 clean-up passes"), "{e}");
         let e =
             FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams { lift_speed: Some(0.0), ..once })
