@@ -510,7 +510,7 @@ class VariationModel:
         thin: int = 5,
         max_leapfrog: int = 30,
         no_foot_skate_cleanup: bool = False,
-        move_root: bool = False,
+        hold_hips: bool = False,
         output: Optional[Path] = None,
         force: bool = False,
     ) -> Tuple[List[Subject], reports.VariationSampleReport]:

@@ -58,8 +58,8 @@ use surfcap_variation::motion_preparation::{
 };
 use surfcap_variation::variation_model::TrainOptions;
 use surfcap_variation::variation_sampling::{
-    ChainStart, ChainSummary, SamplingOptions, VariantPath, in_place_ground, place_variant, reconstruct_aligned,
-    sample_variants,
+    ChainStart, ChainSummary, SamplingOptions, VariantPath, clean_up_variants, in_place_ground, place_variant,
+    reconstruct_aligned, sample_variants,
 };
 
 use crate::error::{Error, Result};
@@ -785,7 +785,15 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
             continue;
         }
         let t1 = Instant::now();
-        let (variants, chains) = sample_variants(&model, &q.name, o.variants, o.seed, &o.sampling)?;
+        // Sampled as they are, then cleaned on the capture's ground (for an in-place capture,
+        // the ground the sliding is measured on, `sliding_ground`; none for a travelling one).
+        let as_sampled = SamplingOptions { foot_skate_cleanup: false, ..o.sampling };
+        let (mut variants, chains) = sample_variants(&model, &q.name, o.variants, o.seed, &as_sampled)?;
+        let captured = &s.sequences()[j];
+        if o.sampling.foot_skate_cleanup {
+            let owned: Vec<Vec<f32>> = (0..captured.n_frames()).map(|f| captured.frame(f).to_vec()).collect();
+            clean_up_variants(&model, &mut variants, &owned, o.sampling.move_root)?;
+        }
         if j == 0 {
             for v in &variants {
                 for (pl, x) in latents.iter_mut().zip(&v.latents) {
@@ -793,7 +801,6 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
                 }
             }
         }
-        let captured = &s.sequences()[j];
         let world_src: Vec<&[f32]> = (0..captured.n_frames()).map(|f| captured.frame(f)).collect();
         let body_src = refs(&prepared.sequences[j].aligned);
         let (lp, ld) = &learnt[j];

@@ -237,11 +237,11 @@ impl PyVariationModel {
     /// sequences and a weight in [0, 1]), as `surfcap vary sample` with `seed` (the same seed
     /// gives the same variants as the command, whatever the thread count). `start` is `"learnt"`
     /// or `"mean"`, `path` `"source"`, `"sampled"` or `"contacts"`; `smoothing`, `warmup`,
-    /// `thin`, `max_leapfrog`, `no_foot_skate_cleanup` and `move_root` as the command's options.
+    /// `thin`, `max_leapfrog`, `no_foot_skate_cleanup` and `hold_hips` as the command's options.
     /// With `output`, the folder is written as the command writes it (one glb per variant and
     /// `report.json`). Returns `(variants, report)`: one `Subject` per variant (one sequence
     /// `<name>~<k>`, `(F, V, 3)` float32 positions) and a `surfcap.reports.VariationSampleReport`.
-    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=100, thin=5, max_leapfrog=30, no_foot_skate_cleanup=false, move_root=false, output=None, force=false))]
+    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=100, thin=5, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, output=None, force=false))]
     #[allow(clippy::too_many_arguments)]
     fn sample<'py>(
         &self,
@@ -257,7 +257,7 @@ impl PyVariationModel {
         thin: usize,
         max_leapfrog: usize,
         no_foot_skate_cleanup: bool,
-        move_root: bool,
+        hold_hips: bool,
         output: Option<PathBuf>,
         force: bool,
     ) -> PyResult<(Vec<PySubject>, Bound<'py, PyAny>)> {
@@ -286,7 +286,7 @@ impl PyVariationModel {
             thin,
             max_leapfrog,
             foot_skate_cleanup: !no_foot_skate_cleanup,
-            move_root,
+            move_root: !hold_hips && !no_foot_skate_cleanup,
         };
         let folder = self.folder();
         let model = &self.model;

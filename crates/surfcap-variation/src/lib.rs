@@ -19,10 +19,12 @@
 //!   variant's own foot contacts) and re-timed to the sequence's own frames. A chain's seed is
 //!   derived from the seed, the sequence's name and the part, so variants do not depend on the
 //!   thread count; `variant_on_source_path` serves synthesis;
-//! - **foot-skate clean-up** ([`foot_skate_cleanup`], on by default in sampling): the planted
-//!   vertices the shared contact detector finds pinned mid-contact, the feet moved along the
-//!   ground to meet them and the legs deformed in the gradient domain (rest Laplacian factorised
-//!   once, one solve per frame), blended in and out around each contact (Kovar et al. 2002);
+//! - **foot-skate clean-up** ([`foot_skate_cleanup`], on by default in sampling): every step the
+//!   shared contact detector plants (the steps the foot-sliding measure counts) pinned
+//!   mid-contact, the whole body moved along the ground with the planted feet and the feet
+//!   moved to meet their pins, the legs deformed in the gradient domain for what is left (rest
+//!   Laplacian factorised once, one solve per frame), blended in and out around each contact
+//!   (Kovar et al. 2002); detected and pinned twice;
 //! - **parametrisation** (6.7, [`motion_parametrisation`]): variants of the two learnt
 //!   trajectories around a weight, interpolated in the latent space, with their timing;
 //! - the model folder on disk ([`variation_model_file`]: `model.json`, `faces.npy`,

@@ -43,8 +43,11 @@
 //! - **Foot skate**: varied leg poses on the source's path still let the planted feet drift
 //!   (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips, docs/results/
 //!   variation.md), so every variant's world frames go through the foot-skate clean-up
-//!   ([`crate::foot_skate_cleanup`], `foot_skate_cleanup` in the options, on by default); for a
-//!   source authored in place its ground is the travel its learnt motion's contacts give.
+//!   ([`crate::foot_skate_cleanup`], `foot_skate_cleanup` in the options, on by default, the
+//!   root moved with the planted feet unless `move_root` is off); for a source authored in
+//!   place its ground is the travel its learnt motion's contacts give ([`sample_variants`]) or
+//!   the captured source's ([`clean_up_variants`] given the capture, as `surfcap eval vary`
+//!   and [`variants_on_source_path`] do).
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
 //!   variant can replace its source inside a longer animation.
 
@@ -127,7 +130,7 @@ pub struct SamplingOptions {
     /// see the module doc).
     pub foot_skate_cleanup: bool,
     /// With the clean-up, move the whole body with the planted feet as well
-    /// ([`FootSkateParams::move_root`]; off by default).
+    /// ([`FootSkateParams::move_root`]; on by default).
     pub move_root: bool,
 }
 
@@ -141,7 +144,7 @@ impl Default for SamplingOptions {
             thin: 5,
             max_leapfrog: 30,
             foot_skate_cleanup: true,
-            move_root: false,
+            move_root: true,
         }
     }
 }
@@ -576,8 +579,10 @@ pub fn pose_height(pose: &[f32], up: surfcap_mesh::UpAxis) -> f64 {
 
 /// Pins the planted feet of every variant ([`crate::foot_skate_cleanup`], default settings,
 /// the legs being the parts named `leg*`/`foot*`), keeping the frames before in
-/// `before_cleanup`. `learnt_world` is the learnt motion the variants vary, placed as they are:
-/// when it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
+/// `before_cleanup`. `learnt_world` is the motion the variants vary, in the world with their
+/// frame count: the learnt motion placed as they are ([`sample_variants`]), or the captured
+/// source when it is at hand (`surfcap eval vary`: the ground its sliding is measured on).
+/// When it is in place ([`in_place_ground`]) its ground travel is the ground the feet are
 /// pinned to. A model without legs is left as it is.
 pub fn clean_up_variants(
     model: &VariationModel,
@@ -642,7 +647,7 @@ pub fn variants_on_source_path(
 ) -> Result<Vec<CleanedVariant>> {
     let placed: Vec<Vec<Vec<f32>>> =
         variants.iter().map(|v| variant_on_source_path(model, j, v, source)).collect::<Result<_>>()?;
-    let fixer = if cleanup { model_cleanup(model, false)? } else { None };
+    let fixer = if cleanup { model_cleanup(model, SamplingOptions::default().move_root)? } else { None };
     let Some(fixer) = fixer else { return Ok(placed.into_iter().map(|p| (p, None)).collect()) };
     let owned: Vec<Vec<f32>> = source.iter().map(|p| p.to_vec()).collect();
     let height = pose_height(&model.reference_pose, model.up_axis);

@@ -117,10 +117,11 @@ pub struct SampleArgs {
     /// and the legs deformed to meet them, blended in and out around each contact).
     #[arg(long)]
     pub no_foot_skate_cleanup: bool,
-    /// Let the clean-up move the whole body with the planted feet (Kovar et al. 2002's root
-    /// adjustment), so a planted foot is reached without stretching its leg; off by default.
+    /// Keep the hips where they are in the foot-skate clean-up, the legs alone reaching the
+    /// pins (by default the whole body moves along the ground with the planted feet, Kovar et
+    /// al. 2002's root adjustment, so a planted foot is reached without stretching its leg).
     #[arg(long, conflicts_with = "no_foot_skate_cleanup")]
-    pub move_root: bool,
+    pub hold_hips: bool,
     /// The output folder: `<name>-variant-<k>.glb` per variant and `report.json`.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -299,7 +300,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
             thin: a.thin,
             max_leapfrog: a.max_leapfrog,
             foot_skate_cleanup: !a.no_foot_skate_cleanup,
-            move_root: a.move_root,
+            move_root: !a.hold_hips && !a.no_foot_skate_cleanup,
         },
         output: a.output.clone(),
         force: ctx.force,

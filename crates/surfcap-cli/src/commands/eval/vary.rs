@@ -233,11 +233,11 @@ pub struct Args {
     /// --no-foot-skate-cleanup`).
     #[arg(long)]
     pub no_foot_skate_cleanup: bool,
-    /// Let the foot-skate clean-up move the whole body with the planted feet (Kovar et al.
-    /// 2002's root adjustment), so a planted foot is reached without stretching its leg; off by
-    /// default (see docs/results/variation.md).
+    /// Keep the hips where they are in the foot-skate clean-up, the legs alone reaching the
+    /// pins (by default the whole body moves along the ground with the planted feet, Kovar et
+    /// al. 2002's root adjustment, so a planted foot is reached without stretching its leg).
     #[arg(long, conflicts_with = "no_foot_skate_cleanup")]
-    pub move_root: bool,
+    pub hold_hips: bool,
     /// Folder for vary.json and the plots.
     #[arg(short, long, default_value = "vary-eval")]
     pub output: PathBuf,
@@ -263,7 +263,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     opts.sampling.path = a.path.0;
     opts.sampling.smoothing = a.smoothing;
     opts.sampling.foot_skate_cleanup = !a.no_foot_skate_cleanup;
-    opts.sampling.move_root = a.move_root;
+    opts.sampling.move_root = !a.hold_hips && !a.no_foot_skate_cleanup;
     let missed = evaluate(ctx, cases, &opts, &a.output)?;
     // The report is the result even when a criterion is missed: it is committed first.
     ctx.commit(outs)?;
