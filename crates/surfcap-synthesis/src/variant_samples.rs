@@ -174,11 +174,6 @@ pub fn check_sampling(count: usize, o: &SamplingOptions) -> Result<()> {
             crate::error::refuse!("{option} {v}: expected a whole number from {lo} to {hi}");
         }
     }
-    if o.move_root && !o.foot_skate_cleanup {
-        crate::error::refuse!(
-            "--move-root moves the body with the planted feet of the foot-skate clean-up: it cannot go with --no-foot-skate-cleanup"
-        );
-    }
     let steps = (o.warmup as f64 + count as f64 * o.thin as f64) * o.max_leapfrog as f64;
     if steps > MAX_LEAPFROG_STEPS {
         crate::error::refuse!(
@@ -487,9 +482,7 @@ mod tests {
         assert_eq!(m, "--thin 0: expected a whole number from 1 to 10000");
         let m = check_sampling(1000, &SamplingOptions { thin: 100, ..o }).unwrap_err().to_string();
         assert!(m.contains("leapfrog steps per body part, above the 2000000 allowed"), "{m}");
-        let m = check_sampling(5, &SamplingOptions { foot_skate_cleanup: false, move_root: true, ..o })
-            .unwrap_err()
-            .to_string();
-        assert!(m.starts_with("--move-root"), "{m}");
+        // Moving the root is part of the clean-up: without it, the default options stay valid.
+        assert!(check_sampling(5, &SamplingOptions { foot_skate_cleanup: false, ..o }).is_ok());
     }
 }

@@ -130,7 +130,8 @@ pub struct SamplingOptions {
     /// see the module doc).
     pub foot_skate_cleanup: bool,
     /// With the clean-up, move the whole body with the planted feet as well
-    /// ([`FootSkateParams::move_root`]; on by default).
+    /// ([`FootSkateParams::move_root`]; on by default). Part of the clean-up: without
+    /// `foot_skate_cleanup` it has no effect.
     pub move_root: bool,
 }
 
