@@ -379,10 +379,12 @@ fn windows_shorter_than_three_frames_are_refused() {
     }
 }
 
-/// On the Vlasic crane, the self-transition `crane:6 -> crane:4` closes a 3-frame loop of
-/// near-still standing; padding 10 s with it played 126 frames of the same pose. It is an
-/// excluded loop by default (too short, and too still once the minimum is lowered), the report
-/// and the message say so, and the answer is the walk alone with the reason no loop remains.
+/// On the Vlasic crane, the paper's graph (`--eq5-self-transitions`) has the self-transition
+/// `crane:6 -> crane:4`, a 3-frame loop of near-still standing; padding 10 s with it played 126
+/// frames of the same pose. It is an excluded loop (too short, and too still once the minimum
+/// is lowered), the report and the message say so, and the answer is the walk alone with the
+/// reason no loop remains. The default graph chooses its self-transition among the loops a
+/// query may play instead: no loop is excluded and every one played is at least the minimum.
 #[test]
 fn loops_too_short_or_too_still_never_pad_time_on_the_crane() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
@@ -407,7 +409,18 @@ fn loops_too_short_or_too_still_never_pad_time_on_the_crane() {
         assert!(o.status.success(), "{}", stderr(&o));
         (report(&out), String::from_utf8_lossy(&o.stdout).into_owned())
     };
-    let (r, text) = query("default", &[]);
+    // The default graph: its self-transition is a loop a query may play.
+    let (r, _) = query("default", &[]);
+    assert_eq!(r["graph"]["self_transitions"]["choice"], "spanning", "{}", r["graph"]);
+    assert!(r["excluded_loops"].as_array().unwrap().is_empty(), "{}", r["excluded_loops"]);
+    let frame = |v: &Value| v.as_str().unwrap().rsplit_once(':').unwrap().1.parse::<i64>().unwrap();
+    for t in r["graph"]["transitions"].as_array().unwrap() {
+        assert!(frame(&t["from"]) - frame(&t["to"]) + 1 >= 10, "a loop of at least 10 frames: {t}");
+    }
+    // The paper's graph.
+    let eq5 = ["--eq5-self-transitions"];
+    let (r, text) = query("eq5", &eq5);
+    assert_eq!(r["graph"]["self_transitions"]["choice"], "eq5");
     let excluded = r["excluded_loops"].as_array().unwrap();
     assert_eq!(excluded.len(), 1, "{excluded:?}");
     assert_eq!(excluded[0]["kind"], "too_short");
@@ -421,13 +434,13 @@ fn loops_too_short_or_too_still_never_pad_time_on_the_crane() {
     assert_eq!(r["unreachable"]["kind"], "no_loop", "{}", r["unreachable"]);
     assert!(text.contains("1 excluded loop(s) not counted"), "{text}");
     // With a lower minimum the same loop is still a held pose: under the floor.
-    let (r, _) = query("floor", &["--min-loop", "3"]);
+    let (r, _) = query("floor", &["--eq5-self-transitions", "--min-loop", "3"]);
     let excluded = r["excluded_loops"].as_array().unwrap();
     assert_eq!(excluded[0]["kind"], "too_still", "{excluded:?}");
     assert!(excluded[0]["pose_variation"].as_f64().unwrap() < 1.0);
     assert_eq!(r["frames"], 175);
     // Every loop allowed: the stutter the rule prevents.
-    let (r, _) = query("all", &["--min-loop", "1", "--loop-variation-floor", "0"]);
+    let (r, _) = query("all", &["--eq5-self-transitions", "--min-loop", "1", "--loop-variation-floor", "0"]);
     assert!(r["excluded_loops"].as_array().unwrap().is_empty());
     assert!(r["loops"][0]["repetitions"].as_u64().unwrap() > 30, "{}", r["loops"]);
     let mut bad = args(&d.path().join("bad.glb"));
