@@ -92,7 +92,9 @@ pub fn run(ctx: &crate::Ctx, a: &Args) -> anyhow::Result<()> {
             &STAND_WALK_JOG_HIT_CONNECTIONS,
             &STAND_WALK_JOG_HIT_KEY_PAIRS,
         ),
-        ClipSet::Locomotion => (locomotion_subject(&a.data, a.vertices)?, &LOCOMOTION_CONNECTIONS, &LOCOMOTION_KEY_PAIRS),
+        ClipSet::Locomotion => {
+            (locomotion_subject(&a.data, a.vertices)?, &LOCOMOTION_CONNECTIONS, &LOCOMOTION_KEY_PAIRS)
+        }
     };
     let frames = MotionFrames::from_subject(&subject);
     let real = frames.n_frames();

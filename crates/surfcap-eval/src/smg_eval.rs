@@ -492,7 +492,8 @@ pub fn smg_eval(
             .targets
             .par_iter()
             .map(|&(d, s)| {
-                let q = PathQuery { w_d: opts.w_d, w_t: opts.w_t, ..PathQuery::new(a, b, d, frames_shown(s, frames.fps)) };
+                let q =
+                    PathQuery { w_d: opts.w_d, w_t: opts.w_t, ..PathQuery::new(a, b, d, frames_shown(s, frames.fps)) };
                 let t = Instant::now();
                 let p = optimise_planned(&g, &ground, &plan, &q);
                 let cpu = t.elapsed().as_secs_f64();

@@ -6,7 +6,9 @@
 
 use std::path::PathBuf;
 
-use surfcap_eval::smg_eval::{STAND_WALK_JOG_HIT_CONNECTIONS, SmgEvalOptions, grid, smg_eval, stand_walk_jog_hit_subject};
+use surfcap_eval::smg_eval::{
+    STAND_WALK_JOG_HIT_CONNECTIONS, SmgEvalOptions, grid, smg_eval, stand_walk_jog_hit_subject,
+};
 use surfcap_formats::import::{Imported, ImportedData};
 use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 use surfcap_smg::loop_exclusion::LoopRule;

@@ -176,7 +176,8 @@ impl SmgGraph {
             Some(rule) => {
                 let filter = LoopFilter::new(rule, &similarity, &frames.sequences)?;
                 let key_pairs = key_pairs(&keys);
-                let choice = LoopChoice { filter: &filter, key_pairs: &key_pairs, per_sequence: request.loops_per_sequence };
+                let choice =
+                    LoopChoice { filter: &filter, key_pairs: &key_pairs, per_sequence: request.loops_per_sequence };
                 build_graph_choosing(&input, &choice)?
             }
             None => build_graph(&input)?,

@@ -160,8 +160,13 @@ fn a_looping_clips_wrap_edge_is_in_the_tiled_graph_as_in_the_one_machine_graph()
     assert!(wraps.contains(&(last, first, "coil:17", "coil:0")), "{wraps:?}");
     merge(&store, &plan).unwrap();
     let d = distance_matrix(&subject, &DistanceParams::default(), &NoProgress);
-    let t = transition_table(&d.values, subject.frame_index(), &TableParams { l_min: 2, l_max: 5, slope: Some(3) }, &NoProgress)
-        .unwrap();
+    let t = transition_table(
+        &d.values,
+        subject.frame_index(),
+        &TableParams { l_min: 2, l_max: 5, slope: Some(3) },
+        &NoProgress,
+    )
+    .unwrap();
     let mut w = surfcap_motion::edge_weights::edge_weights(&t, subject.frame_index(), params().alpha).unwrap();
     let before = w.at(last as usize, first as usize);
     surfcap_motion::clip_loops::add_wrap_edges(&mut w, &loops);

@@ -157,10 +157,7 @@ impl GraphArgs {
 
     /// Which loops may pad time (and, by default, be chosen as self-transitions).
     fn loop_rule(&self) -> surfcap_smg::loop_exclusion::LoopRule {
-        surfcap_smg::loop_exclusion::LoopRule {
-            min_frames: self.min_loop,
-            variation_floor: self.loop_variation_floor,
-        }
+        surfcap_smg::loop_exclusion::LoopRule { min_frames: self.min_loop, variation_floor: self.loop_variation_floor }
     }
 
     /// Opens the input with its similarity and graph, the key frames `keys` among the nodes.
