@@ -56,14 +56,13 @@ fn smg_query_builds_eval_smgs_graph_and_gives_its_answers() {
         let keys = [("--from", from), ("--to", to)];
         let g = SmgGraph::from_data(subject, &request, Some(&cache), &keys, &surfcap_mesh::NoProgress).unwrap();
         assert!(g.similarity_cached, "the evaluation's similarity is read back");
-        let built: Vec<(String, String, usize)> =
+        let mut built: Vec<(String, String, usize)> =
             g.transitions().into_iter().map(|t| (t.from, t.to, t.window)).collect();
-        let measured: Vec<(String, String, usize)> =
+        let mut measured: Vec<(String, String, usize)> =
             eval.transitions.iter().map(|t| (t.from.clone(), t.to.clone(), t.window)).collect();
-        let mut sorted = (built.clone(), measured.clone());
-        sorted.0.sort();
-        sorted.1.sort();
-        assert_eq!(sorted.0, sorted.1, "loops {loops:?}: the same transitions");
+        built.sort();
+        measured.sort();
+        assert_eq!(built, measured, "loops {loops:?}: the same transitions");
         let report = g.report(&request);
         assert_eq!(report.self_transitions.choice, if loops.is_some() { "spanning" } else { "eq5" });
         let row = &eval.pairs[0];
