@@ -8,8 +8,11 @@
 //!   walk model and search tables precomputed once (reported as `precompute_seconds`, apart
 //!   from the per-query times). Graph parameters: the library's defaults unless given.
 //! - Time is counted as the surface motion graph counts it: the frames the output shows, the
-//!   start frame included, against `seconds x fps`. A walk of `k` frame intervals shows `k + 1`
-//!   frames, so the essential graph is asked for `round(seconds x fps) - 1` intervals.
+//!   start frame included, against round(seconds x fps)
+//!   (`surfcap_smg::path_optimisation::frames_shown`, the count `synth reach` and `smg query`
+//!   ask). A walk of `k` frame intervals
+//!   shows `k + 1` frames, so the essential graph is asked for `round(seconds x fps) - 1`
+//!   intervals.
 //! - Distance: each engine's own ground-plane length of the centre's path (the surface motion
 //!   graph: the area-weighted centroid along its sub-sequences, nothing across a switch; the
 //!   essential graph: the centre of mass along the played frames and blends, as its walk model
@@ -33,6 +36,7 @@ use surfcap_motion::timed_walk::{DistanceTimeWalk, LoopRule, TimedGraph};
 use surfcap_motion::walk_sequence::{Step, WalkModel};
 use surfcap_pipeline::{GraphKind, GraphParams, Pipeline};
 use surfcap_smg::motion_frames::MotionFrames;
+use surfcap_smg::path_optimisation::frames_shown;
 
 use crate::MeanStd;
 use crate::error::{Error, Result};
@@ -306,7 +310,7 @@ pub fn smg_comparison(
         let answered: Vec<Vec<(usize, Answer, f64)>> = durations
             .par_iter()
             .map(|(secs, members)| {
-                let intervals = ((secs * frames.fps).round() as usize).saturating_sub(1).max(1);
+                let intervals = (frames_shown(*secs, frames.fps) as usize).saturating_sub(1).max(1);
                 let t = Instant::now();
                 let targets: Vec<(f64, f64)> = members
                     .iter()
@@ -328,7 +332,7 @@ pub fn smg_comparison(
         }
         for (&(dist, secs), answer) in opts.targets.iter().zip(searches) {
             let (found, seconds) = answer.expect("every target belongs to its duration");
-            let shown = secs * frames.fps;
+            let shown = frames_shown(secs, frames.fps);
             let w = match found {
                 Ok(r) => {
                     match &r.unreachable {
@@ -394,7 +398,7 @@ pub fn smg_comparison(
 }
 
 /// The report's summary of the measures.
-const MEASURES: &str = "time: frames shown (start included) against seconds x fps; distance: each engine's ground \
+const MEASURES: &str = "time: frames shown (start included) against round(seconds x fps); distance: each engine's ground \
      length of the centre's path; transition cost: deformation distance (thesis eq. 2.13), smoothness: Hausdorff \
      distance, both weighted triangularly over the frame pairs a transition matches (SMG: its window; essential \
      graph: its DTW warp) with each engine's placement of the destination frame; cpu: the search per query";

@@ -23,7 +23,9 @@ use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::Subject;
 use surfcap_smg::loop_exclusion::{LoopFilter, LoopRule};
 use surfcap_smg::motion_frames::MotionFrames;
-use surfcap_smg::path_optimisation::{PathQuery, Tolerance, optimise_planned, plan_paths, plan_paths_excluding};
+use surfcap_smg::path_optimisation::{
+    PathQuery, Tolerance, frames_shown, optimise_planned, plan_paths, plan_paths_excluding,
+};
 use surfcap_smg::shape_similarity::HistogramParams;
 use surfcap_smg::surface_motion_graph::{
     EdgeKind, GraphInput, LoopChoice, SurfaceMotionGraph, build_graph, build_graph_choosing,
@@ -490,7 +492,8 @@ pub fn smg_eval(
             .targets
             .par_iter()
             .map(|&(d, s)| {
-                let q = PathQuery { w_d: opts.w_d, w_t: opts.w_t, ..PathQuery::new(a, b, d, s * frames.fps) };
+                let q =
+                    PathQuery { w_d: opts.w_d, w_t: opts.w_t, ..PathQuery::new(a, b, d, frames_shown(s, frames.fps)) };
                 let t = Instant::now();
                 let p = optimise_planned(&g, &ground, &plan, &q);
                 let cpu = t.elapsed().as_secs_f64();

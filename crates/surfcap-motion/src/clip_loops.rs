@@ -39,7 +39,7 @@
 //! as captured) and its shortest window a third of that.
 
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, motion_plane_alignment};
-use surfcap_mesh::{FrameIndex, Subject};
+use surfcap_mesh::{FrameIndex, Subject, UpAxis};
 
 use crate::edge_weights::EdgeWeights;
 
@@ -112,6 +112,45 @@ pub fn body_frame_distance(subject: &Subject, i: usize, j: usize) -> f64 {
 /// The looping clips of `subject` ([`clip_loops_by`] with [`body_frame_distance`]).
 pub fn clip_loops(subject: &Subject) -> Vec<ClipLoop> {
     clip_loops_by(subject.frame_index(), |i, j| body_frame_distance(subject, i, j))
+}
+
+/// The looping clips of frames read one at a time by `frame(g)` (global frame `g`'s positions,
+/// e.g. from a subject cache, as the tile jobs read them): [`clip_loops`] on a subject of those
+/// frames, bit for bit (the same [`body_frame_distance`] on the same positions), holding at most
+/// four frames at once. The first error of `frame` is returned.
+pub fn clip_loops_streamed<E>(
+    index: &FrameIndex,
+    up: UpAxis,
+    mut frame: impl FnMut(usize) -> Result<Vec<f32>, E>,
+) -> Result<Vec<ClipLoop>, E> {
+    let mut held: Vec<(usize, Vec<f32>)> = Vec::new();
+    let mut failed: Option<E> = None;
+    let loops = clip_loops_by(index, |i, j| {
+        if failed.is_some() {
+            return f64::INFINITY;
+        }
+        // Keep what later calls ask again: the two frames now, and the sequence's first two
+        // (its last frame is compared with them).
+        let start = index.locate(i).map_or(i, |(s, _)| index.range(s).start);
+        held.retain(|(g, _)| *g == i || *g == j || *g == start || *g == start + 1);
+        for g in [i, j] {
+            if !held.iter().any(|(h, _)| *h == g) {
+                match frame(g) {
+                    Ok(p) => held.push((g, p)),
+                    Err(e) => {
+                        failed = Some(e);
+                        return f64::INFINITY;
+                    }
+                }
+            }
+        }
+        let get = |g: usize| &held.iter().find(|(h, _)| *h == g).expect("held above").1;
+        motion_plane_alignment(get(i), get(j), None, up).1.sqrt()
+    });
+    match failed {
+        Some(e) => Err(e),
+        None => Ok(loops),
+    }
 }
 
 /// Where the wrap places the clip's `first` frame, in the coordinates where the `last` frame is
@@ -194,6 +233,35 @@ mod tests {
         assert_eq!(segment_bounds_for_clips(30.0, &index, &[looping(0)]), (10, 60));
         assert_eq!(segment_bounds_for_clips(30.0, &index, &[looping(0), looping(1), looping(2)]), (4, 12));
         assert_eq!(segment_bounds_for_clips(30.0, &index, &[looping(2)]), (6, 16), "the short clip does not loop");
+    }
+
+    /// Frames read one at a time give the subject's loops (a clip that goes out and back loops,
+    /// one that only goes out does not), and a read error is returned, not a loop.
+    #[test]
+    fn loops_of_streamed_frames_are_the_subjects() {
+        use surfcap_mesh::{Sequence, Topology, Units, UpAxis};
+        let tri = |a: f32| [0.0f32, 0.0, 0.0, 0.3 + 0.1 * a.cos(), 0.0, 0.1 * a.sin(), 0.1, 0.2 * a, 0.4];
+        let there_and_back: Vec<f32> = [0.0f32, 0.2, 0.4, 0.6, 0.4, 0.2, 0.05].iter().flat_map(|&a| tri(a)).collect();
+        let out: Vec<f32> = (0..7).flat_map(|k| tri(0.2 * k as f32)).collect();
+        let topology = Topology::new(3, vec![[0, 1, 2]], None).unwrap();
+        let seqs = vec![Sequence::new("back", 3, there_and_back).unwrap(), Sequence::new("out", 3, out).unwrap()];
+        let s = Subject::new("t", topology, seqs, 30.0, UpAxis::parse("+y").unwrap(), Units::metres()).unwrap();
+        let whole = clip_loops(&s);
+        assert_eq!(whole.len(), 1, "{whole:?}");
+        assert_eq!((whole[0].sequence, whole[0].last, whole[0].first), (0, 6, 0));
+        let mut reads = 0;
+        let streamed = clip_loops_streamed(s.frame_index(), s.up_axis, |g| {
+            reads += 1;
+            Ok::<_, String>(s.frame(g).unwrap().to_vec())
+        })
+        .unwrap();
+        assert_eq!(streamed, whole);
+        assert!(reads <= 2 * s.n_frames(), "{reads} reads of {} frames", s.n_frames());
+        let e = clip_loops_streamed(s.frame_index(), s.up_axis, |g| {
+            if g == 9 { Err(format!("frame {g} unreadable")) } else { Ok(s.frame(g).unwrap().to_vec()) }
+        })
+        .unwrap_err();
+        assert_eq!(e, "frame 9 unreadable");
     }
 
     /// A rigid triangle gliding +1 along x per frame: every pose is alike in the body frame, so

@@ -21,6 +21,7 @@ use surfcap_formats::import::{Imported, ImportedData, ImportedFrames};
 use surfcap_mesh::frame_set::{FrameSet, FrameSetSequence};
 use surfcap_mesh::output_set::OutputSet;
 use surfcap_mesh::{Topology, Units, UpAxis};
+use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 use surfcap_smg::loop_exclusion::LoopRule;
 use surfcap_synthesis::smg_query::{SimilarityCache, SmgAnimation, SmgGraph, SmgGraphRequest, SmgQuery};
 use surfcap_synthesis::{Animation, Output, Tolerances};
@@ -352,7 +353,16 @@ fn request(
     if !(8..=512).contains(&resolution) {
         return Err(PyValueError::new_err(format!("resolution: {resolution}, expected 8 to 512")));
     }
-    Ok(SmgGraphRequest { input: PathBuf::from(label), connect, windows, transitions, separation, resolution })
+    Ok(SmgGraphRequest {
+        input: PathBuf::from(label),
+        connect,
+        windows,
+        transitions,
+        separation,
+        resolution,
+        loops: Some(LoopRule::default()),
+        loops_per_sequence: SmgGraphRequest::DEFAULT_LOOPS_PER_SEQUENCE,
+    })
 }
 
 fn similarity_cache(c: &CacheChoice) -> Option<SimilarityCache> {
@@ -427,16 +437,18 @@ pub fn smg_query<'py>(
         return Err(PyValueError::new_err("format: given without output"));
     }
     let inp = open_input(input)?;
-    let req = request(&inp.label, connections(connect)?, windows, transitions, separation, resolution)?;
+    let mut req = request(&inp.label, connections(connect)?, windows, transitions, separation, resolution)?;
+    let loops = LoopRule { min_frames: min_loop, variation_floor: loop_variation_floor };
+    req.loops = Some(loops);
     let q = SmgQuery {
         from: from_.clone(),
         to: to.clone(),
         distance,
-        time,
+        time: TimeSpec { value: time, unit: Some(TimeUnit::Seconds) },
         distance_weight,
         time_weight,
         paper_cost,
-        loops: LoopRule { min_frames: min_loop, variation_floor: loop_variation_floor },
+        loops,
     };
     let tolerances = Tolerances { distance: tolerance, frames: frame_tolerance };
     let cache = similarity_cache(&inp.cache);

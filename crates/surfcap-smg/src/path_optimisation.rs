@@ -85,6 +85,13 @@ impl Default for Tolerance {
 
 pub use surfcap_mesh::reachability::Unreachable;
 
+/// The frames a duration of `seconds` shows at `fps`, start included: round(T x fps), the count
+/// a path's `t(F)` is compared with (and the count the essential graph's timed searches ask
+/// for, so both engines answer the same target).
+pub fn frames_shown(seconds: f64, fps: f64) -> f64 {
+    (seconds * fps).round()
+}
+
 impl PathQuery {
     /// A query with the paper's weights (`w_d = 1/0.3` per unit, for subjects in metres).
     pub fn new(start: usize, end: usize, distance: f64, frames: f64) -> Self {

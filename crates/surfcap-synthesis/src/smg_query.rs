@@ -22,7 +22,11 @@ use surfcap_smg::path_optimisation::{
     plan_paths_excluding, play_path,
 };
 use surfcap_smg::shape_similarity::HistogramParams;
-use surfcap_smg::surface_motion_graph::{EdgeKind, GraphInput, SurfaceMotionGraph, build_graph};
+use surfcap_smg::surface_motion_graph::{
+    EdgeKind, GraphInput, LoopChoice, SurfaceMotionGraph, build_graph, build_graph_choosing,
+};
+
+use surfcap_pipeline::constraint_files::{TimeSpec, TimeUnit};
 
 use crate::animation_output::{Animation, Travel, write_animation, write_report};
 use crate::constraint::{Constraint, Tolerances};
@@ -45,6 +49,20 @@ pub struct SmgGraphRequest {
     pub separation: usize,
     /// Voxels along the frames' largest extent (the shape histograms' lattice).
     pub resolution: usize,
+    /// Self-transitions (`X -> X`) chosen among the loops this rule lets pad time, spanning each
+    /// sequence's cross transitions and key frames (`surfcap_smg::self_transition_choice`, the
+    /// graph `surfcap eval smg` measures by default); `None`: eq. 5 alone, the paper's graph as
+    /// printed (a clip's stillest 3 frames may be its loop).
+    pub loops: Option<LoopRule>,
+    /// With `loops`: self-transitions per sequence, the spanning one then the cheapest
+    /// admissible loops inside it.
+    pub loops_per_sequence: usize,
+}
+
+impl SmgGraphRequest {
+    /// The default graph's self-transitions (as `surfcap eval smg` builds them): chosen among
+    /// the loops of [`LoopRule::default`], two per sequence.
+    pub const DEFAULT_LOOPS_PER_SEQUENCE: usize = 2;
 }
 
 /// Where the similarity is cached: the folder, and whether to recompute.
@@ -67,6 +85,13 @@ pub struct SmgGraph {
     /// The shape similarity (eq. 2) the graph was built from, `frames x frames`: the excluded
     /// loops' pose variation is measured on it.
     pub similarity: Vec<f64>,
+}
+
+/// The key frames as pairs (start, end) in the order given, as a query's `--from` and `--to`:
+/// the self-transitions span them. An odd last key is paired with itself (spanned as an entry
+/// and an exit), so `keys = [a, b]` gives the graph a query from `a` to `b` uses.
+pub fn key_pairs(keys: &[usize]) -> Vec<(usize, usize)> {
+    keys.chunks(2).map(|c| (c[0], *c.last().expect("chunks are not empty"))).collect()
 }
 
 /// The window lengths of `--windows MIN-MAX`: windows of at least
@@ -137,7 +162,7 @@ impl SmgGraph {
             .map(|(option, spec)| frames.resolve(spec).with_context(|| format!("{option} {spec:?}")))
             .collect::<Result<Vec<usize>>>()?;
         let ground = frames.ground_centroids();
-        let graph = build_graph(&GraphInput {
+        let input = GraphInput {
             sequences: &frames.sequences,
             similarity: &similarity,
             ground: &ground,
@@ -146,7 +171,17 @@ impl SmgGraph {
             lengths,
             per_connection: request.transitions,
             separation: request.separation,
-        })?;
+        };
+        let graph = match request.loops {
+            Some(rule) => {
+                let filter = LoopFilter::new(rule, &similarity, &frames.sequences)?;
+                let key_pairs = key_pairs(&keys);
+                let choice =
+                    LoopChoice { filter: &filter, key_pairs: &key_pairs, per_sequence: request.loops_per_sequence };
+                build_graph_choosing(&input, &choice)?
+            }
+            None => build_graph(&input)?,
+        };
         for (x, y) in &graph.missing {
             progress.note(&format!(
                 "no transition {} -> {}: a sequence is shorter than the smallest window",
@@ -198,6 +233,7 @@ impl SmgGraph {
                 .collect(),
             transitions: self.transitions(),
             missing_transitions: g.missing.iter().map(|&(x, y)| format!("{}:{}", f.names[x], f.names[y])).collect(),
+            self_transitions: SelfTransitions::of(request),
         }
     }
 }
@@ -237,6 +273,32 @@ pub struct SmgGraphReport {
     pub edges: Vec<EdgeReport>,
     pub transitions: Vec<TransitionReport>,
     pub missing_transitions: Vec<String>,
+    pub self_transitions: SelfTransitions,
+}
+
+/// How the graph's self-transitions were chosen.
+#[derive(Debug, Clone, Serialize)]
+pub struct SelfTransitions {
+    /// `spanning` (among the loops `loop_rule` lets pad time, spanning each sequence's cross
+    /// transitions and key frames: `surfcap eval smg`'s default graph) or `eq5` (eq. 5 alone,
+    /// the paper's graph as printed).
+    pub choice: &'static str,
+    pub loop_rule: Option<LoopRule>,
+    /// Self-transitions per sequence (`spanning` only; eq. 5 gives `transitions`).
+    pub per_sequence: Option<usize>,
+}
+
+impl SelfTransitions {
+    fn of(request: &SmgGraphRequest) -> Self {
+        match request.loops {
+            Some(rule) => SelfTransitions {
+                choice: "spanning",
+                loop_rule: Some(rule),
+                per_sequence: Some(request.loops_per_sequence),
+            },
+            None => SelfTransitions { choice: "eq5", loop_rule: None, per_sequence: None },
+        }
+    }
 }
 
 /// A query: the key frames (the graph's first two keys), distance, time and weights.
@@ -247,8 +309,9 @@ pub struct SmgQuery {
     pub to: String,
     /// Ground distance, subject units.
     pub distance: f64,
-    /// Duration, seconds.
-    pub time: f64,
+    /// Duration: seconds (bare or `3s`) or frames shown (`90f`). T seconds show round(T x fps)
+    /// frames, start included, as `synth reach` and `eval smg` count them.
+    pub time: TimeSpec,
     /// Weight of a distance error per unit and of a time error per frame.
     pub distance_weight: f64,
     pub time_weight: f64,
@@ -285,6 +348,7 @@ pub struct QueryGraphReport {
     pub nodes: usize,
     pub edges: usize,
     pub transitions: Vec<TransitionReport>,
+    pub self_transitions: SelfTransitions,
     pub walks: usize,
     pub loops: usize,
 }
@@ -323,6 +387,9 @@ pub struct SmgQueryReport {
     pub outputs: Vec<PathBuf>,
     pub target_distance: f64,
     pub target_seconds: f64,
+    /// The frames the duration shows, start included: round(T x fps), the time constraint's
+    /// target (as `synth reach` counts it).
+    pub target_frames: usize,
     pub seconds: f64,
     /// Output frames where the path jumps to another sequence or back (the transitions play
     /// captured frames only, nothing is blended, so every frame is labelled original):
@@ -410,11 +477,20 @@ impl SmgGraph {
             ImportedData::Subject(i) => (i.subject.name.clone(), i.subject.units.clone()),
             ImportedData::FrameSet(f) => (f.frame_set.name.clone(), f.frame_set.units.clone()),
         };
+        // A duration shows round(T x fps) frames, start included (`synth reach`'s count).
+        let shown = match q.time.frames(frames.fps, TimeUnit::Seconds) {
+            Some(f) if f >= 1 => f,
+            _ => refuse!(
+                "--time {}: expected a duration of at least one frame shown (at {} fps), e.g. 90f or 3s",
+                time_text(&q.time),
+                frames.fps
+            ),
+        };
         let pq = PathQuery {
             w_d: q.distance_weight,
             w_t: q.time_weight,
             tolerance: (!q.paper_cost).then(Tolerance::default),
-            ..PathQuery::new(from, to, q.distance, q.time * frames.fps)
+            ..PathQuery::new(from, to, q.distance, shown as f64)
         };
         let t1 = Instant::now();
         let filter = LoopFilter::new(q.loops, &self.similarity, &frames.sequences)?;
@@ -464,6 +540,7 @@ impl SmgGraph {
                 nodes: graph.nodes.len(),
                 edges: graph.edges.len(),
                 transitions: self.transitions(),
+                self_transitions: SelfTransitions::of(request),
                 walks: path.walks,
                 loops: path.loops_in_graph,
             },
@@ -474,7 +551,11 @@ impl SmgGraph {
             constraints: constraints.clone(),
             outputs: Vec::new(),
             target_distance: q.distance,
-            target_seconds: q.time,
+            target_seconds: match q.time.unit {
+                Some(TimeUnit::Frames) => q.time.value / frames.fps,
+                Some(TimeUnit::Seconds) | None => q.time.value,
+            },
+            target_frames: shown as usize,
             seconds: path.frames.len() as f64 / frames.fps,
             transition_frames: path.switches.clone(),
             tolerance: pq.tolerance,
@@ -517,6 +598,14 @@ impl SmgGraph {
                 )?))
             }
         }
+    }
+}
+
+/// A duration as the user wrote it (`3s`, `90f`).
+fn time_text(t: &TimeSpec) -> String {
+    match t.unit {
+        Some(TimeUnit::Frames) => format!("{}f", t.value),
+        Some(TimeUnit::Seconds) | None => format!("{}s", t.value),
     }
 }
 

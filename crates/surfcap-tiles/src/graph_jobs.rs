@@ -1,7 +1,9 @@
 //! The jobs of the sparse essential graph's stages
 //! (`surfcap_motion::sparse_essential_graph`), by blocks of source rows:
 //! - `candidates`: rows i of Algorithm 1's weights made from rows of the table (D / median + alpha
-//!   L), each frame's k cheapest transitions plus its original edge (`candidates/edges_<b>.npy`);
+//!   L), a looping clip's wrap edge (its last frame into its start, found by the `scale` stage)
+//!   weighted as a successive step, each frame's k cheapest transitions plus its original edge
+//!   (`candidates/edges_<b>.npy`);
 //! - `paths`: the sparse graph assembled from every block's candidates (E <= N (k + 1) edges),
 //!   one Dijkstra per source of the block; the costs into `paths/costs.zarr`, the trees' edges
 //!   into `paths/tree_<b>.npy`.
@@ -58,6 +60,14 @@ fn candidates(
     let n = plan.frames();
     let rows = plan.row_block(block);
     let scale = read_scale(store)?;
+    if let Some(w) = scale.wrap_edges.iter().find(|w| w.last as usize >= n || w.first as usize >= n) {
+        return Err(Error::Job(format!(
+            "{}: wrap edge {} -> {}: expected frames below {n}",
+            store.file(crate::tile_jobs::SCALE_FILE).display(),
+            w.last,
+            w.first
+        )));
+    }
     let cost = store.read_f64(Matrix::TableCost, rows.clone(), 0..n)?;
     let len = store.read_u32(Matrix::TableLen, rows.clone(), 0..n)?;
     let mut w = vec![0.0; n];
@@ -74,6 +84,11 @@ fn candidates(
             )));
         }
         edge_weight_row(c, l, i, &subject.index, plan.params.alpha, scale.d_scale, &mut w);
+        // A looping clip plays its last frame into its start as a successive step
+        // (`surfcap_motion::clip_loops::add_wrap_edges`, as the one-machine graph's weights).
+        for wrap in scale.wrap_edges.iter().filter(|w| w.last as usize == i) {
+            w[wrap.first as usize] = plan.params.alpha.get();
+        }
         for e in cheapest_transitions(&w, i, &subject.index, plan.params.k) {
             flat.extend([e.from as f64, e.to as f64, e.weight]);
             edges += 1;

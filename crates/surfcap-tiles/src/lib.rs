@@ -16,9 +16,12 @@
 //!   place; regions read only when every chunk is there; a job's record written last marks it done;
 //! - [`cost_median`]: the exact median of the table's finite costs streamed in two radix passes
 //!   (Algorithm 1's scale, the same bits as the in-memory selection);
+//! - the `scale` job also finds the clips authored as loops (`surfcap_motion::clip_loops`, on
+//!   the cached frames read a few at a time) and writes their wrap edges beside the median;
 //! - [`tile_jobs`]: distance jobs read only their frames from the subject cache, table jobs their
 //!   halo; the kernel and the process's peak memory recorded; [`graph_jobs`]: each frame's k
-//!   cheapest transitions from rows of the table, then Dijkstra per block of sources;
+//!   cheapest transitions from rows of the table (a looping clip's wrap edge weighted as a
+//!   successive step, as the one-machine graph), then Dijkstra per block of sources;
 //! - [`tile_verify`]: every record (written for this plan, this job, listing this job's files),
 //!   every output (a regular file of the recorded size and BLAKE3) and every `zarr.json` checked
 //!   against the plan; a damaged job is not done (and `run` computes it again), a foreign record

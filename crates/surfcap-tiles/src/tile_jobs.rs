@@ -42,11 +42,25 @@ impl PoseFrames for LoadedFrames {
     }
 }
 
-/// The median written by the `scale` stage.
+/// What the `scale` stage writes: Algorithm 1's median and the looping clips' wrap edges.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scale {
     /// The median of the finite transition costs (1 when there are none or it is 0).
     pub d_scale: f64,
+    /// The wrap edge of every clip authored as a loop (`surfcap_motion::clip_loops`: its last
+    /// pose as close to its first as its own successive frames are), last frame -> first frame
+    /// played (global frames): the candidates give it the weight of a successive step, as the
+    /// one-machine graph does (`Pipeline::edge_weights`).
+    pub wrap_edges: Vec<WrapEdge>,
+}
+
+/// A looping clip's wrap edge, global frames, with their `sequence:frame` names.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WrapEdge {
+    pub last: u32,
+    pub first: u32,
+    pub from: String,
+    pub to: String,
 }
 
 /// Peak resident memory of this process so far (Linux `VmHWM`), bytes; 0 where unknown.
@@ -107,7 +121,7 @@ pub fn run_job(
     let (span, kernel, details, outputs) = match stage {
         Stage::Distances => distances_job(store, plan, subject, index, progress)?,
         Stage::Table => table_job(store, plan, subject, index, progress)?,
-        Stage::Scale => scale_job(store, plan)?,
+        Stage::Scale => scale_job(store, plan, subject)?,
         Stage::Candidates | Stage::Paths => crate::graph_jobs::run(store, plan, subject, stage, index, progress)?,
     };
     let record = JobRecord {
@@ -200,7 +214,24 @@ fn table_job(
     Ok((text, String::new(), serde_json::json!({ "pairs": nr * nc, "finite": finite }), outputs))
 }
 
-fn scale_job(store: &Store, plan: &Plan) -> Result<JobResult> {
+/// The looping clips of the subject's frames (read from the cache a few at a time), as
+/// `Pipeline::loops()` finds them on the subject.
+fn wrap_edges(subject: &CachedFrames) -> Result<Vec<WrapEdge>> {
+    let loops = surfcap_motion::clip_loops::clip_loops_streamed(&subject.index, subject.up_axis, |g| {
+        subject.read(&[g]).map(|mut f| f.pop().map(|(_, p)| p).unwrap_or_default())
+    })?;
+    Ok(loops
+        .iter()
+        .map(|l| WrapEdge {
+            last: l.last,
+            first: l.first,
+            from: subject.index.label(l.last as usize),
+            to: subject.index.label(l.first as usize),
+        })
+        .collect())
+}
+
+fn scale_job(store: &Store, plan: &Plan, subject: &CachedFrames) -> Result<JobResult> {
     let n = plan.frames();
     let blocks: Vec<std::ops::Range<usize>> = (0..plan.jobs(Stage::Candidates)).map(|k| plan.row_block(k)).collect();
     let d_scale = finite_cost_median(|visit| {
@@ -210,10 +241,17 @@ fn scale_job(store: &Store, plan: &Plan) -> Result<JobResult> {
         }
         Ok::<(), Error>(())
     })?;
-    let scale = Scale { d_scale };
+    let wrap_edges = wrap_edges(subject)?;
+    let loops = wrap_edges.len();
+    let scale = Scale { d_scale, wrap_edges };
     let bytes = serde_json::to_vec_pretty(&scale).expect("plain data");
     let outputs = vec![store.write_file(SCALE_FILE, &bytes)?];
-    Ok(("the whole table".into(), String::new(), serde_json::json!({ "d_scale": d_scale }), outputs))
+    Ok((
+        "the whole table; every frame for the looping clips".into(),
+        String::new(),
+        serde_json::json!({ "d_scale": d_scale, "looping_clips": loops }),
+        outputs,
+    ))
 }
 
 /// The file of the `scale` stage's result.
@@ -230,6 +268,15 @@ pub fn read_scale(store: &Store) -> Result<Scale> {
         return Err(Error::Plan {
             path: p,
             message: format!("d_scale {}: expected a finite median > 0", scale.d_scale),
+        });
+    }
+    if let Some(w) = scale.wrap_edges.iter().find(|w| w.first >= w.last) {
+        return Err(Error::Plan {
+            path: p,
+            message: format!(
+                "wrap edge {} -> {}: expected a clip's last frame back to an earlier frame, its start",
+                w.last, w.first
+            ),
         });
     }
     Ok(scale)

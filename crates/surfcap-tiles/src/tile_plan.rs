@@ -6,9 +6,10 @@
 //! 1. `distances`: the upper-triangle tiles of the pose distance matrix (`distance_tiles.rs`);
 //! 2. `table`: every tile of the transition table, each reading its halo of distances
 //!    (`transition_tiles.rs`);
-//! 3. `scale`: one job, the median of the table's finite costs (Algorithm 1 divides D by it);
+//! 3. `scale`: one job, the median of the table's finite costs (Algorithm 1 divides D by it), and
+//!    the clips authored as loops (`clip_loops.rs`, every frame read once, a few at a time);
 //! 4. `candidates`: per block of source rows, each frame's k cheapest transitions and its
-//!    original edge (`sparse_essential_graph.rs`);
+//!    original edge, and a looping clip's wrap edge (`sparse_essential_graph.rs`);
 //! 5. `paths`: per block of source rows, the shortest-path trees on the sparse graph.
 
 use std::path::{Path, PathBuf};
@@ -23,8 +24,9 @@ use crate::error::{Error, Result};
 
 const FORMAT: &str = "surfcap-tiles";
 /// Version 2: the plan records its own content hash, job records the plan's hash and their
-/// outputs' hashes.
-const VERSION: u32 = 2;
+/// outputs' hashes. Version 3: the `scale` stage also finds the looping clips, whose wrap edges
+/// the candidates add (a version 2 folder's graph has none: plan again).
+const VERSION: u32 = 3;
 /// The most jobs a stage may have: a plan beyond it is refused (a larger tile makes fewer jobs),
 /// so no loop over a stage's jobs can run for hours.
 pub const MAX_STAGE_JOBS: usize = 10_000_000;
@@ -387,7 +389,8 @@ pub fn job_memory(
     vec![
         (Stage::Distances, tile_memory_bytes(&span, vertices, triangles, SLAB_BYTES)),
         (Stage::Table, halo.saturating_add(table_out)),
-        (Stage::Scale, rows.saturating_mul(8).saturating_add(1 << 19)),
+        // The rows of costs, and the four frames the loop detection holds.
+        (Stage::Scale, rows.saturating_mul(8).saturating_add(1 << 19).saturating_add(vertices.saturating_mul(48))),
         (Stage::Candidates, rows.saturating_mul(12).saturating_add(frames * 8).saturating_add(t.saturating_mul(kept))),
         (Stage::Paths, frames.saturating_mul(kept).saturating_add(rows.saturating_mul(12))),
     ]

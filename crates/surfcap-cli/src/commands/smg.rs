@@ -50,6 +50,28 @@ pub struct GraphArgs {
     /// Voxels along the frames' largest extent (the shape histograms' lattice).
     #[arg(long, default_value_t = 64, value_parser = |s: &str| crate::options::whole_in(s, 8, 512))]
     pub resolution: usize,
+    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
+    /// to pad time, nor chosen as a self-transition (a few frames repeated dozens of times is a
+    /// stutter, not a motion; 1: no minimum).
+    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
+    pub min_loop: usize,
+    /// Excluded loops: a loop whose frames differ among themselves (largest shape
+    /// dissimilarity) by less than this many typical frame-to-frame dissimilarities of their
+    /// sequences is a held pose, never repeated to pad time, nor chosen as a self-transition
+    /// (0: no floor).
+    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
+    pub loop_variation_floor: f64,
+    /// Self-transitions per sequence (without --eq5-self-transitions): the loop spanning the
+    /// sequence's cross transitions and key frames, then the cheapest admissible loops inside
+    /// it, which queries may repeat to meet their times.
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 1, 10))]
+    pub loops_per_sequence: usize,
+    /// The paper's graph as printed: every self-transition by eq. 5 alone (a clip's stillest
+    /// 3 frames may be its loop). By default a self-transition is chosen among the loops a
+    /// query may play (--min-loop, --loop-variation-floor), spanning the sequence's cross
+    /// transitions and key frames: the graph `surfcap eval smg` measures.
+    #[arg(long)]
+    pub eq5_self_transitions: bool,
     #[command(flatten)]
     pub cache: CacheOpts,
     #[command(flatten)]
@@ -61,7 +83,9 @@ pub struct BuildArgs {
     #[command(flatten)]
     pub graph: GraphArgs,
     /// Key frames (`sequence:frame`, comma-separated or repeated) that become nodes of the
-    /// lower level (a query adds its own).
+    /// lower level, taken in pairs FROM,TO as a query's --from and --to (an odd last one is
+    /// both): the self-transitions span them, so `--keys A,B` builds the graph of `smg query
+    /// --from A --to B`.
     #[arg(long = "keys", value_delimiter = ',')]
     pub keys: Vec<String>,
     /// The graph as JSON (nodes, edges, transitions), for inspection.
@@ -81,9 +105,10 @@ pub struct QueryArgs {
     /// Ground distance to cover, in the subject's units.
     #[arg(long, value_parser = crate::options::non_negative)]
     pub distance: f64,
-    /// Duration, in seconds.
-    #[arg(long, value_parser = crate::options::positive)]
-    pub time: f64,
+    /// Duration: seconds (a bare number, e.g. 3, or 3s) or frames shown (90f). T seconds show
+    /// round(T x fps) frames, start included, as `synth reach` counts them.
+    #[arg(long, value_parser = crate::options::positive_time)]
+    pub time: surfcap_pipeline::constraint_files::TimeSpec,
     /// Weight of a distance error per subject unit (the paper: 1/0.3 per metre).
     #[arg(long, default_value_t = 1.0 / 0.3, value_parser = crate::options::positive)]
     pub distance_weight: f64,
@@ -96,16 +121,6 @@ pub struct QueryArgs {
     /// why when none does.
     #[arg(long)]
     pub paper_cost: bool,
-    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
-    /// to pad time (a few frames repeated dozens of times is a stutter, not a motion; 1: no
-    /// minimum).
-    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
-    pub min_loop: usize,
-    /// Excluded loops: a loop whose frames differ among themselves (largest shape
-    /// dissimilarity) by less than this many typical frame-to-frame dissimilarities of their
-    /// sequences is a held pose, never repeated to pad time (0: no floor).
-    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
-    pub loop_variation_floor: f64,
     /// Output: a .glb (the default format), .abc or .usda file, a folder (see --format), or a
     /// `.frames` folder (surfcap's own frame set, lossless). The report goes beside it as
     /// <output>.report.json, which `surfcap view <output>` shows over the animation.
@@ -135,7 +150,14 @@ impl GraphArgs {
             transitions: self.transitions,
             separation: self.separation,
             resolution: self.resolution,
+            loops: (!self.eq5_self_transitions).then_some(self.loop_rule()),
+            loops_per_sequence: self.loops_per_sequence,
         }
+    }
+
+    /// Which loops may pad time (and, by default, be chosen as self-transitions).
+    fn loop_rule(&self) -> surfcap_smg::loop_exclusion::LoopRule {
+        surfcap_smg::loop_exclusion::LoopRule { min_frames: self.min_loop, variation_floor: self.loop_variation_floor }
     }
 
     /// Opens the input with its similarity and graph, the key frames `keys` among the nodes.
@@ -165,6 +187,14 @@ fn build(ctx: &crate::Ctx, a: BuildArgs) -> anyhow::Result<()> {
             report.edges.len(),
             report.transitions.len()
         );
+        match (&report.self_transitions.loop_rule, report.self_transitions.per_sequence) {
+            (Some(rule), Some(k)) => println!(
+                "self-transitions ({k} per sequence) chosen among the loops of at least {} frames varying at least {} \
+                 typical frame step(s), spanning each sequence's cross transitions and key frames",
+                rule.min_frames, rule.variation_floor
+            ),
+            _ => println!("self-transitions by eq. 5 alone (--eq5-self-transitions)"),
+        }
         for t in &report.transitions {
             println!("  transition {} -> {} (window {}, cost {:.4})", t.from, t.to, t.window, t.cost);
         }
@@ -186,10 +216,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         distance_weight: a.distance_weight,
         time_weight: a.time_weight,
         paper_cost: a.paper_cost,
-        loops: surfcap_smg::loop_exclusion::LoopRule {
-            min_frames: a.min_loop,
-            variation_floor: a.loop_variation_floor,
-        },
+        loops: a.graph.loop_rule(),
     };
     let out = Output {
         path: Some(a.output.clone()),
@@ -203,13 +230,14 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
     let (r, path) = (&done.report, &done.path);
     ctx.result(r, || {
         println!(
-            "{} frames ({:.1} s), {:.2} {} covered (asked {} in {} s); {} transition(s), cost {:.3}; {} walk(s), {} loop(s) in the graph, {} ILP solve(s) in {:.3} s",
+            "{} frames ({:.1} s), {:.2} {} covered (asked {} in {} s: {} frames); {} transition(s), cost {:.3}; {} walk(s), {} loop(s) in the graph, {} ILP solve(s) in {:.3} s",
             r.frames,
             r.seconds,
             r.distance,
             r.unit,
             a.distance,
-            a.time,
+            r.target_seconds,
+            r.target_frames,
             path.switches.len(),
             r.transition_cost,
             r.graph.walks,
@@ -230,7 +258,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
                 "no path of the graph meets {} {} in {} s within 1% and 1 frame: {}{excluded}",
                 a.distance,
                 r.unit,
-                a.time,
+                r.target_seconds,
                 u.in_unit(&r.unit)
             );
         }
