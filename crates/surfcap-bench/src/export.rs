@@ -79,7 +79,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         ExportFormat::Glb => "glb",
         ExportFormat::Abc => "abc",
         ExportFormat::Usda => "usda",
-        other => anyhow::bail!("--format {other:?}: expected glb, abc or usda (one file per animation)"),
+        ExportFormat::Usdc => "usdc",
+        other => anyhow::bail!("--format {other:?}: expected glb, abc, usda or usdc (one file per animation)"),
     };
     if output.is_some() && lengths.len() > 1 {
         anyhow::bail!("--output keeps one file: give one length in --frames");

@@ -70,6 +70,11 @@ pub mod stream;
 pub mod stream_predict;
 pub mod stream_quantise;
 pub mod vertex_velocity;
+// ---- usdc: USD's binary crate format ----
+pub mod usd_crate;
+pub mod usd_crate_compress;
+pub mod usd_crate_read;
+pub mod usd_crate_write;
 
 /// `base`, or `base_1`, `base_2`, ... : the first not in `taken`, which it joins (names of
 /// sibling objects in the USD and Alembic writers).
