@@ -585,6 +585,9 @@ fn stage(cr: &Crate, specs: &HashMap<String, Spec>) -> Result<UsdaStage> {
     Ok(UsdaStage { meshes, fps: rates.0.or(rates.1), up_axis, units, notes })
 }
 
+/// Time samples as the text reader keeps them: (time, value, line; 0 here).
+type Samples<T> = Vec<(f64, Vec<T>, usize)>;
+
 /// What a `Mesh` prim's attributes say, in the text reader's terms.
 fn mesh_properties(cr: &Crate, specs: &HashMap<String, Spec>, path: &str, props: &[String]) -> Result<MeshAcc> {
     let mut m = MeshAcc::default();
@@ -594,7 +597,7 @@ fn mesh_properties(cr: &Crate, specs: &HashMap<String, Spec>, path: &str, props:
         let what = format!("<{attr}>");
         // A blocked value (`None` in text) is no value.
         let get = |f: &str| s.get(f).filter(|r| r.ty() != 51);
-        let collect_f32 = |dim: usize| -> Result<Option<Vec<(f64, Vec<f32>, usize)>>> {
+        let collect_f32 = |dim: usize| -> Result<Option<Samples<f32>>> {
             let Some(r) = get("timeSamples") else { return Ok(None) };
             let mut v = Vec::new();
             for (t, rep) in cr.time_samples(r, &what)? {
@@ -604,7 +607,7 @@ fn mesh_properties(cr: &Crate, specs: &HashMap<String, Spec>, path: &str, props:
             }
             Ok(Some(v))
         };
-        let collect_int = || -> Result<Option<Vec<(f64, Vec<u32>, usize)>>> {
+        let collect_int = || -> Result<Option<Samples<u32>>> {
             let Some(r) = get("timeSamples") else { return Ok(None) };
             let mut v = Vec::new();
             for (t, rep) in cr.time_samples(r, &what)? {
