@@ -1,7 +1,8 @@
 //! `.usdc` (USD's binary crate format) as surfcap writes it, read by Pixar's USD (usd-core, in
 //! `tools/venv`) and by surfcap's own reader: the Vlasic crane (175 frames x 10,002 vertices)
 //! exported, and a synthesised animation (samba key poses: original and synthetic frames); points,
-//! velocities, topology, time codes, labels and layer metadata compared to the bit.
+//! velocities, topology, time codes, labels and layer metadata compared to the bit; a damaged
+//! file refused naming it and what is wrong.
 
 use surfcap_mesh::NoProgress;
 use surfcap_testkit::{p, stderr, surfcap};
@@ -121,4 +122,31 @@ fn a_synthesised_animation_as_usdc_reads_back_exactly_in_pixars_usd() {
             && labels.contains(&surfcap_mesh::subject::FrameLabel::Original),
         "a synthesised animation has original and synthetic (transition) frames"
     );
+}
+
+#[test]
+fn a_damaged_usdc_is_refused_naming_the_file_and_what_is_wrong() {
+    let Some(data) = surfcap_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let good = d.path().join("knight.usdc");
+    let walk = data.join("kaykit_adventurers/knight_Walking_A");
+    let o = surfcap!(&["--quiet", "export", p(&walk), "--format", "usdc", "-o", p(&good)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&good).unwrap();
+    // Cut in half: the table of contents is gone.
+    let cut = d.path().join("cut.usdc");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let o = surfcap!(&["import", p(&cut), "-o", p(&d.path().join("a.subject"))]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("cut.usdc") && e.contains("table of contents") && e.contains("past the end of the file"), "{e}");
+    // A crate version usd-core no longer reads either.
+    let mut old = bytes.clone();
+    old[9] = 3;
+    let old_path = d.path().join("old.usdc");
+    std::fs::write(&old_path, &old).unwrap();
+    let o = surfcap!(&["import", p(&old_path), "-o", p(&d.path().join("b.subject"))]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("old.usdc") && e.contains("version 0.3.0") && e.contains("0.4.0 to 0.14.0"), "{e}");
 }
