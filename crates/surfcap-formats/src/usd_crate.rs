@@ -11,15 +11,14 @@
 //! array, bit 62 inlined (the value is in the low 48 bits), bit 61 compressed, bits 48-55 the
 //! type, bits 0-47 the payload (the inlined value, or the value's offset in the file).
 //!
-//! surfcap writes version 0.8.0, the version usd-core writes by default (24.x-26.x); every
-//! usd-core from 0.4.0's compressed sections on reads it, and 26.x reads nothing older.
+//! surfcap writes version 0.8.0, the version usd-core 26.x writes by default; usd-core 26.x
+//! refuses versions before 0.4.0 as obsolete and warns that those before 0.8.0 are deprecated.
 
 /// The crate version surfcap writes.
 pub const VERSION: [u8; 3] = [0, 8, 0];
 
 /// Value types (OpenUSD `crateDataTypes.h`); only those surfcap writes or reads.
 pub mod ty {
-    pub const BOOL: u8 = 1;
     pub const INT: u8 = 3;
     pub const UINT: u8 = 4;
     pub const INT64: u8 = 5;
