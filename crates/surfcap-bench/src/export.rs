@@ -1,5 +1,5 @@
-//! `surfcap-bench export` (alias `surfcap-bench glb`): writes long animations as `.glb`, `.abc` or
-//! `.usda` (default: glb, 10 minutes at 30 fps of a 10,000-vertex subject, 18,000 frames) and
+//! `surfcap-bench export` (alias `surfcap-bench glb`): writes long animations as `.glb`, `.abc`,
+//! `.usda` or `.usdc` (default: glb, 10 minutes at 30 fps of a 10,000-vertex subject, 18,000 frames) and
 //! reports for each length the file size, the time and the memory the write added above the
 //! subject's own positions (the peak resident memory during the write, reset before it through
 //! `/proc/self/clear_refs`, minus the resident memory before it). Several lengths
@@ -51,7 +51,7 @@ fn long_subject(frames: usize, vertices: usize) -> anyhow::Result<Subject> {
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// glb, abc or usda.
+    /// glb, abc, usda or usdc.
     #[arg(long, default_value = "glb")]
     pub format: ExportFormat,
     /// Lengths in frames (at 30 fps), comma-separated.
@@ -79,7 +79,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         ExportFormat::Glb => "glb",
         ExportFormat::Abc => "abc",
         ExportFormat::Usda => "usda",
-        other => anyhow::bail!("--format {other:?}: expected glb, abc or usda (one file per animation)"),
+        ExportFormat::Usdc => "usdc",
+        other => anyhow::bail!("--format {other:?}: expected glb, abc, usda or usdc (one file per animation)"),
     };
     if output.is_some() && lengths.len() > 1 {
         anyhow::bail!("--output keeps one file: give one length in --frames");

@@ -168,7 +168,7 @@ enum Command {
     /// Describe a subject (sequences, frames, vertices, triangles, components, bounding box) or
     /// a frame set (sequences, frames, vertex and triangle count ranges).
     Info(commands::info::Args),
-    /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches, npy arrays, USD (usda) or Alembic (abc).
+    /// Write a subject as glb, OBJ frames, PLY frames, PC2 point caches, npy arrays, USD (usda, usdc) or Alembic (abc).
     Export(commands::export::Args),
     /// All-pairs pose distance matrix (thesis eq. 2.2, 2.13, 2.14) as .npy, cached.
     Distance(commands::distance::Args),

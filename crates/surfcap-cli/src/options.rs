@@ -423,11 +423,11 @@ impl GraphOpts {
 /// Where an animation goes.
 #[derive(clap::Args, Debug, Clone)]
 pub struct OutOpts {
-    /// Output: a .glb, .usda or .abc file, or a folder for --format obj, ply, pc2 or npy. The JSON report is written
+    /// Output: a .glb, .usda, .usdc or .abc file, or a folder for --format obj, ply, pc2 or npy. The JSON report is written
     /// beside it as <output>.report.json.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// glb, obj, ply, pc2, npy, usda or abc (default: from the output's extension, else glb); or
+    /// glb, obj, ply, pc2, npy, usda, usdc or abc (default: from the output's extension, else glb); or
     /// rig-glb: a skinned character (bones and weights, as `surfcap rig` makes it) in a .glb.
     #[arg(long)]
     pub format: Option<ExportFormat>,

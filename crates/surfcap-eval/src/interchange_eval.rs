@@ -85,12 +85,13 @@ fn format_name(f: ExportFormat) -> Result<&'static str> {
     Ok(match f {
         ExportFormat::Abc => "abc",
         ExportFormat::Usda => "usda",
+        ExportFormat::Usdc => "usdc",
         ExportFormat::Glb => "glb",
         other => {
             return Err(Error::parameter(
                 "--formats",
                 Some(format!("{other:?}").to_lowercase()),
-                "expected single-file formats: abc, usda or glb",
+                "expected single-file formats: abc, usda, usdc or glb",
             ));
         }
     })

@@ -29,6 +29,8 @@ pub enum ExportFormat {
     Npy,
     /// One `.usda` file (USD text): a time-sampled mesh per sequence (`usda`).
     Usda,
+    /// One `.usdc` file (USD's binary crate format): the same stage as `usda` (`usdc`).
+    Usdc,
     /// One `.abc` file (Alembic, Ogawa): an `Xform` + `PolyMesh` per sequence (`abc`).
     Abc,
     /// One `.scstream` file: the compact stream (quantised, predicted, deflated; `stream`).
@@ -49,6 +51,7 @@ impl ExportFormat {
             ExportFormat::Pc2 => "export-pc2",
             ExportFormat::Npy => "export-npy",
             ExportFormat::Usda => "export-usda",
+            ExportFormat::Usdc => "export-usdc",
             ExportFormat::Abc => "export-abc",
             ExportFormat::Stream => "export-stream",
             ExportFormat::RigGlb => "export-rig-glb",
@@ -63,6 +66,7 @@ impl ExportFormat {
             "pc2" => ExportFormat::Pc2,
             "npy" => ExportFormat::Npy,
             "usda" | "usd" => ExportFormat::Usda,
+            "usdc" => ExportFormat::Usdc,
             "abc" | "alembic" => ExportFormat::Abc,
             "stream" | "scstream" => ExportFormat::Stream,
             "rig-glb" => ExportFormat::RigGlb,
@@ -77,7 +81,7 @@ impl std::str::FromStr for ExportFormat {
         ExportFormat::parse(s).ok_or_else(|| {
             surfcap_mesh::Error::new(
                 surfcap_mesh::ErrorKind::Unsupported,
-                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda, abc, stream or rig-glb"),
+                format!("{s:?}: expected glb, obj, ply, pc2, npy, usda, usdc, abc, stream or rig-glb"),
             )
         })
     }
@@ -136,7 +140,7 @@ fn write_sidecar(path: &Path, v: &serde_json::Value) -> Result<()> {
 /// only with `force`).
 pub fn plan_export(set: &mut OutputSet, format: ExportFormat, out: &Path, force: bool) -> Result<()> {
     match format {
-        ExportFormat::Glb | ExportFormat::Usda | ExportFormat::Abc | ExportFormat::Stream => {
+        ExportFormat::Glb | ExportFormat::Usda | ExportFormat::Usdc | ExportFormat::Abc | ExportFormat::Stream => {
             set.file(out)?;
             set.side_file(&glb_sidecar_path(out), SIDECAR_KIND)?;
         }
@@ -293,12 +297,12 @@ pub fn export(
             progress.finish();
             Ok(vec![out.to_path_buf(), side])
         }
-        ExportFormat::Usda | ExportFormat::Abc => {
+        ExportFormat::Usda | ExportFormat::Usdc | ExportFormat::Abc => {
             type Writer = fn(&mut dyn std::io::Write, &Subject) -> std::io::Result<()>;
-            let (what, write): (&str, Writer) = if format == ExportFormat::Usda {
-                ("writing usda", crate::usda::write_usda)
-            } else {
-                ("writing abc", crate::abc::write_abc)
+            let (what, write): (&str, Writer) = match format {
+                ExportFormat::Usda => ("writing usda", crate::usda::write_usda),
+                ExportFormat::Usdc => ("writing usdc", crate::usd_crate_write::write_usdc),
+                _ => ("writing abc", crate::abc::write_abc),
             };
             progress.start(what, 1);
             write_file(out, |w| write(w, subject))?;

@@ -29,8 +29,11 @@
 //!   with the reference library (PyPI `alembic3d`).
 //! - **USD text** (`.usda`): time-sampled points per sequence, units' name in `customLayerData`;
 //!   a reader of a USDA subset without composition (nested Xform/Scope/Mesh prims, time-sampled or
-//!   default points, fan-triangulated polygons, labels, UVs); `.usdc` refused with the `usdcat`
-//!   command to convert it. Read back by Pixar's usd-core in the tests.
+//!   default points, fan-triangulated polygons, labels, UVs). Read back by Pixar's usd-core in
+//!   the tests.
+//! - **USD binary** (`.usdc`, crate version 0.8.0): the same stage as `.usda`, written streaming
+//!   (`usd_crate_write`), and read back (`usd_crate_read`, files of usd-core's crate versions
+//!   0.4.0-0.14.0 too); LZ4 and integer coding of the structural sections (`usd_crate_compress`).
 //! - **Velocities**: Alembic's `.velocities` and USD's `velocities` (units per second, finite
 //!   differences: `vertex_velocity`) written on every mesh of one topology and read back, so
 //!   renderers draw motion blur.
@@ -70,6 +73,11 @@ pub mod stream;
 pub mod stream_predict;
 pub mod stream_quantise;
 pub mod vertex_velocity;
+// ---- usdc: USD's binary crate format ----
+pub mod usd_crate;
+pub mod usd_crate_compress;
+pub mod usd_crate_read;
+pub mod usd_crate_write;
 
 /// `base`, or `base_1`, `base_2`, ... : the first not in `taken`, which it joins (names of
 /// sibling objects in the USD and Alembic writers).

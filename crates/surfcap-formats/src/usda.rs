@@ -21,7 +21,7 @@ use crate::vertex_velocity::frame_velocity;
 use surfcap_mesh::subject::{FrameLabel, Subject, UpAxis};
 
 /// A valid, unique USD prim name for `name` among `taken`.
-fn prim_name(name: &str, taken: &mut Vec<String>) -> String {
+pub(crate) fn prim_name(name: &str, taken: &mut Vec<String>) -> String {
     let mut s: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
     if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
         s.insert(0, '_');
@@ -31,7 +31,7 @@ fn prim_name(name: &str, taken: &mut Vec<String>) -> String {
 
 /// The rotation (column-vector convention, rows) that turns `up` onto +Y, or `None` when USD
 /// can state the axis itself (+Y, +Z).
-fn up_rotation(up: UpAxis) -> Option<[[i8; 3]; 3]> {
+pub(crate) fn up_rotation(up: UpAxis) -> Option<[[i8; 3]; 3]> {
     match up {
         UpAxis::PosY | UpAxis::PosZ => None,
         UpAxis::NegZ => Some([[1, 0, 0], [0, 0, -1], [0, 1, 0]]),

@@ -45,7 +45,8 @@
 //!   UVs are refused with both prims named (frame sets, where every frame has its own topology,
 //!   come from Alembic meshes whose faces change and from frame folders; USD stages of
 //!   different meshes are not read as one).
-//! - Binary crate files (`PXR-USDC`) are refused with the `usdcat` command that converts them.
+//! - Binary crate files (`PXR-USDC`) are read by `usd_crate_read.rs`, which reads the same
+//!   subset into the same meshes and checks them with this module's functions.
 
 use std::path::Path;
 
@@ -558,22 +559,22 @@ fn closer(open: u8) -> u8 {
 
 /// What a `Mesh` prim said, before it is checked.
 #[derive(Default)]
-struct MeshAcc {
-    counts: Option<(Vec<u32>, usize)>,
-    indices: Option<(Vec<u32>, usize)>,
+pub(crate) struct MeshAcc {
+    pub(crate) counts: Option<(Vec<u32>, usize)>,
+    pub(crate) indices: Option<(Vec<u32>, usize)>,
     /// `faceVertexCounts.timeSamples` / `faceVertexIndices.timeSamples`: (time, value, line).
-    counts_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
-    indices_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
-    points: Option<(Vec<f32>, usize)>,
-    samples: Option<Vec<(f64, Vec<f32>, usize)>>,
+    pub(crate) counts_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
+    pub(crate) indices_samples: Option<Vec<(f64, Vec<u32>, usize)>>,
+    pub(crate) points: Option<(Vec<f32>, usize)>,
+    pub(crate) samples: Option<Vec<(f64, Vec<f32>, usize)>>,
     /// `velocities` (default value) and `velocities.timeSamples`.
-    velocities: Option<(Vec<f32>, usize)>,
-    velocity_samples: Option<Vec<(f64, Vec<f32>, usize)>>,
-    labels: Option<Vec<(f64, u32, usize)>>,
-    st: Option<(Vec<f32>, usize)>,
-    st_interpolation: Option<String>,
-    st_indices: Option<Vec<u32>>,
-    left_handed: bool,
+    pub(crate) velocities: Option<(Vec<f32>, usize)>,
+    pub(crate) velocity_samples: Option<Vec<(f64, Vec<f32>, usize)>>,
+    pub(crate) labels: Option<Vec<(f64, u32, usize)>>,
+    pub(crate) st: Option<(Vec<f32>, usize)>,
+    pub(crate) st_interpolation: Option<String>,
+    pub(crate) st_indices: Option<Vec<u32>>,
+    pub(crate) left_handed: bool,
 }
 
 struct Prim {
@@ -584,7 +585,7 @@ struct Prim {
 
 /// Column-vector rotations surfcap writes for up axes USD cannot state (see `usda.rs`),
 /// as the row-vector matrix USD stores (the transpose).
-fn surfcap_up_rotation(m: &[f64; 16]) -> Option<UpAxis> {
+pub(crate) fn surfcap_up_rotation(m: &[f64; 16]) -> Option<UpAxis> {
     let table: [(UpAxis, [[i8; 3]; 3]); 4] = [
         (UpAxis::NegZ, [[1, 0, 0], [0, 0, -1], [0, 1, 0]]),
         (UpAxis::PosX, [[0, -1, 0], [1, 0, 0], [0, 0, 1]]),
@@ -664,7 +665,7 @@ fn unescape(s: &str) -> String {
     out
 }
 
-fn units_of(m: f64) -> Units {
+pub(crate) fn units_of(m: f64) -> Units {
     let name = match m {
         1.0 => "m".to_string(),
         0.01 => "cm".to_string(),
@@ -678,10 +679,7 @@ fn units_of(m: f64) -> Units {
 /// Parses a `.usda` stage held in memory (errors carry the line; the caller adds the file).
 pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     if bytes.starts_with(b"PXR-USDC") {
-        return Err(err!(
-            Unsupported,
-            "binary USD (crate) file: convert it to text first with `usdcat input.usd -o output.usda` (usdcat comes with Pixar's usd-core: pip install usd-core)"
-        ));
+        return crate::usd_crate_read::parse_usdc(bytes);
     }
     if bytes.is_empty() {
         return Err(err!(Empty, "empty file: expected a USD text stage starting with `#usda 1.0`"));
@@ -847,7 +845,16 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     if meshes.is_empty() {
         return Err(err!(Empty, "no Mesh prim with points in this stage: expected at least one `def Mesh`"));
     }
-    // Names: below the single root prim, without a last `mesh` component.
+    name_meshes(&mut meshes, roots);
+    if root_up.is_some() && up_axis == Some(UpAxis::PosY) {
+        up_axis = root_up;
+    }
+    Ok(UsdaStage { meshes, fps: rate, up_axis, units, notes })
+}
+
+/// Names the meshes after their paths: below the single root prim (when `roots` is 1), without a
+/// last `mesh` component; two meshes mapped to one name keep their full paths.
+pub(crate) fn name_meshes(meshes: &mut [UsdaMesh], roots: usize) {
     let mut names: Vec<String> = meshes
         .iter()
         .map(|m| {
@@ -865,7 +872,7 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     for n in &names {
         *uses.entry(n.clone()).or_default() += 1;
     }
-    for (n, m) in names.iter_mut().zip(&meshes) {
+    for (n, m) in names.iter_mut().zip(meshes.iter()) {
         if uses[n.as_str()] > 1 {
             *n = m.path.trim_start_matches('/').to_string();
         }
@@ -873,10 +880,6 @@ pub fn parse_usda(bytes: &[u8]) -> Result<UsdaStage> {
     for (m, n) in meshes.iter_mut().zip(names) {
         m.name = n;
     }
-    if root_up.is_some() && up_axis == Some(UpAxis::PosY) {
-        up_axis = root_up;
-    }
-    Ok(UsdaStage { meshes, fps: rate, up_axis, units, notes })
 }
 
 /// One property statement of `prim`: read when it is one of a mesh's, skipped otherwise.
@@ -1020,7 +1023,13 @@ fn property(
 }
 
 /// Checks a mesh and turns it into a sequence: frames by time, fan-triangulated faces, labels.
-fn finish_mesh(path: &str, line: usize, mut m: MeshAcc, start: f64, notes: &mut Vec<String>) -> Result<UsdaMesh> {
+pub(crate) fn finish_mesh(
+    path: &str,
+    line: usize,
+    mut m: MeshAcc,
+    start: f64,
+    notes: &mut Vec<String>,
+) -> Result<UsdaMesh> {
     let missing = |what: &str| err!(Syntax, "Mesh <{path}> has no {what}").at_line(line);
     // Frames.
     let mut frames: Vec<(f64, Vec<f32>, usize)> = match (m.samples.take(), m.points.take()) {
@@ -1578,9 +1587,10 @@ def Xform "root" (
         assert!(e.to_string().contains("line 12: column 5"), "{e}");
         let e = error(&MESH.replace("startTimeCode = 0", "upAxis = \"X\""));
         assert_eq!((e.kind, e.location.clone()), (ErrorKind::Metadata, Some(Location::Line(3))), "{e}");
+        // A crate file's header cut short: the crate reader's error.
         let e = error("PXR-USDC\0\0\0\0");
-        assert_eq!(e.kind, ErrorKind::Unsupported);
-        assert!(e.message.contains("usdcat"), "{e}");
+        assert_eq!(e.kind, ErrorKind::Truncated);
+        assert!(e.message.contains("88-byte header"), "{e}");
         let e = error("#sdf 1.4.32\n");
         assert_eq!((e.kind, e.location.clone()), (ErrorKind::Syntax, Some(Location::Line(1))), "{e}");
         let e = error("#usda 1.0\ndef Xform \"r\" {\n string s = \"never closed\n}\n");

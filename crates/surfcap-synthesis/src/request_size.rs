@@ -109,6 +109,8 @@ impl SizeLimits {
             ExportFormat::Obj | ExportFormat::Ply | ExportFormat::Usda => {
                 frames.saturating_mul((40 * nv).saturating_add(20 * nt))
             }
+            // USD crate: points and velocities, 12 bytes each a vertex a frame.
+            ExportFormat::Usdc => frames.saturating_mul(24 * nv),
             _ => frames.saturating_mul(12 * nv),
         };
         let budget = surfcap_mesh::sizing::Budget {

@@ -12,12 +12,13 @@ use crate::options::SubjectArgs;
 pub struct Args {
     /// glb (one file), obj or ply (a folder of frames per sequence), pc2 (a point cache per
     /// sequence + template.obj), npy (the shared-data layout, re-importable), usda (one USD
-    /// text file: a time-sampled mesh per sequence), abc (one Alembic archive: an Xform and a
+    /// text file: a time-sampled mesh per sequence), usdc (the same stage in USD's binary crate
+    /// format), abc (one Alembic archive: an Xform and a
     /// PolyMesh per sequence), stream (one .scstream file: quantised, predicted and deflated
     /// positions, a few bytes per vertex per frame; see --stream-bits).
     #[arg(long)]
     pub format: ExportFormat,
-    /// Output file (glb, usda, abc, stream) or folder (the others).
+    /// Output file (glb, usda, usdc, abc, stream) or folder (the others).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Only these sequences (repeatable; default: all).

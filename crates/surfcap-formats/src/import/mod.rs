@@ -72,7 +72,7 @@ pub enum SourceLayout {
     MeshFile(FrameFormat),
     /// A `.glb` file.
     Glb,
-    /// A USD text stage (`.usda`, or `.usd` holding text): one sequence per `Mesh` prim.
+    /// A USD stage (`.usda`, `.usd` or `.usdc`, text or binary crate): one sequence per `Mesh` prim.
     Usda,
     /// An Alembic archive (`.abc`, Ogawa): one sequence per `PolyMesh` object.
     Alembic,
@@ -99,7 +99,7 @@ impl std::fmt::Display for SourceLayout {
             }
             SourceLayout::MeshFile(format) => write!(f, "{} file (one frame)", upper(format)),
             SourceLayout::Glb => write!(f, "glb file"),
-            SourceLayout::Usda => write!(f, "USD text stage"),
+            SourceLayout::Usda => write!(f, "USD stage"),
             SourceLayout::Alembic => write!(f, "Alembic archive"),
             SourceLayout::WithTemplate => write!(f, "positions file with the manifest's template"),
             SourceLayout::Cache => write!(f, "subject cache"),

@@ -195,7 +195,7 @@ pub(super) fn read_source_any(path: &Path, progress: &dyn Progress, notes: &mut 
     let file_pieces = match ext.as_str() {
         "abc" if !path.is_dir() => Some(alembic_pieces(path, progress)?),
 
-        "usda" | "usd" if !path.is_dir() => Some(usda_pieces(path, progress)?),
+        "usda" | "usd" | "usdc" if !path.is_dir() => Some(usda_pieces(path, progress)?),
         _ => None,
     };
     if let Some((pieces, frame_set)) = file_pieces {
