@@ -112,18 +112,7 @@ pub trait Director: Send + Sync {
     fn export(&self, format: &str) -> Result<Exported, String>;
 }
 
-/// Whether an `Origin` header names this very server (`http://127.0.0.1:PORT`,
-/// `http://localhost:PORT` or `http://[::1]:PORT`): a page of another site (or a sandboxed
-/// `null` origin) may not drive synthesis on the user's machine.
-pub fn is_same_origin(origin: &str, port: u16) -> bool {
-    origin.strip_prefix("http://").is_some_and(|host| !host.contains('/') && crate::server::is_local_host(host, port))
-}
-
-/// Whether a `Content-Type` header says JSON (`application/json`, parameters allowed). Browsers
-/// send a cross-site JSON POST only after a preflight this server never grants.
-pub fn is_json(content_type: &str) -> bool {
-    content_type.split(';').next().is_some_and(|t| t.trim().eq_ignore_ascii_case("application/json"))
-}
+pub use crate::local_guard::{is_json, is_same_origin};
 
 #[cfg(test)]
 mod tests {

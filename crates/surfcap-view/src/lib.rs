@@ -20,7 +20,8 @@
 //!
 //! [`play::serve_play`] serves another page, `web/play.html`, on which a keyboard or a gamepad
 //! steers a captured character live: a front end's [`play::Player`] decides and blends, the
-//! page streams the meshes (see [`play`]).
+//! page streams the meshes (see [`play`]). Both servers keep to 127.0.0.1 in one way
+//! ([`local_guard`]): the `Host` check, own-page JSON POSTs and the response helpers.
 //!
 //! The page (`web/`): play/pause, speed, arrow-key stepping, frame entry (`57` or
 //! `sequence:frame`), a loop range, a timeline of original and synthetic spans with transition
@@ -46,6 +47,7 @@
 
 pub mod assets;
 pub mod direct;
+pub mod local_guard;
 // ---- live play ----
 pub mod play;
 // ---- end live play ----

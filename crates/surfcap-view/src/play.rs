@@ -40,15 +40,14 @@ use std::sync::Arc;
 use axum::Router;
 use axum::body::Body;
 use axum::extract::{Path as UrlPath, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
 use crate::ViewError;
 use crate::assets::asset;
-use crate::direct::{is_json, is_same_origin};
-use crate::server::is_local_host;
+use crate::local_guard::{json_answer, refuse_foreign, respond, serve_local};
 
 /// The page.
 pub const PLAY_HTML: &str = include_str!("../web/play.html");
@@ -95,15 +94,7 @@ struct App {
 /// Serves the play page for `player` on 127.0.0.1:`port` (0: any free port) until the process
 /// ends; `ready(address)` is called once it listens.
 pub fn serve_play(player: Arc<dyn Player>, port: u16, ready: impl FnOnce(SocketAddr)) -> Result<(), ViewError> {
-    let rt = tokio::runtime::Builder::new_current_thread().enable_io().build().map_err(ViewError::Serve)?;
-    rt.block_on(async move {
-        let addr = SocketAddr::from(([127, 0, 0, 1], port));
-        let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| ViewError::Bind(addr.to_string(), e))?;
-        let bound = listener.local_addr().map_err(ViewError::Serve)?;
-        let app = Arc::new(App { player, port: bound.port() });
-        ready(bound);
-        axum::serve(listener, router(app)).await.map_err(ViewError::Serve)
-    })
+    serve_local(port, ready, move |port| router(Arc::new(App { player, port })))
 }
 
 fn router(app: Arc<App>) -> Router {
@@ -116,36 +107,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/play/step", post(step))
         .route("/api/play/restart", post(restart))
         .fallback(not_found)
-        .layer(axum::middleware::from_fn_with_state(app.clone(), check_host))
         .with_state(app)
-}
-
-async fn check_host(
-    State(app): State<Arc<App>>,
-    request: axum::extract::Request,
-    next: axum::middleware::Next,
-) -> Response {
-    let host = request.headers().get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
-    if is_local_host(host, app.port) {
-        next.run(request).await
-    } else {
-        let msg = format!(
-            "refused: this server only answers requests addressed to 127.0.0.1:{p}, localhost:{p} or [::1]:{p} (Host was {host:?})\n",
-            p = app.port
-        );
-        (StatusCode::FORBIDDEN, msg).into_response()
-    }
-}
-
-fn respond(content_type: &str, body: impl Into<Body>) -> Response {
-    ([(header::CONTENT_TYPE, content_type.to_string()), (header::CACHE_CONTROL, "no-store".into())], body.into())
-        .into_response()
-}
-
-fn json_answer(status: StatusCode, v: &serde_json::Value) -> Response {
-    let mut r = respond("application/json", serde_json::to_vec(v).expect("JSON values serialise"));
-    *r.status_mut() = status;
-    r
 }
 
 fn error(status: StatusCode, msg: String) -> Response {
@@ -186,25 +148,6 @@ async fn blend(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Res
     }
 }
 
-/// Refuses a POST that does not come from this server's own page or whose body is not JSON.
-fn refuse_foreign(app: &App, headers: &HeaderMap) -> Option<Response> {
-    let value = |name: header::HeaderName| headers.get(name).map(|h| h.to_str().unwrap_or("?"));
-    if let Some(origin) = value(header::ORIGIN)
-        && !is_same_origin(origin, app.port)
-    {
-        let msg = format!(
-            "refused: steps are taken only from this server's own page (http://127.0.0.1:{}/); Origin was {origin:?}",
-            app.port
-        );
-        return Some(error(StatusCode::FORBIDDEN, msg));
-    }
-    if !value(header::CONTENT_TYPE).is_some_and(is_json) {
-        let msg = "refused: a step's body must be JSON, sent with Content-Type: application/json".to_string();
-        return Some(error(StatusCode::UNSUPPORTED_MEDIA_TYPE, msg));
-    }
-    None
-}
-
 /// Checks a step's numbers: a finite direction of length at most 1 (a little over is
 /// rounding), a non-negative finite time step of at most a second.
 pub fn check_step(ask: &StepAsk) -> Result<(), String> {
@@ -219,7 +162,7 @@ pub fn check_step(ask: &StepAsk) -> Result<(), String> {
 }
 
 async fn step(State(app): State<Arc<App>>, headers: HeaderMap, body: axum::body::Bytes) -> Response {
-    if let Some(refused) = refuse_foreign(&app, &headers) {
+    if let Some(refused) = refuse_foreign(app.port, &headers, ("steps", "step")) {
         return refused;
     }
     let ask: StepAsk = match serde_json::from_slice(&body) {
@@ -241,7 +184,7 @@ async fn step(State(app): State<Arc<App>>, headers: HeaderMap, body: axum::body:
 }
 
 async fn restart(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
-    if let Some(refused) = refuse_foreign(&app, &headers) {
+    if let Some(refused) = refuse_foreign(app.port, &headers, ("steps", "step")) {
         return refused;
     }
     let player = app.player.clone();

@@ -6,14 +6,15 @@ use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, RwLock};
 
 use axum::Router;
-use axum::body::Body;
 use axum::extract::{Path as UrlPath, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 
 use crate::assets::{INDEX_HTML, asset};
-use crate::direct::{Direction, Director, is_json, is_same_origin};
+use crate::direct::{Direction, Director};
+pub use crate::local_guard::is_local_host;
+use crate::local_guard::{json_answer, refuse_foreign, respond, serve_local};
 use crate::{ViewError, ViewItem};
 
 struct App {
@@ -57,15 +58,9 @@ pub fn serve_directed(
         Some(r) => Some(r.canonicalize().map_err(|e| ViewError::Report(r.display().to_string(), e))?),
         None => None,
     };
-    let rt = tokio::runtime::Builder::new_current_thread().enable_io().build().map_err(ViewError::Serve)?;
-    rt.block_on(async move {
-        let addr = SocketAddr::from(([127, 0, 0, 1], opts.port));
-        let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| ViewError::Bind(addr.to_string(), e))?;
-        let bound = listener.local_addr().map_err(ViewError::Serve)?;
-        let given: Vec<Arc<ViewItem>> = items.into_iter().map(Arc::new).collect();
-        let app = Arc::new(App { items: RwLock::new(given.clone()), given, director, report, port: bound.port() });
-        ready(bound);
-        axum::serve(listener, router(app)).await.map_err(ViewError::Serve)
+    let given: Vec<Arc<ViewItem>> = items.into_iter().map(Arc::new).collect();
+    serve_local(opts.port, ready, move |port| {
+        router(Arc::new(App { items: RwLock::new(given.clone()), given, director, report, port }))
     })
 }
 
@@ -89,42 +84,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/direct/export/{format}", get(direct_export))
         // ---- end of direction routes ----
         .fallback(not_found)
-        .layer(axum::middleware::from_fn_with_state(app.clone(), check_host))
         .with_state(app)
-}
-
-/// Whether a `Host` header names this server: `127.0.0.1`, `localhost` or `[::1]` with the
-/// port it listens on (a missing port means 80). Anything else is refused, so a page on another
-/// site that re-binds its DNS name to 127.0.0.1 cannot read the items (DNS rebinding).
-pub fn is_local_host(host: &str, port: u16) -> bool {
-    let (name, given) = match host.rsplit_once(':') {
-        Some((n, p)) if !n.is_empty() && (n.ends_with(']') || !n.contains(':')) => (n, p.parse::<u16>().ok()),
-        _ => (host, Some(80)),
-    };
-    let name_ok = ["127.0.0.1", "localhost", "[::1]"].iter().any(|h| name.eq_ignore_ascii_case(h));
-    name_ok && given == Some(port)
-}
-
-async fn check_host(
-    State(app): State<Arc<App>>,
-    request: axum::extract::Request,
-    next: axum::middleware::Next,
-) -> Response {
-    let host = request.headers().get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
-    if is_local_host(host, app.port) {
-        next.run(request).await
-    } else {
-        let msg = format!(
-            "refused: this server only answers requests addressed to 127.0.0.1:{p}, localhost:{p} or [::1]:{p} (Host was {host:?})\n",
-            p = app.port
-        );
-        (StatusCode::FORBIDDEN, msg).into_response()
-    }
-}
-
-fn respond(content_type: &str, body: impl Into<Body>) -> Response {
-    ([(header::CONTENT_TYPE, content_type.to_string()), (header::CACHE_CONTROL, "no-store".into())], body.into())
-        .into_response()
 }
 
 async fn not_found() -> Response {
@@ -288,33 +248,6 @@ async fn report(State(app): State<Arc<App>>, UrlPath(path): UrlPath<String>) -> 
 
 // ---- direction handlers (see crate::direct) ----
 
-/// A JSON answer with `status`.
-fn json_answer(status: StatusCode, v: &serde_json::Value) -> Response {
-    let mut r = respond("application/json", serde_json::to_vec(v).expect("JSON values serialise"));
-    *r.status_mut() = status;
-    r
-}
-
-/// Refuses a direction request that does not come from this server's own page (an `Origin`
-/// of another site, or none but a browser's form content type) or whose body is not JSON.
-fn refuse_foreign(app: &App, headers: &axum::http::HeaderMap) -> Option<Response> {
-    let value = |name: header::HeaderName| headers.get(name).map(|h| h.to_str().unwrap_or("?"));
-    if let Some(origin) = value(header::ORIGIN)
-        && !is_same_origin(origin, app.port)
-    {
-        let msg = format!(
-            "refused: directions are taken only from this server's own page (http://127.0.0.1:{}/); Origin was {origin:?}",
-            app.port
-        );
-        return Some(json_answer(StatusCode::FORBIDDEN, &serde_json::json!({ "error": msg })));
-    }
-    if !value(header::CONTENT_TYPE).is_some_and(is_json) {
-        let msg = "refused: a direction's body must be JSON, sent with Content-Type: application/json";
-        return Some(json_answer(StatusCode::UNSUPPORTED_MEDIA_TYPE, &serde_json::json!({ "error": msg })));
-    }
-    None
-}
-
 fn no_director() -> Response {
     let msg = "this viewer plays only: start it with `surfcap view SUBJECT --direct` to direct a subject";
     json_answer(StatusCode::NOT_FOUND, &serde_json::json!({ "error": msg }))
@@ -323,7 +256,7 @@ fn no_director() -> Response {
 /// `POST /api/direct`: synthesises what the page asks (on a worker thread, so the page's other
 /// requests are answered meanwhile) and plays the result in place of the items.
 async fn direct(State(app): State<Arc<App>>, headers: axum::http::HeaderMap, body: axum::body::Bytes) -> Response {
-    if let Some(refused) = refuse_foreign(&app, &headers) {
+    if let Some(refused) = refuse_foreign(app.port, &headers, ("directions", "direction")) {
         return refused;
     }
     let Some(director) = app.director.clone() else { return no_director() };
@@ -360,7 +293,7 @@ async fn direct(State(app): State<Arc<App>>, headers: axum::http::HeaderMap, bod
 
 /// `POST /api/direct/reset`: the items given play again.
 async fn direct_reset(State(app): State<Arc<App>>, headers: axum::http::HeaderMap) -> Response {
-    if let Some(refused) = refuse_foreign(&app, &headers) {
+    if let Some(refused) = refuse_foreign(app.port, &headers, ("directions", "direction")) {
         return refused;
     }
     if app.director.is_none() {
