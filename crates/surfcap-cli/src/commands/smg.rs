@@ -27,6 +27,47 @@ pub enum Cmd {
     Build(BuildArgs),
 }
 
+/// Which loops a query may play to pad time, and how self-transitions are chosen (shared by
+/// `smg build`, `smg query` and `eval smg`, so the commands build the graph the eval measures).
+#[derive(clap::Args, Debug)]
+pub struct SelfTransitionArgs {
+    /// The paper's graph as printed: every self-transition by eq. 5 alone (a clip's stillest
+    /// 3 frames may be its loop). By default a self-transition is chosen among the loops a
+    /// query may play (--min-loop, --loop-variation-floor), spanning the sequence's cross
+    /// transitions and key frames. `smg query` still never pads time with an excluded loop;
+    /// `eval smg` with this flag plays every loop, as the paper does.
+    #[arg(long)]
+    pub eq5_self_transitions: bool,
+    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
+    /// to pad time, nor chosen as a self-transition (a few frames repeated dozens of times is a
+    /// stutter, not a motion; 1: no minimum).
+    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
+    pub min_loop: usize,
+    /// Excluded loops: a loop whose frames differ among themselves (largest shape
+    /// dissimilarity) by less than this many typical frame-to-frame dissimilarities of their
+    /// sequences is a held pose, never repeated to pad time, nor chosen as a self-transition
+    /// (0: no floor).
+    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
+    pub loop_variation_floor: f64,
+    /// Self-transitions per sequence (without --eq5-self-transitions): the loop spanning the
+    /// sequence's cross transitions and key frames, then the cheapest admissible loops inside
+    /// it, which queries may repeat to meet their times.
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 1, 10))]
+    pub loops_per_sequence: usize,
+}
+
+impl SelfTransitionArgs {
+    /// The loops that may pad time (and, by default, be chosen as self-transitions).
+    pub fn rule(&self) -> surfcap_smg::loop_exclusion::LoopRule {
+        surfcap_smg::loop_exclusion::LoopRule { min_frames: self.min_loop, variation_floor: self.loop_variation_floor }
+    }
+
+    /// The rule self-transitions are chosen by (`None`: the paper's eq. 5 graph).
+    pub fn loop_rule(&self) -> Option<surfcap_smg::loop_exclusion::LoopRule> {
+        (!self.eq5_self_transitions).then_some(self.rule())
+    }
+}
+
 /// What the graph is built from: the input, the user's higher level, the transitions.
 #[derive(clap::Args, Debug)]
 pub struct GraphArgs {
@@ -50,28 +91,8 @@ pub struct GraphArgs {
     /// Voxels along the frames' largest extent (the shape histograms' lattice).
     #[arg(long, default_value_t = 64, value_parser = |s: &str| crate::options::whole_in(s, 8, 512))]
     pub resolution: usize,
-    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
-    /// to pad time, nor chosen as a self-transition (a few frames repeated dozens of times is a
-    /// stutter, not a motion; 1: no minimum).
-    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
-    pub min_loop: usize,
-    /// Excluded loops: a loop whose frames differ among themselves (largest shape
-    /// dissimilarity) by less than this many typical frame-to-frame dissimilarities of their
-    /// sequences is a held pose, never repeated to pad time, nor chosen as a self-transition
-    /// (0: no floor).
-    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
-    pub loop_variation_floor: f64,
-    /// Self-transitions per sequence (without --eq5-self-transitions): the loop spanning the
-    /// sequence's cross transitions and key frames, then the cheapest admissible loops inside
-    /// it, which queries may repeat to meet their times.
-    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 1, 10))]
-    pub loops_per_sequence: usize,
-    /// The paper's graph as printed: every self-transition by eq. 5 alone (a clip's stillest
-    /// 3 frames may be its loop). By default a self-transition is chosen among the loops a
-    /// query may play (--min-loop, --loop-variation-floor), spanning the sequence's cross
-    /// transitions and key frames: the graph `surfcap eval smg` measures.
-    #[arg(long)]
-    pub eq5_self_transitions: bool,
+    #[command(flatten)]
+    pub self_transitions: SelfTransitionArgs,
     #[command(flatten)]
     pub cache: CacheOpts,
     #[command(flatten)]
@@ -150,14 +171,9 @@ impl GraphArgs {
             transitions: self.transitions,
             separation: self.separation,
             resolution: self.resolution,
-            loops: (!self.eq5_self_transitions).then_some(self.loop_rule()),
-            loops_per_sequence: self.loops_per_sequence,
+            loops: self.self_transitions.loop_rule(),
+            loops_per_sequence: self.self_transitions.loops_per_sequence,
         }
-    }
-
-    /// Which loops may pad time (and, by default, be chosen as self-transitions).
-    fn loop_rule(&self) -> surfcap_smg::loop_exclusion::LoopRule {
-        surfcap_smg::loop_exclusion::LoopRule { min_frames: self.min_loop, variation_floor: self.loop_variation_floor }
     }
 
     /// Opens the input with its similarity and graph, the key frames `keys` among the nodes.
@@ -216,7 +232,7 @@ fn query(ctx: &crate::Ctx, a: QueryArgs) -> anyhow::Result<()> {
         distance_weight: a.distance_weight,
         time_weight: a.time_weight,
         paper_cost: a.paper_cost,
-        loops: a.graph.loop_rule(),
+        loops: a.graph.self_transitions.rule(),
     };
     let out = Output {
         path: Some(a.output.clone()),

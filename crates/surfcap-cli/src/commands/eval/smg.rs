@@ -52,26 +52,8 @@ pub struct Args {
     /// switches lie at least 15 frames apart (an extension).
     #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
     pub transitions: usize,
-    /// The paper's graph as printed: every self-transition by eq. 5 alone (a clip's stillest
-    /// 3 frames may be its loop) and every loop played. By default a self-transition is chosen
-    /// among the loops the queries may play (--min-loop, --loop-variation-floor), spanning the
-    /// sequence's cross transitions and key frames, and excluded loops never pad time.
-    #[arg(long)]
-    pub eq5_self_transitions: bool,
-    /// Excluded loops: a loop playing fewer frames than this per repetition is never repeated
-    /// to pad time, nor chosen as a self-transition (1: no minimum).
-    #[arg(long, default_value_t = 10, value_parser = crate::options::count)]
-    pub min_loop: usize,
-    /// Excluded loops: a loop whose frames vary less than this many typical frame-to-frame
-    /// dissimilarities of their sequences is a held pose, never repeated to pad time, nor
-    /// chosen as a self-transition (0: no floor).
-    #[arg(long, default_value_t = 1.0, value_parser = crate::options::non_negative)]
-    pub loop_variation_floor: f64,
-    /// Self-transitions per sequence (without --eq5-self-transitions): the loop spanning the
-    /// sequence's cross transitions and key frames, then the cheapest admissible loops inside
-    /// it, which the queries may repeat to meet their times.
-    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::options::whole_in(s, 1, 10))]
-    pub loops_per_sequence: usize,
+    #[command(flatten)]
+    pub self_transitions: crate::commands::smg::SelfTransitionArgs,
     /// Evaluate this subject or frame set instead of the CMU mannequin (with --connect and
     /// --pair).
     #[arg(long)]
@@ -121,10 +103,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         vertices,
         remeshed,
         transitions,
-        eq5_self_transitions,
-        min_loop,
-        loop_variation_floor,
-        loops_per_sequence,
+        self_transitions,
         input,
         connect,
         pairs,
@@ -198,11 +177,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let opts = SmgEvalOptions {
         per_connection: transitions,
         targets: grid(&distances, &seconds),
-        loops: (!eq5_self_transitions).then_some(surfcap_smg::loop_exclusion::LoopRule {
-            min_frames: min_loop,
-            variation_floor: loop_variation_floor,
-        }),
-        loops_per_sequence,
+        loops: self_transitions.loop_rule(),
+        loops_per_sequence: self_transitions.loops_per_sequence,
         ..SmgEvalOptions::default()
     };
     let r = smg_eval(&frames, &form, &connections, &pairs, &opts, Some((&store, cache.no_cache)), &bar)?;
@@ -250,7 +226,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             Some(rule) => println!(
                 "self-transitions ({} per sequence) chosen among the loops of at least {} frames varying at least {} typical frame step(s), \
                  spanning each sequence's cross transitions and key frames; shorter or stiller loops never pad time",
-                loops_per_sequence, rule.min_frames, rule.variation_floor
+                self_transitions.loops_per_sequence, rule.min_frames, rule.variation_floor
             ),
             None => println!("self-transitions by eq. 5 alone, every loop played (--eq5-self-transitions)"),
         }
