@@ -97,6 +97,9 @@ fn more_transitions_per_connection_add_entry_points_apart() {
             n,
             "--separation",
             "5",
+            // A self-connection's transitions are eq. 5's only on the paper's graph; by
+            // default they are the loops chosen by --loops-per-sequence.
+            "--eq5-self-transitions",
             "-o",
             p(&out),
             "--cache-dir",

@@ -82,7 +82,9 @@ pub struct GraphArgs {
     pub windows: String,
     /// Transitions per connection: 1 is the paper's (eq. 5's single best); more adds the next
     /// best windows whose switches lie at least --separation frames apart (an extension: more
-    /// entry points, so loops are reachable from more key frames).
+    /// entry points, so loops are reachable from more key frames). A self-connection (FROM:FROM)
+    /// counts here only with --eq5-self-transitions; by default its loops are set by
+    /// --loops-per-sequence.
     #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::options::whole_in(s, 1, 20))]
     pub transitions: usize,
     /// Least distance between the switches of one connection's transitions, frames.
