@@ -635,10 +635,13 @@ pub type CleanedVariant = (Vec<Vec<f32>>, Option<CleanupReport>);
 
 /// Variants put on their source sequence `j`'s own path ([`variant_on_source_path`], what
 /// synthesis shows), each with its planted feet pinned ([`crate::foot_skate_cleanup`]) when
-/// `cleanup` is set and the model has legs: the same clean-up as [`sample_variants`] gives,
-/// on the frames synthesis plays. For a source authored in place the feet are pinned to the
-/// ground its own contacts give ([`in_place_ground`] of `source`). Returns per variant its
-/// frames and what the clean-up did.
+/// `cleanup` is set and the model has legs: the clean-up [`sample_variants`] gives, on the
+/// frames synthesis plays, except that the hips are held (`move_root` off). Synthesis placed
+/// the walk to follow the user's path; moving the whole body with the planted feet would carry
+/// it off that path (by 2.8 m on a 12 m line in
+/// `surfcap-synthesis/tests/path_with_appearance_and_variants.rs`), so only the legs bend.
+/// For a source authored in place the feet are pinned to the ground its own contacts give
+/// ([`in_place_ground`] of `source`). Returns per variant its frames and what the clean-up did.
 pub fn variants_on_source_path(
     model: &VariationModel,
     j: usize,
@@ -648,7 +651,8 @@ pub fn variants_on_source_path(
 ) -> Result<Vec<CleanedVariant>> {
     let placed: Vec<Vec<Vec<f32>>> =
         variants.iter().map(|v| variant_on_source_path(model, j, v, source)).collect::<Result<_>>()?;
-    let fixer = if cleanup { model_cleanup(model, SamplingOptions::default().move_root)? } else { None };
+    // The hips held: see the doc comment (the path stays the user's).
+    let fixer = if cleanup { model_cleanup(model, false)? } else { None };
     let Some(fixer) = fixer else { return Ok(placed.into_iter().map(|p| (p, None)).collect()) };
     let owned: Vec<Vec<f32>> = source.iter().map(|p| p.to_vec()).collect();
     let height = pose_height(&model.reference_pose, model.up_axis);
