@@ -44,8 +44,9 @@
 //!   (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips, docs/results/
 //!   variation.md), so every variant's world frames go through the foot-skate clean-up
 //!   ([`crate::foot_skate_cleanup`], `foot_skate_cleanup` in the options, on by default, the
-//!   root moved with the planted feet unless `move_root` is off); for a source authored in
-//!   place its ground is the travel its learnt motion's contacts give ([`sample_variants`]) or
+//!   root moved with the planted feet unless `move_root` is off, and never moved by
+//!   [`variants_on_source_path`], which keeps a synthesised walk on its path); for a source
+//!   authored in place its ground is the travel its learnt motion's contacts give ([`sample_variants`]) or
 //!   the captured source's ([`clean_up_variants`] given the capture, as `surfcap eval vary`
 //!   and [`variants_on_source_path`] do).
 //! - **Frame 0** keeps the learnt `x_1`: every variant starts in the source's first pose, so a
