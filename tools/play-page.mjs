@@ -1,13 +1,15 @@
 // Drives `surfcap play`'s page in headless Chromium (Debian's /usr/bin/chromium, driven by
 // playwright-core) with scripted key presses, and prints one JSON line of what the page's state
 // (window.surfcapPlay) said. Usage:
-//   node play-page.mjs URL steer [SCREENSHOT.png]   walk right (D), then up and right (W and D:
+//   node play-page.mjs URL steer [SCREENSHOT.png]   once every captured frame is decoded, walk
+//                                                   right (D), then up and right (W and D:
 //                                                   a left turn of 45 degrees), then stop
 //                                                   (space); samples the centre track's heading
 //                                                   and speed after each
 //   node play-page.mjs URL measure [SECONDS]        time to the first played frame and to every
 //                                                   frame decoded, bytes received (total and per
-//                                                   second of play), late frames, frame rate and
+//                                                   second of play), blended frames shown exact,
+//                                                   as stand-ins and late, frame rate and
 //                                                   the steps' round trips over SECONDS (default
 //                                                   30) of scripted walking, running and turning
 // Exits 1 with a message when the page reports an error or a console error appears.
@@ -57,7 +59,9 @@ try {
     return s;
   };
   if (mode === 'steer') {
-    // Let the start settle, then: right, up and right (a left turn of 45 degrees), stop.
+    // Every captured frame decoded (so every blended frame has its stand-in at least), let the
+    // start settle, then: right, up and right (a left turn of 45 degrees), stop.
+    await page.waitForFunction(() => window.surfcapPlay.allDecodedMs !== null, null, { timeout: 300000 });
     await wait(1000);
     const right = await hold(['KeyD'], 5000);
     const up = await hold(['KeyW', 'KeyD'], 5000);
@@ -70,7 +74,7 @@ try {
     console.log(JSON.stringify({
       firstFrameMs: first.firstFrameMs, right: pick(right), up: pick(up), stopped: pick(stopped),
       late: stopped.late, bytes: stopped.bytes, rttMs: stopped.rttMs, transitions: stopped.transitions,
-      decisions: stopped.decisions, blendsShown: stopped.blendsShown, cannotFollow: stopped.cannotFollow,
+      decisions: stopped.decisions, blendsShown: stopped.blendsShown, standIns: stopped.standIns, cannotFollow: stopped.cannotFollow,
     }));
   } else {
     const seconds = Number(arg || 30);
@@ -88,7 +92,7 @@ try {
       firstFrameMs: first.firstFrameMs, allDecodedMs: decoded.allDecodedMs, frames: end.totalFrames,
       streamBytes: end.bytes.stream, playedSeconds: played, blendBytes: end.bytes.blends - before.blends,
       stepBytes: end.bytes.steps - before.steps, bytesPerSecond: during / played, late: end.late,
-      framesShown: end.framesShown, blendsShown: end.blendsShown, transitions: end.transitions,
+      framesShown: end.framesShown, blendsShown: end.blendsShown, standIns: end.standIns, transitions: end.transitions,
       fps: end.fps, frameMs: end.frameMs, rttMs: end.rttMs, delayMs: end.delayMs, blendsMade: info.blends_made,
       vertices: info.vertices, subject: info.subject,
     }));

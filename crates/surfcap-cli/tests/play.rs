@@ -66,12 +66,66 @@ fn the_play_page_turns_and_stops_the_character_as_the_keys_ask() {
     assert_eq!(server.get("/api/play/blend/99999").0, 404);
     assert_eq!(server.get("/api/play/nothing").0, 404);
 
-    // The page, steered by keys.
+    let seen = steer_and_check(&url, &info);
+    assert!(seen["transitions"].as_u64().unwrap() >= 1, "{seen}");
+    // A transition chosen is served as a stream of blended frames, decoded by the Rust reader.
+    let (status, blend) = server.get("/api/play/blend/0");
+    assert_eq!(status, 200);
+    let b = surfcap_formats::stream::StreamFile::parse(&blend).unwrap();
+    assert_eq!(b.header.vertices, parsed.header.vertices);
+    assert!(b.header.sequences[0].frames >= 1 && b.header.sequences[0].name.contains("->"), "{:?}", b.header);
+    let whole = b.decode().unwrap();
+    assert!(whole.iter().all(|x| x.is_finite()));
+    // Piece by piece: the frames from 1 on are the whole stream's from 1 on; none from past the end.
+    let total = b.header.sequences[0].frames;
+    let per = 3 * b.header.vertices;
+    if total > 1 {
+        let (status, piece) = server.get("/api/play/blend/0/from/1");
+        assert_eq!(status, 200);
+        let piece = surfcap_formats::stream::StreamFile::parse(&piece).unwrap().decode().unwrap();
+        assert_eq!(piece.len(), (total - 1) * per);
+        let step = 1.0f32 / (1 << 15) as f32;
+        let far = piece.iter().zip(&whole[per..]).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        let extent = whole.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+        assert!(far <= 4.0 * step * extent.max(1.0), "a piece's frame is {far} from the whole stream's");
+    }
+    let (status, body) = server.get(&format!("/api/play/blend/0/from/{total}"));
+    assert_eq!(status, 404, "{}", String::from_utf8_lossy(&body));
+}
+
+/// `surfcap play` on the subject `surfcap demo` builds (the procedural mannequin's walk, jog,
+/// turns, jump and idle), with the graph the demo cached: the page steers it as on the CMU
+/// subject.
+#[test]
+fn the_play_page_steers_the_demos_mannequin() {
+    let tmp = tempfile::tempdir().unwrap();
+    let demo = tmp.path().join("demo");
+    let o = surfcap!(&["demo", "-o", p(&demo), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let subject = demo.join("mannequin.subject");
+    let cache = demo.join("cache");
+    let server = ViewServer::start_command(env!("CARGO_BIN_EXE_surfcap"), &["play"], &[p(&subject), "--cache-dir", p(&cache)]);
+    let (status, body) = server.get("/api/play/info");
+    assert_eq!(status, 200);
+    let info: serde_json::Value = serde_json::from_slice(&body).unwrap();
+    let gaits: Vec<&str> = info["gaits"].as_array().unwrap().iter().filter_map(|g| g.as_str()).collect();
+    assert!(["walk", "run", "idle"].iter().all(|g| gaits.contains(g)), "{info}");
+    let seen = steer_and_check(&server.url, &info);
+    assert!(seen["blendsShown"].as_u64().unwrap() + seen["standIns"].as_u64().unwrap() >= 1, "{seen}");
+}
+
+/// Steers the play page at `url` in headless Chromium (tools/play-page.mjs steer): right, then
+/// up and right (a left turn of 45 degrees), then a stop; checks that the centre track heads
+/// as asked after each and rests after the stop, at a measured frame rate, and that every
+/// blended frame was drawn exact or as its stand-in (none late once the captured frames are
+/// decoded). Returns what the page said.
+fn steer_and_check(url: &str, info: &serde_json::Value) -> serde_json::Value {
+    let tmp = tempfile::tempdir().unwrap();
     let tools = surfcap_testkit::workspace_root().join("tools");
     assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
     let shot = tmp.path().join("play.png");
     let o =
-        Command::new("node").arg(tools.join("play-page.mjs")).args([url.as_str(), "steer", p(&shot)]).output().unwrap();
+        Command::new("node").arg(tools.join("play-page.mjs")).args([url, "steer", p(&shot)]).output().unwrap();
     assert!(
         o.status.success(),
         "play page failed:\n{}\n{}",
@@ -100,11 +154,7 @@ fn the_play_page_turns_and_stops_the_character_as_the_keys_ask() {
     let fps = stopped["fps"].as_f64().unwrap();
     assert!(fps > 5.0, "the page ran at {fps} frames a second: {seen}");
     assert!(seen["transitions"].as_u64().unwrap() >= 1, "{seen}");
-    // A transition chosen is served as a stream of blended frames, decoded by the Rust reader.
-    let (status, blend) = server.get("/api/play/blend/0");
-    assert_eq!(status, 200);
-    let b = surfcap_formats::stream::StreamFile::parse(&blend).unwrap();
-    assert_eq!(b.header.vertices, parsed.header.vertices);
-    assert!(b.header.sequences[0].frames >= 1 && b.header.sequences[0].name.contains("->"), "{:?}", b.header);
-    assert!(b.decode().unwrap().iter().all(|x| x.is_finite()));
+    let late = &seen["late"];
+    assert_eq!((late["blend"].as_u64(), late["captured"].as_u64()), (Some(0), Some(0)), "late frames: {seen}");
+    seen
 }

@@ -23,11 +23,18 @@
 //!   frame, so it decodes on its own), the block of the start frame first, so it plays as soon
 //!   as that block is in;
 //! - `GET /api/play/blend/{id}`: the frames of one transition, blended by the server on a worker
-//!   thread as soon as the controller chooses it (ahead of display: the transition is shown
-//!   only after its lead-in frames), coded as a stream of their own in the coordinates where the
-//!   transition's source frame is unmoved; the page places them as the step says. A blended
-//!   frame due before its bytes are decoded is late: the page shows the last mesh moved along
-//!   the centre track instead, and counts it.
+//!   thread as soon as the controller chooses it (the newest chosen first: an older one's frames
+//!   may be past), frame by frame in playing order, coded as a stream of their own in the
+//!   coordinates where the transition's source frame is unmoved; the page places them as the
+//!   step says. `GET /api/play/blend/{id}/from/{k}` gives the frames from k on made so far, so
+//!   the page gets the first frames while the later ones are being solved.
+//! - A transition's first frame is due about 0.1-0.2 s after it is chosen (its lead-in frames
+//!   and the page's display delay), less than Blend's solves take on a large mesh. So each
+//!   blended frame in a step also carries its stand-in (`surfcap_synthesis`'s display blend: the
+//!   two captured frames Blend mixes, placed, and the weight), which the page draws at once from
+//!   the captured frames it holds, by linear interpolation (eq. 2.23); the exact frame is drawn
+//!   instead whenever it has arrived. The page counts the blended frames shown exact, as
+//!   stand-ins, and late (neither: the last mesh moved along the centre track).
 //!
 //! Routes: `GET /` the page, `/assets/...`, `GET /api/play/info`, the two above,
 //! `POST /api/play/step` (JSON [`StepAsk`]) and `POST /api/play/restart`. POSTs are taken only
@@ -82,6 +89,9 @@ pub trait Player: Send + Sync {
     /// Blend `id`'s frames as a compact stream, waiting for its worker (`None`: no such blend,
     /// or it failed: the message says why).
     fn blend(&self, id: u64) -> Result<Arc<Vec<u8>>, String>;
+    /// Blend `id`'s frames from frame `from` on that are made so far (at least one: waits for
+    /// it), as a compact stream, and the transition's number of frames.
+    fn blend_from(&self, id: u64, from: usize) -> Result<(Vec<u8>, usize), String>;
     /// Starts the controller again from its start frame.
     fn restart(&self) -> Result<(), String>;
 }
@@ -104,6 +114,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/play/info", get(info))
         .route("/api/play/stream", get(stream))
         .route("/api/play/blend/{id}", get(blend))
+        .route("/api/play/blend/{id}/from/{from}", get(blend_from))
         .route("/api/play/step", post(step))
         .route("/api/play/restart", post(restart))
         .fallback(not_found)
@@ -143,6 +154,23 @@ async fn blend(State(app): State<Arc<App>>, UrlPath(id): UrlPath<String>) -> Res
     let player = app.player.clone();
     match tokio::task::spawn_blocking(move || player.blend(id)).await {
         Ok(Ok(bytes)) => respond("application/octet-stream", Body::from(bytes.as_ref().clone())),
+        Ok(Err(msg)) => error(StatusCode::NOT_FOUND, msg),
+        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, format!("the blend stopped: {e}")),
+    }
+}
+
+/// The frames of a blend made so far from frame `from` on; the header `X-Blend-Frames` says how
+/// many frames the transition has, so the page asks again from where this piece ends until it
+/// has them all.
+async fn blend_from(State(app): State<Arc<App>>, UrlPath((id, from)): UrlPath<(String, String)>) -> Response {
+    let (Ok(id), Ok(from)) = (id.parse::<u64>(), from.parse::<usize>()) else { return not_found().await };
+    let player = app.player.clone();
+    match tokio::task::spawn_blocking(move || player.blend_from(id, from)).await {
+        Ok(Ok((bytes, total))) => {
+            let mut r = respond("application/octet-stream", Body::from(bytes));
+            r.headers_mut().insert("x-blend-frames", total.into());
+            r
+        }
         Ok(Err(msg)) => error(StatusCode::NOT_FOUND, msg),
         Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, format!("the blend stopped: {e}")),
     }

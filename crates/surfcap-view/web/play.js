@@ -6,9 +6,12 @@
 // - every animation frame, sends one step (the asked direction in the subject's ground axes, run
 //   or not, the seconds since the last step) and shows the frames that fell due, each captured
 //   frame or blended transition frame placed by the rigid ground motion the step gives;
-// - fetches each transition's blended frames (a stream of their own) as soon as the step says
-//   the controller chose it; a blended or captured frame due before its mesh is decoded is
-//   shown as the last mesh moved along the centre track, and counted as late;
+// - fetches each transition's blended frames (streams of their own, piece by piece as the
+//   server makes them) as soon as the step says the controller chose it; a blended frame due
+//   before its exact mesh is here is drawn as its stand-in (the two captured frames Blend mixes,
+//   placed as the step says, linearly interpolated: eq. 2.23) and counted as such; a frame
+//   whose meshes are not decoded at all is shown as the last mesh moved along the centre track,
+//   and counted as late;
 // - draws the ground grid, the desired and the predicted trajectories, the centre track, the
 //   clip and transition, what cannot be followed, and a frame-time graph.
 // window.surfcapPlay exposes the state for scripts and tests.
@@ -37,7 +40,9 @@ const state = {
   bytes: { stream: 0, blends: 0, steps: 0 },
   streamComplete: false,
   late: { blend: 0, captured: 0 },
+  // Blended frames shown exact (Blend's, from the server) and as stand-ins.
   blendsShown: 0,
+  standIns: 0,
   transitions: 0,
   decisions: 0,
   cannotFollow: [],
@@ -374,14 +379,44 @@ async function main() {
     position.needsUpdate = true;
   };
 
-  const blends = new Map(); // id -> Float32Array[] once decoded
+  const blends = new Map(); // id -> Float32Array[] of the frames decoded so far
   const requested = new Set();
+  // A transition's frames, piece by piece: each answer holds the frames made so far from the
+  // first one not here yet, and says how many the transition has.
   const fetchBlend = async (id) => {
-    const r = await fetch(`/api/play/blend/${id}`);
-    if (!r.ok) throw new Error(`/api/play/blend/${id}: HTTP ${r.status}: ${await r.text()}`);
-    const b = await r.arrayBuffer();
-    state.bytes.blends += b.byteLength;
-    blends.set(id, await decodeFrames(parseStream(b)));
+    const got = [];
+    blends.set(id, got);
+    for (let total = Infinity; got.length < total;) {
+      const url = `/api/play/blend/${id}/from/${got.length}`;
+      const r = await fetch(url);
+      if (!r.ok) throw new Error(`${url}: HTTP ${r.status}: ${await r.text()}`);
+      total = Number(r.headers.get('x-blend-frames'));
+      const b = await r.arrayBuffer();
+      state.bytes.blends += b.byteLength;
+      const frames = await decodeFrames(parseStream(b));
+      if (!frames.length || !(total > 0)) throw new Error(`${url}: no frames (of ${total})`);
+      got.push(...frames);
+    }
+  };
+  // A blended frame's stand-in: the two captured frames placed and mixed (null when either is
+  // not decoded yet).
+  const standIn = (m) => {
+    const a = captured.frames[m.a];
+    const b = captured.frames[m.b];
+    if (!a || !b) return null;
+    const out = new Float32Array(3 * n);
+    const [ta, ua, va] = m.ga;
+    const [tb, ub, vb] = m.gb;
+    const ca = Math.cos(ta), sa = Math.sin(ta), cb = Math.cos(tb), sb = Math.sin(tb);
+    const l = m.lambda;
+    for (let i = 0; i < n; i++) {
+      const [x, y] = [a[3 * i + iu], a[3 * i + iv]];
+      const [p, q] = [b[3 * i + iu], b[3 * i + iv]];
+      out[3 * i + iu] = (1 - l) * (x * ca + y * sa + ua) + l * (p * cb + q * sb + ub);
+      out[3 * i + iv] = (1 - l) * (-x * sa + y * ca + va) + l * (-p * sb + q * cb + vb);
+      out[3 * i + upAxis] = (1 - l) * a[3 * i + upAxis] + l * b[3 * i + upAxis];
+    }
+    return out;
   };
 
   const show = (f) => {
@@ -395,8 +430,12 @@ async function main() {
     } else {
       const b = blends.get(f.blend);
       src = b ? b[f.k] : null;
-      if (!src) state.late.blend++;
-      else state.blendsShown++;
+      if (src) state.blendsShown++;
+      else if (f.stand_in && (src = standIn(f.stand_in))) state.standIns++;
+      else {
+        if (f.stand_in) { captured.want(f.stand_in.a); captured.want(f.stand_in.b); }
+        state.late.blend++;
+      }
     }
     if (src) showPositions(src, f.theta, f.t);
     else if (shownCentre) moveShown(shownCentre, f.centre);
@@ -525,7 +564,7 @@ async function main() {
       $('rtt').textContent = rtts.length ? `p50 ${state.rttMs.p50.toFixed(1)} ms, p99 ${state.rttMs.p99.toFixed(1)} ms` : '-';
       const kb = (x) => `${(x / 1e6).toFixed(2)} MB`;
       $('bytes').textContent = `stream ${kb(state.bytes.stream)} (${state.decoded}/${state.totalFrames} frames decoded), blends ${kb(state.bytes.blends)}, steps ${kb(state.bytes.steps)}`;
-      $('late').textContent = `${state.late.blend + state.late.captured} (blended ${state.late.blend}, captured ${state.late.captured})`;
+      $('late').textContent = `${state.late.blend + state.late.captured} (blended ${state.late.blend}, captured ${state.late.captured}); blended frames shown exact ${state.blendsShown}, as stand-ins ${state.standIns}`;
     }
     if (!inFlight) step(now).catch((e) => { inFlight = false; fail(e); });
     let shown = false;

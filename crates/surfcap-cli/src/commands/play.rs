@@ -17,9 +17,11 @@ use std::time::Instant;
 use surfcap_formats::stream::{StreamOptions, encode_stream};
 use surfcap_geometry::motion_plane_alignment::{PlaneMotion, plane_axes};
 use surfcap_mesh::{Sequence, Subject, Topology};
-use surfcap_motion::walk_sequence::{WalkModel, walk_sequence};
+use surfcap_motion::walk_sequence::WalkModel;
 use surfcap_pipeline::{GraphKind, GraphParams, PoseDistances};
 use surfcap_synthesis::Prepared;
+use surfcap_synthesis::controller::display_blend::{DisplayMix, display_blend};
+use surfcap_synthesis::controller::transition_blend::{BlendTimes, TransitionBlender};
 use surfcap_synthesis::controller::{Controller, ControllerOptions, Gait, Input, Move};
 use surfcap_view::play::{Player, StepAsk, serve_play};
 
@@ -111,11 +113,13 @@ fn open_in_browser(url: &str) {
     }
 }
 
-/// A blend on its way: being made, made (its stream), or failed (why).
+/// A blend on its way: being made (the frames made so far, of how many), made (its stream), or
+/// failed (why).
 #[derive(Clone)]
 enum BlendState {
     Pending,
-    Ready(Arc<Vec<u8>>),
+    Making(Vec<Arc<Vec<f32>>>, usize),
+    Ready(Arc<Vec<u8>>, Vec<Arc<Vec<f32>>>),
     Failed(String),
 }
 
@@ -124,6 +128,21 @@ enum BlendState {
 struct BlendTable {
     by_id: HashMap<u64, BlendState>,
     by_pair: HashMap<(u32, u32), u64>,
+    /// Each blend's stand-ins, frame by frame (empty when the pair is not a transition).
+    stand_ins: HashMap<u64, Arc<Vec<DisplayMix>>>,
+}
+
+/// Timings of the blends made (seconds), for the info route.
+#[derive(Default)]
+struct BlendClock {
+    /// Each blend: from asked to made and coded.
+    made: Vec<f64>,
+    /// Each blend: from asked to its first frame.
+    first: Vec<f64>,
+    /// Each blend: from asked to started (waiting behind other blends).
+    waited: Vec<f64>,
+    times: BlendTimes,
+    coding: f64,
 }
 
 /// The transitions blended so far.
@@ -131,8 +150,7 @@ struct BlendTable {
 struct Blends {
     state: Mutex<BlendTable>,
     changed: Condvar,
-    /// Seconds each blend took to make and code.
-    seconds: Mutex<Vec<f64>>,
+    clock: Mutex<BlendClock>,
 }
 
 /// The controller's walk as the page sees it.
@@ -154,7 +172,9 @@ struct LivePlayer {
     session: Mutex<Session>,
     stream: Arc<Vec<u8>>,
     blends: Arc<Blends>,
-    jobs: Mutex<mpsc::Sender<(u64, u32, u32)>>,
+    jobs: Mutex<mpsc::Sender<(u64, u32, u32, Instant)>>,
+    distances: Arc<PoseDistances>,
+    bits: u32,
     info: serde_json::Value,
     walk_speed: f64,
     run_speed: f64,
@@ -205,28 +225,28 @@ impl LivePlayer {
             "decision_interval": ControllerOptions::default().decision_interval,
         });
         let blends = Arc::new(Blends::default());
-        let (tx, rx) = mpsc::channel::<(u64, u32, u32)>();
+        let (tx, rx) = mpsc::channel::<(u64, u32, u32, Instant)>();
         let worker = BlendWorker {
+            blender: TransitionBlender::new(s).map_err(|e| anyhow::anyhow!("{}: {e}", s.name))?,
             subject: Arc::new(s.clone()),
             model: prep.model.clone(),
-            distances,
+            distances: distances.clone(),
             blends: blends.clone(),
             bits,
         };
         std::thread::Builder::new()
             .name("blend".into())
             .spawn(move || {
-                for (id, from, to) in rx {
-                    let t = Instant::now();
-                    let made = worker.blend(from, to);
-                    worker.blends.seconds.lock().unwrap_or_else(|e| e.into_inner()).push(t.elapsed().as_secs_f64());
-                    let state = match made {
-                        Ok(bytes) => BlendState::Ready(Arc::new(bytes)),
-                        Err(e) => BlendState::Failed(e),
-                    };
-                    let mut st = worker.blends.state.lock().unwrap_or_else(|e| e.into_inner());
-                    st.by_id.insert(id, state);
-                    worker.blends.changed.notify_all();
+                // The newest transition chosen first: an older one's frames may be past already
+                // (its stand-ins were shown), and it is made when nothing newer waits.
+                let mut waiting = Vec::new();
+                while let Ok(job) = rx.recv() {
+                    waiting.push(job);
+                    waiting.extend(rx.try_iter());
+                    while let Some(job) = waiting.pop() {
+                        worker.make(job);
+                        waiting.extend(rx.try_iter());
+                    }
                 }
             })
             .map_err(|e| anyhow::anyhow!("cannot start the blending thread: {e}"))?;
@@ -238,6 +258,8 @@ impl LivePlayer {
             stream,
             blends,
             jobs: Mutex::new(tx),
+            distances,
+            bits,
             info,
             walk_speed,
             run_speed,
@@ -258,7 +280,8 @@ impl LivePlayer {
         if ask.run { input.with_gait(Gait::Run) } else { input }
     }
 
-    /// The blend id of transition `from` -> `to`, asking the worker for it the first time.
+    /// The blend id of transition `from` -> `to`, asking the worker for it (and making its
+    /// stand-ins) the first time.
     fn blend_id(&self, from: u32, to: u32) -> u64 {
         let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(&id) = st.by_pair.get(&(from, to)) {
@@ -267,13 +290,50 @@ impl LivePlayer {
         let id = st.by_pair.len() as u64;
         st.by_pair.insert((from, to), id);
         st.by_id.insert(id, BlendState::Pending);
+        let mixes = display_blend(self.prep.subject(), &self.prep.model, &self.distances.values, from, to);
+        st.stand_ins.insert(id, Arc::new(mixes.unwrap_or_default()));
         drop(st);
-        let sent = self.jobs.lock().unwrap_or_else(|e| e.into_inner()).send((id, from, to));
+        let sent = self.jobs.lock().unwrap_or_else(|e| e.into_inner()).send((id, from, to, Instant::now()));
         if sent.is_err() {
             let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
             st.by_id.insert(id, BlendState::Failed("the blending thread stopped".into()));
         }
         id
+    }
+
+    /// Frame `k`'s stand-in of blend `id` as JSON for the page.
+    fn stand_in(&self, id: u64, k: usize) -> serde_json::Value {
+        let st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+        match st.stand_ins.get(&id).and_then(|m| m.get(k)) {
+            Some(m) => serde_json::json!({
+                "a": m.a, "b": m.b, "lambda": m.lambda,
+                "ga": [m.ga.theta, m.ga.t[0], m.ga.t[1]], "gb": [m.gb.theta, m.gb.t[0], m.gb.t[1]],
+            }),
+            None => serde_json::Value::Null,
+        }
+    }
+
+    /// Waits (up to 60 s) until blend `id` is made or has at least `from + 1` frames, and
+    /// returns its state then.
+    fn wait_for(&self, id: u64, from: usize) -> Result<BlendState, String> {
+        let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+        let deadline = Instant::now() + std::time::Duration::from_secs(60);
+        loop {
+            let state = st.by_id.get(&id).cloned().ok_or_else(|| {
+                format!("no blend {id}: the controller has chosen {} transitions", st.by_pair.len())
+            })?;
+            match state {
+                BlendState::Failed(why) => return Err(why),
+                BlendState::Making(ref f, _) if f.len() > from => return Ok(state),
+                BlendState::Ready(..) => return Ok(state),
+                _ => {}
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return Err(format!("blend {id} is still being made after 60 s"));
+            }
+            st = self.blends.changed.wait_timeout(st, deadline - now).unwrap_or_else(|e| e.into_inner()).0;
+        }
     }
 
     fn label(&self, f: u32) -> String {
@@ -293,6 +353,7 @@ impl LivePlayer {
 
 /// Blends transitions on its own thread.
 struct BlendWorker {
+    blender: TransitionBlender,
     subject: Arc<Subject>,
     model: Arc<WalkModel>,
     distances: Arc<PoseDistances>,
@@ -300,39 +361,83 @@ struct BlendWorker {
     bits: u32,
 }
 
+/// `frames` (each the subject's vertex count) as a compact stream named `name`. Its topology is
+/// one placeholder triangle: the page draws the captured stream's triangles.
+fn code_frames(s: &Subject, name: &str, frames: &[Vec<f32>], bits: u32) -> Result<Vec<u8>, String> {
+    let n = s.topology().n_vertices();
+    if frames.is_empty() || n < 3 {
+        return Err(format!("{name}: {} frames of {n} vertices", frames.len()));
+    }
+    let topo = Topology::new(n, vec![[0, 1, 2]], None).map_err(|e| format!("{name}: {e}"))?;
+    let seq = Sequence::new(name.to_string(), n, frames.concat()).map_err(|e| format!("{name}: {e}"))?;
+    let blend = Subject::new("blend", topo, vec![seq], s.fps, s.up_axis, s.units.clone()).map_err(|e| format!("{name}: {e}"))?;
+    Ok(encode_stream(&blend, &StreamOptions { bits, max_error: None, key_interval: 60 }).0)
+}
+
 impl BlendWorker {
     /// Transition `from` -> `to` played by Blend as offline synthesis plays it
     /// (`surfcap_motion::walk_sequence`, thesis Algorithm 3) with `from` unmoved: its frames
-    /// after `from` (the last one is `to`, placed), coded as a compact stream. The stream's
-    /// topology is one placeholder triangle: the page draws the captured stream's triangles.
-    fn blend(&self, from: u32, to: u32) -> Result<Vec<u8>, String> {
+    /// after `from` (the last one is `to`, placed), published one by one as they are made, then
+    /// coded as a compact stream.
+    fn make(&self, (id, from, to, asked): (u64, u32, u32, Instant)) {
+        let started = asked.elapsed().as_secs_f64();
         let s = &self.subject;
-        let label = |f: u32| s.frame_index().label(f as usize);
-        let why = |e: &dyn std::fmt::Display| format!("blending {} -> {}: {e}", label(from), label(to));
-        let played =
-            walk_sequence(s, &self.model, &self.distances.values, &[from, to], &PlaneMotion::identity(s.up_axis))
-                .map_err(|e| why(&e))?;
-        let n = s.topology().n_vertices();
-        let per = 3 * n;
-        let frames = played.positions.len() / per;
-        if frames < 2 || n < 3 {
-            return Err(why(&format!("{frames} frames of {n} vertices played")));
-        }
-        let positions = played.positions[per..].to_vec();
-        let topo = Topology::new(n, vec![[0, 1, 2]], None).map_err(|e| why(&e))?;
-        let seq = Sequence::new(format!("{}->{}", label(from), label(to)), n, positions).map_err(|e| why(&e))?;
-        let blend = Subject::new("blend", topo, vec![seq], s.fps, s.up_axis, s.units.clone()).map_err(|e| why(&e))?;
-        Ok(encode_stream(&blend, &StreamOptions { bits: self.bits, max_error: None, key_interval: 60 }).0)
+        let name = format!("{}->{}", s.frame_index().label(from as usize), s.frame_index().label(to as usize));
+        let mut made: Vec<Arc<Vec<f32>>> = Vec::new();
+        let mut first = None;
+        let blended = self.blender.blend(s, &self.model, &self.distances.values, (from, to), |k, total, frame| {
+            if k == 0 {
+                first = Some(asked.elapsed().as_secs_f64());
+            }
+            made.push(Arc::new(frame));
+            let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+            st.by_id.insert(id, BlendState::Making(made.clone(), total));
+            self.blends.changed.notify_all();
+            true
+        });
+        let state = match blended {
+            Ok((0, _)) => BlendState::Failed(format!("blending {name}: not a transition of the walk model")),
+            Ok((_, times)) => {
+                let t = Instant::now();
+                let frames: Vec<Vec<f32>> = made.iter().map(|f| f.to_vec()).collect();
+                let coded = code_frames(s, &name, &frames, self.bits);
+                let mut clock = self.blends.clock.lock().unwrap_or_else(|e| e.into_inner());
+                clock.times.add(&times);
+                clock.coding += t.elapsed().as_secs_f64();
+                clock.made.push(asked.elapsed().as_secs_f64());
+                clock.first.extend(first);
+                clock.waited.push(started);
+                match coded {
+                    Ok(bytes) => BlendState::Ready(Arc::new(bytes), made),
+                    Err(e) => BlendState::Failed(format!("blending {e}")),
+                }
+            }
+            Err(e) => BlendState::Failed(format!("blending {name}: {e}")),
+        };
+        let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.by_id.insert(id, state);
+        self.blends.changed.notify_all();
     }
 }
 
 impl Player for LivePlayer {
     fn info(&self) -> serde_json::Value {
         let mut info = self.info.clone();
-        let mut t = self.blends.seconds.lock().unwrap_or_else(|e| e.into_inner()).clone();
-        t.sort_by(f64::total_cmp);
-        let at = |q: f64| t.get(((t.len() as f64 - 1.0) * q).round() as usize).map(|s| s * 1e3);
-        info["blends_made"] = serde_json::json!({ "count": t.len(), "p50_ms": at(0.5), "p99_ms": at(0.99) });
+        let clock = self.blends.clock.lock().unwrap_or_else(|e| e.into_inner());
+        let at = |v: &[f64], q: f64| {
+            let mut t = v.to_vec();
+            t.sort_by(f64::total_cmp);
+            t.get(((t.len() as f64 - 1.0) * q).round() as usize).map(|s| s * 1e3)
+        };
+        let (m, f, w) = (&clock.made, &clock.first, &clock.waited);
+        let tm = &clock.times;
+        info["blends_made"] = serde_json::json!({
+            "count": m.len(), "p50_ms": at(m, 0.5), "p99_ms": at(m, 0.99),
+            "first_frame_p50_ms": at(f, 0.5), "first_frame_p99_ms": at(f, 0.99),
+            "waited_p50_ms": at(w, 0.5), "waited_p99_ms": at(w, 0.99),
+            "frames": tm.frames,
+            "seconds": { "placements": tm.placements, "factorise": tm.factorise, "solve": tm.solve, "coding": clock.coding },
+        });
         info
     }
 
@@ -392,7 +497,10 @@ impl Player for LivePlayer {
                         let id = self.blend_id(u, v);
                         let k = session.in_blend;
                         session.in_blend += 1;
-                        serde_json::json!({ "blend": id, "k": k, "label": format!("{} -> {} ({})", self.label(u), self.label(v), k + 1) })
+                        serde_json::json!({
+                            "blend": id, "k": k, "stand_in": self.stand_in(id, k),
+                            "label": format!("{} -> {} ({})", self.label(u), self.label(v), k + 1),
+                        })
                     }
                 };
                 let g = session.placement;
@@ -452,24 +560,26 @@ impl Player for LivePlayer {
     }
 
     fn blend(&self, id: u64) -> Result<Arc<Vec<u8>>, String> {
-        let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
-        let deadline = Instant::now() + std::time::Duration::from_secs(60);
-        loop {
-            match st.by_id.get(&id).cloned() {
-                None => {
-                    return Err(format!("no blend {id}: the controller has chosen {} transitions", st.by_pair.len()));
-                }
-                Some(BlendState::Ready(b)) => return Ok(b),
-                Some(BlendState::Failed(why)) => return Err(why),
-                Some(BlendState::Pending) => {
-                    let now = Instant::now();
-                    if now >= deadline {
-                        return Err(format!("blend {id} is still being made after 60 s"));
-                    }
-                    st = self.blends.changed.wait_timeout(st, deadline - now).unwrap_or_else(|e| e.into_inner()).0;
-                }
-            }
+        match self.wait_for(id, usize::MAX)? {
+            BlendState::Ready(bytes, _) => Ok(bytes),
+            _ => Err(format!("blend {id} is not made")),
         }
+    }
+
+    fn blend_from(&self, id: u64, from: usize) -> Result<(Vec<u8>, usize), String> {
+        let (frames, total) = match self.wait_for(id, from)? {
+            BlendState::Ready(_, f) => {
+                let n = f.len();
+                (f, n)
+            }
+            BlendState::Making(f, total) => (f, total),
+            _ => return Err(format!("blend {id} is not made")),
+        };
+        if from >= frames.len() {
+            return Err(format!("blend {id} has {} frames: none from frame {from}", frames.len()));
+        }
+        let piece: Vec<Vec<f32>> = frames[from..].iter().map(|f| f.to_vec()).collect();
+        Ok((code_frames(self.prep.subject(), &format!("blend {id} from {from}"), &piece, self.bits)?, total))
     }
 
     fn restart(&self) -> Result<(), String> {

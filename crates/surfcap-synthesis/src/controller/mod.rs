@@ -15,6 +15,10 @@
 //! - [`parametric_blend`]: a partner clip of the same kind mixed into the clip played at a
 //!   continuous weight (Casas et al. 2012), for speeds and turn rates between the captured
 //!   ones; a decision compares it with the graph's moves.
+//! - [`transition_blend`]: Blend of one chosen transition, frame by frame in playing order,
+//!   with the mesh's symbolic factorisation made once per subject (for a live player).
+//! - [`display_blend`]: the stand-in a page draws at once for each of those frames (the two
+//!   placed captured frames mixed linearly, eq. 2.23) until the exact frame arrives.
 //! - [`live_controller`]: [`Controller::new`] (`&Prepared`, [`ControllerOptions`]) and
 //!   [`Controller::step`] (`&Input`, `dt`) returning the frames to show and the decisions
 //!   made ([`Step`]), deciding at least every 0.1 s, and saying when an input cannot be
@@ -24,11 +28,13 @@
 //! scripted inputs are followed, against offline path following on the same trajectories.
 
 pub mod desired_trajectory;
+pub mod display_blend;
 pub mod frame_motion;
 pub mod future_trajectory;
 pub mod live_controller;
 pub mod move_choice;
 pub mod parametric_blend;
+pub mod transition_blend;
 
 pub use frame_motion::{FrameMotion, Gait};
 pub use future_trajectory::FutureTrajectories;
