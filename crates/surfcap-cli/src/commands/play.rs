@@ -113,13 +113,13 @@ fn open_in_browser(url: &str) {
     }
 }
 
-/// A blend on its way: being made (the frames made so far, of how many), made (its stream), or
+/// A blend on its way: being made (the frames made so far, of how many), made (its frames), or
 /// failed (why).
 #[derive(Clone)]
 enum BlendState {
     Pending,
     Making(Vec<Arc<Vec<f32>>>, usize),
-    Ready(Arc<Vec<u8>>, Vec<Arc<Vec<f32>>>),
+    Ready(Vec<Arc<Vec<f32>>>),
     Failed(String),
 }
 
@@ -232,7 +232,6 @@ impl LivePlayer {
             model: prep.model.clone(),
             distances: distances.clone(),
             blends: blends.clone(),
-            bits,
         };
         std::thread::Builder::new()
             .name("blend".into())
@@ -336,6 +335,15 @@ impl LivePlayer {
         }
     }
 
+    /// Blended frames as a compact stream (the coding time is counted in the info).
+    fn code(&self, name: &str, frames: &[Arc<Vec<f32>>]) -> Result<Vec<u8>, String> {
+        let t = Instant::now();
+        let frames: Vec<Vec<f32>> = frames.iter().map(|f| f.to_vec()).collect();
+        let coded = code_frames(self.prep.subject(), name, &frames, self.bits);
+        self.blends.clock.lock().unwrap_or_else(|e| e.into_inner()).coding += t.elapsed().as_secs_f64();
+        coded
+    }
+
     fn label(&self, f: u32) -> String {
         self.prep.subject().frame_index().label(f as usize)
     }
@@ -358,7 +366,6 @@ struct BlendWorker {
     model: Arc<WalkModel>,
     distances: Arc<PoseDistances>,
     blends: Arc<Blends>,
-    bits: u32,
 }
 
 /// `frames` (each the subject's vertex count) as a compact stream named `name`. Its topology is
@@ -377,8 +384,8 @@ fn code_frames(s: &Subject, name: &str, frames: &[Vec<f32>], bits: u32) -> Resul
 impl BlendWorker {
     /// Transition `from` -> `to` played by Blend as offline synthesis plays it
     /// (`surfcap_motion::walk_sequence`, thesis Algorithm 3) with `from` unmoved: its frames
-    /// after `from` (the last one is `to`, placed), published one by one as they are made, then
-    /// coded as a compact stream.
+    /// after `from` (the last one is `to`, placed), published one by one as they are made (the
+    /// routes code them when they are asked for).
     fn make(&self, (id, from, to, asked): (u64, u32, u32, Instant)) {
         let started = asked.elapsed().as_secs_f64();
         let s = &self.subject;
@@ -398,19 +405,12 @@ impl BlendWorker {
         let state = match blended {
             Ok((0, _)) => BlendState::Failed(format!("blending {name}: not a transition of the walk model")),
             Ok((_, times)) => {
-                let t = Instant::now();
-                let frames: Vec<Vec<f32>> = made.iter().map(|f| f.to_vec()).collect();
-                let coded = code_frames(s, &name, &frames, self.bits);
                 let mut clock = self.blends.clock.lock().unwrap_or_else(|e| e.into_inner());
                 clock.times.add(&times);
-                clock.coding += t.elapsed().as_secs_f64();
                 clock.made.push(asked.elapsed().as_secs_f64());
                 clock.first.extend(first);
                 clock.waited.push(started);
-                match coded {
-                    Ok(bytes) => BlendState::Ready(Arc::new(bytes), made),
-                    Err(e) => BlendState::Failed(format!("blending {e}")),
-                }
+                BlendState::Ready(made)
             }
             Err(e) => BlendState::Failed(format!("blending {name}: {e}")),
         };
@@ -560,15 +560,21 @@ impl Player for LivePlayer {
     }
 
     fn blend(&self, id: u64) -> Result<Arc<Vec<u8>>, String> {
-        match self.wait_for(id, usize::MAX)? {
-            BlendState::Ready(bytes, _) => Ok(bytes),
-            _ => Err(format!("blend {id} is not made")),
-        }
+        let frames = match self.wait_for(id, usize::MAX)? {
+            BlendState::Ready(f) => f,
+            _ => return Err(format!("blend {id} is not made")),
+        };
+        let name = {
+            let st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
+            let pair = st.by_pair.iter().find(|(_, i)| **i == id).map(|(p, _)| *p);
+            pair.map_or(format!("blend {id}"), |(u, v)| format!("{}->{}", self.label(u), self.label(v)))
+        };
+        Ok(Arc::new(self.code(&name, &frames)?))
     }
 
     fn blend_from(&self, id: u64, from: usize) -> Result<(Vec<u8>, usize), String> {
         let (frames, total) = match self.wait_for(id, from)? {
-            BlendState::Ready(_, f) => {
+            BlendState::Ready(f) => {
                 let n = f.len();
                 (f, n)
             }
@@ -578,8 +584,7 @@ impl Player for LivePlayer {
         if from >= frames.len() {
             return Err(format!("blend {id} has {} frames: none from frame {from}", frames.len()));
         }
-        let piece: Vec<Vec<f32>> = frames[from..].iter().map(|f| f.to_vec()).collect();
-        Ok((code_frames(self.prep.subject(), &format!("blend {id} from {from}"), &piece, self.bits)?, total))
+        Ok((self.code(&format!("blend {id} from {from}"), &frames[from..])?, total))
     }
 
     fn restart(&self) -> Result<(), String> {
