@@ -104,7 +104,8 @@ fn the_play_page_steers_the_demos_mannequin() {
     assert!(o.status.success(), "{}", stderr(&o));
     let subject = demo.join("mannequin.subject");
     let cache = demo.join("cache");
-    let server = ViewServer::start_command(env!("CARGO_BIN_EXE_surfcap"), &["play"], &[p(&subject), "--cache-dir", p(&cache)]);
+    let server =
+        ViewServer::start_command(env!("CARGO_BIN_EXE_surfcap"), &["play"], &[p(&subject), "--cache-dir", p(&cache)]);
     let (status, body) = server.get("/api/play/info");
     assert_eq!(status, 200);
     let info: serde_json::Value = serde_json::from_slice(&body).unwrap();
@@ -124,8 +125,7 @@ fn steer_and_check(url: &str, info: &serde_json::Value) -> serde_json::Value {
     let tools = surfcap_testkit::workspace_root().join("tools");
     assert!(tools.join("node_modules/playwright-core").is_dir(), "playwright-core is missing: run scripts/test");
     let shot = tmp.path().join("play.png");
-    let o =
-        Command::new("node").arg(tools.join("play-page.mjs")).args([url, "steer", p(&shot)]).output().unwrap();
+    let o = Command::new("node").arg(tools.join("play-page.mjs")).args([url, "steer", p(&shot)]).output().unwrap();
     assert!(
         o.status.success(),
         "play page failed:\n{}\n{}",

@@ -318,9 +318,10 @@ impl LivePlayer {
         let mut st = self.blends.state.lock().unwrap_or_else(|e| e.into_inner());
         let deadline = Instant::now() + std::time::Duration::from_secs(60);
         loop {
-            let state = st.by_id.get(&id).cloned().ok_or_else(|| {
-                format!("no blend {id}: the controller has chosen {} transitions", st.by_pair.len())
-            })?;
+            let state =
+                st.by_id.get(&id).cloned().ok_or_else(|| {
+                    format!("no blend {id}: the controller has chosen {} transitions", st.by_pair.len())
+                })?;
             match state {
                 BlendState::Failed(why) => return Err(why),
                 BlendState::Making(ref f, _) if f.len() > from => return Ok(state),
@@ -377,7 +378,8 @@ fn code_frames(s: &Subject, name: &str, frames: &[Vec<f32>], bits: u32) -> Resul
     }
     let topo = Topology::new(n, vec![[0, 1, 2]], None).map_err(|e| format!("{name}: {e}"))?;
     let seq = Sequence::new(name.to_string(), n, frames.concat()).map_err(|e| format!("{name}: {e}"))?;
-    let blend = Subject::new("blend", topo, vec![seq], s.fps, s.up_axis, s.units.clone()).map_err(|e| format!("{name}: {e}"))?;
+    let blend = Subject::new("blend", topo, vec![seq], s.fps, s.up_axis, s.units.clone())
+        .map_err(|e| format!("{name}: {e}"))?;
     Ok(encode_stream(&blend, &StreamOptions { bits, max_error: None, key_interval: 60 }).0)
 }
 
