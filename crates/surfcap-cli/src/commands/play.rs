@@ -106,7 +106,8 @@ fn captured_stream(prep: &Prepared, bits: u32) -> anyhow::Result<(Vec<u8>, bool)
     let options = StreamOptions { bits, max_error: None, key_interval: 60 };
     let code = || encode_stream(s, &options).0;
     let Some(cache) = prep.pipe.store().cache.as_ref() else { return Ok((code(), false)) };
-    let path = cache.path("play-stream", &surfcap_mesh::derived_cache::subject_hash(s), &format!("v1 bits {bits} key 60"));
+    let path =
+        cache.path("play-stream", &surfcap_mesh::derived_cache::subject_hash(s), &format!("v1 bits {bits} key 60"));
     let (frames, vertices) = (s.n_frames(), s.topology().n_vertices());
     let fetched = cache.fetch::<u8, Vec<u8>, surfcap_mesh::Error>(
         &path,
@@ -117,14 +118,18 @@ fn captured_stream(prep: &Prepared, bits: u32) -> anyhow::Result<(Vec<u8>, bool)
             Ok(surfcap_mesh::npy::NpyArray { shape: vec![bytes.len()], data: bytes })
         },
         |a| {
-            let parsed = surfcap_formats::stream::StreamFile::parse(&a.data)
-                .map_err(|e| surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Syntax, format!("not a compact stream: {e}")))?;
+            let parsed = surfcap_formats::stream::StreamFile::parse(&a.data).map_err(|e| {
+                surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Syntax, format!("not a compact stream: {e}"))
+            })?;
             let n: usize = parsed.header.sequences.iter().map(|q| q.frames).sum();
             if n != frames || parsed.header.vertices != vertices {
-                return Err(surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Syntax, format!(
-                    "a stream of {n} frames of {} vertices, expected {frames} of {vertices}",
-                    parsed.header.vertices
-                )));
+                return Err(surfcap_mesh::Error::new(
+                    surfcap_mesh::ErrorKind::Syntax,
+                    format!(
+                        "a stream of {n} frames of {} vertices, expected {frames} of {vertices}",
+                        parsed.header.vertices
+                    ),
+                ));
             }
             Ok(a.data)
         },
