@@ -1,11 +1,13 @@
 //! `surfcap play <subject>`: steer a captured character live in the browser. The subject's
 //! essential graph and walk model are read from the cache or built (as `synth` does), the
 //! interactive controller (`surfcap_synthesis::controller`) is set up on them, every captured
-//! frame is coded once as a compact stream, and the play page (`surfcap_view::play`) is served:
-//! keyboard (WASD or arrows, shift to run, space to stop) or a gamepad steer the character, the
-//! controller decides here at the page's 60 steps a second, and each transition it chooses is
-//! blended on a worker thread ahead of display and sent as a stream of its own (the design, and
-//! why decisions are made server-side: `surfcap_view::play`'s documentation).
+//! frame is coded once as a compact stream (kept in the derived cache), and the play page
+//! (`surfcap_view::play`) is served: keyboard (WASD or arrows, shift to run, space to stop) or a
+//! gamepad steer the character, the controller decides here at the page's 60 steps a second, and
+//! each transition it chooses is blended on a worker thread (the newest first, frame by frame)
+//! and sent in pieces, while every blended frame of a step carries its stand-in for the page to
+//! draw until the exact one is here (the design, and why decisions are made server-side:
+//! `surfcap_view::play`'s documentation).
 
 use std::collections::HashMap;
 use std::io::Write;
