@@ -5,7 +5,9 @@
 //! key presses: walking right, then up and right (a left turn of 45 degrees), then stopping.
 //! The centre track the page keeps must head the commanded way after each and come to rest after
 //! the stop, at a measured frame rate, with no console error; a transition the controller chose
-//! is then read back from its route as a stream of blended frames.
+//! is then read back from its route as a stream of blended frames, whole and from a frame on.
+//! Every blended frame must have been drawn exact or as its stand-in (none late). The same
+//! steering is checked on the mannequin `surfcap demo` builds.
 
 use std::process::Command;
 
