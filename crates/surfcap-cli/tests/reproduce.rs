@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use surfcap_testkit::{p, stderr, surfcap};
+use surfcap_testkit::{markdown_cells as cells, p, stderr, surfcap};
 
 #[test]
 fn list_shows_the_embedded_catalogue() {
@@ -166,24 +166,6 @@ fn quick_run_writes_a_page_that_renders_every_figure_and_resumes() {
     let o = surfcap!(&redo);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("finished earlier"), "{}", stderr(&o));
-}
-
-/// The cells of a markdown table row (`\|` is a literal bar).
-fn cells(row: &str) -> Vec<String> {
-    let inner = row.trim().trim_start_matches('|').trim_end_matches('|');
-    let mut out = vec![String::new()];
-    let mut chars = inner.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '\\' if chars.peek() == Some(&'|') => {
-                chars.next();
-                out.last_mut().unwrap().push('|');
-            }
-            '|' => out.push(String::new()),
-            _ => out.last_mut().unwrap().push(c),
-        }
-    }
-    out.iter().map(|s| s.trim().to_string()).collect()
 }
 
 /// Every value of results.json is a row of its eval's markdown page, with the same label,
