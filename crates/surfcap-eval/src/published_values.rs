@@ -530,6 +530,7 @@ mod tests {
                 alphas,
                 plot_pairs: 5,
                 table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
+                ties: crate::graph_comparison_eval::TieReading::Surfcap,
             },
         )
         .unwrap();

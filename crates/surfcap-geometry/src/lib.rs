@@ -63,6 +63,7 @@ pub mod foot_contacts;
 pub mod foot_sliding;
 pub mod gradient_operator;
 pub mod ground_contacts;
+pub mod literal_deformation_distance;
 pub mod motion_plane_alignment;
 pub mod poisson_reconstruction;
 pub mod polar_decomposition;
