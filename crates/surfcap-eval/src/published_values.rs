@@ -519,6 +519,7 @@ mod tests {
                 fixed: None,
                 plot_pairs: 5,
                 first_step: FirstStep::Straight,
+                normalisation: surfcap_motion::dtw::Normalisation::SumThenDivide,
             },
         )
         .unwrap();
