@@ -84,7 +84,7 @@ mod tests {
         let tris: Vec<[u32; 3]> = (0..70).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
         let pi: Vec<f32> = (0..70 * 9).map(|_| lcg(&mut seed)).collect();
         let pj: Vec<f32> = pi.iter().map(|x| x * 1.3 + 0.1 * lcg(&mut seed)).collect();
-        let g = rotation_about_up(UpAxis::Y, 0.4);
+        let g = rotation_about_up(UpAxis::PosY, 0.4);
         let (mut fi, mut fj) = (Vec::new(), Vec::new());
         triangle_frames(&tris, &pi, &mut fi);
         triangle_frames(&tris, &pj, &mut fj);
