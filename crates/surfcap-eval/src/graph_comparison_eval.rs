@@ -259,8 +259,7 @@ mod tests {
                 })
             })
             .collect();
-        let cli =
-            json!({ "subject": r.subject, "frames": n, "l_min": 3, "l_max": 6, "tie_rule": "surfcap", "rows": rows, "seconds": r.seconds });
+        let cli = json!({ "subject": r.subject, "frames": n, "l_min": 3, "l_max": 6, "tie_rule": "surfcap", "rows": rows, "seconds": r.seconds });
         assert_eq!(serde_json::to_value(&r).unwrap(), cli);
     }
 

@@ -293,7 +293,8 @@ mod tests {
         let pipe = pipeline(worm(9.0));
         let run = |first_step| {
             let normalisation = Normalisation::default();
-            let o = TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step, normalisation };
+            let o =
+                TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step, normalisation };
             transition_costs_eval(&pipe, &o).unwrap()
         };
         let (ours, literal) = (run(FirstStep::default()), run(FirstStep::Diagonal));
@@ -312,7 +313,8 @@ mod tests {
         let pipe = pipeline(worm(9.0));
         let run = |normalisation| {
             let first_step = FirstStep::default();
-            let o = TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step, normalisation };
+            let o =
+                TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step, normalisation };
             transition_costs_eval(&pipe, &o).unwrap()
         };
         let (ours, exact) = (run(Normalisation::SumThenDivide), run(Normalisation::ExactRatio));

@@ -68,8 +68,10 @@ impl PoseMetric {
 impl std::str::FromStr for PoseMetric {
     type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, UnknownName> {
-        PoseMetric::parse(s)
-            .ok_or_else(|| UnknownName { given: s.to_string(), expected: "deformation, deformation-log, deformation-literal or euclidean" })
+        PoseMetric::parse(s).ok_or_else(|| UnknownName {
+            given: s.to_string(),
+            expected: "deformation, deformation-log, deformation-literal or euclidean",
+        })
     }
 }
 

@@ -106,7 +106,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             r.frames_total,
             r.joints_used.len(),
             opts.permutations,
-            if r.deformation_gradient == "literal" { "A^-1 B, read literally" } else { "J = B A^-1, surfcap's reading" }
+            if r.deformation_gradient == "literal" {
+                "A^-1 B, read literally"
+            } else {
+                "J = B A^-1, surfcap's reading"
+            }
         );
         println!("{:<18} {:>10} {:>10}", "", "Eucl.", "Ours");
         type Field = fn(&MetricAgreement) -> f64;
