@@ -7,7 +7,7 @@
 // item binds each frame's own texture. Prints one JSON line of what it saw, including the colours counted on the canvas
 // and the timeline at an original and a synthetic frame (the caller asserts on those, since
 // which must appear depends on the input); exits 1 with a message when a check fails.
-import { chromium } from 'playwright-core';
+import { launchChromium } from './headless-chromium.mjs';
 
 const [url, shot] = process.argv.slice(2);
 const fail = (msg) => { console.error(`browser test: ${msg}`); process.exit(1); };
@@ -37,10 +37,7 @@ function countColours(selector) {
   return n;
 }
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const browser = await launchChromium();
 const errors = [];
 try {
   const page = await browser.newPage({ viewport: { width: 960, height: 640 } });

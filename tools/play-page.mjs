@@ -13,16 +13,13 @@
 //                                                   the steps' round trips over SECONDS (default
 //                                                   30) of scripted walking, running and turning
 // Exits 1 with a message when the page reports an error or a console error appears.
-import { chromium } from 'playwright-core';
+import { launchChromium } from './headless-chromium.mjs';
 
 const [url, mode, arg] = process.argv.slice(2);
 const fail = (msg) => { console.error(`play page: ${msg}`); process.exit(1); };
 if (!url || !['steer', 'measure'].includes(mode)) fail('usage: node play-page.mjs URL steer|measure [PNG|SECONDS]');
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const browser = await launchChromium();
 const errors = [];
 try {
   const page = await browser.newPage({ viewport: { width: 960, height: 640 } });

@@ -9,7 +9,7 @@
 // counts the pixels the figure covers (the scene drawn with it, then without). Writes OUT.json:
 // { played, frames: [{ frame, shown, vertices: [x, y, z, ...] as float32 }], figurePixels, errors };
 // the caller compares the vertices with the source. Exits 1 on a console error or failed check.
-import { chromium } from 'playwright-core';
+import { launchChromium } from './headless-chromium.mjs';
 import { writeFile } from 'node:fs/promises';
 
 const [url, itemArg, framesArg, out] = process.argv.slice(2);
@@ -18,10 +18,7 @@ if (!out) fail('usage: node tools/played-test.mjs URL ITEM FRAMES OUT.json');
 const item = Number(itemArg);
 const wanted = framesArg.split(',').map(Number);
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const browser = await launchChromium();
 const errors = [];
 try {
   const page = await browser.newPage({ viewport: { width: 800, height: 560 } });

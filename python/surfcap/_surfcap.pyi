@@ -137,7 +137,8 @@ class Subject:
 def pose_distances(subject: Subject, *, metric: str = "deformation", w: float = 0.01) -> npt.NDArray[np.float64]:
     """All-pairs pose distances (F, F) float64 in global frame order, as ``surfcap distance``
     writes them (same cache file, same bits): ``metric`` "deformation" (eq. 2.13),
-    "deformation-log" (eq. 2.14) or "euclidean" (eq. 2.2); ``w`` the stretch weight. A read-only
+    "deformation-log" (eq. 2.14), "euclidean" (eq. 2.2) or "deformation-literal" (eq. 2.13 with
+    eq. 2.6 read literally, A^-1 B); ``w`` the stretch weight. A read-only
     view of the cached matrix."""
 
 def pose_distance(subject: Subject, a: Frame, b: Frame, *, metric: str = "deformation", w: float = 0.01) -> float:

@@ -122,7 +122,7 @@ def test_interpolate_writes_what_the_cli_writes(crane_part, cli, tmp_path, metho
 
 def test_bad_arguments_name_the_argument(crane_part, cli, tmp_path):
     s = surfcap.Subject.load(crane_part, cache=False)
-    with pytest.raises(ValueError, match=r'^metric: "cosine": expected deformation, deformation-log or euclidean$'):
+    with pytest.raises(ValueError, match=r'^metric: "cosine": expected deformation, deformation-log, deformation-literal or euclidean$'):
         surfcap.pose_distances(s, metric="cosine")
     with pytest.raises(ValueError, match=r"^w -1: expected a finite number >= 0$"):
         surfcap.pose_distances(s, w=-1.0)
@@ -142,4 +142,4 @@ def test_bad_arguments_name_the_argument(crane_part, cli, tmp_path):
     p = cli("interpolate", crane_part, "--from", "0", "--to", "1", "--method", "cubic", "-o", tmp_path / "x.glb", check=False)
     assert p.returncode != 0 and '"cubic": expected nonlinear or linear' in p.stderr
     p = cli("distance", crane_part, "--metric", "cosine", "-o", tmp_path / "d.npy", check=False)
-    assert p.returncode != 0 and '"cosine": expected deformation, deformation-log or euclidean' in p.stderr
+    assert p.returncode != 0 and '"cosine": expected deformation, deformation-log, deformation-literal or euclidean' in p.stderr

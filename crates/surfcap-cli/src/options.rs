@@ -83,7 +83,8 @@ pub struct SeedOpt {
 /// The pose distance: which metric, and the weight of its stretch term.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DistanceOpts {
-    /// deformation (thesis eq. 2.13), deformation-log (eq. 2.14) or euclidean (eq. 2.2).
+    /// deformation (thesis eq. 2.13), deformation-log (eq. 2.14), euclidean (eq. 2.2) or
+    /// deformation-literal (eq. 2.13 with eq. 2.6 read literally, A^-1 B).
     #[arg(long, default_value = "deformation")]
     pub metric: PoseMetric,
     /// Weight of the stretch term (eq. 2.13).

@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use surfcap_testkit::{p, stderr, surfcap};
+use surfcap_testkit::{markdown_cells as cells, p, stderr, surfcap};
 
 #[test]
 fn list_shows_the_embedded_catalogue() {
@@ -137,6 +137,22 @@ fn quick_run_writes_a_page_that_renders_every_figure_and_resumes() {
         }
     }
     assert!(differ > 0, "the two readings give the same numbers on every value");
+    // And under eq. 2.55's least ratio found exactly: never above surfcap's normalised costs.
+    let exact = &results["runs"]["transitions"]["alternates"][1];
+    assert_eq!(exact["folder"], "runs/transitions-exact-ratio", "{exact}");
+    assert!(e.contains("eq. 2.55's least ratio found exactly"), "{e}");
+    let mut lower = 0;
+    for v in costs["values"].as_array().unwrap() {
+        let other = &v["other_readings"][1];
+        assert!(other["reading"].as_str().unwrap().contains("2.55"), "{v}");
+        if let (Some(ours), Some(x)) = (v["ours"].as_f64(), other["ours"].as_f64())
+            && v["label"].as_str().unwrap().contains("mean normalised cost")
+        {
+            assert!(x <= ours * (1.0 + 1e-12), "{v}");
+            lower += usize::from(x < ours);
+        }
+    }
+    assert!(lower > 0, "the exact ratio is lower on no mean cost");
     // The evals' own printed tables are kept and shown.
     for eval in ["interpolation", "transitions"] {
         let printed = results["runs"][eval]["printed"].as_str().unwrap_or_default();
@@ -146,7 +162,7 @@ fn quick_run_writes_a_page_that_renders_every_figure_and_resumes() {
     assert_eq!(csv.lines().count(), 1 + values.len());
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("id=\"quick-mode\""));
-    assert_eq!(html.matches("<details class=\"printed\">").count(), 3, "interpolation, transitions twice");
+    assert_eq!(html.matches("<details class=\"printed\">").count(), 4, "interpolation, transitions thrice");
     assert!(html.contains("--dtw-first-step literal"));
     // The markdown pages hold the numbers of results.json.
     markdown_matches_json(&md, &results);
@@ -158,7 +174,7 @@ fn quick_run_writes_a_page_that_renders_every_figure_and_resumes() {
     let record = std::fs::read(out.join("runs/transitions.run.json")).unwrap();
     let o = surfcap!(&args);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(stderr(&o).matches("finished earlier").count(), 3, "{}", stderr(&o));
+    assert_eq!(stderr(&o).matches("finished earlier").count(), 4, "{}", stderr(&o));
     assert_eq!(std::fs::read(out.join("runs/transitions.run.json")).unwrap(), record);
     // --redo runs them again.
     let mut redo = args.to_vec();
@@ -166,24 +182,6 @@ fn quick_run_writes_a_page_that_renders_every_figure_and_resumes() {
     let o = surfcap!(&redo);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("finished earlier"), "{}", stderr(&o));
-}
-
-/// The cells of a markdown table row (`\|` is a literal bar).
-fn cells(row: &str) -> Vec<String> {
-    let inner = row.trim().trim_start_matches('|').trim_end_matches('|');
-    let mut out = vec![String::new()];
-    let mut chars = inner.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '\\' if chars.peek() == Some(&'|') => {
-                chars.next();
-                out.last_mut().unwrap().push('|');
-            }
-            '|' => out.push(String::new()),
-            _ => out.last_mut().unwrap().push(c),
-        }
-    }
-    out.iter().map(|s| s.trim().to_string()).collect()
 }
 
 /// Every value of results.json is a row of its eval's markdown page, with the same label,

@@ -1,10 +1,21 @@
 //! Essential graph vs motion graph for several alphas (thesis 3.3.3, Fig. 3.2 and 3.8):
 //! densities and the mean and standard deviation of all-pairs shortest-path costs.
+//!
+//! The essential graph's tie rule has two readings (PAPER-NOTES on the essential graph; module
+//! `surfcap_motion::essential_graph`): surfcap's (eq. 3.2 gives a same-sequence pair an edge
+//! only when the transition is strictly cheaper than the original frames; a predecessor is
+//! replaced only by a strictly cheaper path), the default, and eq. 3.2 read literally (every
+//! forward same-sequence pair has an edge, and one that ties with the original frames is kept).
+//! [`GraphComparisonOptions::ties`] picks one and the report records it. The literal reading's
+//! essential graphs are built here, not cached by the pipeline; the motion graph is the same
+//! under both.
 
 use std::time::Instant;
 
 use serde::Serialize;
+use surfcap_mesh::NoProgress;
 use surfcap_motion::edge_weights::Alpha;
+use surfcap_motion::essential_graph::{TieRule, essential_graph_with, with_skip_edges};
 use surfcap_motion::transition_table::TableParams;
 use surfcap_pipeline::{GraphKind, GraphParams, Pipeline};
 
@@ -20,6 +31,29 @@ pub struct GraphComparisonOptions {
     pub plot_pairs: usize,
     /// The transition table both graphs are built on.
     pub table: TableParams,
+    /// Reading of the essential graph's ties: surfcap's (the default) or eq. 3.2's literal one.
+    pub ties: TieReading,
+}
+
+/// The readings of the essential graph's ties, as `--tie-rule` names them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum TieReading {
+    /// No same-sequence edge that only matches the original frames; strictly cheaper paths win.
+    #[default]
+    Surfcap,
+    /// Eq. 3.2 read literally: every forward same-sequence pair has an edge of weight
+    /// min(alpha (j - i), D + alpha L), and an edge tying with the original frames is kept.
+    Literal,
+}
+
+impl TieReading {
+    /// The name used on the command line and in the report: "surfcap" or "literal".
+    pub fn name(self) -> &'static str {
+        match self {
+            TieReading::Surfcap => "surfcap",
+            TieReading::Literal => "literal",
+        }
+    }
 }
 
 /// The motion graph at one alpha; `mean`/`std` over the compared pairs.
@@ -78,6 +112,8 @@ pub struct GraphComparisonEval {
     pub frames: usize,
     pub l_min: usize,
     pub l_max: usize,
+    /// Reading of the essential graph's ties: "surfcap" or "literal" (eq. 3.2 read literally).
+    pub tie_rule: &'static str,
     pub rows: Vec<AlphaRow>,
     /// Time to build (or read) the graphs and compare them, seconds.
     pub seconds: f64,
@@ -101,7 +137,13 @@ pub fn graph_comparison_eval(pipe: &Pipeline, o: &GraphComparisonOptions) -> Res
     let t0 = Instant::now();
     for &alpha in &o.alphas {
         let graph = |kind| pipe.graph(&GraphParams { table: o.table, kind, alpha });
-        let eg = graph(GraphKind::Essential)?.value;
+        let eg = match o.ties {
+            TieReading::Surfcap => graph(GraphKind::Essential)?.value,
+            TieReading::Literal => {
+                let w = with_skip_edges(&*pipe.edge_weights(&o.table, alpha)?, s.frame_index());
+                std::sync::Arc::new(essential_graph_with(&w, TieRule::FirstFound, &NoProgress).graph)
+            }
+        };
         let mg = graph(GraphKind::Motion)?.value;
         let (ce, cm) = (eg.all_pairs(), mg.all_pairs());
         let (mut on_mg, mut on_eg, mut eg_all) = (Vec::new(), Vec::new(), Vec::new());
@@ -158,6 +200,7 @@ pub fn graph_comparison_eval(pipe: &Pipeline, o: &GraphComparisonOptions) -> Res
         frames: n,
         l_min: o.table.l_min,
         l_max: o.table.l_max,
+        tie_rule: o.ties.name(),
         rows,
         seconds: t0.elapsed().as_secs_f64(),
         path_costs,
@@ -173,7 +216,12 @@ mod tests {
 
     fn options(alphas: Vec<f64>) -> GraphComparisonOptions {
         let alphas = alphas.into_iter().map(|a| Alpha::new(a).unwrap()).collect();
-        GraphComparisonOptions { alphas, plot_pairs: 20, table: TableParams { l_min: 3, l_max: 6, slope: Some(3) } }
+        GraphComparisonOptions {
+            alphas,
+            plot_pairs: 20,
+            table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
+            ties: TieReading::Surfcap,
+        }
     }
 
     #[test]
@@ -211,8 +259,7 @@ mod tests {
                 })
             })
             .collect();
-        let cli =
-            json!({ "subject": r.subject, "frames": n, "l_min": 3, "l_max": 6, "rows": rows, "seconds": r.seconds });
+        let cli = json!({ "subject": r.subject, "frames": n, "l_min": 3, "l_max": 6, "tie_rule": "surfcap", "rows": rows, "seconds": r.seconds });
         assert_eq!(serde_json::to_value(&r).unwrap(), cli);
     }
 
@@ -223,5 +270,20 @@ mod tests {
         assert_eq!(e(vec![]), "--alpha: expected at least one value");
         // An alpha of 0 cannot reach the comparison: it is refused where it is made.
         assert_eq!(Alpha::new(0.0).unwrap_err().to_string(), "alpha 0: expected a positive number");
+    }
+
+    #[test]
+    fn the_literal_tie_rule_keeps_more_edges_at_the_same_path_costs_and_is_recorded() {
+        let pipe = pipeline(worm(30.0));
+        let ours = graph_comparison_eval(&pipe, &options(vec![0.05])).unwrap();
+        let o = GraphComparisonOptions { ties: TieReading::Literal, ..options(vec![0.05]) };
+        let literal = graph_comparison_eval(&pipe, &o).unwrap();
+        assert_eq!((ours.tie_rule, literal.tie_rule), ("surfcap", "literal"));
+        assert_eq!(serde_json::to_value(&literal).unwrap()["tie_rule"], "literal");
+        let (a, b) = (&ours.rows[0], &literal.rows[0]);
+        assert!(b.essential_graph.edges > a.essential_graph.edges, "{a:?} vs {b:?}");
+        assert!(b.essential_graph.density > a.essential_graph.density);
+        assert!((a.essential_graph.mean - b.essential_graph.mean).abs() <= 1e-9 * a.essential_graph.mean);
+        assert_eq!(a.motion_graph.edges, b.motion_graph.edges, "the motion graph is the same");
     }
 }

@@ -28,6 +28,38 @@ pub struct PoseMetricOptions {
     pub classes: usize,
     /// Seed of the permutations.
     pub seed: u64,
+    /// Reading of eq. 2.6 behind our distance: surfcap's (the default) or the literal one.
+    pub gradient: GradientReading,
+}
+
+/// The readings of eq. 2.6, the deformation gradient behind our distance (PAPER-NOTES): with
+/// A = (v1 - v3, v2 - v3, n) of pose i and B that of pose j as matrix columns, surfcap's J =
+/// B A^-1 (the spatial gradient, the default) or the printed A^-1 B.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum GradientReading {
+    /// J = B A^-1.
+    #[default]
+    Surfcap,
+    /// A^-1 B, eq. 2.6 read literally.
+    Literal,
+}
+
+impl GradientReading {
+    /// The name used on the command line and in the report: "surfcap" or "literal".
+    pub fn name(self) -> &'static str {
+        match self {
+            GradientReading::Surfcap => "surfcap",
+            GradientReading::Literal => "literal",
+        }
+    }
+
+    /// The pose metric of our distance under this reading (eq. 2.13).
+    pub fn metric(self) -> PoseMetric {
+        match self {
+            GradientReading::Surfcap => PoseMetric::Deformation,
+            GradientReading::Literal => PoseMetric::DeformationLiteral,
+        }
+    }
 }
 
 /// How well one mesh distance agrees with the ground truth.
@@ -64,6 +96,8 @@ pub struct PoseMetricEval {
     pub joints_used: Vec<String>,
     pub permutations: usize,
     pub seed: u64,
+    /// Reading of eq. 2.6 behind our distance: "surfcap" (J = B A^-1) or "literal" (A^-1 B).
+    pub deformation_gradient: &'static str,
     /// Our deformation distance (eq. 2.13).
     pub ours: MetricAgreement,
     /// The Euclidean distance after alignment (eq. 2.2).
@@ -117,7 +151,7 @@ pub fn pose_metric_eval(
         let params = DistanceParams { metric, ..Default::default() };
         Ok(condensed(n, &pipe.distances(&params)?.value.values))
     };
-    let ours = dist(PoseMetric::Deformation)?;
+    let ours = dist(o.gradient.metric())?;
     let eucl = dist(PoseMetric::Euclidean)?;
     let angles: Vec<Vec<[f64; 3]>> = chosen
         .iter()
@@ -153,6 +187,7 @@ pub fn pose_metric_eval(
         joints_used: joints.iter().map(|&j| first.names[j].clone()).collect(),
         permutations: o.permutations,
         seed: o.seed,
+        deformation_gradient: o.gradient.name(),
         ours: s_ours,
         euclidean: s_eucl,
         correlogram: Correlograms { ours: c_ours, euclidean: c_eucl, class_permutations: CLASS_PERMUTATIONS },
@@ -171,7 +206,7 @@ mod tests {
     use crate::test_subjects::worm;
 
     fn options() -> PoseMetricOptions {
-        PoseMetricOptions { max_frames: 16, permutations: 99, classes: 4, seed: 3 }
+        PoseMetricOptions { max_frames: 16, permutations: 99, classes: 4, seed: 3, gradient: GradientReading::Surfcap }
     }
 
     #[test]
@@ -211,10 +246,27 @@ mod tests {
         };
         let cli = json!({
             "subject": "m", "frames_used": 16, "frames_total": s.n_frames(), "joints_used": r.joints_used,
-            "permutations": 99, "seed": 3, "ours": stats(&r.ours), "euclidean": stats(&r.euclidean),
+            "permutations": 99, "seed": 3, "deformation_gradient": "surfcap", "ours": stats(&r.ours), "euclidean": stats(&r.euclidean),
             "correlogram": { "ours": classes(&r.correlogram.ours), "euclidean": classes(&r.correlogram.euclidean), "class_permutations": 999 },
         });
         assert_eq!(serde_json::to_value(&r).unwrap(), cli);
+    }
+
+    #[test]
+    fn the_literal_gradient_changes_our_distance_only_and_is_recorded() {
+        let m = mannequin(&BodyShape::average(), 1000).unwrap();
+        let clips = [Clip::procedural(&m, Gait::Walk, 10.0, 1.5, 5).unwrap()];
+        let s = mannequin_subject("m", &m, &clips, 10.0).unwrap();
+        let store = CacheStore::memory_only();
+        let run = |gradient| {
+            let o = PoseMetricOptions { gradient, ..options() };
+            pose_metric_eval(&s, &store, Box::new(NoProgress), &o).unwrap()
+        };
+        let (ours, literal) = (run(GradientReading::Surfcap), run(GradientReading::Literal));
+        assert_eq!((ours.deformation_gradient, literal.deformation_gradient), ("surfcap", "literal"));
+        assert_eq!(serde_json::to_value(&literal).unwrap()["deformation_gradient"], "literal");
+        assert_eq!(serde_json::to_value(&ours.euclidean).unwrap(), serde_json::to_value(&literal.euclidean).unwrap());
+        assert_ne!(ours.ours.pearson, literal.ours.pearson, "the readings give the same distances");
     }
 
     #[test]

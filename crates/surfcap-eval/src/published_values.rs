@@ -519,6 +519,7 @@ mod tests {
                 fixed: None,
                 plot_pairs: 5,
                 first_step: FirstStep::Straight,
+                normalisation: surfcap_motion::dtw::Normalisation::SumThenDivide,
             },
         )
         .unwrap();
@@ -530,6 +531,7 @@ mod tests {
                 alphas,
                 plot_pairs: 5,
                 table: TableParams { l_min: 3, l_max: 6, slope: Some(3) },
+                ties: crate::graph_comparison_eval::TieReading::Surfcap,
             },
         )
         .unwrap();

@@ -8,15 +8,18 @@
 //!
 //! The DTW's first step has two readings (PAPER-NOTES on eq. 2.53): surfcap's (up to p - 1
 //! straight steps may open the path, the default) and the literal one (a diagonal first);
-//! [`TransitionCostsOptions::first_step`] picks one and the report records it. The literal
-//! reading's tables are computed here, not cached by the pipeline.
+//! [`TransitionCostsOptions::first_step`] picks one and the report records it. So does the
+//! DTW's normalisation (PAPER-NOTES on eq. 2.55 vs 2.50): surfcap's DP minimises the summed cost
+//! and divides by the path length (the default); the exact reading finds the path of least
+//! ratio ([`TransitionCostsOptions::normalisation`]). The tables of a reading other than
+//! surfcap's are computed here, not cached by the pipeline.
 
 use std::sync::Arc;
 
 use rayon::prelude::*;
 use serde::Serialize;
 use surfcap_mesh::NoProgress;
-use surfcap_motion::dtw::{FirstStep, dtw_window_from};
+use surfcap_motion::dtw::{DtwReading, FirstStep, Normalisation, dtw_window_from};
 use surfcap_motion::segment_bounds;
 use surfcap_motion::transition_table::{
     SegmentRoom, TableParams, fixed_length_dtw_from, standard_transition, transition_table_from,
@@ -38,6 +41,9 @@ pub struct TransitionCostsOptions {
     pub plot_pairs: usize,
     /// Reading of the DTW's first step (eq. 2.53): surfcap's (the default) or the literal one.
     pub first_step: FirstStep,
+    /// Normalisation of the DTW's cost (eq. 2.50, 2.55): surfcap's sum then divide (the
+    /// default) or the exact least ratio.
+    pub normalisation: Normalisation,
 }
 
 /// The three kinds of transition at one slope constraint, over the pairs where all exist.
@@ -108,6 +114,9 @@ pub struct TransitionCostsEval {
     /// Reading of the DTW's first step: "surfcap" (up to p - 1 straight steps may open the
     /// path) or "literal" (eq. 2.53 read from g(1, 1): a diagonal first).
     pub dtw_first_step: &'static str,
+    /// Normalisation of the DTW's cost: "surfcap" (the least summed cost, divided by its path
+    /// length) or "exact" (the least ratio of summed cost to path length, eq. 2.55).
+    pub dtw_ratio: &'static str,
     pub rows: Vec<SlopeRow>,
     #[serde(skip)]
     pub plot: TransitionPlotData,
@@ -130,18 +139,18 @@ pub fn transition_costs_eval(pipe: &Pipeline, o: &TransitionCostsOptions) -> Res
         (0..n * n).into_par_iter().map(|k| standard_transition(&d.values, &room, k / n, k % n, fixed)).collect();
     let mut rows = Vec::new();
     let mut plot_data = None;
+    let reading = DtwReading { first_step: o.first_step, normalisation: o.normalisation };
     for &p in &o.slopes {
         let params = TableParams { l_min, l_max, slope: Some(p) };
-        let table = match o.first_step {
-            FirstStep::Straight => pipe.table(&params)?.value,
-            FirstStep::Diagonal => {
-                let t = transition_table_from(&d.values, s.frame_index(), &params, o.first_step, &NoProgress);
-                Arc::new(t.map_err(surfcap_pipeline::Error::from)?)
-            }
+        let table = if reading == DtwReading::default() {
+            pipe.table(&params)?.value
+        } else {
+            let t = transition_table_from(&d.values, s.frame_index(), &params, reading, &NoProgress);
+            Arc::new(t.map_err(surfcap_pipeline::Error::from)?)
         };
         let dtw: Vec<Option<(f64, u32)>> = (0..n * n)
             .into_par_iter()
-            .map(|k| fixed_length_dtw_from(&d.values, &room, (k / n, k % n), fixed, Some(p), o.first_step))
+            .map(|k| fixed_length_dtw_from(&d.values, &room, (k / n, k % n), fixed, Some(p), reading))
             .collect();
         let pairs: Vec<usize> =
             (0..n * n).filter(|&k| standard[k].is_some() && dtw[k].is_some() && table.cost[k].is_finite()).collect();
@@ -188,7 +197,7 @@ pub fn transition_costs_eval(pipe: &Pipeline, o: &TransitionCostsOptions) -> Res
     }
     let (p_plot, sample, shown) = plot_data.expect("at least one slope");
     let shown = shown.and_then(|(i, li, j, lj)| {
-        let warp = dtw_window_from(&d.values, n, i, li, j, lj, Some(p_plot), o.first_step)?;
+        let warp = dtw_window_from(&d.values, n, i, li, j, lj, Some(p_plot), reading)?;
         Some(ShownWarp { source: i, source_len: li, destination: j, destination_len: lj, path: warp.path })
     });
     Ok(TransitionCostsEval {
@@ -199,6 +208,7 @@ pub fn transition_costs_eval(pipe: &Pipeline, o: &TransitionCostsOptions) -> Res
         l_max,
         fixed_length: fixed,
         dtw_first_step: o.first_step.name(),
+        dtw_ratio: o.normalisation.name(),
         rows,
         plot: TransitionPlotData { slope: p_plot, sample, shown, distances: d },
     })
@@ -220,6 +230,7 @@ mod tests {
             fixed: None,
             plot_pairs: 10,
             first_step: FirstStep::default(),
+            normalisation: Normalisation::default(),
         };
         let r = transition_costs_eval(&pipe, &o).unwrap();
         let n = pipe.subject().n_frames();
@@ -254,7 +265,7 @@ mod tests {
             .collect();
         let cli = json!({
             "subject": r.subject, "frames": n, "fps": 9.0, "l_min": 3, "l_max": 18, "fixed_length": 9,
-            "dtw_first_step": "surfcap", "rows": rows,
+            "dtw_first_step": "surfcap", "dtw_ratio": "surfcap", "rows": rows,
         });
         assert_eq!(serde_json::to_value(&r).unwrap(), cli);
     }
@@ -263,7 +274,13 @@ mod tests {
     fn slopes_must_be_whole_numbers_from_one() {
         let pipe = pipeline(worm(9.0));
         for slopes in [vec![], vec![2, 0]] {
-            let o = TransitionCostsOptions { slopes, fixed: None, plot_pairs: 10, first_step: FirstStep::default() };
+            let o = TransitionCostsOptions {
+                slopes,
+                fixed: None,
+                plot_pairs: 10,
+                first_step: FirstStep::default(),
+                normalisation: Normalisation::default(),
+            };
             assert_eq!(
                 transition_costs_eval(&pipe, &o).unwrap_err().to_string(),
                 "--slopes: expected whole numbers >= 1"
@@ -275,7 +292,9 @@ mod tests {
     fn the_literal_dtw_first_step_changes_the_costs_and_is_recorded() {
         let pipe = pipeline(worm(9.0));
         let run = |first_step| {
-            let o = TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step };
+            let normalisation = Normalisation::default();
+            let o =
+                TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step, normalisation };
             transition_costs_eval(&pipe, &o).unwrap()
         };
         let (ours, literal) = (run(FirstStep::default()), run(FirstStep::Diagonal));
@@ -287,5 +306,27 @@ mod tests {
             assert_eq!(a.standard.mean, b.standard.mean);
             assert_ne!(a.dtw_vls.mean, b.dtw_vls.mean, "slope {}", a.slope);
         }
+    }
+
+    #[test]
+    fn the_exact_ratio_never_costs_more_and_is_recorded() {
+        let pipe = pipeline(worm(9.0));
+        let run = |normalisation| {
+            let first_step = FirstStep::default();
+            let o =
+                TransitionCostsOptions { slopes: vec![2, 3], fixed: None, plot_pairs: 10, first_step, normalisation };
+            transition_costs_eval(&pipe, &o).unwrap()
+        };
+        let (ours, exact) = (run(Normalisation::SumThenDivide), run(Normalisation::ExactRatio));
+        assert_eq!((ours.dtw_ratio, exact.dtw_ratio), ("surfcap", "exact"));
+        assert_eq!(serde_json::to_value(&exact).unwrap()["dtw_ratio"], "exact");
+        for (a, b) in ours.rows.iter().zip(&exact.rows) {
+            assert_eq!((a.standard.mean, a.pairs), (b.standard.mean, b.pairs));
+            // The least ratio is at most the ratio of the least sum, pair by pair.
+            assert!(b.dtw_vls.mean <= a.dtw_vls.mean && b.dtw.mean <= a.dtw.mean, "{a:?} vs {b:?}");
+        }
+        assert!(ours.rows.iter().zip(&exact.rows).any(|(a, b)| b.dtw_vls.mean < a.dtw_vls.mean));
+        let w = exact.plot.shown.as_ref().expect("a transition to draw");
+        assert_eq!(w.path.last(), Some(&(w.source + w.source_len - 1, w.destination)));
     }
 }

@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use surfcap_mesh::{Progress, Subject, UpAxis};
 
 use crate::distance_matrix::{DistanceParams, slab_triangles};
+use crate::literal_deformation_distance::literal_deformation_distance;
 use crate::motion_plane_alignment::{plane_axes, rotation_about_up};
 use crate::pose_distance::{
     BLOCK, FRAME_FLOATS, PoseMetric, deformation_distance, degenerate_triangles, triangle_frames, union_count,
@@ -231,8 +232,9 @@ pub fn distance_tile(
                 }
             }
         }
-        PoseMetric::Deformation | PoseMetric::DeformationLog => {
+        PoseMetric::Deformation | PoseMetric::DeformationLog | PoseMetric::DeformationLiteral => {
             let log_s = params.metric == PoseMetric::DeformationLog;
+            let literal = params.metric == PoseMetric::DeformationLiteral;
             let mut work: Vec<RowBlock> = span
                 .rows
                 .clone()
@@ -271,7 +273,7 @@ pub fn distance_tile(
                     list.extend(degenerate_triangles(f, part.len()).into_iter().map(|k| k + t0 as u32));
                 }
                 work.par_iter_mut().for_each(|block| {
-                    block.add_slab(&data, &ids, span, params.w, log_s);
+                    block.add_slab(&data, &ids, span, params.w, log_s, literal);
                     progress.advance(block.acc.iter().map(Vec::len).sum::<usize>() as u64);
                 });
             }
@@ -306,7 +308,9 @@ pub fn distance_tile(
 impl RowBlock {
     /// Adds the distances over one slab's triangles, chunk by chunk in mesh order (slabs are
     /// whole chunks), so a pair's sum depends neither on the slabs nor on the thread count.
-    fn add_slab(&mut self, data: &[Vec<f64>], ids: &[usize], span: &TileSpan, w: f64, log_s: bool) {
+    /// `literal`: eq. 2.6 read literally (`literal_deformation_distance`) instead of surfcap's
+    /// reading.
+    fn add_slab(&mut self, data: &[Vec<f64>], ids: &[usize], span: &TileSpan, w: f64, log_s: bool, literal: bool) {
         let len = data.first().map_or(0, Vec::len);
         let step = TRIANGLE_CHUNK * FRAME_FLOATS;
         let row_data: Vec<&[f64]> = self.rows.clone().map(|i| data[slot(ids, i)].as_slice()).collect();
@@ -322,7 +326,12 @@ impl RowBlock {
                         continue;
                     }
                     let k = c - first;
-                    self.acc[r][k] += deformation_distance(&fi[start..end], fj, &self.rot[r][k], w, log_s);
+                    let (fi, g) = (&fi[start..end], &self.rot[r][k]);
+                    self.acc[r][k] += if literal {
+                        literal_deformation_distance(fi, fj, g, w, log_s)
+                    } else {
+                        deformation_distance(fi, fj, g, w, log_s)
+                    };
                 }
             }
         }

@@ -4,7 +4,9 @@
 //!
 //! - Rigid alignment: [`motion_plane_alignment`] (about the up axis) and Procrustes;
 //!   [`deformation_gradient`], [`polar_decomposition`], [`rotation_log_exp`].
-//! - Pose distances ([`pose_distance`]: eq. 2.2, 2.13, 2.14) and the all-pairs matrix
+//! - Pose distances ([`pose_distance`]: eq. 2.2, 2.13, 2.14; [`literal_deformation_distance`]:
+//!   eq. 2.13 with eq. 2.6 read literally, A^-1 B, the metric `deformation-literal`) and the
+//!   all-pairs matrix
 //!   ([`distance_matrix`]) assembled from tiles ([`distance_tiles`]): any upper-triangle block of
 //!   rows x columns is computed from its own frames through the [`distance_tiles::PoseFrames`]
 //!   trait (a subject in memory, or only a tile's frames read from disk); each pair is aligned
@@ -63,6 +65,7 @@ pub mod foot_contacts;
 pub mod foot_sliding;
 pub mod gradient_operator;
 pub mod ground_contacts;
+pub mod literal_deformation_distance;
 pub mod motion_plane_alignment;
 pub mod poisson_reconstruction;
 pub mod polar_decomposition;

@@ -37,6 +37,9 @@ pub enum PoseMetric {
     Deformation,
     /// eq. 2.14.
     DeformationLog,
+    /// eq. 2.13 with eq. 2.6 read literally, T = A^-1 B instead of J = B A^-1 (PAPER-NOTES;
+    /// `crate::literal_deformation_distance`): offered to show what that reading changes.
+    DeformationLiteral,
 }
 
 impl PoseMetric {
@@ -45,6 +48,7 @@ impl PoseMetric {
             "euclidean" => PoseMetric::Euclidean,
             "deformation" => PoseMetric::Deformation,
             "deformation-log" => PoseMetric::DeformationLog,
+            "deformation-literal" => PoseMetric::DeformationLiteral,
             _ => return None,
         })
     }
@@ -54,16 +58,20 @@ impl PoseMetric {
             PoseMetric::Euclidean => "euclidean",
             PoseMetric::Deformation => "deformation",
             PoseMetric::DeformationLog => "deformation-log",
+            PoseMetric::DeformationLiteral => "deformation-literal",
         }
     }
 }
 
-/// Parses `euclidean`, `deformation` or `deformation-log`; the error says what was expected.
+/// Parses `euclidean`, `deformation`, `deformation-log` or `deformation-literal`; the error says
+/// what was expected.
 impl std::str::FromStr for PoseMetric {
     type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, UnknownName> {
-        PoseMetric::parse(s)
-            .ok_or_else(|| UnknownName { given: s.to_string(), expected: "deformation, deformation-log or euclidean" })
+        PoseMetric::parse(s).ok_or_else(|| UnknownName {
+            given: s.to_string(),
+            expected: "deformation, deformation-log, deformation-literal or euclidean",
+        })
     }
 }
 

@@ -15,8 +15,12 @@
 //! eq. 2.51 starts at g(0, 0) = d(0, 0) (the printed "- 1" is a typo, PAPER-NOTES).
 //!
 //! The dynamic programme minimises the summed cost (eq. 2.52-2.54) and records the path length
-//! L; the normalised cost of eq. 2.50 is that sum divided by L. (Minimising the ratio exactly is
-//! a different, harder problem; the thesis's recursions minimise the sum.)
+//! L; the normalised cost of eq. 2.50 is that sum divided by L ([`Normalisation::SumThenDivide`],
+//! surfcap's reading, the default). Minimising the ratio exactly is a different, costlier
+//! problem ([`Normalisation::ExactRatio`], module `exact_ratio`: the path length becomes a second
+//! index of the DP), offered to show what eq. 2.55 read as the least ratio changes.
+
+mod exact_ratio;
 
 /// Slope constraint: `Some(p)` with p >= 1, or `None` for unconstrained (p = infinity).
 pub type Slope = Option<usize>;
@@ -39,6 +43,41 @@ impl FirstStep {
             FirstStep::Straight => "surfcap",
             FirstStep::Diagonal => "literal",
         }
+    }
+}
+
+/// How the DP turns a path's summed cost into the normalised cost of eq. 2.50 (PAPER-NOTES on
+/// eq. 2.55 vs 2.50).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum Normalisation {
+    /// Minimise the summed cost, then divide the best path's sum by its length L (surfcap's).
+    #[default]
+    SumThenDivide,
+    /// Minimise the ratio sum / L exactly over the warping paths.
+    ExactRatio,
+}
+
+impl Normalisation {
+    /// The name used on the command line and in result files: "surfcap" or "exact".
+    pub fn name(self) -> &'static str {
+        match self {
+            Normalisation::SumThenDivide => "surfcap",
+            Normalisation::ExactRatio => "exact",
+        }
+    }
+}
+
+/// A reading of the DTW: how its path may start and how its cost is normalised. A
+/// [`FirstStep`] alone converts into the reading with surfcap's normalisation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct DtwReading {
+    pub first_step: FirstStep,
+    pub normalisation: Normalisation,
+}
+
+impl From<FirstStep> for DtwReading {
+    fn from(first_step: FirstStep) -> Self {
+        DtwReading { first_step, normalisation: Normalisation::default() }
     }
 }
 
@@ -65,6 +104,8 @@ pub struct DtwTables {
     pub cost: Vec<f64>,
     pub len: Vec<u32>,
     steps: Vec<Step>,
+    /// The exact-ratio DP's layers (`None` after a plain fill).
+    layers: Option<exact_ratio::Layers>,
 }
 
 impl DtwTables {
@@ -76,6 +117,9 @@ impl DtwTables {
 
     /// The warping path to cell (k, l) as (source offset, destination offset) pairs, from (0, 0).
     pub fn path_to(&self, k: usize, l: usize) -> Vec<(usize, usize)> {
+        if let Some(layers) = &self.layers {
+            return layers.path_to(self.cols, k, l, self.len[k * self.cols + l]);
+        }
         let mut out = Vec::new();
         let (mut k, mut l) = (k, l);
         loop {
@@ -132,15 +176,24 @@ pub fn dtw_fill(rows: usize, cols: usize, d: impl Fn(usize, usize) -> f64, slope
     dtw_fill_from(rows, cols, d, slope, FirstStep::Straight, t)
 }
 
-/// [`dtw_fill`] with the reading of the first step; `first` matters only for a finite slope.
+/// [`dtw_fill`] with a reading of the DTW (a [`FirstStep`] or a [`DtwReading`]); the first step
+/// matters only for a finite slope. Under [`Normalisation::ExactRatio`], `t.at(k, l)` is the
+/// (sum, L) of the path of least sum / L.
 pub fn dtw_fill_from(
     rows: usize,
     cols: usize,
     d: impl Fn(usize, usize) -> f64,
     slope: Slope,
-    first: FirstStep,
+    reading: impl Into<DtwReading>,
     t: &mut DtwTables,
 ) {
+    let reading = reading.into();
+    let first = reading.first_step;
+    if reading.normalisation == Normalisation::ExactRatio {
+        exact_ratio::fill(rows, cols, d, slope, first, t);
+        return;
+    }
+    t.layers = None;
     let n = rows * cols;
     t.rows = rows;
     t.cols = cols;
@@ -247,7 +300,7 @@ pub fn dtw_window(d: &[f64], n: usize, src: usize, li: usize, dst_end: usize, lj
     dtw_window_from(d, n, src, li, dst_end, lj, slope, FirstStep::Straight)
 }
 
-/// [`dtw_window`] with the reading of the first step.
+/// [`dtw_window`] with a reading of the DTW (a [`FirstStep`] or a [`DtwReading`]).
 #[allow(clippy::too_many_arguments)]
 pub fn dtw_window_from(
     d: &[f64],
@@ -257,7 +310,7 @@ pub fn dtw_window_from(
     dst_end: usize,
     lj: usize,
     slope: Slope,
-    first: FirstStep,
+    first: impl Into<DtwReading>,
 ) -> Option<Warp> {
     let dst = (dst_end + 1).checked_sub(lj)?;
     if src + li > n || dst_end >= n || li == 0 || lj == 0 {

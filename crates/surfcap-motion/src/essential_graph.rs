@@ -9,12 +9,22 @@
 //! node) edges. Ties between equal-cost paths: Dijkstra settles the unsettled node of smallest
 //! index among equal distances and a predecessor is replaced only by a strictly cheaper one, so
 //! the graph is the same whatever the number of threads.
+//!
+//! That tie rule is surfcap's reading ([`TieRule::Strict`]): with its reading of eq. 3.2 (no
+//! same-sequence "skip" edge that only matches the original frames, `edge_weights`) exact ties
+//! are rare. Eq. 3.2 read literally gives every forward same-sequence pair an edge of weight
+//! min(alpha (j - i), D + alpha L) ([`with_skip_edges`]); such an edge ties with the chain of
+//! original frames, and which one survives is then decided by rounding unless the rule says:
+//! [`TieRule::FirstFound`] counts paths within [`TIE_TOLERANCE`] relative as equal and keeps
+//! the one found first (through the node settled first: the direct edge). Offered to show what
+//! that reading changes (`surfcap eval graphs --tie-rule literal`).
 
 use rayon::prelude::*;
 use surfcap_mesh::Progress;
 
 use crate::edge_weights::EdgeWeights;
 use crate::graph::{Edge, Graph};
+use surfcap_mesh::FrameIndex;
 
 const NO_PRED: u32 = crate::sparse_essential_graph::NO_PRED;
 
@@ -26,8 +36,40 @@ pub struct EssentialGraph {
     pub costs: Vec<f64>,
 }
 
-/// Dense Dijkstra from `source`: costs and predecessors.
-fn dense_dijkstra(w: &EdgeWeights, source: usize, dist: &mut [f64], pred: &mut [u32]) {
+/// Relative cost difference under which [`TieRule::FirstFound`] counts two paths as equal.
+pub const TIE_TOLERANCE: f64 = 1e-12;
+
+/// How the shortest-path trees decide between paths of equal cost.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum TieRule {
+    /// A predecessor is replaced only by a strictly cheaper path (surfcap's rule).
+    #[default]
+    Strict,
+    /// Paths within [`TIE_TOLERANCE`] relative cost are equal and the first found is kept.
+    FirstFound,
+}
+
+/// Eq. 3.2 read literally: `w` with every forward same-sequence pair (i, j > i + 1) given the
+/// weight min(alpha (j - i), D + alpha L), where surfcap's reading leaves no edge unless the
+/// transition is strictly cheaper than the original frames.
+pub fn with_skip_edges(w: &EdgeWeights, index: &FrameIndex) -> EdgeWeights {
+    let mut out = w.clone();
+    let (n, alpha) = (w.n, w.alpha.get());
+    for s in 0..index.n_sequences() {
+        let range = index.range(s);
+        for i in range.clone() {
+            for j in i + 2..range.end {
+                let k = i * n + j;
+                out.weight[k] = out.weight[k].min(alpha * (j - i) as f64);
+            }
+        }
+    }
+    out
+}
+
+/// Dense Dijkstra from `source`: costs and predecessors. A node's predecessor is replaced by
+/// a path cheaper by more than `tol` relative (0: by any amount).
+fn dense_dijkstra(w: &EdgeWeights, source: usize, dist: &mut [f64], pred: &mut [u32], tol: f64) {
     let n = w.n;
     let mut done = vec![false; n];
     dist.fill(f64::INFINITY);
@@ -45,7 +87,7 @@ fn dense_dijkstra(w: &EdgeWeights, source: usize, dist: &mut [f64], pred: &mut [
                 continue;
             }
             let nd = du + row[v];
-            if nd < dist[v] {
+            if nd < dist[v] && (tol == 0.0 || dist[v].is_infinite() || nd < dist[v] * (1.0 - tol)) {
                 dist[v] = nd;
                 pred[v] = u as u32;
             }
@@ -61,14 +103,23 @@ fn dense_dijkstra(w: &EdgeWeights, source: usize, dist: &mut [f64], pred: &mut [
     }
 }
 
-/// Builds the essential graph of the complete digraph `w`.
+/// Builds the essential graph of the complete digraph `w` (surfcap's tie rule).
 pub fn essential_graph(w: &EdgeWeights, progress: &dyn Progress) -> EssentialGraph {
+    essential_graph_with(w, TieRule::Strict, progress)
+}
+
+/// [`essential_graph`] with the rule deciding between equal-cost paths.
+pub fn essential_graph_with(w: &EdgeWeights, ties: TieRule, progress: &dyn Progress) -> EssentialGraph {
+    let tol = match ties {
+        TieRule::Strict => 0.0,
+        TieRule::FirstFound => TIE_TOLERANCE,
+    };
     let n = w.n;
     let mut costs = vec![f64::INFINITY; n * n];
     let mut preds = vec![NO_PRED; n * n];
     progress.start("essential graph", n as u64);
     costs.par_chunks_mut(n).zip(preds.par_chunks_mut(n)).enumerate().for_each(|(s, (dist, pred))| {
-        dense_dijkstra(w, s, dist, pred);
+        dense_dijkstra(w, s, dist, pred, tol);
         progress.advance(1);
     });
     progress.finish();
@@ -129,6 +180,36 @@ mod tests {
         // Never lower in the motion graph, for any pair.
         let mg_costs = mg.graph.all_pairs();
         assert!(mg_costs.iter().zip(&eg.costs).all(|(m, e)| m >= e));
+    }
+
+    /// One sequence of 6 frames whose transitions all cost more than playing on: surfcap's
+    /// reading keeps the chain of original frames only; eq. 3.2 read literally with the
+    /// first-found tie rule keeps a direct edge from every frame to every later one (each ties
+    /// with the chain and is found first); the path costs agree to rounding.
+    #[test]
+    fn the_literal_reading_keeps_the_skip_edges_that_tie_with_the_chain() {
+        use surfcap_mesh::FrameIndex;
+        let (n, alpha) = (6, 0.05);
+        let index = FrameIndex::new([n]);
+        let mut weight = vec![10.0; n * n];
+        for i in 0..n {
+            weight[i * n + i] = f64::INFINITY;
+            for j in i + 1..n {
+                weight[i * n + j] = if j == i + 1 { alpha } else { f64::INFINITY };
+            }
+        }
+        let w = EdgeWeights { n, alpha: Alpha::new(alpha).unwrap(), d_scale: 1.0, weight };
+        let ours = essential_graph(&w, &NoProgress);
+        let forward = |g: &Graph| g.edges().iter().filter(|e| e.to > e.from).count();
+        assert_eq!(forward(&ours.graph), n - 1, "the chain only");
+        assert_eq!(essential_graph_with(&w, TieRule::FirstFound, &NoProgress).graph.edges(), ours.graph.edges());
+        let skip = with_skip_edges(&w, &index);
+        assert!((skip.at(0, 5) - 5.0 * alpha).abs() < 1e-15 && skip.at(5, 0) == 10.0);
+        let literal = essential_graph_with(&skip, TieRule::FirstFound, &NoProgress);
+        assert_eq!(forward(&literal.graph), n * (n - 1) / 2, "a direct edge to every later frame");
+        for (a, b) in ours.costs.iter().zip(&literal.costs) {
+            assert!((a - b).abs() <= 1e-12 * a.abs().max(1.0), "{a} vs {b}");
+        }
     }
 
     /// A complete digraph with pseudo-random weights: the essential graph keeps every pair's

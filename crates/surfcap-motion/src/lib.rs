@@ -4,7 +4,8 @@
 //! algorithm per module:
 //!
 //! - Transitions (thesis 2.5): [`dtw`] with the slope constraint and warp recovery (eq.
-//!   2.50-2.54); the all-pairs [`transition_table`] with variable segment lengths sharing one DP per
+//!   2.50-2.54; the readings of its first step and of its normalisation, sum then divide or the
+//!   exact least ratio, as [`dtw::DtwReading`]); the all-pairs [`transition_table`] with variable segment lengths sharing one DP per
 //!   (source start, destination start) (eq. 2.55-2.57), assembled from tiles
 //!   ([`transition_tiles`]: a block of source x end frames from its halo of distances, each DTW
 //!   table cut at the tile's last column, candidates scanned in the whole table's order, so tiles
@@ -13,7 +14,8 @@
 //!   integration; `blend_placements` is its rigid part alone).
 //! - Graphs (thesis 3.3): [`edge_weights`] (Algorithm 1, D scaled by its median; `edge_weight_row`
 //!   is its one definition, row by row; the tolerance alpha an `Alpha`, checked where it is made); the [`essential_graph`] (union of shortest-path trees,
-//!   dense Dijkstra per source, O(V^3), parallel); the [`sparse_essential_graph`] (per frame its k
+//!   dense Dijkstra per source, O(V^3), parallel; eq. 3.2 read literally with its ties kept as
+//!   direct edges, `essential_graph_with` and `with_skip_edges`, beside surfcap's reading); the [`sparse_essential_graph`] (per frame its k
 //!   cheapest transitions plus the original edge, one heap Dijkstra per source, O(E + V log V),
 //!   tileable by source rows; with k >= N - 1 bit-identical to the exact build, same tie rules);
 //!   the Kovar [`motion_graph`] (local minima per sequence-pair block, largest strongly connected

@@ -17,7 +17,7 @@
 
 use surfcap_mesh::{FrameIndex, Progress};
 
-use crate::dtw::{DtwTables, FirstStep, Slope, dtw_fill_from};
+use crate::dtw::{DtwReading, DtwTables, FirstStep, Slope, dtw_fill_from};
 use crate::error::{Error, Result};
 use crate::transition_tiles::{DistanceBlock, TABLE_TILE, TableTile, plan_table_tiles, transition_tile_from};
 
@@ -157,16 +157,17 @@ pub fn transition_table(
     transition_table_in_tiles(d, index, p, progress, TABLE_TILE)
 }
 
-/// [`transition_table`] with the reading of the DTW's first step (eq. 2.53 read literally or
-/// surfcap's reading, PAPER-NOTES); [`FirstStep::Straight`] gives [`transition_table`]'s table.
+/// [`transition_table`] with a reading of the DTW: its first step (eq. 2.53 read literally or
+/// surfcap's reading, PAPER-NOTES) and its normalisation (eq. 2.55's least ratio found exactly,
+/// or surfcap's sum then divide); [`FirstStep::Straight`] gives [`transition_table`]'s table.
 pub fn transition_table_from(
     d: &[f64],
     index: &FrameIndex,
     p: &TableParams,
-    first: FirstStep,
+    first: impl Into<DtwReading>,
     progress: &dyn Progress,
 ) -> Result<TransitionTable> {
-    table_in_tiles(d, index, p, first, progress, TABLE_TILE)
+    table_in_tiles(d, index, p, first.into(), progress, TABLE_TILE)
 }
 
 /// [`transition_table`] with tiles of `tile` frames (0: one tile).
@@ -177,14 +178,14 @@ pub fn transition_table_in_tiles(
     progress: &dyn Progress,
     tile: usize,
 ) -> Result<TransitionTable> {
-    table_in_tiles(d, index, p, FirstStep::Straight, progress, tile)
+    table_in_tiles(d, index, p, FirstStep::Straight.into(), progress, tile)
 }
 
 fn table_in_tiles(
     d: &[f64],
     index: &FrameIndex,
     p: &TableParams,
-    first: FirstStep,
+    first: DtwReading,
     progress: &dyn Progress,
     tile: usize,
 ) -> Result<TransitionTable> {
@@ -281,7 +282,7 @@ pub fn fixed_length_dtw_from(
     (i, j): (usize, usize),
     l: usize,
     slope: Slope,
-    first: FirstStep,
+    first: impl Into<DtwReading>,
 ) -> Option<(f64, u32)> {
     let n = room.len();
     let (after, before) = (&room.after, &room.before);

@@ -17,7 +17,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 use surfcap_mesh::Progress;
 
-use crate::dtw::{DtwTables, FirstStep, dtw_fill_from};
+use crate::dtw::{DtwReading, DtwTables, FirstStep, dtw_fill_from};
 use crate::error::{Error, Result};
 use crate::transition_table::TableParams;
 
@@ -115,15 +115,17 @@ pub fn transition_tile(
     transition_tile_from(d, after, p, FirstStep::Straight, span, progress)
 }
 
-/// [`transition_tile`] with the reading of the DTW's first step (eq. 2.53, PAPER-NOTES).
+/// [`transition_tile`] with a reading of the DTW (its first step, eq. 2.53, and its
+/// normalisation, eq. 2.55; PAPER-NOTES).
 pub fn transition_tile_from(
     d: &DistanceBlock,
     after: &[usize],
     p: &TableParams,
-    first: FirstStep,
+    first: impl Into<DtwReading>,
     span: &TableSpan,
     progress: &dyn Progress,
 ) -> Result<TableTile> {
+    let first: DtwReading = first.into();
     if p.l_min < 1 || p.l_min > p.l_max {
         return Err(Error::Parameter { name: "l-min", value: p.l_min as f64, expected: "1 <= l-min <= l-max" });
     }
@@ -174,7 +176,7 @@ fn source_row(
     i: usize,
     cols: &Range<usize>,
     after: &[usize],
-    (p, first_step): (&TableParams, FirstStep),
+    (p, first_step): (&TableParams, DtwReading),
     t: &mut DtwTables,
     row: &mut RowBest,
 ) {

@@ -57,8 +57,9 @@ pub struct MatrixOwner {
 /// column j: the distance between frames i and j; symmetric, 0 on the diagonal), as
 /// `surfcap distance --metric METRIC --w W -o d.npy` writes them: the same cache file (read
 /// when there, written when computed) and the same bits. `metric`: "deformation" (thesis
-/// eq. 2.13), "deformation-log" (eq. 2.14) or "euclidean" (eq. 2.2, in squared units); `w`: the
-/// weight of the stretch term. A read-only view of the cached matrix (`.copy()` to change it).
+/// eq. 2.13), "deformation-log" (eq. 2.14), "euclidean" (eq. 2.2, in squared units) or
+/// "deformation-literal" (eq. 2.13 with eq. 2.6 read literally, A^-1 B); `w`: the weight of the
+/// stretch term. A read-only view of the cached matrix (`.copy()` to change it).
 #[pyfunction]
 #[pyo3(signature = (subject, *, metric="deformation", w=0.01))]
 pub fn pose_distances<'py>(

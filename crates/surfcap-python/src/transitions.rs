@@ -204,6 +204,7 @@ pub fn transition_costs<'py>(
         fixed: count("fixed", fixed)?,
         plot_pairs: count("plot_pairs", Some(plot_pairs))?.expect("given"),
         first_step,
+        normalisation: surfcap_motion::dtw::Normalisation::default(),
     };
     let pipe = subject.pipe().clone();
     let r = py.detach(|| transition_costs_eval(&pipe, &opts)).py_err()?;

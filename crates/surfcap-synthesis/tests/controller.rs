@@ -4,45 +4,15 @@
 //! synthesis uses, says what the data cannot follow, and decides the same whatever the thread
 //! count.
 
-use std::sync::Arc;
+mod common;
 
+use common::prepared;
 use surfcap_builtin::locomotion::Gait as Procedural;
-use surfcap_builtin::mannequin::{BodyShape, mannequin};
-use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
-use surfcap_mesh::{NoProgress, Subject};
-use surfcap_motion::edge_weights::Alpha;
-use surfcap_motion::transition_table::TableParams;
-use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
 use surfcap_synthesis::Prepared;
 use surfcap_synthesis::controller::{Controller, ControllerOptions, Gait, Input, Move, ShownFrame};
 
-/// The mannequin (1,000 vertices) in 2 s clips at 30 fps of the given gaits.
-fn subject(gaits: &[Procedural]) -> Subject {
-    let m = mannequin(&BodyShape::average(), 1000).unwrap();
-    let clips: Vec<Clip> =
-        gaits.iter().enumerate().map(|(k, &g)| Clip::procedural(&m, g, 30.0, 2.0, k as u64).unwrap()).collect();
-    mannequin_subject("walker", &m, &clips, 30.0).unwrap()
-}
-
-fn prepared(s: Subject) -> Prepared {
-    let (l_min, l_max) = surfcap_motion::segment_bounds(s.fps);
-    let params = GraphParams {
-        table: TableParams { l_min, l_max, slope: Some(3) },
-        kind: GraphKind::Essential,
-        alpha: Alpha::new(0.05).unwrap(),
-    };
-    let pipe = Arc::new(Pipeline::new(s, CacheStore::memory_only(), Box::new(NoProgress)));
-    Prepared::new(pipe, params, None).unwrap()
-}
-
 fn all_gaits() -> Prepared {
-    prepared(subject(&[
-        Procedural::Walk,
-        Procedural::Jog,
-        Procedural::TurnLeft,
-        Procedural::TurnRight,
-        Procedural::Idle,
-    ]))
+    prepared(&[Procedural::Walk, Procedural::Jog, Procedural::TurnLeft, Procedural::TurnRight, Procedural::Idle])
 }
 
 /// Plays `script` (seconds, input) at 60 Hz; returns every frame shown and every decision.
@@ -130,7 +100,7 @@ fn meshes_are_the_blended_walk_and_their_centres_the_predicted_ones() {
 
 #[test]
 fn inputs_the_data_cannot_follow_are_named() {
-    let prep = prepared(subject(&[Procedural::Walk]));
+    let prep = prepared(&[Procedural::Walk]);
     let mut c = Controller::new(&prep, ControllerOptions::default()).unwrap();
     let run = c.step(&Input::velocity([1.0, 0.0]).with_gait(Gait::Run), 0.1).unwrap();
     assert!(run.cannot_follow.iter().any(|n| n.starts_with("no run clip")), "{:?}", run.cannot_follow);

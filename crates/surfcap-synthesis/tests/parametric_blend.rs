@@ -2,38 +2,16 @@
 //! pair up, the blended centre track is Algorithm 2's rigid part at a constant weight, and a
 //! straight walk blended with a turning walk turns in between.
 
-use std::sync::Arc;
+mod common;
 
+use common::prepared;
 use surfcap_builtin::locomotion::Gait as Procedural;
-use surfcap_builtin::mannequin::{BodyShape, mannequin};
-use surfcap_builtin::mannequin_subject::{Clip, mannequin_subject};
 use surfcap_geometry::motion_plane_alignment::plane_axes;
-use surfcap_mesh::{NoProgress, Subject};
 use surfcap_motion::blend::{Lambda, blend_placements_from};
-use surfcap_motion::edge_weights::Alpha;
-use surfcap_motion::transition_table::TableParams;
-use surfcap_pipeline::{CacheStore, GraphKind, GraphParams, Pipeline};
-use surfcap_synthesis::Prepared;
 use surfcap_synthesis::controller::parametric_blend::{
     BlendContext, BlendState, WEIGHT_PER_SECOND, frame_angle, weight_towards,
 };
 use surfcap_synthesis::controller::{Controller, ControllerOptions};
-
-/// The mannequin (1,000 vertices) in 2 s clips at 30 fps of the given gaits.
-fn prepared(gaits: &[Procedural]) -> Prepared {
-    let m = mannequin(&BodyShape::average(), 1000).unwrap();
-    let clips: Vec<Clip> =
-        gaits.iter().enumerate().map(|(k, &g)| Clip::procedural(&m, g, 30.0, 2.0, k as u64).unwrap()).collect();
-    let s: Subject = mannequin_subject("walker", &m, &clips, 30.0).unwrap();
-    let (l_min, l_max) = surfcap_motion::segment_bounds(s.fps);
-    let params = GraphParams {
-        table: TableParams { l_min, l_max, slope: Some(3) },
-        kind: GraphKind::Essential,
-        alpha: Alpha::new(0.05).unwrap(),
-    };
-    let pipe = Arc::new(Pipeline::new(s, CacheStore::memory_only(), Box::new(NoProgress)));
-    Prepared::new(pipe, params, None).unwrap()
-}
 
 fn options(parametric: bool) -> ControllerOptions {
     ControllerOptions { parametric, ..Default::default() }

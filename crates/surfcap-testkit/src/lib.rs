@@ -29,6 +29,11 @@
 //! [`http_request`] sends raw HTTP requests (no URL normalisation, so traversal attempts reach the
 //! server).
 //!
+//! # Markdown tables
+//!
+//! [`markdown_cells`] splits a row of a markdown table into its cells (`\|` is a literal bar),
+//! for tests that compare generated pages with the numbers they came from.
+//!
 //! # Documentation examples
 //!
 //! [`doc_examples()`] lists every command example of `README.md` and `docs/**/*.md` with its
@@ -377,6 +382,25 @@ impl Drop for ViewServer {
     }
 }
 
+/// The cells of a markdown table row, trimmed: `| a \\| b | c |` gives `["a | b", "c"]` (a
+/// backslash before a bar makes it a literal bar, as the generated pages escape it).
+pub fn markdown_cells(row: &str) -> Vec<String> {
+    let inner = row.trim().trim_start_matches('|').trim_end_matches('|');
+    let mut out = vec![String::new()];
+    let mut chars = inner.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' if chars.peek() == Some(&'|') => {
+                chars.next();
+                out.last_mut().expect("never empty").push('|');
+            }
+            '|' => out.push(String::new()),
+            _ => out.last_mut().expect("never empty").push(c),
+        }
+    }
+    out.iter().map(|s| s.trim().to_string()).collect()
+}
+
 /// A valid 1 x 1 PNG of one opaque RGB colour (stored, uncompressed deflate), for tests.
 pub fn png_1x1(rgb: [u8; 3]) -> Vec<u8> {
     fn crc(bytes: &[u8]) -> u32 {
@@ -453,5 +477,13 @@ mod tests {
         };
         assert!(m.contains("CI=true"), "{m}");
         assert!(matches!(real_data(Path::new("/nowhere"), false, false, false, true), RealData::Fail(_)));
+    }
+
+    #[test]
+    fn markdown_cells_keep_escaped_bars_and_trim() {
+        assert_eq!(markdown_cells("| a \\| b | c |"), ["a | b", "c"]);
+        assert_eq!(markdown_cells("  | x |y|  "), ["x", "y"]);
+        assert_eq!(markdown_cells("| one |"), ["one"]);
+        assert_eq!(markdown_cells("| a \\ b |"), ["a \\ b"], "a backslash alone stays");
     }
 }

@@ -82,7 +82,7 @@ pub fn kernel_name() -> String {
 pub fn distance_params(plan: &Plan) -> Result<DistanceParams> {
     let metric = PoseMetric::parse(&plan.params.metric).ok_or_else(|| {
         Error::Job(format!(
-            "metric {:?} in the plan: expected deformation, deformation-log or euclidean",
+            "metric {:?} in the plan: expected deformation, deformation-log, deformation-literal or euclidean",
             plan.params.metric
         ))
     })?;

@@ -195,7 +195,10 @@ impl Plan {
         }
         let p = &self.params;
         if PoseMetric::parse(&p.metric).is_none() {
-            return bad(format!("metric {:?}: expected deformation, deformation-log or euclidean", p.metric));
+            return bad(format!(
+                "metric {:?}: expected deformation, deformation-log, deformation-literal or euclidean",
+                p.metric
+            ));
         }
         if !(p.w.is_finite() && p.w >= 0.0) {
             return bad(format!("w {}: expected a finite stretch weight >= 0", p.w));

@@ -68,12 +68,16 @@ fn scale(metric: PoseMetric, w: f64, triangles: usize, units: &surfcap_mesh::Uni
                 "a distance is the sum over the vertices of the squared distance between the two poses after the best rotation about the up axis and ground-plane shift (eq. 2.2), in {unit} squared"
             )
         }
-        PoseMetric::Deformation | PoseMetric::DeformationLog => {
-            let stretch = if metric == PoseMetric::Deformation { "||S - I||" } else { "||log S||" };
+        PoseMetric::Deformation | PoseMetric::DeformationLog | PoseMetric::DeformationLiteral => {
+            let stretch = if metric == PoseMetric::DeformationLog { "||log S||" } else { "||S - I||" };
             let per = mean / triangles.max(1) as f64;
             format!(
                 "a distance is the sum over the {triangles} triangles of the angle (radians) by which each turns between the two poses plus {w} x its stretch {stretch} (eq. {}); divided by {triangles}, the mean {mean:.1} is {per:.3} rad ({:.1} degrees) per triangle",
-                if metric == PoseMetric::Deformation { "2.13" } else { "2.14" },
+                match metric {
+                    PoseMetric::DeformationLog => "2.14",
+                    PoseMetric::DeformationLiteral => "2.13, with eq. 2.6 read literally as A^-1 B",
+                    _ => "2.13",
+                },
                 per.to_degrees()
             )
         }

@@ -6,9 +6,10 @@
 //! in this process (the eval commands' own `run`, with their progress bars; what it prints, its
 //! tables, is captured for the page), into its own folder `runs/<eval>/` (the eval's
 //! all-or-nothing folder output), and a run record `runs/<eval>.run.json` (time, machine,
-//! settings, printed text) is committed after it as the completion marker. An eval with a paper
-//! reading that has a switch (the DTW's first step of `eval transitions`) runs once more under
-//! the other reading, into `runs/<eval>-<reading>/`, shown beside it. A run whose record is there
+//! settings, printed text) is committed after it as the completion marker. An eval with paper
+//! readings that have a switch (`READINGS`: eq. 2.6 in `eval pose-metric`, the DTW's first step
+//! and normalisation in `eval transitions`, the essential graph's ties in `eval graphs`) runs
+//! once more per other reading, into `runs/<eval>-<reading>/`, shown beside it. A run whose record is there
 //! with the same settings is not redone (unless `--redo`); derived matrices go through the cache
 //! as for the evals themselves. Then the page (`surfcap_eval::reproduce_report`): index.html,
 //! results.json and results.csv, committed together, and with `--results-dir` the same tables
@@ -96,30 +97,55 @@ struct Recipe {
     reading: Option<&'static str>,
 }
 
-/// Readings of the papers that change numbers and have a cheap switch: for an eval, (folder
-/// suffix, the default's reading, the other reading, the arguments that choose it). The DTW's
-/// first step (PAPER-NOTES): surfcap lets up to p - 1 straight steps open the warping path, the
-/// literal eq. 2.53 takes a diagonal step first.
-const READINGS: [(&str, &str, &str, &str, [&str; 2]); 1] = [(
-    "transitions",
-    "literal",
-    "surfcap's reading of eq. 2.53",
-    "eq. 2.53 read literally",
-    ["--dtw-first-step", "literal"],
-)];
+/// An eval's paper readings that change numbers and have a cheap switch (PAPER-NOTES): the
+/// eval, the name of surfcap's readings (its default run), and per other reading the run
+/// folder's suffix, the reading's name and the arguments that choose it.
+type Readings = (&'static str, &'static str, &'static [(&'static str, &'static str, [&'static str; 2])]);
+
+/// The readings shown beside surfcap's:
+/// - eq. 2.6, the deformation gradient: surfcap's J = B A^-1, or A^-1 B as printed;
+/// - eq. 2.53, the DTW's first step: surfcap lets up to p - 1 straight steps open the warping
+///   path, the literal eq. 2.53 takes a diagonal step first;
+/// - eq. 2.55, the DTW's normalised cost: surfcap's DP minimises the sum and divides by the
+///   path length, the exact one finds the least ratio;
+/// - eq. 3.2 and the essential graph's ties: surfcap adds a same-sequence edge only when
+///   strictly cheaper than the original frames; read literally every forward pair has one, and
+///   one tying with the original frames is kept.
+const READINGS: [Readings; 3] = [
+    (
+        "pose-metric",
+        "surfcap's reading of eq. 2.6, J = B A^-1",
+        &[("literal", "eq. 2.6 read literally, A^-1 B", ["--deformation-gradient", "literal"])],
+    ),
+    (
+        "transitions",
+        "surfcap's readings of eq. 2.53 and 2.55",
+        &[
+            ("literal", "eq. 2.53 read literally", ["--dtw-first-step", "literal"]),
+            ("exact-ratio", "eq. 2.55's least ratio found exactly", ["--dtw-ratio", "exact"]),
+        ],
+    ),
+    (
+        "graphs",
+        "surfcap's reading of eq. 3.2 and its tie rule",
+        &[("literal-ties", "eq. 3.2 read literally, ties to the direct edge", ["--tie-rule", "literal"])],
+    ),
+];
 
 /// The recipe of `eval` and those of its other readings ([`READINGS`]).
 fn recipes(eval: &str, data: &Path, knight: &Path, quick: bool) -> Option<(Recipe, Vec<Recipe>)> {
     let mut main = recipe(eval, data, knight, quick)?;
     let mut others = Vec::new();
-    for (e, suffix, ours, other, args) in READINGS {
+    for (e, ours, alternatives) in READINGS {
         if e == eval {
             main.reading = Some(ours);
-            let mut alt = main.clone();
-            alt.args.extend(args.iter().map(|a| a.to_string()));
-            alt.folder = format!("{eval}-{suffix}");
-            alt.reading = Some(other);
-            others.push(alt);
+            for (suffix, other, args) in alternatives {
+                let mut alt = main.clone();
+                alt.args.extend(args.iter().map(|a| a.to_string()));
+                alt.folder = format!("{eval}-{suffix}");
+                alt.reading = Some(other);
+                others.push(alt);
+            }
         }
     }
     Some((main, others))

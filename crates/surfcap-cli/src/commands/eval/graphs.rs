@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use surfcap_eval::graph_comparison_eval::{AlphaRow, GraphComparisonOptions, graph_comparison_eval};
+use surfcap_eval::graph_comparison_eval::{AlphaRow, GraphComparisonOptions, TieReading, graph_comparison_eval};
 use surfcap_motion::edge_weights::Alpha;
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
@@ -15,6 +15,13 @@ pub struct Args {
     /// Values of alpha.
     #[arg(long = "alpha", value_delimiter = ',', default_value = "0.01,0.02,0.03,0.05,0.1,0.2")]
     pub alphas: Vec<Alpha>,
+    /// Reading of the essential graph's ties: surfcap (a same-sequence transition gets an edge
+    /// only when strictly cheaper than playing the original frames; a shortest path is replaced
+    /// only by a strictly cheaper one) or literal (eq. 3.2 read literally: every forward
+    /// same-sequence pair has an edge of weight min(alpha (j - i), D + alpha L), and an edge that
+    /// ties with the original frames, to 1e-12 relative, is kept). The motion graph is the same.
+    #[arg(long, value_enum, default_value_t = TieArg::Surfcap)]
+    pub tie_rule: TieArg,
     /// Frame pairs in the shortest-path plots.
     #[arg(long, default_value_t = 200, value_parser = crate::options::count)]
     pub plot_pairs: usize,
@@ -29,12 +36,34 @@ pub struct Args {
     pub subject: SubjectArgs,
 }
 
+/// The readings of the essential graph's ties, as `--tie-rule` names them.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum TieArg {
+    /// surfcap's reading.
+    Surfcap,
+    /// Eq. 3.2 read literally.
+    Literal,
+}
+
+impl From<TieArg> for TieReading {
+    fn from(a: TieArg) -> Self {
+        match a {
+            TieArg::Surfcap => TieReading::Surfcap,
+            TieArg::Literal => TieReading::Literal,
+        }
+    }
+}
+
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = super::folder::claim(ctx, &a.output, &[&a.subject.path], "eval-graphs")?;
     anyhow::ensure!(!a.alphas.is_empty(), "--alpha: expected at least one value");
     let s = a.subject.open(ctx)?;
-    let opts =
-        GraphComparisonOptions { alphas: a.alphas.clone(), plot_pairs: a.plot_pairs, table: a.table.params(s.fps)? };
+    let opts = GraphComparisonOptions {
+        alphas: a.alphas.clone(),
+        plot_pairs: a.plot_pairs,
+        table: a.table.params(s.fps)?,
+        ties: a.tie_rule.into(),
+    };
     let pipe = a.cache.pipeline(ctx, s)?;
     let output = a.output.as_path();
     let r = graph_comparison_eval(&pipe, &opts)?;
@@ -80,8 +109,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (report, rp) = super::folder::save_report(output, "graphs.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
-            "subject {} ({} frames); shortest-path costs over the pairs the motion graph connects (thesis Fig. 3.8)",
-            r.subject, r.frames
+            "subject {} ({} frames); shortest-path costs over the pairs the motion graph connects (thesis Fig. 3.8); \
+             essential graph's ties: {}",
+            r.subject,
+            r.frames,
+            if r.tie_rule == "literal" { "eq. 3.2 read literally" } else { "surfcap's reading" }
         );
         println!(
             "{:>7} | {:>10} {:>10} | {:>10} {:>10} | {:>9} {:>9} | {:>7}",

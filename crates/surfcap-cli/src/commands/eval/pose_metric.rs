@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use surfcap_eval::mantel_test::CorrelogramClass;
-use surfcap_eval::pose_metric_eval::{MetricAgreement, PoseMetricOptions, pose_metric_eval};
+use surfcap_eval::pose_metric_eval::{GradientReading, MetricAgreement, PoseMetricOptions, pose_metric_eval};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::folder::{claim, print_wrote, save_report};
@@ -27,6 +27,11 @@ pub struct Args {
     /// Seed of the permutations.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Reading of eq. 2.6, the deformation gradient behind our distance: surfcap (J = B A^-1,
+    /// the spatial gradient) or literal (eq. 2.6 read literally: A^-1 B, with A and B the
+    /// triangle's (v1 - v3, v2 - v3, n) in poses i and j as matrix columns).
+    #[arg(long, value_enum, default_value_t = GradientArg::Surfcap)]
+    pub deformation_gradient: GradientArg,
     /// Folder for the report (JSON) and the correlogram plot (SVG, PNG).
     #[arg(short, long, default_value = "pose-metric")]
     pub output: PathBuf,
@@ -36,10 +41,33 @@ pub struct Args {
     pub source: SourceOpts,
 }
 
+/// The readings of eq. 2.6, as `--deformation-gradient` names them.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum GradientArg {
+    /// J = B A^-1 (surfcap's reading).
+    Surfcap,
+    /// A^-1 B (eq. 2.6 read literally).
+    Literal,
+}
+
+impl From<GradientArg> for GradientReading {
+    fn from(a: GradientArg) -> Self {
+        match a {
+            GradientArg::Surfcap => GradientReading::Surfcap,
+            GradientArg::Literal => GradientReading::Literal,
+        }
+    }
+}
+
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = claim(ctx, &a.output, &[&a.subject], "eval-pose-metric")?;
-    let opts =
-        PoseMetricOptions { max_frames: a.max_frames, permutations: a.permutations, classes: a.classes, seed: a.seed };
+    let opts = PoseMetricOptions {
+        max_frames: a.max_frames,
+        permutations: a.permutations,
+        classes: a.classes,
+        seed: a.seed,
+        gradient: a.deformation_gradient.into(),
+    };
     let s = open(ctx, &a.subject, &a.source)?;
     let (cache, output) = (&a.cache, a.output.as_path());
     let progress = Box::new(crate::progress::Bar::new(ctx));
@@ -71,12 +99,18 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (report, rp) = save_report(output, "pose-metric.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
-            "subject {}: {} of {} frames, {} joints (roots and rig helpers left out), {} Mantel permutations",
+            "subject {}: {} of {} frames, {} joints (roots and rig helpers left out), {} Mantel permutations, \
+             deformation gradient {} (eq. 2.6)",
             r.subject,
             r.frames_used,
             r.frames_total,
             r.joints_used.len(),
-            opts.permutations
+            opts.permutations,
+            if r.deformation_gradient == "literal" {
+                "A^-1 B, read literally"
+            } else {
+                "J = B A^-1, surfcap's reading"
+            }
         );
         println!("{:<18} {:>10} {:>10}", "", "Eucl.", "Ours");
         type Field = fn(&MetricAgreement) -> f64;

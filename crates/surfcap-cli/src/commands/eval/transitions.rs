@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use surfcap_eval::transition_costs_eval::{TransitionCostsOptions, transition_costs_eval};
-use surfcap_motion::dtw::FirstStep;
+use surfcap_motion::dtw::{FirstStep, Normalisation};
 use surfcap_plot::{LineChart, Series, write_line_chart};
 
 use super::folder::{claim, print_wrote, save_report};
@@ -27,6 +27,12 @@ pub struct Args {
     /// every path opens with a diagonal step); the report records which
     #[arg(long, value_enum, default_value_t = FirstStepArg::Surfcap)]
     pub dtw_first_step: FirstStepArg,
+    /// Normalisation of the DTW's cost (thesis eq. 2.50 and 2.55): surfcap (the DP minimises the
+    /// summed cost over the warping path and divides it by the path length L) or exact (eq. 2.55's
+    /// least normalised cost found exactly: the path of least sum / L, with L a second index of
+    /// the DP, several times slower); the report records which
+    #[arg(long, value_enum, default_value_t = RatioArg::Surfcap)]
+    pub dtw_ratio: RatioArg,
     /// Folder for the report and the plots.
     #[arg(short, long, default_value = "transitions-eval")]
     pub output: PathBuf,
@@ -54,6 +60,24 @@ impl From<FirstStepArg> for FirstStep {
     }
 }
 
+/// The readings of the DTW's normalisation, as `--dtw-ratio` names them.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RatioArg {
+    /// The least summed cost divided by its path length (surfcap's reading).
+    Surfcap,
+    /// The least ratio of summed cost to path length (eq. 2.55 minimised exactly).
+    Exact,
+}
+
+impl From<RatioArg> for Normalisation {
+    fn from(a: RatioArg) -> Self {
+        match a {
+            RatioArg::Surfcap => Normalisation::SumThenDivide,
+            RatioArg::Exact => Normalisation::ExactRatio,
+        }
+    }
+}
+
 pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let outs = claim(ctx, &a.output, &[&a.subject.path], "eval-transitions")?;
     let opts = TransitionCostsOptions {
@@ -61,6 +85,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         fixed: a.fixed,
         plot_pairs: a.plot_pairs,
         first_step: a.dtw_first_step.into(),
+        normalisation: a.dtw_ratio.into(),
     };
     let pipe = a.cache.pipeline(ctx, a.subject.open(ctx)?)?;
     let output = a.output.as_path();
@@ -111,8 +136,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let (report, rp) = save_report(output, "transitions.json", &r, "plots", &plots)?;
     ctx.result(&report, || {
         println!(
-            "subject {name}: {} frames at {} fps; segments {}..{}; standard and DTW-only length {fixed}; DTW first step: {}",
-            r.frames, r.fps, r.l_min, r.l_max, r.dtw_first_step
+            "subject {name}: {} frames at {} fps; segments {}..{}; standard and DTW-only length {fixed}; DTW first step: {}; DTW ratio: {}",
+            r.frames, r.fps, r.l_min, r.l_max, r.dtw_first_step, r.dtw_ratio
         );
         println!(
             "{:>6} {:>8} {:>22} {:>22} {:>22} {:>10}",
