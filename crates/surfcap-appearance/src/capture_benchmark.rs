@@ -230,6 +230,8 @@ fn gaussian3(rng: &mut ChaCha8Rng) -> V3 {
 pub struct BlendSample {
     pub camera: usize,
     pub pixel: [f64; 2],
+    /// The point's depth along the camera's view axis.
+    pub depth: f64,
     pub weight: f64,
 }
 
@@ -259,7 +261,7 @@ pub fn blend_samples(
         if z > d.depth[py * cw + px] + depth_tolerance {
             continue;
         }
-        out.push(BlendSample { camera: j, pixel: [x, y], weight: cos });
+        out.push(BlendSample { camera: j, pixel: [x, y], depth: z, weight: cos });
     }
     Ok(out)
 }

@@ -14,7 +14,10 @@
 //! every `x + d_j`. Its mean `d̄ = Σ w_j d_j / Σ w_j` is the displacement a flow can follow; the
 //! weighted RMS spread `sqrt(Σ w_j |d_j - d̄|² / Σ w_j)` is the ghosting no single flow can.
 //! A texel's displacement is undefined when one of its samples mixes pixel centres of two UV
-//! charts (a seam: the mean of their atlas coordinates means nothing) or touches the background.
+//! charts (a seam: the mean of their atlas coordinates means nothing), touches the background,
+//! or mixes a pixel centre whose true surface lies further than the blend's depth tolerance
+//! from the texel's point (an occluder or the far side of a silhouette: content from another
+//! surface, which no displacement describes).
 //!
 //! Between two frames a and b whose content comes from `x + d_a(x)` and `x + d_b(x)`, the true
 //! flow `w` with `a(x) ≈ b(x + w(x))` solves `x + d_a(x) = x + w + d_b(x + w)`
@@ -48,6 +51,23 @@ impl ContentDisplacement {
     /// defined texels.
     pub fn summary(&self) -> (f64, f64, usize) {
         self.summary_where(|_| true)
+    }
+
+    /// Medians over the defined texels of |mean| and of the spread (texels; 0 when none is).
+    pub fn medians(&self) -> (f64, f64) {
+        let mut size: Vec<f32> = Vec::new();
+        let mut spread: Vec<f32> = Vec::new();
+        for i in 0..self.defined.len() {
+            if self.defined[i] {
+                size.push(self.mean.u[i].hypot(self.mean.v[i]));
+                spread.push(self.spread[i]);
+            }
+        }
+        let median = |v: &mut Vec<f32>| {
+            v.sort_by(f32::total_cmp);
+            v.get(v.len() / 2).map_or(0.0, |&x| x as f64)
+        };
+        (median(&mut size), median(&mut spread))
     }
 
     /// [`Self::summary`] over the defined texels where `keep` is true.
@@ -107,8 +127,20 @@ fn pixel_source(frags: &Fragments, atlas: &UvAtlas, charts: &[u32], size: [usize
 }
 
 /// Camera `frags`' bilinear sample at pixel `q` (x right, y down, centres at +0.5), as the
-/// blend takes it: the atlas coordinates it shows, or `None` across a seam or the background.
-fn sample_source(frags: &Fragments, atlas: &UvAtlas, charts: &[u32], size: [usize; 2], q: [f64; 2]) -> Option<[f64; 2]> {
+/// blend takes it: the atlas coordinates it shows, or `None` across a seam, on the background,
+/// across a depth step (pixel centres more than `tolerance` apart in depth: the sample mixes two
+/// surfaces), or where the surface it shows lies more than [`OTHER_SURFACE`] tolerances nearer
+/// or further than the texel's point (at depth `z`): an occluder the depth test let through,
+/// whose content no displacement describes.
+fn sample_source(
+    frags: &Fragments,
+    atlas: &UvAtlas,
+    charts: &[u32],
+    size: [usize; 2],
+    q: [f64; 2],
+    z: f64,
+    tolerance: f64,
+) -> Option<[f64; 2]> {
     let (w, h) = (frags.width, frags.height);
     let x = (q[0] - 0.5).clamp(0.0, (w - 1) as f64);
     let y = (q[1] - 0.5).clamp(0.0, (h - 1) as f64);
@@ -118,11 +150,14 @@ fn sample_source(frags: &Fragments, atlas: &UvAtlas, charts: &[u32], size: [usiz
     let corners = [(x0, y0, (1.0 - fx) * (1.0 - fy)), (x1, y0, fx * (1.0 - fy)), (x0, y1, (1.0 - fx) * fy), (x1, y1, fx * fy)];
     let mut s = [0.0f64; 2];
     let mut chart = None;
+    let (mut near, mut far, mut seen) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for (cx, cy, wt) in corners {
         if wt <= 0.0 {
             continue;
         }
         let (src, c) = pixel_source(frags, atlas, charts, size, cy * w + cx)?;
+        let d = frags.depth[cy * w + cx];
+        (near, far, seen) = (near.min(d), far.max(d), seen + wt * d);
         if chart.is_some_and(|k| k != c) {
             return None;
         }
@@ -130,8 +165,16 @@ fn sample_source(frags: &Fragments, atlas: &UvAtlas, charts: &[u32], size: [usiz
         s[0] += wt * src[0];
         s[1] += wt * src[1];
     }
+    if far - near > tolerance || (seen - z).abs() > OTHER_SURFACE * tolerance {
+        return None;
+    }
     chart.map(|_| s)
 }
+
+/// How many depth tolerances from the texel's point the surface a sample shows may lie before
+/// it counts as another surface (the errors themselves move the seen point along the surface,
+/// and on a slanted surface that changes its depth).
+pub const OTHER_SURFACE: f64 = 3.0;
 
 /// The mesh and cameras a capture is re-projected through and the ones that took it.
 #[derive(Debug, Clone, Copy)]
@@ -183,7 +226,8 @@ pub fn content_displacement(
             let x = [(i % w) as f64, (i / w) as f64];
             let mut ds: Vec<([f64; 2], f64)> = Vec::new();
             for s in blend_samples(p, n, g.calibrated, &depth, depth_tolerance)? {
-                let Some(src) = sample_source(&seen[s.camera], atlas, &charts, [w, h], s.pixel) else {
+                let z = s.depth;
+                let Some(src) = sample_source(&seen[s.camera], atlas, &charts, [w, h], s.pixel, z, depth_tolerance) else {
                     return Ok(None);
                 };
                 ds.push(([src[0] - x[0], src[1] - x[1]], s.weight));

@@ -12,6 +12,16 @@
 //!    estimator, which caches them) against the true flow `true_flow(reference, k)`, beside the
 //!    error of a zero flow (the drift itself); optionally for a few frames with a second
 //!    estimator (e.g. full resolution).
+//!    On the capture-like benchmark the true flow is the one between the frames' true content
+//!    displacements (`surfcap_appearance::content_displacement`), over the texels where the
+//!    reference's is defined.
+//! 1b. **Warps against the truth** (where the benchmark knows each texel's content
+//!    displacement: the capture-like one): how far each capture error alone moves the content
+//!    and how far the cameras' displacements spread (ghosting); the Poisson model's backward
+//!    warps, with the sweep's numbers of eigen warps, against the true backward flows; the
+//!    variance of the textures left after aligning them; the model built on the true flows
+//!    (one alignment, to the frame closest to the mean) and the splits of K with no warp, a
+//!    third and half of K, with either flows.
 //! 2. **Poisson vs direct warping** (Fig. 4.5-4.6): the model built with each warping;
 //!    reconstruction of the training frames with every component, MSE and SSIM in the texture
 //!    domain against the input frames and the clean ones; the same over the component sweep.
@@ -154,6 +164,10 @@ pub struct CauseRow {
     pub displacement: f64,
     /// Mean spread of the cameras' displacements about it (ghosting), texels.
     pub spread: f64,
+    /// The same as medians over the texels (mean over the frames): the means are pulled by
+    /// the few texels whose samples show content from far away in the atlas.
+    pub median_displacement: f64,
+    pub median_spread: f64,
     /// Share of the active texels where it is defined.
     pub defined_share: f64,
 }
@@ -176,7 +190,7 @@ impl CaptureSequence {
             ("none", ErrorCauses::NONE),
         ];
         let active = benchmark.mask().len().max(1) as f64;
-        type Made = (CaptureFrame, ContentDisplacement, Vec<(f64, f64, f64)>);
+        type Made = (CaptureFrame, ContentDisplacement, Vec<[f64; 5]>);
         let made: Vec<Made> = (0..n)
             .into_par_iter()
             .map(|k| {
@@ -184,12 +198,16 @@ impl CaptureSequence {
                 let all = benchmark.content_displacement(k, ErrorCauses::BOTH)?;
                 let mut rows = Vec::new();
                 for (_, c) in &causes {
-                    let (d, s, m) = if *c == ErrorCauses::BOTH {
-                        all.summary()
+                    let one;
+                    let d = if *c == ErrorCauses::BOTH {
+                        &all
                     } else {
-                        benchmark.content_displacement(k, *c)?.summary()
+                        one = benchmark.content_displacement(k, *c)?;
+                        &one
                     };
-                    rows.push((d, s, m as f64 / active));
+                    let (size, spread, m) = d.summary();
+                    let (median_size, median_spread) = d.medians();
+                    rows.push([size, spread, m as f64 / active, median_size, median_spread]);
                 }
                 progress.advance(1);
                 Ok((f, all, rows))
@@ -202,9 +220,11 @@ impl CaptureSequence {
             .enumerate()
             .map(|(j, (name, _))| CauseRow {
                 cause: name.to_string(),
-                displacement: made.iter().map(|m| m.2[j].0).sum::<f64>() / nf,
-                spread: made.iter().map(|m| m.2[j].1).sum::<f64>() / nf,
-                defined_share: made.iter().map(|m| m.2[j].2).sum::<f64>() / nf,
+                displacement: made.iter().map(|m| m.2[j][0]).sum::<f64>() / nf,
+                spread: made.iter().map(|m| m.2[j][1]).sum::<f64>() / nf,
+                defined_share: made.iter().map(|m| m.2[j][2]).sum::<f64>() / nf,
+                median_displacement: made.iter().map(|m| m.2[j][3]).sum::<f64>() / nf,
+                median_spread: made.iter().map(|m| m.2[j][4]).sum::<f64>() / nf,
             })
             .collect();
         let (frames, displacements): (Vec<_>, Vec<_>) = made.into_iter().map(|m| (m.0, m.1)).unzip();
@@ -328,7 +348,7 @@ pub struct FlowAccuracy {
     /// The estimator's description (e.g. its finest scale), as the caller gives it.
     pub estimator: String,
     pub reference: String,
-    /// `None` when the benchmark does not know the true flow (the capture-like one).
+    /// `None` when the benchmark does not know the true flow (a folder of frames).
     pub errors: Option<EndPointErrors>,
     /// The second estimator's description and errors on the first frames, when run.
     pub second_estimator: Option<String>,
@@ -423,6 +443,8 @@ pub struct BackwardWarpRow {
     pub eigen_warps: usize,
     /// Mean end-point error over the training frames (the reference left out), texels.
     pub end_point_error: f64,
+    /// The per-frame median over the texels, mean over the frames.
+    pub median_end_point_error: f64,
 }
 
 /// Ours at one split of K between eigen textures and eigen warps.
@@ -448,6 +470,7 @@ pub struct WarpTruth {
     pub backward: Vec<BackwardWarpRow>,
     /// The mean length of the true backward flows (the error of a zero flow), texels.
     pub backward_zero_flow: f64,
+    pub backward_zero_flow_median: f64,
     /// The model built on the true flows (one alignment, to the frame closest to the mean).
     pub true_warps_reference: String,
     pub true_warps_all_components: Scores,
@@ -657,7 +680,7 @@ fn warp_truth(
     counts.dedup();
     progress.start("warps against the truth: backward warps", n as u64);
     let others: Vec<usize> = (0..n).filter(|&i| complete[i] != reference).collect();
-    let per_frame: Vec<(Vec<f64>, f64)> = others
+    let per_frame: Vec<(Vec<[f64; 2]>, [f64; 2])> = others
         .par_iter()
         .map(|&i| {
             let k = complete[i];
@@ -666,9 +689,9 @@ fn warp_truth(
             let (_, wc) = poisson.model.frame_coefficients(i)?;
             let errs = counts
                 .iter()
-                .map(|&kw| Ok(poisson.model.backward_warp(&wc[..kw.min(wc.len())])?.end_point_error(&truth, &keep)))
-                .collect::<Result<Vec<f64>>>()?;
-            let zero = FlowField::zeros(truth.width, truth.height).end_point_error(&truth, &keep);
+                .map(|&kw| Ok(end_point_errors(&poisson.model.backward_warp(&wc[..kw.min(wc.len())])?, &truth, &keep)))
+                .collect::<Result<Vec<_>>>()?;
+            let zero = end_point_errors(&FlowField::zeros(truth.width, truth.height), &truth, &keep);
             progress.advance(1);
             Ok((errs, zero))
         })
@@ -680,10 +703,12 @@ fn warp_truth(
         .enumerate()
         .map(|(j, &kw)| BackwardWarpRow {
             eigen_warps: kw,
-            end_point_error: per_frame.iter().map(|p| p.0[j]).sum::<f64>() / m,
+            end_point_error: per_frame.iter().map(|p| p.0[j][0]).sum::<f64>() / m,
+            median_end_point_error: per_frame.iter().map(|p| p.0[j][1]).sum::<f64>() / m,
         })
         .collect();
-    let backward_zero_flow = per_frame.iter().map(|p| p.1).sum::<f64>() / m;
+    let backward_zero_flow = per_frame.iter().map(|p| p.1[0]).sum::<f64>() / m;
+    let backward_zero_flow_median = per_frame.iter().map(|p| p.1[1]).sum::<f64>() / m;
 
     // The model on the true flows: each texture is found among the inputs by its texels; a
     // flow to a texture that is not an input (an aligned one) goes to the reference, the first
@@ -757,12 +782,27 @@ fn warp_truth(
         reference: data.names[reference].clone(),
         backward,
         backward_zero_flow,
+        backward_zero_flow_median,
         true_warps_reference: data.names[true_model.reference()].clone(),
         true_warps_all_components,
         aligned_variance_share,
         true_aligned_variance_share,
         splits,
     })
+}
+
+/// Mean and median end-point error of `flow` against `truth` over the texels `keep` selects.
+fn end_point_errors(flow: &FlowField, truth: &FlowField, keep: impl Fn(usize) -> bool) -> [f64; 2] {
+    let mut e: Vec<f64> = (0..flow.u.len())
+        .filter(|&i| keep(i))
+        .map(|i| ((flow.u[i] - truth.u[i]) as f64).hypot((flow.v[i] - truth.v[i]) as f64))
+        .collect();
+    if e.is_empty() {
+        return [0.0, 0.0];
+    }
+    let mean = e.iter().sum::<f64>() / e.len() as f64;
+    e.sort_by(f64::total_cmp);
+    [mean, e[e.len() / 2]]
 }
 
 /// The active texels of a texture, channel after channel.

@@ -186,23 +186,31 @@ fn print_tables(r: &AppearanceEval) {
         );
     }
     if let Some(t) = &r.warp_truth {
-        println!("true content displacement (texels, mean over frames and defined texels): cause, displacement, ghosting spread, defined share");
+        println!(
+            "true content displacement (texels; over the defined texels, mean and median, mean over frames): cause, displacement, ghosting spread, median displacement, median spread, defined share"
+        );
         for c in &t.causes {
             println!(
-                "  {:<12} {:>7.3} {:>7.3} {:>6.1}%",
+                "  {:<12} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>6.1}%",
                 c.cause,
                 c.displacement,
                 c.spread,
+                c.median_displacement,
+                c.median_spread,
                 100.0 * c.defined_share
             );
         }
-        let warps: Vec<String> =
-            t.backward.iter().map(|b| format!("{} warps {:.3}", b.eigen_warps, b.end_point_error)).collect();
+        let warps: Vec<String> = t
+            .backward
+            .iter()
+            .map(|b| format!("{} warps {:.3} / {:.3}", b.eigen_warps, b.end_point_error, b.median_end_point_error))
+            .collect();
         println!(
-            "backward warps vs the true ones, reference {}: end-point error {} texels (zero flow {:.3})",
+            "backward warps vs the true ones, reference {}: end-point error (mean / median) {} texels (zero flow {:.3} / {:.3})",
             t.reference,
             warps.join(", "),
-            t.backward_zero_flow
+            t.backward_zero_flow,
+            t.backward_zero_flow_median
         );
         println!(
             "variance left after alignment: {:.1}% with the estimated flows, {:.1}% with the true ones",
