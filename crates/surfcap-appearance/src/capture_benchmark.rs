@@ -878,19 +878,25 @@ mod tests {
 
     #[test]
     fn content_comes_from_its_own_texel_without_error_and_from_elsewhere_with_it() {
-        let b = tiny_benchmark(5);
+        // Renders fine enough that the four pixel centres of a sample lie within the depth
+        // tolerance of each other on the cube's slanted faces.
+        let (topo, pos) = cube();
+        let options = CaptureOptions { frames: 3, seed: 5, size: 32, cameras: 4, image_size: 192, ..CaptureOptions::default() };
+        let b = CaptureBenchmark::new(&topo, &pos, &smooth_texture(32), &options).unwrap();
         // The texels the charts cover (the dilated ring's points are its inner neighbours').
         let covered = |i: usize| b.raster.covered(i);
         let summary = |c: ErrorCauses| b.content_displacement(1, c).unwrap().summary_where(covered);
         let (none, none_spread, defined) = summary(ErrorCauses::NONE);
         let n_covered = (0..32 * 32).filter(|&i| covered(i)).count();
-        assert!(defined as f64 > 0.5 * n_covered as f64, "{defined} of {n_covered}");
+        // Texels a camera sees at a grazing angle (a pixel there spans several texels of depth
+        // beyond the tolerance) are left undefined; the ones all cameras see squarely remain.
+        assert!(defined >= 40 && defined < n_covered, "{defined} of {n_covered}");
         // Without error every camera's sample shows the texel's own point, up to the bilinear
         // mix of four pixel centres.
         assert!(none < 0.05 && none_spread < 0.05, "{none} {none_spread}");
         let (ring, _, _) = b.content_displacement(1, ErrorCauses::NONE).unwrap().summary_where(|i| !covered(i));
         assert!(ring > 0.3, "the ring shows its inner neighbours' points: {ring}");
-        let mut big = tiny_benchmark(5);
+        let mut big = b.clone();
         big.options.calibration_deg = 0.0;
         for (a, c) in big.actual.iter_mut().zip(&big.calibrated) {
             // Every actual camera looks 0.15 units (about 2 texels of a 32-texel cube face) off.
