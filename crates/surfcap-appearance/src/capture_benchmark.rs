@@ -881,7 +881,8 @@ mod tests {
         // Renders fine enough that the four pixel centres of a sample lie within the depth
         // tolerance of each other on the cube's slanted faces.
         let (topo, pos) = cube();
-        let options = CaptureOptions { frames: 3, seed: 5, size: 32, cameras: 4, image_size: 192, ..CaptureOptions::default() };
+        let options =
+            CaptureOptions { frames: 3, seed: 5, size: 32, cameras: 4, image_size: 192, ..CaptureOptions::default() };
         let b = CaptureBenchmark::new(&topo, &pos, &smooth_texture(32), &options).unwrap();
         // The texels the charts cover (the dilated ring's points are its inner neighbours').
         let covered = |i: usize| b.raster.covered(i);

@@ -113,7 +113,13 @@ pub fn uv_charts(atlas: &UvAtlas) -> Vec<u32> {
 
 /// The atlas coordinates (texel centres at integers, as [`sample_bilinear`]) and chart of the
 /// true surface a pixel centre shows, or `None` on the background.
-fn pixel_source(frags: &Fragments, atlas: &UvAtlas, charts: &[u32], size: [usize; 2], i: usize) -> Option<([f64; 2], u32)> {
+fn pixel_source(
+    frags: &Fragments,
+    atlas: &UvAtlas,
+    charts: &[u32],
+    size: [usize; 2],
+    i: usize,
+) -> Option<([f64; 2], u32)> {
     if !frags.covered(i) {
         return None;
     }
@@ -149,7 +155,8 @@ fn sample_source(
     let (x0, y0) = (x.floor() as usize, y.floor() as usize);
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
     let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-    let corners = [(x0, y0, (1.0 - fx) * (1.0 - fy)), (x1, y0, fx * (1.0 - fy)), (x0, y1, (1.0 - fx) * fy), (x1, y1, fx * fy)];
+    let corners =
+        [(x0, y0, (1.0 - fx) * (1.0 - fy)), (x1, y0, fx * (1.0 - fy)), (x0, y1, (1.0 - fx) * fy), (x1, y1, fx * fy)];
     let mut s = [0.0f64; 2];
     let mut chart = None;
     let (mut near, mut far, mut seen) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
@@ -208,8 +215,7 @@ pub fn content_displacement(
             g.actual.len()
         )));
     }
-    let atlas =
-        g.topology.uv().ok_or_else(|| Error::Invalid("the mesh has no texture coordinates (vt)".into()))?;
+    let atlas = g.topology.uv().ok_or_else(|| Error::Invalid("the mesh has no texture coordinates (vt)".into()))?;
     let charts = uv_charts(atlas);
     let (w, h) = (raster.width, raster.height);
     let mask = TexelMask::from_raster(raster, dilation)?;
@@ -229,7 +235,8 @@ pub fn content_displacement(
             let mut ds: Vec<([f64; 2], f64)> = Vec::new();
             for s in blend_samples(p, n, g.calibrated, &depth, depth_tolerance)? {
                 let z = s.depth;
-                let Some(src) = sample_source(&seen[s.camera], atlas, &charts, [w, h], s.pixel, z, depth_tolerance) else {
+                let Some(src) = sample_source(&seen[s.camera], atlas, &charts, [w, h], s.pixel, z, depth_tolerance)
+                else {
                     return Ok(None);
                 };
                 ds.push(([src[0] - x[0], src[1] - x[1]], s.weight));
@@ -247,11 +254,8 @@ pub fn content_displacement(
             Ok(Some((mean, var.sqrt())))
         })
         .collect::<Result<_>>()?;
-    let mut out = ContentDisplacement {
-        mean: FlowField::zeros(w, h),
-        spread: vec![0.0; w * h],
-        defined: vec![false; w * h],
-    };
+    let mut out =
+        ContentDisplacement { mean: FlowField::zeros(w, h), spread: vec![0.0; w * h], defined: vec![false; w * h] };
     for (i, t) in per_texel.iter().enumerate() {
         if let Some((m, s)) = t {
             out.mean.u[i] = m[0] as f32;
@@ -328,10 +332,7 @@ mod tests {
 
     #[test]
     fn charts_are_the_triangles_sharing_texture_coordinates() {
-        let atlas = UvAtlas {
-            coords: vec![[0.0, 0.0]; 7],
-            corners: vec![[0, 1, 2], [2, 1, 3], [4, 5, 6]],
-        };
+        let atlas = UvAtlas { coords: vec![[0.0, 0.0]; 7], corners: vec![[0, 1, 2], [2, 1, 3], [4, 5, 6]] };
         assert_eq!(uv_charts(&atlas), vec![0, 0, 4]);
     }
 }
