@@ -163,7 +163,7 @@ fn a_folder_that_is_not_a_generated_sequence_is_named() {
 }
 
 #[test]
-fn the_capture_benchmark_reports_both_methods_without_a_true_flow() {
+fn the_capture_benchmark_reports_both_methods_and_the_warps_against_the_true_flow() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("eval");

@@ -15,7 +15,8 @@
 //!    On the capture-like benchmark the true flow is the one between the frames' true content
 //!    displacements (`surfcap_appearance::content_displacement`), over the texels where the
 //!    reference's is defined.
-//! 1b. **Warps against the truth** (where the benchmark knows each texel's content
+//!
+//!    **Warps against the truth** (where the benchmark knows each texel's content
 //!    displacement: the capture-like one): how far each capture error alone moves the content
 //!    and how far the cameras' displacements spread (ghosting); the Poisson model's backward
 //!    warps, with the sweep's numbers of eigen warps, against the true backward flows; the
@@ -689,9 +690,9 @@ fn warp_truth(
             let (_, wc) = poisson.model.frame_coefficients(i)?;
             let errs = counts
                 .iter()
-                .map(|&kw| Ok(end_point_errors(&poisson.model.backward_warp(&wc[..kw.min(wc.len())])?, &truth, &keep)))
+                .map(|&kw| Ok(end_point_errors(&poisson.model.backward_warp(&wc[..kw.min(wc.len())])?, &truth, keep)))
                 .collect::<Result<Vec<_>>>()?;
-            let zero = end_point_errors(&FlowField::zeros(truth.width, truth.height), &truth, &keep);
+            let zero = end_point_errors(&FlowField::zeros(truth.width, truth.height), &truth, keep);
             progress.advance(1);
             Ok((errs, zero))
         })
