@@ -39,10 +39,11 @@ use surfcap_mesh::Topology;
 
 use crate::atlas_normals::{AtlasGeometry, vertex_normals};
 use crate::atlas_raster::AtlasRaster;
+use crate::content_displacement::{CaptureGeometry, ContentDisplacement, content_displacement};
 use crate::error::{Error, Result};
 use crate::flow_field::sample_bilinear;
 use crate::inactive_fill::push_pull_fill;
-use crate::mesh_rasteriser::{Camera, Lens, cameras_around, rasterise};
+use crate::mesh_rasteriser::{Camera, Fragments, Lens, cameras_around, rasterise};
 use crate::texel_mask::TexelMask;
 use crate::texture_generator::{Hole, resample_area};
 use crate::texture_image::TextureImage;
@@ -164,6 +165,20 @@ impl CaptureOptions {
     }
 }
 
+/// Which capture errors a [`CaptureBenchmark::content_displacement`] includes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ErrorCauses {
+    pub calibration: bool,
+    pub tracking: bool,
+}
+
+impl ErrorCauses {
+    pub const BOTH: ErrorCauses = ErrorCauses { calibration: true, tracking: true };
+    pub const CALIBRATION: ErrorCauses = ErrorCauses { calibration: true, tracking: false };
+    pub const TRACKING: ErrorCauses = ErrorCauses { calibration: false, tracking: true };
+    pub const NONE: ErrorCauses = ErrorCauses { calibration: false, tracking: false };
+}
+
 /// One frame: the re-projected texture (holes black), the clean truth, the hole mask where the
 /// frame has one, and the texels at least one camera saw.
 #[derive(Debug, Clone, PartialEq)]
@@ -182,9 +197,9 @@ pub struct Reprojection {
 }
 
 /// Minimum cosine between a texel's normal and its view direction for a camera to count.
-const MIN_COS: f64 = 0.05;
+pub const MIN_COS: f64 = 0.05;
 
-type V3 = [f64; 3];
+pub type V3 = [f64; 3];
 fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -207,6 +222,48 @@ fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
 
 fn gaussian3(rng: &mut ChaCha8Rng) -> V3 {
     [gaussian(rng), gaussian(rng), gaussian(rng)]
+}
+
+/// One camera's share of a texel's blend: the camera, the pixel the texel's point projects to
+/// (x right, y down, pixel centres at +0.5) and the blend weight (the cosine of the view angle).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlendSample {
+    pub camera: usize,
+    pub pixel: [f64; 2],
+    /// The point's depth along the camera's view axis.
+    pub depth: f64,
+    pub weight: f64,
+}
+
+/// The cameras that see the surface point `p` with normal `n` (facing it by at least
+/// [`MIN_COS`], inside the image, within `depth_tolerance` of the depth map `depth[j]` of the
+/// mesh the texels are re-projected through), in camera order: the samples [`reproject`]
+/// blends.
+pub fn blend_samples(
+    p: V3,
+    n: V3,
+    cameras: &[Camera],
+    depth: &[Fragments],
+    depth_tolerance: f64,
+) -> Result<Vec<BlendSample>> {
+    let mut out = Vec::new();
+    for (j, (cam, d)) in cameras.iter().zip(depth).enumerate() {
+        let cos = dot(n, unit(sub(cam.eye, p)));
+        if cos < MIN_COS {
+            continue;
+        }
+        let Some([x, y, z]) = cam.project(p)? else { continue };
+        let (cw, ch) = (cam.lens.width, cam.lens.height);
+        if !(x >= 0.0 && y >= 0.0 && x < cw as f64 && y < ch as f64) {
+            continue;
+        }
+        let (px, py) = (x as usize, y as usize);
+        if z > d.depth[py * cw + px] + depth_tolerance {
+            continue;
+        }
+        out.push(BlendSample { camera: j, pixel: [x, y], depth: z, weight: cos });
+    }
+    Ok(out)
 }
 
 /// Re-projects the images seen by `cameras` onto the texels of `raster` (the covered ones and
@@ -257,24 +314,14 @@ pub fn reproject(
             let n = f64s(geometry.normal[i]);
             let mut acc = vec![0.0f64; channels];
             let mut total = 0.0f64;
-            for ((cam, d), im) in cameras.iter().zip(&depth).zip(images) {
-                let cos = dot(n, unit(sub(cam.eye, p)));
-                if cos < MIN_COS {
-                    continue;
-                }
-                let Some([x, y, z]) = cam.project(p)? else { continue };
-                let (cw, ch) = (cam.lens.width, cam.lens.height);
-                if !(x >= 0.0 && y >= 0.0 && x < cw as f64 && y < ch as f64) {
-                    continue;
-                }
-                let (px, py) = (x as usize, y as usize);
-                if z > d.depth[py * cw + px] + depth_tolerance {
-                    continue;
-                }
+            for s in blend_samples(p, n, cameras, &depth, depth_tolerance)? {
+                let (im, cw, ch) = (&images[s.camera], cameras[s.camera].lens.width, cameras[s.camera].lens.height);
                 for (c, a) in acc.iter_mut().enumerate() {
-                    *a += cos * sample_bilinear(im.plane(c), cw, ch, (x - 0.5) as f32, (y - 0.5) as f32) as f64;
+                    *a += s.weight
+                        * sample_bilinear(im.plane(c), cw, ch, (s.pixel[0] - 0.5) as f32, (s.pixel[1] - 0.5) as f32)
+                            as f64;
                 }
-                total += cos;
+                total += s.weight;
             }
             Ok((total > 0.0).then(|| acc.iter().map(|a| (a / total) as f32).collect()))
         })
@@ -612,6 +659,26 @@ impl CaptureBenchmark {
         )
     }
 
+    /// The true displacement of frame `k`'s re-projected content
+    /// ([`crate::content_displacement`]) with the capture errors `causes` names (the others
+    /// left out: the true mesh as tracked, the actual cameras as calibrated).
+    pub fn content_displacement(&self, k: usize, causes: ErrorCauses) -> Result<ContentDisplacement> {
+        if k >= self.options.frames {
+            return Err(Error::Invalid(format!("frame {k}: the benchmark has {} frames", self.options.frames)));
+        }
+        let truth = self.true_positions(k);
+        let tracked = if causes.tracking { self.tracked_positions(k) } else { truth.clone() };
+        let actual = if causes.calibration { &self.actual } else { &self.calibrated };
+        let geometry = CaptureGeometry {
+            topology: &self.topology,
+            tracked: &tracked,
+            calibrated: &self.calibrated,
+            truth: &truth,
+            actual,
+        };
+        content_displacement(&geometry, &self.raster, self.options.dilation, self.options.depth_tolerance * self.radius)
+    }
+
     /// Frame `k`: every camera's render re-projected through the tracked mesh and the
     /// calibrated cameras, its clean truth and its hole.
     pub fn frame(&self, k: usize) -> Result<CaptureFrame> {
@@ -807,6 +874,42 @@ mod tests {
         // it further.
         assert!(clean_err < 5.0, "{clean_err}");
         assert!(err > 1.5 * clean_err, "{err} vs {clean_err}");
+    }
+
+    #[test]
+    fn content_comes_from_its_own_texel_without_error_and_from_elsewhere_with_it() {
+        // Renders fine enough that the four pixel centres of a sample lie within the depth
+        // tolerance of each other on the cube's slanted faces.
+        let (topo, pos) = cube();
+        let options =
+            CaptureOptions { frames: 3, seed: 5, size: 32, cameras: 4, image_size: 192, ..CaptureOptions::default() };
+        let b = CaptureBenchmark::new(&topo, &pos, &smooth_texture(32), &options).unwrap();
+        // The texels the charts cover (the dilated ring's points are its inner neighbours').
+        let covered = |i: usize| b.raster.covered(i);
+        let summary = |c: ErrorCauses| b.content_displacement(1, c).unwrap().summary_where(covered);
+        let (none, none_spread, defined) = summary(ErrorCauses::NONE);
+        let n_covered = (0..32 * 32).filter(|&i| covered(i)).count();
+        // Texels a camera sees at a grazing angle (a pixel there spans several texels of depth
+        // beyond the tolerance) are left undefined; the ones all cameras see squarely remain.
+        assert!(defined >= 40 && defined < n_covered, "{defined} of {n_covered}");
+        // Without error every camera's sample shows the texel's own point, up to the bilinear
+        // mix of four pixel centres.
+        assert!(none < 0.05 && none_spread < 0.05, "{none} {none_spread}");
+        let (ring, _, _) = b.content_displacement(1, ErrorCauses::NONE).unwrap().summary_where(|i| !covered(i));
+        assert!(ring > 0.3, "the ring shows its inner neighbours' points: {ring}");
+        let mut big = b.clone();
+        big.options.calibration_deg = 0.0;
+        for (a, c) in big.actual.iter_mut().zip(&big.calibrated) {
+            // Every actual camera looks 0.15 units (about 2 texels of a 32-texel cube face) off.
+            a.target = [c.target[0] + 0.15, c.target[1], c.target[2]];
+        }
+        let (moved, moved_spread, _) =
+            big.content_displacement(1, ErrorCauses::CALIBRATION).unwrap().summary_where(covered);
+        assert!(moved > 0.5, "{moved}");
+        // The cameras look off in different directions in the atlas: the blend ghosts.
+        assert!(moved_spread > 0.1, "{moved_spread}");
+        let (tracked, _, _) = b.content_displacement(1, ErrorCauses::TRACKING).unwrap().summary_where(covered);
+        assert!(tracked > 0.05, "{tracked}");
     }
 
     #[test]

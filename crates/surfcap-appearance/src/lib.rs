@@ -34,7 +34,10 @@
 //!   `appearance-frames` folder and its reader); [`capture_benchmark`] (the textures multi-view
 //!   capture makes: a moving subject rendered from a camera ring with specular shading, sensor
 //!   noise, per-camera calibration error and per-frame tracking error, re-projected into the
-//!   atlas by view-weighted blending with a depth test; the clean truth kept).
+//!   atlas by view-weighted blending with a depth test; the clean truth kept) and
+//!   [`content_displacement`] (its ground truth: where each texel's blended content truly came
+//!   from, per camera and as the cosine-weighted mean and spread, and the true flow between two
+//!   frames).
 //! - Evaluation (4.5): [`mesh_rasteriser`] (z-buffer, perspective-correct barycentrics and UVs,
 //!   cameras on a ring),
 //!   [`image_similarity`] (masked MSE and SSIM).
@@ -52,6 +55,7 @@ pub mod atlas_raster;
 pub mod bilateral_filter;
 pub mod blended_frame_textures;
 pub mod capture_benchmark;
+pub mod content_displacement;
 pub mod eigen_maps;
 pub mod error;
 pub mod flow_cache;

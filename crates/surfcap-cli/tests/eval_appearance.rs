@@ -163,7 +163,7 @@ fn a_folder_that_is_not_a_generated_sequence_is_named() {
 }
 
 #[test]
-fn the_capture_benchmark_reports_both_methods_without_a_true_flow() {
+fn the_capture_benchmark_reports_both_methods_and_the_warps_against_the_true_flow() {
     let Some(data) = surfcap_testkit::shared_data() else { return };
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("eval");
@@ -201,8 +201,29 @@ fn the_capture_benchmark_reports_both_methods_without_a_true_flow() {
     let r: Value = serde_json::from_slice(&std::fs::read(out.join("appearance.json")).unwrap()).unwrap();
     assert_eq!(r["benchmark"], "capture");
     assert_eq!(r["capture"]["cameras"], 8);
-    // The capture benchmark knows no true flow: no end-point errors, the rest as the smooth one.
-    assert!(r["flow"]["errors"].is_null(), "{}", r["flow"]);
+    // The capture benchmark knows where each texel's content came from: the forward flows
+    // have end-point errors against the true flow, which is not zero.
+    let e = &r["flow"]["errors"];
+    assert!(f(&e["mean"]) >= 0.0 && f(&e["zero_flow_mean"]) > 0.0, "{}", r["flow"]);
+    let t = &r["warp_truth"];
+    let causes: Vec<(&str, f64)> =
+        t["causes"].as_array().unwrap().iter().map(|c| (c["cause"].as_str().unwrap(), f(&c["displacement"]))).collect();
+    let cause = |name: &str| causes.iter().find(|c| c.0 == name).unwrap_or_else(|| panic!("{name}: {t}")).1;
+    // Each capture error moves the content further than resampling alone does.
+    assert!(cause("all") > cause("none") && cause("tracking") > cause("none"), "{causes:?}");
+    assert!(cause("calibration") > cause("none"), "{causes:?}");
+    assert!(f(&t["backward_zero_flow"]) > 0.0, "{t}");
+    for b in t["backward"].as_array().unwrap() {
+        assert!(f(&b["end_point_error"]) >= 0.0, "{b}");
+    }
+    for row in t["splits"].as_array().unwrap() {
+        for m in ["ours", "true_warps"] {
+            let s = f(&row[m]["input"]["ssim"]);
+            assert!(s > 0.3 && s <= 1.0 + 1e-9, "{row}");
+        }
+    }
+    let v = f(&t["true_aligned_variance_share"]);
+    assert!(v > 0.0 && v.is_finite(), "{t}");
     let seen = f(&r["capture_seen_share"]);
     assert!(seen > 0.7 && seen <= 1.0, "{seen}");
     let ic = f(&r["input_vs_clean"]["ssim"]);

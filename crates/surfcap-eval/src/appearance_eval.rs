@@ -12,6 +12,17 @@
 //!    estimator, which caches them) against the true flow `true_flow(reference, k)`, beside the
 //!    error of a zero flow (the drift itself); optionally for a few frames with a second
 //!    estimator (e.g. full resolution).
+//!    On the capture-like benchmark the true flow is the one between the frames' true content
+//!    displacements (`surfcap_appearance::content_displacement`), over the texels where the
+//!    reference's is defined.
+//!
+//!    **Warps against the truth** (where the benchmark knows each texel's content
+//!    displacement: the capture-like one): how far each capture error alone moves the content
+//!    and how far the cameras' displacements spread (ghosting); the Poisson model's backward
+//!    warps, with the sweep's numbers of eigen warps, against the true backward flows; the
+//!    variance of the textures left after aligning them; the model built on the true flows
+//!    (one alignment, to the frame closest to the mean) and the splits of K with no warp, a
+//!    third and half of K, with either flows.
 //! 2. **Poisson vs direct warping** (Fig. 4.5-4.6): the model built with each warping;
 //!    reconstruction of the training frames with every component, MSE and SSIM in the texture
 //!    domain against the input frames and the clean ones; the same over the component sweep.
@@ -46,7 +57,8 @@ use rand::seq::SliceRandom;
 use rayon::prelude::*;
 use serde::Serialize;
 use surfcap_appearance::appearance_model::MaskedFlowEstimator;
-use surfcap_appearance::capture_benchmark::{CaptureBenchmark, CaptureFrame};
+use surfcap_appearance::capture_benchmark::{CaptureBenchmark, CaptureFrame, ErrorCauses};
+use surfcap_appearance::content_displacement::{ContentDisplacement, flow_between};
 use surfcap_appearance::generated_frames::GeneratedFrames;
 use surfcap_appearance::image_similarity::{Similarity, similarity};
 use surfcap_appearance::mesh_rasteriser::{Camera, Lens, Render, cameras_around_mesh, render_views};
@@ -83,6 +95,14 @@ pub trait AppearanceSequence: Sync {
     fn hole(&self, k: usize) -> Option<Vec<bool>>;
     /// The true flow `from` -> `to` (`None`: unknown).
     fn true_flow(&self, from: usize, to: usize) -> Option<Result<FlowField>>;
+    /// The texels where the true flow from frame `k` is known (`None`: every active texel).
+    fn flow_defined(&self, _k: usize) -> Option<&[bool]> {
+        None
+    }
+    /// How far each capture error moves the texels' content, where the benchmark knows it.
+    fn displacement_causes(&self) -> Option<&[CauseRow]> {
+        None
+    }
 }
 
 impl AppearanceSequence for GeneratedFrames {
@@ -129,6 +149,28 @@ pub struct CaptureSequence {
     /// The mesh at rest (the atlas's shape).
     pub positions: Vec<f32>,
     pub frames: Vec<CaptureFrame>,
+    /// The true displacement of every frame's content, all capture errors included.
+    pub displacements: Vec<ContentDisplacement>,
+    /// The displacement of each error alone and of none, mean over the frames.
+    pub causes: Vec<CauseRow>,
+}
+
+/// How far one capture error (or all, or none) moves the re-projected content: means over the
+/// frames of the per-frame means over the active texels where the displacement is defined.
+#[derive(Debug, Clone, Serialize)]
+pub struct CauseRow {
+    /// `all`, `calibration`, `tracking` or `none` (resampling and the charts' dilated ring only).
+    pub cause: String,
+    /// Mean length of the cosine-weighted mean displacement, texels.
+    pub displacement: f64,
+    /// Mean spread of the cameras' displacements about it (ghosting), texels.
+    pub spread: f64,
+    /// The same as medians over the texels (mean over the frames): the means are pulled by
+    /// the few texels whose samples show content from far away in the atlas.
+    pub median_displacement: f64,
+    pub median_spread: f64,
+    /// Share of the active texels where it is defined.
+    pub defined_share: f64,
 }
 
 impl CaptureSequence {
@@ -141,21 +183,59 @@ impl CaptureSequence {
         progress: &dyn Progress,
     ) -> Result<CaptureSequence> {
         let n = benchmark.options().frames;
-        progress.start("capture benchmark: rendering and re-projecting", n as u64);
-        let frames: Vec<CaptureFrame> = (0..n)
+        progress.start("capture benchmark: rendering, re-projecting, true displacements", n as u64);
+        let causes = [
+            ("all", ErrorCauses::BOTH),
+            ("calibration", ErrorCauses::CALIBRATION),
+            ("tracking", ErrorCauses::TRACKING),
+            ("none", ErrorCauses::NONE),
+        ];
+        let active = benchmark.mask().len().max(1) as f64;
+        type Made = (CaptureFrame, ContentDisplacement, Vec<[f64; 5]>);
+        let made: Vec<Made> = (0..n)
             .into_par_iter()
             .map(|k| {
                 let f = benchmark.frame(k)?;
+                let all = benchmark.content_displacement(k, ErrorCauses::BOTH)?;
+                let mut rows = Vec::new();
+                for (_, c) in &causes {
+                    let one;
+                    let d = if *c == ErrorCauses::BOTH {
+                        &all
+                    } else {
+                        one = benchmark.content_displacement(k, *c)?;
+                        &one
+                    };
+                    let (size, spread, m) = d.summary();
+                    let (median_size, median_spread) = d.medians();
+                    rows.push([size, spread, m as f64 / active, median_size, median_spread]);
+                }
                 progress.advance(1);
-                Ok(f)
+                Ok((f, all, rows))
             })
             .collect::<Result<_>>()?;
         progress.finish();
+        let nf = n.max(1) as f64;
+        let causes = causes
+            .iter()
+            .enumerate()
+            .map(|(j, (name, _))| CauseRow {
+                cause: name.to_string(),
+                displacement: made.iter().map(|m| m.2[j][0]).sum::<f64>() / nf,
+                spread: made.iter().map(|m| m.2[j][1]).sum::<f64>() / nf,
+                defined_share: made.iter().map(|m| m.2[j][2]).sum::<f64>() / nf,
+                median_displacement: made.iter().map(|m| m.2[j][3]).sum::<f64>() / nf,
+                median_spread: made.iter().map(|m| m.2[j][4]).sum::<f64>() / nf,
+            })
+            .collect();
+        let (frames, displacements): (Vec<_>, Vec<_>) = made.into_iter().map(|m| (m.0, m.1)).unzip();
         Ok(CaptureSequence {
             source: source.to_string(),
             topology: topology.clone(),
             positions: positions.to_vec(),
             frames,
+            displacements,
+            causes,
         })
     }
 }
@@ -195,8 +275,15 @@ impl AppearanceSequence for CaptureSequence {
     fn hole(&self, k: usize) -> Option<Vec<bool>> {
         self.frames.get(k)?.hole.clone()
     }
-    fn true_flow(&self, _from: usize, _to: usize) -> Option<Result<FlowField>> {
-        None
+    fn true_flow(&self, from: usize, to: usize) -> Option<Result<FlowField>> {
+        let (a, b) = (self.displacements.get(from)?, self.displacements.get(to)?);
+        Some(flow_between(a, b).map_err(Error::from))
+    }
+    fn flow_defined(&self, k: usize) -> Option<&[bool]> {
+        self.displacements.get(k).map(|d| d.defined.as_slice())
+    }
+    fn displacement_causes(&self) -> Option<&[CauseRow]> {
+        Some(&self.causes)
     }
 }
 
@@ -262,7 +349,7 @@ pub struct FlowAccuracy {
     /// The estimator's description (e.g. its finest scale), as the caller gives it.
     pub estimator: String,
     pub reference: String,
-    /// `None` when the benchmark does not know the true flow (the capture-like one).
+    /// `None` when the benchmark does not know the true flow (a folder of frames).
     pub errors: Option<EndPointErrors>,
     /// The second estimator's description and errors on the first frames, when run.
     pub second_estimator: Option<String>,
@@ -349,6 +436,52 @@ pub struct Completion {
     pub holed_input: Option<Similarity>,
 }
 
+/// The backward warps of the Poisson model with a number of eigen warps against the true
+/// backward flows.
+#[derive(Debug, Clone, Serialize)]
+pub struct BackwardWarpRow {
+    /// Eigen warps used (all of them: the estimated flows themselves).
+    pub eigen_warps: usize,
+    /// Mean end-point error over the training frames (the reference left out), texels.
+    pub end_point_error: f64,
+    /// The per-frame median over the texels, mean over the frames.
+    pub median_end_point_error: f64,
+}
+
+/// Ours at one split of K between eigen textures and eigen warps.
+#[derive(Debug, Clone, Serialize)]
+pub struct SplitRow {
+    pub components: usize,
+    pub eigen_textures: usize,
+    pub eigen_warps: usize,
+    /// Estimated flows (the model of the compactness sweep).
+    pub ours: Scores,
+    /// The model built on the true flows.
+    pub true_warps: Scores,
+}
+
+/// 1b. The warps against the truth, where the benchmark knows where each texel's content came
+/// from (the capture-like one): how far each capture error moves it, how well the estimated
+/// backward warps and their eigen-warp reconstructions follow the true ones, and what ours
+/// scores with the true flows in place of the estimated ones and with other splits of K.
+#[derive(Debug, Clone, Serialize)]
+pub struct WarpTruth {
+    pub causes: Vec<CauseRow>,
+    pub reference: String,
+    pub backward: Vec<BackwardWarpRow>,
+    /// The mean length of the true backward flows (the error of a zero flow), texels.
+    pub backward_zero_flow: f64,
+    pub backward_zero_flow_median: f64,
+    /// The model built on the true flows (one alignment, to the frame closest to the mean).
+    pub true_warps_reference: String,
+    pub true_warps_all_components: Scores,
+    /// Share of the variance of the input textures (about their mean) left after aligning them
+    /// with the estimated flows and with the true ones (Poisson warping).
+    pub aligned_variance_share: f64,
+    pub true_aligned_variance_share: f64,
+    pub splits: Vec<SplitRow>,
+}
+
 /// Wall-clock seconds of each part.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct EvalTimings {
@@ -356,6 +489,7 @@ pub struct EvalTimings {
     pub builds: f64,
     pub flow_accuracy: f64,
     pub compactness_texture: f64,
+    pub warp_truth: f64,
     pub compactness_image: f64,
     pub generalisation: f64,
     pub completion: f64,
@@ -379,6 +513,9 @@ pub struct AppearanceEval {
     /// Frames of the image domain of the compactness sweep.
     pub image_frames: Vec<String>,
     pub flow: FlowAccuracy,
+    /// The warps against the truth (`None` unless the benchmark knows each texel's content
+    /// displacement).
+    pub warp_truth: Option<WarpTruth>,
     pub warping: Vec<WarpingRow>,
     pub build: BuildReport,
     pub compactness: Vec<CompactnessRow>,
@@ -477,7 +614,8 @@ fn flow_errors(
 ) -> Result<EndPointErrors> {
     let targets: Vec<usize> = frames.iter().copied().filter(|&k| k != reference).collect();
     progress.start(label, targets.len() as u64);
-    let active = |i: usize| data.mask.is_active(i);
+    let defined = data.frames.flow_defined(reference);
+    let active = |i: usize| data.mask.is_active(i) && defined.is_none_or(|d| d[i]);
     let pairs: Vec<(f64, f64)> = targets
         .par_iter()
         .map(|&k| {
@@ -498,6 +636,179 @@ fn flow_errors(
     e.sort_by(f64::total_cmp);
     let median = if e.is_empty() { 0.0 } else { e[e.len() / 2] };
     Ok(EndPointErrors { frames: e.len(), mean, median, max: e.last().copied().unwrap_or(0.0), zero_flow_mean })
+}
+
+/// Sum over frames of the squared distance of each vector from the vectors' mean.
+fn total_variance(vectors: &[Vec<f32>]) -> f64 {
+    let n = vectors.first().map_or(0, Vec::len);
+    let f = vectors.len().max(1) as f64;
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mean = vectors.iter().map(|v| v[i] as f64).sum::<f64>() / f;
+            vectors.iter().map(|v| (v[i] as f64 - mean).powi(2)).sum::<f64>()
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum()
+}
+
+/// The warps against the truth (see [`WarpTruth`]).
+fn warp_truth(
+    data: &Data<'_>,
+    complete: &[usize],
+    poisson: &Built,
+    ks: &[usize],
+    causes: &[CauseRow],
+    opts: &AppearanceEvalOptions,
+    progress: &dyn Progress,
+) -> Result<WarpTruth> {
+    let n = complete.len();
+    let reference = poisson.reference();
+    let truth_of = |from: usize, to: usize| -> Result<FlowField> {
+        data.frames.true_flow(from, to).ok_or_else(|| {
+            Error::Unsuitable(format!("{}: the benchmark does not know the true flow", data.frames.source()))
+        })?
+    };
+    let keep_of = |k: usize| {
+        let defined = data.frames.flow_defined(k);
+        move |i: usize| data.mask.is_active(i) && defined.is_none_or(|d| d[i])
+    };
+    // Backward warps with each number of eigen warps of the sweep, and all of them.
+    let mut counts: Vec<usize> = ks.iter().map(|&k| split_components(k).1).collect();
+    counts.push(poisson.model.n_warps());
+    counts.sort_unstable();
+    counts.dedup();
+    progress.start("warps against the truth: backward warps", n as u64);
+    let others: Vec<usize> = (0..n).filter(|&i| complete[i] != reference).collect();
+    let per_frame: Vec<(Vec<[f64; 2]>, [f64; 2])> = others
+        .par_iter()
+        .map(|&i| {
+            let k = complete[i];
+            let truth = truth_of(k, reference)?;
+            let keep = keep_of(k);
+            let (_, wc) = poisson.model.frame_coefficients(i)?;
+            let errs = counts
+                .iter()
+                .map(|&kw| Ok(end_point_errors(&poisson.model.backward_warp(&wc[..kw.min(wc.len())])?, &truth, keep)))
+                .collect::<Result<Vec<_>>>()?;
+            let zero = end_point_errors(&FlowField::zeros(truth.width, truth.height), &truth, keep);
+            progress.advance(1);
+            Ok((errs, zero))
+        })
+        .collect::<Result<_>>()?;
+    progress.finish();
+    let m = others.len().max(1) as f64;
+    let backward = counts
+        .iter()
+        .enumerate()
+        .map(|(j, &kw)| BackwardWarpRow {
+            eigen_warps: kw,
+            end_point_error: per_frame.iter().map(|p| p.0[j][0]).sum::<f64>() / m,
+            median_end_point_error: per_frame.iter().map(|p| p.0[j][1]).sum::<f64>() / m,
+        })
+        .collect();
+    let backward_zero_flow = per_frame.iter().map(|p| p.1[0]).sum::<f64>() / m;
+    let backward_zero_flow_median = per_frame.iter().map(|p| p.1[1]).sum::<f64>() / m;
+
+    // The model on the true flows: each texture is found among the inputs by its texels; a
+    // flow to a texture that is not an input (an aligned one) goes to the reference, the first
+    // texture of the one alignment's forward flows.
+    let find = |t: &TextureImage| complete.iter().copied().find(|&k| data.inputs[k].data() == t.data());
+    let last_reference = std::sync::Mutex::new(None::<usize>);
+    let oracle = |a: &TextureImage, b: &TextureImage, _: &TexelMask| -> surfcap_appearance::Result<FlowField> {
+        let bad = |what: &str| surfcap_appearance::Error::Invalid(format!("true flows: {what}"));
+        let ka = find(a).ok_or_else(|| bad("a texture that is not an input"))?;
+        let kb = match find(b) {
+            Some(kb) => {
+                *last_reference.lock().expect("not poisoned") = Some(ka);
+                kb
+            }
+            None => last_reference
+                .lock()
+                .expect("not poisoned")
+                .ok_or_else(|| bad("an aligned texture before any alignment"))?,
+        };
+        truth_of(ka, kb).map_err(|e| bad(&e.to_string()))
+    };
+    let one_alignment = AppearanceEvalOptions { medoid_iterations: 1, ..opts.clone() };
+    let true_model = build(data, complete, Warping::Poisson, &one_alignment, &oracle, progress)?;
+    let sweep = |built: &Built, kt: usize, kw: usize| -> Result<Scores> {
+        let rows: Vec<Scores> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let (tc, wc) = built.model.frame_coefficients(i)?;
+                let recon = built.model.instantiate(&tc[..kt.min(tc.len())], &wc[..kw.min(wc.len())])?;
+                data.scores(&recon, complete[i])
+            })
+            .collect::<Result<_>>()?;
+        Ok(mean_scores(&rows))
+    };
+    let true_warps_all_components = sweep(&true_model, usize::MAX, usize::MAX)?;
+    // Variance left after alignment: the aligned textures are the models' texture data.
+    let inputs: Vec<Vec<f32>> = complete.iter().map(|&k| active_vector_of(&data.inputs[k], &data.mask)).collect();
+    let input_variance = total_variance(&inputs).max(f64::MIN_POSITIVE);
+    let aligned_variance = |built: &Built| -> Result<f64> {
+        let aligned: Vec<Vec<f32>> = (0..n)
+            .map(|i| {
+                let (tc, _) = built.model.frame_coefficients(i)?;
+                Ok(active_vector_of(&built.model.aligned_texture(tc)?, &data.mask))
+            })
+            .collect::<Result<_>>()?;
+        Ok(total_variance(&aligned) / input_variance)
+    };
+    let aligned_variance_share = aligned_variance(poisson)?;
+    let true_aligned_variance_share = aligned_variance(&true_model)?;
+    // Splits of K: no warp, the default third, half.
+    progress.start("warps against the truth: splits of K", ks.len() as u64);
+    let mut splits = Vec::new();
+    for &k in ks {
+        let mut kws = vec![0, split_components(k).1, k / 2];
+        kws.dedup();
+        for kw in kws {
+            let kt = k - kw;
+            splits.push(SplitRow {
+                components: k,
+                eigen_textures: kt,
+                eigen_warps: kw,
+                ours: sweep(poisson, kt, kw)?,
+                true_warps: sweep(&true_model, kt, kw)?,
+            });
+        }
+        progress.advance(1);
+    }
+    progress.finish();
+    Ok(WarpTruth {
+        causes: causes.to_vec(),
+        reference: data.names[reference].clone(),
+        backward,
+        backward_zero_flow,
+        backward_zero_flow_median,
+        true_warps_reference: data.names[true_model.reference()].clone(),
+        true_warps_all_components,
+        aligned_variance_share,
+        true_aligned_variance_share,
+        splits,
+    })
+}
+
+/// Mean and median end-point error of `flow` against `truth` over the texels `keep` selects.
+fn end_point_errors(flow: &FlowField, truth: &FlowField, keep: impl Fn(usize) -> bool) -> [f64; 2] {
+    let mut e: Vec<f64> = (0..flow.u.len())
+        .filter(|&i| keep(i))
+        .map(|i| ((flow.u[i] - truth.u[i]) as f64).hypot((flow.v[i] - truth.v[i]) as f64))
+        .collect();
+    if e.is_empty() {
+        return [0.0, 0.0];
+    }
+    let mean = e.iter().sum::<f64>() / e.len() as f64;
+    e.sort_by(f64::total_cmp);
+    [mean, e[e.len() / 2]]
+}
+
+/// The active texels of a texture, channel after channel.
+fn active_vector_of(t: &TextureImage, mask: &TexelMask) -> Vec<f32> {
+    (0..t.channels()).flat_map(|c| mask.gather(t.plane(c))).collect()
 }
 
 /// Renders of a texture from every camera.
@@ -730,6 +1041,14 @@ pub fn appearance_eval(
     progress.finish();
     seconds.compactness_texture = t.elapsed().as_secs_f64();
 
+    // 1b. The warps against the truth.
+    let t = Instant::now();
+    let warp_truth = match frames.displacement_causes() {
+        Some(causes) => Some(warp_truth(&data, &complete, &poisson, &ks, causes, opts, progress)?),
+        None => None,
+    };
+    seconds.warp_truth = t.elapsed().as_secs_f64();
+
     // 3. Compactness, image domain on evenly spaced training frames.
     let t = Instant::now();
     let lens = Lens { fov_y_deg: 40.0, width: opts.image_size, height: opts.image_size };
@@ -919,6 +1238,7 @@ pub fn appearance_eval(
         options: opts.clone(),
         image_frames: image_slots.iter().map(|&i| data.names[complete[i]].clone()).collect(),
         flow: flow_accuracy,
+        warp_truth,
         warping,
         build: poisson.report.clone(),
         compactness,

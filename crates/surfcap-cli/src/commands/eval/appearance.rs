@@ -185,6 +185,57 @@ fn print_tables(r: &AppearanceEval) {
             inv
         );
     }
+    if let Some(t) = &r.warp_truth {
+        println!(
+            "true content displacement (texels; over the defined texels, mean and median, mean over frames): cause, displacement, ghosting spread, median displacement, median spread, defined share"
+        );
+        for c in &t.causes {
+            println!(
+                "  {:<12} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>6.1}%",
+                c.cause,
+                c.displacement,
+                c.spread,
+                c.median_displacement,
+                c.median_spread,
+                100.0 * c.defined_share
+            );
+        }
+        let warps: Vec<String> = t
+            .backward
+            .iter()
+            .map(|b| format!("{} warps {:.3} / {:.3}", b.eigen_warps, b.end_point_error, b.median_end_point_error))
+            .collect();
+        println!(
+            "backward warps vs the true ones, reference {}: end-point error (mean / median) {} texels (zero flow {:.3} / {:.3})",
+            t.reference,
+            warps.join(", "),
+            t.backward_zero_flow,
+            t.backward_zero_flow_median
+        );
+        println!(
+            "variance left after alignment: {:.1}% with the estimated flows, {:.1}% with the true ones",
+            100.0 * t.aligned_variance_share,
+            100.0 * t.true_aligned_variance_share
+        );
+        println!(
+            "model on the true flows (reference {}), every component: vs input {}  vs clean {}",
+            t.true_warps_reference,
+            sim(&t.true_warps_all_components.input),
+            sim(&t.true_warps_all_components.clean)
+        );
+        println!("splits of K, texture domain vs input (clean SSIM in brackets): estimated flows | true flows");
+        for row in &t.splits {
+            println!(
+                "{:>4} {:>6}  {:<17} ({:.4}) | {:<17} ({:.4})",
+                row.components,
+                format!("{}+{}", row.eigen_textures, row.eigen_warps),
+                sim(&row.ours.input),
+                row.ours.clean.ssim,
+                sim(&row.true_warps.input),
+                row.true_warps.clean.ssim
+            );
+        }
+    }
     println!(
         "generalisation (Fig. 4.11-4.12): held-out frames projected, SSIM and MSE vs input (image domain on the first frames)"
     );
@@ -218,8 +269,15 @@ fn print_tables(r: &AppearanceEval) {
     }
     let s = &r.seconds;
     println!(
-        "seconds: builds {:.1}, flow accuracy {:.1}, compactness {:.1} + image {:.1}, generalisation {:.1}, completion {:.1}, total {:.1}",
-        s.builds, s.flow_accuracy, s.compactness_texture, s.compactness_image, s.generalisation, s.completion, s.total
+        "seconds: builds {:.1}, flow accuracy {:.1}, compactness {:.1} + image {:.1}, warps against the truth {:.1}, generalisation {:.1}, completion {:.1}, total {:.1}",
+        s.builds,
+        s.flow_accuracy,
+        s.compactness_texture,
+        s.compactness_image,
+        s.warp_truth,
+        s.generalisation,
+        s.completion,
+        s.total
     );
 }
 
