@@ -137,6 +137,14 @@ pub struct FootSkateParams {
     /// in the unit test, but with the root moved (the default) a leg bends only in double
     /// support, and its effect on `surfcap eval vary` is not measured.
     pub keep_edges: bool,
+    /// Pin every planted vertex at its own place (the module doc's step 4b) after the foot's
+    /// rigid move: what the rigid fit leaves (a planted sole that rolls, turns or changes
+    /// shape under it) is taken away vertex by vertex, the rest of the leg following in the
+    /// gradient domain. On by default: on the KayKit walks and runs most of the sliding left
+    /// after the rigid fit was not a motion of the foot as a whole but of its planted
+    /// vertices against each other (`surfcap eval vary`, docs/results/variation.md). Off, the
+    /// foot is only moved rigidly.
+    pub vertex_pins: bool,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -155,6 +163,7 @@ impl Default for FootSkateParams {
             fit_turn: false,
             move_root: true,
             keep_edges: false,
+            vertex_pins: true,
             contact: ContactParams::default(),
         }
     }
@@ -201,6 +210,9 @@ pub struct FootSkateCleanup {
     /// The rest pose's hat-function gradients and areas of the triangles with a free vertex
     /// (for [`FootSkateParams::keep_edges`]): (vertices, gradients, area).
     leg_triangles: Vec<([u32; 3], [[f64; 3]; 3], f64)>,
+    /// The Laplacian among the legs' movable vertices (feet and free), duplicates merged:
+    /// (row, column, value), for the per-vertex pins' solve (module doc, step 4b).
+    movable_laplacian: Vec<(u32, u32, f64)>,
 }
 
 impl std::fmt::Debug for FootSkateCleanup {
@@ -349,6 +361,22 @@ impl FootSkateCleanup {
         } else {
             (None, None)
         };
+        let movable = |v: usize| is_foot[v] || free[v].is_some();
+        let mut movable_laplacian: Vec<(u32, u32, f64)> = op
+            .laplacian_triplets()
+            .into_iter()
+            .filter(|t| movable(t.row) && movable(t.col))
+            .map(|t| (t.row as u32, t.col as u32, t.val))
+            .collect();
+        movable_laplacian.sort_by_key(|c| (c.0, c.1));
+        movable_laplacian.dedup_by(|b, a| {
+            if (a.0, a.1) == (b.0, b.1) {
+                a.2 += b.2;
+                true
+            } else {
+                false
+            }
+        });
         let leg_triangles = topology
             .triangles()
             .iter()
@@ -358,6 +386,7 @@ impl FootSkateCleanup {
             .collect();
         Ok(FootSkateCleanup {
             leg_triangles,
+            movable_laplacian,
             up,
             n_vertices: n,
             height,
@@ -408,6 +437,67 @@ impl FootSkateCleanup {
         }
         sym.solve_in_place(num, rhs.as_mut());
         (0..self.n_free).map(|i| rhs[(i, 0)]).collect()
+    }
+
+    /// The displacement that takes each pinned vertex the rest of its way (`pins`: vertex and
+    /// what is left along the ground axes, sorted by vertex) and bends the legs' other movable
+    /// vertices (feet and free) with them, the hips and the body held: `L_FF e_F = -L_FP e_P`
+    /// over this frame's free set F (the movable vertices not pinned), factorised per frame
+    /// (the pinned set changes from frame to frame). Returns (vertex, displacement) for the
+    /// movable vertices; empty without pins.
+    fn vertex_pin_displacement(&self, pins: &[(u32, [f64; 2])]) -> Vec<(u32, [f64; 2])> {
+        if pins.is_empty() {
+            return Vec::new();
+        }
+        let n = self.n_vertices;
+        let pinned: std::collections::HashMap<u32, [f64; 2]> = pins.iter().copied().collect();
+        let mut index = vec![usize::MAX; n];
+        let mut order = Vec::new();
+        for v in 0..n {
+            let movable = self.free[v].is_some()
+                || self.leg_of[v].is_some_and(|k| self.feet[k as usize].binary_search(&(v as u32)).is_ok());
+            if movable && !pinned.contains_key(&(v as u32)) {
+                index[v] = order.len();
+                order.push(v as u32);
+            }
+        }
+        let mut out: Vec<(u32, [f64; 2])> = pins.to_vec();
+        if order.is_empty() {
+            return out;
+        }
+        let mut lower = Vec::new();
+        let mut rhs = Mat::<f64>::zeros(order.len(), 2);
+        for &(r, c, l) in &self.movable_laplacian {
+            let i = index[r as usize];
+            if i == usize::MAX {
+                continue;
+            }
+            match (index[c as usize], pinned.get(&c)) {
+                (j, _) if j != usize::MAX => {
+                    if i >= j {
+                        lower.push(Triplet::new(i, j, l));
+                    }
+                }
+                (_, Some(e)) => {
+                    rhs[(i, 0)] -= l * e[0];
+                    rhs[(i, 1)] -= l * e[1];
+                }
+                _ => {}
+            }
+        }
+        let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / order.len() as f64;
+        lower.extend((0..order.len()).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
+        let solved =
+            SparseColMat::<usize, f64>::try_new_from_triplets(order.len(), order.len(), &lower).ok().and_then(|mat| {
+                let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
+                let numeric = symbolic.factorize(mat.as_ref()).ok()?;
+                symbolic.solve_in_place(&numeric, rhs.as_mut());
+                Some(())
+            });
+        if solved.is_some() {
+            out.extend(order.iter().enumerate().map(|(i, &v)| (v, [rhs[(i, 0)], rhs[(i, 1)]])));
+        }
+        out
     }
 
     /// The cleaned-up frames of a motion (`frames[f]` of `[n][3]`, at `fps`) and what was done.
@@ -636,6 +726,74 @@ impl FootSkateCleanup {
                 r: x.r,
             });
         }
+        // Per-vertex pins (step 4b): what the rigid move leaves of each planted vertex's way to
+        // its pin, on the plant's frames, faded out around them as the corrections are.
+        let foot_means: Vec<Vec<[f64; 2]>> = self
+            .feet
+            .iter()
+            .map(|foot| {
+                (0..nf)
+                    .map(|f| {
+                        let g = foot.iter().fold([0.0; 2], |a, &v| {
+                            let q = xy(f, v);
+                            [a[0] + q[0], a[1] + q[1]]
+                        });
+                        let c = foot.len().max(1) as f64;
+                        [g[0] / c, g[1] / c]
+                    })
+                    .collect()
+            })
+            .collect();
+        // The rigid move of a point `q` of foot k at frame f (before the root's shift).
+        let rigid = |k: usize, f: usize, q: [f64; 2]| -> [f64; 2] {
+            let c = corrections[k][f];
+            let g = foot_means[k][f];
+            let centre = [g[0] + c.r[0], g[1] + c.r[1]];
+            let (s, co) = c.theta.sin_cos();
+            let (x, y) = (q[0] - centre[0], q[1] - centre[1]);
+            [centre[0] + co * x - s * y + c.t[0] - q[0], centre[1] + s * x + co * y + c.t[1] - q[1]]
+        };
+        let mut residuals: Vec<Vec<(u32, [f64; 2])>> = vec![Vec::new(); nf];
+        if self.params.vertex_pins {
+            for (k, a, b, per_frame) in &plants {
+                let (k, a, b) = (*k, *a, *b);
+                let m = (a + b) / 2;
+                let of_frame = |f: usize| -> Vec<(u32, [f64; 2])> {
+                    per_frame[f - a]
+                        .iter()
+                        .map(|c| {
+                            let (q, y) = (xy(f, c.vertex), xy(m, c.vertex));
+                            let d = rigid(k, f, q);
+                            (c.vertex, [y[0] - q[0] - d[0] - root[f][0], y[1] - q[1] - d[1] - root[f][1]])
+                        })
+                        .collect()
+                };
+                for f in a..=b {
+                    residuals[f].extend(of_frame(f));
+                }
+                let fade = |x: usize| smoothstep(1.0 - x as f64 / (blend + 1) as f64);
+                let (first, last) = (of_frame(a), of_frame(b));
+                for x in 1..=blend {
+                    if let Some(f) = a.checked_sub(x).filter(|&f| !active[k][f]) {
+                        residuals[f].extend(first.iter().map(|&(v, r)| (v, [fade(x) * r[0], fade(x) * r[1]])));
+                    }
+                    if let Some(f) = Some(b + x).filter(|&f| f < nf && !active[k][f]) {
+                        residuals[f].extend(last.iter().map(|&(v, r)| (v, [fade(x) * r[0], fade(x) * r[1]])));
+                    }
+                }
+            }
+            for list in &mut residuals {
+                list.sort_by_key(|c| c.0);
+                list.dedup_by(|b, a| {
+                    if a.0 == b.0 {
+                        a.1 = [a.1[0] + b.1[0], a.1[1] + b.1[1]];
+                        true
+                    } else {
+                        false
+                    }
+                });
+            }
+        }
         // Per frame: the feet's displacements, then the legs' solve.
         let out: Vec<(Vec<f32>, f64)> = (0..nf)
             .into_par_iter()
@@ -676,6 +834,9 @@ impl FootSkateCleanup {
                     }
                 }
                 let lift = if self.params.keep_edges { self.turn_heights(&d, u, w) } else { Vec::new() };
+                for (v, e) in self.vertex_pin_displacement(&residuals[f]) {
+                    d[v as usize] = [d[v as usize][0] + e[0], d[v as usize][1] + e[1]];
+                }
                 let mut q = p.clone();
                 let mut largest = 0.0f64;
                 for (v, dv) in d.iter().enumerate() {
