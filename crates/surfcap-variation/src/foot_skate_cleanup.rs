@@ -145,6 +145,14 @@ pub struct FootSkateParams {
     /// vertices against each other (`surfcap eval vary`, docs/results/variation.md). Off, the
     /// foot is only moved rigidly.
     pub vertex_pins: bool,
+    /// With [`FootSkateParams::move_root`]: pin each plant where its foot comes down, as the
+    /// body has been moved so far, and move the body on with the planted feet step by step
+    /// (the module doc's step 5b), instead of pinning every plant where the foot is at its
+    /// middle frame in the motion as given. On by default: a variant whose stride differs
+    /// from its path's travel then covers its own stride's distance instead of stretching
+    /// its legs between two pins a stride and a slide apart, and a swinging foot is never
+    /// dragged back to a pin (`surfcap eval vary`, docs/results/variation.md).
+    pub carry_pins: bool,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -164,6 +172,7 @@ impl Default for FootSkateParams {
             move_root: true,
             keep_edges: false,
             vertex_pins: true,
+            carry_pins: true,
             contact: ContactParams::default(),
         }
     }
@@ -187,6 +196,12 @@ pub struct CleanupReport {
     pub pinned_drift_after_max: f64,
     /// The largest displacement of a vertex by the clean-up.
     pub largest_correction: f64,
+    /// The largest shift of the whole body along the ground (the root's, step 5; 0 with the
+    /// hips held).
+    pub largest_body_shift: f64,
+    /// The largest displacement of a vertex against the body's shift of its frame: how far
+    /// the clean-up bent a leg or moved a foot, the swinging ones included.
+    pub largest_leg_correction: f64,
 }
 
 /// The factorised leg deformation of one subject (see the module doc).
@@ -522,17 +537,23 @@ impl FootSkateCleanup {
             report.pinned_drift_after = r.pinned_drift_after;
             report.pinned_drift_after_max = r.pinned_drift_after_max;
         }
-        if self.params.passes > 1 {
-            report.largest_correction = frames
-                .iter()
-                .zip(&out)
-                .flat_map(|(a, b)| {
-                    a.chunks_exact(3)
-                        .zip(b.chunks_exact(3))
-                        .map(|(p, q)| (0..3).map(|k| ((q[k] - p[k]) as f64).powi(2)).sum::<f64>().sqrt())
-                })
-                .fold(0.0, f64::max);
+        // The body's shift of a frame: the displacement of a vertex outside the legs (they all
+        // move by it).
+        let body = self.leg_of.iter().position(Option::is_none);
+        let (mut largest, mut shift, mut leg) = (0.0f64, 0.0f64, 0.0f64);
+        for (a, b) in frames.iter().zip(&out) {
+            let disp = |v: usize| -> [f64; 3] { [0, 1, 2].map(|k| (b[3 * v + k] - a[3 * v + k]) as f64) };
+            let s = body.map_or([0.0; 3], disp);
+            shift = shift.max(s[0].hypot(s[1]).hypot(s[2]));
+            for v in 0..self.n_vertices {
+                let d = disp(v);
+                largest = largest.max(d[0].hypot(d[1]).hypot(d[2]));
+                leg = leg.max((d[0] - s[0]).hypot(d[1] - s[1]).hypot(d[2] - s[2]));
+            }
         }
+        report.largest_correction = largest;
+        report.largest_body_shift = shift;
+        report.largest_leg_correction = leg;
         Ok((out, report))
     }
 
@@ -694,7 +715,55 @@ impl FootSkateCleanup {
         // feet's mean pull; between plants bridged and faded as the corrections are. The feet
         // then only need what is left of their pull (their correction less the shift).
         let mut root = vec![[0.0f64; 2]; nf];
-        if self.params.move_root {
+        // Per plant, the shift of its pins (step 5b): 0 unless the pins are carried.
+        let mut carried = vec![[0.0f64; 2]; plants.len()];
+        if self.params.move_root && self.params.carry_pins {
+            // Step 5b: each plant is pinned where its foot comes down, as the body has been
+            // moved so far; the body then moves on with the planted feet, step by step: by
+            // their mean change of pull, plus a share of what the legs still have to reach
+            // (drained into the body, so a leg bent in double support straightens after it).
+            let mut plant_at = vec![vec![None; nf]; legs];
+            for (i, (k, a, b, _)) in plants.iter().enumerate() {
+                for slot in &mut plant_at[*k][*a..=*b] {
+                    *slot = Some(i);
+                }
+            }
+            let drain = 1.0 / (blend + 1) as f64;
+            for f in 0..nf {
+                for (k, at) in plant_at.iter().enumerate() {
+                    if let Some(i) = at[f]
+                        && plants[i].1 == f
+                    {
+                        let p = corrections[k][f].mean_shift();
+                        carried[i] = [root[f][0] - p[0], root[f][1] - p[1]];
+                    }
+                }
+                if f + 1 == nf {
+                    break;
+                }
+                let (mut sum, mut count) = ([0.0; 2], 0.0);
+                for (k, at) in plant_at.iter().enumerate() {
+                    if let (Some(i), Some(j)) = (at[f], at[f + 1])
+                        && i == j
+                    {
+                        let (p0, p1) = (corrections[k][f].mean_shift(), corrections[k][f + 1].mean_shift());
+                        let e = [p0[0] + carried[i][0] - root[f][0], p0[1] + carried[i][1] - root[f][1]];
+                        sum = [sum[0] + p1[0] - p0[0] + drain * e[0], sum[1] + p1[1] - p0[1] + drain * e[1]];
+                        count += 1.0;
+                    }
+                }
+                root[f + 1] =
+                    if count > 0.0 { [root[f][0] + sum[0] / count, root[f][1] + sum[1] / count] } else { root[f] };
+            }
+            for (k, at) in plant_at.iter().enumerate() {
+                for f in 0..nf {
+                    if let Some(i) = at[f] {
+                        let c = &mut corrections[k][f];
+                        c.t = [c.t[0] + carried[i][0] - root[f][0], c.t[1] + carried[i][1] - root[f][1]];
+                    }
+                }
+            }
+        } else if self.params.move_root {
             let on: Vec<bool> = (0..nf).map(|f| active.iter().any(|a| a[f])).collect();
             for (f, r) in root.iter_mut().enumerate() {
                 let (mut sum, mut count) = ([0.0; 2], 0.0);
@@ -755,15 +824,17 @@ impl FootSkateCleanup {
         };
         let mut residuals: Vec<Vec<(u32, [f64; 2])>> = vec![Vec::new(); nf];
         if self.params.vertex_pins {
-            for (k, a, b, per_frame) in &plants {
+            for (i, (k, a, b, per_frame)) in plants.iter().enumerate() {
                 let (k, a, b) = (*k, *a, *b);
                 let m = (a + b) / 2;
+                let shift = carried[i];
                 let of_frame = |f: usize| -> Vec<(u32, [f64; 2])> {
                     per_frame[f - a]
                         .iter()
                         .map(|c| {
                             let (q, y) = (xy(f, c.vertex), xy(m, c.vertex));
                             let d = rigid(k, f, q);
+                            let y = [y[0] + shift[0], y[1] + shift[1]];
                             (c.vertex, [y[0] - q[0] - d[0] - root[f][0], y[1] - q[1] - d[1] - root[f][1]])
                         })
                         .collect()
@@ -886,6 +957,8 @@ impl FootSkateCleanup {
             pinned_drift_after: mean(after),
             pinned_drift_after_max: worst,
             largest_correction,
+            largest_body_shift: 0.0,
+            largest_leg_correction: 0.0,
         };
         // Back off the moving ground.
         let cleaned = cleaned_moved
