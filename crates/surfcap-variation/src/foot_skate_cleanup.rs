@@ -153,6 +153,9 @@ pub struct FootSkateParams {
     /// its legs between two pins a stride and a slide apart, and a swinging foot is never
     /// dragged back to a pin (`surfcap eval vary`, docs/results/variation.md).
     pub carry_pins: bool,
+    /// The farthest a planted vertex is moved to its own pin beyond the foot's rigid move, as
+    /// a fraction of the subject's height (step 4b).
+    pub pin_reach: f64,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -173,6 +176,7 @@ impl Default for FootSkateParams {
             keep_edges: false,
             vertex_pins: true,
             carry_pins: true,
+            pin_reach: 0.02,
             contact: ContactParams::default(),
         }
     }
@@ -823,6 +827,7 @@ impl FootSkateCleanup {
             [centre[0] + co * x - s * y + c.t[0] - q[0], centre[1] + s * x + co * y + c.t[1] - q[1]]
         };
         let mut residuals: Vec<Vec<(u32, [f64; 2])>> = vec![Vec::new(); nf];
+        let reach = self.params.pin_reach * self.height;
         if self.params.vertex_pins {
             for (i, (k, a, b, per_frame)) in plants.iter().enumerate() {
                 let (k, a, b) = (*k, *a, *b);
@@ -835,7 +840,11 @@ impl FootSkateCleanup {
                             let (q, y) = (xy(f, c.vertex), xy(m, c.vertex));
                             let d = rigid(k, f, q);
                             let y = [y[0] + shift[0], y[1] + shift[1]];
-                            (c.vertex, [y[0] - q[0] - d[0] - root[f][0], y[1] - q[1] - d[1] - root[f][1]])
+                            let r = [y[0] - q[0] - d[0] - root[f][0], y[1] - q[1] - d[1] - root[f][1]];
+                            // Bounded: a vertex far from its pin is let go of rather than
+                            // dragged through the foot.
+                            let scale = (reach / r[0].hypot(r[1]).max(f64::MIN_POSITIVE)).min(1.0);
+                            (c.vertex, [scale * r[0], scale * r[1]])
                         })
                         .collect()
                 };
