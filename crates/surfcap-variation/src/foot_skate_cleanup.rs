@@ -1228,8 +1228,9 @@ mod tests {
     fn measured_sliding(frames: &[Vec<f32>]) -> f64 {
         let flat: Vec<f32> = frames.iter().flatten().copied().collect();
         let p = ContactParams::default();
-        let c = ground_contacts(&flat, 30, 30.0, UpAxis::PosY, &p);
-        foot_sliding(&flat, 30, 30.0, UpAxis::PosY, &c, &p, &[]).unwrap().mean_speed
+        let n = frames[0].len() / 3;
+        let c = ground_contacts(&flat, n, 30.0, UpAxis::PosY, &p);
+        foot_sliding(&flat, n, 30.0, UpAxis::PosY, &c, &p, &[]).unwrap().mean_speed
     }
 
     #[test]
@@ -1336,6 +1337,128 @@ mod tests {
         // heights are fixed (measured: mean strain 0.0023 turned, 0.0034 slanted).
         let (s, k) = (mean_strain(&t, &frames, &slanted), mean_strain(&t, &frames, &turned));
         assert!(k < 0.75 * s, "mean strain: turned {k}, slanted {s}");
+    }
+
+    #[test]
+    fn a_planted_sole_turning_under_the_rigid_fit_is_pinned_vertex_by_vertex() {
+        let (t, rest, leg) = ribbon();
+        // The skating foot of `skating`, whose rows (0-2) also turn about the up axis around
+        // their middle column at 0.02 radians a frame while planted (frames 5-20), the rows
+        // above following less up to the hip: the rigid fit (a translation) takes the skate
+        // away, not the turn, under which the sole's ends slide 0.06 units a second.
+        let mut frames = skating(&rest);
+        for (f, p) in frames.iter_mut().enumerate() {
+            let turn = 0.02 * (f.clamp(5, 20) as f64 - 5.0);
+            for (r, &y) in ROWS.iter().enumerate().take(8) {
+                let s = if r <= 2 { 1.0 } else { (1.1 - y as f64) / 1.0 };
+                let (sn, cs) = (s * turn).sin_cos();
+                for c in 0..3 {
+                    let k = 3 * (3 * r + c);
+                    let x = 0.1 * c as f64 - 0.1;
+                    p[k] = (0.1 + x * cs) as f32 + (p[k] - 0.1 * c as f32);
+                    p[k + 2] = (-x * sn) as f32;
+                }
+            }
+        }
+        let before = measured_sliding(&frames);
+        assert!(before > 0.3, "the turning sole skates: {before}");
+        let clean = |vertex_pins: bool| {
+            let p = FootSkateParams { vertex_pins, ..FootSkateParams::default() };
+            let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, std::slice::from_ref(&leg), p).unwrap();
+            c.clean(&frames, 30.0, None).unwrap().0
+        };
+        let rigid = measured_sliding(&clean(false));
+        let pinned_out = clean(true);
+        let pinned = measured_sliding(&pinned_out);
+        assert!(rigid > 0.03, "the rigid fit leaves the turn: {rigid} (before {before})");
+        assert!(pinned < 1e-3, "pinned vertex by vertex: {pinned} (rigid only {rigid}, before {before})");
+        // The sole's vertices stay where they were on every planted frame.
+        for f in 5..=20 {
+            for v in 0..6 {
+                let d = (pinned_out[f][3 * v] - pinned_out[5][3 * v]).abs()
+                    + (pinned_out[f][3 * v + 2] - pinned_out[5][3 * v + 2]).abs();
+                assert!(d < 1e-4, "frame {f}, vertex {v}: {d} from where it came down");
+            }
+        }
+    }
+
+    /// Two legs: the ribbon (leg A, rows 0-7, and the torso) and a second leg strip B (rows
+    /// 0-7, a separate piece 0.5 away along z). The whole body travels along x at 0.3 units a
+    /// second, too fast for its steps: A is planted at frames 0-15, B at frames 10-29 (double
+    /// support 10-15), a foot in the air lifted 0.3.
+    fn two_legs_travelling() -> (Topology, Vec<f32>, Vec<Vec<u32>>, Vec<Vec<f32>>) {
+        let (t, mut rest, leg_a) = ribbon();
+        let mut tris = t.triangles().to_vec();
+        for r in 0..7u32 {
+            for c in 0..2u32 {
+                let o = 30;
+                let (a, b, d, e) = (o + 3 * r + c, o + 3 * r + c + 1, o + 3 * (r + 1) + c, o + 3 * (r + 1) + c + 1);
+                tris.push([a, b, e]);
+                tris.push([a, e, d]);
+            }
+        }
+        rest.extend(ROWS.iter().take(8).flat_map(|&y| (0..3).flat_map(move |c| [0.1 * c as f32, y, 0.5])));
+        let t = Topology::new(54, tris, None).unwrap();
+        let legs = vec![leg_a, (30..54).collect()];
+        let frames = (0..30)
+            .map(|f| {
+                let mut p = rest.clone();
+                for q in p.chunks_exact_mut(3) {
+                    q[0] += 0.01 * f as f32;
+                }
+                for (offset, planted) in [(0usize, f <= 15), (30, f >= 10)] {
+                    if planted {
+                        continue;
+                    }
+                    for (r, &y) in ROWS.iter().enumerate().take(8) {
+                        let s = if r <= 2 { 1.0 } else { (1.1 - y) / 1.0 };
+                        for c in 0..3 {
+                            p[3 * (offset + 3 * r + c) + 1] += s * 0.3;
+                        }
+                    }
+                }
+                p
+            })
+            .collect();
+        (t, rest, legs, frames)
+    }
+
+    #[test]
+    fn carried_pins_let_the_body_follow_its_steps_without_stretching_the_legs_in_double_support() {
+        let (t, rest, legs, frames) = two_legs_travelling();
+        let run = |carry_pins: bool| {
+            let p = FootSkateParams { carry_pins, ..FootSkateParams::default() };
+            FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &legs, p).unwrap().clean(&frames, 30.0, None).unwrap()
+        };
+        let ((carried, report), (midway, _)) = (run(true), run(false));
+        let before = measured_sliding(&frames);
+        assert!(before > 0.25, "both feet slide with the body: {before}");
+        assert!(report.sliding_after < 1e-3 && measured_sliding(&carried) < 1e-3, "{report:?}");
+        // Each planted foot stays where it came down.
+        for (foot, range) in [(0usize, 0..=15usize), (30, 10..=29)] {
+            let first = *range.start();
+            for f in range {
+                for v in foot..foot + 6 {
+                    let d = (carried[f][3 * v] - carried[first][3 * v]).abs();
+                    assert!(d < 1e-4, "frame {f}, vertex {v}: {d} from where it came down");
+                }
+            }
+        }
+        // The body follows its steps: every frame is the given one moved as a whole, so no
+        // edge changes length and the body travels 0.3 less per second. Pinned where each
+        // foot is at its plant's middle frame instead, the two pins are a stride and a slide
+        // apart and the legs stretch in double support.
+        let stretch = |o: &[Vec<f32>]| {
+            (0..30)
+                .flat_map(|f| {
+                    edge_lengths(&t, &frames[f]).into_iter().zip(edge_lengths(&t, &o[f])).map(|(a, b)| (a - b).abs())
+                })
+                .fold(0.0, f64::max)
+        };
+        assert!(stretch(&carried) < 1e-4, "carried: {}", stretch(&carried));
+        // (measured: edges change by up to 0.0067 pinned midway)
+        assert!(stretch(&midway) > 0.005, "pinned midway: {}", stretch(&midway));
+        assert!(report.largest_leg_correction < 1e-4 && report.largest_body_shift > 0.25, "{report:?}");
     }
 
     #[test]
