@@ -42,6 +42,17 @@
 //!    is along the ground, heights are kept. The free block `L_II` (leg vertices between foot and
 //!    hip) is factorised once per subject ([`FootSkateCleanup::new`]); each frame is one sparse
 //!    solve with two right-hand sides, `L_II d_I = -L_IC d_C`, frames in parallel.
+//!    **4b. Every planted vertex pinned** (with [`FootSkateParams::vertex_pins`], on by
+//!    default): a rigid foot cannot follow a planted sole that rolls, turns or changes shape
+//!    under it, and what it leaves is what the sliding measure counts (on the KayKit walks'
+//!    variants most of the sliding left after the rigid move: `surfcap eval vary`,
+//!    docs/results/variation.md). So each planted vertex of a plant's frame is then moved the
+//!    rest of the way to its pin, `e_v = y_v - T_f(p_v(f)) - r_f` (at most
+//!    [`FootSkateParams::pin_reach`] x the subject's height; a vertex further off is let
+//!    go of, not dragged through the foot), faded out around the plant as the correction is;
+//!    the other movable leg vertices (feet and free ones) follow in the gradient domain, the
+//!    hips and the body held: `L_FF e_F = -L_FP e_P`, factorised per frame since the pinned
+//!    set changes from frame to frame.
 //! 5. **The root** (Kovar sec. 4, with [`FootSkateParams::move_root`], on by default): the
 //!    whole mesh is moved along the ground by `r_f`, on every frame where a foot is planted the
 //!    planted feet's mean pull (a foot's pull: its vertices' mean displacement by `T_f`),
@@ -50,6 +61,20 @@
 //!    a foot alone on the ground is reached by moving the body, without bending its leg; two
 //!    planted feet bend their legs only by how far their pulls differ; a foot in the air moves
 //!    with the body.
+//!    **5b. Pins carried by the root** (with [`FootSkateParams::carry_pins`], on by default
+//!    with the root moved): pinned where each foot is at its plant's middle frame in the
+//!    motion as given, two plants in double support are a stride plus what the feet slid
+//!    between the two middles apart, and the legs stretch to span it (`surfcap eval vary`'s
+//!    world-frame edge distortion on CMU walks); a foot leaving a plant is also pulled far
+//!    back to its pin. So each plant `P` is pinned where its foot comes down with the body
+//!    moved so far, `y_v + s_P` with `s_P = r_a - pull(a)` at its first frame `a`, and the
+//!    body then moves on with the planted feet frame by frame: `r_{f+1} = r_f + mean_k
+//!    (pull_k(f+1) - pull_k(f) + e_k(f) / (blend + 1))` over the feet planted at both frames,
+//!    `e_k = pull_k + s_P - r` what foot k's leg still has to reach (drained into the body, so
+//!    a leg bent in double support straightens after it); held where no foot stays planted.
+//!    A variant whose stride differs from its path's travel then covers its own stride's
+//!    distance: the body drifts from the path it was placed on (the report's
+//!    `largest_body_shift`) while the legs keep their lengths (`largest_leg_correction`).
 //! 6. **Turned, not slanted, legs** (with [`FootSkateParams::keep_edges`]): step 4's
 //!    displacement is along the ground only, so a foot pulled by `delta` under a held hip
 //!    slants its leg: a shear of about `delta / L` over the leg's length `L`, which stretches
