@@ -42,6 +42,17 @@
 //!    is along the ground, heights are kept. The free block `L_II` (leg vertices between foot and
 //!    hip) is factorised once per subject ([`FootSkateCleanup::new`]); each frame is one sparse
 //!    solve with two right-hand sides, `L_II d_I = -L_IC d_C`, frames in parallel.
+//!    **4b. Every planted vertex pinned** (with [`FootSkateParams::vertex_pins`], on by
+//!    default): a rigid foot cannot follow a planted sole that rolls, turns or changes shape
+//!    under it, and what it leaves is what the sliding measure counts (on the KayKit walks'
+//!    variants most of the sliding left after the rigid move: `surfcap eval vary`,
+//!    docs/results/variation.md). So each planted vertex of a plant's frame is then moved the
+//!    rest of the way to its pin, `e_v = y_v - T_f(p_v(f)) - r_f` (at most
+//!    [`FootSkateParams::pin_reach`] x the subject's height; a vertex further off is let
+//!    go of, not dragged through the foot), faded out around the plant as the correction is;
+//!    the other movable leg vertices (feet and free ones) follow in the gradient domain, the
+//!    hips and the body held: `L_FF e_F = -L_FP e_P`, factorised per frame since the pinned
+//!    set changes from frame to frame.
 //! 5. **The root** (Kovar sec. 4, with [`FootSkateParams::move_root`], on by default): the
 //!    whole mesh is moved along the ground by `r_f`, on every frame where a foot is planted the
 //!    planted feet's mean pull (a foot's pull: its vertices' mean displacement by `T_f`),
@@ -50,6 +61,20 @@
 //!    a foot alone on the ground is reached by moving the body, without bending its leg; two
 //!    planted feet bend their legs only by how far their pulls differ; a foot in the air moves
 //!    with the body.
+//!    **5b. Pins carried by the root** (with [`FootSkateParams::carry_pins`], on by default
+//!    with the root moved): pinned where each foot is at its plant's middle frame in the
+//!    motion as given, two plants in double support are a stride plus what the feet slid
+//!    between the two middles apart, and the legs stretch to span it (`surfcap eval vary`'s
+//!    world-frame edge distortion on CMU walks); a foot leaving a plant is also pulled far
+//!    back to its pin. So each plant `P` is pinned where its foot comes down with the body
+//!    moved so far, `y_v + s_P` with `s_P = r_a - pull(a)` at its first frame `a`, and the
+//!    body then moves on with the planted feet frame by frame: `r_{f+1} = r_f + mean_k
+//!    (pull_k(f+1) - pull_k(f) + e_k(f) / (blend + 1))` over the feet planted at both frames,
+//!    `e_k = pull_k + s_P - r` what foot k's leg still has to reach (drained into the body, so
+//!    a leg bent in double support straightens after it); held where no foot stays planted.
+//!    A variant whose stride differs from its path's travel then covers its own stride's
+//!    distance: the body drifts from the path it was placed on (the report's
+//!    `largest_body_shift`) while the legs keep their lengths (`largest_leg_correction`).
 //! 6. **Turned, not slanted, legs** (with [`FootSkateParams::keep_edges`]): step 4's
 //!    displacement is along the ground only, so a foot pulled by `delta` under a held hip
 //!    slants its leg: a shear of about `delta / L` over the leg's length `L`, which stretches
@@ -137,6 +162,25 @@ pub struct FootSkateParams {
     /// in the unit test, but with the root moved (the default) a leg bends only in double
     /// support, and its effect on `surfcap eval vary` is not measured.
     pub keep_edges: bool,
+    /// Pin every planted vertex at its own place (the module doc's step 4b) after the foot's
+    /// rigid move: what the rigid fit leaves (a planted sole that rolls, turns or changes
+    /// shape under it) is taken away vertex by vertex, the rest of the leg following in the
+    /// gradient domain. On by default: on the KayKit walks and runs most of the sliding left
+    /// after the rigid fit was not a motion of the foot as a whole but of its planted
+    /// vertices against each other (`surfcap eval vary`, docs/results/variation.md). Off, the
+    /// foot is only moved rigidly.
+    pub vertex_pins: bool,
+    /// With [`FootSkateParams::move_root`]: pin each plant where its foot comes down, as the
+    /// body has been moved so far, and move the body on with the planted feet step by step
+    /// (the module doc's step 5b), instead of pinning every plant where the foot is at its
+    /// middle frame in the motion as given. On by default: a variant whose stride differs
+    /// from its path's travel then covers its own stride's distance instead of stretching
+    /// its legs between two pins a stride and a slide apart, and a swinging foot is never
+    /// dragged back to a pin (`surfcap eval vary`, docs/results/variation.md).
+    pub carry_pins: bool,
+    /// The farthest a planted vertex is moved to its own pin beyond the foot's rigid move, as
+    /// a fraction of the subject's height (step 4b).
+    pub pin_reach: f64,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -155,6 +199,9 @@ impl Default for FootSkateParams {
             fit_turn: false,
             move_root: true,
             keep_edges: false,
+            vertex_pins: true,
+            carry_pins: true,
+            pin_reach: 0.02,
             contact: ContactParams::default(),
         }
     }
@@ -178,6 +225,12 @@ pub struct CleanupReport {
     pub pinned_drift_after_max: f64,
     /// The largest displacement of a vertex by the clean-up.
     pub largest_correction: f64,
+    /// The largest shift of the whole body along the ground (the root's, step 5; 0 with the
+    /// hips held).
+    pub largest_body_shift: f64,
+    /// The largest displacement of a vertex against the body's shift of its frame: how far
+    /// the clean-up bent a leg or moved a foot, the swinging ones included.
+    pub largest_leg_correction: f64,
 }
 
 /// The factorised leg deformation of one subject (see the module doc).
@@ -201,6 +254,9 @@ pub struct FootSkateCleanup {
     /// The rest pose's hat-function gradients and areas of the triangles with a free vertex
     /// (for [`FootSkateParams::keep_edges`]): (vertices, gradients, area).
     leg_triangles: Vec<([u32; 3], [[f64; 3]; 3], f64)>,
+    /// The Laplacian among the legs' movable vertices (feet and free), duplicates merged:
+    /// (row, column, value), for the per-vertex pins' solve (module doc, step 4b).
+    movable_laplacian: Vec<(u32, u32, f64)>,
 }
 
 impl std::fmt::Debug for FootSkateCleanup {
@@ -349,6 +405,22 @@ impl FootSkateCleanup {
         } else {
             (None, None)
         };
+        let movable = |v: usize| is_foot[v] || free[v].is_some();
+        let mut movable_laplacian: Vec<(u32, u32, f64)> = op
+            .laplacian_triplets()
+            .into_iter()
+            .filter(|t| movable(t.row) && movable(t.col))
+            .map(|t| (t.row as u32, t.col as u32, t.val))
+            .collect();
+        movable_laplacian.sort_by_key(|c| (c.0, c.1));
+        movable_laplacian.dedup_by(|b, a| {
+            if (a.0, a.1) == (b.0, b.1) {
+                a.2 += b.2;
+                true
+            } else {
+                false
+            }
+        });
         let leg_triangles = topology
             .triangles()
             .iter()
@@ -358,6 +430,7 @@ impl FootSkateCleanup {
             .collect();
         Ok(FootSkateCleanup {
             leg_triangles,
+            movable_laplacian,
             up,
             n_vertices: n,
             height,
@@ -410,6 +483,67 @@ impl FootSkateCleanup {
         (0..self.n_free).map(|i| rhs[(i, 0)]).collect()
     }
 
+    /// The displacement that takes each pinned vertex the rest of its way (`pins`: vertex and
+    /// what is left along the ground axes, sorted by vertex) and bends the legs' other movable
+    /// vertices (feet and free) with them, the hips and the body held: `L_FF e_F = -L_FP e_P`
+    /// over this frame's free set F (the movable vertices not pinned), factorised per frame
+    /// (the pinned set changes from frame to frame). Returns (vertex, displacement) for the
+    /// movable vertices; empty without pins.
+    fn vertex_pin_displacement(&self, pins: &[(u32, [f64; 2])]) -> Vec<(u32, [f64; 2])> {
+        if pins.is_empty() {
+            return Vec::new();
+        }
+        let n = self.n_vertices;
+        let pinned: std::collections::HashMap<u32, [f64; 2]> = pins.iter().copied().collect();
+        let mut index = vec![usize::MAX; n];
+        let mut order = Vec::new();
+        for v in 0..n {
+            let movable = self.free[v].is_some()
+                || self.leg_of[v].is_some_and(|k| self.feet[k as usize].binary_search(&(v as u32)).is_ok());
+            if movable && !pinned.contains_key(&(v as u32)) {
+                index[v] = order.len();
+                order.push(v as u32);
+            }
+        }
+        let mut out: Vec<(u32, [f64; 2])> = pins.to_vec();
+        if order.is_empty() {
+            return out;
+        }
+        let mut lower = Vec::new();
+        let mut rhs = Mat::<f64>::zeros(order.len(), 2);
+        for &(r, c, l) in &self.movable_laplacian {
+            let i = index[r as usize];
+            if i == usize::MAX {
+                continue;
+            }
+            match (index[c as usize], pinned.get(&c)) {
+                (j, _) if j != usize::MAX => {
+                    if i >= j {
+                        lower.push(Triplet::new(i, j, l));
+                    }
+                }
+                (_, Some(e)) => {
+                    rhs[(i, 0)] -= l * e[0];
+                    rhs[(i, 1)] -= l * e[1];
+                }
+                _ => {}
+            }
+        }
+        let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / order.len() as f64;
+        lower.extend((0..order.len()).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
+        let solved =
+            SparseColMat::<usize, f64>::try_new_from_triplets(order.len(), order.len(), &lower).ok().and_then(|mat| {
+                let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
+                let numeric = symbolic.factorize(mat.as_ref()).ok()?;
+                symbolic.solve_in_place(&numeric, rhs.as_mut());
+                Some(())
+            });
+        if solved.is_some() {
+            out.extend(order.iter().enumerate().map(|(i, &v)| (v, [rhs[(i, 0)], rhs[(i, 1)]])));
+        }
+        out
+    }
+
     /// The cleaned-up frames of a motion (`frames[f]` of `[n][3]`, at `fps`) and what was done.
     /// `ground`, when given, is per frame the ground's travel along the two ground axes (the
     /// module doc's in-place clips): the feet are pinned to it.
@@ -432,17 +566,23 @@ impl FootSkateCleanup {
             report.pinned_drift_after = r.pinned_drift_after;
             report.pinned_drift_after_max = r.pinned_drift_after_max;
         }
-        if self.params.passes > 1 {
-            report.largest_correction = frames
-                .iter()
-                .zip(&out)
-                .flat_map(|(a, b)| {
-                    a.chunks_exact(3)
-                        .zip(b.chunks_exact(3))
-                        .map(|(p, q)| (0..3).map(|k| ((q[k] - p[k]) as f64).powi(2)).sum::<f64>().sqrt())
-                })
-                .fold(0.0, f64::max);
+        // The body's shift of a frame: the displacement of a vertex outside the legs (they all
+        // move by it).
+        let body = self.leg_of.iter().position(Option::is_none);
+        let (mut largest, mut shift, mut leg) = (0.0f64, 0.0f64, 0.0f64);
+        for (a, b) in frames.iter().zip(&out) {
+            let disp = |v: usize| -> [f64; 3] { [0, 1, 2].map(|k| (b[3 * v + k] - a[3 * v + k]) as f64) };
+            let s = body.map_or([0.0; 3], disp);
+            shift = shift.max(s[0].hypot(s[1]).hypot(s[2]));
+            for v in 0..self.n_vertices {
+                let d = disp(v);
+                largest = largest.max(d[0].hypot(d[1]).hypot(d[2]));
+                leg = leg.max((d[0] - s[0]).hypot(d[1] - s[1]).hypot(d[2] - s[2]));
+            }
         }
+        report.largest_correction = largest;
+        report.largest_body_shift = shift;
+        report.largest_leg_correction = leg;
         Ok((out, report))
     }
 
@@ -604,7 +744,55 @@ impl FootSkateCleanup {
         // feet's mean pull; between plants bridged and faded as the corrections are. The feet
         // then only need what is left of their pull (their correction less the shift).
         let mut root = vec![[0.0f64; 2]; nf];
-        if self.params.move_root {
+        // Per plant, the shift of its pins (step 5b): 0 unless the pins are carried.
+        let mut carried = vec![[0.0f64; 2]; plants.len()];
+        if self.params.move_root && self.params.carry_pins {
+            // Step 5b: each plant is pinned where its foot comes down, as the body has been
+            // moved so far; the body then moves on with the planted feet, step by step: by
+            // their mean change of pull, plus a share of what the legs still have to reach
+            // (drained into the body, so a leg bent in double support straightens after it).
+            let mut plant_at = vec![vec![None; nf]; legs];
+            for (i, (k, a, b, _)) in plants.iter().enumerate() {
+                for slot in &mut plant_at[*k][*a..=*b] {
+                    *slot = Some(i);
+                }
+            }
+            let drain = 1.0 / (blend + 1) as f64;
+            for f in 0..nf {
+                for (k, at) in plant_at.iter().enumerate() {
+                    if let Some(i) = at[f]
+                        && plants[i].1 == f
+                    {
+                        let p = corrections[k][f].mean_shift();
+                        carried[i] = [root[f][0] - p[0], root[f][1] - p[1]];
+                    }
+                }
+                if f + 1 == nf {
+                    break;
+                }
+                let (mut sum, mut count) = ([0.0; 2], 0.0);
+                for (k, at) in plant_at.iter().enumerate() {
+                    if let (Some(i), Some(j)) = (at[f], at[f + 1])
+                        && i == j
+                    {
+                        let (p0, p1) = (corrections[k][f].mean_shift(), corrections[k][f + 1].mean_shift());
+                        let e = [p0[0] + carried[i][0] - root[f][0], p0[1] + carried[i][1] - root[f][1]];
+                        sum = [sum[0] + p1[0] - p0[0] + drain * e[0], sum[1] + p1[1] - p0[1] + drain * e[1]];
+                        count += 1.0;
+                    }
+                }
+                root[f + 1] =
+                    if count > 0.0 { [root[f][0] + sum[0] / count, root[f][1] + sum[1] / count] } else { root[f] };
+            }
+            for (k, at) in plant_at.iter().enumerate() {
+                for f in 0..nf {
+                    if let Some(i) = at[f] {
+                        let c = &mut corrections[k][f];
+                        c.t = [c.t[0] + carried[i][0] - root[f][0], c.t[1] + carried[i][1] - root[f][1]];
+                    }
+                }
+            }
+        } else if self.params.move_root {
             let on: Vec<bool> = (0..nf).map(|f| active.iter().any(|a| a[f])).collect();
             for (f, r) in root.iter_mut().enumerate() {
                 let (mut sum, mut count) = ([0.0; 2], 0.0);
@@ -635,6 +823,81 @@ impl FootSkateCleanup {
                 t: [c.t[0] + x.t[0], c.t[1] + x.t[1]],
                 r: x.r,
             });
+        }
+        // Per-vertex pins (step 4b): what the rigid move leaves of each planted vertex's way to
+        // its pin, on the plant's frames, faded out around them as the corrections are.
+        let foot_means: Vec<Vec<[f64; 2]>> = self
+            .feet
+            .iter()
+            .map(|foot| {
+                (0..nf)
+                    .map(|f| {
+                        let g = foot.iter().fold([0.0; 2], |a, &v| {
+                            let q = xy(f, v);
+                            [a[0] + q[0], a[1] + q[1]]
+                        });
+                        let c = foot.len().max(1) as f64;
+                        [g[0] / c, g[1] / c]
+                    })
+                    .collect()
+            })
+            .collect();
+        // The rigid move of a point `q` of foot k at frame f (before the root's shift).
+        let rigid = |k: usize, f: usize, q: [f64; 2]| -> [f64; 2] {
+            let c = corrections[k][f];
+            let g = foot_means[k][f];
+            let centre = [g[0] + c.r[0], g[1] + c.r[1]];
+            let (s, co) = c.theta.sin_cos();
+            let (x, y) = (q[0] - centre[0], q[1] - centre[1]);
+            [centre[0] + co * x - s * y + c.t[0] - q[0], centre[1] + s * x + co * y + c.t[1] - q[1]]
+        };
+        let mut residuals: Vec<Vec<(u32, [f64; 2])>> = vec![Vec::new(); nf];
+        let reach = self.params.pin_reach * self.height;
+        if self.params.vertex_pins {
+            for (i, (k, a, b, per_frame)) in plants.iter().enumerate() {
+                let (k, a, b) = (*k, *a, *b);
+                let m = (a + b) / 2;
+                let shift = carried[i];
+                let of_frame = |f: usize| -> Vec<(u32, [f64; 2])> {
+                    per_frame[f - a]
+                        .iter()
+                        .map(|c| {
+                            let (q, y) = (xy(f, c.vertex), xy(m, c.vertex));
+                            let d = rigid(k, f, q);
+                            let y = [y[0] + shift[0], y[1] + shift[1]];
+                            let r = [y[0] - q[0] - d[0] - root[f][0], y[1] - q[1] - d[1] - root[f][1]];
+                            // Bounded: a vertex far from its pin is let go of rather than
+                            // dragged through the foot.
+                            let scale = (reach / r[0].hypot(r[1]).max(f64::MIN_POSITIVE)).min(1.0);
+                            (c.vertex, [scale * r[0], scale * r[1]])
+                        })
+                        .collect()
+                };
+                for f in a..=b {
+                    residuals[f].extend(of_frame(f));
+                }
+                let fade = |x: usize| smoothstep(1.0 - x as f64 / (blend + 1) as f64);
+                let (first, last) = (of_frame(a), of_frame(b));
+                for x in 1..=blend {
+                    if let Some(f) = a.checked_sub(x).filter(|&f| !active[k][f]) {
+                        residuals[f].extend(first.iter().map(|&(v, r)| (v, [fade(x) * r[0], fade(x) * r[1]])));
+                    }
+                    if let Some(f) = Some(b + x).filter(|&f| f < nf && !active[k][f]) {
+                        residuals[f].extend(last.iter().map(|&(v, r)| (v, [fade(x) * r[0], fade(x) * r[1]])));
+                    }
+                }
+            }
+            for list in &mut residuals {
+                list.sort_by_key(|c| c.0);
+                list.dedup_by(|b, a| {
+                    if a.0 == b.0 {
+                        a.1 = [a.1[0] + b.1[0], a.1[1] + b.1[1]];
+                        true
+                    } else {
+                        false
+                    }
+                });
+            }
         }
         // Per frame: the feet's displacements, then the legs' solve.
         let out: Vec<(Vec<f32>, f64)> = (0..nf)
@@ -676,6 +939,9 @@ impl FootSkateCleanup {
                     }
                 }
                 let lift = if self.params.keep_edges { self.turn_heights(&d, u, w) } else { Vec::new() };
+                for (v, e) in self.vertex_pin_displacement(&residuals[f]) {
+                    d[v as usize] = [d[v as usize][0] + e[0], d[v as usize][1] + e[1]];
+                }
                 let mut q = p.clone();
                 let mut largest = 0.0f64;
                 for (v, dv) in d.iter().enumerate() {
@@ -725,6 +991,8 @@ impl FootSkateCleanup {
             pinned_drift_after: mean(after),
             pinned_drift_after_max: worst,
             largest_correction,
+            largest_body_shift: 0.0,
+            largest_leg_correction: 0.0,
         };
         // Back off the moving ground.
         let cleaned = cleaned_moved
@@ -985,8 +1253,9 @@ mod tests {
     fn measured_sliding(frames: &[Vec<f32>]) -> f64 {
         let flat: Vec<f32> = frames.iter().flatten().copied().collect();
         let p = ContactParams::default();
-        let c = ground_contacts(&flat, 30, 30.0, UpAxis::PosY, &p);
-        foot_sliding(&flat, 30, 30.0, UpAxis::PosY, &c, &p, &[]).unwrap().mean_speed
+        let n = frames[0].len() / 3;
+        let c = ground_contacts(&flat, n, 30.0, UpAxis::PosY, &p);
+        foot_sliding(&flat, n, 30.0, UpAxis::PosY, &c, &p, &[]).unwrap().mean_speed
     }
 
     #[test]
@@ -1093,6 +1362,128 @@ mod tests {
         // heights are fixed (measured: mean strain 0.0023 turned, 0.0034 slanted).
         let (s, k) = (mean_strain(&t, &frames, &slanted), mean_strain(&t, &frames, &turned));
         assert!(k < 0.75 * s, "mean strain: turned {k}, slanted {s}");
+    }
+
+    #[test]
+    fn a_planted_sole_turning_under_the_rigid_fit_is_pinned_vertex_by_vertex() {
+        let (t, rest, leg) = ribbon();
+        // The skating foot of `skating`, whose rows (0-2) also turn about the up axis around
+        // their middle column at 0.02 radians a frame while planted (frames 5-20), the rows
+        // above following less up to the hip: the rigid fit (a translation) takes the skate
+        // away, not the turn, under which the sole's ends slide 0.06 units a second.
+        let mut frames = skating(&rest);
+        for (f, p) in frames.iter_mut().enumerate() {
+            let turn = 0.02 * (f.clamp(5, 20) as f64 - 5.0);
+            for (r, &y) in ROWS.iter().enumerate().take(8) {
+                let s = if r <= 2 { 1.0 } else { (1.1 - y as f64) / 1.0 };
+                let (sn, cs) = (s * turn).sin_cos();
+                for c in 0..3 {
+                    let k = 3 * (3 * r + c);
+                    let x = 0.1 * c as f64 - 0.1;
+                    p[k] = (0.1 + x * cs) as f32 + (p[k] - 0.1 * c as f32);
+                    p[k + 2] = (-x * sn) as f32;
+                }
+            }
+        }
+        let before = measured_sliding(&frames);
+        assert!(before > 0.3, "the turning sole skates: {before}");
+        let clean = |vertex_pins: bool| {
+            let p = FootSkateParams { vertex_pins, ..FootSkateParams::default() };
+            let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, std::slice::from_ref(&leg), p).unwrap();
+            c.clean(&frames, 30.0, None).unwrap().0
+        };
+        let rigid = measured_sliding(&clean(false));
+        let pinned_out = clean(true);
+        let pinned = measured_sliding(&pinned_out);
+        assert!(rigid > 0.03, "the rigid fit leaves the turn: {rigid} (before {before})");
+        assert!(pinned < 1e-3, "pinned vertex by vertex: {pinned} (rigid only {rigid}, before {before})");
+        // The sole's vertices stay where they were on every planted frame.
+        for f in 5..=20 {
+            for v in 0..6 {
+                let d = (pinned_out[f][3 * v] - pinned_out[5][3 * v]).abs()
+                    + (pinned_out[f][3 * v + 2] - pinned_out[5][3 * v + 2]).abs();
+                assert!(d < 1e-4, "frame {f}, vertex {v}: {d} from where it came down");
+            }
+        }
+    }
+
+    /// Two legs: the ribbon (leg A, rows 0-7, and the torso) and a second leg strip B (rows
+    /// 0-7, a separate piece 0.5 away along z). The whole body travels along x at 0.3 units a
+    /// second, too fast for its steps: A is planted at frames 0-15, B at frames 10-29 (double
+    /// support 10-15), a foot in the air lifted 0.3.
+    fn two_legs_travelling() -> (Topology, Vec<f32>, Vec<Vec<u32>>, Vec<Vec<f32>>) {
+        let (t, mut rest, leg_a) = ribbon();
+        let mut tris = t.triangles().to_vec();
+        for r in 0..7u32 {
+            for c in 0..2u32 {
+                let o = 30;
+                let (a, b, d, e) = (o + 3 * r + c, o + 3 * r + c + 1, o + 3 * (r + 1) + c, o + 3 * (r + 1) + c + 1);
+                tris.push([a, b, e]);
+                tris.push([a, e, d]);
+            }
+        }
+        rest.extend(ROWS.iter().take(8).flat_map(|&y| (0..3).flat_map(move |c| [0.1 * c as f32, y, 0.5])));
+        let t = Topology::new(54, tris, None).unwrap();
+        let legs = vec![leg_a, (30..54).collect()];
+        let frames = (0..30)
+            .map(|f| {
+                let mut p = rest.clone();
+                for q in p.chunks_exact_mut(3) {
+                    q[0] += 0.01 * f as f32;
+                }
+                for (offset, planted) in [(0usize, f <= 15), (30, f >= 10)] {
+                    if planted {
+                        continue;
+                    }
+                    for (r, &y) in ROWS.iter().enumerate().take(8) {
+                        let s = if r <= 2 { 1.0 } else { (1.1 - y) / 1.0 };
+                        for c in 0..3 {
+                            p[3 * (offset + 3 * r + c) + 1] += s * 0.3;
+                        }
+                    }
+                }
+                p
+            })
+            .collect();
+        (t, rest, legs, frames)
+    }
+
+    #[test]
+    fn carried_pins_let_the_body_follow_its_steps_without_stretching_the_legs_in_double_support() {
+        let (t, rest, legs, frames) = two_legs_travelling();
+        let run = |carry_pins: bool| {
+            let p = FootSkateParams { carry_pins, ..FootSkateParams::default() };
+            FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &legs, p).unwrap().clean(&frames, 30.0, None).unwrap()
+        };
+        let ((carried, report), (midway, _)) = (run(true), run(false));
+        let before = measured_sliding(&frames);
+        assert!(before > 0.25, "both feet slide with the body: {before}");
+        assert!(report.sliding_after < 1e-3 && measured_sliding(&carried) < 1e-3, "{report:?}");
+        // Each planted foot stays where it came down.
+        for (foot, range) in [(0usize, 0..=15usize), (30, 10..=29)] {
+            let first = *range.start();
+            for f in range {
+                for v in foot..foot + 6 {
+                    let d = (carried[f][3 * v] - carried[first][3 * v]).abs();
+                    assert!(d < 1e-4, "frame {f}, vertex {v}: {d} from where it came down");
+                }
+            }
+        }
+        // The body follows its steps: every frame is the given one moved as a whole, so no
+        // edge changes length and the body travels 0.3 less per second. Pinned where each
+        // foot is at its plant's middle frame instead, the two pins are a stride and a slide
+        // apart and the legs stretch in double support.
+        let stretch = |o: &[Vec<f32>]| {
+            (0..30)
+                .flat_map(|f| {
+                    edge_lengths(&t, &frames[f]).into_iter().zip(edge_lengths(&t, &o[f])).map(|(a, b)| (a - b).abs())
+                })
+                .fold(0.0, f64::max)
+        };
+        assert!(stretch(&carried) < 1e-4, "carried: {}", stretch(&carried));
+        // (measured: edges change by up to 0.0067 pinned midway)
+        assert!(stretch(&midway) > 0.005, "pinned midway: {}", stretch(&midway));
+        assert!(report.largest_leg_correction < 1e-4 && report.largest_body_shift > 0.25, "{report:?}");
     }
 
     #[test]

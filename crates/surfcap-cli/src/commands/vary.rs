@@ -326,8 +326,15 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
             );
             if let Some(c) = &v.cleanup {
                 println!(
-                    "    foot skate: sliding {:.3} -> {:.3} {unit}/s, {} contacts pinned, pinned vertices {:.4} -> {:.4} {unit} from their pins (largest correction {:.3} {unit})",
-                    c.sliding_before, c.sliding_after, c.plants, c.pinned_drift_before, c.pinned_drift_after, c.largest_correction
+                    "    foot skate: sliding {:.3} -> {:.3} {unit}/s, {} contacts pinned, pinned vertices {:.4} -> {:.4} {unit} from their pins (largest correction {:.3} {unit}: body moved up to {:.3} {unit}, legs and feet against it up to {:.3} {unit})",
+                    c.sliding_before,
+                    c.sliding_after,
+                    c.plants,
+                    c.pinned_drift_before,
+                    c.pinned_drift_after,
+                    c.largest_correction,
+                    c.largest_body_shift,
+                    c.largest_leg_correction
                 );
             }
         }
