@@ -497,11 +497,11 @@ impl FootSkateCleanup {
         let pinned: std::collections::HashMap<u32, [f64; 2]> = pins.iter().copied().collect();
         let mut index = vec![usize::MAX; n];
         let mut order = Vec::new();
-        for v in 0..n {
+        for (v, slot) in index.iter_mut().enumerate() {
             let movable = self.free[v].is_some()
                 || self.leg_of[v].is_some_and(|k| self.feet[k as usize].binary_search(&(v as u32)).is_ok());
             if movable && !pinned.contains_key(&(v as u32)) {
-                index[v] = order.len();
+                *slot = order.len();
                 order.push(v as u32);
             }
         }
@@ -517,11 +517,8 @@ impl FootSkateCleanup {
                 continue;
             }
             match (index[c as usize], pinned.get(&c)) {
-                (j, _) if j != usize::MAX => {
-                    if i >= j {
-                        lower.push(Triplet::new(i, j, l));
-                    }
-                }
+                (j, _) if j != usize::MAX && i >= j => lower.push(Triplet::new(i, j, l)),
+                (j, _) if j != usize::MAX => {}
                 (_, Some(e)) => {
                     rhs[(i, 0)] -= l * e[0];
                     rhs[(i, 1)] -= l * e[1];
@@ -873,8 +870,8 @@ impl FootSkateCleanup {
                         })
                         .collect()
                 };
-                for f in a..=b {
-                    residuals[f].extend(of_frame(f));
+                for (f, frame) in residuals.iter_mut().enumerate().take(b + 1).skip(a) {
+                    frame.extend(of_frame(f));
                 }
                 let fade = |x: usize| smoothstep(1.0 - x as f64 / (blend + 1) as f64);
                 let (first, last) = (of_frame(a), of_frame(b));
@@ -1411,6 +1408,7 @@ mod tests {
     /// 0-7, a separate piece 0.5 away along z). The whole body travels along x at 0.3 units a
     /// second, too fast for its steps: A is planted at frames 0-15, B at frames 10-29 (double
     /// support 10-15), a foot in the air lifted 0.3.
+    #[allow(clippy::type_complexity)] // (topology, rest, leg vertex sets, frames): a test fixture
     fn two_legs_travelling() -> (Topology, Vec<f32>, Vec<Vec<u32>>, Vec<Vec<f32>>) {
         let (t, mut rest, leg_a) = ribbon();
         let mut tris = t.triangles().to_vec();
