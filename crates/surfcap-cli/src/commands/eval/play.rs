@@ -69,9 +69,11 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
             subject.topology().n_vertices(),
             subject.fps
         ));
-        let params =
-            GraphParams { table: a.table.params(subject.fps)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
         let pipe = a.cache.pipeline(ctx, subject)?;
+        // Segments fit the subject's shortest looping clip, as `surfcap play` and `synth path`
+        // build them: the knight's one-cycle clips are shorter than the default 1/3-2 s windows.
+        let params =
+            GraphParams { table: a.table.params_for(&pipe)?, kind: GraphKind::Essential, alpha: a.alpha.value() };
         let prep = surfcap_synthesis::Prepared::new(pipe, params, None)?;
         // A subject the controller cannot play at all (no frame from which a walk goes on) is
         // reported as such; the others are still evaluated.
