@@ -55,13 +55,15 @@ fn cleaned_variants_of_a_cmu_walk_slide_no_more_than_the_capture_and_keep_their_
         assert!(a <= 1.1 * captured, "variant {k}: cleaned, it slides {a} m/s against the capture's {captured}");
         // The pins are real: the planted vertices stay within 2 cm of their pins on average.
         assert!(r.pinned_drift_after < 0.02 && r.pinned_drift_after < 0.25 * r.pinned_drift_before, "{r:?}");
-        // The legs bend without stretching: the clean-up adds less than a tenth of the
-        // capture's edge distortion to the variant's (measured: 0.0005-0.0007 on 0.0185;
-        // 0.0010-0.0017 before the pins were carried by the body; `eval vary` judges
-        // criterion (iii) on the cleaned frames of its longer fits).
+        // The legs bend with little stretching: the clean-up adds less than 15% of the
+        // capture's edge distortion to the variant's. Measured on 0.0185: 0.0019 by default
+        // (every planted vertex pinned at its plant's middle frame), 0.0005-0.0007 with the
+        // pins carried by the body (`FootSkateParams::carry_pins`, off by default because the
+        // body then drifts off its path), 0.0010-0.0017 with the feet pinned rigidly only;
+        // `eval vary` judges criterion (iii) on the cleaned frames of its longer fits.
         let (e0, e) = (edges(&before), edges(&after));
         eprintln!("edges: capture {captured_edges:.4}, variant before {e0:.4}, after {e:.4}");
-        assert!(e <= e0 + 0.1 * captured_edges, "variant {k}: edge distortion {e0} -> {e} (capture {captured_edges})");
+        assert!(e <= e0 + 0.15 * captured_edges, "variant {k}: edge distortion {e0} -> {e} (capture {captured_edges})");
     }
     // With the hips held (`move_root` off, `--hold-hips`): the same samples, the planted feet
     // still pinned, and the legs stretched more than with the root moved (by default the whole
