@@ -88,13 +88,20 @@ pub struct Rendered {
     pub height: u32,
 }
 
-/// The frames of `request` and the output's rate, for a page playing `n_frames` at `fps`.
-pub fn plan(request: &RenderRequest, n_frames: usize, fps: f64) -> Result<(Vec<usize>, f64), RenderError> {
+/// The inclusive range of frames `frames` asks (all by default) of an animation of `n_frames`
+/// frames; an error naming both when it lies outside.
+pub fn frame_range(frames: Option<(usize, usize)>, n_frames: usize) -> Result<(usize, usize), RenderError> {
     let last_frame = n_frames.saturating_sub(1);
-    let (first, last) = request.frames.unwrap_or((0, last_frame));
+    let (first, last) = frames.unwrap_or((0, last_frame));
     if first > last || last > last_frame {
         return Err(RenderError::Frames { first, last, last_frame });
     }
+    Ok((first, last))
+}
+
+/// The frames of `request` and the output's rate, for a page playing `n_frames` at `fps`.
+pub fn plan(request: &RenderRequest, n_frames: usize, fps: f64) -> Result<(Vec<usize>, f64), RenderError> {
+    let (first, last) = frame_range(request.frames, n_frames)?;
     let out = request.fps.unwrap_or(fps);
     if !(out.is_finite() && out > 0.0 && out <= 1000.0) {
         return Err(RenderError::Rate(out, "expected more than 0 and at most 1000 frames per second".into()));

@@ -231,6 +231,10 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     let source = SourceOpts { fps: a.source_fps, up_axis: a.up_axis, units: a.units.clone() };
     let (items, report) = crate::commands::view::load(ctx, &a.shown, &source)?;
     let names: Vec<String> = items.iter().map(|i| i.name.clone()).collect();
+    // A frame range outside the animation is refused by name before Chromium starts: the page
+    // plays as many frames as its longest item has.
+    let request = RenderRequest { frames: a.frames.map(|r| (r.first, r.last)), fps: a.fps };
+    surfcap_render::frame_range(request.frames, items.iter().map(|i| i.n_frames).max().unwrap_or(0))?;
     let started = Instant::now();
     // The viewer's server on a free loopback port, on its own thread for the rest of the run.
     let (tx, rx) = std::sync::mpsc::channel();
@@ -260,7 +264,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     )
     .map_err(explain)?;
     let loaded = started.elapsed();
-    let request = RenderRequest { frames: a.frames.map(|r| (r.first, r.last)), fps: a.fps };
     let (frames, fps) = surfcap_render::plan(&request, page.n_frames, page.fps)?;
     let bar = crate::progress::Bar::new(ctx);
     let t0 = Instant::now();
