@@ -95,6 +95,45 @@ enum Step {
     Right1,
 }
 
+impl Step {
+    /// Walks this step back from cell (k, l): pushes the cells it covers onto `out` (from (k, l)
+    /// backwards) and returns the cell it came from and how many cells it covered, or `None` at
+    /// the start, after pushing the straight run back to (0, 0).
+    fn trace_back(self, k: usize, l: usize, out: &mut Vec<(usize, usize)>) -> Option<(usize, usize, usize)> {
+        match self {
+            Step::Start => {
+                out.push((k, l));
+                // Initial straight run back to (0, 0).
+                out.extend((0..k).rev().map(|r| (r, l)));
+                out.extend((0..l).rev().map(|c| (0, c)));
+                None
+            }
+            Step::Vertical(q) => {
+                let q = q as usize;
+                out.extend((0..q).map(|r| (k - r, l)));
+                Some((k - q, l - 1, q))
+            }
+            Step::Horizontal(q) => {
+                let q = q as usize;
+                out.extend((0..q).map(|r| (k, l - r)));
+                Some((k - 1, l - q, q))
+            }
+            Step::Diagonal1 => {
+                out.push((k, l));
+                Some((k - 1, l - 1, 1))
+            }
+            Step::Down1 => {
+                out.push((k, l));
+                Some((k - 1, l, 1))
+            }
+            Step::Right1 => {
+                out.push((k, l));
+                Some((k, l - 1, 1))
+            }
+        }
+    }
+}
+
 /// Dynamic-programming tables of one grid: summed cost and path length of the best path from
 /// (0, 0) to every cell (f64::INFINITY where no path satisfies the constraints).
 #[derive(Debug, Clone, Default)]
@@ -122,49 +161,8 @@ impl DtwTables {
         }
         let mut out = Vec::new();
         let (mut k, mut l) = (k, l);
-        loop {
-            match self.steps[k * self.cols + l] {
-                Step::Start => {
-                    out.push((k, l));
-                    // Initial straight run back to (0, 0).
-                    while k > 0 {
-                        k -= 1;
-                        out.push((k, l));
-                    }
-                    while l > 0 {
-                        l -= 1;
-                        out.push((k, l));
-                    }
-                    break;
-                }
-                Step::Vertical(q) => {
-                    for r in 0..q as usize {
-                        out.push((k - r, l));
-                    }
-                    k -= q as usize;
-                    l -= 1;
-                }
-                Step::Horizontal(q) => {
-                    for r in 0..q as usize {
-                        out.push((k, l - r));
-                    }
-                    k -= 1;
-                    l -= q as usize;
-                }
-                Step::Diagonal1 => {
-                    out.push((k, l));
-                    k -= 1;
-                    l -= 1;
-                }
-                Step::Down1 => {
-                    out.push((k, l));
-                    k -= 1;
-                }
-                Step::Right1 => {
-                    out.push((k, l));
-                    l -= 1;
-                }
-            }
+        while let Some((pk, pl, _)) = self.steps[k * self.cols + l].trace_back(k, l, &mut out) {
+            (k, l) = (pk, pl);
         }
         out.reverse();
         out

@@ -156,46 +156,10 @@ impl Layers {
     pub(super) fn path_to(&self, cols: usize, k: usize, l: usize, len: u32) -> Vec<(usize, usize)> {
         let mut out = Vec::new();
         let (mut k, mut l, mut len) = (k, l, len as usize);
-        loop {
-            let step = self.step[self.base[k * cols + l] + len - shortest(k, l)];
-            match step {
-                Step::Start => {
-                    out.push((k, l));
-                    while k > 0 {
-                        k -= 1;
-                        out.push((k, l));
-                    }
-                    while l > 0 {
-                        l -= 1;
-                        out.push((k, l));
-                    }
-                    break;
-                }
-                Step::Vertical(q) => {
-                    for r in 0..q as usize {
-                        out.push((k - r, l));
-                    }
-                    (k, l, len) = (k - q as usize, l - 1, len - q as usize);
-                }
-                Step::Horizontal(q) => {
-                    for r in 0..q as usize {
-                        out.push((k, l - r));
-                    }
-                    (k, l, len) = (k - 1, l - q as usize, len - q as usize);
-                }
-                Step::Diagonal1 => {
-                    out.push((k, l));
-                    (k, l, len) = (k - 1, l - 1, len - 1);
-                }
-                Step::Down1 => {
-                    out.push((k, l));
-                    (k, len) = (k - 1, len - 1);
-                }
-                Step::Right1 => {
-                    out.push((k, l));
-                    (l, len) = (l - 1, len - 1);
-                }
-            }
+        while let Some((pk, pl, cells)) =
+            self.step[self.base[k * cols + l] + len - shortest(k, l)].trace_back(k, l, &mut out)
+        {
+            (k, l, len) = (pk, pl, len - cells);
         }
         out.reverse();
         out
