@@ -22,6 +22,7 @@ use surfcap_mesh::{Sequence, Subject, Topology};
 use surfcap_motion::walk_sequence::WalkModel;
 use surfcap_pipeline::{GraphKind, GraphParams, PoseDistances};
 use surfcap_synthesis::Prepared;
+use surfcap_synthesis::controller::captured_stream::{KEY_INTERVAL, captured_stream};
 use surfcap_synthesis::controller::display_blend::{DisplayMix, display_blend};
 use surfcap_synthesis::controller::transition_blend::{BlendTimes, TransitionBlender};
 use surfcap_synthesis::controller::{Controller, ControllerOptions, Gait, Input, Move};
@@ -96,47 +97,6 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         }
     })?;
     Ok(())
-}
-
-/// Every captured frame of the subject as a compact stream of `bits` bits (key frame every 60),
-/// from the derived cache when it holds it for this subject (coding 2,000 frames of 10k vertices
-/// takes most of a minute), else coded and stored there; the bool says whether it came from the
-/// cache. An entry that does not parse as a stream of this subject's frames and vertices is
-/// coded again.
-fn captured_stream(prep: &Prepared, bits: u32) -> anyhow::Result<(Vec<u8>, bool)> {
-    let s = prep.subject();
-    let options = StreamOptions { bits, max_error: None, key_interval: 60 };
-    let code = || encode_stream(s, &options).0;
-    let Some(cache) = prep.pipe.store().cache.as_ref() else { return Ok((code(), false)) };
-    let path =
-        cache.path("play-stream", &surfcap_mesh::derived_cache::subject_hash(s), &format!("v1 bits {bits} key 60"));
-    let (frames, vertices) = (s.n_frames(), s.topology().n_vertices());
-    let fetched = cache.fetch::<u8, Vec<u8>, surfcap_mesh::Error>(
-        &path,
-        prep.pipe.store().refresh,
-        &surfcap_mesh::NoProgress,
-        || {
-            let bytes = code();
-            Ok(surfcap_mesh::npy::NpyArray { shape: vec![bytes.len()], data: bytes })
-        },
-        |a| {
-            let parsed = surfcap_formats::stream::StreamFile::parse(&a.data).map_err(|e| {
-                surfcap_mesh::Error::new(surfcap_mesh::ErrorKind::Syntax, format!("not a compact stream: {e}"))
-            })?;
-            let n: usize = parsed.header.sequences.iter().map(|q| q.frames).sum();
-            if n != frames || parsed.header.vertices != vertices {
-                return Err(surfcap_mesh::Error::new(
-                    surfcap_mesh::ErrorKind::Syntax,
-                    format!(
-                        "a stream of {n} frames of {} vertices, expected {frames} of {vertices}",
-                        parsed.header.vertices
-                    ),
-                ));
-            }
-            Ok(a.data)
-        },
-    )?;
-    Ok(fetched)
 }
 
 /// Opens `url` with the desktop's opener (`xdg-open`, `open` on macOS, `start` on Windows); a
@@ -423,7 +383,7 @@ fn code_frames(s: &Subject, name: &str, frames: &[Vec<f32>], bits: u32) -> Resul
     let seq = Sequence::new(name.to_string(), n, frames.concat()).map_err(|e| format!("{name}: {e}"))?;
     let blend = Subject::new("blend", topo, vec![seq], s.fps, s.up_axis, s.units.clone())
         .map_err(|e| format!("{name}: {e}"))?;
-    Ok(encode_stream(&blend, &StreamOptions { bits, max_error: None, key_interval: 60 }).0)
+    Ok(encode_stream(&blend, &StreamOptions { bits, max_error: None, key_interval: KEY_INTERVAL }).0)
 }
 
 impl BlendWorker {

@@ -27,6 +27,7 @@
 //! `surfcap-bench play` measures a decision's latency; `surfcap eval play` measures how well
 //! scripted inputs are followed, against offline path following on the same trajectories.
 
+pub mod captured_stream;
 pub mod desired_trajectory;
 pub mod display_blend;
 pub mod frame_motion;
