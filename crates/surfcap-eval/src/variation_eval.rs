@@ -357,6 +357,10 @@ pub struct SamplingSettings {
     pub foot_skate_cleanup: bool,
     /// Whether the clean-up moved the whole body with the planted feet.
     pub move_root: bool,
+    /// Whether sampled poses took the learnt motion's stretch (`surfcap_variation::learnt_stretch`).
+    pub learnt_stretch: bool,
+    /// Whether the clean-up carried the pins with the body (`FootSkateParams::carry_pins`).
+    pub carry_pins: bool,
 }
 
 /// Result of [`variation_eval`]; serialised, the report `vary.json` without `written`.
@@ -792,7 +796,7 @@ pub fn case_eval(case: &VariationCase, o: &VariationEvalOptions) -> Result<CaseE
         let captured = &s.sequences()[j];
         if o.sampling.foot_skate_cleanup {
             let owned: Vec<Vec<f32>> = (0..captured.n_frames()).map(|f| captured.frame(f).to_vec()).collect();
-            clean_up_variants(&model, &mut variants, &owned, o.sampling.move_root)?;
+            clean_up_variants(&model, &mut variants, &owned, &o.sampling)?;
         }
         if j == 0 {
             for v in &variants {
@@ -957,6 +961,8 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
             max_leapfrog: o.sampling.max_leapfrog,
             foot_skate_cleanup: o.sampling.foot_skate_cleanup,
             move_root: o.sampling.move_root,
+            learnt_stretch: o.sampling.learnt_stretch,
+            carry_pins: o.sampling.carry_pins,
         },
         criteria: o.criteria,
         missed: cases.iter().map(|c| c.missed).sum(),

@@ -73,26 +73,26 @@ pub fn deformation_polar_factors(
     pi: &[f32],
     pj: &[f32],
 ) -> Vec<Option<(Matrix3<f64>, Matrix3<f64>)>> {
-    topology
-        .triangles()
-        .iter()
-        .map(|t| {
-            let (qi, a) = triangle_basis(pi, t)?;
-            let (qj, b) = triangle_basis(pj, t)?;
-            // m = b a^-1 for upper-triangular a = [[a0, a1], [0, a2]], b likewise.
-            let (p, q, u) = (b[0] / a[0], (b[1] - b[0] * a[1] / a[0]) / a[2], b[2] / a[2]);
-            let h = ((p + u) * (p + u) + q * q).sqrt();
-            let (c, s) = ((p + u) / h, -q / h);
-            let r2 = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
-            // s2 = r2^T m (symmetric positive 2x2), in the i basis.
-            let m = Matrix3::new(p, q, 0.0, 0.0, u, 0.0, 0.0, 0.0, 1.0);
-            let mut s2 = r2.transpose() * m;
-            let off = 0.5 * (s2[(0, 1)] + s2[(1, 0)]);
-            s2[(0, 1)] = off;
-            s2[(1, 0)] = off;
-            Some((qj * r2 * qi.transpose(), qi * s2 * qi.transpose()))
-        })
-        .collect()
+    topology.triangles().iter().map(|t| triangle_polar_factors(pi, pj, t)).collect()
+}
+
+/// [`deformation_polar_factors`] of one triangle `t`: (R, S) of its deformation gradient from
+/// pose `pi` to pose `pj`; `None` when it has zero area in either.
+pub fn triangle_polar_factors(pi: &[f32], pj: &[f32], t: &[u32; 3]) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
+    let (qi, a) = triangle_basis(pi, t)?;
+    let (qj, b) = triangle_basis(pj, t)?;
+    // m = b a^-1 for upper-triangular a = [[a0, a1], [0, a2]], b likewise.
+    let (p, q, u) = (b[0] / a[0], (b[1] - b[0] * a[1] / a[0]) / a[2], b[2] / a[2]);
+    let h = ((p + u) * (p + u) + q * q).sqrt();
+    let (c, s) = ((p + u) / h, -q / h);
+    let r2 = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    // s2 = r2^T m (symmetric positive 2x2), in the i basis.
+    let m = Matrix3::new(p, q, 0.0, 0.0, u, 0.0, 0.0, 0.0, 1.0);
+    let mut s2 = r2.transpose() * m;
+    let off = 0.5 * (s2[(0, 1)] + s2[(1, 0)]);
+    s2[(0, 1)] = off;
+    s2[(1, 0)] = off;
+    Some((qj * r2 * qi.transpose(), qi * s2 * qi.transpose()))
 }
 
 #[cfg(test)]

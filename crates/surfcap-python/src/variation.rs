@@ -241,7 +241,7 @@ impl PyVariationModel {
     /// With `output`, the folder is written as the command writes it (one glb per variant and
     /// `report.json`). Returns `(variants, report)`: one `Subject` per variant (one sequence
     /// `<name>~<k>`, `(F, V, 3)` float32 positions) and a `surfcap.reports.VariationSampleReport`.
-    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=100, thin=5, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, output=None, force=false))]
+    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=20, thin=2, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, output=None, force=false))]
     #[allow(clippy::too_many_arguments)]
     fn sample<'py>(
         &self,
@@ -287,6 +287,8 @@ impl PyVariationModel {
             max_leapfrog,
             foot_skate_cleanup: !no_foot_skate_cleanup,
             move_root: !hold_hips && !no_foot_skate_cleanup,
+            learnt_stretch: true,
+            carry_pins: false,
         };
         let folder = self.folder();
         let model = &self.model;

@@ -154,8 +154,9 @@ fn shell_word(p: &str) -> String {
 }
 
 /// Largest leapfrog step count of one part's HMC chain: (warm-up + variants x thinning) x the
-/// longest path. The defaults take 3,750 (a few seconds a part); thesis 6.6 samples a handful of
-/// variants with short chains, so 500 times the defaults covers every use and bounds the time.
+/// longest path. The defaults take 900 (about a second a part); thesis 6.6 samples a handful of
+/// variants with short chains, and 2,000,000 (the former defaults' 3,750 times 500) covers every
+/// use and bounds the time.
 pub const MAX_LEAPFROG_STEPS: f64 = 2_000_000.0;
 
 /// Checks a sampling's numbers as `surfcap vary sample` does before any work: the variant count

@@ -91,6 +91,15 @@
 //!    shared detector finds on the output partly differ from those pinned; the clean-up
 //!    detects and pins again on its own output, [`FootSkateParams::passes`] times in all.
 //!
+//! 8. **Legs bent, not stretched** ([`FootSkateParams::stretch_iterations`]): step 4's solve
+//!    keeps every leg triangle's gradient, so a leg whose foot is pulled further than it
+//!    reaches is sheared and stretched (two feet pinned a stride and a slide apart in double
+//!    support). A few as-rigid-as-possible local/global iterations (Sorkine and Alexa 2007)
+//!    follow on the free leg vertices, the feet, the hips and the body held: each triangle's
+//!    target is its rotation now times its stretch before the clean-up, one solve with the
+//!    factorised `L_II` per iteration. A leg then straightens or bends at the knee where it
+//!    can instead of stretching.
+//!
 //! **In-place clips** (authored with the root pinned, e.g. the KayKit clips): there the ground
 //! moves under the character and a planted foot slides backwards at the walking speed. Pinning
 //! it in place would stop the walk; the clean-up instead works on the frames moved by the
@@ -102,8 +111,10 @@
 
 use faer::Mat;
 use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::Matrix3;
 use rayon::prelude::*;
 use serde::Serialize;
+use surfcap_geometry::deformation_gradient::triangle_polar_factors;
 use surfcap_geometry::foot_sliding::foot_sliding;
 use surfcap_geometry::gradient_operator::GradientOperator;
 use surfcap_geometry::ground_contacts::{ContactParams, GroundContact, ground_contacts};
@@ -141,7 +152,9 @@ pub struct FootSkateParams {
     /// Detections and clean-ups in turn: each pass detects the plants of the previous one's
     /// output with the shared detector and pins them (pinning changes which contacts move
     /// together, so the measure's planted groups after a pass partly differ from the ones
-    /// pinned). At least 1.
+    /// pinned). At least 1; 3 by default: with the legs bent as rigidly as possible (step 8)
+    /// two passes left up to 0.2 m/s of sliding on KayKit variants, three pinned it
+    /// (`surfcap eval vary`, docs/results/variation.md).
     pub passes: usize,
     /// Fit the foot's turn about the up axis as well as its translation (off by default: on
     /// a CMU walk's variants the turn fitted to a small planted patch moved a foot by up to
@@ -183,6 +196,14 @@ pub struct FootSkateParams {
     /// The farthest a planted vertex is moved to its own pin beyond the foot's rigid move, as
     /// a fraction of the subject's height (step 4b).
     pub pin_reach: f64,
+    /// Local/global iterations that bend rather than stretch the legs (the module doc's step
+    /// 8, Sorkine and Alexa 2007's as-rigid-as-possible energy with each triangle's stretch
+    /// before the clean-up as its rest state); 0 turns them off. 3 by default: pinned where
+    /// each foot is at its plant's middle frame, two planted feet can be a stride and a slide
+    /// apart, and step 4's solve spans that by shearing the legs (`surfcap eval vary`: the
+    /// delivered frames' edge distortion 9-44% above the sampled poses', docs/results/
+    /// variation.md).
+    pub stretch_iterations: usize,
     /// The shared contact detection's thresholds.
     #[serde(skip)]
     pub contact: ContactParams,
@@ -197,13 +218,14 @@ impl Default for FootSkateParams {
             gap_steps: 2,
             rejoin_distance: 0.05,
             lift_speed: None,
-            passes: 2,
+            passes: 3,
             fit_turn: false,
             move_root: true,
             keep_edges: false,
             vertex_pins: true,
             carry_pins: false,
             pin_reach: 0.02,
+            stretch_iterations: 3,
             contact: ContactParams::default(),
         }
     }
@@ -259,6 +281,10 @@ pub struct FootSkateCleanup {
     /// The Laplacian among the legs' movable vertices (feet and free), duplicates merged:
     /// (row, column, value), for the per-vertex pins' solve (module doc, step 4b).
     movable_laplacian: Vec<(u32, u32, f64)>,
+    /// The rest pose, and the rest gradient of the coordinates on each of `leg_triangles`
+    /// (step 8).
+    rest: Vec<f32>,
+    leg_rest_gradients: Vec<Matrix3<f64>>,
 }
 
 impl std::fmt::Debug for FootSkateCleanup {
@@ -423,15 +449,32 @@ impl FootSkateCleanup {
                 false
             }
         });
-        let leg_triangles = topology
+        let leg_triangles: Vec<([u32; 3], [[f64; 3]; 3], f64)> = topology
             .triangles()
             .iter()
             .zip(op.basis.iter().zip(&op.areas))
             .filter(|(t, _)| t.iter().any(|&v| free[v as usize].is_some()))
             .map(|(t, (g, &area))| (*t, [0, 1, 2].map(|k| [g[k][0], g[k][1], g[k][2]]), area))
             .collect();
+        let leg_rest_gradients = leg_triangles
+            .iter()
+            .map(|(t, g, _)| {
+                let mut m = Matrix3::zeros();
+                for k in 0..3 {
+                    let v = t[k] as usize;
+                    for (d, gd) in g[k].iter().enumerate() {
+                        for c in 0..3 {
+                            m[(d, c)] += gd * rest[3 * v + c] as f64;
+                        }
+                    }
+                }
+                m
+            })
+            .collect();
         Ok(FootSkateCleanup {
             leg_triangles,
+            leg_rest_gradients,
+            rest: rest.to_vec(),
             movable_laplacian,
             up,
             n_vertices: n,
@@ -483,6 +526,97 @@ impl FootSkateCleanup {
         }
         sym.solve_in_place(num, rhs.as_mut());
         (0..self.n_free).map(|i| rhs[(i, 0)]).collect()
+    }
+
+    /// Step 8: the free leg vertices of `q` (the frame as cleaned) moved so that every leg
+    /// triangle keeps the stretch it had in `before` (the frame before the clean-up) under its
+    /// rotation in `q`, the feet, the hips, the body and the vertices `held` (this frame's
+    /// pinned vertices, sorted) held: as-rigid-as-possible local/global iterations (Sorkine
+    /// and Alexa 2007), each a Poisson solve for the update `delta`,
+    /// `L_II delta_I = (G^T D (G~ - G q))_I` with `G~_m = G_rest,m (R_m S_m)^T`, `R_m` the
+    /// polar rotation of the triangle from rest to `q`, `S_m` its stretch from rest to
+    /// `before` (thesis eq. 2.48's system). `I` is the free set less `held`: the factorised
+    /// `L_II` when no held vertex is free, else factorised for this frame.
+    fn keep_leg_stretch(&self, before: &[f32], q: &mut [f32], held: &[u32]) {
+        let (Some(sym), Some(num)) = (&self.symbolic, &self.numeric) else { return };
+        let is_held = |v: usize| held.binary_search(&(v as u32)).is_ok();
+        let own: Option<(Vec<Option<usize>>, usize, SymbolicLlt, NumericLlt)> =
+            if held.iter().any(|&v| self.free[v as usize].is_some()) {
+                let mut index = vec![None; self.n_vertices];
+                let mut count = 0;
+                for (v, slot) in index.iter_mut().enumerate() {
+                    if self.free[v].is_some() && !is_held(v) {
+                        *slot = Some(count);
+                        count += 1;
+                    }
+                }
+                if count == 0 {
+                    return;
+                }
+                let mut lower: Vec<Triplet<usize, usize, f64>> = self
+                    .movable_laplacian
+                    .iter()
+                    .filter_map(|&(r, c, l)| {
+                        let (i, j) = (index[r as usize]?, index[c as usize]?);
+                        (i >= j).then(|| Triplet::new(i, j, l))
+                    })
+                    .collect();
+                let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / count as f64;
+                lower.extend((0..count).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
+                let Some((symbolic, numeric)) =
+                    SparseColMat::<usize, f64>::try_new_from_triplets(count, count, &lower).ok().and_then(|mat| {
+                        let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
+                        let numeric = symbolic.factorize(mat.as_ref()).ok()?;
+                        Some((symbolic, numeric))
+                    })
+                else {
+                    return;
+                };
+                Some((index, count, symbolic, numeric))
+            } else {
+                None
+            };
+        let (index, count, sym, num) = match &own {
+            Some((index, count, s, n)) => (index.as_slice(), *count, s, n),
+            None => (self.free.as_slice(), self.n_free, sym, num),
+        };
+        for _ in 0..self.params.stretch_iterations {
+            let mut rhs = Mat::<f64>::zeros(count, 3);
+            for ((t, g, area), rest_gradient) in self.leg_triangles.iter().zip(&self.leg_rest_gradients) {
+                if *area == 0.0 || t.iter().all(|&v| index[v as usize].is_none()) {
+                    continue;
+                }
+                let (Some((r, _)), Some((_, st))) =
+                    (triangle_polar_factors(&self.rest, q, t), triangle_polar_factors(&self.rest, before, t))
+                else {
+                    continue;
+                };
+                let mut e = rest_gradient * (r * st).transpose();
+                for k in 0..3 {
+                    let v = t[k] as usize;
+                    for (d, gd) in g[k].iter().enumerate() {
+                        for c in 0..3 {
+                            e[(d, c)] -= gd * q[3 * v + c] as f64;
+                        }
+                    }
+                }
+                for k in 0..3 {
+                    if let Some(i) = index[t[k] as usize] {
+                        for c in 0..3 {
+                            rhs[(i, c)] += area * (0..3).map(|d| g[k][d] * e[(d, c)]).sum::<f64>();
+                        }
+                    }
+                }
+            }
+            sym.solve_in_place(num, rhs.as_mut());
+            for (v, slot) in index.iter().enumerate() {
+                if let Some(i) = slot {
+                    for c in 0..3 {
+                        q[3 * v + c] += rhs[(*i, c)] as f32;
+                    }
+                }
+            }
+        }
     }
 
     /// The displacement that takes each pinned vertex the rest of its way (`pins`: vertex and
@@ -942,15 +1076,24 @@ impl FootSkateCleanup {
                     d[v as usize] = [d[v as usize][0] + e[0], d[v as usize][1] + e[1]];
                 }
                 let mut q = p.clone();
-                let mut largest = 0.0f64;
                 for (v, dv) in d.iter().enumerate() {
-                    let dv = [dv[0] + root[0], dv[1] + root[1]];
-                    q[3 * v + u] += dv[0] as f32;
-                    q[3 * v + w] += dv[1] as f32;
+                    q[3 * v + u] += (dv[0] + root[0]) as f32;
+                    q[3 * v + w] += (dv[1] + root[1]) as f32;
                     let dh = self.free[v].and_then(|i| lift.get(i)).copied().unwrap_or(0.0);
                     q[3 * v + up_axis] += dh as f32;
-                    largest = largest.max(dv[0].hypot(dv[1]).hypot(dh));
                 }
+                if d.iter().any(|dv| *dv != [0.0; 2]) {
+                    let held: Vec<u32> = residuals[f].iter().map(|r| r.0).collect();
+                    self.keep_leg_stretch(p, &mut q, &held);
+                }
+                let largest = q
+                    .chunks_exact(3)
+                    .zip(p.chunks_exact(3))
+                    .map(|(a, b)| {
+                        let e = [0, 1, 2].map(|c| (a[c] - b[c]) as f64);
+                        e[0].hypot(e[1]).hypot(e[2])
+                    })
+                    .fold(0.0, f64::max);
                 (q, largest)
             })
             .collect();
@@ -1175,8 +1318,9 @@ mod tests {
     #[test]
     fn a_skating_planted_foot_is_pinned_the_rest_barely_moves_and_nothing_pops() {
         let (t, rest, leg) = ribbon();
-        // The hips held: the leg alone bends to reach the pin.
-        let held = FootSkateParams { move_root: false, ..FootSkateParams::default() };
+        // The hips held: the leg alone bends to reach the pin (in the ground's directions
+        // only: step 8 is tested below).
+        let held = FootSkateParams { move_root: false, stretch_iterations: 0, ..FootSkateParams::default() };
         let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], held).unwrap();
         assert_eq!(c.feet(), &[(0..9).collect::<Vec<u32>>()], "the sole and the ankle rows");
         let frames = skating(&rest);
@@ -1328,7 +1472,8 @@ mod tests {
         let frames = skating(&rest);
         let run = |keep_edges: bool| {
             // The hips held: the leg alone reaches the pin, so it bends.
-            let p = FootSkateParams { keep_edges, move_root: false, ..FootSkateParams::default() };
+            let p =
+                FootSkateParams { keep_edges, move_root: false, stretch_iterations: 0, ..FootSkateParams::default() };
             FootSkateCleanup::new(&t, &rest, UpAxis::PosY, std::slice::from_ref(&leg), p)
                 .unwrap()
                 .clean(&frames, 30.0, None)
@@ -1361,6 +1506,62 @@ mod tests {
         // heights are fixed (measured: mean strain 0.0023 turned, 0.0034 slanted).
         let (s, k) = (mean_strain(&t, &frames, &slanted), mean_strain(&t, &frames, &turned));
         assert!(k < 0.75 * s, "mean strain: turned {k}, slanted {s}");
+    }
+
+    #[test]
+    fn legs_bent_as_rigidly_as_possible_reach_the_pins_and_stretch_less() {
+        let (t, rest, leg) = ribbon();
+        let frames = skating(&rest);
+        let run = |stretch_iterations: usize| {
+            let p = FootSkateParams { move_root: false, stretch_iterations, ..FootSkateParams::default() };
+            FootSkateCleanup::new(&t, &rest, UpAxis::PosY, std::slice::from_ref(&leg), p)
+                .unwrap()
+                .clean(&frames, 30.0, None)
+                .unwrap()
+        };
+        let ((sheared, _), (bent, report)) = (run(0), run(3));
+        // Pinned as before: the sole stays where it is mid-contact.
+        for f in 5..=20 {
+            for v in 0..6 {
+                let d = (bent[f][3 * v] - bent[12][3 * v]).abs() + (bent[f][3 * v + 2] - bent[12][3 * v + 2]).abs();
+                assert!(d < 1e-5, "frame {f}, vertex {v}: {d} from its pin");
+            }
+        }
+        assert!(report.sliding_after < 1e-3, "{report:?}");
+        // The feet (rows 0-2), the hip row and the torso are held where step 4 put them; only
+        // the leg between them moves.
+        for f in 0..30 {
+            for v in (0..9).chain(21..30) {
+                for c in 0..3 {
+                    assert_eq!(bent[f][3 * v + c], sheared[f][3 * v + c], "frame {f}, vertex {v}");
+                }
+            }
+        }
+        // Measured: mean strain 0.0021 bent, 0.0034 sheared.
+        let (s, b) = (mean_strain(&t, &frames, &sheared), mean_strain(&t, &frames, &bent));
+        assert!(b < 0.75 * s, "mean strain: bent {b}, sheared {s}");
+        assert_eq!(run(3).0, bent, "deterministic");
+    }
+
+    #[test]
+    fn a_pinned_vertex_of_the_free_leg_is_held_by_the_rigid_bending() {
+        let (t, rest, leg) = ribbon();
+        let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams::default()).unwrap();
+        // The leg's middle rows (free vertices 9-20) pushed sideways: a sheared leg.
+        let mut q = rest.clone();
+        for v in 9..21 {
+            q[3 * v] += 0.05 * (v / 3 - 2) as f32;
+        }
+        let (mut free, mut held) = (q.clone(), q.clone());
+        c.keep_leg_stretch(&rest, &mut free, &[]);
+        c.keep_leg_stretch(&rest, &mut held, &[13]);
+        assert_eq!(&held[39..42], &q[39..42], "the held vertex 13 stays");
+        assert_ne!(&free[39..42], &q[39..42], "unheld, vertex 13 moves");
+        for v in (0..9).chain(21..30) {
+            assert_eq!(&held[3 * v..3 * v + 3], &q[3 * v..3 * v + 3], "vertex {v} is outside the free leg");
+        }
+        let strain = |p: &[f32]| mean_strain(&t, std::slice::from_ref(&rest), &[p.to_vec()]);
+        assert!(strain(&held) < strain(&q) && strain(&free) < strain(&q), "both stretch less than the sheared leg");
     }
 
     #[test]

@@ -14,11 +14,12 @@
 //! - **sampling** (6.6, [`variation_sampling`]): a seeded HMC chain over whole latent trajectories
 //!   per part, started at the learnt trajectory (or the mean prediction of 6.6.1); each sampled
 //!   trajectory smoothed (triangular, radius 2), poses from the reconstruction GP's mean, parts
-//!   stitched (chapter 5's cheapest cuts and Poisson merge), placed by a `VariantPath` (the
-//!   source's path by default; the integrated sampled displacements of 6.6.2; or travel from the
-//!   variant's own foot contacts) and re-timed to the sequence's own frames. A chain's seed is
-//!   derived from the seed, the sequence's name and the part, so variants do not depend on the
-//!   thread count; `variant_on_source_path` serves synthesis;
+//!   stitched (chapter 5's cheapest cuts and Poisson merge), each triangle given the learnt
+//!   motion's stretch at the same frame under its own rotation ([`learnt_stretch`]), placed by
+//!   a `VariantPath` (the source's path by default; the integrated sampled displacements of
+//!   6.6.2; or travel from the variant's own foot contacts) and re-timed to the sequence's own
+//!   frames. A chain's seed is derived from the seed, the sequence's name and the part, so
+//!   variants do not depend on the thread count; `variant_on_source_path` serves synthesis;
 //! - **foot-skate clean-up** ([`foot_skate_cleanup`], on by default in sampling): every step the
 //!   shared contact detector plants (the steps the foot-sliding measure counts) pinned
 //!   mid-contact, the whole body moved along the ground with the planted feet and the feet
@@ -38,6 +39,7 @@ pub mod centroid_path_length;
 pub mod error;
 pub mod foot_skate_cleanup;
 pub mod learnt_motion;
+pub mod learnt_stretch;
 pub mod mean_vertex_distance;
 pub mod motion_parametrisation;
 pub mod motion_preparation;

@@ -25,8 +25,8 @@ use crate::error::{Error, Result};
 use crate::motion_preparation::SequenceOrigin;
 use crate::variation_model::VariationModel;
 use crate::variation_sampling::{
-    ChainSummary, SamplingOptions, Variant, clean_up_variants, place_variant, reconstruct_aligned,
-    sample_latent_variants,
+    ChainSummary, LatentVariants, SamplingOptions, Variant, place_variant, sample_latent_variants,
+    variants_from_latents,
 };
 
 /// A learnt trajectory on the blend ladder of a pair: its weight and sequence index.
@@ -154,22 +154,11 @@ pub fn sample_blend_variants(
     let place = |aligned: &[Vec<f32>], displacements: &[[f64; 6]]| {
         place_variant(model, opts.path, aligned, displacements, &start, &path, &times, own)
     };
-    let mut variants: Vec<Variant> = lower
-        .iter()
-        .zip(&pairing)
-        .map(|(x1, &m)| {
-            let lat = interpolate_latents(x1, &upper[m], r1, r2, w);
-            let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = place(&aligned, &displacements)?;
-            Ok(Variant { latents: lat, aligned, displacements, world, before_cleanup: None, cleanup: None })
-        })
-        .collect::<Result<_>>()?;
-    if opts.foot_skate_cleanup {
-        let learnt =
-            interpolate_latents(&model.learnt_latents(r1.sequence)?, &model.learnt_latents(r2.sequence)?, r1, r2, w);
-        let (la, ld) = reconstruct_aligned(model, &learnt)?;
-        clean_up_variants(model, &mut variants, &place(&la, &ld)?, opts.move_root)?;
-    }
+    let latents: LatentVariants =
+        lower.iter().zip(&pairing).map(|(x1, &m)| interpolate_latents(x1, &upper[m], r1, r2, w)).collect();
+    let learnt =
+        interpolate_latents(&model.learnt_latents(r1.sequence)?, &model.learnt_latents(r2.sequence)?, r1, r2, w);
+    let variants = variants_from_latents(model, latents, &learnt, opts, place)?;
     Ok((variants, BlendSampling { a: a.into(), b: b.into(), w, lower: r1, upper: r2, pairing, chains }))
 }
 

@@ -35,11 +35,27 @@
 //!   detection). By default a variant's pose of reference frame i is therefore placed where the
 //!   source's frame i is ([`VariantPath::Source`]): the body varies, the path is the
 //!   captured one. [`VariantPath::Sampled`] keeps the thesis's placement.
+//! - **How far a variant goes**: the chain starts at the learnt trajectory and every
+//!   iteration takes it further; a variant is drawn after `warmup + k thin` iterations. With
+//!   100 and 5 (surfcap's former defaults) the variants of KayKit Walking_B were 26-30 mm
+//!   (mean per vertex) from its learnt walk and as near to Walking_C's, so they no longer
+//!   read as Walking_B (criterion (ii) of `surfcap eval vary`); the chains' acceptance and
+//!   step sizes were the same with 20 warm-up iterations. The defaults are 20 and 2: variants
+//!   15-32 mm from their learnt motion, 6-14 times the floor below which a variant counts as
+//!   a copy (docs/results/variation.md).
 //! - **Smoothing**: the chain samples the product of one-step predictives, so each sampled
 //!   point carries its own dynamics noise and the poses jitter from frame to frame (the
 //!   learnt trajectories do not). A triangular moving average of radius 2 frames is applied
 //!   to each sampled trajectory (`smoothing`, 0 turns it off; measured with `surfcap eval
 //!   vary`, see docs/results/variation.md).
+//! - **Surface stretch**: the reconstruction GP's mean blends training poses linearly in
+//!   vertex space, which shrinks and stretches the surface between them (thesis 2.4); each
+//!   triangle of a sampled pose keeps its rotation and takes the learnt motion's stretch at the
+//!   same frame, through one Poisson solve ([`crate::learnt_stretch`], `learnt_stretch` in the
+//!   options, on by default). Re-timing to the sequence's own frames blends neighbouring frames
+//!   linearly again, so the world frames are given the stretch of the learnt motion placed and
+//!   re-timed alike. Measured with `surfcap eval vary` (docs/results/variation.md): the body-
+//!   frame poses' edge distortion went from up to 11% above the captures' to within 5%.
 //! - **Foot skate**: varied leg poses on the source's path still let the planted feet drift
 //!   (`surfcap eval vary`: 6-10x the captures' foot sliding on CMU clips, docs/results/
 //!   variation.md), so every variant's world frames go through the foot-skate clean-up
@@ -61,6 +77,7 @@ use surfcap_transfer::pose_representation::Placement;
 
 use crate::error::{Error, Result};
 use crate::foot_skate_cleanup::{CleanupReport, FootSkateCleanup, FootSkateParams};
+use crate::learnt_stretch::LearntStretch;
 use crate::motion_preparation::poses_at;
 use crate::variation_model::VariationModel;
 
@@ -121,9 +138,12 @@ pub struct SamplingOptions {
     /// Radius (frames) of the triangular moving average applied to each sampled latent
     /// trajectory, its first point kept (0: none); see the module doc.
     pub smoothing: usize,
-    /// HMC warm-up iterations (step size and path length tuning).
+    /// HMC warm-up iterations (step size and path length tuning). The chain moves away from
+    /// its start while it tunes, so this also sets how far the variants wander from the
+    /// learnt trajectory (see the module doc's "How far a variant goes").
     pub warmup: usize,
-    /// Iterations between two variants (a larger value gives less correlated variants).
+    /// Iterations between two variants (a larger value gives less correlated variants, and
+    /// later ones further from the start).
     pub thin: usize,
     /// Upper bound on leapfrog steps per HMC iteration.
     pub max_leapfrog: usize,
@@ -134,6 +154,14 @@ pub struct SamplingOptions {
     /// ([`FootSkateParams::move_root`]; on by default). Part of the clean-up: without
     /// `foot_skate_cleanup` it has no effect.
     pub move_root: bool,
+    /// Give every triangle of a sampled pose the learnt motion's stretch at the same frame,
+    /// under the triangle's own rotation ([`crate::learnt_stretch`]; on by default, see the
+    /// module doc). Off, the stitched reconstruction-GP mean is used as it is.
+    pub learnt_stretch: bool,
+    /// With the clean-up and the root moved, pin each plant where its foot comes down and let
+    /// the body go on with its planted feet ([`FootSkateParams::carry_pins`]; off by default:
+    /// the body then leaves its source's path, see the field).
+    pub carry_pins: bool,
 }
 
 impl Default for SamplingOptions {
@@ -142,11 +170,13 @@ impl Default for SamplingOptions {
             start: ChainStart::Learnt,
             path: VariantPath::Source,
             smoothing: 2,
-            warmup: 100,
-            thin: 5,
+            warmup: 20,
+            thin: 2,
             max_leapfrog: 30,
             foot_skate_cleanup: true,
             move_root: true,
+            learnt_stretch: true,
+            carry_pins: false,
         }
     }
 }
@@ -507,20 +537,48 @@ pub fn sample_variants(
             seq.own_frames,
         )
     };
+    let variants = variants_from_latents(model, latents, &model.learnt_latents(j)?, opts, place)?;
+    Ok((variants, chains))
+}
+
+/// Variants from their sampled latent trajectories (`[variant][part]`): reconstructed and
+/// stitched, given the stretch of `learnt` (the latent trajectories they vary) when
+/// `opts.learnt_stretch` is on, put in the world by `place`, and cleaned of foot skate when
+/// `opts.foot_skate_cleanup` is on (on the ground of `learnt` placed likewise).
+pub(crate) fn variants_from_latents(
+    model: &VariationModel,
+    latents: LatentVariants,
+    learnt: &[Mat<f64>],
+    opts: &SamplingOptions,
+    place: impl Fn(&[Vec<f32>], &[[f64; 6]]) -> Result<Vec<Vec<f32>>>,
+) -> Result<Vec<Variant>> {
+    let learnt =
+        if opts.foot_skate_cleanup || opts.learnt_stretch { Some(reconstruct_aligned(model, learnt)?) } else { None };
+    let stretch = match &learnt {
+        Some(_) if opts.learnt_stretch => Some(LearntStretch::new(&model.topology, &model.reference_pose)?),
+        _ => None,
+    };
+    let learnt_world = learnt.as_ref().map(|(la, ld)| place(la, ld)).transpose()?;
     let mut variants: Vec<Variant> = latents
         .into_iter()
         .map(|lat| {
-            let (aligned, displacements) = reconstruct_aligned(model, &lat)?;
-            let world = place(&aligned, &displacements)?;
+            let (mut aligned, displacements) = reconstruct_aligned(model, &lat)?;
+            let world = match (&stretch, &learnt, &learnt_world) {
+                (Some(fix), Some((la, _)), Some(lw)) => {
+                    aligned = fix.apply_all(&aligned, la)?;
+                    // Re-timing blends neighbouring frames linearly: the stretch is given
+                    // again, from the learnt motion placed and re-timed alike.
+                    fix.apply_all(&place(&aligned, &displacements)?, lw)?
+                }
+                _ => place(&aligned, &displacements)?,
+            };
             Ok(Variant { latents: lat, aligned, displacements, world, before_cleanup: None, cleanup: None })
         })
         .collect::<Result<_>>()?;
-    if opts.foot_skate_cleanup {
-        let (la, ld) = reconstruct_aligned(model, &model.learnt_latents(j)?)?;
-        let learnt_world = place(&la, &ld)?;
-        clean_up_variants(model, &mut variants, &learnt_world, opts.move_root)?;
+    if let (true, Some(lw)) = (opts.foot_skate_cleanup, &learnt_world) {
+        clean_up_variants(model, &mut variants, lw, opts)?;
     }
-    Ok((variants, chains))
+    Ok(variants)
 }
 
 /// Body-frame poses (reference frames) put in the world by `path` (see [`VariantPath`]) and
@@ -590,12 +648,14 @@ pub fn clean_up_variants(
     model: &VariationModel,
     variants: &mut [Variant],
     learnt_world: &[Vec<f32>],
-    move_root: bool,
+    opts: &SamplingOptions,
 ) -> Result<()> {
     if variants.is_empty() {
         return Ok(());
     }
-    let Some(cleanup) = model_cleanup(model, move_root)? else { return Ok(()) };
+    let params =
+        FootSkateParams { move_root: opts.move_root, carry_pins: opts.carry_pins, ..FootSkateParams::default() };
+    let Some(cleanup) = model_cleanup(model, params)? else { return Ok(()) };
     let height = pose_height(&model.reference_pose, model.up_axis);
     let ground = in_place_ground(learnt_world, model.fps, model.up_axis, height);
     for v in variants {
@@ -615,20 +675,14 @@ pub fn clean_up_variants(
     Ok(())
 }
 
-/// The foot-skate clean-up of a model's mesh (default settings but `move_root`, the legs being
-/// the parts named `leg*`/`foot*`); `None` for a model without legs.
-fn model_cleanup(model: &VariationModel, move_root: bool) -> Result<Option<FootSkateCleanup>> {
+/// The foot-skate clean-up of a model's mesh with `params`, the legs being the parts named
+/// `leg*`/`foot*`; `None` for a model without legs.
+fn model_cleanup(model: &VariationModel, params: FootSkateParams) -> Result<Option<FootSkateCleanup>> {
     let legs = crate::motion_preparation::feet_of(&model.parts);
     if legs.is_empty() {
         return Ok(None);
     }
-    Ok(Some(FootSkateCleanup::new(
-        &model.topology,
-        &model.reference_pose,
-        model.up_axis,
-        &legs,
-        FootSkateParams { move_root, ..FootSkateParams::default() },
-    )?))
+    Ok(Some(FootSkateCleanup::new(&model.topology, &model.reference_pose, model.up_axis, &legs, params)?))
 }
 
 /// A variant's frames and what the foot-skate clean-up did to them (`None` when not cleaned).
@@ -653,7 +707,11 @@ pub fn variants_on_source_path(
     let placed: Vec<Vec<Vec<f32>>> =
         variants.iter().map(|v| variant_on_source_path(model, j, v, source)).collect::<Result<_>>()?;
     // The hips held: see the doc comment (the path stays the user's).
-    let fixer = if cleanup { model_cleanup(model, false)? } else { None };
+    let fixer = if cleanup {
+        model_cleanup(model, FootSkateParams { move_root: false, ..FootSkateParams::default() })?
+    } else {
+        None
+    };
     let Some(fixer) = fixer else { return Ok(placed.into_iter().map(|p| (p, None)).collect()) };
     let owned: Vec<Vec<f32>> = source.iter().map(|p| p.to_vec()).collect();
     let height = pose_height(&model.reference_pose, model.up_axis);

@@ -101,15 +101,17 @@ pub struct SampleArgs {
     /// the one-step HMC samples jitter from frame to frame).
     #[arg(long, default_value_t = 2, value_parser = |s: &str| whole_in(s, 0, 1000))]
     pub smoothing: usize,
-    /// HMC warm-up iterations (step size and path length tuning).
-    #[arg(long, default_value_t = 100, value_parser = |s: &str| whole_in(s, 1, 100_000))]
+    /// HMC warm-up iterations (step size and path length tuning). The chain moves away from
+    /// the learnt motion while it tunes: more iterations, variants further from their source.
+    #[arg(long, default_value_t = 20, value_parser = |s: &str| whole_in(s, 1, 100_000))]
     pub warmup: usize,
-    /// HMC iterations between two variants (more: less correlated variants).
-    #[arg(long, default_value_t = 5, value_parser = |s: &str| whole_in(s, 1, 10_000))]
+    /// HMC iterations between two variants (more: less correlated variants, and later ones
+    /// further from their source).
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| whole_in(s, 1, 10_000))]
     pub thin: usize,
     /// Most leapfrog steps per HMC iteration. The work of a part's chain, (--warmup + --count x
-    /// --thin) x --max-leapfrog leapfrog steps, may be at most 2,000,000 (500 times the
-    /// defaults' 3,750): larger requests are refused before any work.
+    /// --thin) x --max-leapfrog leapfrog steps, may be at most 2,000,000 (over 2,000 times
+    /// the defaults' 900): larger requests are refused before any work.
     #[arg(long, default_value_t = 30, value_parser = |s: &str| whole_in(s, 1, 10_000))]
     pub max_leapfrog: usize,
     /// Leave the planted feet as sampled: no foot-skate clean-up (by default the planted
@@ -122,6 +124,17 @@ pub struct SampleArgs {
     /// al. 2002's root adjustment, so a planted foot is reached without stretching its leg).
     #[arg(long, conflicts_with = "no_foot_skate_cleanup")]
     pub hold_hips: bool,
+    /// Use the stitched reconstruction-GP means as they are: by default every triangle of a
+    /// sampled pose keeps its rotation and takes the learnt motion's stretch at the same frame
+    /// (one Poisson solve per frame), as linear blends of training poses shrink the surface.
+    #[arg(long)]
+    pub no_learnt_stretch: bool,
+    /// In the foot-skate clean-up, pin each step where the foot comes down and let the body
+    /// go on with its planted feet (the legs keep their lengths; the body then leaves the
+    /// source's path, by 2.1-2.4 m over the 4.5 m CMU walks of `surfcap eval vary`). By default
+    /// each step is pinned where the foot is mid-contact, on the source's path.
+    #[arg(long, conflicts_with_all = ["no_foot_skate_cleanup", "hold_hips"])]
+    pub carry_pins: bool,
     /// The output folder: `<name>-variant-<k>.glb` per variant and `report.json`.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -301,6 +314,8 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
             max_leapfrog: a.max_leapfrog,
             foot_skate_cleanup: !a.no_foot_skate_cleanup,
             move_root: !a.hold_hips && !a.no_foot_skate_cleanup,
+            learnt_stretch: !a.no_learnt_stretch,
+            carry_pins: a.carry_pins,
         },
         output: a.output.clone(),
         force: ctx.force,

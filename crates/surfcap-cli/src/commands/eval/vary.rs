@@ -238,6 +238,17 @@ pub struct Args {
     /// al. 2002's root adjustment, so a planted foot is reached without stretching its leg).
     #[arg(long, conflicts_with = "no_foot_skate_cleanup")]
     pub hold_hips: bool,
+    /// Use the stitched reconstruction-GP means as they are: by default every triangle of a
+    /// sampled pose keeps its rotation and takes the learnt motion's stretch at the same frame
+    /// (one Poisson solve per frame), as linear blends of training poses shrink the surface.
+    #[arg(long)]
+    pub no_learnt_stretch: bool,
+    /// In the foot-skate clean-up, pin each step where the foot comes down and let the body
+    /// go on with its planted feet (the legs keep their lengths; the body then leaves the
+    /// source's path, by 2.1-2.4 m over the 4.5 m CMU walks of `surfcap eval vary`). By default
+    /// each step is pinned where the foot is mid-contact, on the source's path.
+    #[arg(long, conflicts_with_all = ["no_foot_skate_cleanup", "hold_hips"])]
+    pub carry_pins: bool,
     /// Folder for vary.json and the plots.
     #[arg(short, long, default_value = "vary-eval")]
     pub output: PathBuf,
@@ -264,6 +275,8 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
     opts.sampling.smoothing = a.smoothing;
     opts.sampling.foot_skate_cleanup = !a.no_foot_skate_cleanup;
     opts.sampling.move_root = !a.hold_hips && !a.no_foot_skate_cleanup;
+    opts.sampling.learnt_stretch = !a.no_learnt_stretch;
+    opts.sampling.carry_pins = a.carry_pins;
     let missed = evaluate(ctx, cases, &opts, &a.output)?;
     // The report is the result even when a criterion is missed: it is committed first.
     ctx.commit(outs)?;
