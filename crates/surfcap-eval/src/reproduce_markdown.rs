@@ -24,6 +24,10 @@ pub fn is_own_page(text: &str) -> bool {
     text.lines().next() == Some(MARKER)
 }
 
+/// What the pages call the items no surfcap eval reproduces (their page is
+/// `reproduce-not-run.md`).
+pub const NOT_RUN: &str = "not-run";
+
 /// The file name of the page of `eval`'s run: "reproduce-transitions.md".
 pub fn page_name(eval: &str) -> String {
     format!("reproduce-{eval}.md")
@@ -145,7 +149,7 @@ pub fn results_markdown(page: &Page, command: &str) -> Vec<(String, String)> {
     let mut pages = Vec::new();
     for eval in order {
         let items: Vec<&ItemRow> = page.items.iter().filter(|i| i.item.eval == eval).collect();
-        let name = page_name(if eval.is_empty() { "none" } else { eval });
+        let name = page_name(if eval.is_empty() { NOT_RUN } else { eval });
         for it in &items {
             let c = status_counts(std::slice::from_ref(*it));
             let _ = writeln!(
