@@ -435,7 +435,11 @@ pub fn results_html(page: &Page) -> String {
     for eval in order {
         let items: Vec<&ItemRow> = page.items.iter().filter(|i| i.item.eval == eval).collect();
         let names: Vec<String> = items.iter().map(|i| i.item.display_name()).collect();
-        let _ = writeln!(h, "<section class=\"run\" id=\"run-{}\">", esc(if eval.is_empty() { crate::reproduce_markdown::NOT_RUN } else { eval }));
+        let _ = writeln!(
+            h,
+            "<section class=\"run\" id=\"run-{}\">",
+            esc(if eval.is_empty() { crate::reproduce_markdown::NOT_RUN } else { eval })
+        );
         let _ = writeln!(h, "<h2>{}</h2>", esc(&names.join(", ")));
         let run = page.runs.get(eval);
         match run {
