@@ -51,8 +51,13 @@ try {
   const rendered = () => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   // Playing: the frame counter advances.
   const f0 = await viewer(() => window.surfcapViewer.frame);
-  await page.waitForFunction((f) => window.surfcapViewer.frame !== f, f0, { timeout: 20000 });
-  const f1 = await viewer(() => window.surfcapViewer.frame);
+  // The frame it advanced to, read when it changed: a short sequence playing under load can wrap
+  // round to f0 again before a second read.
+  const advanced = await page.waitForFunction((f) => {
+    const x = window.surfcapViewer.frame;
+    return x !== f && { frame: x };
+  }, f0, { timeout: 20000 });
+  const f1 = (await advanced.jsonValue()).frame;
   const text1 = await counter();
   // Pause, then a click on the timeline jumps to the frame under the pointer.
   await page.click('#play');
