@@ -512,6 +512,8 @@ class VariationModel:
         max_leapfrog: int = 30,
         no_foot_skate_cleanup: bool = False,
         hold_hips: bool = False,
+        no_learnt_stretch: bool = False,
+        carry_pins: bool = False,
         output: Optional[Path] = None,
         force: bool = False,
     ) -> Tuple[List[Subject], reports.VariationSampleReport]:

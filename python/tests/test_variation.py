@@ -133,6 +133,14 @@ def test_variants_of_a_sequence_equal_the_commands_to_the_bit(cli_model, cli, wo
     assert report.model == str(cli_model)
     assert not np.array_equal(variants[0].positions, variants[1].positions), "two variants differ"
 
+    # The switches reach the sampling as the command's do.
+    for flag, kw in (("--carry-pins", {"carry_pins": True}), ("--no-learnt-stretch", {"no_learnt_stretch": True})):
+        switched = workdir / f"cli-walk{flag}"
+        cli("--quiet", "vary", "sample", cli_model, "--sequence", "16_15", *SAMPLING_ARGS, flag, "-o", switched)
+        other, _ = model.sample("16_15", **SAMPLING, **kw)
+        same_as_glb(other[0], switched / "16_15-variant-1.glb", workdir)
+        assert not np.array_equal(other[0].positions, variants[0].positions), flag
+
     # output= writes the command's folder: the same glb bytes and report numbers.
     written = workdir / "py-walk"
     _, report = model.sample("16_15", **SAMPLING, output=written)
@@ -172,6 +180,8 @@ def test_bad_arguments_name_the_argument(mannequin, cli_model, workdir):
         model.sample(blend=("16_15", "16_36", 1.5))
     with pytest.raises(TypeError, match="give one, not both"):
         model.sample("16_15", blend=("16_15", "16_36", 0.5))
+    with pytest.raises(ValueError, match="carry_pins with hold_hips"):
+        model.sample("16_15", carry_pins=True, hold_hips=True)
     with pytest.raises(TypeError, match="expected sequence=NAME or blend"):
         model.sample()
     with pytest.raises(surfcap.SurfcapError, match="model.json"):

@@ -237,11 +237,12 @@ impl PyVariationModel {
     /// sequences and a weight in [0, 1]), as `surfcap vary sample` with `seed` (the same seed
     /// gives the same variants as the command, whatever the thread count). `start` is `"learnt"`
     /// or `"mean"`, `path` `"source"`, `"sampled"` or `"contacts"`; `smoothing`, `warmup`,
-    /// `thin`, `max_leapfrog`, `no_foot_skate_cleanup` and `hold_hips` as the command's options.
+    /// `thin`, `max_leapfrog`, `no_foot_skate_cleanup`, `hold_hips`, `no_learnt_stretch` and
+    /// `carry_pins` as the command's options.
     /// With `output`, the folder is written as the command writes it (one glb per variant and
     /// `report.json`). Returns `(variants, report)`: one `Subject` per variant (one sequence
     /// `<name>~<k>`, `(F, V, 3)` float32 positions) and a `surfcap.reports.VariationSampleReport`.
-    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=20, thin=2, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, output=None, force=false))]
+    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=20, thin=2, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, no_learnt_stretch=false, carry_pins=false, output=None, force=false))]
     #[allow(clippy::too_many_arguments)]
     fn sample<'py>(
         &self,
@@ -258,9 +259,17 @@ impl PyVariationModel {
         max_leapfrog: usize,
         no_foot_skate_cleanup: bool,
         hold_hips: bool,
+        no_learnt_stretch: bool,
+        carry_pins: bool,
         output: Option<PathBuf>,
         force: bool,
     ) -> PyResult<(Vec<PySubject>, Bound<'py, PyAny>)> {
+        if carry_pins && (hold_hips || no_foot_skate_cleanup) {
+            return Err(PyValueError::new_err(
+                "carry_pins with hold_hips or no_foot_skate_cleanup: carried pins move the body with the planted feet, \
+                 which needs the clean-up with the hips free",
+            ));
+        }
         let varied = match (sequence, blend) {
             (Some(s), None) => Varied::Sequence(s),
             (None, Some((a, b, w))) => {
@@ -287,8 +296,8 @@ impl PyVariationModel {
             max_leapfrog,
             foot_skate_cleanup: !no_foot_skate_cleanup,
             move_root: !hold_hips && !no_foot_skate_cleanup,
-            learnt_stretch: true,
-            carry_pins: false,
+            learnt_stretch: !no_learnt_stretch,
+            carry_pins,
         };
         let folder = self.folder();
         let model = &self.model;
