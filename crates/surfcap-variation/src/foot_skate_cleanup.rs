@@ -201,7 +201,7 @@ pub struct FootSkateParams {
     /// before the clean-up as its rest state); 0 turns them off. 3 by default: pinned where
     /// each foot is at its plant's middle frame, two planted feet can be a stride and a slide
     /// apart, and step 4's solve spans that by shearing the legs (`surfcap eval vary`: the
-    /// delivered frames' edge distortion 9-44% above the sampled poses', docs/results/
+    /// delivered frames' edge distortion 4-33% above the sampled poses', docs/results/
     /// variation.md).
     pub stretch_iterations: usize,
     /// The shared contact detection's thresholds.

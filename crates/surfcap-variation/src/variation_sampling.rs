@@ -637,8 +637,9 @@ pub fn pose_height(pose: &[f32], up: surfcap_mesh::UpAxis) -> f64 {
     (hi - lo).max(0.0)
 }
 
-/// Pins the planted feet of every variant ([`crate::foot_skate_cleanup`], default settings,
-/// the legs being the parts named `leg*`/`foot*`), keeping the frames before in
+/// Pins the planted feet of every variant ([`crate::foot_skate_cleanup`], default settings but
+/// `opts.move_root` and `opts.carry_pins`, the legs being the parts named `leg*`/`foot*`),
+/// keeping the frames before in
 /// `before_cleanup`. `learnt_world` is the motion the variants vary, in the world with their
 /// frame count: the learnt motion placed as they are ([`sample_variants`]), or the captured
 /// source when it is at hand (`surfcap eval vary`: the ground its sliding is measured on).
