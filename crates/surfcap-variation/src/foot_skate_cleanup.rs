@@ -95,10 +95,10 @@
 //!    keeps every leg triangle's gradient, so a leg whose foot is pulled further than it
 //!    reaches is sheared and stretched (two feet pinned a stride and a slide apart in double
 //!    support). A few as-rigid-as-possible local/global iterations (Sorkine and Alexa 2007)
-//!    follow on the free leg vertices, the feet, the hips and the body held: each triangle's
-//!    target is its rotation now times its stretch before the clean-up, one solve with the
-//!    factorised `L_II` per iteration. A leg then straightens or bends at the knee where it
-//!    can instead of stretching.
+//!    follow on the free leg vertices (and on a planted foot's vertices that are not pinned),
+//!    the pinned vertices, the other feet, the hips and the body held: each triangle's target
+//!    is its rotation now times its stretch before the clean-up, one solve per iteration. A
+//!    leg then straightens or bends at the knee where it can instead of stretching.
 //!
 //! **In-place clips** (authored with the root pinned, e.g. the KayKit clips): there the ground
 //! moves under the character and a planted foot slides backwards at the walking speed. Pinning
@@ -453,7 +453,7 @@ impl FootSkateCleanup {
             .triangles()
             .iter()
             .zip(op.basis.iter().zip(&op.areas))
-            .filter(|(t, _)| t.iter().any(|&v| free[v as usize].is_some()))
+            .filter(|(t, _)| t.iter().any(|&v| movable(v as usize)))
             .map(|(t, (g, &area))| (*t, [0, 1, 2].map(|k| [g[k][0], g[k][1], g[k][2]]), area))
             .collect();
         let leg_rest_gradients = leg_triangles
@@ -535,47 +535,54 @@ impl FootSkateCleanup {
     /// and Alexa 2007), each a Poisson solve for the update `delta`,
     /// `L_II delta_I = (G^T D (G~ - G q))_I` with `G~_m = G_rest,m (R_m S_m)^T`, `R_m` the
     /// polar rotation of the triangle from rest to `q`, `S_m` its stretch from rest to
-    /// `before` (thesis eq. 2.48's system). `I` is the free set less `held`: the factorised
-    /// `L_II` when no held vertex is free, else factorised for this frame.
+    /// `before` (thesis eq. 2.48's system). Without `held`, `I` is the free set and `L_II` is
+    /// factorised once; with it, `I` also takes the other vertices of every leg holding a
+    /// pinned vertex (its planted foot's sole rolls with the pins instead of being dragged
+    /// rigidly), less `held`, factorised for this frame.
     fn keep_leg_stretch(&self, before: &[f32], q: &mut [f32], held: &[u32]) {
         let (Some(sym), Some(num)) = (&self.symbolic, &self.numeric) else { return };
         let is_held = |v: usize| held.binary_search(&(v as u32)).is_ok();
-        let own: Option<(Vec<Option<usize>>, usize, SymbolicLlt, NumericLlt)> =
-            if held.iter().any(|&v| self.free[v as usize].is_some()) {
-                let mut index = vec![None; self.n_vertices];
-                let mut count = 0;
-                for (v, slot) in index.iter_mut().enumerate() {
-                    if self.free[v].is_some() && !is_held(v) {
-                        *slot = Some(count);
-                        count += 1;
-                    }
-                }
-                if count == 0 {
-                    return;
-                }
-                let mut lower: Vec<Triplet<usize, usize, f64>> = self
-                    .movable_laplacian
-                    .iter()
-                    .filter_map(|&(r, c, l)| {
-                        let (i, j) = (index[r as usize]?, index[c as usize]?);
-                        (i >= j).then(|| Triplet::new(i, j, l))
-                    })
-                    .collect();
-                let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / count as f64;
-                lower.extend((0..count).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
-                let Some((symbolic, numeric)) =
-                    SparseColMat::<usize, f64>::try_new_from_triplets(count, count, &lower).ok().and_then(|mat| {
-                        let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
-                        let numeric = symbolic.factorize(mat.as_ref()).ok()?;
-                        Some((symbolic, numeric))
-                    })
-                else {
-                    return;
-                };
-                Some((index, count, symbolic, numeric))
-            } else {
-                None
+        let own: Option<(Vec<Option<usize>>, usize, SymbolicLlt, NumericLlt)> = if !held.is_empty() {
+            // The feet holding a pinned vertex: their other vertices bend with the leg.
+            let planted: Vec<u32> = held.iter().filter_map(|&v| self.leg_of[v as usize]).collect();
+            let in_planted_foot = |v: usize| {
+                self.leg_of[v]
+                    .is_some_and(|k| planted.contains(&k) && self.feet[k as usize].binary_search(&(v as u32)).is_ok())
             };
+            let mut index = vec![None; self.n_vertices];
+            let mut count = 0;
+            for (v, slot) in index.iter_mut().enumerate() {
+                if (self.free[v].is_some() || in_planted_foot(v)) && !is_held(v) {
+                    *slot = Some(count);
+                    count += 1;
+                }
+            }
+            if count == 0 {
+                return;
+            }
+            let mut lower: Vec<Triplet<usize, usize, f64>> = self
+                .movable_laplacian
+                .iter()
+                .filter_map(|&(r, c, l)| {
+                    let (i, j) = (index[r as usize]?, index[c as usize]?);
+                    (i >= j).then(|| Triplet::new(i, j, l))
+                })
+                .collect();
+            let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / count as f64;
+            lower.extend((0..count).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
+            let Some((symbolic, numeric)) =
+                SparseColMat::<usize, f64>::try_new_from_triplets(count, count, &lower).ok().and_then(|mat| {
+                    let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
+                    let numeric = symbolic.factorize(mat.as_ref()).ok()?;
+                    Some((symbolic, numeric))
+                })
+            else {
+                return;
+            };
+            Some((index, count, symbolic, numeric))
+        } else {
+            None
+        };
         let (index, count, sym, num) = match &own {
             Some((index, count, s, n)) => (index.as_slice(), *count, s, n),
             None => (self.free.as_slice(), self.n_free, sym, num),
@@ -1528,10 +1535,12 @@ mod tests {
             }
         }
         assert!(report.sliding_after < 1e-3, "{report:?}");
-        // The feet (rows 0-2), the hip row and the torso are held where step 4 put them; only
-        // the leg between them moves.
+        // The hip row and the torso are held where step 4 put them, and so is the foot (rows
+        // 0-2) on frames without pins; on frames with pins (the contact, frames 5-20, and the
+        // 5 frames of fading on either side) its ankle row, not pinned, bends with the leg.
         for f in 0..30 {
-            for v in (0..9).chain(21..30) {
+            let foot = if f <= 25 { 0..0 } else { 0..9 };
+            for v in foot.chain(21..30) {
                 for c in 0..3 {
                     assert_eq!(bent[f][3 * v + c], sheared[f][3 * v + c], "frame {f}, vertex {v}");
                 }
@@ -1544,7 +1553,7 @@ mod tests {
     }
 
     #[test]
-    fn a_pinned_vertex_of_the_free_leg_is_held_by_the_rigid_bending() {
+    fn pinned_vertices_are_held_by_the_rigid_bending_and_the_rest_of_their_foot_bends() {
         let (t, rest, leg) = ribbon();
         let c = FootSkateCleanup::new(&t, &rest, UpAxis::PosY, &[leg], FootSkateParams::default()).unwrap();
         // The leg's middle rows (free vertices 9-20) pushed sideways: a sheared leg.
@@ -1557,9 +1566,18 @@ mod tests {
         c.keep_leg_stretch(&rest, &mut held, &[13]);
         assert_eq!(&held[39..42], &q[39..42], "the held vertex 13 stays");
         assert_ne!(&free[39..42], &q[39..42], "unheld, vertex 13 moves");
-        for v in (0..9).chain(21..30) {
-            assert_eq!(&held[3 * v..3 * v + 3], &q[3 * v..3 * v + 3], "vertex {v} is outside the free leg");
+        for v in 21..30 {
+            assert_eq!(&held[3 * v..3 * v + 3], &q[3 * v..3 * v + 3], "vertex {v} is the hip or the torso");
         }
+        // Without a pinned vertex the foot (rows 0-2) is held; with one, its other vertices
+        // bend with the leg.
+        for v in 0..9 {
+            assert_eq!(&free[3 * v..3 * v + 3], &q[3 * v..3 * v + 3], "vertex {v} of a foot without pins");
+        }
+        let mut sole = q.clone();
+        c.keep_leg_stretch(&rest, &mut sole, &[0, 1, 2]);
+        assert_eq!(&sole[0..9], &q[0..9], "the pinned sole stays");
+        assert!((3..9).any(|v| sole[3 * v..3 * v + 3] != q[3 * v..3 * v + 3]), "the rest of that foot bends");
         let strain = |p: &[f32]| mean_strain(&t, std::slice::from_ref(&rest), &[p.to_vec()]);
         assert!(strain(&held) < strain(&q) && strain(&free) < strain(&q), "both stretch less than the sheared leg");
     }

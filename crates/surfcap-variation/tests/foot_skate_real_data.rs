@@ -56,7 +56,7 @@ fn cleaned_variants_of_a_cmu_walk_slide_no_more_than_the_capture_and_keep_their_
         // The pins are real: the planted vertices stay within 2 cm of their pins on average.
         assert!(r.pinned_drift_after < 0.02 && r.pinned_drift_after < 0.25 * r.pinned_drift_before, "{r:?}");
         // The legs bend with little stretching: the clean-up adds less than 15% of the
-        // capture's edge distortion to the variant's. Measured on 0.0185: 0.0008-0.0010 by
+        // capture's edge distortion to the variant's. Measured on 0.0185: 0.0007-0.0008 by
         // default (every planted vertex pinned at its plant's middle frame, the legs bent as
         // rigidly as possible; the sampled poses, with the learnt motion's stretch, at
         // 0.0185-0.0186); before those two changes 0.0019 on poses at 0.0190-0.0193; with
