@@ -297,6 +297,18 @@ impl std::fmt::Debug for FootSkateCleanup {
     }
 }
 
+/// Factorises the `count` x `count` sub-Laplacian whose lower triangle is `lower`, with a
+/// diagonal shift of 1e-9 of its mean diagonal (a free piece touching no constraint, such as a
+/// loose fragment of a leg, then stays put); `None` when it cannot be factorised.
+fn factorise_shifted(mut lower: Vec<Triplet<usize, usize, f64>>, count: usize) -> Option<(SymbolicLlt, NumericLlt)> {
+    let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / count.max(1) as f64;
+    lower.extend((0..count).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
+    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(count, count, &lower).ok()?;
+    let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
+    let numeric = symbolic.factorize(mat.as_ref()).ok()?;
+    Some((symbolic, numeric))
+}
+
 fn smoothstep(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
@@ -560,7 +572,7 @@ impl FootSkateCleanup {
             if count == 0 {
                 return;
             }
-            let mut lower: Vec<Triplet<usize, usize, f64>> = self
+            let lower: Vec<Triplet<usize, usize, f64>> = self
                 .movable_laplacian
                 .iter()
                 .filter_map(|&(r, c, l)| {
@@ -568,17 +580,7 @@ impl FootSkateCleanup {
                     (i >= j).then(|| Triplet::new(i, j, l))
                 })
                 .collect();
-            let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / count as f64;
-            lower.extend((0..count).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
-            let Some((symbolic, numeric)) =
-                SparseColMat::<usize, f64>::try_new_from_triplets(count, count, &lower).ok().and_then(|mat| {
-                    let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
-                    let numeric = symbolic.factorize(mat.as_ref()).ok()?;
-                    Some((symbolic, numeric))
-                })
-            else {
-                return;
-            };
+            let Some((symbolic, numeric)) = factorise_shifted(lower, count) else { return };
             Some((index, count, symbolic, numeric))
         } else {
             None
@@ -587,15 +589,21 @@ impl FootSkateCleanup {
             Some((index, count, s, n)) => (index.as_slice(), *count, s, n),
             None => (self.free.as_slice(), self.n_free, sym, num),
         };
+        // Each triangle's stretch before the clean-up, the same for every iteration.
+        let stretch: Vec<Option<Matrix3<f64>>> = self
+            .leg_triangles
+            .iter()
+            .map(|(t, _, area)| {
+                let moving = *area != 0.0 && t.iter().any(|&v| index[v as usize].is_some());
+                if moving { triangle_polar_factors(&self.rest, before, t).map(|(_, s)| s) } else { None }
+            })
+            .collect();
         for _ in 0..self.params.stretch_iterations {
             let mut rhs = Mat::<f64>::zeros(count, 3);
-            for ((t, g, area), rest_gradient) in self.leg_triangles.iter().zip(&self.leg_rest_gradients) {
-                if *area == 0.0 || t.iter().all(|&v| index[v as usize].is_none()) {
-                    continue;
-                }
-                let (Some((r, _)), Some((_, st))) =
-                    (triangle_polar_factors(&self.rest, q, t), triangle_polar_factors(&self.rest, before, t))
-                else {
+            for (((t, g, area), rest_gradient), st) in
+                self.leg_triangles.iter().zip(&self.leg_rest_gradients).zip(&stretch)
+            {
+                let (Some(st), Some((r, _))) = (st, st.and_then(|_| triangle_polar_factors(&self.rest, q, t))) else {
                     continue;
                 };
                 let mut e = rest_gradient * (r * st).transpose();
@@ -669,16 +677,8 @@ impl FootSkateCleanup {
                 _ => {}
             }
         }
-        let d: f64 = lower.iter().filter(|t| t.row == t.col).map(|t| t.val).sum::<f64>() / order.len() as f64;
-        lower.extend((0..order.len()).map(|k| Triplet::new(k, k, 1e-9 * d.max(f64::MIN_POSITIVE))));
-        let solved =
-            SparseColMat::<usize, f64>::try_new_from_triplets(order.len(), order.len(), &lower).ok().and_then(|mat| {
-                let symbolic = SymbolicLlt::new(mat.symbolic()).ok()?;
-                let numeric = symbolic.factorize(mat.as_ref()).ok()?;
-                symbolic.solve_in_place(&numeric, rhs.as_mut());
-                Some(())
-            });
-        if solved.is_some() {
+        if let Some((symbolic, numeric)) = factorise_shifted(lower, order.len()) {
+            symbolic.solve_in_place(&numeric, rhs.as_mut());
             out.extend(order.iter().enumerate().map(|(i, &v)| (v, [rhs[(i, 0)], rhs[(i, 1)]])));
         }
         out
