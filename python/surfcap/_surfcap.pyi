@@ -507,6 +507,7 @@ class VariationModel:
         start: str = "learnt",
         path: str = "source",
         smoothing: int = 2,
+        deviation_smoothing: int = 4,
         warmup: int = 20,
         thin: int = 2,
         max_leapfrog: int = 30,

@@ -351,6 +351,9 @@ pub struct SamplingSettings {
     pub path: VariantPath,
     pub start: ChainStart,
     pub smoothing: usize,
+    /// Radius of the moving average over each variant's deviation from the learnt motion
+    /// (`surfcap_variation::pose_deviation_smoothing`).
+    pub deviation_smoothing: usize,
     pub warmup: usize,
     pub thin: usize,
     pub max_leapfrog: usize,
@@ -956,6 +959,7 @@ pub fn variation_eval(cases: &[VariationCase], o: &VariationEvalOptions) -> Resu
             path: o.sampling.path,
             start: o.sampling.start,
             smoothing: o.sampling.smoothing,
+            deviation_smoothing: o.sampling.deviation_smoothing,
             warmup: o.sampling.warmup,
             thin: o.sampling.thin,
             max_leapfrog: o.sampling.max_leapfrog,

@@ -236,13 +236,13 @@ impl PyVariationModel {
     /// Samples `count` variants of the learnt `sequence`, or of `blend` = `(A, B, W)` (two learnt
     /// sequences and a weight in [0, 1]), as `surfcap vary sample` with `seed` (the same seed
     /// gives the same variants as the command, whatever the thread count). `start` is `"learnt"`
-    /// or `"mean"`, `path` `"source"`, `"sampled"` or `"contacts"`; `smoothing`, `warmup`,
+    /// or `"mean"`, `path` `"source"`, `"sampled"` or `"contacts"`; `smoothing`, `deviation_smoothing`, `warmup`,
     /// `thin`, `max_leapfrog`, `no_foot_skate_cleanup`, `hold_hips`, `no_learnt_stretch` and
     /// `carry_pins` as the command's options.
     /// With `output`, the folder is written as the command writes it (one glb per variant and
     /// `report.json`). Returns `(variants, report)`: one `Subject` per variant (one sequence
     /// `<name>~<k>`, `(F, V, 3)` float32 positions) and a `surfcap.reports.VariationSampleReport`.
-    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, warmup=20, thin=2, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, no_learnt_stretch=false, carry_pins=false, output=None, force=false))]
+    #[pyo3(signature = (sequence=None, *, blend=None, count=5, seed=0, start="learnt", path="source", smoothing=2, deviation_smoothing=4, warmup=20, thin=2, max_leapfrog=30, no_foot_skate_cleanup=false, hold_hips=false, no_learnt_stretch=false, carry_pins=false, output=None, force=false))]
     #[allow(clippy::too_many_arguments)]
     fn sample<'py>(
         &self,
@@ -254,6 +254,7 @@ impl PyVariationModel {
         start: &str,
         path: &str,
         smoothing: usize,
+        deviation_smoothing: usize,
         warmup: usize,
         thin: usize,
         max_leapfrog: usize,
@@ -291,6 +292,7 @@ impl PyVariationModel {
             start,
             path,
             smoothing,
+            deviation_smoothing,
             warmup,
             thin,
             max_leapfrog,

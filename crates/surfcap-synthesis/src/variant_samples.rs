@@ -66,10 +66,16 @@ pub struct BlendReport {
 pub struct OptionsReport {
     pub start: &'static str,
     pub path: &'static str,
+    pub smoothing: usize,
+    pub deviation_smoothing: usize,
     pub warmup: usize,
     pub thin: usize,
     pub max_leapfrog: usize,
     pub foot_skate_cleanup: bool,
+    /// Whether the clean-up moved the whole body with the planted feet (off with the hips held).
+    pub move_root: bool,
+    pub learnt_stretch: bool,
+    pub carry_pins: bool,
 }
 
 /// The report's `learnt`: the motion the variants vary.
@@ -163,9 +169,10 @@ pub const MAX_LEAPFROG_STEPS: f64 = 2_000_000.0;
 /// (1 to 1000), the HMC settings' ranges, and the chain's length against
 /// [`MAX_LEAPFROG_STEPS`].
 pub fn check_sampling(count: usize, o: &SamplingOptions) -> Result<()> {
-    let ranges: [(&str, usize, usize, usize); 5] = [
+    let ranges: [(&str, usize, usize, usize); 6] = [
         ("--count", count, 1, 1000),
         ("--smoothing", o.smoothing, 0, 1000),
+        ("--deviation-smoothing", o.deviation_smoothing, 0, 1000),
         ("--warmup", o.warmup, 1, 100_000),
         ("--thin", o.thin, 1, 10_000),
         ("--max-leapfrog", o.max_leapfrog, 1, 10_000),
@@ -344,10 +351,15 @@ fn sample_checked(
                 VariantPath::Sampled => "sampled",
                 VariantPath::Contacts => "contacts",
             },
+            smoothing: opts.smoothing,
+            deviation_smoothing: opts.deviation_smoothing,
             warmup: opts.warmup,
             thin: opts.thin,
             max_leapfrog: opts.max_leapfrog,
             foot_skate_cleanup: opts.foot_skate_cleanup,
+            move_root: opts.foot_skate_cleanup && opts.move_root,
+            learnt_stretch: opts.learnt_stretch,
+            carry_pins: opts.carry_pins,
         },
         chains,
         learnt: LearntReport {

@@ -14,7 +14,8 @@
 //! - **sampling** (6.6, [`variation_sampling`]): a seeded HMC chain over whole latent trajectories
 //!   per part, started at the learnt trajectory (or the mean prediction of 6.6.1); each sampled
 //!   trajectory smoothed (triangular, radius 2), poses from the reconstruction GP's mean, parts
-//!   stitched (chapter 5's cheapest cuts and Poisson merge), each triangle given the learnt
+//!   stitched (chapter 5's cheapest cuts and Poisson merge), their deviation from the learnt
+//!   motion averaged over time ([`pose_deviation_smoothing`], radius 4), each triangle given the learnt
 //!   motion's stretch at the same frame under its own rotation ([`learnt_stretch`]), placed by
 //!   a `VariantPath` (the source's path by default; the integrated sampled displacements of
 //!   6.6.2; or travel from the variant's own foot contacts) and re-timed to the sequence's own
@@ -25,7 +26,7 @@
 //!   mid-contact, the whole body moved along the ground with the planted feet and the feet
 //!   moved to meet their pins, the legs deformed in the gradient domain for what is left (rest
 //!   Laplacian factorised once, one solve per frame), blended in and out around each contact
-//!   (Kovar et al. 2002); detected and pinned twice;
+//!   (Kovar et al. 2002), the legs then bent as rigidly as possible; detected and pinned three times;
 //! - **parametrisation** (6.7, [`motion_parametrisation`]): variants of the two learnt
 //!   trajectories around a weight, interpolated in the latent space, with their timing;
 //! - the model folder on disk ([`variation_model_file`]: `model.json`, `faces.npy`,
@@ -44,6 +45,7 @@ pub mod mean_vertex_distance;
 pub mod motion_parametrisation;
 pub mod motion_preparation;
 pub mod pose_centroid;
+pub mod pose_deviation_smoothing;
 pub mod variation_model;
 pub mod variation_model_file;
 pub mod variation_sampling;

@@ -48,6 +48,16 @@
 //!   learnt trajectories do not). A triangular moving average of radius 2 frames is applied
 //!   to each sampled trajectory (`smoothing`, 0 turns it off; measured with `surfcap eval
 //!   vary`, see docs/results/variation.md).
+//! - **Deviation smoothing**: off the learnt trajectories the reconstruction GP's mean answers
+//!   sharply to where a latent point is, so the stitched poses jitter even with smooth latent
+//!   trajectories (the feet of the CMU walk's variants: 47 mm frame-to-frame second difference
+//!   against 8 mm in the capture, 35 mm with the latent trajectories smoothed over 8 frames on
+//!   each side) and planted feet slide at 0.7-3.1 m/s. Each variant's body-frame deviation from
+//!   the learnt motion is averaged over time instead ([`crate::pose_deviation_smoothing`],
+//!   `deviation_smoothing` in the options, radius 4 by default): the learnt motion's own
+//!   frame-to-frame change is kept, the variant's difference from it made slow. Measured with
+//!   `surfcap eval vary` (docs/results/variation.md): sliding before the clean-up went to
+//!   0.13-1.34 m/s and every criterion is met on both cases.
 //! - **Surface stretch**: the reconstruction GP's mean blends training poses linearly in
 //!   vertex space, which shrinks and stretches the surface between them (thesis 2.4); each
 //!   triangle of a sampled pose keeps its rotation and takes the learnt motion's stretch at the
@@ -79,6 +89,7 @@ use crate::error::{Error, Result};
 use crate::foot_skate_cleanup::{CleanupReport, FootSkateCleanup, FootSkateParams};
 use crate::learnt_stretch::LearntStretch;
 use crate::motion_preparation::poses_at;
+use crate::pose_deviation_smoothing::smooth_deviation;
 use crate::variation_model::VariationModel;
 
 /// Where each part's HMC chain starts.
@@ -138,6 +149,10 @@ pub struct SamplingOptions {
     /// Radius (frames) of the triangular moving average applied to each sampled latent
     /// trajectory, its first point kept (0: none); see the module doc.
     pub smoothing: usize,
+    /// Radius (frames) of the triangular moving average applied to each variant's body-frame
+    /// deviation from the learnt motion, frame 0 kept (0: none;
+    /// [`crate::pose_deviation_smoothing`]; 4 by default, see the module doc).
+    pub deviation_smoothing: usize,
     /// HMC warm-up iterations (step size and path length tuning). The chain moves away from
     /// its start while it tunes, so this also sets how far the variants wander from the
     /// learnt trajectory (see the module doc's "How far a variant goes").
@@ -170,6 +185,7 @@ impl Default for SamplingOptions {
             start: ChainStart::Learnt,
             path: VariantPath::Source,
             smoothing: 2,
+            deviation_smoothing: 4,
             warmup: 20,
             thin: 2,
             max_leapfrog: 30,
@@ -542,7 +558,8 @@ pub fn sample_variants(
 }
 
 /// Variants from their sampled latent trajectories (`[variant][part]`): reconstructed and
-/// stitched, given the stretch of `learnt` (the latent trajectories they vary) when
+/// stitched, their deviation from `learnt`'s poses smoothed over `opts.deviation_smoothing`
+/// frames, given the stretch of `learnt` (the latent trajectories they vary) when
 /// `opts.learnt_stretch` is on, put in the world by `place`, and cleaned of foot skate when
 /// `opts.foot_skate_cleanup` is on (on the ground of `learnt` placed likewise).
 pub(crate) fn variants_from_latents(
@@ -552,8 +569,11 @@ pub(crate) fn variants_from_latents(
     opts: &SamplingOptions,
     place: impl Fn(&[Vec<f32>], &[[f64; 6]]) -> Result<Vec<Vec<f32>>>,
 ) -> Result<Vec<Variant>> {
-    let learnt =
-        if opts.foot_skate_cleanup || opts.learnt_stretch { Some(reconstruct_aligned(model, learnt)?) } else { None };
+    let learnt = if opts.foot_skate_cleanup || opts.learnt_stretch || opts.deviation_smoothing > 0 {
+        Some(reconstruct_aligned(model, learnt)?)
+    } else {
+        None
+    };
     let stretch = match &learnt {
         Some(_) if opts.learnt_stretch => Some(LearntStretch::new(&model.topology, &model.reference_pose)?),
         _ => None,
@@ -563,6 +583,9 @@ pub(crate) fn variants_from_latents(
         .into_iter()
         .map(|lat| {
             let (mut aligned, displacements) = reconstruct_aligned(model, &lat)?;
+            if let Some((la, _)) = &learnt {
+                smooth_deviation(&mut aligned, la, opts.deviation_smoothing)?;
+            }
             let world = match (&stretch, &learnt, &learnt_world) {
                 (Some(fix), Some((la, _)), Some(lw)) => {
                     aligned = fix.apply_all(&aligned, la)?;

@@ -101,6 +101,12 @@ pub struct SampleArgs {
     /// the one-step HMC samples jitter from frame to frame).
     #[arg(long, default_value_t = 2, value_parser = |s: &str| whole_in(s, 0, 1000))]
     pub smoothing: usize,
+    /// Radius in frames of the moving average over each variant's deviation from the learnt
+    /// motion (body frame, per vertex; 0: none). The reconstruction GP's poses jitter off the
+    /// learnt trajectories even when the latent ones are smooth, and planted feet then slide;
+    /// averaging the deviation keeps the learnt motion's own timing.
+    #[arg(long, default_value_t = 4, value_parser = |s: &str| whole_in(s, 0, 1000))]
+    pub deviation_smoothing: usize,
     /// HMC warm-up iterations (step size and path length tuning). The chain moves away from
     /// the learnt motion while it tunes: more iterations, variants further from their source.
     #[arg(long, default_value_t = 20, value_parser = |s: &str| whole_in(s, 1, 100_000))]
@@ -309,6 +315,7 @@ fn sample(ctx: &crate::Ctx, a: SampleArgs) -> anyhow::Result<()> {
             start: a.start.0,
             path: a.path.0,
             smoothing: a.smoothing,
+            deviation_smoothing: a.deviation_smoothing,
             warmup: a.warmup,
             thin: a.thin,
             max_leapfrog: a.max_leapfrog,

@@ -229,6 +229,10 @@ pub struct Args {
     /// --smoothing`).
     #[arg(long, default_value_t = 2)]
     pub smoothing: usize,
+    /// Radius of the moving average over each variant's deviation from the learnt motion
+    /// (`vary sample --deviation-smoothing`).
+    #[arg(long, default_value_t = 4)]
+    pub deviation_smoothing: usize,
     /// Judge the variants as sampled, without the foot-skate clean-up (`vary sample
     /// --no-foot-skate-cleanup`).
     #[arg(long)]
@@ -273,6 +277,7 @@ pub fn run(ctx: &crate::Ctx, a: Args) -> anyhow::Result<()> {
         VariationEvalOptions { variants: a.variants, seed: a.seed, iterations: a.iterations, ..Default::default() };
     opts.sampling.path = a.path.0;
     opts.sampling.smoothing = a.smoothing;
+    opts.sampling.deviation_smoothing = a.deviation_smoothing;
     opts.sampling.foot_skate_cleanup = !a.no_foot_skate_cleanup;
     opts.sampling.move_root = !a.hold_hips && !a.no_foot_skate_cleanup;
     opts.sampling.learnt_stretch = !a.no_learnt_stretch;
