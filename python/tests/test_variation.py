@@ -134,12 +134,16 @@ def test_variants_of_a_sequence_equal_the_commands_to_the_bit(cli_model, cli, wo
     assert not np.array_equal(variants[0].positions, variants[1].positions), "two variants differ"
 
     # The switches reach the sampling as the command's do.
-    for flag, kw in (("--carry-pins", {"carry_pins": True}), ("--no-learnt-stretch", {"no_learnt_stretch": True})):
-        switched = workdir / f"cli-walk{flag}"
-        cli("--quiet", "vary", "sample", cli_model, "--sequence", "16_15", *SAMPLING_ARGS, flag, "-o", switched)
+    for flags, kw in (
+        (["--carry-pins"], {"carry_pins": True}),
+        (["--no-learnt-stretch"], {"no_learnt_stretch": True}),
+        (["--deviation-smoothing", "0"], {"deviation_smoothing": 0}),
+    ):
+        switched = workdir / f"cli-walk{flags[0]}"
+        cli("--quiet", "vary", "sample", cli_model, "--sequence", "16_15", *SAMPLING_ARGS, *flags, "-o", switched)
         other, _ = model.sample("16_15", **SAMPLING, **kw)
         same_as_glb(other[0], switched / "16_15-variant-1.glb", workdir)
-        assert not np.array_equal(other[0].positions, variants[0].positions), flag
+        assert not np.array_equal(other[0].positions, variants[0].positions), flags
 
     # output= writes the command's folder: the same glb bytes and report numbers.
     written = workdir / "py-walk"
@@ -170,6 +174,8 @@ def test_bad_arguments_name_the_argument(mannequin, cli_model, workdir):
         model.sample("walk")
     with pytest.raises(surfcap.SurfcapError, match=r"--count 0: expected a whole number from 1 to 1000"):
         model.sample("16_15", count=0)
+    with pytest.raises(surfcap.SurfcapError, match=r"--deviation-smoothing 1001: expected a whole number from 0 to 1000"):
+        model.sample("16_15", deviation_smoothing=1001)
     with pytest.raises(surfcap.SurfcapError, match=r"leapfrog steps per body part, above the 2000000 allowed"):
         model.sample("16_15", count=1000, thin=100)
     with pytest.raises(ValueError, match=r"start: \"middle\": expected learnt or mean"):

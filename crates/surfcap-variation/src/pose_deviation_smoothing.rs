@@ -8,7 +8,7 @@
 //! feet's centroids, along the ground) against 8 mm in the capture. It is not the chain's
 //! noise alone: one HMC iteration from the learnt trajectory already gave 48 mm, and smoothing
 //! the latent trajectories over 8 frames on each side still left 35 mm. A planted foot that
-//! moves 3-5 cm from one frame to the next slides at 1 m/s: the variants slid 0.7-3.1 m/s
+//! moves 3-5 cm from one frame to the next slides at 1 m/s: the CMU variants slid 0.7-3.1 m/s
 //! before the foot-skate clean-up (0.09-0.29 for the captures), and pinning such feet bent the
 //! legs past the captures' edge distortion.
 //!
