@@ -142,3 +142,60 @@ fn the_same_inputs_give_the_same_frames_whatever_the_thread_count() {
     assert_eq!(a.0, b.0);
     assert_eq!(a.1, b.1);
 }
+
+/// The live session the play page talks to, without a page: steps return the frames due and
+/// the transitions chosen, each chosen transition's blend comes back as a stream of the frames
+/// the controller plays (the same whole or piece by piece), and a restart starts again.
+#[test]
+fn a_live_session_steps_blends_its_transitions_and_restarts() {
+    use surfcap_formats::stream::StreamFile;
+    use surfcap_synthesis::controller::live_session::{LiveAsk, LiveSession};
+
+    let session = LiveSession::start(all_gaits(), 16).unwrap();
+    let info = session.info();
+    assert_eq!(info["subject"], "walker");
+    assert_eq!(info["frames"].as_u64().unwrap() as usize, session.prepared().subject().n_frames());
+    let stream = session.captured_stream();
+    let captured = StreamFile::parse(&stream).unwrap();
+    let n = session.prepared().subject().topology().n_vertices();
+    assert_eq!(captured.decode().unwrap().len(), session.prepared().subject().n_frames() * n * 3);
+
+    // Walk along +x, then along +z: 3 s each at the page's 60 steps a second.
+    let (mut frames, mut blends) = (0, Vec::new());
+    for k in 0..360 {
+        let direction = if k < 180 { [1.0, 0.0] } else { [0.0, 1.0] };
+        let out = session.step(&LiveAsk { direction, run: false, dt: 1.0 / 60.0 }).unwrap();
+        frames += out["frames"].as_array().unwrap().len();
+        for b in out["blends"].as_array().unwrap() {
+            blends.push(b["id"].as_u64().unwrap());
+        }
+        for f in out["frames"].as_array().unwrap() {
+            assert!(f["frame"].is_u64() || f["blend"].is_u64(), "{f}");
+            assert!(f["theta"].is_f64() && f["t"].is_array(), "{f}");
+        }
+    }
+    assert!((frames as i64 - 180).abs() <= 1, "{frames} frames in 6 s at 30 fps");
+    assert!(!blends.is_empty(), "turning a quarter chose no transition");
+    for &id in &blends {
+        let whole = session.blend(id).unwrap();
+        let whole = StreamFile::parse(&whole).unwrap().decode().unwrap();
+        assert!(!whole.is_empty() && whole.len().is_multiple_of(n * 3));
+        let (piece, total) = session.blend_from(id, 1).unwrap();
+        assert_eq!(total, whole.len() / (n * 3), "blend {id}'s frame count");
+        // Each stream is quantised on its own bounds (16 bits): equal within a step of them.
+        let piece = StreamFile::parse(&piece).unwrap().decode().unwrap();
+        assert_eq!(piece.len(), whole.len() - n * 3, "blend {id} from frame 1");
+        let off = piece.iter().zip(&whole[n * 3..]).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        assert!(off < 1e-3, "blend {id} from frame 1 is {off} off the whole blend's frames");
+    }
+    let made = session.info()["blends_made"]["count"].as_u64().unwrap();
+    assert_eq!(made as usize, blends.iter().collect::<std::collections::BTreeSet<_>>().len());
+    assert!(session.blend(10_000).unwrap_err().contains("no blend 10000"));
+
+    // A restart plays the start frame again.
+    session.restart().unwrap();
+    let out = session.step(&LiveAsk { direction: [0.0, 0.0], run: false, dt: 1.0 / 60.0 }).unwrap();
+    let start = &info["start"]["frame"];
+    let first = out["frames"].as_array().unwrap().first().map(|f| f["frame"].clone());
+    assert!(first.is_none() || first.as_ref() == Some(start), "{first:?} after a restart, start {start}");
+}

@@ -23,6 +23,9 @@
 //!   [`Controller::step`] (`&Input`, `dt`) returning the frames to show and the decisions
 //!   made ([`Step`]), deciding at least every 0.1 s, and saying when an input cannot be
 //!   followed with the data (no run clip, no idle, no turn, too fast).
+//! - [`live_session`]: a controller played live ([`live_session::LiveSession`]): steps under a
+//!   player's input, each chosen transition blended on a worker thread as the frames are asked
+//!   for, the answers as the JSON of `surfcap play`'s page.
 //!
 //! `surfcap-bench play` measures a decision's latency; `surfcap eval play` measures how well
 //! scripted inputs are followed, against offline path following on the same trajectories.
@@ -33,6 +36,7 @@ pub mod display_blend;
 pub mod frame_motion;
 pub mod future_trajectory;
 pub mod live_controller;
+pub mod live_session;
 pub mod move_choice;
 pub mod parametric_blend;
 pub mod transition_blend;
