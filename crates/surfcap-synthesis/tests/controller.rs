@@ -151,6 +151,8 @@ fn a_live_session_steps_blends_its_transitions_and_restarts() {
     use surfcap_formats::stream::StreamFile;
     use surfcap_synthesis::controller::live_session::{LiveAsk, LiveSession};
 
+    let e = LiveSession::start(all_gaits(), 20).err().expect("20 bits refused").to_string();
+    assert!(e.contains("20 bits per coordinate: expected 8 to 16"), "{e}");
     let session = LiveSession::start(all_gaits(), 16).unwrap();
     let info = session.info();
     assert_eq!(info["subject"], "walker");

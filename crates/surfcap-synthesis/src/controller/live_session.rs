@@ -112,9 +112,13 @@ pub struct LiveSession {
 
 impl LiveSession {
     /// A session on `prep`: the controller's moves precomputed, the captured frames coded as
-    /// one compact stream of `bits` per coordinate (read from the derived cache when there),
-    /// the pose distances the blends need, and the blending thread started.
+    /// one compact stream of `bits` per coordinate (8 to 16, what the play page decodes; read
+    /// from the derived cache when there), the pose distances the blends need, and the blending
+    /// thread started.
     pub fn start(prep: Prepared, bits: u32) -> Result<Self> {
+        if !(8..=16).contains(&bits) {
+            return Err(Error::Request(format!("{bits} bits per coordinate: expected 8 to 16")));
+        }
         let t0 = Instant::now();
         let controller = Controller::new(&prep, ControllerOptions::default())?;
         let precompute = t0.elapsed().as_secs_f64();
