@@ -4,7 +4,7 @@ docstrings: F frames, V vertices, T triangles."""
 from __future__ import annotations
 
 from os import PathLike
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -235,6 +235,26 @@ Keys = Union[Path, Sequence[Tuple[Frame, Union[float, str]]]]
 """A key file (``frame,time`` lines), or ``(frame, time)`` pairs: time in seconds (a number) or
 a str as in the file (``"90"``/``"90f"``: output frame, ``"3s"``: seconds)."""
 
+class LiveSession:
+    """The interactive controller played live (``Synthesizer.live``): ``step`` advances it under
+    an input and returns what falls due as a dict (``frames`` with their placement ``theta``,
+    ``t`` and ``centre``, each a captured ``frame`` or a ``blend`` id and its frame ``k``;
+    ``decisions``, ``blends``, ``cannot_follow``, ``predicted``, ``desired``); ``blend`` and
+    ``blend_from`` give a chosen transition's blended frames as (F, V, 3) float32 positions."""
+
+    info: Dict[str, Any]
+    def step(self, direction: Tuple[float, float], *, run: bool = False, dt: float = 1 / 60) -> Dict[str, Any]:
+        """Advances the controller by ``dt`` seconds (0 to 1): ``direction`` on the subject's two
+        ground axes, of length 0 (stop) to 1 (the gait's full speed); ``run`` rather than walk."""
+    def blend(self, id: int) -> npt.NDArray[np.float32]:
+        """Blend ``id``'s frames, once made: (F, V, 3) float32 positions."""
+    def blend_from(self, id: int, frame: int) -> Tuple[npt.NDArray[np.float32], int]:
+        """Blend ``id``'s frames from ``frame`` on that are made so far, and its frame count."""
+    def captured_stream(self) -> bytes:
+        """Every captured frame as one compact stream (the play page's format)."""
+    def restart(self) -> None:
+        """Starts the controller again from its start frame."""
+
 class Synthesizer:
     """A subject prepared for synthesis (``prepare``): its graph and walk model, built once."""
 
@@ -243,6 +263,9 @@ class Synthesizer:
     n_edges: int
     n_transitions: int
     prepare_seconds: float
+    def live(self, *, bits: int = 16) -> LiveSession:
+        """Starts a live session of the interactive controller on this subject (``surfcap
+        play``'s player without the page); ``bits``: 8 to 16 per coordinate of the streams."""
     def path(
         self,
         curve: Curve,

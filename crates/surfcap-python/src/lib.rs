@@ -29,6 +29,7 @@ pub mod arrays;
 pub mod distances;
 pub mod errors;
 pub mod graphs;
+pub mod live;
 pub mod progress;
 pub mod reports;
 pub mod smg;
@@ -52,6 +53,8 @@ fn _surfcap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     graphs::register(m)?;
     // Path, key-pose and reach synthesis (thesis 3.5).
     synthesis::register(m)?;
+    // The interactive controller's live session (surfcap play's player).
+    live::register(m)?;
     // Huang et al. 2009's surface motion graph.
     smg::register(m)?;
     // Motion transfer (thesis chapter 5).

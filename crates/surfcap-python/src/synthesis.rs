@@ -304,6 +304,17 @@ impl PySynthesizer {
         self.prep.seconds
     }
 
+    /// Starts a live session of the interactive controller on this subject (`surfcap play`'s
+    /// player without the page): the moves precomputed, the captured frames coded at ``bits``
+    /// (8 to 16) bits per coordinate, the blending thread started. Returns a ``LiveSession``.
+    #[pyo3(signature = (*, bits=16))]
+    fn live(&self, py: Python<'_>, bits: u32) -> PyResult<crate::live::PyLiveSession> {
+        let prep = py
+            .detach(|| Prepared::new(self.prep.pipe.clone(), self.prep.params.clone(), self.prep.tracked.as_deref()))
+            .py_err()?;
+        crate::live::PyLiveSession::start(py, prep, bits)
+    }
+
     /// Follows a curve with the centre of mass (or of the tracked vertices), as `surfcap synth
     /// path` (thesis 3.5.1). ``curve``: a CSV file or an (N, 3) array of x,y,z (or (N, 2): the
     /// ground plane's two axes) in the subject's units, float32 or float64. Returns
