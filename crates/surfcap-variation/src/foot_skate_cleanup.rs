@@ -603,9 +603,8 @@ impl FootSkateCleanup {
             for (((t, g, area), rest_gradient), st) in
                 self.leg_triangles.iter().zip(&self.leg_rest_gradients).zip(&stretch)
             {
-                let (Some(st), Some((r, _))) = (st, st.and_then(|_| triangle_polar_factors(&self.rest, q, t))) else {
-                    continue;
-                };
+                let Some(st) = st else { continue };
+                let Some((r, _)) = triangle_polar_factors(&self.rest, q, t) else { continue };
                 let mut e = rest_gradient * (r * st).transpose();
                 for k in 0..3 {
                     let v = t[k] as usize;

@@ -29,6 +29,13 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 
+/// The frames a triangular moving average of radius `r` takes around frame `i` of `n`, with
+/// their weights: `k` from `i - r` to `i + r` (clipped to the frames there are), weight
+/// `r + 1 - |k - i|`. Shared with [`crate::variation_sampling::smoothed`] (latent space).
+pub fn triangular_window(i: usize, n: usize, r: usize) -> impl Iterator<Item = (usize, f64)> {
+    (i.saturating_sub(r)..=(i + r).min(n.saturating_sub(1))).map(move |k| (k, (r + 1 - k.abs_diff(i)) as f64))
+}
+
 /// `poses` (a variant, frame by frame) replaced by `learnt + smoothed(poses - learnt)`, the
 /// deviation averaged over `2 radius + 1` frames with triangular weights, frame 0 kept.
 /// `radius` 0 leaves the poses as they are.
@@ -56,10 +63,9 @@ pub fn smooth_deviation(poses: &mut [Vec<f32>], learnt: &[Vec<f32>], radius: usi
     poses.par_iter_mut().enumerate().skip(1).for_each(|(i, pose)| {
         let mut sum = vec![0.0f64; pose.len()];
         let mut total = 0.0;
-        for (k, d) in deviation.iter().enumerate().take((i + radius).min(n - 1) + 1).skip(i.saturating_sub(radius)) {
-            let w = (radius + 1 - k.abs_diff(i)) as f64;
+        for (k, w) in triangular_window(i, n, radius) {
             total += w;
-            for (s, x) in sum.iter_mut().zip(d) {
+            for (s, x) in sum.iter_mut().zip(&deviation[k]) {
                 *s += w * x;
             }
         }

@@ -89,7 +89,7 @@ use crate::error::{Error, Result};
 use crate::foot_skate_cleanup::{CleanupReport, FootSkateCleanup, FootSkateParams};
 use crate::learnt_stretch::LearntStretch;
 use crate::motion_preparation::poses_at;
-use crate::pose_deviation_smoothing::smooth_deviation;
+use crate::pose_deviation_smoothing::{smooth_deviation, triangular_window};
 use crate::variation_model::VariationModel;
 
 /// Where each part's HMC chain starts.
@@ -259,8 +259,7 @@ pub fn smoothed(x: &Mat<f64>, r: usize) -> Mat<f64> {
             return x[(0, j)];
         }
         let (mut s, mut w) = (0.0, 0.0);
-        for k in i.saturating_sub(r)..=(i + r).min(n - 1) {
-            let wk = (r + 1 - k.abs_diff(i)) as f64;
+        for (k, wk) in triangular_window(i, n, r) {
             s += wk * x[(k, j)];
             w += wk;
         }
